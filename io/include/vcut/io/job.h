@@ -1,0 +1,55 @@
+// A simulation job (YAML): machine, tools, program, offsets, stock, design, engine and
+// report settings. Paths inside are relative to the job file; read_job makes them absolute.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "vcut/io/tool_library.h"
+#include "vcut/removal/stock.h"
+
+namespace vcut::io {
+
+struct DesignSpec {
+  std::string file;
+  Eigen::Vector3d translate_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d rotate_deg = Eigen::Vector3d::Zero();  // about X, then Y, then Z (fixed axes)
+};
+
+struct StockSpec {
+  enum class Kind { Box, Cylinder, Mesh } kind = Kind::Box;
+  removal::BoxShape box{};
+  removal::CylinderShape cylinder{};
+  std::string mesh_file;
+};
+
+struct Job {
+  std::string file;  // the job file itself
+  std::string name;
+  std::string machine = "3axis";
+  std::string tools_file;
+  ToolLibrary tools;
+  std::vector<std::string> program_files;
+  std::string dialect = "auto";
+  bool unsupported_as_warning = false;
+  std::map<std::string, Eigen::Vector3d> offsets_mm;
+  StockSpec stock;
+  std::optional<DesignSpec> design;
+  std::string engine = "vdb";
+  double resolution_mm = 0.1;
+  int threads = 0;  // 0 = all cores
+  std::string out_dir;
+  double gouge_tolerance_mm = 0.01;
+  double excess_tolerance_mm = 0.1;
+  double collision_tolerance_mm = 0.01;
+  double chord_tolerance_mm = 0.0;  // arcs; 0 = resolution / 20
+};
+
+// Throws vcut::InputError (file:line:column, key, what was expected).
+Job read_job(const std::string& path);
+
+}  // namespace vcut::io

@@ -1,0 +1,75 @@
+// The whole pipeline of `vcut simulate`: job -> program -> poses -> moves -> cut stock ->
+// machined mesh -> deviation from the design -> the output folder.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "vcut/io/job.h"
+
+namespace vcut::io {
+
+struct SimulateOptions {
+  std::optional<double> resolution_mm;  // overrides engine.resolution
+  std::optional<int> threads;           // overrides engine.threads (0 = all cores)
+  std::optional<std::string> out_dir;   // overrides report.out
+  double max_memory_mb = 0.0;           // refuse a stock larger than this; 0 = 75 % of RAM
+  // Progress: (stage, done, total); from the calling thread.
+  std::function<void(const std::string&, std::size_t, std::size_t)> progress;
+};
+
+struct RegionRecord {
+  double depth_mm = 0.0;
+  double area_mm2 = 0.0;
+  Eigen::Vector3d centroid_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
+  std::vector<std::string> lines;  // "file:line" or "file:first-last"
+  std::vector<int> tools;          // T numbers; empty for untouched stock
+  bool initial_stock = false;      // part of the region was never cut
+};
+
+struct CollisionRecord {
+  std::string kind;  // "rapid_into_stock"
+  std::string line;  // "file:line"
+  int tool = 0;
+  double depth_mm = 0.0;
+  Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
+};
+
+struct SimulationResult {
+  std::string job_name;
+  std::string out_dir;
+  std::size_t blocks = 0, poses = 0, moves = 0, cutting_moves = 0;
+  double resolution_mm = 0.0;
+  int threads = 0;
+  double initial_volume_mm3 = 0.0, final_volume_mm3 = 0.0, removed_volume_mm3 = 0.0;
+  bool compared = false;
+  double max_gouge_mm = 0.0, max_excess_mm = 0.0;
+  std::vector<RegionRecord> gouges, excess;
+  std::vector<CollisionRecord> collisions;
+  std::vector<std::string> warnings;
+  std::vector<double> histogram_edges_mm;
+  std::vector<std::size_t> histogram_counts;
+  std::vector<double> histogram_area_mm2;
+  std::size_t machined_vertices = 0, machined_triangles = 0;
+  std::vector<std::pair<std::string, double>> stage_seconds;
+  double wall_time_s = 0.0;
+  double peak_memory_mb = 0.0, stock_memory_mb = 0.0, estimated_memory_mb = 0.0;
+  std::vector<std::pair<std::string, std::string>> input_hashes;  // path, sha256
+  std::vector<std::string> outputs;
+};
+
+// Runs the job and writes machined.stl, deviation.ply (with a design), report.json and
+// gouges.csv into the output folder. Bad input is a vcut::InputError.
+SimulationResult simulate(const Job& job, const SimulateOptions& options);
+
+// Peak resident memory of this process so far (MB), from /proc/self/status.
+double peak_memory_mb();
+
+}  // namespace vcut::io

@@ -1,0 +1,18 @@
+// The tool library (YAML): cutters keyed by T number. Lengths in mm.
+//   tools: {1: {type: flat|ball|bull, diameter: 10, corner_radius: 0, flute_length: 25,
+//               shank_diameter: 10, length: 40}}
+#pragma once
+
+#include <map>
+#include <string>
+
+#include "vcut/removal/cutter.h"
+
+namespace vcut::io {
+
+using ToolLibrary = std::map<int, removal::Cutter>;
+
+// Throws vcut::InputError naming file:line:column and the key for anything invalid.
+ToolLibrary read_tool_library(const std::string& path);
+
+}  // namespace vcut::io

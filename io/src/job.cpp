@@ -1,0 +1,135 @@
+#include "vcut/io/job.h"
+
+#include <filesystem>
+
+#include "yaml_util.h"
+
+namespace vcut::io {
+namespace fs = std::filesystem;
+
+namespace {
+std::string resolve(const fs::path& base, const std::string& relative) {
+  const fs::path p(relative);
+  return (p.is_absolute() ? p : base / p).lexically_normal().string();
+}
+}  // namespace
+
+Job read_job(const std::string& path) {
+  const YamlReader yaml(path);
+  const YAML::Node root = yaml.load();
+  if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
+  yaml.only_keys(root, "", {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify"});
+  const fs::path base = fs::absolute(fs::path(path)).parent_path();
+  Job job;
+  job.file = path;
+  job.name = root["job"] ? yaml.text(root["job"], "job") : fs::path(path).stem().string();
+  if (root["machine"]) job.machine = yaml.text(root["machine"], "machine");
+  if (job.machine != "3axis")
+    yaml.fail(root["machine"], "machine", "the bundled machine '3axis' (machine files come with the five-axis pose engine)");
+
+  job.tools_file = resolve(base, yaml.text(yaml.require(root, "tools", ""), "tools"));
+  job.tools = read_tool_library(job.tools_file);
+
+  const YAML::Node program = yaml.require(root, "program", "");
+  yaml.only_keys(program, "program", {"file", "files", "dialect", "unsupported"});
+  if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
+  if (program["file"]) {
+    job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
+  } else {
+    const YAML::Node files = yaml.require(program, "files", "program");
+    if (!files.IsSequence() || files.size() == 0) yaml.fail(files, "program.files", "a non-empty list of program files");
+    for (const auto& f : files) job.program_files.push_back(resolve(base, yaml.text(f, "program.files")));
+  }
+  if (program["dialect"]) {
+    job.dialect = yaml.text(program["dialect"], "program.dialect");
+    if (job.dialect != "auto" && job.dialect != "gcode" && job.dialect != "linuxcnc" && job.dialect != "fanuc")
+      yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc or fanuc");
+  }
+  if (program["unsupported"]) {
+    const std::string mode = yaml.text(program["unsupported"], "program.unsupported");
+    if (mode != "error" && mode != "warn") yaml.fail(program["unsupported"], "program.unsupported", "error or warn");
+    job.unsupported_as_warning = mode == "warn";
+  }
+
+  if (const YAML::Node offsets = root["offsets"]) {
+    if (!offsets.IsMap()) yaml.fail(offsets, "offsets", "a map like {G54: [x, y, z]}");
+    for (const auto& kv : offsets) {
+      const std::string name = kv.first.Scalar();
+      static const char* kNames[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+      bool ok = false;
+      for (const char* n : kNames) ok = ok || name == n;
+      if (!ok) yaml.fail(kv.first, "offsets." + name, "a work offset name G54..G59, G59.1..G59.3");
+      job.offsets_mm[name] = yaml.vec3(kv.second, "offsets." + name);
+    }
+  }
+
+  const YAML::Node stock = yaml.require(root, "stock", "");
+  yaml.only_keys(stock, "stock", {"box", "cylinder", "mesh"});
+  if (stock.size() != 1) yaml.fail(stock, "stock", "exactly one of box, cylinder or mesh");
+  if (const YAML::Node box = stock["box"]) {
+    yaml.only_keys(box, "stock.box", {"min", "max"});
+    job.stock.kind = StockSpec::Kind::Box;
+    job.stock.box.min_mm = yaml.vec3(yaml.require(box, "min", "stock.box"), "stock.box.min");
+    job.stock.box.max_mm = yaml.vec3(yaml.require(box, "max", "stock.box"), "stock.box.max");
+    if (!((job.stock.box.max_mm - job.stock.box.min_mm).array() > 0.0).all())
+      yaml.fail(box["max"], "stock.box.max", "greater than stock.box.min in x, y and z");
+  } else if (const YAML::Node cyl = stock["cylinder"]) {
+    yaml.only_keys(cyl, "stock.cylinder", {"center", "axis", "radius", "height"});
+    job.stock.kind = StockSpec::Kind::Cylinder;
+    job.stock.cylinder.base_center_mm = yaml.vec3(yaml.require(cyl, "center", "stock.cylinder"), "stock.cylinder.center");
+    job.stock.cylinder.axis = cyl["axis"] ? yaml.vec3(cyl["axis"], "stock.cylinder.axis") : Eigen::Vector3d::UnitZ();
+    if (job.stock.cylinder.axis.norm() < 1e-9) yaml.fail(cyl["axis"], "stock.cylinder.axis", "a non-zero vector");
+    job.stock.cylinder.axis.normalize();
+    job.stock.cylinder.radius_mm = yaml.positive(yaml.require(cyl, "radius", "stock.cylinder"), "stock.cylinder.radius");
+    job.stock.cylinder.height_mm = yaml.positive(yaml.require(cyl, "height", "stock.cylinder"), "stock.cylinder.height");
+  } else {
+    job.stock.kind = StockSpec::Kind::Mesh;
+    const YAML::Node mesh = stock["mesh"];
+    job.stock.mesh_file = resolve(base, yaml.text(mesh.IsMap() ? yaml.require(mesh, "file", "stock.mesh") : mesh, "stock.mesh"));
+  }
+
+  if (const YAML::Node design = root["design"]) {
+    yaml.only_keys(design, "design", {"file", "transform"});
+    DesignSpec d;
+    d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
+    if (const YAML::Node t = design["transform"]) {
+      yaml.only_keys(t, "design.transform", {"translate", "rotate_deg"});
+      if (t["translate"]) d.translate_mm = yaml.vec3(t["translate"], "design.transform.translate");
+      if (t["rotate_deg"]) d.rotate_deg = yaml.vec3(t["rotate_deg"], "design.transform.rotate_deg");
+    }
+    job.design = d;
+  }
+
+  if (const YAML::Node engine = root["engine"]) {
+    yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
+    if (engine["kind"]) {
+      job.engine = yaml.text(engine["kind"], "engine.kind");
+      if (job.engine != "vdb") yaml.fail(engine["kind"], "engine.kind", "vdb (the tri-dexel engine is not built yet)");
+    }
+    if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
+    if (const YAML::Node threads = engine["threads"]) {
+      if (threads.IsScalar() && threads.Scalar() == "auto") job.threads = 0;
+      else {
+        job.threads = yaml.integer(threads, "engine.threads");
+        if (job.threads < 1) yaml.fail(threads, "engine.threads", "auto or a positive count");
+      }
+    }
+  }
+
+  job.out_dir = resolve(base, "out/" + job.name);
+  if (const YAML::Node report = root["report"]) {
+    yaml.only_keys(report, "report", {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance"});
+    if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
+    if (report["gouge_tolerance"]) job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
+    if (report["excess_tolerance"]) job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
+    if (report["collision_tolerance"])
+      job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
+  }
+  if (const YAML::Node densify = root["densify"]) {
+    yaml.only_keys(densify, "densify", {"chord_tolerance"});
+    if (densify["chord_tolerance"]) job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
+  }
+  return job;
+}
+
+}  // namespace vcut::io

@@ -1,0 +1,127 @@
+#include "vcut/io/report.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "vcut/io/atomic_file.h"
+
+namespace vcut::io {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json vec(const Eigen::Vector3d& v) {
+  // Rounded to 0.1 um: positions are no better than that and the file stays readable.
+  auto r = [](double x) { return std::round(x * 1e4) / 1e4; };
+  return ordered_json::array({r(v.x()), r(v.y()), r(v.z())});
+}
+
+double um(double mm) { return std::round(mm * 1e6) / 1e6; }
+
+ordered_json region(const RegionRecord& r) {
+  ordered_json j;
+  j["depth_mm"] = um(r.depth_mm);
+  j["area_mm2"] = um(r.area_mm2);
+  j["centroid"] = vec(r.centroid_mm);
+  j["deepest"] = vec(r.deepest_mm);
+  j["lines"] = r.lines;
+  j["tool"] = r.tools.empty() ? ordered_json(nullptr) : ordered_json(r.tools.front());
+  j["tools"] = r.tools;
+  j["initial_stock"] = r.initial_stock;
+  return j;
+}
+
+std::string csv_field(const std::string& s) {
+  if (s.find_first_of(",\"\n") == std::string::npos) return s;
+  std::string q = "\"";
+  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+  return q + "\"";
+}
+
+}  // namespace
+
+void write_report_json(const std::string& path, const Job& job, const SimulationResult& r) {
+  ordered_json j;
+  j["schema_version"] = kReportSchemaVersion;
+  j["job"] = r.job_name;
+  ordered_json s;
+  s["moves"] = r.moves;
+  s["cutting_moves"] = r.cutting_moves;
+  s["blocks"] = r.blocks;
+  s["poses"] = r.poses;
+  s["initial_volume_mm3"] = um(r.initial_volume_mm3);
+  s["final_volume_mm3"] = um(r.final_volume_mm3);
+  s["removed_volume_mm3"] = um(r.removed_volume_mm3);
+  s["compared"] = r.compared;
+  s["max_gouge_mm"] = um(r.max_gouge_mm);
+  s["max_excess_mm"] = um(r.max_excess_mm);
+  s["gouge_regions"] = r.gouges.size();
+  s["excess_regions"] = r.excess.size();
+  s["collisions"] = r.collisions.size();
+  s["machined_vertices"] = r.machined_vertices;
+  s["machined_triangles"] = r.machined_triangles;
+  s["wall_time_s"] = std::round(r.wall_time_s * 1e3) / 1e3;
+  s["peak_memory_mb"] = std::round(r.peak_memory_mb * 10) / 10;
+  s["stock_memory_mb"] = std::round(r.stock_memory_mb * 10) / 10;
+  s["estimated_memory_mb"] = std::round(r.estimated_memory_mb * 10) / 10;
+  ordered_json stages = ordered_json::object();
+  for (const auto& [name, seconds] : r.stage_seconds) stages[name] = std::round(seconds * 1e3) / 1e3;
+  s["stage_seconds"] = stages;
+  j["summary"] = s;
+  j["gouges"] = ordered_json::array();
+  for (const auto& g : r.gouges) j["gouges"].push_back(region(g));
+  j["excess"] = ordered_json::array();
+  for (const auto& e : r.excess) j["excess"].push_back(region(e));
+  j["collisions"] = ordered_json::array();
+  for (const auto& c : r.collisions)
+    j["collisions"].push_back({{"kind", c.kind}, {"line", c.line}, {"tool", c.tool}, {"depth_mm", um(c.depth_mm)}, {"where", vec(c.where_mm)}});
+  ordered_json h;
+  h["unit"] = "mm";
+  h["edges_mm"] = ordered_json::array();
+  for (double e : r.histogram_edges_mm) h["edges_mm"].push_back(std::isinf(e) ? ordered_json(e < 0 ? "-inf" : "inf") : ordered_json(um(e)));
+  h["vertex_counts"] = r.histogram_counts;
+  h["area_mm2"] = ordered_json::array();
+  for (double a : r.histogram_area_mm2) h["area_mm2"].push_back(um(a));
+  j["histogram"] = h;
+  j["warnings"] = r.warnings;
+  ordered_json settings;
+  settings["job_file"] = job.file;
+  settings["machine"] = job.machine;
+  settings["engine"] = job.engine;
+  settings["resolution_mm"] = r.resolution_mm;
+  settings["threads"] = r.threads;
+  settings["gouge_tolerance_mm"] = job.gouge_tolerance_mm;
+  settings["excess_tolerance_mm"] = job.excess_tolerance_mm;
+  settings["collision_tolerance_mm"] = job.collision_tolerance_mm;
+  settings["chord_tolerance_mm"] = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : r.resolution_mm / 20.0;
+  settings["out"] = r.out_dir;
+  j["settings"] = settings;
+  ordered_json inputs = ordered_json::array();
+  for (const auto& [file, hash] : r.input_hashes) inputs.push_back({{"file", file}, {"sha256", hash}});
+  j["inputs"] = inputs;
+  j["outputs"] = r.outputs;
+  write_text_atomically(path, j.dump(2) + "\n");
+}
+
+void write_gouges_csv(const std::string& path, const SimulationResult& r) {
+  std::ostringstream out;
+  out << "kind,rank,depth_mm,area_mm2,centroid_x,centroid_y,centroid_z,deepest_x,deepest_y,deepest_z,tool,lines\n";
+  auto rows = [&](const char* kind, const std::vector<RegionRecord>& regions) {
+    int rank = 0;
+    for (const auto& g : regions) {
+      std::string lines;
+      for (const auto& l : g.lines) lines += (lines.empty() ? "" : " ") + l;
+      if (g.initial_stock) lines += std::string(lines.empty() ? "" : " ") + "(initial stock)";
+      out << kind << ',' << ++rank << ',' << um(g.depth_mm) << ',' << um(g.area_mm2) << ',' << g.centroid_mm.x() << ','
+          << g.centroid_mm.y() << ',' << g.centroid_mm.z() << ',' << g.deepest_mm.x() << ',' << g.deepest_mm.y() << ','
+          << g.deepest_mm.z() << ',' << (g.tools.empty() ? std::string() : "T" + std::to_string(g.tools.front())) << ','
+          << csv_field(lines) << '\n';
+    }
+  };
+  rows("gouge", r.gouges);
+  rows("excess", r.excess);
+  write_text_atomically(path, out.str());
+}
+
+}  // namespace vcut::io

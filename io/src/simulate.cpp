@@ -1,0 +1,322 @@
+#include "vcut/io/simulate.h"
+
+#include <Eigen/Geometry>
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "vcut/io/atomic_file.h"
+#include "vcut/io/gcode_reader.h"
+#include "vcut/io/input_error.h"
+#include "vcut/io/mesh_io.h"
+#include "vcut/io/report.h"
+#include "vcut/io/sha256.h"
+#include "vcut/kinematics/densify.h"
+#include "vcut/removal/compare.h"
+#include "vcut/removal/vdb_stock.h"
+
+namespace vcut::io {
+namespace fs = std::filesystem;
+
+double peak_memory_mb() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+  return 0.0;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double total_ram_mb() {
+  const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) / (1024.0 * 1024.0) : 4096.0;
+}
+
+std::string display_name(const std::string& path, const std::string& job_file) {
+  const fs::path base = fs::absolute(job_file).parent_path();
+  const fs::path rel = fs::path(path).lexically_relative(base);
+  return rel.empty() || *rel.begin() == ".." ? path : rel.string();
+}
+
+// "file:12", "file:14-19": consecutive lines of one file merge into a range.
+std::vector<std::string> merge_lines(std::vector<std::pair<std::string, int>> refs) {
+  std::sort(refs.begin(), refs.end());
+  refs.erase(std::unique(refs.begin(), refs.end()), refs.end());
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < refs.size();) {
+    std::size_t j = i;
+    while (j + 1 < refs.size() && refs[j + 1].first == refs[i].first && refs[j + 1].second == refs[j].second + 1) ++j;
+    std::string s = refs[i].first + ":" + std::to_string(refs[i].second);
+    if (j > i) s += "-" + std::to_string(refs[j].second);
+    out.push_back(s);
+    i = j + 1;
+  }
+  return out;
+}
+
+removal::TriangleMesh transformed(removal::TriangleMesh mesh, const DesignSpec& d) {
+  const double k = M_PI / 180.0;
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.rotate_deg.z() * k, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(d.rotate_deg.y() * k, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(d.rotate_deg.x() * k, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  for (auto& p : mesh.vertices_mm) p = r * p + d.translate_mm;
+  return mesh;
+}
+
+}  // namespace
+
+SimulationResult simulate(const Job& job, const SimulateOptions& options) {
+  const auto t_start = Clock::now();
+  auto t_stage = t_start;
+  SimulationResult result;
+  auto stage_done = [&](const char* name) {
+    const auto now = Clock::now();
+    result.stage_seconds.emplace_back(name, std::chrono::duration<double>(now - t_stage).count());
+    t_stage = now;
+  };
+  auto progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+    if (options.progress) options.progress(stage, done, total);
+  };
+  result.job_name = job.name;
+  result.resolution_mm = options.resolution_mm.value_or(job.resolution_mm);
+  result.out_dir = options.out_dir.value_or(job.out_dir);
+  const int threads = options.threads.value_or(job.threads);
+  result.threads = threads > 0 ? threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(result.threads));
+  const double v = result.resolution_mm;
+  if (!(v > 0.0) || !std::isfinite(v)) throw InputError("--resolution: expected a positive number of mm");
+
+  // Fail on an unwritable output folder before hours of cutting, not after.
+  ensure_writable_folder(result.out_dir);
+
+  // 1. Program.
+  kinematics::Program program;
+  GcodeOptions gcode;
+  gcode.work_offsets_mm = job.offsets_mm;
+  gcode.unsupported_as_warning = job.unsupported_as_warning;
+  GcodeState state;
+  for (const std::string& file : job.program_files) {
+    std::ifstream in(file);
+    if (!in) throw InputError(file, 0, 0, "cannot open program file for reading");
+    read_gcode(in, file, gcode, program, state);
+  }
+  for (auto& f : program.files) f = display_name(f, job.file);
+  result.blocks = program.blocks.size();
+  result.warnings = program.warnings;
+  stage_done("read");
+
+  // 2. Tools: every block's tool must be in the library; cutting needs a tool.
+  std::map<int, int> cutter_index;
+  removal::MoveList moves;
+  for (const auto& b : program.blocks) {
+    if (b.tool == 0) {
+      if (b.kind != kinematics::MotionKind::Rapid)
+        throw InputError(program.where(b.source) + ": feed move with no tool in the spindle (expected T<n> M6 before it)");
+      continue;
+    }
+    if (cutter_index.count(b.tool)) continue;
+    const auto it = job.tools.find(b.tool);
+    if (it == job.tools.end())
+      throw InputError(program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library " +
+                       display_name(job.tools_file, job.file));
+    cutter_index[b.tool] = static_cast<int>(moves.cutters.size());
+    moves.cutters.push_back(it->second);
+  }
+
+  // 3. Poses and moves.
+  kinematics::DensifySettings densify;
+  densify.chord_tolerance_mm = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : v / 20.0;
+  const std::vector<kinematics::PoseSample> poses = kinematics::densify(program, densify);
+  result.poses = poses.size();
+  for (std::size_t i = 1; i < poses.size(); ++i) {
+    const auto& b = program.blocks[static_cast<std::size_t>(poses[i].block)];
+    if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
+    removal::Move m;
+    m.start_mm = poses[i - 1].pose.tip_mm;
+    m.end_mm = poses[i].pose.tip_mm;
+    if ((m.end_mm - m.start_mm).norm() < 1e-12) continue;
+    m.axis = poses[i].pose.axis;
+    m.cutter = cutter_index.at(b.tool);
+    m.block = poses[i].block;
+    m.rapid = b.kind == kinematics::MotionKind::Rapid;
+    result.cutting_moves += !m.rapid;
+    moves.moves.push_back(m);
+  }
+  result.moves = moves.moves.size();
+  stage_done("densify");
+
+  // 4. Stock.
+  removal::StockShape shape;
+  std::vector<std::string> hashed = {job.file, job.tools_file};
+  hashed.insert(hashed.end(), job.program_files.begin(), job.program_files.end());
+  switch (job.stock.kind) {
+    case StockSpec::Kind::Box: shape = job.stock.box; break;
+    case StockSpec::Kind::Cylinder: shape = job.stock.cylinder; break;
+    case StockSpec::Kind::Mesh: {
+      removal::TriangleMesh mesh = read_mesh(job.stock.mesh_file);
+      if (!removal::is_closed(mesh))
+        throw InputError(job.stock.mesh_file, 0, 0, "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
+      if (removal::signed_volume_mm3(mesh) < 0.0)
+        for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+      shape = std::move(mesh);
+      hashed.push_back(job.stock.mesh_file);
+      break;
+    }
+  }
+  const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
+  bool overlap = false;
+  Eigen::AlignedBox3d path_box;
+  for (const auto& m : moves.moves) {
+    if (m.rapid) continue;
+    path_box.extend(m.start_mm);
+    path_box.extend(m.end_mm);
+    Eigen::AlignedBox3d swept;
+    const double r = moves.cutters[static_cast<std::size_t>(m.cutter)].radius_mm();
+    swept.extend(m.start_mm.cwiseMin(m.end_mm) - Eigen::Vector3d(r, r, 0.0));
+    swept.extend(m.start_mm.cwiseMax(m.end_mm) +
+                 Eigen::Vector3d(r, r, moves.cutters[static_cast<std::size_t>(m.cutter)].flute_length_mm));
+    overlap = overlap || swept.intersects(stock_box);
+  }
+  if (!overlap) {
+    std::ostringstream msg;
+    msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
+        << stock_box.max().transpose() << "] mm";
+    if (!path_box.isEmpty()) msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
+    msg << "): check the work offsets and the stock";
+    throw InputError(job.file, 0, 0, msg.str());
+  }
+  const double estimate_mb = static_cast<double>(removal::estimate_vdb_memory_bytes(shape, v)) / (1024.0 * 1024.0);
+  result.estimated_memory_mb = estimate_mb;
+  const double limit_mb = options.max_memory_mb > 0.0 ? options.max_memory_mb : 0.75 * total_ram_mb();
+  if (estimate_mb > limit_mb) {
+    std::ostringstream msg;
+    msg.precision(0);
+    msg << std::fixed << "resolution " << v << " mm needs about " << estimate_mb << " MB for this stock, more than the "
+        << limit_mb << " MB allowed (--max-memory): choose a coarser resolution";
+    msg.precision(3);
+    throw InputError(msg.str());
+  }
+  removal::VdbStock stock(shape, v);
+  result.initial_volume_mm3 = stock.volume_mm3();
+  stage_done("stock");
+
+  // 5. Cut.
+  removal::CutOptions cut_options;
+  cut_options.collision_tolerance_mm = job.collision_tolerance_mm;
+  cut_options.progress = [&](std::size_t done, std::size_t total) { progress("cut", done, total); };
+  const removal::CutResult cut = stock.cut(moves, cut_options);
+  result.removed_volume_mm3 = cut.removed_volume_mm3;
+  result.final_volume_mm3 = stock.volume_mm3();
+  result.stock_memory_mb = static_cast<double>(stock.memory_bytes()) / (1024.0 * 1024.0);
+  auto block_of = [&](int move) -> const kinematics::Block& {
+    return program.blocks[static_cast<std::size_t>(moves.moves[static_cast<std::size_t>(move)].block)];
+  };
+  for (const auto& c : cut.collisions) {
+    const auto& b = block_of(c.move);
+    result.collisions.push_back({"rapid_into_stock", program.where(b.source), b.tool, c.depth_mm, c.where_mm});
+  }
+  stage_done("cut");
+
+  // 6. Mesh.
+  progress("mesh", 0, 1);
+  const removal::SurfaceMesh machined = stock.surface();
+  result.machined_vertices = machined.mesh.vertices_mm.size();
+  result.machined_triangles = machined.mesh.triangles.size();
+  stage_done("mesh");
+
+  // 7. Compare.
+  std::vector<double> deviation;
+  if (job.design) {
+    progress("compare", 0, 1);
+    const removal::TriangleMesh design = transformed(read_mesh(job.design->file), *job.design);
+    hashed.push_back(job.design->file);
+    const removal::DesignDistance distance(design);
+    if (!distance.closed())
+      result.warnings.push_back(display_name(job.design->file, job.file) +
+                                ": design mesh is not closed; compared anyway (signs near its holes may be wrong)");
+    removal::CompareSettings settings{job.gouge_tolerance_mm, job.excess_tolerance_mm};
+    const removal::Comparison cmp = removal::compare(machined, distance, settings);
+    result.compared = true;
+    result.max_gouge_mm = cmp.max_gouge_mm;
+    result.max_excess_mm = cmp.max_excess_mm;
+    deviation = cmp.deviation_mm;
+    auto record = [&](const removal::Region& r) {
+      RegionRecord rec;
+      rec.depth_mm = r.depth_mm;
+      rec.area_mm2 = r.area_mm2;
+      rec.centroid_mm = r.centroid_mm;
+      rec.deepest_mm = r.deepest_mm;
+      std::vector<std::pair<std::string, int>> refs;
+      std::set<int> tools;
+      for (int move : r.moves) {
+        if (move < 0) { rec.initial_stock = true; continue; }
+        const auto& b = block_of(move);
+        refs.emplace_back(program.files[static_cast<std::size_t>(b.source.file)], b.source.line);
+        tools.insert(b.tool);
+      }
+      rec.lines = merge_lines(std::move(refs));
+      rec.tools.assign(tools.begin(), tools.end());
+      return rec;
+    };
+    for (const auto& r : cmp.gouges) result.gouges.push_back(record(r));
+    for (const auto& r : cmp.excess) result.excess.push_back(record(r));
+    // Histogram: 41 bins over +-4 tolerances plus two overflow bins, by vertex and area.
+    const double span = 4.0 * std::max({job.gouge_tolerance_mm, job.excess_tolerance_mm, v});
+    const int bins = 41;
+    result.histogram_edges_mm.push_back(-std::numeric_limits<double>::infinity());
+    for (int i = 0; i <= bins; ++i) result.histogram_edges_mm.push_back(-span + 2.0 * span * i / bins);
+    result.histogram_edges_mm.push_back(std::numeric_limits<double>::infinity());
+    result.histogram_counts.assign(bins + 2, 0);
+    result.histogram_area_mm2.assign(bins + 2, 0.0);
+    const std::vector<double> area = removal::vertex_areas_mm2(machined.mesh);
+    for (std::size_t i = 0; i < deviation.size(); ++i) {
+      const double d = deviation[i];
+      const std::size_t bin = d < -span ? 0 : d >= span ? bins + 1
+                                         : 1 + std::min<std::size_t>(bins - 1, static_cast<std::size_t>((d + span) / (2.0 * span) * bins));
+      ++result.histogram_counts[bin];
+      result.histogram_area_mm2[bin] += area[i];
+    }
+    stage_done("compare");
+  }
+
+  // 8. Files.
+  progress("write", 0, 1);
+  for (const auto& f : hashed) result.input_hashes.emplace_back(display_name(f, job.file), sha256_file(f));
+  const fs::path out(result.out_dir);
+  write_stl((out / "machined.stl").string(), machined.mesh);
+  result.outputs.push_back("machined.stl");
+  if (result.compared) {
+    PlyAttributes a;
+    a.normals = removal::vertex_normals(machined.mesh);
+    const double scale = std::max(3.0 * job.gouge_tolerance_mm, job.excess_tolerance_mm);
+    for (double d : deviation) a.colors.push_back(deviation_color(d, scale > 0.0 ? scale : v));
+    a.deviation_mm = deviation;
+    a.move = machined.vertex_move;
+    for (int m : machined.vertex_move) a.line.push_back(m < 0 ? 0 : block_of(m).source.line);
+    write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
+    result.outputs.push_back("deviation.ply");
+  }
+  write_gouges_csv((out / "gouges.csv").string(), result);
+  result.outputs.push_back("gouges.csv");
+  stage_done("write");
+  result.outputs.push_back("report.json");
+  result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+  result.peak_memory_mb = peak_memory_mb();
+  write_report_json((out / "report.json").string(), job, result);
+  return result;
+}
+
+}  // namespace vcut::io

@@ -1,0 +1,53 @@
+#include "vcut/io/tool_library.h"
+
+#include "yaml_util.h"
+
+namespace vcut::io {
+
+ToolLibrary read_tool_library(const std::string& path) {
+  const YamlReader yaml(path);
+  const YAML::Node root = yaml.load();
+  if (!root.IsMap()) yaml.fail(root, "tools", "a map with the key 'tools'");
+  yaml.only_keys(root, "", {"tools"});
+  const YAML::Node tools = yaml.require(root, "tools", "");
+  if (!tools.IsMap()) yaml.fail(tools, "tools", "a map from T number to tool");
+  ToolLibrary library;
+  for (const auto& kv : tools) {
+    const int number = yaml.integer(kv.first, "tools");
+    const std::string where = "tools." + kv.first.Scalar();
+    if (number < 1 || number > 99999) yaml.fail(kv.first, where, "a T number from 1 to 99999");
+    const YAML::Node& t = kv.second;
+    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "flute_length", "shank_diameter", "length", "name"});
+    removal::Cutter c;
+    const std::string type = yaml.text(yaml.require(t, "type", where), where + ".type");
+    if (type == "flat") c.type = removal::CutterType::Flat;
+    else if (type == "ball") c.type = removal::CutterType::Ball;
+    else if (type == "bull" || type == "bullnose") c.type = removal::CutterType::BullNose;
+    else yaml.fail(t["type"], where + ".type", "flat, ball or bull");
+    c.diameter_mm = yaml.positive(yaml.require(t, "diameter", where), where + ".diameter");
+    const double radius = 0.5 * c.diameter_mm;
+    if (c.type == removal::CutterType::Flat) {
+      c.corner_radius_mm = t["corner_radius"] ? yaml.non_negative(t["corner_radius"], where + ".corner_radius") : 0.0;
+      if (c.corner_radius_mm != 0.0) yaml.fail(t["corner_radius"], where + ".corner_radius", "0 for a flat end mill");
+    } else if (c.type == removal::CutterType::Ball) {
+      c.corner_radius_mm = t["corner_radius"] ? yaml.positive(t["corner_radius"], where + ".corner_radius") : radius;
+      if (std::abs(c.corner_radius_mm - radius) > 1e-9)
+        yaml.fail(t["corner_radius"], where + ".corner_radius", "half the diameter for a ball end mill");
+      c.corner_radius_mm = radius;
+    } else {
+      c.corner_radius_mm = yaml.positive(yaml.require(t, "corner_radius", where), where + ".corner_radius");
+      if (c.corner_radius_mm > radius) yaml.fail(t["corner_radius"], where + ".corner_radius", "at most half the diameter");
+    }
+    c.flute_length_mm = yaml.positive(yaml.require(t, "flute_length", where), where + ".flute_length");
+    if (c.flute_length_mm < c.corner_radius_mm)
+      yaml.fail(t["flute_length"], where + ".flute_length", "at least the corner radius");
+    c.shank_diameter_mm = t["shank_diameter"] ? yaml.positive(t["shank_diameter"], where + ".shank_diameter") : c.diameter_mm;
+    c.length_mm = t["length"] ? yaml.positive(t["length"], where + ".length") : c.flute_length_mm;
+    if (c.length_mm < c.flute_length_mm) yaml.fail(t["length"], where + ".length", "at least the flute length");
+    if (!library.emplace(number, c).second) yaml.fail(kv.first, where, "each T number once");
+  }
+  if (library.empty()) yaml.fail(tools, "tools", "at least one tool");
+  return library;
+}
+
+}  // namespace vcut::io

@@ -1,0 +1,58 @@
+// Signed deviation of the machined surface from the design part, exact against the
+// design's triangles (CGAL AABB tree): negative = gouge (inside the design), positive =
+// excess (material left). Workpiece frame, mm.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <memory>
+#include <vector>
+
+#include "vcut/removal/mesh.h"
+#include "vcut/removal/stock.h"
+
+namespace vcut::removal {
+
+// Signed distance to a triangle mesh. The sign comes from the angle-weighted pseudo-normal
+// of the closest feature (face, edge or vertex; Baerentzen & Aanaes 2005), exact for
+// closed meshes and the natural choice for open ones.
+class DesignDistance {
+ public:
+  explicit DesignDistance(const TriangleMesh& design);
+  ~DesignDistance();
+  DesignDistance(DesignDistance&&) noexcept;
+  double signed_distance(const Eigen::Vector3d& x_mm) const;
+  bool closed() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct CompareSettings {
+  double gouge_tolerance_mm = 0.01;
+  double excess_tolerance_mm = 0.1;
+};
+
+// A connected part of the machined surface beyond a tolerance.
+struct Region {
+  double depth_mm = 0.0;  // largest |deviation|, positive
+  double area_mm2 = 0.0;
+  Eigen::Vector3d centroid_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
+  std::vector<int> moves;  // sorted, unique; -1 = initial stock surface
+  int vertices = 0;
+};
+
+struct Comparison {
+  std::vector<double> deviation_mm;  // per machined vertex
+  std::vector<Region> gouges;        // deepest first
+  std::vector<Region> excess;        // thickest first
+  double max_gouge_mm = 0.0;         // positive depth, 0 when none
+  double max_excess_mm = 0.0;
+};
+
+Comparison compare(const SurfaceMesh& machined, const DesignDistance& design,
+                   const CompareSettings& settings);
+
+}  // namespace vcut::removal

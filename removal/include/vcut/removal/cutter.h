@@ -1,0 +1,42 @@
+// A rotating cutter's cutting part as a solid, in the tool frame: tip (lowest point on the
+// axis) at the origin, axis +Z toward the spindle. Lengths in mm.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace vcut::removal {
+
+enum class CutterType { Flat, Ball, BullNose };
+
+struct Cutter {
+  CutterType type = CutterType::Flat;
+  double diameter_mm = 0.0;
+  double corner_radius_mm = 0.0;  // 0 flat, diameter/2 ball, in between bull-nose
+  double flute_length_mm = 0.0;   // height of the cutting part above the tip
+  double shank_diameter_mm = 0.0;
+  double length_mm = 0.0;  // out of the holder
+
+  double radius_mm() const { return 0.5 * diameter_mm; }
+};
+
+// The cutting part as a rounded cylinder: a core cylinder K of radius R - r spanning
+// z in [r, max(r, H - r)] grown by a ball of radius r (seed 003's tool model: every APT
+// end mill of this family is such a Minkowski sum). Its top is rounded too; the top lies
+// at the flute length, where the shank takes over.
+struct CutterCore {
+  double core_radius_mm;  // R - r
+  double z_low_mm;        // r
+  double z_high_mm;       // max(r, H - r)
+  double rounding_mm;     // r
+};
+
+CutterCore core_of(const Cutter& cutter);
+
+// Signed distance (mm, negative inside) from a tool-frame point to the cutting part.
+double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p_tool_mm);
+
+std::string to_string(CutterType type);
+
+}  // namespace vcut::removal

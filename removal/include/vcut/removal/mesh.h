@@ -1,0 +1,30 @@
+// Triangle meshes in the workpiece frame (mm), and the mesh work done on them with
+// OpenMesh: outward vertex normals, per-vertex areas, enclosed volume.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <vector>
+
+namespace vcut::removal {
+
+struct TriangleMesh {
+  std::vector<Eigen::Vector3d> vertices_mm;
+  std::vector<Eigen::Vector3i> triangles;  // counter-clockwise seen from outside
+};
+
+// Signed enclosed volume (mm^3, divergence theorem): positive for outward triangles.
+double signed_volume_mm3(const TriangleMesh& mesh);
+
+// Area-weighted unit vertex normals (OpenMesh); triangles OpenMesh cannot take (complex
+// edges) still count through a direct accumulation.
+std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
+
+// A third of the area of every incident triangle (mm^2): vertex areas sum to the mesh area.
+std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh);
+
+// Whether every edge is shared by exactly two triangles with opposite orientation.
+bool is_closed(const TriangleMesh& mesh);
+
+}  // namespace vcut::removal

@@ -1,0 +1,169 @@
+#include "vcut/removal/compare.h"
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Simple_cartesian.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace vcut::removal {
+namespace {
+
+using K = CGAL::Simple_cartesian<double>;
+using Triangle = K::Triangle_3;
+using TriangleIterator = std::vector<Triangle>::const_iterator;
+using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
+using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
+
+// Barycentric coordinates below this (relative) put the closest point on an edge/vertex.
+constexpr double kFeatureEpsilon = 1e-9;
+
+std::uint64_t edge_key(int a, int b) {
+  if (a > b) std::swap(a, b);
+  return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+}
+
+}  // namespace
+
+struct DesignDistance::Impl {
+  std::vector<Triangle> triangles;
+  std::vector<Eigen::Vector3i> corners;          // vertex ids per kept triangle
+  std::vector<Eigen::Vector3d> face_normal;      // unit
+  std::vector<Eigen::Vector3d> vertex_normal;    // angle-weighted sum
+  std::unordered_map<std::uint64_t, Eigen::Vector3d> edge_normal;  // sum of adjacent faces
+  std::vector<Eigen::Vector3d> points;
+  Tree tree;
+  bool closed = false;
+};
+
+DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_unique<Impl>()) {
+  Impl& m = *impl_;
+  m.points = design.vertices_mm;
+  m.vertex_normal.assign(design.vertices_mm.size(), Eigen::Vector3d::Zero());
+  for (const auto& t : design.triangles) {
+    const Eigen::Vector3d& a = m.points[static_cast<std::size_t>(t[0])];
+    const Eigen::Vector3d& b = m.points[static_cast<std::size_t>(t[1])];
+    const Eigen::Vector3d& c = m.points[static_cast<std::size_t>(t[2])];
+    const Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() <= 1e-14 * std::max(1.0, (b - a).squaredNorm() + (c - a).squaredNorm())) continue;  // degenerate
+    const Eigen::Vector3d unit = n.normalized();
+    m.triangles.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
+                             K::Point_3(c.x(), c.y(), c.z()));
+    m.corners.push_back(t);
+    m.face_normal.push_back(unit);
+    for (int i = 0; i < 3; ++i) {
+      const Eigen::Vector3d& p = m.points[static_cast<std::size_t>(t[i])];
+      const Eigen::Vector3d e1 = (m.points[static_cast<std::size_t>(t[(i + 1) % 3])] - p).normalized();
+      const Eigen::Vector3d e2 = (m.points[static_cast<std::size_t>(t[(i + 2) % 3])] - p).normalized();
+      const double angle = std::acos(std::clamp(e1.dot(e2), -1.0, 1.0));
+      m.vertex_normal[static_cast<std::size_t>(t[i])] += angle * unit;
+      m.edge_normal[edge_key(t[i], t[(i + 1) % 3])] += unit;
+    }
+  }
+  m.closed = is_closed(design);
+  m.tree.insert(m.triangles.begin(), m.triangles.end());
+  m.tree.build();
+  m.tree.accelerate_distance_queries();
+}
+
+DesignDistance::~DesignDistance() = default;
+DesignDistance::DesignDistance(DesignDistance&&) noexcept = default;
+bool DesignDistance::closed() const { return impl_->closed; }
+
+double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
+  const Impl& m = *impl_;
+  const auto hit = m.tree.closest_point_and_primitive(K::Point_3(x.x(), x.y(), x.z()));
+  const Eigen::Vector3d c(hit.first.x(), hit.first.y(), hit.first.z());
+  const std::size_t f = static_cast<std::size_t>(hit.second - m.triangles.begin());
+  const Eigen::Vector3i& t = m.corners[f];
+  // Barycentric coordinates of the closest point pick the feature whose normal signs it.
+  const Eigen::Vector3d& a = m.points[static_cast<std::size_t>(t[0])];
+  const Eigen::Vector3d& b = m.points[static_cast<std::size_t>(t[1])];
+  const Eigen::Vector3d& p = m.points[static_cast<std::size_t>(t[2])];
+  const Eigen::Vector3d n = (b - a).cross(p - a);
+  const double inv = 1.0 / n.squaredNorm();
+  const double wa = (b - c).cross(p - c).dot(n) * inv;
+  const double wb = (p - c).cross(a - c).dot(n) * inv;
+  const double wp = 1.0 - wa - wb;
+  const double bary[3] = {wa, wb, wp};
+  int zero_count = 0, nonzero[3], nz = 0, zero_at = -1;
+  for (int i = 0; i < 3; ++i) {
+    if (bary[i] < kFeatureEpsilon) { ++zero_count; zero_at = i; }
+    else nonzero[nz++] = i;
+  }
+  Eigen::Vector3d normal;
+  if (zero_count >= 2) normal = m.vertex_normal[static_cast<std::size_t>(t[nonzero[0]])];
+  else if (zero_count == 1) normal = m.edge_normal.at(edge_key(t[(zero_at + 1) % 3], t[(zero_at + 2) % 3]));
+  else normal = m.face_normal[f];
+  const Eigen::Vector3d d = x - c;
+  const double distance = d.norm();
+  return d.dot(normal) < 0.0 ? -distance : distance;
+}
+
+Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, const CompareSettings& settings) {
+  Comparison result;
+  const TriangleMesh& mesh = machined.mesh;
+  const std::size_t n = mesh.vertices_mm.size();
+  result.deviation_mm.resize(n);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i)
+      result.deviation_mm[i] = design.signed_distance(mesh.vertices_mm[i]);
+  });
+  for (double d : result.deviation_mm) {
+    result.max_gouge_mm = std::max(result.max_gouge_mm, -d);
+    result.max_excess_mm = std::max(result.max_excess_mm, d);
+  }
+  // Regions: connected components of the vertices beyond a tolerance, through the
+  // triangles' edges.
+  std::vector<std::vector<int>> neighbours(n);
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c) {
+      neighbours[static_cast<std::size_t>(t[c])].push_back(t[(c + 1) % 3]);
+      neighbours[static_cast<std::size_t>(t[(c + 1) % 3])].push_back(t[c]);
+    }
+  const std::vector<double> area = vertex_areas_mm2(mesh);
+  auto regions = [&](double sign, double tolerance) {
+    std::vector<Region> out;
+    std::vector<char> seen(n, 0);
+    for (std::size_t seed = 0; seed < n; ++seed) {
+      if (seen[seed] || sign * result.deviation_mm[seed] <= tolerance) continue;
+      Region r;
+      std::vector<std::size_t> stack{seed};
+      seen[seed] = 1;
+      double weight = 0.0;
+      while (!stack.empty()) {
+        const std::size_t v = stack.back();
+        stack.pop_back();
+        const double depth = sign * result.deviation_mm[v];
+        if (depth > r.depth_mm) { r.depth_mm = depth; r.deepest_mm = mesh.vertices_mm[v]; }
+        r.area_mm2 += area[v];
+        r.centroid_mm += area[v] * mesh.vertices_mm[v];
+        weight += area[v];
+        r.moves.push_back(machined.vertex_move.empty() ? -1 : machined.vertex_move[v]);
+        ++r.vertices;
+        for (int u : neighbours[v]) {
+          const std::size_t uu = static_cast<std::size_t>(u);
+          if (!seen[uu] && sign * result.deviation_mm[uu] > tolerance) {
+            seen[uu] = 1;
+            stack.push_back(uu);
+          }
+        }
+      }
+      r.centroid_mm = weight > 0.0 ? Eigen::Vector3d(r.centroid_mm / weight) : r.deepest_mm;
+      std::sort(r.moves.begin(), r.moves.end());
+      r.moves.erase(std::unique(r.moves.begin(), r.moves.end()), r.moves.end());
+      out.push_back(std::move(r));
+    }
+    std::stable_sort(out.begin(), out.end(), [](const Region& a, const Region& b) { return a.depth_mm > b.depth_mm; });
+    return out;
+  };
+  result.gouges = regions(-1.0, settings.gouge_tolerance_mm);
+  result.excess = regions(1.0, settings.excess_tolerance_mm);
+  return result;
+}
+
+}  // namespace vcut::removal

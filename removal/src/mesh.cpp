@@ -1,0 +1,93 @@
+#include "vcut/removal/mesh.h"
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <OpenMesh/Core/System/omstream.hh>
+
+#include <algorithm>
+#include <unordered_map>
+
+namespace vcut::removal {
+namespace {
+
+struct Traits : OpenMesh::DefaultTraits {
+  using Point = OpenMesh::Vec3d;
+  using Normal = OpenMesh::Vec3d;
+  VertexAttributes(OpenMesh::Attributes::Normal);
+  FaceAttributes(OpenMesh::Attributes::Normal);
+};
+using OMesh = OpenMesh::TriMesh_ArrayKernelT<Traits>;
+
+Eigen::Vector3d area_normal(const TriangleMesh& mesh, const Eigen::Vector3i& t) {
+  const auto& a = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
+  return (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - a)
+      .cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - a);
+}
+
+}  // namespace
+
+double signed_volume_mm3(const TriangleMesh& mesh) {
+  double six_v = 0.0;
+  for (const auto& t : mesh.triangles)
+    six_v += mesh.vertices_mm[static_cast<std::size_t>(t[0])].dot(
+        mesh.vertices_mm[static_cast<std::size_t>(t[1])].cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])]));
+  return six_v / 6.0;
+}
+
+std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh) {
+  OMesh om;
+  std::vector<OMesh::VertexHandle> handles;
+  handles.reserve(mesh.vertices_mm.size());
+  for (const auto& p : mesh.vertices_mm) handles.push_back(om.add_vertex(OMesh::Point(p.x(), p.y(), p.z())));
+  std::vector<Eigen::Vector3d> extra(mesh.vertices_mm.size(), Eigen::Vector3d::Zero());
+  omerr().disable();  // complex edges are expected at thin features; handled below
+  for (const auto& t : mesh.triangles) {
+    const auto f = om.add_face(handles[static_cast<std::size_t>(t[0])], handles[static_cast<std::size_t>(t[1])],
+                               handles[static_cast<std::size_t>(t[2])]);
+    if (!f.is_valid()) {
+      const Eigen::Vector3d n = area_normal(mesh, t);
+      for (int c = 0; c < 3; ++c) extra[static_cast<std::size_t>(t[c])] += n;
+    }
+  }
+  omerr().enable();
+  om.request_face_normals();
+  om.request_vertex_normals();
+  // Area-weighted: sum the unnormalised face normals around each vertex.
+  std::vector<Eigen::Vector3d> normals = std::move(extra);
+  for (const auto& fh : om.faces()) {
+    auto fv = om.cfv_iter(fh);
+    const OMesh::Point a = om.point(*fv), b = om.point(*++fv), c = om.point(*++fv);
+    const OMesh::Point n = (b - a) % (c - a);
+    for (const auto& vh : om.fv_range(fh)) normals[static_cast<std::size_t>(vh.idx())] += Eigen::Vector3d(n[0], n[1], n[2]);
+  }
+  for (auto& n : normals) {
+    const double len = n.norm();
+    if (len > 0.0) n /= len;
+  }
+  return normals;
+}
+
+std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh) {
+  std::vector<double> area(mesh.vertices_mm.size(), 0.0);
+  for (const auto& t : mesh.triangles) {
+    const double third = area_normal(mesh, t).norm() / 6.0;
+    for (int c = 0; c < 3; ++c) area[static_cast<std::size_t>(t[c])] += third;
+  }
+  return area;
+}
+
+bool is_closed(const TriangleMesh& mesh) {
+  // Each directed edge must appear once and its reverse once.
+  std::unordered_map<std::uint64_t, int> directed;
+  directed.reserve(mesh.triangles.size() * 3);
+  auto key = [](int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); };
+  for (const auto& t : mesh.triangles)
+    for (int c = 0; c < 3; ++c)
+      if (++directed[key(t[c], t[(c + 1) % 3])] > 1) return false;
+  for (const auto& [k, count] : directed) {
+    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
+    if (directed.find(key(b, a)) == directed.end()) return false;
+  }
+  return true;
+}
+
+}  // namespace vcut::removal

@@ -1,0 +1,109 @@
+#include "vcut/removal/sweep.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vcut::removal {
+namespace {
+
+// Motion components below this (mm) are treated as zero; the distance error this causes
+// is at most this much, since d is 1-Lipschitz in the sweep's end point.
+constexpr double kDegenerateMotion_mm = 1e-9;
+
+// Signed distance of a (convex) 2-D shape with distance `d_plane` extruded over an interval
+// with distance `d_axial`: exact for a product set.
+inline double extrude(double d_plane, double d_axial) {
+  const double a = std::max(d_plane, 0.0);
+  const double b = std::max(d_axial, 0.0);
+  return std::sqrt(a * a + b * b) + std::min(std::max(d_plane, d_axial), 0.0);
+}
+
+inline double interval_distance(double z, double lo, double hi) {
+  return std::abs(z - 0.5 * (lo + hi)) - 0.5 * (hi - lo);
+}
+
+// Any rotation taking `axis` to +Z (the cutter is symmetric about its axis).
+Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& axis) {
+  return Eigen::Quaterniond::FromTwoVectors(axis.normalized(), Eigen::Vector3d::UnitZ())
+      .toRotationMatrix();
+}
+
+}  // namespace
+
+TranslationSweep::TranslationSweep(const Cutter& cutter, const Move& move)
+    : core_(core_of(cutter)), to_tool_(rotation_to_z(move.axis)), origin_(move.start_mm) {
+  delta_tool_ = to_tool_ * (move.end_mm - move.start_mm);
+  delta_length_ = delta_tool_.norm();
+  const double across = delta_tool_.head<2>().norm();
+  if (std::abs(delta_tool_.z()) <= kDegenerateMotion_mm) {
+    kind_ = Kind::Across;
+    delta_tool_.z() = 0.0;
+  } else if (across <= kDegenerateMotion_mm) {
+    kind_ = Kind::Along;
+    delta_tool_.head<2>().setZero();
+  } else {
+    kind_ = Kind::General;
+  }
+  // Bounds: the cutter's bounding cylinder box at both ends, in the workpiece frame.
+  const double radius = core_.core_radius_mm + core_.rounding_mm;
+  const Eigen::Matrix3d to_work = to_tool_.transpose();
+  bounds_.setEmpty();
+  for (const Eigen::Vector3d& tip : {move.start_mm, move.end_mm}) {
+    for (int corner = 0; corner < 8; ++corner) {
+      const Eigen::Vector3d c((corner & 1) ? radius : -radius, (corner & 2) ? radius : -radius,
+                              (corner & 4) ? core_.z_high_mm + core_.rounding_mm : 0.0);
+      bounds_.extend(tip + to_work * c);
+    }
+  }
+}
+
+double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
+  const double d_radial = std::hypot(y.x(), y.y()) - core_.core_radius_mm;
+  return extrude(d_radial, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm));
+}
+
+double TranslationSweep::distance(const Eigen::Vector3d& x) const {
+  const Eigen::Vector3d y = to_tool_ * (x - origin_);
+  switch (kind_) {
+    case Kind::Across: {
+      // Core + segment = stadium (disk swept along a segment in the plane) x [z_low, z_high].
+      const Eigen::Vector2d d = delta_tool_.head<2>();
+      const double len2 = d.squaredNorm();
+      const double t = len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
+      const double d_plane = (y.head<2>() - t * d).norm() - core_.core_radius_mm;
+      return extrude(d_plane, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm)) -
+             core_.rounding_mm;
+    }
+    case Kind::Along: {
+      // Core + segment = a longer cylinder.
+      const double lo = core_.z_low_mm + std::min(0.0, delta_tool_.z());
+      const double hi = core_.z_high_mm + std::max(0.0, delta_tool_.z());
+      return extrude(y.head<2>().norm() - core_.core_radius_mm, interval_distance(y.z(), lo, hi)) -
+             core_.rounding_mm;
+    }
+    case Kind::General: {
+      // f(t) = d_core(y - t*delta) is convex in t (signed distance of a convex set along a
+      // line), and |f'| <= |delta|: golden-section search brackets the minimum.
+      constexpr double kInvPhi = 0.6180339887498949;
+      double a = 0.0, b = 1.0;
+      double c = b - kInvPhi * (b - a), e = a + kInvPhi * (b - a);
+      double fc = core_distance(y - c * delta_tool_), fe = core_distance(y - e * delta_tool_);
+      while ((b - a) * delta_length_ > kGeneralSweepTolerance_mm) {
+        if (fc <= fe) {
+          b = e; e = c; fe = fc;
+          c = b - kInvPhi * (b - a);
+          fc = core_distance(y - c * delta_tool_);
+        } else {
+          a = c; c = e; fc = fe;
+          e = a + kInvPhi * (b - a);
+          fe = core_distance(y - e * delta_tool_);
+        }
+      }
+      const double f_ends = std::min(core_distance(y), core_distance(y - delta_tool_));
+      return std::min({fc, fe, f_ends}) - core_.rounding_mm;
+    }
+  }
+  return 0.0;
+}
+
+}  // namespace vcut::removal

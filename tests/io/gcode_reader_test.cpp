@@ -1,0 +1,642 @@
+// Tests of the G-code reader. Expected values are worked by hand from the RS274/NGC
+// semantics as LinuxCNC documents and implements them (G-code reference pages; rs274ngc
+// interp_convert.cc / interp_arc.cc), each noted where it is used; none is copied from the
+// reader's own output.
+#include <vcut/io/gcode_reader.h>
+#include <vcut/io/input_error.h>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <string>
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Block;
+using kinematics::MotionKind;
+using kinematics::Program;
+using kinematics::SpindleState;
+
+// Hand-computed values are exact decimals or closed forms evaluated in double: only the
+// rounding of a few operations separates them from the reader's results.
+constexpr double kTol = 1e-9;
+constexpr double kPi = 3.14159265358979323846;
+
+Program read(const std::string& text, const GcodeOptions& options = {}) {
+  Program program;
+  GcodeState state;
+  std::istringstream in(text);
+  read_gcode(in, "test.ngc", options, program, state);
+  return program;
+}
+
+// The error a program raises; fails the test if it raises none.
+InputError error_of(const std::string& text, const GcodeOptions& options = {}) {
+  try {
+    read(text, options);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return InputError("none");
+}
+
+#define EXPECT_INPUT_ERROR(text, line_, column_, fragment)                            \
+  do {                                                                                \
+    const InputError e_ = error_of(text);                                             \
+    EXPECT_EQ(e_.file(), "test.ngc");                                                 \
+    EXPECT_EQ(e_.line(), line_) << e_.what();                                         \
+    EXPECT_EQ(e_.column(), column_) << e_.what();                                     \
+    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what(); \
+    EXPECT_EQ(std::string(e_.what()).rfind(std::string("test.ngc:") +                 \
+                                               std::to_string(line_) + ":" +          \
+                                               std::to_string(column_) + ": ",        \
+                                           0),                                        \
+              0u)                                                                     \
+        << e_.what();                                                                 \
+  } while (0)
+
+void expect_vec(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected,
+                double tol = kTol) {
+  EXPECT_NEAR(actual.x(), expected.x(), tol) << actual.transpose();
+  EXPECT_NEAR(actual.y(), expected.y(), tol) << actual.transpose();
+  EXPECT_NEAR(actual.z(), expected.z(), tol) << actual.transpose();
+}
+
+// The swept angle of an arc as program.h defines it: from start to end about `normal`, in
+// (0, 2*pi], plus 2*pi per extra turn.
+double swept_angle(const Block& b) {
+  const Eigen::Vector3d n = b.normal.normalized();
+  Eigen::Vector3d u = b.start_mm - b.center_mm;
+  Eigen::Vector3d v = b.end_mm - b.center_mm;
+  u -= n * n.dot(u);
+  v -= n * n.dot(v);
+  double angle = std::atan2(n.dot(u.cross(v)), u.dot(v));
+  if (angle <= 0.0) angle += 2.0 * kPi;
+  return angle + 2.0 * kPi * (b.turns - 1);
+}
+
+// ---------------------------------------------------------------- motion kinds
+
+TEST(GcodeReader, RapidAndLinearMovesWithFeedAndSource) {
+  // Straight moves: the end points are the programmed values (G21 G90, no offset).
+  const Program p = read(
+      "G17 G21 G40 G49 G80 G90 G94\n"
+      "G0 X0 Y0 Z10\n"
+      "G1 Z0 F100\n"
+      "G1 X10\n"
+      "G0 Z10\n");
+  ASSERT_EQ(p.files.size(), 1u);
+  EXPECT_EQ(p.files[0], "test.ngc");
+  // Line 2 starts from an unknown position, so it moves nothing and is dropped.
+  ASSERT_EQ(p.blocks.size(), 3u);
+  EXPECT_EQ(p.blocks[0].kind, MotionKind::Linear);
+  expect_vec(p.blocks[0].start_mm, {0, 0, 10});
+  expect_vec(p.blocks[0].end_mm, {0, 0, 0});
+  EXPECT_EQ(p.blocks[0].feed_mm_per_min, 100.0);
+  EXPECT_EQ(p.blocks[0].source.file, 0);
+  EXPECT_EQ(p.blocks[0].source.line, 3);
+  EXPECT_EQ(p.blocks[1].kind, MotionKind::Linear);
+  expect_vec(p.blocks[1].start_mm, {0, 0, 0});
+  expect_vec(p.blocks[1].end_mm, {10, 0, 0});
+  EXPECT_EQ(p.blocks[1].source.line, 4);
+  EXPECT_EQ(p.blocks[2].kind, MotionKind::Rapid);
+  expect_vec(p.blocks[2].end_mm, {10, 0, 10});
+  EXPECT_EQ(p.blocks[2].feed_mm_per_min, 0.0);  // rapids carry no feed
+  EXPECT_EQ(p.blocks[2].source.line, 5);
+  EXPECT_TRUE(p.warnings.empty());
+}
+
+TEST(GcodeReader, FirstMovesOnlyMoveProgrammedAxes) {
+  // Brief: an unknown axis's start takes the end value, so each of the first three lines
+  // moves nothing (dropped); the fourth runs from (5, 7, 3).
+  const Program p = read("G0 X5\nG0 Y7\nG0 Z3\nG1 X6 F10\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  expect_vec(p.blocks[0].start_mm, {5, 7, 3});
+  expect_vec(p.blocks[0].end_mm, {6, 7, 3});
+  EXPECT_EQ(p.blocks[0].source.line, 4);
+}
+
+TEST(GcodeReader, MoveWhileAnAxisIsUnknownHoldsItAtItsFirstValue) {
+  // Z is unknown during line 2; it is first programmed (5) on line 3, so line 2's move holds
+  // Z at 5 and line 3 moves nothing. A warning says so.
+  const Program p = read("G0 X0 Y0\nG1 X10 F100\nG0 Z5\nG1 Y1\n");
+  ASSERT_EQ(p.blocks.size(), 2u);
+  expect_vec(p.blocks[0].start_mm, {0, 0, 5});
+  expect_vec(p.blocks[0].end_mm, {10, 0, 5});
+  expect_vec(p.blocks[1].start_mm, {10, 0, 5});
+  expect_vec(p.blocks[1].end_mm, {10, 1, 5});
+  ASSERT_EQ(p.warnings.size(), 1u);
+  EXPECT_NE(p.warnings[0].find("test.ngc:3:"), std::string::npos) << p.warnings[0];
+  EXPECT_NE(p.warnings[0].find("Z"), std::string::npos) << p.warnings[0];
+}
+
+TEST(GcodeReader, ZeroLengthMovesAreDropped) {
+  // Convention of this reader: a straight move that does not move makes no Block.
+  const Program p = read("G0 X0 Y0 Z0\nG1 X0 F10\nG0 Y0 Z0\nG1 X1\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  EXPECT_EQ(p.blocks[0].source.line, 4);
+}
+
+TEST(GcodeReader, ModalMotionRepeats) {
+  // A line with only coordinates repeats the last motion code (rs274ngc modal group 1).
+  const Program p = read("G0 X0 Y0 Z0\nG1 X10 F200\nY5\nX0 Y0\nG0 Z5\nX3\n");
+  ASSERT_EQ(p.blocks.size(), 5u);
+  EXPECT_EQ(p.blocks[1].kind, MotionKind::Linear);
+  expect_vec(p.blocks[1].end_mm, {10, 5, 0});
+  EXPECT_EQ(p.blocks[1].feed_mm_per_min, 200.0);
+  EXPECT_EQ(p.blocks[2].kind, MotionKind::Linear);
+  expect_vec(p.blocks[2].end_mm, {0, 0, 0});
+  EXPECT_EQ(p.blocks[4].kind, MotionKind::Rapid);
+  expect_vec(p.blocks[4].end_mm, {3, 0, 5});
+}
+
+// ---------------------------------------------------------------- arcs
+
+TEST(GcodeReader, ArcG17IjkCentreNormalAndSweep) {
+  // From (10,0): centre = start + (I,J) = (0,0). G3 turns about +Z (program.h), so (10,0) to
+  // (0,10) is a quarter turn; G2 about -Z, so (10,0) to (0,-10) is a quarter turn too.
+  const Program p = read("G0 X10 Y0 Z0\nG3 X0 Y10 I-10 J0 F100\nG0 X10 Y0\nG2 X0 Y-10 I-10\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  const Block& ccw = p.blocks[0];
+  EXPECT_EQ(ccw.kind, MotionKind::Arc);
+  expect_vec(ccw.center_mm, {0, 0, 0});
+  expect_vec(ccw.normal, {0, 0, 1});
+  expect_vec(ccw.end_mm, {0, 10, 0});
+  EXPECT_EQ(ccw.turns, 1);
+  EXPECT_EQ(ccw.feed_mm_per_min, 100.0);
+  EXPECT_NEAR(swept_angle(ccw), kPi / 2, kTol);
+  const Block& cw = p.blocks[2];
+  expect_vec(cw.center_mm, {0, 0, 0});
+  expect_vec(cw.normal, {0, 0, -1});
+  EXPECT_NEAR(swept_angle(cw), kPi / 2, kTol);
+}
+
+TEST(GcodeReader, ArcG18FollowsLinuxCncZxPlane) {
+  // rs274ngc convert_arc passes (Z, X) as the plane's (first, second) axes in G18 and G3 is
+  // counterclockwise from first to second: a right-hand turn about Z x X = +Y. Rotating
+  // (10,0,0) by +90 deg about +Y gives (0,0,-10): G3 X0 Z-10 from X10 Z0 about the origin is a
+  // quarter turn. G2 turns about -Y: (10,0,0) -> (0,0,10) is a quarter turn.
+  const Program p =
+      read("G18\nG0 X10 Y0 Z0\nG3 X0 Z-10 I-10 K0 F100\nG0 X10 Z0\nG2 X0 Z10 I-10\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  expect_vec(p.blocks[0].center_mm, {0, 0, 0});
+  expect_vec(p.blocks[0].normal, {0, 1, 0});
+  EXPECT_NEAR(swept_angle(p.blocks[0]), kPi / 2, kTol);
+  expect_vec(p.blocks[2].normal, {0, -1, 0});
+  EXPECT_NEAR(swept_angle(p.blocks[2]), kPi / 2, kTol);
+}
+
+TEST(GcodeReader, ArcG19YzPlane) {
+  // G19: plane (Y, Z), G3 about Y x Z = +X. Rotating (0,10,0) by +90 deg about +X gives
+  // (0,0,10): a quarter turn with centre (0,0,0) = start + (J,K).
+  const Program p = read("G19\nG0 X0 Y10 Z0\nG3 Y0 Z10 J-10 K0 F100\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  expect_vec(p.blocks[0].center_mm, {0, 0, 0});
+  expect_vec(p.blocks[0].normal, {1, 0, 0});
+  expect_vec(p.blocks[0].end_mm, {0, 0, 10});
+  EXPECT_NEAR(swept_angle(p.blocks[0]), kPi / 2, kTol);
+}
+
+TEST(GcodeReader, RArcsShortAndLongBothDirections) {
+  // (0,0) -> (10,0) with |R| = 10: centre on x = 5 at y = +-sqrt(100 - 25) = +-8.660254...
+  // rs274ngc arc_data_r: right of start->end (y < 0) for G2 R>0 and G3 R<0, else left.
+  // The short arc subtends 2*asin(5/10) = pi/3, the long one 2*pi - pi/3.
+  const double h = std::sqrt(75.0);
+  struct Case {
+    const char* code;
+    double center_y;
+    double normal_z;
+    double angle;
+  } cases[] = {{"G2 X10 R10", -h, -1, kPi / 3},
+               {"G2 X10 R-10", h, -1, 2 * kPi - kPi / 3},
+               {"G3 X10 R10", h, 1, kPi / 3},
+               {"G3 X10 R-10", -h, 1, 2 * kPi - kPi / 3}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.code);
+    const Program p = read(std::string("G0 X0 Y0 Z0\nF100\n") + c.code + "\n");
+    ASSERT_EQ(p.blocks.size(), 1u);
+    expect_vec(p.blocks[0].center_mm, {5, c.center_y, 0});
+    expect_vec(p.blocks[0].normal, {0, 0, c.normal_z});
+    EXPECT_NEAR(swept_angle(p.blocks[0]), c.angle, kTol);
+  }
+  // A semicircle (|R| = half the chord): centre at the chord's midpoint.
+  const Program semi = read("G0 X0 Y0 Z0\nG2 X10 R5 F100\n");
+  expect_vec(semi.blocks.at(0).center_mm, {5, 0, 0});
+  EXPECT_NEAR(swept_angle(semi.blocks[0]), kPi, kTol);
+}
+
+TEST(GcodeReader, FullCircleWithIjk) {
+  // Start == end with I J K: one full turn (2*pi) about centre (0,0).
+  for (const char* line : {"G2 I-10", "G3 X10 Y0 I-10 J0"}) {
+    SCOPED_TRACE(line);
+    const Program p = read(std::string("G0 X10 Y0 Z0\nF100\n") + line + "\n");
+    ASSERT_EQ(p.blocks.size(), 1u);
+    EXPECT_EQ(p.blocks[0].start_mm, p.blocks[0].end_mm);
+    expect_vec(p.blocks[0].center_mm, {0, 0, 0});
+    EXPECT_NEAR(swept_angle(p.blocks[0]), 2 * kPi, kTol);
+  }
+}
+
+TEST(GcodeReader, HelixWithTurns) {
+  // Full circle in XY while Z falls 5 mm, P2 = two turns (4*pi); the centre lies in the
+  // start's plane (z = 0) per program.h.
+  const Program p = read("G0 X10 Y0 Z0\nG3 X10 Y0 Z-5 I-10 P2 F100\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  const Block& b = p.blocks[0];
+  expect_vec(b.start_mm, {10, 0, 0});
+  expect_vec(b.end_mm, {10, 0, -5});
+  expect_vec(b.center_mm, {0, 0, 0});
+  EXPECT_EQ(b.turns, 2);
+  EXPECT_NEAR(swept_angle(b), 4 * kPi, kTol);
+}
+
+TEST(GcodeReader, ArcToleranceBoundary) {
+  // r_start = 10; r_end = 10.0015 differs by 0.0015 <= 0.002 (default): accepted; 10.003 is not.
+  EXPECT_NO_THROW(read("G0 X10 Y0 Z0\nG2 X0 Y-10.0015 I-10 F100\n"));
+  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10.003 I-10 F100\n", 2, 1, "not on its circle");
+  GcodeOptions loose;
+  loose.arc_tolerance_mm = 0.01;
+  EXPECT_NO_THROW(read("G0 X10 Y0 Z0\nG2 X0 Y-10.003 I-10 F100\n", loose));
+}
+
+TEST(GcodeReader, RandomArcsLieOnTheirCircles) {
+  // Property (fixed seed): for R arcs in every plane, start and end are |R| from the centre
+  // in the plane, and the sweep is <= pi for R > 0 and >= pi for R < 0 (rs274 / NCMS rule).
+  std::mt19937 rng(12345);
+  std::uniform_real_distribution<double> coord(-50.0, 50.0);
+  std::uniform_real_distribution<double> extra(1.0, 3.0);
+  const char* planes[] = {"G17", "G18", "G19"};
+  const int axes[3][2] = {{0, 1}, {2, 0}, {1, 2}};
+  for (int i = 0; i < 300; ++i) {
+    const int plane = i % 3;
+    const bool cw = (i / 3) % 2 == 0;
+    const bool long_arc = (i / 6) % 2 == 0;
+    const Eigen::Vector3d s(coord(rng), coord(rng), coord(rng));
+    const Eigen::Vector3d e(coord(rng), coord(rng), coord(rng));
+    const int a = axes[plane][0], b = axes[plane][1];
+    const double half = std::hypot(e[a] - s[a], e[b] - s[b]) / 2.0;
+    const double r = half * extra(rng);
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "%s G0 X%.6f Y%.6f Z%.6f\n%s X%.6f Y%.6f Z%.6f R%.6f F100\n", planes[plane],
+                  s.x(), s.y(), s.z(), cw ? "G2" : "G3", e.x(), e.y(), e.z(),
+                  long_arc ? -r : r);
+    SCOPED_TRACE(text);
+    const Program p = read(text);
+    ASSERT_EQ(p.blocks.size(), 2u);
+    const Block& arc = p.blocks[1];
+    const double r_read = std::round(r * 1e6) / 1e6;  // as printed
+    const Eigen::Vector3d c = arc.center_mm;
+    EXPECT_NEAR(std::hypot(arc.start_mm[a] - c[a], arc.start_mm[b] - c[b]), r_read, 1e-6);
+    EXPECT_NEAR(std::hypot(arc.end_mm[a] - c[a], arc.end_mm[b] - c[b]), r_read, 1e-6);
+    const double angle = swept_angle(arc);
+    if (long_arc) {
+      EXPECT_GE(angle, kPi - 1e-9);
+    } else {
+      EXPECT_LE(angle, kPi + 1e-9);
+    }
+  }
+}
+
+// ---------------------------------------------------------------- modes
+
+TEST(GcodeReader, InchesConvertCoordinatesCentresRadiiAndFeed) {
+  // G20: every length and F times 25.4 (exact).
+  const Program p = read("G20\nG0 X1 Y0 Z0.5\nG1 X2 F10\nG3 X1 Y1 I-1 J0\nG2 X0 Y0 R-1\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_vec(p.blocks[0].start_mm, {25.4, 0, 12.7});
+  expect_vec(p.blocks[0].end_mm, {50.8, 0, 12.7});
+  EXPECT_DOUBLE_EQ(p.blocks[0].feed_mm_per_min, 254.0);
+  // (2,0) in + (I,J) = (1,0) in.
+  expect_vec(p.blocks[1].center_mm, {25.4, 0, 12.7});
+  expect_vec(p.blocks[1].end_mm, {25.4, 25.4, 12.7});
+  // (1,1) -> (0,0) in, R -1 in: the circles of radius 1 through both points have centres
+  // (1,0) and (0,1); clockwise about (1,0) from 90 deg to 180 deg is 270 deg, the long arc
+  // that a negative R asks for. So the centre is (1,0) in = (25.4, 0) mm.
+  expect_vec(p.blocks[2].center_mm, {25.4, 0, 12.7});
+  EXPECT_NEAR(swept_angle(p.blocks[2]), 1.5 * kPi, kTol);
+  // Back to G21: numbers are mm again; the feed in effect stays 254 mm/min.
+  const Program q = read("G20 G0 X1 Y0 Z0\nF10\nG21 G1 X10\n");
+  expect_vec(q.blocks.at(0).end_mm, {10, 0, 0});
+  EXPECT_DOUBLE_EQ(q.blocks[0].feed_mm_per_min, 254.0);
+}
+
+TEST(GcodeReader, IncrementalDistanceMode) {
+  // G91: each axis word adds to the current position.
+  const Program p = read("G0 X1 Y1 Z1\nG91\nG1 X2 F100\nY-3\nG90 X0\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_vec(p.blocks[0].start_mm, {1, 1, 1});
+  expect_vec(p.blocks[0].end_mm, {3, 1, 1});
+  expect_vec(p.blocks[1].end_mm, {3, -2, 1});
+  expect_vec(p.blocks[2].end_mm, {0, -2, 1});
+  // Incremental arcs: the end is start + (X, Y), the centre start + (I, J) as always.
+  const Program a = read("G0 X10 Y0 Z0\nG91 G3 X-10 Y10 I-10 F100\n");
+  expect_vec(a.blocks.at(0).end_mm, {0, 10, 0});
+  expect_vec(a.blocks[0].center_mm, {0, 0, 0});
+}
+
+TEST(GcodeReader, AbsoluteArcCentreG901) {
+  // G90.1: I J K are the centre's coordinates in the active system (LinuxCNC G90.1), so a
+  // G54 offset applies to them as to X Y Z.
+  const Program p = read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\n");
+  expect_vec(p.blocks.at(0).center_mm, {0, 0, 0});
+  GcodeOptions options;
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(100, 200, 0);
+  const Program q = read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\nG91.1 G2 X10 Y0 I0 J-10\n",
+                         options);
+  ASSERT_EQ(q.blocks.size(), 2u);
+  expect_vec(q.blocks[0].center_mm, {100, 200, 0});
+  expect_vec(q.blocks[0].end_mm, {100, 210, 0});
+  // Back in G91.1: centre = start (100,210) + (0,-10).
+  expect_vec(q.blocks[1].center_mm, {100, 200, 0});
+}
+
+TEST(GcodeReader, WorkOffsetsApply) {
+  // Brief: block coordinates = programmed (mm) + the active offset. Changing the system does
+  // not move the tool (LinuxCNC): unprogrammed axes keep their workpiece-frame position.
+  GcodeOptions options;
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(100, 0, -50);
+  options.work_offsets_mm["G55"] = Eigen::Vector3d(0, 300, 0);
+  options.work_offsets_mm["G59.1"] = Eigen::Vector3d(1, 1, 1);
+  const Program p = read("G0 X1 Y2 Z3\nG1 X2 F10\nG55 G1 X3\nY0\nG59.1 Z0\n", options);
+  ASSERT_EQ(p.blocks.size(), 4u);
+  expect_vec(p.blocks[0].start_mm, {101, 2, -47});
+  expect_vec(p.blocks[0].end_mm, {102, 2, -47});
+  expect_vec(p.blocks[1].end_mm, {3, 2, -47});
+  expect_vec(p.blocks[2].end_mm, {3, 300, -47});
+  expect_vec(p.blocks[3].end_mm, {3, 300, 1});
+}
+
+TEST(GcodeReader, CommentsPercentBlockDeleteLineNumbersAndNumberForms) {
+  const Program p = read(
+      "%\n"
+      "(header comment)\n"
+      "N10 G0 X0 Y0 Z0 ; trailing comment\n"
+      "/G1 X100 F1\n"
+      "  / G1 X100 F1\n"
+      "n20 g1 x1 (mid-line comment) y2 f50\n"
+      "N30 G4 P0.5\n"
+      "G1 X 1 0.5 Y -1320 Z+3\n"  // LinuxCNC drops blanks: X10.5
+      "G1 X1. Y.5 Z-0.25\n"
+      "%\n"
+      "G1 X999\n"
+      "garbage after the closing percent\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_vec(p.blocks[0].end_mm, {1, 2, 0});
+  EXPECT_EQ(p.blocks[0].source.line, 6);
+  EXPECT_EQ(p.blocks[0].feed_mm_per_min, 50.0);
+  expect_vec(p.blocks[1].end_mm, {10.5, -1320, 3});
+  EXPECT_EQ(p.blocks[1].source.line, 8);
+  expect_vec(p.blocks[2].end_mm, {1, 0.5, -0.25});
+  // CRLF line ends, tabs, a Fanuc program number and G01-style codes.
+  const Program q = read("O1234 (PART)\r\nG00\tX0 Y0 Z0\r\nG01 X5 F100\r\n");
+  ASSERT_EQ(q.blocks.size(), 1u);
+  expect_vec(q.blocks[0].end_mm, {5, 0, 0});
+}
+
+TEST(GcodeReader, ProgramEndIgnoresLaterLinesAndResetsModes) {
+  const Program p = read("G0 X0 Y0 Z0\nG1 X1 F10\nM2\nG1 X5\nthis is not G-code\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  // M30 on a motion line: the motion runs first (rs274ngc order of execution).
+  const Program q = read("G0 X0 Y0 Z0\nG1 X2 F10 M30\nG1 X5\n");
+  ASSERT_EQ(q.blocks.size(), 1u);
+  expect_vec(q.blocks[0].end_mm, {2, 0, 0});
+  // LinuxCNC M2: G54 G17 G90 M5 and motion mode G1; position, units and feed stay.
+  Program program;
+  GcodeState state;
+  std::istringstream in("G20 G91 G18 G55 G0 X0 Y0 Z0\nS100 M3 F5\nG0 M2\n");
+  read_gcode(in, "a.ngc", {}, program, state);
+  EXPECT_EQ(state.work_offset, "G54");
+  EXPECT_EQ(state.plane, GcodeState::Plane::XY);
+  EXPECT_FALSE(state.incremental);
+  EXPECT_TRUE(state.inches);
+  EXPECT_EQ(state.spindle, SpindleState::Off);
+  EXPECT_EQ(state.motion, GcodeState::Motion::Linear);
+}
+
+TEST(GcodeReader, ToolChangeAndSpindleState) {
+  // T only selects; M6 loads the selected tool (LinuxCNC). M5 on a motion line stops the
+  // spindle before the motion (rs274ngc: spindle control precedes motion).
+  const Program p = read(
+      "T1 M6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X1 F10\nT2\nG1 X2\nM6\nM4 S500\nG1 X3\nM5 G1 X4\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  EXPECT_EQ(p.blocks[0].tool, 1);
+  EXPECT_EQ(p.blocks[0].spindle, SpindleState::Clockwise);
+  EXPECT_EQ(p.blocks[0].spindle_rpm, 1000.0);
+  EXPECT_EQ(p.blocks[1].tool, 1);
+  EXPECT_EQ(p.blocks[2].tool, 2);
+  EXPECT_EQ(p.blocks[2].spindle, SpindleState::CounterClockwise);
+  EXPECT_EQ(p.blocks[2].spindle_rpm, 500.0);
+  EXPECT_EQ(p.blocks[3].spindle, SpindleState::Off);
+  // T and M6 on one line in either order: T is read first.
+  EXPECT_EQ(read("M6 T7\nG0 X0 Y0 Z0\nG0 X1\n").blocks.at(0).tool, 7);
+}
+
+TEST(GcodeReader, StateCarriesAcrossFiles) {
+  Program program;
+  GcodeState state;
+  std::istringstream first("G0 X0 Y0 Z0\nG1 X1 F100\nG20\n");
+  read_gcode(first, "first.ngc", {}, program, state);
+  std::istringstream second("X1\n");  // modal G1, inches, F100 mm/min carried over
+  read_gcode(second, "second.ngc", {}, program, state);
+  ASSERT_EQ(program.files.size(), 2u);
+  EXPECT_EQ(program.files[1], "second.ngc");
+  ASSERT_EQ(program.blocks.size(), 2u);
+  EXPECT_EQ(program.blocks[1].source.file, 1);
+  EXPECT_EQ(program.blocks[1].source.line, 1);
+  expect_vec(program.blocks[1].start_mm, {1, 0, 0});
+  expect_vec(program.blocks[1].end_mm, {25.4, 0, 0});
+  EXPECT_EQ(program.blocks[1].feed_mm_per_min, 100.0);
+  EXPECT_EQ(program.where(program.blocks[1].source), "second.ngc:1");
+}
+
+TEST(GcodeReader, ReadsAFileByPath) {
+  const std::string path = testing::TempDir() + "vcut_gcode_reader_test.ngc";
+  {
+    std::ofstream out(path);
+    out << "G0 X0 Y0\nG1 X1 F10\n";
+  }
+  const Program p = read_gcode(path, {});
+  ASSERT_EQ(p.files.size(), 1u);
+  EXPECT_EQ(p.files[0], path);
+  ASSERT_EQ(p.blocks.size(), 1u);
+  EXPECT_EQ(p.blocks[0].source.file, 0);
+  EXPECT_EQ(p.where(p.blocks[0].source), path + ":2");
+  // Z was never programmed: the block holds it at 0 and a warning says so.
+  ASSERT_EQ(p.warnings.size(), 1u);
+  EXPECT_NE(p.warnings[0].find("Z is never programmed"), std::string::npos) << p.warnings[0];
+}
+
+TEST(GcodeReader, LongLinesAndManyLines) {
+  // A 1 MB comment and 1 MB of blanks inside one line; then 200000 short lines.
+  const std::string long_line =
+      "G0 X0 Y0 Z0 (" + std::string(1 << 20, 'c') + ")" + std::string(1 << 20, ' ') + "\n";
+  EXPECT_TRUE(read(long_line).blocks.empty());
+  std::string many = "G0 X0 Y0 Z0\nG1 F100\n";
+  for (int i = 1; i <= 200000; ++i) many += (i % 2 ? "X1\n" : "X0\n");
+  const Program p = read(many);
+  EXPECT_EQ(p.blocks.size(), 200000u);
+  EXPECT_EQ(p.blocks.back().source.line, 200002);
+}
+
+TEST(GcodeReader, UnsupportedWordsAsWarnings) {
+  GcodeOptions options;
+  options.unsupported_as_warning = true;
+  const Program p = read("G0 X0 Y0 Z0\nG93\nG93\nM123\nG1 X1 A10 F10\nG5 I1 J1 P1 Q1 X9\n"
+                         "G0 X2\n",
+                         options);
+  // One warning per distinct word (G93, M123, A, G5), each naming its first place.
+  ASSERT_EQ(p.warnings.size(), 4u);
+  EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
+  EXPECT_NE(p.warnings[0].find("G93"), std::string::npos);
+  EXPECT_EQ(p.warnings[1].rfind("test.ngc:4:1: ", 0), 0u) << p.warnings[1];
+  EXPECT_EQ(p.warnings[2].rfind("test.ngc:5:7: ", 0), 0u) << p.warnings[2];
+  EXPECT_EQ(p.warnings[3].rfind("test.ngc:6:1: ", 0), 0u) << p.warnings[3];
+  // The ignored G5 spline leaves X unknown: the G0 X2 after it only re-establishes X.
+  ASSERT_EQ(p.blocks.size(), 1u);
+  expect_vec(p.blocks[0].end_mm, {1, 0, 0});
+  // G28 (go home) leaves its axes unknown; a canned cycle ignores its lines until G80.
+  const Program q = read("G0 X0 Y0 Z0\nG28 Z0\nG81 X1 Y1 Z-1 R2 F100\nX2\nG80\nG0 X0 Y0\n",
+                         options);
+  EXPECT_TRUE(q.blocks.empty());
+}
+
+// ---------------------------------------------------------------- errors: line and column
+
+TEST(GcodeReaderErrors, UnknownGAndMCodes) {
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG1 X1 F10 G5\n", 2, 11, "G5");
+  EXPECT_INPUT_ERROR("G12.7\n", 1, 1, "unknown G code G12.7");
+  EXPECT_INPUT_ERROR("G0 X0\n  M123\n", 2, 3, "unknown M code M123");
+  EXPECT_INPUT_ERROR("G93\n", 1, 1, "inverse-time");
+  EXPECT_INPUT_ERROR("G0 G28 Z0\n", 1, 4, "G28");
+  EXPECT_INPUT_ERROR("G41 D1\n", 1, 1, "G41");
+}
+
+TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
+  EXPECT_INPUT_ERROR("G0 E5\n", 1, 4, "'E'");
+  EXPECT_INPUT_ERROR("G0 X1 @\n", 1, 7, "'@'");
+  EXPECT_INPUT_ERROR("#1 = 5\n", 1, 1, "parameters");
+  EXPECT_INPUT_ERROR("G0 X[1+2]\n", 1, 4, "expected a number");
+  EXPECT_INPUT_ERROR("o100 sub\n", 1, 1, "O-words");
+  EXPECT_INPUT_ERROR("G0 A10\n", 1, 4, "A words");
+  EXPECT_INPUT_ERROR("G0\rX1\n", 1, 3, "carriage return");
+  EXPECT_INPUT_ERROR("G0 X1.2.3\n", 1, 8, "'.'");
+}
+
+TEST(GcodeReaderErrors, ArcEndNotOnCircle) {
+  // r_start = 10, r_end = 10.1: 0.1 mm > 0.002 mm. Reported at the G2 word, or at the first
+  // axis word when the arc is modal.
+  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10.1 I-10 F100\n", 2, 1, "not on its circle");
+  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10 I-10 F100\n  X10 Y0.5 J10\n", 3, 3,
+                     "not on its circle");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X0 Y0 I0 J0 F10\n", 2, 1, "zero-radius");
+}
+
+TEST(GcodeReaderErrors, RadiusTooSmall) {
+  // Half the chord is 5 mm > 4.9: impossible. |R| short by 1e-10 is rounding: accepted.
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X10 R4.9 F100\n", 2, 8, "less than half the chord");
+  EXPECT_NO_THROW(read("G0 X0 Y0 Z0\nG2 X10 R4.9999999999 F100\n"));
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X0 R5 F10\n", 2, 7, "ends where it starts");
+}
+
+TEST(GcodeReaderErrors, FeedMoveWithoutF) {
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG1 X1\n", 2, 1, "feed move without F");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG1\n Y1\n", 3, 2, "feed move without F");
+  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10 I-10\n", 2, 1, "feed move without F");
+}
+
+TEST(GcodeReaderErrors, BadNumbers) {
+  EXPECT_INPUT_ERROR("G0 Xnan\n", 1, 4, "expected a number after 'X'");
+  EXPECT_INPUT_ERROR("G0 X inf\n", 1, 4, "expected a number after 'X'");
+  EXPECT_INPUT_ERROR("G0 X1e400\n", 1, 4, "exponent");
+  EXPECT_INPUT_ERROR("G0 X1e5\n", 1, 4, "exponent");
+  EXPECT_INPUT_ERROR("G0 X1000001\n", 1, 4, "out of range");
+  EXPECT_INPUT_ERROR("G0 X" + std::string(400, '9') + "\n", 1, 4, "out of range");
+  // 40000 in = 1016000 mm, beyond 1e6 mm after conversion.
+  EXPECT_INPUT_ERROR("G20 G0 X40000\n", 1, 8, "out of range");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG91\nG0 X600000\n X600000\n", 4, 2, "out of range");
+  EXPECT_INPUT_ERROR("G1 X1 F2000000\n", 1, 7, "out of range");
+  EXPECT_INPUT_ERROR("S1000001 M3\n", 1, 1, "out of range");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG3 I-1 P0.5 F10\n", 2, 8, "turns");
+  EXPECT_INPUT_ERROR("T1.5 M6\n", 1, 1, "tool number");
+  EXPECT_INPUT_ERROR("S-1\n", 1, 1, "spindle speed");
+}
+
+TEST(GcodeReaderErrors, CommentsAndMissingNumbers) {
+  EXPECT_INPUT_ERROR("G0 X1 (oops\n", 1, 7, "unterminated comment");
+  EXPECT_INPUT_ERROR("G0 X1 (a (b))\n", 1, 10, "inside a comment");
+  EXPECT_INPUT_ERROR("G0 X\n", 1, 4, "expected a number after 'X', found end of line");
+  EXPECT_INPUT_ERROR("G0 X Y1\n", 1, 4, "found 'Y'");
+  EXPECT_INPUT_ERROR("G\n", 1, 1, "expected a number after 'G'");
+  EXPECT_INPUT_ERROR("G1 X-\n", 1, 4, "expected a number after 'X'");
+}
+
+TEST(GcodeReaderErrors, SameModalGroupTwiceAndRepeatedWords) {
+  EXPECT_INPUT_ERROR("G0 G1 X1\n", 1, 4, "motion (group 1)");
+  EXPECT_INPUT_ERROR("G90 G91\n", 1, 5, "distance mode");
+  EXPECT_INPUT_ERROR("G20 G21\n", 1, 5, "units");
+  EXPECT_INPUT_ERROR("M3 M4\n", 1, 4, "M3 and M4");
+  EXPECT_INPUT_ERROR("G0 X1 X2\n", 1, 7, "second X word");
+  EXPECT_INPUT_ERROR("G0 N10 X1\n", 1, 4, "N word");
+}
+
+TEST(GcodeReaderErrors, ArcWithoutCentreOrWithBadWords) {
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X1 Y1 F100\n", 2, 1, "without I/J/K or R");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X1 Y1 K1 F10\n", 2, 10, "K word in a XY-plane arc");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X2 I1 R1 F10\n", 2, 10, "both R and I/J/K");
+  EXPECT_INPUT_ERROR("G90.1 G0 X10 Y0 Z0\nG3 X0 Y10 I0 F100\n", 2, 1, "J word missing");
+  EXPECT_INPUT_ERROR("F10\nG2 X1 Y1 I1\n", 2, 1, "unknown X position");
+}
+
+TEST(GcodeReaderErrors, NonPositiveFeed) {
+  EXPECT_INPUT_ERROR("F0\n", 1, 1, "expected a feed > 0");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG1 X1 F-5\n", 2, 7, "expected a feed > 0");
+}
+
+TEST(GcodeReaderErrors, WordsWithoutUsersAndModes) {
+  EXPECT_INPUT_ERROR("X1\n", 1, 1, "no motion mode");
+  EXPECT_INPUT_ERROR("G0 X0\nG80 X1\n", 2, 5, "no motion mode");
+  EXPECT_INPUT_ERROR("G0 X1 R5\n", 1, 7, "R word with no G2/G3");
+  EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG1 X1 F10 P2\n", 2, 11, "P word");
+  EXPECT_INPUT_ERROR("G4\n", 1, 1, "G4 dwell without P");
+  EXPECT_INPUT_ERROR("G91 G0 X1\n", 1, 8, "position is unknown");
+  EXPECT_INPUT_ERROR("G0 X1\n%\n", 2, 1, "did not open with '%'");
+}
+
+TEST(GcodeReaderErrors, MissingOrUnreadableFile) {
+  const std::string missing = "/nonexistent/vcut/no_such_program.ngc";
+  try {
+    read_gcode(missing, {});
+    ADD_FAILURE() << "no error for a missing file";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), missing);
+    EXPECT_EQ(e.line(), 0);
+    EXPECT_NE(std::string(e.what()).find("cannot open"), std::string::npos) << e.what();
+  }
+  try {
+    read_gcode(VCUT_SOURCE_DIR, {});  // a directory
+    ADD_FAILURE() << "no error for a directory";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), VCUT_SOURCE_DIR);
+  }
+}
+
+TEST(GcodeReaderErrors, BadOptions) {
+  GcodeOptions options;
+  options.work_offsets_mm["G60"] = Eigen::Vector3d::Zero();
+  try {
+    read("G0 X0\n", options);
+    ADD_FAILURE() << "no error for a bad offset name";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("G60"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace vcut::io
