@@ -62,7 +62,7 @@ double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
   return extrude(d_radial, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm));
 }
 
-double TranslationSweep::distance(const Eigen::Vector3d& x) const {
+double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const {
   const Eigen::Vector3d y = to_tool_ * (x - origin_);
   switch (kind_) {
     case Kind::Across: {
@@ -82,13 +82,39 @@ double TranslationSweep::distance(const Eigen::Vector3d& x) const {
              core_.rounding_mm;
     }
     case Kind::General: {
+      if (core_.core_radius_mm == 0.0) {
+        // Ball end: the core is a segment on the axis, swept into a parallelogram P spanned
+        // by the axis and delta; the distance to P is in closed form.
+        const Eigen::Vector3d o(0.0, 0.0, core_.z_low_mm);
+        const double height = core_.z_high_mm - core_.z_low_mm;
+        const Eigen::Vector3d q = y - o;
+        const Eigen::Vector2d d_plane = delta_tool_.head<2>();
+        const double t = q.head<2>().dot(d_plane) / d_plane.squaredNorm();
+        const double s = q.z() - t * delta_tool_.z();
+        if (t >= 0.0 && t <= 1.0 && s >= 0.0 && s <= height) {
+          const Eigen::Vector2d n(-d_plane.y(), d_plane.x());
+          return std::abs(q.head<2>().dot(n)) / n.norm() - core_.rounding_mm;
+        }
+        const Eigen::Vector3d up(0.0, 0.0, height);
+        auto segment = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& d) {
+          const double u = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+          return (q - a - u * d).squaredNorm();
+        };
+        double best = std::min(segment(Eigen::Vector3d::Zero(), delta_tool_), segment(up, delta_tool_));
+        if (height > 0.0) best = std::min({best, segment(Eigen::Vector3d::Zero(), up), segment(delta_tool_, up)});
+        return std::sqrt(best) - core_.rounding_mm;
+      }
       // f(t) = d_core(y - t*delta) is convex in t (signed distance of a convex set along a
       // line), and |f'| <= |delta|: golden-section search brackets the minimum.
       constexpr double kInvPhi = 0.6180339887498949;
       double a = 0.0, b = 1.0;
       double c = b - kInvPhi * (b - a), e = a + kInvPhi * (b - a);
       double fc = core_distance(y - c * delta_tool_), fe = core_distance(y - e * delta_tool_);
+      const double far_core = far_mm + core_.rounding_mm;
       while ((b - a) * delta_length_ > kGeneralSweepTolerance_mm) {
+        // The minimum lies in [a, b] and f is delta_length-Lipschitz: a lower bound.
+        const double lower = std::min(fc, fe) - (b - a) * delta_length_;
+        if (lower >= far_core) return lower - core_.rounding_mm;
         if (fc <= fe) {
           b = e; e = c; fe = fc;
           c = b - kInvPhi * (b - a);

@@ -11,9 +11,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <functional>
 #include <mutex>
 #include <stdexcept>
 
+#include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
 
 namespace vcut::removal {
@@ -27,6 +29,11 @@ constexpr int kLeafVoxels = kLeafDim * kLeafDim * kLeafDim;
 constexpr int kCoarse = 4;  // leaves per side of a coarse culling cell
 constexpr int kNoMove = -1;
 constexpr std::size_t kBatchMoves = 8192;  // moves binned and cut together (memory bound)
+// Mesh vertices are moved onto the exact surface to within this (mm).
+constexpr double kProjectionTolerance_mm = 1e-7;
+// volumeToMesh adaptivity: merges cells on flat regions; vertices go back onto the exact
+// surface afterwards, so only the triangles between them approximate it.
+constexpr double kMeshAdaptivity = 0.05;
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
@@ -83,6 +90,12 @@ struct VdbStock::Impl {
   Coord leaf_min, leaf_dims, coarse_dims;
   std::vector<std::uint8_t> occupied;
   std::vector<std::int32_t> coarse_count;
+  // For placing mesh vertices on the exact surface: the initial stock's signed distance and
+  // every move cut so far (move ids in the id grid index `moves`).
+  std::function<double(const Eigen::Vector3d&)> initial_distance;
+  std::shared_ptr<const DesignDistance> initial_mesh;
+  std::vector<Move> moves;
+  std::vector<Cutter> cutters;
 
   std::int64_t leaf_index(int i, int j, int k) const {
     return (static_cast<std::int64_t>(k) * leaf_dims.y() + j) * leaf_dims.x() + i;
@@ -181,7 +194,8 @@ struct VdbStock::Impl {
           if (coarse_count[static_cast<std::size_t>(coarse_index(ci, cj, ck))] == 0) continue;
           const Coord co = leaf_origin(ci * kCoarse, cj * kCoarse, ck * kCoarse);
           const double sc = sweep.distance(voxel_position(co) +
-                                           Eigen::Vector3d::Constant((kCoarse * kLeafDim * 0.5 - 0.5) * v));
+                                           Eigen::Vector3d::Constant((kCoarse * kLeafDim * 0.5 - 0.5) * v),
+                                           w + coarse_half_diag + v);
           if (sc > w + coarse_half_diag) continue;
           for (int k = std::max(lo[2], ck * kCoarse); k <= std::min(hi[2], ck * kCoarse + kCoarse - 1); ++k)
             for (int j = std::max(lo[1], cj * kCoarse); j <= std::min(hi[1], cj * kCoarse + kCoarse - 1); ++j)
@@ -189,7 +203,7 @@ struct VdbStock::Impl {
                 const std::int64_t index = leaf_index(i, j, k);
                 if (!occupied[static_cast<std::size_t>(index)]) continue;
                 const double s = sweep.distance(voxel_position(leaf_origin(i, j, k)) +
-                                                Eigen::Vector3d::Constant(3.5 * v));
+                                                Eigen::Vector3d::Constant(3.5 * v), w + half_diag + v);
                 if (s > w + half_diag) continue;
                 const EntryKind kind = rapid ? EntryKind::Probe
                                        : s < -(w + half_diag) ? EntryKind::Clear
@@ -206,8 +220,9 @@ struct VdbStock::Impl {
     return leaf_origin(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k));
   }
 
+  // `id_offset` turns a batch-local move index into the move id stored in the id grid.
   void process(const Entry* begin, const Entry* end, const std::vector<TranslationSweep>& sweeps,
-               BlockResult& r) const {
+               int id_offset, BlockResult& r) const {
     const Coord o = origin_of(begin->leaf);
     const auto& tree = grid->tree();
     const auto& id_tree = ids->tree();
@@ -236,16 +251,16 @@ struct VdbStock::Impl {
       switch (e->kind) {
         case EntryKind::Clear:
           for (int n = 0; n < kLeafVoxels; ++n)
-            if (r.value[n] < wf) { r.value[n] = wf; r.id[n] = e->move; }
+            if (r.value[n] < wf) { r.value[n] = wf; r.id[n] = id_offset + e->move; }
           not_outside = 0;
           break;
         case EntryKind::Near:
           for (int n = 0; n < kLeafVoxels; ++n) {
             if (r.value[n] >= wf) continue;
-            const double cut = -sweep.distance(position[n]);
+            const double cut = -sweep.distance(position[n], w);
             if (cut > r.value[n]) {
               r.value[n] = static_cast<float>(std::min(cut, w));
-              r.id[n] = e->move;
+              r.id[n] = id_offset + e->move;
               not_outside -= r.value[n] >= wf;
             }
           }
@@ -254,9 +269,11 @@ struct VdbStock::Impl {
           Collision deepest{e->move, 0.0, Eigen::Vector3d::Zero()};
           for (int n = 0; n < kLeafVoxels; ++n) {
             if (r.value[n] >= 0.0f) continue;
-            const double s = sweep.distance(position[n]);
-            if (s >= 0.0) continue;
-            const double depth = std::min(-static_cast<double>(r.value[n]), -s);
+            if (sweep.distance(position[n]) >= 0.0) continue;
+            // Depth below the material surface; the band stores at most w, deeper voxels
+            // take the initial stock's depth (exact where no cut came near).
+            const double depth = r.value[n] > -wf ? -static_cast<double>(r.value[n])
+                                                  : std::max(w, -initial_distance(position[n]));
             if (depth > deepest.depth_mm) deepest = {e->move, depth, position[n]};
           }
           if (deepest.depth_mm > 0.0) r.probes.push_back(deepest);
@@ -329,11 +346,11 @@ double surface_area_mm2(const StockShape& shape) {
 }
 
 std::size_t estimate_vdb_memory_bytes(const StockShape& shape, double voxel_mm) {
-  // A surface of area A crosses about 2 A / (8v)^2 leaves (the band straddles leaf
+  // A surface of area A crosses about 1.5 A / (8v)^2 leaves (the band straddles leaf
   // boundaries); each holds 512 values and 512 move ids, plus masks and node overhead.
   const double leaf_side = kLeafDim * voxel_mm;
-  const double leaves = 2.0 * surface_area_mm2(shape) / (leaf_side * leaf_side);
-  const double per_leaf = sizeof(FloatLeaf) + sizeof(IdLeaf) + 64.0;
+  const double leaves = 1.5 * surface_area_mm2(shape) / (leaf_side * leaf_side);
+  const double per_leaf = kLeafVoxels * (sizeof(float) + sizeof(std::int32_t)) + 256.0;
   const Eigen::Vector3d extent = bounds_of(shape).sizes();
   const double map_bytes = (extent / leaf_side + Eigen::Vector3d::Constant(4.0)).prod();
   return static_cast<std::size_t>(leaves * per_leaf + map_bytes);
@@ -353,13 +370,17 @@ VdbStock::VdbStock(const StockShape& shape, double voxel_mm) : impl_(std::make_u
   if (const auto* box = std::get_if<BoxShape>(&shape)) {
     m.grid = openvdb::FloatGrid::create(static_cast<float>(m.w));
     m.grid->setTransform(transform);
-    m.build_analytic([&](const Eigen::Vector3d& x) { return box_distance(*box, x); });
+    m.initial_distance = [b = *box](const Eigen::Vector3d& x) { return box_distance(b, x); };
+    m.build_analytic(m.initial_distance);
   } else if (const auto* cyl = std::get_if<CylinderShape>(&shape)) {
     m.grid = openvdb::FloatGrid::create(static_cast<float>(m.w));
     m.grid->setTransform(transform);
-    m.build_analytic([&](const Eigen::Vector3d& x) { return cylinder_distance(*cyl, x); });
+    m.initial_distance = [c = *cyl](const Eigen::Vector3d& x) { return cylinder_distance(c, x); };
+    m.build_analytic(m.initial_distance);
   } else {
     const auto& mesh = std::get<TriangleMesh>(shape);
+    m.initial_mesh = std::make_shared<const DesignDistance>(mesh);
+    m.initial_distance = [d = m.initial_mesh](const Eigen::Vector3d& x) { return d->signed_distance(x); };
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     for (const auto& p : mesh.vertices_mm)
@@ -386,6 +407,14 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
   const std::size_t total = list.moves.size();
   std::map<int, Collision> collisions;
   double removed_voxels = 0.0;
+  // Move ids in the id grid count across calls: remember every move with its cutter.
+  const int id_base = static_cast<int>(m.moves.size());
+  const int cutter_base = static_cast<int>(m.cutters.size());
+  m.cutters.insert(m.cutters.end(), list.cutters.begin(), list.cutters.end());
+  for (Move move : list.moves) {
+    move.cutter += cutter_base;
+    m.moves.push_back(move);
+  }
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
     const std::size_t last = std::min(total, first + kBatchMoves);
     std::vector<TranslationSweep> sweeps;
@@ -420,7 +449,8 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
         for (std::size_t g = range.begin(); g != range.end(); ++g) {
           BlockResult& r = blocks[g - g0];
           r.probes.clear();
-          m.process(entries.data() + group_start[g], entries.data() + group_start[g + 1], sweeps, r);
+          m.process(entries.data() + group_start[g], entries.data() + group_start[g + 1], sweeps,
+                    id_base + static_cast<int>(first), r);
         }
       });
       for (std::size_t g = g0; g < g1; ++g) {
@@ -448,7 +478,7 @@ SurfaceMesh VdbStock::surface() const {
   std::vector<openvdb::Vec3s> points;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*m.grid, points, triangles, quads, 0.0, 0.0);
+  openvdb::tools::volumeToMesh(*m.grid, points, triangles, quads, 0.0, kMeshAdaptivity);
   SurfaceMesh mesh;
   mesh.mesh.vertices_mm.reserve(points.size());
   for (const auto& p : points) mesh.mesh.vertices_mm.emplace_back(p.x(), p.y(), p.z());
@@ -459,23 +489,65 @@ SurfaceMesh VdbStock::surface() const {
     mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[2]), static_cast<int>(q[1]));
     mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[3]), static_cast<int>(q[2]));
   }
-  // Each vertex takes the move id of the nearest-to-surface voxel of its cell.
-  auto values = m.grid->getConstAccessor();
+  // Each vertex goes onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0,
+  // where the moves m are those that shaped the voxels around it, by Newton steps; it
+  // takes the id of the move whose sweep is its surface (-1: the initial stock).
   auto ids = m.ids->getConstAccessor();
-  mesh.vertex_move.reserve(points.size());
-  for (const auto& p : points) {
-    const Coord base(static_cast<int>(std::floor(p.x() / m.v)), static_cast<int>(std::floor(p.y() / m.v)),
-                     static_cast<int>(std::floor(p.z() / m.v)));
-    float best = std::numeric_limits<float>::max();
-    int id = kNoMove;
-    for (int c = 0; c < 8; ++c) {
-      const Coord q = base.offsetBy(c & 1, (c >> 1) & 1, (c >> 2) & 1);
-      const float a = std::abs(values.getValue(q));
-      const int qid = ids.getValue(q);
-      if (a < best || (a == best && qid < id)) { best = a; id = qid; }
+  const std::size_t count = points.size();
+  mesh.vertex_move.assign(count, kNoMove);
+  std::vector<std::vector<int>> nearby(count);
+  for (std::size_t v = 0; v < count; ++v) {
+    const auto& p = points[v];
+    const Coord base(static_cast<int>(std::floor(p.x() / m.v)) - 1, static_cast<int>(std::floor(p.y() / m.v)) - 1,
+                     static_cast<int>(std::floor(p.z() / m.v)) - 1);
+    std::vector<int>& list = nearby[v];
+    for (int c = 0; c < 64; ++c) {
+      const int id = ids.getValue(base.offsetBy(c & 3, (c >> 2) & 3, (c >> 4) & 3));
+      if (id != kNoMove && std::find(list.begin(), list.end(), id) == list.end()) list.push_back(id);
     }
-    mesh.vertex_move.push_back(id);
+    std::sort(list.begin(), list.end());
   }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
+    std::vector<TranslationSweep> sweeps;
+    for (std::size_t v = range.begin(); v != range.end(); ++v) {
+      sweeps.clear();
+      for (int id : nearby[v]) {
+        const Move& move = m.moves[static_cast<std::size_t>(id)];
+        sweeps.emplace_back(m.cutters[static_cast<std::size_t>(move.cutter)], move);
+      }
+      int active = kNoMove;
+      auto field = [&](const Eigen::Vector3d& x) {
+        double f = m.initial_distance(x);
+        active = kNoMove;
+        for (std::size_t k = 0; k < sweeps.size(); ++k) {
+          const double cut = -sweeps[k].distance(x);
+          if (cut > f) { f = cut; active = nearby[v][k]; }
+        }
+        return f;
+      };
+      const Eigen::Vector3d start = mesh.mesh.vertices_mm[v];
+      Eigen::Vector3d x = start;
+      constexpr double kStep_mm = 1e-5;  // central differences: error O(h^2) on smooth parts
+      for (int iteration = 0; iteration < 16; ++iteration) {
+        const double f = field(x);
+        if (std::abs(f) < kProjectionTolerance_mm) break;
+        Eigen::Vector3d g;
+        for (int a = 0; a < 3; ++a) {
+          Eigen::Vector3d h = Eigen::Vector3d::Zero();
+          h[a] = kStep_mm;
+          g[a] = (field(x + h) - field(x - h)) / (2 * kStep_mm);
+        }
+        if (g.squaredNorm() < 0.25) break;  // on a kink: keep the point
+        x -= f * g / g.squaredNorm();
+      }
+      // A vertex lies in its voxel cell, so the surface is within a cell diagonal (sqrt(3) v);
+      // one that would travel farther found no surface nearby: keep it.
+      if ((x - start).norm() > 2.0 * m.v || !x.allFinite()) x = start;
+      field(x);
+      mesh.mesh.vertices_mm[v] = x;
+      mesh.vertex_move[v] = active;
+    }
+  });
   return mesh;
 }
 

@@ -6,6 +6,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <limits>
+
 #include "vcut/removal/cutter.h"
 #include "vcut/removal/move.h"
 
@@ -24,7 +26,10 @@ class TranslationSweep {
  public:
   TranslationSweep(const Cutter& cutter, const Move& move);
 
-  double distance(const Eigen::Vector3d& x_mm) const;
+  // With far_mm: where the distance is at least far_mm, any value >= far_mm may come back
+  // (a cheaper lower bound); elsewhere the exact distance.
+  double distance(const Eigen::Vector3d& x_mm,
+                  double far_mm = std::numeric_limits<double>::infinity()) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
  private:

@@ -1,0 +1,105 @@
+// Swept-volume distances against independent references: the closed-form capsule
+// (ball end mill), a profile written out by hand (flat, bull-nose), and a brute-force
+// minimum over 10^5 cutter instances along the move (ramps).
+#include "vcut/removal/sweep.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace vcut::removal {
+namespace {
+
+constexpr double kClosedForm_mm = 1e-9;  // double round-off on mm-sized distances
+
+Cutter cutter(CutterType type, double d, double r, double flute) {
+  Cutter c;
+  c.type = type;
+  c.diameter_mm = d;
+  c.corner_radius_mm = r;
+  c.flute_length_mm = flute;
+  c.length_mm = flute;
+  return c;
+}
+
+Move move(Eigen::Vector3d a, Eigen::Vector3d b) {
+  Move m;
+  m.start_mm = a;
+  m.end_mm = b;
+  return m;
+}
+
+double segment_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double t = std::clamp((x - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (x - a - t * d).norm();
+}
+
+TEST(CutterDistance, FlatBallBullProfiles) {
+  const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
+  EXPECT_NEAR(cutter_distance(flat, {0, 0, -1}), 1.0, kClosedForm_mm);   // below the tip face
+  EXPECT_NEAR(cutter_distance(flat, {7, 0, 5}), 2.0, kClosedForm_mm);    // beside the flank
+  EXPECT_NEAR(cutter_distance(flat, {8, 0, -4}), 5.0, kClosedForm_mm);   // from the rim: 3-4-5
+  EXPECT_NEAR(cutter_distance(flat, {0, 0, 1}), -1.0, kClosedForm_mm);   // inside, 1 above the face
+  const Cutter ball = cutter(CutterType::Ball, 6, 3, 20);
+  EXPECT_NEAR(cutter_distance(ball, {0, 0, -1}), 1.0, kClosedForm_mm);
+  EXPECT_NEAR(cutter_distance(ball, {4, 0, 0}), std::hypot(4.0, 3.0) - 3.0, kClosedForm_mm);  // from the centre (0,0,3)
+  const Cutter bull = cutter(CutterType::BullNose, 10, 2, 20);
+  // Torus tube centre circle radius 3 at z = 2: point (6, 0, 0) is sqrt(3^2 + 2^2) - 2 away.
+  EXPECT_NEAR(cutter_distance(bull, {6, 0, 0}), std::sqrt(13.0) - 2.0, kClosedForm_mm);
+  EXPECT_NEAR(cutter_distance(bull, {2, 0, -0.5}), 0.5, kClosedForm_mm);  // under the flat part
+}
+
+TEST(TranslationSweep, BallIsACapsule) {
+  const Cutter ball = cutter(CutterType::Ball, 6, 3, 20);
+  const Move m = move({0, 0, 0}, {10, 4, -2});  // a general ramp
+  const TranslationSweep sweep(ball, m);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-6, 16);
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d x(u(rng), u(rng) * 0.6, u(rng) * 0.3);
+    // Below the sphere centres' top the flute cylinder cannot be nearer than the sphere.
+    const double capsule = segment_distance(x, Eigen::Vector3d(0, 0, 3), Eigen::Vector3d(10, 4, 1)) - 3.0;
+    if (x.z() > 0.5 || capsule > 1.0) continue;  // stay where the spherical end is the whole story
+    EXPECT_NEAR(sweep.distance(x), capsule, kGeneralSweepTolerance_mm + kClosedForm_mm) << x.transpose();
+  }
+}
+
+TEST(TranslationSweep, MatchesBruteForceMinimumOverInstances) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-8, 8);
+  const Cutter cutters[] = {cutter(CutterType::Flat, 10, 0, 15), cutter(CutterType::BullNose, 10, 2, 15),
+                            cutter(CutterType::Ball, 6, 3, 15)};
+  const Move moves[] = {move({0, 0, 0}, {6, 0, 0}), move({0, 0, 0}, {0, 0, -5}), move({0, 0, 0}, {5, 3, -2}),
+                        move({1, 1, 1}, {-4, 2, 6})};
+  constexpr int kInstances = 100000;
+  for (const Cutter& c : cutters)
+    for (const Move& m : moves) {
+      const TranslationSweep sweep(c, m);
+      const double length = (m.end_mm - m.start_mm).norm();
+      for (int i = 0; i < 40; ++i) {
+        const Eigen::Vector3d x(u(rng), u(rng), u(rng));
+        double brute = std::numeric_limits<double>::max();
+        for (int k = 0; k <= kInstances; ++k) {
+          const double t = static_cast<double>(k) / kInstances;
+          brute = std::min(brute, cutter_distance(c, x - m.start_mm - t * (m.end_mm - m.start_mm)));
+        }
+        // The sampled minimum overestimates by at most half a sample step (1-Lipschitz).
+        const double d = sweep.distance(x);
+        EXPECT_LE(d, brute + kGeneralSweepTolerance_mm);
+        EXPECT_GE(d, brute - 0.5 * length / kInstances - kGeneralSweepTolerance_mm);
+      }
+    }
+}
+
+TEST(TranslationSweep, BoundsContainTheCutterAtBothEnds) {
+  const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
+  const TranslationSweep sweep(flat, move({0, 0, 0}, {10, 0, -3}));
+  EXPECT_TRUE(sweep.bounds().contains(Eigen::Vector3d(-5, -5, 0)));
+  EXPECT_TRUE(sweep.bounds().contains(Eigen::Vector3d(15, 5, 17)));
+  EXPECT_FALSE(sweep.bounds().contains(Eigen::Vector3d(16, 0, 0)));
+}
+
+}  // namespace
+}  // namespace vcut::removal
