@@ -190,7 +190,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
                  Eigen::Vector3d(r, r, moves.cutters[static_cast<std::size_t>(m.cutter)].flute_length_mm));
     overlap = overlap || swept.intersects(stock_box);
   }
-  if (!overlap) {
+  if (!overlap && result.cutting_moves > 0) {
     std::ostringstream msg;
     msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
         << stock_box.max().transpose() << "] mm";

@@ -1,0 +1,216 @@
+// `vcut simulate` end to end, run as a user runs it: exit codes, one-line errors naming
+// file:line:column, the report naming the NC line of a gouge, and no half-written output.
+// Geometry expectations are the slot's closed forms (see tests/removal).
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "../removal/test_meshes.h"
+
+namespace {
+namespace fs = std::filesystem;
+
+struct CommandResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+CommandResult run_vcut(const std::string& args) {
+  const std::string command = std::string(VCUT_BINARY) + " " + args + " 2>&1";
+  CommandResult r{-1, ""};
+  FILE* pipe = ::popen(command.c_str(), "r");
+  char buffer[4096];
+  while (pipe && std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
+  const int status = pipe ? ::pclose(pipe) : -1;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+void write(const fs::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+void write_ascii_stl(const fs::path& path, const vcut::removal::TriangleMesh& m) {
+  std::ofstream out(path);
+  out << "solid design\n";
+  for (const auto& t : m.triangles) {
+    out << "facet normal 0 0 0\nouter loop\n";
+    for (int c = 0; c < 3; ++c) {
+      const auto& p = m.vertices_mm[static_cast<std::size_t>(t[c])];
+      out << "vertex " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+    }
+    out << "endloop\nendfacet\n";
+  }
+  out << "endsolid design\n";
+}
+
+class Simulate : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("vcut_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, corner_radius: 0, flute_length: 25, shank_diameter: 10, length: 40}\n");
+    // Line 7 cuts the slot; the tip runs at z = -2 across the whole box.
+    program = "%\nG17 G21 G90 G94 G54\nT1 M6\nS10000 M3\nG0 X-10 Y20 Z5\nG1 Z-2 F500\nG1 X70\nG0 Z5\nM30\n%\n";
+    write(dir / "slot.ngc", program);
+    job = "job: slot\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\noffsets: {G54: [0, 0, 0]}\n"
+          "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\nengine: {kind: vdb, resolution: 0.1, threads: 2}\n"
+          "report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.02}\n";
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  CommandResult simulate(const std::string& extra = "") {
+    write(dir / "job.yaml", job);
+    write(dir / "slot.ngc", program);
+    return run_vcut("simulate --quiet " + (dir / "job.yaml").string() + " " + extra);
+  }
+  nlohmann::json report() {
+    std::ifstream in(dir / "out" / "report.json");
+    return nlohmann::json::parse(in);
+  }
+  bool no_output() { return !fs::exists(dir / "out") || fs::is_empty(dir / "out"); }
+
+  fs::path dir;
+  std::string program, job;
+};
+
+TEST_F(Simulate, SlotWithoutDesignWritesMeshAndReport) {
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = report();
+  EXPECT_EQ(j["schema_version"], "1.0");
+  EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), 1200.0, 6.0);  // 60 x 10 x 2 within 0.5 %
+  EXPECT_TRUE(fs::exists(dir / "out" / "machined.stl"));
+  EXPECT_TRUE(fs::exists(dir / "out" / "gouges.csv"));
+  EXPECT_TRUE(j["collisions"].empty());
+}
+
+TEST_F(Simulate, GougeNamesItsLine) {
+  write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 1.95));  // floor 0.05 higher
+  job += "design: {file: part.stl}\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = report();
+  ASSERT_FALSE(j["gouges"].empty());
+  EXPECT_NEAR(j["gouges"][0]["depth_mm"].get<double>(), 0.05, 0.01);
+  EXPECT_EQ(j["gouges"][0]["lines"], nlohmann::json::array({"slot.ngc:7"}));
+  EXPECT_EQ(j["gouges"][0]["tool"], 1);
+  EXPECT_NEAR(j["summary"]["max_gouge_mm"].get<double>(), 0.05, 0.01);
+  EXPECT_TRUE(fs::exists(dir / "out" / "deviation.ply"));
+  std::ifstream csv(dir / "out" / "gouges.csv");
+  std::stringstream text;
+  text << csv.rdbuf();
+  EXPECT_NE(text.str().find("gouge,1,"), std::string::npos);
+  EXPECT_NE(text.str().find("slot.ngc:7"), std::string::npos);
+}
+
+TEST_F(Simulate, DesignEqualToTheCutHasNoGouge) {
+  write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 2.0));
+  job += "design: {file: part.stl}\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = report();
+  EXPECT_TRUE(j["gouges"].empty());
+  EXPECT_TRUE(j["excess"].empty());
+}
+
+TEST_F(Simulate, RapidThroughStockIsACollisionWithItsLine) {
+  program = "G21 G90\nT1 M6\nG0 X-10 Y20 Z-1\nG0 X70\nM30\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = report();
+  ASSERT_EQ(j["collisions"].size(), 1u);
+  EXPECT_EQ(j["collisions"][0]["line"], "slot.ngc:4");
+  EXPECT_NEAR(j["collisions"][0]["depth_mm"].get<double>(), 1.0, 0.1);
+  EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), 0.0, 1e-6);  // rapids do not cut
+}
+
+TEST_F(Simulate, FlagsOverrideJobKeys) {
+  const CommandResult r = simulate("--resolution 0.2 --threads 1 --out " + (dir / "elsewhere").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "elsewhere" / "report.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["settings"]["resolution_mm"], 0.2);
+  EXPECT_EQ(j["settings"]["threads"], 1);
+}
+
+// Each bad input: exit code 2, one line naming the place, nothing left in the output folder.
+void expect_error(const CommandResult& r, const std::string& fragment) {
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("vcut: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+}
+
+TEST_F(Simulate, UnknownGCode) {
+  program = "G21\nT1 M6\nG1 X1 F100\nG5 X3\n";
+  expect_error(simulate(), "slot.ngc:4:1");
+  EXPECT_TRUE(no_output());
+}
+
+TEST_F(Simulate, ToolMissingFromLibrary) {
+  program = "G21\nT7 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\n";
+  expect_error(simulate(), "T7 is not in the tool library");
+  EXPECT_TRUE(no_output());
+}
+
+TEST_F(Simulate, MissingProgramFile) {
+  job.replace(job.find("slot.ngc"), 8, "nope.ngc");
+  expect_error(simulate(), "nope.ngc");
+}
+
+TEST_F(Simulate, InvalidYamlNamesLine) {
+  job += "engine: {kind: vdb, resolution: [\n";
+  expect_error(simulate(), "job.yaml:");
+}
+
+TEST_F(Simulate, WrongTypeNamesKey) {
+  job.replace(job.find("resolution: 0.1"), 15, "resolution: abc");
+  expect_error(simulate(), "engine.resolution");
+}
+
+TEST_F(Simulate, ZeroToolDiameter) {
+  write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 0, flute_length: 25}\n");
+  expect_error(simulate(), "tools.1.diameter");
+}
+
+TEST_F(Simulate, StockAndProgramDoNotOverlap) {
+  job.replace(job.find("offsets: {G54: [0, 0, 0]}"), 25, "offsets: {G54: [500, 0, 0]}");
+  expect_error(simulate(), "never reach the stock");
+  EXPECT_TRUE(no_output());
+}
+
+TEST_F(Simulate, ResolutionBeyondMemoryIsRefused) {
+  expect_error(simulate("--resolution 0.005 --max-memory 100"), "MB");
+  EXPECT_TRUE(no_output());
+}
+
+TEST_F(Simulate, OpenDesignIsAWarningAndStillCompared) {
+  auto mesh = vcut::removal::test::slotted_block(5.0, 2.0);
+  mesh.triangles.pop_back();  // a hole
+  write_ascii_stl(dir / "part.stl", mesh);
+  job += "design: {file: part.stl}\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: part.stl: design mesh is not closed"), std::string::npos) << r.output;
+  EXPECT_TRUE(report()["summary"]["compared"].get<bool>());
+}
+
+TEST_F(Simulate, CorruptDesignMesh) {
+  write(dir / "part.stl", "solid x\nfacet normal 0 0 0\nouter loop\nvertex 1 2\n");
+  job += "design: {file: part.stl}\n";
+  expect_error(simulate(), "part.stl");
+}
+
+TEST_F(Simulate, UnwritableOutputFolder) {
+  write(dir / "blocker", "a file where the folder should be");
+  job.replace(job.find("out: out"), 8, "out: blocker/out");
+  expect_error(simulate(), "blocker");
+}
+
+}  // namespace
