@@ -1,0 +1,37 @@
+# vcut: `make demo` sets up and runs the bundled example; `make test` sets up and runs
+# every test (also under AddressSanitizer/UBSan); `make bench` measures.
+BUILD ?= build
+BUILD_SAN ?= build-sanitize
+JOBS ?= $(shell nproc)
+CMAKE_FLAGS ?=
+
+.PHONY: deps build demo test test-release test-sanitize bench clean
+
+deps:
+	@scripts/install-deps
+
+build: deps
+	cmake -S . -B $(BUILD) -G Ninja -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS) > $(BUILD).configure.log || (cat $(BUILD).configure.log; exit 1)
+	cmake --build $(BUILD) -j $(JOBS)
+
+demo: build
+	./$(BUILD)/cli/vcut simulate examples/demo/job.yaml
+	@echo "Open examples/demo/out/demo/deviation.ply (coloured deviation) or read examples/demo/out/demo/report.json"
+
+test-release: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+test-sanitize: deps
+	cmake -S . -B $(BUILD_SAN) -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVCUT_SANITIZE=ON -DVCUT_BUILD_BENCHMARKS=OFF > $(BUILD_SAN).configure.log || (cat $(BUILD_SAN).configure.log; exit 1)
+	cmake --build $(BUILD_SAN) -j $(JOBS)
+	cd $(BUILD_SAN) && ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
+
+test: test-release test-sanitize
+
+bench: build
+	@scripts/install-deps --bench
+	./$(BUILD)/benchmarks/vcut_benchmarks --benchmark_min_time=0.2
+	scripts/bench-demo $(BUILD)/cli/vcut
+
+clean:
+	rm -rf $(BUILD) $(BUILD_SAN) $(BUILD).configure.log $(BUILD_SAN).configure.log
