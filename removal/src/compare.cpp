@@ -19,9 +19,6 @@ using TriangleIterator = std::vector<Triangle>::const_iterator;
 using Primitive = CGAL::AABB_triangle_primitive<K, TriangleIterator>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 
-// Barycentric coordinates below this (relative) put the closest point on an edge/vertex.
-constexpr double kFeatureEpsilon = 1e-9;
-
 std::uint64_t edge_key(int a, int b) {
   if (a > b) std::swap(a, b);
   return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
@@ -61,13 +58,14 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
       const Eigen::Vector3d e2 = (m.points[static_cast<std::size_t>(t[(i + 2) % 3])] - p).normalized();
       const double angle = std::acos(std::clamp(e1.dot(e2), -1.0, 1.0));
       m.vertex_normal[static_cast<std::size_t>(t[i])] += angle * unit;
-      m.edge_normal[edge_key(t[i], t[(i + 1) % 3])] += unit;
+      // Eigen vectors are not zero-initialised: insert an explicit zero first.
+      m.edge_normal.try_emplace(edge_key(t[i], t[(i + 1) % 3]), Eigen::Vector3d::Zero()).first->second += unit;
     }
   }
   m.closed = is_closed(design);
   m.tree.insert(m.triangles.begin(), m.triangles.end());
   m.tree.build();
-  m.tree.accelerate_distance_queries();
+  m.tree.do_not_accelerate_distance_queries();  // the KD-tree hint made tie-breaking between equally near triangles vary
 }
 
 DesignDistance::~DesignDistance() = default;
@@ -76,30 +74,42 @@ bool DesignDistance::closed() const { return impl_->closed; }
 
 double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
   const Impl& m = *impl_;
+  // CGAL finds the nearest triangle; the nearest point on it and its feature (vertex,
+  // edge, face) come from Ericson's region test (Real-Time Collision Detection, 5.1.5),
+  // so the pseudo-normal that signs the distance is chosen exactly.
   const auto hit = m.tree.closest_point_and_primitive(K::Point_3(x.x(), x.y(), x.z()));
-  const Eigen::Vector3d c(hit.first.x(), hit.first.y(), hit.first.z());
   const std::size_t f = static_cast<std::size_t>(hit.second - m.triangles.begin());
   const Eigen::Vector3i& t = m.corners[f];
-  // Barycentric coordinates of the closest point pick the feature whose normal signs it.
   const Eigen::Vector3d& a = m.points[static_cast<std::size_t>(t[0])];
   const Eigen::Vector3d& b = m.points[static_cast<std::size_t>(t[1])];
-  const Eigen::Vector3d& p = m.points[static_cast<std::size_t>(t[2])];
-  const Eigen::Vector3d n = (b - a).cross(p - a);
-  const double inv = 1.0 / n.squaredNorm();
-  const double wa = (b - c).cross(p - c).dot(n) * inv;
-  const double wb = (p - c).cross(a - c).dot(n) * inv;
-  const double wp = 1.0 - wa - wb;
-  const double bary[3] = {wa, wb, wp};
-  int zero_count = 0, nonzero[3], nz = 0, zero_at = -1;
-  for (int i = 0; i < 3; ++i) {
-    if (bary[i] < kFeatureEpsilon) { ++zero_count; zero_at = i; }
-    else nonzero[nz++] = i;
-  }
+  const Eigen::Vector3d& c = m.points[static_cast<std::size_t>(t[2])];
+  const Eigen::Vector3d ab = b - a, ac = c - a, ap = x - a;
+  Eigen::Vector3d nearest;
   Eigen::Vector3d normal;
-  if (zero_count >= 2) normal = m.vertex_normal[static_cast<std::size_t>(t[nonzero[0]])];
-  else if (zero_count == 1) normal = m.edge_normal.at(edge_key(t[(zero_at + 1) % 3], t[(zero_at + 2) % 3]));
-  else normal = m.face_normal[f];
-  const Eigen::Vector3d d = x - c;
+  auto edge = [&](int i, int j) { return m.edge_normal.at(edge_key(t[i], t[j])); };
+  auto vertex = [&](int i) { return m.vertex_normal[static_cast<std::size_t>(t[i])]; };
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  const Eigen::Vector3d bp = x - b, cp = x - c;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp), d5 = ab.dot(cp), d6 = ac.dot(cp);
+  const double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    nearest = a; normal = vertex(0);
+  } else if (d3 >= 0.0 && d4 <= d3) {
+    nearest = b; normal = vertex(1);
+  } else if (d6 >= 0.0 && d5 <= d6) {
+    nearest = c; normal = vertex(2);
+  } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    nearest = a + d1 / (d1 - d3) * ab; normal = edge(0, 1);
+  } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    nearest = a + d2 / (d2 - d6) * ac; normal = edge(0, 2);
+  } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    nearest = b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b); normal = edge(1, 2);
+  } else {
+    const double denom = 1.0 / (va + vb + vc);
+    nearest = a + ab * (vb * denom) + ac * (vc * denom);
+    normal = m.face_normal[f];
+  }
+  const Eigen::Vector3d d = x - nearest;
   const double distance = d.norm();
   return d.dot(normal) < 0.0 ? -distance : distance;
 }

@@ -46,23 +46,21 @@ InputError error_of(const std::string& text, const GcodeOptions& options = {}) {
   return InputError("none");
 }
 
-#define EXPECT_INPUT_ERROR(text, line_, column_, fragment)                            \
-  do {                                                                                \
-    const InputError e_ = error_of(text);                                             \
-    EXPECT_EQ(e_.file(), "test.ngc");                                                 \
-    EXPECT_EQ(e_.line(), line_) << e_.what();                                         \
-    EXPECT_EQ(e_.column(), column_) << e_.what();                                     \
-    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what(); \
-    EXPECT_EQ(std::string(e_.what()).rfind(std::string("test.ngc:") +                 \
-                                               std::to_string(line_) + ":" +          \
-                                               std::to_string(column_) + ": ",        \
-                                           0),                                        \
-              0u)                                                                     \
-        << e_.what();                                                                 \
+#define EXPECT_INPUT_ERROR(text, line_, column_, fragment)                                    \
+  do {                                                                                        \
+    const InputError e_ = error_of(text);                                                     \
+    EXPECT_EQ(e_.file(), "test.ngc");                                                         \
+    EXPECT_EQ(e_.line(), line_) << e_.what();                                                 \
+    EXPECT_EQ(e_.column(), column_) << e_.what();                                             \
+    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();         \
+    EXPECT_EQ(std::string(e_.what()).rfind(std::string("test.ngc:") + std::to_string(line_) + \
+                                               ":" + std::to_string(column_) + ": ",          \
+                                           0),                                                \
+              0u)                                                                             \
+        << e_.what();                                                                         \
   } while (0)
 
-void expect_vec(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected,
-                double tol = kTol) {
+void expect_vec(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected, double tol = kTol) {
   EXPECT_NEAR(actual.x(), expected.x(), tol) << actual.transpose();
   EXPECT_NEAR(actual.y(), expected.y(), tol) << actual.transpose();
   EXPECT_NEAR(actual.z(), expected.z(), tol) << actual.transpose();
@@ -162,7 +160,8 @@ TEST(GcodeReader, ArcG17IjkCentreNormalAndSweep) {
   // From (10,0): centre = start + (I,J) = (0,0). G3 turns about +Z (program.h), so (10,0) to
   // (0,10) is a quarter turn; G2 about -Z, so (10,0) to (0,-10) is a quarter turn too.
   const Program p = read("G0 X10 Y0 Z0\nG3 X0 Y10 I-10 J0 F100\nG0 X10 Y0\nG2 X0 Y-10 I-10\n");
-  ASSERT_EQ(p.blocks.size(), 4u);
+  // The first G0 starts from an unknown position: it moves nothing and is dropped.
+  ASSERT_EQ(p.blocks.size(), 3u);
   const Block& ccw = p.blocks[0];
   EXPECT_EQ(ccw.kind, MotionKind::Arc);
   expect_vec(ccw.center_mm, {0, 0, 0});
@@ -182,9 +181,8 @@ TEST(GcodeReader, ArcG18FollowsLinuxCncZxPlane) {
   // counterclockwise from first to second: a right-hand turn about Z x X = +Y. Rotating
   // (10,0,0) by +90 deg about +Y gives (0,0,-10): G3 X0 Z-10 from X10 Z0 about the origin is a
   // quarter turn. G2 turns about -Y: (10,0,0) -> (0,0,10) is a quarter turn.
-  const Program p =
-      read("G18\nG0 X10 Y0 Z0\nG3 X0 Z-10 I-10 K0 F100\nG0 X10 Z0\nG2 X0 Z10 I-10\n");
-  ASSERT_EQ(p.blocks.size(), 4u);
+  const Program p = read("G18\nG0 X10 Y0 Z0\nG3 X0 Z-10 I-10 K0 F100\nG0 X10 Z0\nG2 X0 Z10 I-10\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
   expect_vec(p.blocks[0].center_mm, {0, 0, 0});
   expect_vec(p.blocks[0].normal, {0, 1, 0});
   EXPECT_NEAR(swept_angle(p.blocks[0]), kPi / 2, kTol);
@@ -283,14 +281,13 @@ TEST(GcodeReader, RandomArcsLieOnTheirCircles) {
     const double half = std::hypot(e[a] - s[a], e[b] - s[b]) / 2.0;
     const double r = half * extra(rng);
     char text[512];
-    std::snprintf(text, sizeof text,
-                  "%s G0 X%.6f Y%.6f Z%.6f\n%s X%.6f Y%.6f Z%.6f R%.6f F100\n", planes[plane],
-                  s.x(), s.y(), s.z(), cw ? "G2" : "G3", e.x(), e.y(), e.z(),
+    std::snprintf(text, sizeof text, "%s G0 X%.6f Y%.6f Z%.6f\n%s X%.6f Y%.6f Z%.6f R%.6f F100\n",
+                  planes[plane], s.x(), s.y(), s.z(), cw ? "G2" : "G3", e.x(), e.y(), e.z(),
                   long_arc ? -r : r);
     SCOPED_TRACE(text);
     const Program p = read(text);
-    ASSERT_EQ(p.blocks.size(), 2u);
-    const Block& arc = p.blocks[1];
+    ASSERT_EQ(p.blocks.size(), 1u);  // the first G0 moves nothing
+    const Block& arc = p.blocks[0];
     const double r_read = std::round(r * 1e6) / 1e6;  // as printed
     const Eigen::Vector3d c = arc.center_mm;
     EXPECT_NEAR(std::hypot(arc.start_mm[a] - c[a], arc.start_mm[b] - c[b]), r_read, 1e-6);
@@ -348,8 +345,8 @@ TEST(GcodeReader, AbsoluteArcCentreG901) {
   expect_vec(p.blocks.at(0).center_mm, {0, 0, 0});
   GcodeOptions options;
   options.work_offsets_mm["G54"] = Eigen::Vector3d(100, 200, 0);
-  const Program q = read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\nG91.1 G2 X10 Y0 I0 J-10\n",
-                         options);
+  const Program q =
+      read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\nG91.1 G2 X10 Y0 I0 J-10\n", options);
   ASSERT_EQ(q.blocks.size(), 2u);
   expect_vec(q.blocks[0].center_mm, {100, 200, 0});
   expect_vec(q.blocks[0].end_mm, {100, 210, 0});
@@ -410,7 +407,7 @@ TEST(GcodeReader, ProgramEndIgnoresLaterLinesAndResetsModes) {
   // LinuxCNC M2: G54 G17 G90 M5 and motion mode G1; position, units and feed stay.
   Program program;
   GcodeState state;
-  std::istringstream in("G20 G91 G18 G55 G0 X0 Y0 Z0\nS100 M3 F5\nG0 M2\n");
+  std::istringstream in("G20 G18 G55 G0 X0 Y0 Z0\nG91 S100 M3 F5\nG0 M2\n");
   read_gcode(in, "a.ngc", {}, program, state);
   EXPECT_EQ(state.work_offset, "G54");
   EXPECT_EQ(state.plane, GcodeState::Plane::XY);
@@ -423,8 +420,8 @@ TEST(GcodeReader, ProgramEndIgnoresLaterLinesAndResetsModes) {
 TEST(GcodeReader, ToolChangeAndSpindleState) {
   // T only selects; M6 loads the selected tool (LinuxCNC). M5 on a motion line stops the
   // spindle before the motion (rs274ngc: spindle control precedes motion).
-  const Program p = read(
-      "T1 M6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X1 F10\nT2\nG1 X2\nM6\nM4 S500\nG1 X3\nM5 G1 X4\n");
+  const Program p =
+      read("T1 M6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X1 F10\nT2\nG1 X2\nM6\nM4 S500\nG1 X3\nM5 G1 X4\n");
   ASSERT_EQ(p.blocks.size(), 4u);
   EXPECT_EQ(p.blocks[0].tool, 1);
   EXPECT_EQ(p.blocks[0].spindle, SpindleState::Clockwise);
@@ -456,6 +453,24 @@ TEST(GcodeReader, StateCarriesAcrossFiles) {
   EXPECT_EQ(program.where(program.blocks[1].source), "second.ngc:1");
 }
 
+TEST(GcodeReader, UnknownAxisResolvedInALaterFile) {
+  // Z is unknown through the first file: its move holds Z still (warning at the end of the
+  // file) and takes Z = 2 when the second file first programs it (second warning).
+  Program program;
+  GcodeState state;
+  std::istringstream first("G0 X0 Y0\nG1 X1 F10\n");
+  read_gcode(first, "first.ngc", {}, program, state);
+  ASSERT_EQ(program.warnings.size(), 1u);
+  EXPECT_NE(program.warnings[0].find("Z has not been programmed"), std::string::npos);
+  std::istringstream second("G0 Z2\n");
+  read_gcode(second, "second.ngc", {}, program, state);
+  ASSERT_EQ(program.blocks.size(), 1u);
+  expect_vec(program.blocks[0].start_mm, {0, 0, 2});
+  expect_vec(program.blocks[0].end_mm, {1, 0, 2});
+  ASSERT_EQ(program.warnings.size(), 2u);
+  EXPECT_EQ(program.warnings[1].rfind("second.ngc:1:4: ", 0), 0u) << program.warnings[1];
+}
+
 TEST(GcodeReader, ReadsAFileByPath) {
   const std::string path = testing::TempDir() + "vcut_gcode_reader_test.ngc";
   {
@@ -470,7 +485,7 @@ TEST(GcodeReader, ReadsAFileByPath) {
   EXPECT_EQ(p.where(p.blocks[0].source), path + ":2");
   // Z was never programmed: the block holds it at 0 and a warning says so.
   ASSERT_EQ(p.warnings.size(), 1u);
-  EXPECT_NE(p.warnings[0].find("Z is never programmed"), std::string::npos) << p.warnings[0];
+  EXPECT_NE(p.warnings[0].find("Z has not been programmed"), std::string::npos) << p.warnings[0];
 }
 
 TEST(GcodeReader, LongLinesAndManyLines) {
@@ -488,9 +503,10 @@ TEST(GcodeReader, LongLinesAndManyLines) {
 TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;
-  const Program p = read("G0 X0 Y0 Z0\nG93\nG93\nM123\nG1 X1 A10 F10\nG5 I1 J1 P1 Q1 X9\n"
-                         "G0 X2\n",
-                         options);
+  const Program p = read(
+      "G0 X0 Y0 Z0\nG93\nG93\nM123\nG1 X1 A10 F10\nG5 I1 J1 P1 Q1 X9\n"
+      "G0 X2\n",
+      options);
   // One warning per distinct word (G93, M123, A, G5), each naming its first place.
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
@@ -502,8 +518,8 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   ASSERT_EQ(p.blocks.size(), 1u);
   expect_vec(p.blocks[0].end_mm, {1, 0, 0});
   // G28 (go home) leaves its axes unknown; a canned cycle ignores its lines until G80.
-  const Program q = read("G0 X0 Y0 Z0\nG28 Z0\nG81 X1 Y1 Z-1 R2 F100\nX2\nG80\nG0 X0 Y0\n",
-                         options);
+  const Program q =
+      read("G0 X0 Y0 Z0\nG28 Z0\nG81 X1 Y1 Z-1 R2 F100\nX2\nG80\nG0 X0 Y0\n", options);
   EXPECT_TRUE(q.blocks.empty());
 }
 

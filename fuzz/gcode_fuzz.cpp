@@ -1,0 +1,73 @@
+// libFuzzer entry point for the G-code reader: any bytes are a program; the only exception
+// allowed out of the reader is vcut::InputError, and what it did read must be well formed.
+#include <vcut/io/gcode_reader.h>
+#include <vcut/io/input_error.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+
+namespace {
+
+// A broken invariant is a crash, so that the fuzzer keeps the input.
+void require(bool ok) {
+  if (!ok) std::abort();
+}
+
+void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOptions& options) {
+  using vcut::kinematics::MotionKind;
+  // Coordinates are bounded by 1e6 mm; a pending axis may hold a value from the offsets.
+  constexpr double kBound = 1e6 + 1e-6;
+  for (const auto& b : program.blocks) {
+    require(b.source.file == 0 && b.source.line >= 1);
+    require(b.start_mm.allFinite() && b.end_mm.allFinite() && b.center_mm.allFinite());
+    require(b.start_mm.cwiseAbs().maxCoeff() <= kBound && b.end_mm.cwiseAbs().maxCoeff() <= kBound);
+    require(b.feed_mm_per_min >= 0.0 && b.feed_mm_per_min <= 1e6);
+    if (b.kind == MotionKind::Rapid) require(b.feed_mm_per_min == 0.0);
+    if (b.kind != MotionKind::Rapid) require(b.feed_mm_per_min > 0.0);
+    if (b.kind != MotionKind::Arc) {
+      require(b.start_mm != b.end_mm);  // zero-length moves are dropped
+      continue;
+    }
+    require(b.turns >= 1);
+    require(std::abs(b.normal.norm() - 1.0) == 0.0 && b.normal.cwiseAbs().maxCoeff() == 1.0);
+    const Eigen::Vector3d n = b.normal;
+    // The centre lies in the start's plane; start and end are (nearly) equally far from it.
+    require(std::abs(n.dot(b.center_mm - b.start_mm)) <= 1e-9);
+    Eigen::Vector3d u = b.start_mm - b.center_mm, v = b.end_mm - b.center_mm;
+    u -= n * n.dot(u);
+    v -= n * n.dot(v);
+    const double r1 = u.norm(), r2 = v.norm();
+    require(r1 > 0.0 && r2 > 0.0);
+    const double allowed = std::max(options.arc_tolerance_mm, 1e-6 * std::max(r1, r2));
+    require(std::abs(r1 - r2) <= allowed + 1e-6);
+  }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  vcut::io::GcodeOptions options;
+  // The first byte also picks the options, so that both the strict and the warning paths and
+  // a non-zero offset are fuzzed.
+  if (size > 0) {
+    options.unsupported_as_warning = (data[0] & 1) != 0;
+    if ((data[0] & 2) != 0) {
+      options.work_offsets_mm["G54"] = Eigen::Vector3d(100.0, -250.5, 40.0);
+      options.work_offsets_mm["G55"] = Eigen::Vector3d(-999999.0, 0.0, 999999.0);
+    }
+  }
+  std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
+  vcut::kinematics::Program program;
+  vcut::io::GcodeState state;
+  try {
+    vcut::io::read_gcode(in, "fuzz.ngc", options, program, state);
+  } catch (const vcut::InputError&) {
+    // Expected for bad input; the blocks read before the error must still be well formed.
+  }
+  check(program, options);
+  return 0;
+}

@@ -1,0 +1,63 @@
+// The G-code reader: RS274/NGC programs (LinuxCNC/Fanuc dialect, X Y Z core) in, Blocks out,
+// in the workpiece frame in mm (inches converted, work offsets applied), each naming its line.
+// Bad input is a vcut::InputError naming file:line:column; nothing else is ever thrown.
+#pragma once
+
+#include <vcut/kinematics/program.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <iosfwd>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+
+struct GcodeOptions {
+  // Work offsets by name ("G54".."G59.3"): the workpiece-frame position (mm) of that system's
+  // zero. Block coordinates = programmed coordinates (in mm) + the active offset. Default all zero.
+  std::map<std::string, Eigen::Vector3d> work_offsets_mm;
+  bool unsupported_as_warning =
+      false;  // an unsupported word: one warning per distinct word, then ignored
+  double arc_tolerance_mm = 0.002;  // radius mismatch allowed between start and end of an I J K arc
+};
+// Reads one program file; errors are vcut::InputError naming file:line:column.
+// Appends to `program` (so several files can run in sequence; the modal state and the
+// position carry over from the previous file when `state` is passed back in).
+struct GcodeState;  // opaque modal state (define it in the header; fields are yours)
+kinematics::Program read_gcode(const std::string& path, const GcodeOptions& options);
+void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options,
+                kinematics::Program& program, GcodeState& state);
+
+// The modal state between lines and between files. Start from a default-constructed one
+// (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool,
+// position unknown) and pass the same one, with the same Program, for each file in sequence.
+struct GcodeState {
+  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Unsupported };
+  enum class Plane { XY, ZX, YZ };  // G17, G18, G19
+
+  Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
+  Plane plane = Plane::XY;
+  bool inches = false;               // G20
+  bool incremental = false;          // G91
+  bool arc_center_absolute = false;  // G90.1 (default G91.1)
+  std::string work_offset = "G54";
+
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // workpiece frame, where known
+  std::array<bool, 3> known = {false, false, false};      // X Y Z programmed yet?
+  // Blocks (indices into Program::blocks) emitted while an axis was unknown: they hold that
+  // axis still, and take its value when it is first programmed.
+  std::array<std::vector<std::size_t>, 3> pending;
+
+  double feed_mm_per_min = 0.0;  // 0: no F yet
+  double spindle_rpm = 0.0;
+  kinematics::SpindleState spindle = kinematics::SpindleState::Off;
+  int tool = 0;                  // in the spindle (after M6)
+  int selected_tool = -1;        // last T word, -1 if none
+  std::set<std::string> warned;  // unsupported words already warned about
+};
+
+}  // namespace vcut::io
