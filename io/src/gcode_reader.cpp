@@ -167,166 +167,105 @@ struct GInfo {
   const char* what = nullptr;
 };
 
-GInfo g_info(int g) {
-  if (g >= 540 && g <= 590 && g % 10 == 0) return {kCoordinateSystem, true};
-  if (g >= 810 && g <= 890 && g % 10 == 0) return {kMotion, false, true, false, "canned cycle"};
-  switch (g) {
-    case 0:
-    case 10:
-    case 20:
-    case 30:
-    case 800:
-      return {kMotion, true};
-    case 40:
-      return {kNonModal, true};  // G4 dwell
-    case 170:
-    case 180:
-    case 190:
-      return {kPlane, true};
-    case 200:
-    case 210:
-      return {kUnits, true};
-    case 400:
-      return {kCutterComp, true};
+// Every G code (x10) that rs274ngc has, with its group; the supported ones first.
+struct GEntry {
+  int code;
+  GInfo info;
+};
+// clang-format off
+constexpr GEntry kGCodes[] = {
+    {0, {kMotion, true}}, {10, {kMotion, true}}, {20, {kMotion, true}}, {30, {kMotion, true}},
+    {800, {kMotion, true}},
+    {40, {kNonModal, true}},  // G4 dwell: no motion
+    {170, {kPlane, true}}, {180, {kPlane, true}}, {190, {kPlane, true}},
+    {200, {kUnits, true}}, {210, {kUnits, true}},
+    {400, {kCutterComp, true}},
     // G43/G49: accepted without effect. Blocks are tool-tip positions and the programmed
     // point is taken to be the tip, which is what a CAM post with G43 H means; tool lengths
     // are the machine model's business.
-    case 430:
-    case 490:
-      return {kToolLength, true};
-    case 591:
-    case 592:
-    case 593:
-      return {kCoordinateSystem, true};
+    {430, {kToolLength, true}}, {490, {kToolLength, true}},
+    {540, {kCoordinateSystem, true}}, {550, {kCoordinateSystem, true}},
+    {560, {kCoordinateSystem, true}}, {570, {kCoordinateSystem, true}},
+    {580, {kCoordinateSystem, true}}, {590, {kCoordinateSystem, true}},
+    {591, {kCoordinateSystem, true}}, {592, {kCoordinateSystem, true}},
+    {593, {kCoordinateSystem, true}},
     // G61/G61.1/G64: exact stop vs. blending changes the timing, not the programmed path;
     // the Block has no field for it yet.
-    case 610:
-    case 611:
-    case 640:
-      return {kPathControl, true};
-    case 900:
-    case 910:
-      return {kDistance, true};
-    case 901:
-    case 911:
-      return {kArcDistance, true};
-    case 940:
-      return {kFeedMode, true};
-    case 970:
-      return {kSpindleMode, true};
-    case 980:
-    case 990:
-      return {kReturnMode, true};  // no effect without canned cycles
+    {610, {kPathControl, true}}, {611, {kPathControl, true}}, {640, {kPathControl, true}},
+    {900, {kDistance, true}}, {910, {kDistance, true}},
+    {901, {kArcDistance, true}}, {911, {kArcDistance, true}},
+    {940, {kFeedMode, true}},
+    {970, {kSpindleMode, true}},
+    {980, {kReturnMode, true}}, {990, {kReturnMode, true}},  // no effect without cycles
 
-    case 50:
-    case 51:
-    case 52:
-    case 53:
-      return {kMotion, false, true, false, "spline/NURBS"};
-    case 330:
-    case 331:
-      return {kMotion, false, true, false, "spindle-synchronized motion"};
-    case 382:
-    case 383:
-    case 384:
-    case 385:
-      return {kMotion, false, true, false, "probing"};
-    case 730:
-    case 740:
-    case 760:
-      return {kMotion, false, true, false, "canned cycle"};
-    case 100:
-      return {kNonModal, false, true, false, "setting offsets"};
-    case 280:
-    case 300:
-      return {kNonModal, false, true, true, "move to a stored position"};
-    case 281:
-    case 301:
-      return {kNonModal, false, false, false, "store a position"};
-    case 520:
-      return {kNonModal, false, true, true, "local coordinate offset"};
-    case 530:
-      return {kNonModal, false, true, false, "move in machine coordinates"};
-    case 920:
-    case 921:
-    case 922:
-    case 923:
-      return {kNonModal, false, true, true, "coordinate system offset"};
-    case 171:
-    case 181:
-    case 191:
-      return {kPlane, false, false, false, "UVW plane"};
-    case 410:
-    case 411:
-    case 420:
-    case 421:
-      return {kCutterComp, false, false, false, "cutter radius compensation"};
-    case 431:
-    case 432:
-      return {kToolLength, false, false, false, "dynamic tool length offset"};
-    case 930:
-      return {kFeedMode, false, false, false, "inverse-time feed"};
-    case 950:
-      return {kFeedMode, false, false, false, "feed per revolution"};
-    case 960:
-      return {kSpindleMode, false, false, false, "constant surface speed"};
-    case 70:
-    case 80:
-      return {kLatheMode, false, false, false, "lathe diameter/radius mode"};
-    default:
-      return {};
+    {50, {kMotion, false, true, false, "spline/NURBS"}},
+    {51, {kMotion, false, true, false, "spline/NURBS"}},
+    {52, {kMotion, false, true, false, "spline/NURBS"}},
+    {53, {kMotion, false, true, false, "spline/NURBS"}},
+    {330, {kMotion, false, true, false, "spindle-synchronized motion"}},
+    {331, {kMotion, false, true, false, "spindle-synchronized motion"}},
+    {382, {kMotion, false, true, false, "probing"}}, {383, {kMotion, false, true, false, "probing"}},
+    {384, {kMotion, false, true, false, "probing"}}, {385, {kMotion, false, true, false, "probing"}},
+    {730, {kMotion, false, true, false, "canned cycle"}},
+    {740, {kMotion, false, true, false, "canned cycle"}},
+    {760, {kMotion, false, true, false, "canned cycle"}},
+    {810, {kMotion, false, true, false, "canned cycle"}},
+    {820, {kMotion, false, true, false, "canned cycle"}},
+    {830, {kMotion, false, true, false, "canned cycle"}},
+    {840, {kMotion, false, true, false, "canned cycle"}},
+    {850, {kMotion, false, true, false, "canned cycle"}},
+    {860, {kMotion, false, true, false, "canned cycle"}},
+    {870, {kMotion, false, true, false, "canned cycle"}},
+    {880, {kMotion, false, true, false, "canned cycle"}},
+    {890, {kMotion, false, true, false, "canned cycle"}},
+    {100, {kNonModal, false, true, false, "setting offsets"}},
+    {280, {kNonModal, false, true, true, "move to a stored position"}},
+    {300, {kNonModal, false, true, true, "move to a stored position"}},
+    {281, {kNonModal, false, false, false, "store a position"}},
+    {301, {kNonModal, false, false, false, "store a position"}},
+    {520, {kNonModal, false, true, true, "local coordinate offset"}},
+    {530, {kNonModal, false, true, false, "move in machine coordinates"}},
+    {920, {kNonModal, false, true, true, "coordinate system offset"}},
+    {921, {kNonModal, false, true, true, "coordinate system offset"}},
+    {922, {kNonModal, false, true, true, "coordinate system offset"}},
+    {923, {kNonModal, false, true, true, "coordinate system offset"}},
+    {171, {kPlane, false, false, false, "UVW plane"}},
+    {181, {kPlane, false, false, false, "UVW plane"}},
+    {191, {kPlane, false, false, false, "UVW plane"}},
+    {410, {kCutterComp, false, false, false, "cutter radius compensation"}},
+    {411, {kCutterComp, false, false, false, "cutter radius compensation"}},
+    {420, {kCutterComp, false, false, false, "cutter radius compensation"}},
+    {421, {kCutterComp, false, false, false, "cutter radius compensation"}},
+    {431, {kToolLength, false, false, false, "dynamic tool length offset"}},
+    {432, {kToolLength, false, false, false, "dynamic tool length offset"}},
+    {930, {kFeedMode, false, false, false, "inverse-time feed"}},
+    {950, {kFeedMode, false, false, false, "feed per revolution"}},
+    {960, {kSpindleMode, false, false, false, "constant surface speed"}},
+    {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
+    {80, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
+};
+
+GInfo g_info(int g) {
+  for (const GEntry& e : kGCodes) {
+    if (e.code == g) return e.info;
   }
+  return {};  // a code rs274ngc does not have
 }
 
 // M codes: groups as rs274ngc (4 stop, 6 tool change, 7 spindle, 8 coolant, 9 overrides).
 int m_group(int m) {
   switch (m) {
-    case 0:
-    case 1:
-    case 2:
-    case 30:
-    case 60:
-      return 4;
-    case 6:
-      return 6;
-    case 3:
-    case 4:
-    case 5:
-      return 7;
-    case 7:
-    case 8:
-    case 9:
-      return 8;
-    case 48:
-    case 49:
-    case 50:
-    case 51:
-    case 52:
-    case 53:
-      return 9;
-    default:
-      return -1;
+    case 0: case 1: case 2: case 30: case 60: return 4;
+    case 6: return 6;
+    case 3: case 4: case 5: return 7;
+    case 7: case 8: case 9: return 8;
+    case 48: case 49: case 50: case 51: case 52: case 53: return 9;
+    default: return -1;
   }
 }
+// clang-format on
 
-bool m_supported(int m) {
-  switch (m) {
-    case 0:
-    case 1:
-    case 2:
-    case 30:
-    case 3:
-    case 4:
-    case 5:
-    case 6:
-    case 7:
-    case 8:
-    case 9:
-      return true;
-    default:
-      return false;
-  }
-}
+bool m_supported(int m) { return (m >= 0 && m <= 9) || m == 30; }
 
 bool valid_offset_name(const std::string& name) {
   static const char* const kNames[] = {"G54", "G55",   "G56",   "G57",  "G58",
@@ -1125,7 +1064,8 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
   if (in.bad()) throw InputError(name, number + 1, 0, "read error (expected a readable text file)");
   for (int a = 0; a < 3; ++a) {
     if (state.pending[a].empty()) continue;
-    program.warnings.push_back(name + ": " + kAxisLetter[a] + " has not been programmed by the end of this file; " +
+    program.warnings.push_back(name + ": " + kAxisLetter[a] +
+                               " has not been programmed by the end of this file; " +
                                std::to_string(state.pending[a].size()) +
                                " move(s) hold it at 0 unless a later file sets it");
   }

@@ -2,12 +2,11 @@
 // semantics as LinuxCNC documents and implements them (G-code reference pages; rs274ngc
 // interp_convert.cc / interp_arc.cc), each noted where it is used; none is copied from the
 // reader's own output.
+#include <gtest/gtest.h>
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 
 #include <Eigen/Geometry>
-#include <gtest/gtest.h>
-
 #include <cmath>
 #include <fstream>
 #include <random>
