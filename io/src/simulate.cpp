@@ -22,6 +22,7 @@
 #include "vcut/io/sha256.h"
 #include "vcut/kinematics/densify.h"
 #include "vcut/removal/compare.h"
+#include "vcut/removal/sweep.h"
 #include "vcut/removal/vdb_stock.h"
 
 namespace vcut::io {
@@ -183,12 +184,8 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     if (m.rapid) continue;
     path_box.extend(m.start_mm);
     path_box.extend(m.end_mm);
-    Eigen::AlignedBox3d swept;
-    const double r = moves.cutters[static_cast<std::size_t>(m.cutter)].radius_mm();
-    swept.extend(m.start_mm.cwiseMin(m.end_mm) - Eigen::Vector3d(r, r, 0.0));
-    swept.extend(m.start_mm.cwiseMax(m.end_mm) +
-                 Eigen::Vector3d(r, r, moves.cutters[static_cast<std::size_t>(m.cutter)].flute_length_mm));
-    overlap = overlap || swept.intersects(stock_box);
+    const removal::TranslationSweep sweep(moves.cutters[static_cast<std::size_t>(m.cutter)], m);
+    overlap = overlap || sweep.bounds().intersects(stock_box);
   }
   if (!overlap && result.cutting_moves > 0) {
     std::ostringstream msg;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "distance.h"
+
 namespace vcut::removal {
 
 CutterCore core_of(const Cutter& cutter) {
@@ -12,13 +14,10 @@ CutterCore core_of(const Cutter& cutter) {
 
 double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p) {
   const CutterCore k = core_of(cutter);
-  // Signed distance to the core cylinder: a disk extruded over an interval (exact).
-  const double d_radial = std::hypot(p.x(), p.y()) - k.core_radius_mm;
-  const double z_mid = 0.5 * (k.z_low_mm + k.z_high_mm);
-  const double d_axial = std::abs(p.z() - z_mid) - 0.5 * (k.z_high_mm - k.z_low_mm);
-  const double outside = std::hypot(std::max(d_radial, 0.0), std::max(d_axial, 0.0));
-  const double inside = std::min(std::max(d_radial, d_axial), 0.0);
-  return outside + inside - k.rounding_mm;
+  // The core cylinder is a disk extruded over an interval (exact).
+  return detail::extrude(std::hypot(p.x(), p.y()) - k.core_radius_mm,
+                         detail::interval_distance(p.z(), k.z_low_mm, k.z_high_mm)) -
+         k.rounding_mm;
 }
 
 std::string to_string(CutterType type) {

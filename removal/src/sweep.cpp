@@ -1,26 +1,19 @@
 #include "vcut/removal/sweep.h"
 
+#include "distance.h"
+
 #include <algorithm>
 #include <cmath>
 
 namespace vcut::removal {
 namespace {
 
+using detail::extrude;
+using detail::interval_distance;
+
 // Motion components below this (mm) are treated as zero; the distance error this causes
 // is at most this much, since d is 1-Lipschitz in the sweep's end point.
 constexpr double kDegenerateMotion_mm = 1e-9;
-
-// Signed distance of a (convex) 2-D shape with distance `d_plane` extruded over an interval
-// with distance `d_axial`: exact for a product set.
-inline double extrude(double d_plane, double d_axial) {
-  const double a = std::max(d_plane, 0.0);
-  const double b = std::max(d_axial, 0.0);
-  return std::sqrt(a * a + b * b) + std::min(std::max(d_plane, d_axial), 0.0);
-}
-
-inline double interval_distance(double z, double lo, double hi) {
-  return std::abs(z - 0.5 * (lo + hi)) - 0.5 * (hi - lo);
-}
 
 // Any rotation taking `axis` to +Z (the cutter is symmetric about its axis).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& axis) {

@@ -17,6 +17,7 @@
 
 #include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
+#include "distance.h"
 
 namespace vcut::removal {
 namespace {
@@ -37,11 +38,6 @@ constexpr double kMeshAdaptivity = 0.05;
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-double extrude(double d_plane, double d_axial) {
-  const double a = std::max(d_plane, 0.0), b = std::max(d_axial, 0.0);
-  return std::sqrt(a * a + b * b) + std::min(std::max(d_plane, d_axial), 0.0);
-}
-
 double box_distance(const BoxShape& box, const Eigen::Vector3d& x) {
   const Eigen::Vector3d q =
       (x - 0.5 * (box.min_mm + box.max_mm)).cwiseAbs() - 0.5 * (box.max_mm - box.min_mm);
@@ -52,7 +48,7 @@ double cylinder_distance(const CylinderShape& c, const Eigen::Vector3d& x) {
   const Eigen::Vector3d d = x - c.base_center_mm;
   const double h = d.dot(c.axis);
   const double radial = (d - h * c.axis).norm();
-  return extrude(radial - c.radius_mm, std::abs(h - 0.5 * c.height_mm) - 0.5 * c.height_mm);
+  return detail::extrude(radial - c.radius_mm, detail::interval_distance(h, 0.0, c.height_mm));
 }
 
 // Fraction of a voxel inside material for level-set value phi (mm): exact for a plane
