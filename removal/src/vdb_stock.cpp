@@ -18,6 +18,8 @@
 #include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
 #include "distance.h"
+#include "initial_stock.h"
+#include "surface_projection.h"
 
 namespace vcut::removal {
 namespace {
@@ -30,26 +32,11 @@ constexpr int kLeafVoxels = kLeafDim * kLeafDim * kLeafDim;
 constexpr int kCoarse = 4;  // leaves per side of a coarse culling cell
 constexpr int kNoMove = -1;
 constexpr std::size_t kBatchMoves = 8192;  // moves binned and cut together (memory bound)
-// Mesh vertices are moved onto the exact surface to within this (mm).
-constexpr double kProjectionTolerance_mm = 1e-7;
 // volumeToMesh adaptivity: merges cells on flat regions; vertices go back onto the exact
 // surface afterwards, so only the triangles between them approximate it.
 constexpr double kMeshAdaptivity = 0.05;
 
 int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
-
-double box_distance(const BoxShape& box, const Eigen::Vector3d& x) {
-  const Eigen::Vector3d q =
-      (x - 0.5 * (box.min_mm + box.max_mm)).cwiseAbs() - 0.5 * (box.max_mm - box.min_mm);
-  return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
-}
-
-double cylinder_distance(const CylinderShape& c, const Eigen::Vector3d& x) {
-  const Eigen::Vector3d d = x - c.base_center_mm;
-  const double h = d.dot(c.axis);
-  const double radial = (d - h * c.axis).norm();
-  return detail::extrude(radial - c.radius_mm, detail::interval_distance(h, 0.0, c.height_mm));
-}
 
 // Fraction of a voxel inside material for level-set value phi (mm): exact for a plane
 // crossing a column of voxels along its normal, the usual first-order volume estimate.
@@ -363,20 +350,14 @@ VdbStock::VdbStock(const StockShape& shape, double voxel_mm) : impl_(std::make_u
   m.ids = openvdb::Int32Grid::create(kNoMove);
   m.ids->setTransform(transform);
   m.setup_region(bounds_of(shape));
-  if (const auto* box = std::get_if<BoxShape>(&shape)) {
+  if (!std::holds_alternative<TriangleMesh>(shape)) {
     m.grid = openvdb::FloatGrid::create(static_cast<float>(m.w));
     m.grid->setTransform(transform);
-    m.initial_distance = [b = *box](const Eigen::Vector3d& x) { return box_distance(b, x); };
-    m.build_analytic(m.initial_distance);
-  } else if (const auto* cyl = std::get_if<CylinderShape>(&shape)) {
-    m.grid = openvdb::FloatGrid::create(static_cast<float>(m.w));
-    m.grid->setTransform(transform);
-    m.initial_distance = [c = *cyl](const Eigen::Vector3d& x) { return cylinder_distance(c, x); };
+    m.initial_distance = detail::initial_distance(shape, m.initial_mesh);
     m.build_analytic(m.initial_distance);
   } else {
     const auto& mesh = std::get<TriangleMesh>(shape);
-    m.initial_mesh = std::make_shared<const DesignDistance>(mesh);
-    m.initial_distance = [d = m.initial_mesh](const Eigen::Vector3d& x) { return d->signed_distance(x); };
+    m.initial_distance = detail::initial_distance(shape, m.initial_mesh);
     std::vector<openvdb::Vec3s> points;
     std::vector<openvdb::Vec3I> triangles;
     for (const auto& p : mesh.vertices_mm)
@@ -503,47 +484,8 @@ SurfaceMesh VdbStock::surface() const {
     }
     std::sort(list.begin(), list.end());
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
-    std::vector<TranslationSweep> sweeps;
-    for (std::size_t v = range.begin(); v != range.end(); ++v) {
-      sweeps.clear();
-      for (int id : nearby[v]) {
-        const Move& move = m.moves[static_cast<std::size_t>(id)];
-        sweeps.emplace_back(m.cutters[static_cast<std::size_t>(move.cutter)], move);
-      }
-      int active = kNoMove;
-      auto field = [&](const Eigen::Vector3d& x) {
-        double f = m.initial_distance(x);
-        active = kNoMove;
-        for (std::size_t k = 0; k < sweeps.size(); ++k) {
-          const double cut = -sweeps[k].distance(x);
-          if (cut > f) { f = cut; active = nearby[v][k]; }
-        }
-        return f;
-      };
-      const Eigen::Vector3d start = mesh.mesh.vertices_mm[v];
-      Eigen::Vector3d x = start;
-      constexpr double kStep_mm = 1e-5;  // central differences: error O(h^2) on smooth parts
-      for (int iteration = 0; iteration < 16; ++iteration) {
-        const double f = field(x);
-        if (std::abs(f) < kProjectionTolerance_mm) break;
-        Eigen::Vector3d g;
-        for (int a = 0; a < 3; ++a) {
-          Eigen::Vector3d h = Eigen::Vector3d::Zero();
-          h[a] = kStep_mm;
-          g[a] = (field(x + h) - field(x - h)) / (2 * kStep_mm);
-        }
-        if (g.squaredNorm() < 0.25) break;  // on a kink: keep the point
-        x -= f * g / g.squaredNorm();
-      }
-      // A vertex lies in its voxel cell, so the surface is within a cell diagonal (sqrt(3) v);
-      // one that would travel farther found no surface nearby: keep it.
-      if ((x - start).norm() > 2.0 * m.v || !x.allFinite()) x = start;
-      field(x);
-      mesh.mesh.vertices_mm[v] = x;
-      mesh.vertex_move[v] = active;
-    }
-  });
+  // A vertex lies in its voxel cell, so the surface is within a cell diagonal (sqrt(3) v).
+  detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * m.v, mesh);
   return mesh;
 }
 

@@ -1,5 +1,7 @@
-// The OpenVDB stock against analytic results (ARCHITECTURE §8; issue 2's accuracy list):
-// every expected value below is a closed form of the cut's geometry, not a vcut output.
+// Both stock engines (OpenVDB level set and tri-dexel) against analytic results
+// (ARCHITECTURE §8; the accuracy lists of issues 2 and 9): every expected value below is a
+// closed form of the cut's geometry, not a vcut output.
+#include "vcut/removal/dexel_stock.h"
 #include "vcut/removal/vdb_stock.h"
 
 #include <gtest/gtest.h>
@@ -44,11 +46,16 @@ MoveList straight_groove(const Cutter& c, double tip_z) {
   return list;
 }
 
+template <class Engine>
+class StockTest : public ::testing::Test {};
+using Engines = ::testing::Types<VdbStock, DexelStock>;
+TYPED_TEST_SUITE(StockTest, Engines);
+
 // Vertices well inside the stock's x range (away from its end faces) and below the top.
 bool in_groove(const Eigen::Vector3d& p) { return p.x() > 2 * kV && p.x() < 60 - 2 * kV && p.z() < -kV && p.z() > -10; }
 
-TEST(VdbStock, FlatSlotFloorWallsAndVolume) {
-  VdbStock stock(kBox, kV);
+TYPED_TEST(StockTest, FlatSlotFloorWallsAndVolume) {
+  TypeParam stock(kBox, kV);
   EXPECT_NEAR(stock.volume_mm3(), 60.0 * 40 * 20, 60.0 * 40 * 20 * 1e-3);
   const CutResult r = stock.cut(straight_groove(make(CutterType::Flat, 10, 0), -2.0), {});
   EXPECT_NEAR(r.removed_volume_mm3, 60.0 * 10 * 2, 60.0 * 10 * 2 * kVolumeTol);
@@ -74,8 +81,8 @@ TEST(VdbStock, FlatSlotFloorWallsAndVolume) {
   EXPECT_NEAR(signed_volume_mm3(s.mesh), 60.0 * 40 * 20 - 1200, 0.005 * 1200);
 }
 
-TEST(VdbStock, BallGrooveIsCylinderAndSphere) {
-  VdbStock stock(kBox, kV);
+TYPED_TEST(StockTest, BallGrooveIsCylinderAndSphere) {
+  TypeParam stock(kBox, kV);
   stock.cut(straight_groove(make(CutterType::Ball, 6, 3), -2.0), {});
   const SurfaceMesh s = stock.surface();
   int checked = 0;
@@ -92,8 +99,8 @@ TEST(VdbStock, BallGrooveIsCylinderAndSphere) {
   EXPECT_NEAR(stock.volume_mm3(), 48000 - 60 * segment, 60 * segment * kVolumeTol);
 }
 
-TEST(VdbStock, BullNoseGrooveIsSweptTorus) {
-  VdbStock stock(kBox, kV);
+TYPED_TEST(StockTest, BullNoseGrooveIsSweptTorus) {
+  TypeParam stock(kBox, kV);
   stock.cut(straight_groove(make(CutterType::BullNose, 10, 2), -3.0), {});
   const SurfaceMesh s = stock.surface();
   int checked = 0;
@@ -107,7 +114,7 @@ TEST(VdbStock, BullNoseGrooveIsSweptTorus) {
   EXPECT_GT(checked, 100);
 }
 
-TEST(VdbStock, FullCircleRemovesTheAnnulus) {
+TYPED_TEST(StockTest, FullCircleRemovesTheAnnulus) {
   // G2 full circle, radius 10 about (30, 20), flat D6 at 2 mm depth: annulus 7..13 mm.
   kinematics::Program program;
   program.files = {"circle.ngc"};
@@ -133,13 +140,13 @@ TEST(VdbStock, FullCircleRemovesTheAnnulus) {
     m.block = poses[i].block;
     list.moves.push_back(m);
   }
-  VdbStock stock(kBox, kV);
+  TypeParam stock(kBox, kV);
   const CutResult r = stock.cut(list, {});
   const double annulus = M_PI * (13.0 * 13.0 - 7.0 * 7.0) * 2.0;
   EXPECT_NEAR(r.removed_volume_mm3, annulus, annulus * kVolumeTol);
 }
 
-TEST(VdbStock, RapidIntoStockIsACollisionNotACut) {
+TYPED_TEST(StockTest, RapidIntoStockIsACollisionNotACut) {
   MoveList list;
   list.cutters.push_back(make(CutterType::Flat, 10, 0));
   Move above;
@@ -149,7 +156,7 @@ TEST(VdbStock, RapidIntoStockIsACollisionNotACut) {
   Move through = above;
   through.start_mm.z() = through.end_mm.z() = -1.5;
   list.moves = {above, through};
-  VdbStock stock(kBox, kV);
+  TypeParam stock(kBox, kV);
   const CutResult r = stock.cut(list, {});
   ASSERT_EQ(r.collisions.size(), 1u);
   EXPECT_EQ(r.collisions[0].move, 1);
@@ -157,7 +164,7 @@ TEST(VdbStock, RapidIntoStockIsACollisionNotACut) {
   EXPECT_NEAR(r.removed_volume_mm3, 0.0, 1e-9);
 }
 
-TEST(VdbStock, SameBytesForOneAndTwoThreads) {
+TYPED_TEST(StockTest, SameBytesForOneAndTwoThreads) {
   auto run = [](int threads) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     MoveList list = straight_groove(make(CutterType::Ball, 6, 3), -2.0);
@@ -165,10 +172,10 @@ TEST(VdbStock, SameBytesForOneAndTwoThreads) {
     for (int i = 0; i < 200; ++i) {
       Move m;
       m.start_mm = list.moves.back().end_mm;
-      m.end_mm = {5 + 0.25 * i, 10 + 20 * (i % 2), -1.0 - 0.01 * i};
+      m.end_mm = {5 + 0.25 * i, 10.0 + 20 * (i % 2), -1.0 - 0.01 * i};
       list.moves.push_back(m);
     }
-    VdbStock stock(kBox, kV);
+    TypeParam stock(kBox, kV);
     const CutResult r = stock.cut(list, {});
     return std::make_pair(r.removed_volume_mm3, stock.surface());
   };
@@ -182,8 +189,8 @@ TEST(VdbStock, SameBytesForOneAndTwoThreads) {
   EXPECT_EQ(s1.vertex_move, s2.vertex_move);
 }
 
-TEST(VdbStock, MeshStockCutsLikeTheBox) {
-  VdbStock stock(test::box_mesh({0, 0, -20}, {60, 40, 0}), kV);
+TYPED_TEST(StockTest, MeshStockCutsLikeTheBox) {
+  TypeParam stock(test::box_mesh({0, 0, -20}, {60, 40, 0}), kV);
   EXPECT_NEAR(stock.volume_mm3(), 48000, 48000 * 2e-3);
   const CutResult r = stock.cut(straight_groove(make(CutterType::Flat, 10, 0), -2.0), {});
   EXPECT_NEAR(r.removed_volume_mm3, 1200, 1200 * kVolumeTol);

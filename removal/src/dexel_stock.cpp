@@ -1,0 +1,713 @@
+#include "vcut/removal/dexel_stock.h"
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/SignedFloodFill.h>
+#include <openvdb/tools/VolumeToMesh.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <stdexcept>
+
+#include "vcut/removal/compare.h"
+#include "initial_stock.h"
+#include "ray_sweep.h"
+#include "surface_projection.h"
+
+namespace vcut::removal {
+namespace {
+
+using Eigen::Vector3d;
+using openvdb::Coord;
+constexpr int kNoMove = -1;
+constexpr int kTile = 16;                  // rays per side of a tile of one family
+constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
+// Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
+constexpr float kMinSegment_mm = 1e-6f;
+// volumeToMesh adaptivity: merges cells on flat regions; vertices go back onto the exact
+// surface afterwards, so only the triangles between them approximate it.
+constexpr double kMeshAdaptivity = 0.05;
+
+// The intervals of one ray: one inline, more on the heap (24 bytes per ray).
+class SegmentList {
+ public:
+  SegmentList() : one_{0.0f, 0.0f, kNoMove, kNoMove} {}
+  ~SegmentList() {
+    if (capacity_ > 1) delete[] many_;
+  }
+  SegmentList(const SegmentList&) = delete;
+  SegmentList& operator=(const SegmentList&) = delete;
+  SegmentList(SegmentList&& other) noexcept : size_(other.size_), capacity_(other.capacity_) {
+    if (capacity_ > 1) many_ = other.many_; else one_ = other.one_;
+    other.size_ = 0;
+    other.capacity_ = 1;
+  }
+  SegmentList& operator=(SegmentList&&) = delete;
+
+  std::uint32_t size() const { return size_; }
+  const DexelSegment* data() const { return capacity_ > 1 ? many_ : &one_; }
+  DexelSegment* data() { return capacity_ > 1 ? many_ : &one_; }
+  std::size_t heap_bytes() const { return capacity_ > 1 ? capacity_ * sizeof(DexelSegment) : 0; }
+
+  void assign(const DexelSegment* s, std::uint32_t n) {
+    if (n > capacity_) {
+      const std::uint32_t capacity = std::max(n, 2 * capacity_);
+      auto* fresh = new DexelSegment[capacity];
+      if (capacity_ > 1) delete[] many_;
+      many_ = fresh;
+      capacity_ = capacity;
+    }
+    if (n > 0) std::memmove(data(), s, n * sizeof(DexelSegment));
+    size_ = n;
+  }
+
+ private:
+  union {
+    DexelSegment one_;
+    DexelSegment* many_;
+  };
+  std::uint32_t size_ = 0, capacity_ = 1;
+};
+static_assert(sizeof(SegmentList) == 24, "one ray should stay 24 bytes");
+
+// The two lattice axes of a family, in increasing order.
+constexpr std::array<std::array<int, 2>, 3> kOther = {{{1, 2}, {0, 2}, {0, 1}}};
+
+struct Family {
+  int axis = 0;
+  int lo_u = 0, lo_w = 0;  // lattice index of the first ray along the two other axes
+  int n_u = 0, n_w = 0;
+  int tiles_u = 0, tiles_w = 0;
+  std::vector<SegmentList> rays;
+  double length_mm = 0.0;  // material along all rays
+
+  bool contains(int iu, int iw) const {
+    return iu >= lo_u && iu < lo_u + n_u && iw >= lo_w && iw < lo_w + n_w;
+  }
+  const SegmentList& at(int iu, int iw) const {
+    return rays[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(n_u) +
+                static_cast<std::size_t>(iu - lo_u)];
+  }
+  SegmentList& at(int iu, int iw) {
+    return rays[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(n_u) +
+                static_cast<std::size_t>(iu - lo_u)];
+  }
+  int tiles() const { return tiles_u * tiles_w; }
+};
+
+// Removes [a, b] (made by `move`) from the ray; returns the length removed (mm).
+double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelSegment>& scratch) {
+  const std::uint32_t n = ray.size();
+  if (n == 0 || !(a < b)) return 0.0;
+  DexelSegment* s = ray.data();
+  if (b <= s[0].lo_mm || a >= s[n - 1].hi_mm) return 0.0;
+  double removed = 0.0;
+  scratch.clear();
+  bool changed = false;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const DexelSegment seg = s[i];
+    if (seg.hi_mm <= a || seg.lo_mm >= b) {
+      scratch.push_back(seg);
+      continue;
+    }
+    changed = true;
+    removed += static_cast<double>(std::min(seg.hi_mm, b)) - std::max(seg.lo_mm, a);
+    if (seg.lo_mm < a) {
+      if (a - seg.lo_mm > kMinSegment_mm) scratch.push_back({seg.lo_mm, a, seg.lo_move, move});
+      else removed += static_cast<double>(a) - seg.lo_mm;
+    }
+    if (seg.hi_mm > b) {
+      if (seg.hi_mm - b > kMinSegment_mm) scratch.push_back({b, seg.hi_mm, move, seg.hi_move});
+      else removed += static_cast<double>(seg.hi_mm) - b;
+    }
+  }
+  if (changed) ray.assign(scratch.data(), static_cast<std::uint32_t>(scratch.size()));
+  return removed;
+}
+
+// Longest overlap (mm) of [a, b] with the ray's material, and where along the ray.
+double overlap(const SegmentList& ray, double a, double b, double& middle) {
+  double best = 0.0;
+  const DexelSegment* s = ray.data();
+  for (std::uint32_t i = 0; i < ray.size(); ++i) {
+    const double lo = std::max<double>(s[i].lo_mm, a), hi = std::min<double>(s[i].hi_mm, b);
+    if (hi - lo > best) {
+      best = hi - lo;
+      middle = 0.5 * (lo + hi);
+    }
+  }
+  return best;
+}
+
+bool ray_contains(const SegmentList& ray, double s) {
+  const DexelSegment* seg = ray.data();
+  for (std::uint32_t i = 0; i < ray.size(); ++i) {
+    if (s < seg[i].lo_mm) return false;
+    if (s <= seg[i].hi_mm) return true;
+  }
+  return false;
+}
+
+struct Probe {
+  int move;     // index in the batch
+  int axis;
+  double overlap_mm;
+  Vector3d where_mm;
+};
+
+struct TileResult {
+  double removed_mm = 0.0;  // length along the family's rays
+  std::vector<Probe> probes;
+};
+
+}  // namespace
+
+struct DexelStock::Impl {
+  double v = 0.1;  // ray spacing, mm
+  std::array<Family, 3> families;
+  Eigen::AlignedBox3d shape_bounds;
+  std::function<double(const Eigen::Vector3d&)> initial_distance;
+  std::shared_ptr<const DesignDistance> initial_mesh;
+  std::vector<Move> moves;
+  std::vector<Cutter> cutters;
+
+  // World coordinate of lattice index i along any axis: rays sit mid-cell, so a box whose
+  // faces lie on multiples of v is measured exactly.
+  double position(int i) const { return (i + 0.5) * v; }
+  double index_of(double x) const { return x / v - 0.5; }
+
+  void setup(const Eigen::AlignedBox3d& box) {
+    std::array<int, 3> lo, count;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = static_cast<int>(std::floor(index_of(box.min()[a]))) - 1;
+      const int hi = static_cast<int>(std::ceil(index_of(box.max()[a]))) + 1;
+      count[a] = hi - lo[a] + 1;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      Family& f = families[static_cast<std::size_t>(axis)];
+      const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+      f.axis = axis;
+      f.lo_u = lo[static_cast<std::size_t>(a1)];
+      f.lo_w = lo[static_cast<std::size_t>(a2)];
+      f.n_u = count[static_cast<std::size_t>(a1)];
+      f.n_w = count[static_cast<std::size_t>(a2)];
+      f.tiles_u = (f.n_u + kTile - 1) / kTile;
+      f.tiles_w = (f.n_w + kTile - 1) / kTile;
+      f.rays = std::vector<SegmentList>(static_cast<std::size_t>(f.n_u) * static_cast<std::size_t>(f.n_w));
+    }
+  }
+
+  // Fills every ray with its intervals inside an analytic stock.
+  template <class Interval>
+  void fill(Interval&& interval) {
+    for (Family& f : families) {
+      tbb::parallel_for(0, f.n_w, [&](int row) {
+        const int iw = f.lo_w + row;
+        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+          double a, b;
+          if (interval(f.axis, position(iu), position(iw), a, b) && b - a > kMinSegment_mm) {
+            const DexelSegment seg{static_cast<float>(a), static_cast<float>(b), kNoMove, kNoMove};
+            f.at(iu, iw).assign(&seg, 1);
+          }
+        }
+      });
+    }
+  }
+
+  void fill_mesh(const TriangleMesh& mesh);
+  void sum_lengths() {
+    for (Family& f : families) {
+      double total = 0.0;
+      for (const SegmentList& ray : f.rays)
+        for (std::uint32_t i = 0; i < ray.size(); ++i) total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
+      f.length_mm = total;
+    }
+  }
+
+  Vector3d point(int axis, int iu, int iw, double s) const {
+    Vector3d x;
+    x[axis] = s;
+    x[kOther[static_cast<std::size_t>(axis)][0]] = position(iu);
+    x[kOther[static_cast<std::size_t>(axis)][1]] = position(iw);
+    return x;
+  }
+
+  // Lattice index range [first, last] of rays of family f within [lo, hi] on its axis a1/a2.
+  bool ray_range(const Family& f, const Eigen::AlignedBox3d& box, int& u0, int& u1, int& w0, int& w1) const {
+    const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+    u0 = std::max(f.lo_u, static_cast<int>(std::ceil(index_of(box.min()[a1]))));
+    u1 = std::min(f.lo_u + f.n_u - 1, static_cast<int>(std::floor(index_of(box.max()[a1]))));
+    w0 = std::max(f.lo_w, static_cast<int>(std::ceil(index_of(box.min()[a2]))));
+    w1 = std::min(f.lo_w + f.n_w - 1, static_cast<int>(std::floor(index_of(box.max()[a2]))));
+    return u0 <= u1 && w0 <= w1;
+  }
+
+  bool inside(int i, int j, int k) const {
+    const Family& z = families[2];
+    if (!z.contains(i, j)) return false;
+    return ray_contains(z.at(i, j), position(k));
+  }
+};
+
+void DexelStock::Impl::fill_mesh(const TriangleMesh& mesh) {
+  for (Family& f : families) {
+    const int k = f.axis;
+    const auto [a1, a2] = kOther[static_cast<std::size_t>(k)];
+    // Triangles by the rows of rays their projection covers.
+    std::vector<std::vector<int>> rows(static_cast<std::size_t>(f.n_w));
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+      double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+      for (int c = 0; c < 3; ++c) {
+        const double w = mesh.vertices_mm[static_cast<std::size_t>(mesh.triangles[t][c])][a2];
+        lo = std::min(lo, w);
+        hi = std::max(hi, w);
+      }
+      const int r0 = std::max(f.lo_w, static_cast<int>(std::ceil(index_of(lo))));
+      const int r1 = std::min(f.lo_w + f.n_w - 1, static_cast<int>(std::floor(index_of(hi))));
+      for (int r = r0; r <= r1; ++r) rows[static_cast<std::size_t>(r - f.lo_w)].push_back(static_cast<int>(t));
+    }
+    tbb::parallel_for(0, f.n_w, [&](int row) {
+      const int iw = f.lo_w + row;
+      const double w = position(iw);
+      std::vector<std::vector<std::pair<double, int>>> hits(static_cast<std::size_t>(f.n_u));
+      for (int t : rows[static_cast<std::size_t>(row)]) {
+        Vector3d p[3];
+        for (int c = 0; c < 3; ++c) p[c] = mesh.vertices_mm[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(t)][c])];
+        auto cross2 = [&](const Vector3d& a, const Vector3d& b, double pu, double pw) {
+          return (b[a1] - a[a1]) * (pw - a[a2]) - (b[a2] - a[a2]) * (pu - a[a1]);
+        };
+        double area = cross2(p[0], p[1], p[2][a1], p[2][a2]);
+        if (area == 0.0) continue;  // edge-on
+        // The triangle's outward normal along the ray: leaving material where it is positive.
+        const double normal_k = k == 1 ? -area : area;
+        const int direction = normal_k > 0.0 ? -1 : 1;  // -1 leaves, +1 enters material
+        if (area < 0.0) {
+          std::swap(p[1], p[2]);
+          area = -area;
+        }
+        double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+        for (const auto& q : p) {
+          lo = std::min(lo, q[a1]);
+          hi = std::max(hi, q[a1]);
+        }
+        const int u0 = std::max(f.lo_u, static_cast<int>(std::ceil(index_of(lo))));
+        const int u1 = std::min(f.lo_u + f.n_u - 1, static_cast<int>(std::floor(index_of(hi))));
+        for (int iu = u0; iu <= u1; ++iu) {
+          const double u = position(iu);
+          double e[3];
+          bool in = true;
+          for (int c = 0; c < 3 && in; ++c) {
+            const Vector3d& a = p[(c + 1) % 3];
+            const Vector3d& b = p[(c + 2) % 3];
+            e[c] = cross2(a, b, u, w);
+            if (e[c] < 0.0) in = false;
+            // On an edge: it belongs to exactly one of the two triangles sharing it (the
+            // edge's direction decides), so a ray through it counts once.
+            if (e[c] == 0.0) {
+              const double du = b[a1] - a[a1], dw = b[a2] - a[a2];
+              if (!(dw < 0.0 || (dw == 0.0 && du < 0.0))) in = false;
+            }
+          }
+          if (!in) continue;
+          const double s = (e[0] * p[0][k] + e[1] * p[1][k] + e[2] * p[2][k]) / area;
+          hits[static_cast<std::size_t>(iu - f.lo_u)].emplace_back(s, direction);
+        }
+      }
+      std::vector<DexelSegment> segments;
+      for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+        auto& list = hits[static_cast<std::size_t>(iu - f.lo_u)];
+        if (list.empty()) continue;
+        std::sort(list.begin(), list.end());
+        segments.clear();
+        int winding = 0;
+        double start = 0.0;
+        for (const auto& [s, d] : list) {
+          const int before = winding;
+          winding += d;
+          if (before <= 0 && winding > 0) start = s;
+          if (before > 0 && winding <= 0 && s - start > kMinSegment_mm)
+            segments.push_back({static_cast<float>(start), static_cast<float>(s), kNoMove, kNoMove});
+        }
+        f.at(iu, iw).assign(segments.data(), static_cast<std::uint32_t>(segments.size()));
+      }
+    });
+  }
+}
+
+std::size_t estimate_dexel_memory_bytes(const StockShape& shape, double spacing_mm) {
+  const Eigen::AlignedBox3d box = bounds_of(shape);
+  const Vector3d n = (box.sizes() / spacing_mm).array() + 4.0;
+  const double rays = n.x() * n.y() + n.y() * n.z() + n.x() * n.z();
+  // Rays, plus the surface lattice meshed at the end (a float per node of the leaves around
+  // the surface, about 16 nodes deep per surface cell).
+  const double surface_cells = surface_area_mm2(shape) / (spacing_mm * spacing_mm);
+  return static_cast<std::size_t>(rays * sizeof(SegmentList) + surface_cells * 16.0 * sizeof(float));
+}
+
+DexelStock::DexelStock(const StockShape& shape, double spacing_mm) : impl_(std::make_unique<Impl>()) {
+  if (!(spacing_mm > 0.0)) throw std::invalid_argument("ray spacing must be positive");
+  Impl& m = *impl_;
+  m.v = spacing_mm;
+  m.shape_bounds = bounds_of(shape);
+  m.setup(m.shape_bounds);
+  if (const auto* box = std::get_if<BoxShape>(&shape)) {
+    m.fill([b = *box](int axis, double u, double w, double& lo, double& hi) {
+      const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+      if (u < b.min_mm[a1] || u > b.max_mm[a1] || w < b.min_mm[a2] || w > b.max_mm[a2]) return false;
+      lo = b.min_mm[axis];
+      hi = b.max_mm[axis];
+      return true;
+    });
+  } else if (const auto* cyl = std::get_if<CylinderShape>(&shape)) {
+    m.fill([c = *cyl](int axis, double u, double w, double& lo, double& hi) {
+      Vector3d o;
+      o[axis] = 0.0;
+      o[kOther[static_cast<std::size_t>(axis)][0]] = u;
+      o[kOther[static_cast<std::size_t>(axis)][1]] = w;
+      return detail::line_cylinder(axis, o, c.base_center_mm, c.axis.normalized() * c.height_mm,
+                                   c.radius_mm, lo, hi);
+    });
+  } else {
+    const auto& mesh = std::get<TriangleMesh>(shape);
+    if (!is_closed(mesh)) throw std::invalid_argument("a mesh stock must be closed");
+    m.fill_mesh(mesh);
+  }
+  m.initial_distance = detail::initial_distance(shape, m.initial_mesh);
+  m.sum_lengths();
+}
+
+DexelStock::~DexelStock() = default;
+
+double DexelStock::spacing_mm() const { return impl_->v; }
+
+CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
+  Impl& m = *impl_;
+  CutResult result;
+  const std::size_t total = list.moves.size();
+  // Rays' endpoints hold move ids that count across calls: remember every move.
+  const int id_base = static_cast<int>(m.moves.size());
+  const int cutter_base = static_cast<int>(m.cutters.size());
+  m.cutters.insert(m.cutters.end(), list.cutters.begin(), list.cutters.end());
+  for (Move move : list.moves) {
+    move.cutter += cutter_base;
+    m.moves.push_back(move);
+  }
+  // Per rapid: the longest overlap with material seen along each family.
+  std::map<int, std::array<Probe, 3>> probes;
+  std::array<double, 3> removed_mm = {0.0, 0.0, 0.0};
+  std::array<int, 4> tile_base = {0, 0, 0, 0};
+  for (int a = 0; a < 3; ++a) tile_base[static_cast<std::size_t>(a + 1)] = tile_base[static_cast<std::size_t>(a)] + m.families[static_cast<std::size_t>(a)].tiles();
+  const int tiles = tile_base[3];
+  std::vector<int> start(static_cast<std::size_t>(tiles) + 1);
+  std::vector<int> entries;
+  std::vector<TileResult> results(static_cast<std::size_t>(tiles));
+  tbb::enumerable_thread_specific<std::vector<DexelSegment>> scratch;
+
+  for (std::size_t first = 0; first < total; first += kBatchMoves) {
+    const std::size_t last = std::min(total, first + kBatchMoves);
+    std::vector<detail::RaySweep> sweeps;
+    sweeps.reserve(last - first);
+    for (std::size_t i = first; i < last; ++i)
+      sweeps.emplace_back(list.cutters.at(static_cast<std::size_t>(list.moves[i].cutter)), list.moves[i]);
+    // Bin the batch's moves to the tiles of rays their sweep's box covers (counting sort:
+    // within a tile the moves stay in program order).
+    std::fill(start.begin(), start.end(), 0);
+    auto for_each_tile = [&](std::size_t i, auto&& visit) {
+      for (int a = 0; a < 3; ++a) {
+        const Family& f = m.families[static_cast<std::size_t>(a)];
+        int u0, u1, w0, w1;
+        if (!m.ray_range(f, sweeps[i - first].bounds(), u0, u1, w0, w1)) continue;
+        for (int tw = (w0 - f.lo_w) / kTile; tw <= (w1 - f.lo_w) / kTile; ++tw)
+          for (int tu = (u0 - f.lo_u) / kTile; tu <= (u1 - f.lo_u) / kTile; ++tu)
+            visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu);
+      }
+    };
+    for (std::size_t i = first; i < last; ++i) for_each_tile(i, [&](int t) { ++start[static_cast<std::size_t>(t) + 1]; });
+    for (int t = 0; t < tiles; ++t) start[static_cast<std::size_t>(t) + 1] += start[static_cast<std::size_t>(t)];
+    entries.resize(static_cast<std::size_t>(start[static_cast<std::size_t>(tiles)]));
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (std::size_t i = first; i < last; ++i)
+        for_each_tile(i, [&](int t) { entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = static_cast<int>(i - first); });
+    }
+    std::vector<int> busy;
+    for (int t = 0; t < tiles; ++t)
+      if (start[static_cast<std::size_t>(t) + 1] > start[static_cast<std::size_t>(t)]) busy.push_back(t);
+
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, busy.size(), 1), [&](const auto& range) {
+      auto& buffer = scratch.local();
+      for (std::size_t b = range.begin(); b != range.end(); ++b) {
+        const int t = busy[b];
+        const int a = t >= tile_base[2] ? 2 : (t >= tile_base[1] ? 1 : 0);
+        Family& f = m.families[static_cast<std::size_t>(a)];
+        const int local = t - tile_base[static_cast<std::size_t>(a)];
+        const int tu = local % f.tiles_u, tw = local / f.tiles_u;
+        const int tile_u0 = f.lo_u + tu * kTile, tile_w0 = f.lo_w + tw * kTile;
+        TileResult& r = results[static_cast<std::size_t>(t)];
+        r.removed_mm = 0.0;
+        r.probes.clear();
+        for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
+          const int i = entries[static_cast<std::size_t>(e)];
+          const detail::RaySweep& sweep = sweeps[static_cast<std::size_t>(i)];
+          const Move& move = list.moves[first + static_cast<std::size_t>(i)];
+          const int id = id_base + static_cast<int>(first) + i;
+          int u0, u1, w0, w1;
+          m.ray_range(f, sweep.bounds(), u0, u1, w0, w1);
+          u0 = std::max(u0, tile_u0);
+          u1 = std::min(u1, tile_u0 + kTile - 1);
+          w0 = std::max(w0, tile_w0);
+          w1 = std::min(w1, tile_w0 + kTile - 1);
+          const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
+          Probe probe{i, a, 0.0, Vector3d::Zero()};
+          for (int iw = w0; iw <= w1; ++iw) {
+            for (int iu = u0; iu <= u1; ++iu) {
+              SegmentList& ray = f.at(iu, iw);
+              const std::uint32_t n = ray.size();
+              // Rays already clear of the sweep's box cost a look only.
+              if (n == 0 || ray.data()[0].lo_mm >= box_hi || ray.data()[n - 1].hi_mm <= box_lo) continue;
+              double lo, hi;
+              if (!sweep.interval(a, m.position(iu), m.position(iw), lo, hi)) continue;
+              if (move.rapid) {
+                double middle = 0.0;
+                const double depth = overlap(ray, lo, hi, middle);
+                if (depth > probe.overlap_mm) {
+                  probe.overlap_mm = depth;
+                  probe.where_mm = m.point(a, iu, iw, middle);
+                }
+              } else {
+                r.removed_mm += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
+              }
+            }
+          }
+          if (probe.overlap_mm > 0.0) r.probes.push_back(probe);
+        }
+      }
+    });
+    // Gather in tile order: the same sums and the same collisions for any thread count.
+    for (int t : busy) {
+      const int a = t >= tile_base[2] ? 2 : (t >= tile_base[1] ? 1 : 0);
+      const TileResult& r = results[static_cast<std::size_t>(t)];
+      removed_mm[static_cast<std::size_t>(a)] += r.removed_mm;
+      for (const Probe& p : r.probes) {
+        auto& slot = probes[static_cast<int>(first) + p.move][static_cast<std::size_t>(a)];
+        if (p.overlap_mm > slot.overlap_mm) {
+          slot = p;
+          slot.move = static_cast<int>(first) + p.move;
+        }
+      }
+    }
+    if (options.progress) options.progress(last, total);
+  }
+  double removed = 0.0;
+  for (int a = 0; a < 3; ++a) {
+    m.families[static_cast<std::size_t>(a)].length_mm -= removed_mm[static_cast<std::size_t>(a)];
+    removed += removed_mm[static_cast<std::size_t>(a)];
+  }
+  result.removed_volume_mm3 = removed * m.v * m.v / 3.0;
+  // A rapid's depth in material: the shortest of the longest overlaps the three families
+  // saw (a family that saw none is below its resolution there and does not count).
+  for (const auto& [move, by_axis] : probes) {
+    const Probe* best = nullptr;
+    for (const Probe& p : by_axis)
+      if (p.overlap_mm > 0.0 && (best == nullptr || p.overlap_mm < best->overlap_mm)) best = &p;
+    if (best != nullptr && best->overlap_mm > options.collision_tolerance_mm)
+      result.collisions.push_back({move, best->overlap_mm, best->where_mm});
+  }
+  return result;
+}
+
+SurfaceMesh DexelStock::surface() const {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+  const Impl& m = *impl_;
+  const double v = m.v;
+  // A level set on the rays' lattice: every node next to a ray's crossing of the surface,
+  // valued by the distance to the plane through the nearest crossings on the three axes
+  // (exact for a plane), signed by the z ray through it.
+  const float background = static_cast<float>(3.0 * v);
+  auto grid = openvdb::FloatGrid::create(background);
+  auto transform = openvdb::math::Transform::createLinearTransform(v);
+  transform->postTranslate(openvdb::Vec3d(0.5 * v));
+  grid->setTransform(transform);
+  {
+    auto acc = grid->getAccessor();
+    for (const Family& f : m.families) {
+      const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+      for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) {
+        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+          const SegmentList& ray = f.at(iu, iw);
+          for (std::uint32_t s = 0; s < ray.size(); ++s) {
+            for (float x : {ray.data()[s].lo_mm, ray.data()[s].hi_mm}) {
+              const int k = static_cast<int>(std::floor(m.index_of(x)));
+              Coord c;
+              c[a1] = iu;
+              c[a2] = iw;
+              c[f.axis] = k;
+              acc.setValueOn(c, background);
+              c[f.axis] = k + 1;
+              acc.setValueOn(c, background);
+            }
+          }
+        }
+      }
+    }
+  }
+  // Distance along `axis` from node c to the nearest crossing of its ray within one spacing.
+  auto axis_distance = [&](const Coord& c, int axis) {
+    const Family& f = m.families[static_cast<std::size_t>(axis)];
+    const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+    if (!f.contains(c[a1], c[a2])) return std::numeric_limits<double>::infinity();
+    const SegmentList& ray = f.at(c[a1], c[a2]);
+    const double s = m.position(c[axis]);
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t i = 0; i < ray.size(); ++i) {
+      best = std::min({best, std::abs(ray.data()[i].lo_mm - s), std::abs(ray.data()[i].hi_mm - s)});
+      if (ray.data()[i].lo_mm > s + v) break;
+    }
+    return best <= v ? best : std::numeric_limits<double>::infinity();
+  };
+  auto value_at = [&](const Coord& c) {
+    double inverse = 0.0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double d = std::max(axis_distance(c, axis), 1e-3 * v);
+      if (std::isfinite(d)) inverse += 1.0 / (d * d);
+    }
+    const double magnitude = inverse > 0.0 ? 1.0 / std::sqrt(inverse) : v;
+    return static_cast<float>(m.inside(c.x(), c.y(), c.z()) ? -magnitude : magnitude);
+  };
+  {
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
+    leaves.foreach([&](openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+      for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(value_at(it.getCoord()));
+    });
+  }
+  // Where two neighbours differ in sign, both must carry a value (a crossing the rays of
+  // the third family saw at a lattice node may have no partner in the others).
+  {
+    tbb::enumerable_thread_specific<std::vector<Coord>> missing;
+    openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
+    leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
+      auto& out = missing.local();
+      for (auto it = leaf.cbeginValueOn(); it; ++it) {
+        const Coord c = it.getCoord();
+        const bool in = *it < 0.0f;
+        for (int n = 0; n < 6; ++n) {
+          Coord d = c;
+          d[n / 2] += (n % 2) ? 1 : -1;
+          if (!grid->tree().isValueOn(d) && m.inside(d.x(), d.y(), d.z()) != in) out.push_back(d);
+        }
+      }
+    });
+    auto acc = grid->getAccessor();
+    for (const auto& list : missing)
+      for (const Coord& c : list) acc.setValueOn(c, value_at(c));
+  }
+  openvdb::tools::signedFloodFill(grid->tree());
+  grid->setGridClass(openvdb::GRID_LEVEL_SET);
+
+  std::vector<openvdb::Vec3s> points;
+  std::vector<openvdb::Vec3I> triangles;
+  std::vector<openvdb::Vec4I> quads;
+  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, kMeshAdaptivity);
+  grid.reset();
+  SurfaceMesh mesh;
+  mesh.mesh.vertices_mm.reserve(points.size());
+  for (const auto& p : points) mesh.mesh.vertices_mm.emplace_back(p.x(), p.y(), p.z());
+  // OpenVDB winds level-set polygons clockwise seen from outside; flip to outward CCW.
+  for (const auto& t : triangles)
+    mesh.mesh.triangles.emplace_back(static_cast<int>(t[0]), static_cast<int>(t[2]), static_cast<int>(t[1]));
+  for (const auto& q : quads) {
+    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[2]), static_cast<int>(q[1]));
+    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[3]), static_cast<int>(q[2]));
+  }
+  // The moves that made the crossings around each vertex: its candidates on the exact surface.
+  const std::size_t count = points.size();
+  std::vector<std::vector<int>> nearby(count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 512), [&](const auto& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      const Vector3d& x = mesh.mesh.vertices_mm[p];
+      Eigen::Vector3i base;
+      for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
+      std::vector<int>& ids = nearby[p];
+      for (const Family& f : m.families) {
+        const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+        const double s_lo = m.position(base[f.axis] - 1), s_hi = m.position(base[f.axis] + 2);
+        for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
+          for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
+            if (!f.contains(iu, iw)) continue;
+            const SegmentList& ray = f.at(iu, iw);
+            for (std::uint32_t s = 0; s < ray.size(); ++s) {
+              const DexelSegment& seg = ray.data()[s];
+              if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo && seg.lo_mm <= s_hi) ids.push_back(seg.lo_move);
+              if (seg.hi_move != kNoMove && seg.hi_mm >= s_lo && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
+            }
+          }
+        }
+      }
+      std::sort(ids.begin(), ids.end());
+      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    }
+  });
+  // A vertex lies in its lattice cell, so the surface is within a cell diagonal.
+  detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * v, mesh);
+  return mesh;
+}
+
+double DexelStock::volume_mm3() const {
+  const Impl& m = *impl_;
+  double total = 0.0;
+  for (const Family& f : m.families) total += f.length_mm;
+  return total * m.v * m.v / 3.0;
+}
+
+std::size_t DexelStock::memory_bytes() const {
+  std::size_t bytes = sizeof(Impl) + impl_->moves.size() * sizeof(Move);
+  for (const Family& f : impl_->families) {
+    bytes += f.rays.size() * sizeof(SegmentList);
+    for (const SegmentList& ray : f.rays) bytes += ray.heap_bytes();
+  }
+  return bytes;
+}
+
+Eigen::AlignedBox3d DexelStock::bounds() const { return impl_->shape_bounds; }
+
+std::vector<DexelSegment> DexelStock::ray(int axis, int iu, int iw) const {
+  const Family& f = impl_->families.at(static_cast<std::size_t>(axis));
+  if (!f.contains(iu, iw)) return {};
+  const SegmentList& r = f.at(iu, iw);
+  return {r.data(), r.data() + r.size()};
+}
+
+std::vector<DexelEndpoint> DexelStock::endpoints() const {
+  const Impl& m = *impl_;
+  std::vector<DexelEndpoint> out;
+  for (const Family& f : m.families) {
+    for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) {
+      for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+        const SegmentList& ray = f.at(iu, iw);
+        for (std::uint32_t s = 0; s < ray.size(); ++s) {
+          const DexelSegment& seg = ray.data()[s];
+          out.push_back({m.point(f.axis, iu, iw, seg.lo_mm), seg.lo_move, f.axis});
+          out.push_back({m.point(f.axis, iu, iw, seg.hi_mm), seg.hi_move, f.axis});
+        }
+      }
+    }
+  }
+  return out;
+}
+
+std::size_t DexelStock::ray_count() const {
+  std::size_t n = 0;
+  for (const Family& f : impl_->families) n += f.rays.size();
+  return n;
+}
+
+}  // namespace vcut::removal

@@ -1,0 +1,337 @@
+#include "ray_sweep.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace vcut::removal::detail {
+namespace {
+
+using Eigen::Vector3d;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// Motion or edge lengths below this (mm) count as zero.
+constexpr double kTiny_mm = 1e-12;
+
+// Minimum of a convex function on [a, b] by golden-section search; returns the argument.
+template <class F>
+double golden_argmin(F&& f, double a, double b, double tolerance) {
+  constexpr double kInvPhi = 0.6180339887498949;
+  double c = b - kInvPhi * (b - a), e = a + kInvPhi * (b - a);
+  double fc = f(c), fe = f(e);
+  while (b - a > tolerance) {
+    if (fc <= fe) {
+      b = e; e = c; fe = fc;
+      c = b - kInvPhi * (b - a);
+      fc = f(c);
+    } else {
+      a = c; c = e; fc = fe;
+      e = a + kInvPhi * (b - a);
+      fe = f(e);
+    }
+  }
+  // The ends too: a convex function may be smallest at a bound of the interval.
+  double best = 0.5 * (a + b), f_best = f(best);
+  for (double t : {a, b}) {
+    const double ft = f(t);
+    if (ft < f_best) { best = t; f_best = ft; }
+  }
+  return best;
+}
+
+// A root of f in [a, b] where f(a) and f(b) differ in sign (f(a) > 0 >= f(b) or the reverse):
+// the point nearest to the side where f > 0 that is still <= 0, to `tolerance`.
+template <class F>
+double bisect(F&& f, double outside, double inside, double tolerance) {
+  while (std::abs(inside - outside) > tolerance) {
+    const double mid = 0.5 * (outside + inside);
+    (f(mid) > 0.0 ? outside : inside) = mid;
+  }
+  return inside;
+}
+
+void widen(double& lo, double& hi, double a, double b) {
+  lo = std::min(lo, a);
+  hi = std::max(hi, b);
+}
+
+// The line o + s*e_axis (o[axis] = 0) against a ball.
+bool line_sphere(int axis, const Vector3d& o, const Vector3d& c, double r, double& lo, double& hi) {
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  const double h2 = r * r - (o[a1] - c[a1]) * (o[a1] - c[a1]) - (o[a2] - c[a2]) * (o[a2] - c[a2]);
+  if (h2 < 0.0) return false;
+  const double h = std::sqrt(h2);
+  lo = c[axis] - h;
+  hi = c[axis] + h;
+  return true;
+}
+
+}  // namespace
+
+bool line_cylinder(int axis, const Vector3d& o, const Vector3d& p, const Vector3d& d, double r,
+                   double& lo, double& hi) {
+  const double dd = d.squaredNorm();
+  if (dd <= kTiny_mm * kTiny_mm) return false;
+  Vector3d m = o - p;
+  m[axis] = -p[axis];
+  const double md = m.dot(d), nd = d[axis], mn = m[axis];
+  const double a = dd - nd * nd;
+  const double c = dd * (m.squaredNorm() - r * r) - md * md;
+  double s0 = -kInf, s1 = kInf;
+  if (a <= 1e-14 * dd) {
+    if (c > 0.0) return false;  // parallel to the cylinder and outside it
+  } else {
+    const double b = dd * mn - nd * md;
+    const double disc = b * b - a * c;
+    if (disc < 0.0) return false;
+    const double root = std::sqrt(disc);
+    s0 = (-b - root) / a;
+    s1 = (-b + root) / a;
+  }
+  // Between the two end planes: the projection parameter (md + s*nd)/dd in [0, 1].
+  if (nd != 0.0) {
+    double e0 = -md / nd, e1 = (dd - md) / nd;
+    if (e0 > e1) std::swap(e0, e1);
+    s0 = std::max(s0, e0);
+    s1 = std::min(s1, e1);
+  } else if (md < 0.0 || md > dd) {
+    return false;
+  }
+  if (s0 > s1) return false;
+  lo = s0;
+  hi = s1;
+  return true;
+}
+
+namespace {
+
+// Restricts [s0, s1] to where v0 + s*slope lies in [lo, hi].
+bool clip(double v0, double slope, double lo, double hi, double& s0, double& s1) {
+  if (slope == 0.0) return v0 >= lo && v0 <= hi;
+  double e0 = (lo - v0) / slope, e1 = (hi - v0) / slope;
+  if (e0 > e1) std::swap(e0, e1);
+  s0 = std::max(s0, e0);
+  s1 = std::min(s1, e1);
+  return s0 <= s1;
+}
+
+double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
+
+}  // namespace
+
+RaySweep::RaySweep(const Cutter& cutter, const Move& move)
+    : sweep_(cutter, move), core_(core_of(cutter)), p0_(move.start_mm), delta_(move.end_mm - move.start_mm) {
+  radius_mm_ = core_.core_radius_mm + core_.rounding_mm;
+  height_mm_ = core_.z_high_mm + core_.rounding_mm;
+  const Vector3d a = move.axis.normalized();
+  vertical_axis_ = std::abs(a.x()) <= kTiny_mm && std::abs(a.y()) <= kTiny_mm && a.z() > 0.0;
+  if (core_.core_radius_mm == 0.0) {
+    method_ = Method::Ball;
+    c0_ = p0_ + core_.z_low_mm * a;
+    edge_a_ = (core_.z_high_mm - core_.z_low_mm) * a;
+    edge_b_ = delta_;
+    const double la = edge_a_.norm(), lb = edge_b_.norm();
+    const Vector3d cross = edge_a_.cross(edge_b_);
+    if (la <= 1e-9 && lb <= 1e-9) {
+      segments_ = 0;
+    } else if (la <= 1e-9 || lb <= 1e-9 || cross.norm() <= 1e-12 * la * lb) {
+      // The parallelogram is a segment: its two extreme corners along the common direction.
+      const Vector3d dir = (la > lb ? edge_a_ : edge_b_).normalized();
+      Vector3d lo_point = c0_, hi_point = c0_;
+      for (const Vector3d& p : {Vector3d(c0_ + edge_a_), Vector3d(c0_ + edge_b_), Vector3d(c0_ + edge_a_ + edge_b_)}) {
+        if (p.dot(dir) < lo_point.dot(dir)) lo_point = p;
+        if (p.dot(dir) > hi_point.dot(dir)) hi_point = p;
+      }
+      segments_ = 1;
+      c0_ = lo_point;
+      edge_a_ = hi_point - lo_point;
+    } else {
+      segments_ = 2;
+      normal_ = cross.normalized();
+      const Vector3d bn = edge_b_.cross(normal_), na = normal_.cross(edge_a_);
+      dual_a_ = bn / edge_a_.dot(bn);
+      dual_b_ = na / edge_b_.dot(na);
+    }
+  } else if (vertical_axis_) {
+    method_ = Method::Upright;
+  } else {
+    method_ = Method::General;
+  }
+}
+
+bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
+  Vector3d o;
+  o[axis] = 0.0;
+  o[axis == 0 ? 1 : 0] = u;
+  o[axis == 2 ? 1 : 2] = w;
+  switch (method_) {
+    case Method::Ball: return ball(axis, o, lo, hi);
+    case Method::Upright:
+      return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
+    case Method::General: return general(axis, o, lo, hi);
+  }
+  return false;
+}
+
+bool RaySweep::ball(int axis, const Vector3d& o, double& lo, double& hi) const {
+  const double r = core_.rounding_mm;
+  double a, b;
+  lo = kInf;
+  hi = -kInf;
+  if (segments_ == 0) return line_sphere(axis, o, c0_, r, lo, hi);
+  if (segments_ == 1) {
+    if (line_sphere(axis, o, c0_, r, a, b)) widen(lo, hi, a, b);
+    if (line_sphere(axis, o, c0_ + edge_a_, r, a, b)) widen(lo, hi, a, b);
+    if (line_cylinder(axis, o, c0_, edge_a_, r, a, b)) widen(lo, hi, a, b);
+    return lo <= hi;
+  }
+  const Vector3d c1 = c0_ + edge_b_, top0 = c0_ + edge_a_, top1 = c1 + edge_a_;
+  if (axis == 2 && vertical_axis_) {
+    // A vertical line enters through the sweep of the ball's centre and leaves through the
+    // sweep of the top rounding's centre (the rest lies between the two in z).
+    if (line_sphere(axis, o, c0_, r, a, b)) lo = std::min(lo, a);
+    if (line_sphere(axis, o, c1, r, a, b)) lo = std::min(lo, a);
+    if (line_cylinder(axis, o, c0_, edge_b_, r, a, b)) lo = std::min(lo, a);
+    if (lo == kInf) return false;
+    if (line_sphere(axis, o, top0, r, a, b)) hi = std::max(hi, b);
+    if (line_sphere(axis, o, top1, r, a, b)) hi = std::max(hi, b);
+    if (line_cylinder(axis, o, top0, edge_b_, r, a, b)) hi = std::max(hi, b);
+    return hi >= lo;
+  }
+  for (const Vector3d* c : {&c0_, &c1, &top0, &top1})
+    if (line_sphere(axis, o, *c, r, a, b)) widen(lo, hi, a, b);
+  if (line_cylinder(axis, o, c0_, edge_b_, r, a, b)) widen(lo, hi, a, b);
+  if (line_cylinder(axis, o, top0, edge_b_, r, a, b)) widen(lo, hi, a, b);
+  if (line_cylinder(axis, o, c0_, edge_a_, r, a, b)) widen(lo, hi, a, b);
+  if (line_cylinder(axis, o, c1, edge_a_, r, a, b)) widen(lo, hi, a, b);
+  // The slab of thickness 2r over the parallelogram's inside.
+  const Vector3d m = o - c0_;
+  double s0 = -kInf, s1 = kInf;
+  if (clip(normal_.dot(m), normal_[axis], -r, r, s0, s1) &&
+      clip(dual_a_.dot(m), dual_a_[axis], 0.0, 1.0, s0, s1) &&
+      clip(dual_b_.dot(m), dual_b_[axis], 0.0, 1.0, s0, s1))
+    widen(lo, hi, s0, s1);
+  return lo <= hi;
+}
+
+bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) const {
+  const double radius = radius_mm_, rc = core_.core_radius_mm, r = core_.rounding_mm;
+  const double qx = u - p0_.x(), qy = w - p0_.y();
+  const double dx = delta_.x(), dy = delta_.y(), dz = delta_.z();
+  const double dd = dx * dx + dy * dy, qd = qx * dx + qy * dy, qq = qx * qx + qy * qy;
+  // The part of the move during which the line passes through the cutter's disc.
+  double ta = 0.0, tb = 1.0;
+  if (dd <= kTiny_mm * kTiny_mm) {
+    if (qq > radius * radius) return false;
+  } else {
+    const double disc = qd * qd - dd * (qq - radius * radius);
+    if (disc < 0.0) return false;
+    const double root = std::sqrt(disc);
+    ta = std::max(0.0, (qd - root) / dd);
+    tb = std::min(1.0, (qd + root) / dd);
+    if (ta > tb) return false;
+  }
+  // Height of the cutter's underside above its tip at the line, at move parameter t.
+  auto underside = [&](double t) {
+    const double off = std::hypot(qx - t * dx, qy - t * dy) - rc;
+    return off <= 0.0 ? 0.0 : r - std::sqrt(std::max(0.0, r * r - off * off));
+  };
+  const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, std::sqrt(dd + dz * dz));
+  // min over [ta, tb] of t*slope + underside(t): convex (the underside is a convex function
+  // of the distance to the axis, itself convex in t).
+  auto lowest = [&](double slope) {
+    if (r == 0.0) return slope >= 0.0 ? ta * slope : tb * slope;
+    if (std::abs(slope) <= kTiny_mm) return underside(dd > 0.0 ? std::clamp(qd / dd, ta, tb) : ta);
+    const auto f = [&](double t) { return t * slope + underside(t); };
+    return f(golden_argmin(f, ta, tb, t_tolerance));
+  };
+  lo = p0_.z() + lowest(dz);
+  hi = p0_.z() + height_mm_ - lowest(-dz);  // the top is the underside mirrored
+  return true;
+}
+
+bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, double& hi) const {
+  const int across = axis == 0 ? 1 : 0;  // the other horizontal axis, where u lies
+  const double c0 = p0_[axis], dc = delta_[axis];
+  const double w0 = p0_[across] - u, dw = delta_[across];
+  const double h0 = w - p0_.z(), dh = -delta_.z();  // the line's height above the tip
+  const double rc = core_.core_radius_mm, r = core_.rounding_mm;
+  double ta = 0.0, tb = 1.0;
+  if (std::abs(dh) <= kTiny_mm) {
+    if (h0 < 0.0 || h0 > height_mm_) return false;
+  } else if (!clip(h0, dh, 0.0, height_mm_, ta, tb)) {
+    return false;
+  }
+  // Radius of the cutter's cross-section at height h above the tip.
+  auto section = [&](double h) {
+    const double off = h < core_.z_low_mm ? core_.z_low_mm - h : (h > core_.z_high_mm ? h - core_.z_high_mm : 0.0);
+    return rc + std::sqrt(std::max(0.0, r * r - off * off));
+  };
+  if (r == 0.0 || std::abs(dh) <= kTiny_mm) {
+    // The section does not change along the move: a disc swept along a segment in the
+    // plane of the line, whose extent along the line has a closed form.
+    const double radius = section(h0 + 0.5 * (ta + tb) * dh);
+    if (std::abs(dw) <= kTiny_mm) {
+      if (std::abs(w0) > radius) return false;
+    } else if (!clip(w0, dw, -radius, radius, ta, tb)) {
+      return false;
+    }
+    auto half = [&](double t) {
+      const double off = w0 + t * dw;
+      return std::sqrt(std::max(0.0, radius * radius - off * off));
+    };
+    double t_lo, t_hi;
+    if (std::abs(dw) <= kTiny_mm) {
+      t_lo = dc >= 0.0 ? ta : tb;
+      t_hi = dc >= 0.0 ? tb : ta;
+    } else {
+      // Stationary points of c(t) -/+ half(t): the offset where the disc's edge runs
+      // parallel to the line.
+      const double off = std::abs(dc) * radius / std::hypot(dc, dw) * sign(dc) * sign(dw);
+      t_lo = std::clamp((-off - w0) / dw, ta, tb);
+      t_hi = std::clamp((off - w0) / dw, ta, tb);
+    }
+    lo = c0 + t_lo * dc - half(t_lo);
+    hi = c0 + t_hi * dc + half(t_hi);
+    return true;
+  }
+  // A bull-nose moving up or down: the section changes along the move. The line meets the
+  // section while k(t) = |w(t)| - section(h(t)) <= 0, k convex; inside that range the extent
+  // along the line is the minimum of a convex and the maximum of a concave function of t.
+  const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, delta_.norm());
+  auto k = [&](double t) { return std::abs(w0 + t * dw) - section(h0 + t * dh); };
+  const double t_mid = golden_argmin(k, ta, tb, t_tolerance);
+  if (k(t_mid) > 0.0) return false;
+  const double t_first = k(ta) > 0.0 ? bisect(k, ta, t_mid, t_tolerance) : ta;
+  const double t_last = k(tb) > 0.0 ? bisect(k, tb, t_mid, t_tolerance) : tb;
+  auto half = [&](double t) {
+    const double radius = section(h0 + t * dh), off = w0 + t * dw;
+    return std::sqrt(std::max(0.0, radius * radius - off * off));
+  };
+  const auto near_end = [&](double t) { return c0 + t * dc - half(t); };
+  const auto far_end = [&](double t) { return -(c0 + t * dc + half(t)); };
+  lo = near_end(golden_argmin(near_end, t_first, t_last, t_tolerance));
+  hi = -far_end(golden_argmin(far_end, t_first, t_last, t_tolerance));
+  return true;
+}
+
+bool RaySweep::general(int axis, const Vector3d& o, double& lo, double& hi) const {
+  const Eigen::AlignedBox3d& box = sweep_.bounds();
+  for (int a = 0; a < 3; ++a)
+    if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
+  const double sa = box.min()[axis] - 1e-6, sb = box.max()[axis] + 1e-6;
+  auto f = [&](double s) {
+    Vector3d x = o;
+    x[axis] = s;
+    return sweep_.distance(x);
+  };
+  // The sweep's signed distance is convex along the line: bracket its minimum, then the
+  // two zero crossings on either side of it.
+  const double s_min = golden_argmin(f, sa, sb, kRaySearchTolerance_mm);
+  if (f(s_min) > 0.0) return false;
+  lo = f(sa) > 0.0 ? bisect(f, sa, s_min, kRaySearchTolerance_mm) : sa;
+  hi = f(sb) > 0.0 ? bisect(f, sb, s_min, kRaySearchTolerance_mm) : sb;
+  return true;
+}
+
+}  // namespace vcut::removal::detail

@@ -1,0 +1,67 @@
+// Where an axis-parallel ray meets the volume swept by one move (ARCHITECTURE §8).
+// Internal to vcut::removal (the tri-dexel stock's cutting kernel).
+//
+// The cutter is convex and a translation sweeps it into a convex set, so a line meets the
+// sweep in one interval. Three methods, chosen per move:
+//  - Ball end, any tool axis: the sweep is a parallelogram P (the axis segment of the
+//    core swept along the move) grown by the ball radius r; a line meets P + B(r) in the
+//    hull of its meetings with the four edge capsules and the slab over P: closed form.
+//  - Flat or bull-nose end with the tool axis +Z (three-axis work): the slice of the
+//    sweep by the plane of the ray and the motion, in (s, t) = (along the ray, along the
+//    move), is convex; its extent in s is the minimum of a convex function of t: closed
+//    form when the cutter's cross-section at the ray does not change along the move, else
+//    a bracketing search to kRaySearchTolerance.
+//  - Anything else (tilted flat or bull-nose): the sweep's signed distance along the ray
+//    is convex in s; its minimum and the two zero crossings are bracketed numerically.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "vcut/removal/cutter.h"
+#include "vcut/removal/move.h"
+#include "vcut/removal/sweep.h"
+
+namespace vcut::removal::detail {
+
+// Bracketing searches stop when the bracket is this small (mm along the ray, or mm of
+// motion along the move): endpoints are exact to about this, far below the 1 um target.
+inline constexpr double kRaySearchTolerance_mm = 1e-9;
+
+// The line o + s e_axis (o[axis] ignored) against the solid cylinder of radius r around the
+// segment p -> p + d, between the planes through p and p + d normal to d: [lo, hi] of s.
+bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
+                   const Eigen::Vector3d& d, double r, double& lo, double& hi);
+
+class RaySweep {
+ public:
+  RaySweep(const Cutter& cutter, const Move& move);
+
+  // The ray parallel to coordinate axis `axis` (0 x, 1 y, 2 z) through the point whose two
+  // other coordinates, in increasing axis order, are (u, w). Returns false when it misses the
+  // sweep, else the interval [lo, hi] of the axis coordinate inside it.
+  bool interval(int axis, double u, double w, double& lo, double& hi) const;
+
+  const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
+
+ private:
+  enum class Method { Ball, Upright, General };
+  bool ball(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
+  bool upright_vertical(double u, double w, double& lo, double& hi) const;
+  bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
+  bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
+
+  TranslationSweep sweep_;
+  Method method_;
+  CutterCore core_;
+  double radius_mm_;       // R
+  double height_mm_;       // H = z_high + r, the top of the cutting part
+  Eigen::Vector3d p0_, delta_;
+  // Ball: the parallelogram c0 + a*A + b*B, a, b in [0, 1].
+  Eigen::Vector3d c0_, edge_a_, edge_b_;
+  Eigen::Vector3d normal_, dual_a_, dual_b_;  // slab normal and dual basis (no slab if zero)
+  int segments_ = 0;          // 0: sphere, 1: one capsule c0 -> c0 + edge_a, 2: parallelogram
+  bool vertical_axis_ = false;
+};
+
+}  // namespace vcut::removal::detail

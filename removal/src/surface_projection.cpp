@@ -1,0 +1,75 @@
+#include "surface_projection.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+#include "vcut/removal/compare.h"
+#include "vcut/removal/sweep.h"
+#include "initial_stock.h"
+
+namespace vcut::removal::detail {
+namespace {
+// Mesh vertices are moved onto the exact surface to within this (mm).
+constexpr double kProjectionTolerance_mm = 1e-7;
+}  // namespace
+
+std::function<double(const Eigen::Vector3d&)> initial_distance(
+    const StockShape& shape, std::shared_ptr<const DesignDistance>& mesh_distance) {
+  if (const auto* box = std::get_if<BoxShape>(&shape))
+    return [b = *box](const Eigen::Vector3d& x) { return box_distance(b, x); };
+  if (const auto* cyl = std::get_if<CylinderShape>(&shape))
+    return [c = *cyl](const Eigen::Vector3d& x) { return cylinder_distance(c, x); };
+  mesh_distance = std::make_shared<const DesignDistance>(std::get<TriangleMesh>(shape));
+  return [d = mesh_distance](const Eigen::Vector3d& x) { return d->signed_distance(x); };
+}
+
+void project_onto_machined_surface(const std::vector<Move>& moves, const std::vector<Cutter>& cutters,
+                                   const std::function<double(const Eigen::Vector3d&)>& initial,
+                                   const std::vector<std::vector<int>>& nearby, double max_travel_mm,
+                                   SurfaceMesh& mesh) {
+  const std::size_t count = mesh.mesh.vertices_mm.size();
+  mesh.vertex_move.assign(count, -1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
+    std::vector<TranslationSweep> sweeps;
+    for (std::size_t v = range.begin(); v != range.end(); ++v) {
+      sweeps.clear();
+      for (int id : nearby[v]) {
+        const Move& move = moves[static_cast<std::size_t>(id)];
+        sweeps.emplace_back(cutters[static_cast<std::size_t>(move.cutter)], move);
+      }
+      int active = -1;
+      auto field = [&](const Eigen::Vector3d& x) {
+        double f = initial(x);
+        active = -1;
+        for (std::size_t k = 0; k < sweeps.size(); ++k) {
+          const double cut = -sweeps[k].distance(x);
+          if (cut > f) { f = cut; active = nearby[v][k]; }
+        }
+        return f;
+      };
+      const Eigen::Vector3d start = mesh.mesh.vertices_mm[v];
+      Eigen::Vector3d x = start;
+      constexpr double kStep_mm = 1e-5;  // central differences: error O(h^2) on smooth parts
+      for (int iteration = 0; iteration < 16; ++iteration) {
+        const double f = field(x);
+        if (std::abs(f) < kProjectionTolerance_mm) break;
+        Eigen::Vector3d g;
+        for (int a = 0; a < 3; ++a) {
+          Eigen::Vector3d h = Eigen::Vector3d::Zero();
+          h[a] = kStep_mm;
+          g[a] = (field(x + h) - field(x - h)) / (2 * kStep_mm);
+        }
+        if (g.squaredNorm() < 0.25) break;  // on a kink: keep the point
+        x -= f * g / g.squaredNorm();
+      }
+      if ((x - start).norm() > max_travel_mm || !x.allFinite()) x = start;
+      field(x);
+      mesh.mesh.vertices_mm[v] = x;
+      mesh.vertex_move[v] = active;
+    }
+  });
+}
+
+}  // namespace vcut::removal::detail
