@@ -104,7 +104,8 @@ Job read_job(const std::string& path) {
     yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
     if (engine["kind"]) {
       job.engine = yaml.text(engine["kind"], "engine.kind");
-      if (job.engine != "vdb") yaml.fail(engine["kind"], "engine.kind", "vdb (the tri-dexel engine is not built yet)");
+      if (job.engine != "dexel" && job.engine != "vdb" && job.engine != "both")
+        yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
     }
     if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
     if (const YAML::Node threads = engine["threads"]) {

@@ -84,6 +84,29 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
   h["area_mm2"] = ordered_json::array();
   for (double a : r.histogram_area_mm2) h["area_mm2"].push_back(um(a));
   j["histogram"] = h;
+  if (r.endpoints.done) {
+    // Which points the summary's gouge and excess figures were measured at.
+    ordered_json e;
+    e["measured_at"] = "dexel endpoints: every point where a ray of the tri-dexel stock enters or leaves material that a move made (faces of the initial stock never cut are measured on the mesh), exact distance to the design's triangles";
+    e["points"] = r.endpoints.points;
+    e["max_gouge_mm"] = um(r.endpoints.max_gouge_mm);
+    e["deepest"] = vec(r.endpoints.deepest_mm);
+    e["deepest_line"] = r.endpoints.deepest_line;
+    e["max_excess_mm"] = um(r.endpoints.max_excess_mm);
+    e["gouge_points"] = r.endpoints.gouge_points;
+    e["excess_points"] = r.endpoints.excess_points;
+    j["endpoint_check"] = e;
+  }
+  if (r.engines.done) {
+    ordered_json e;
+    e["compared"] = "tri-dexel and OpenVDB machined surfaces, every vertex of each against the other's triangles";
+    e["max_mm"] = um(r.engines.max_mm);
+    e["rms_mm"] = um(r.engines.rms_mm);
+    e["vertices"] = r.engines.vertices;
+    e["vdb_cut_s"] = std::round(r.engines.vdb_cut_s * 1e3) / 1e3;
+    e["vdb_mesh_s"] = std::round(r.engines.vdb_mesh_s * 1e3) / 1e3;
+    j["engine_check"] = e;
+  }
   j["warnings"] = r.warnings;
   ordered_json settings;
   settings["job_file"] = job.file;

@@ -23,7 +23,11 @@
 #include "vcut/kinematics/densify.h"
 #include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
+#include "vcut/removal/dexel_stock.h"
 #include "vcut/removal/vdb_stock.h"
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 namespace vcut::io {
 namespace fs = std::filesystem;
@@ -195,7 +199,11 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     msg << "): check the work offsets and the stock";
     throw InputError(job.file, 0, 0, msg.str());
   }
-  const double estimate_mb = static_cast<double>(removal::estimate_vdb_memory_bytes(shape, v)) / (1024.0 * 1024.0);
+  const bool use_dexel = job.engine != "vdb", use_vdb = job.engine != "dexel";
+  std::size_t estimate_bytes = 0;
+  if (use_dexel) estimate_bytes += removal::estimate_dexel_memory_bytes(shape, v);
+  if (use_vdb) estimate_bytes += removal::estimate_vdb_memory_bytes(shape, v);
+  const double estimate_mb = static_cast<double>(estimate_bytes) / (1024.0 * 1024.0);
   result.estimated_memory_mb = estimate_mb;
   const double limit_mb = options.max_memory_mb > 0.0 ? options.max_memory_mb : 0.75 * total_ram_mb();
   if (estimate_mb > limit_mb) {
@@ -206,7 +214,12 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     msg.precision(3);
     throw InputError(msg.str());
   }
-  removal::VdbStock stock(shape, v);
+  // The primary engine makes the outputs; with engine: both the OpenVDB one checks it.
+  std::unique_ptr<removal::Stock> primary, second;
+  if (use_dexel) primary = std::make_unique<removal::DexelStock>(shape, v);
+  else primary = std::make_unique<removal::VdbStock>(shape, v);
+  if (use_dexel && use_vdb) second = std::make_unique<removal::VdbStock>(shape, v);
+  removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");
 
@@ -234,6 +247,40 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   result.machined_triangles = machined.mesh.triangles.size();
   stage_done("mesh");
 
+  if (second) {
+    // engine: both — cut again with the OpenVDB engine; the distance between the two
+    // machined surfaces, both ways, is the self-check.
+    progress("check", 0, 1);
+    const auto t0 = Clock::now();
+    second->cut(moves, removal::CutOptions{job.collision_tolerance_mm, {}});
+    const auto t1 = Clock::now();
+    const removal::SurfaceMesh other = second->surface();
+    result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
+    result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
+    const removal::DesignDistance to_other(other.mesh), to_primary(machined.mesh);
+    struct Sums { double max = 0.0, squares = 0.0; };
+    auto measure = [](const removal::DesignDistance& target, const std::vector<Eigen::Vector3d>& points) {
+      return tbb::parallel_reduce(
+          tbb::blocked_range<std::size_t>(0, points.size(), 1024), Sums{},
+          [&](const auto& range, Sums s) {
+            for (std::size_t i = range.begin(); i != range.end(); ++i) {
+              const double d = std::abs(target.signed_distance(points[i]));
+              s.max = std::max(s.max, d);
+              s.squares += d * d;
+            }
+            return s;
+          },
+          [](Sums a, const Sums& b) { return Sums{std::max(a.max, b.max), a.squares + b.squares}; },
+          tbb::static_partitioner());
+    };
+    const Sums a = measure(to_other, machined.mesh.vertices_mm), b = measure(to_primary, other.mesh.vertices_mm);
+    result.engines.done = true;
+    result.engines.vertices = machined.mesh.vertices_mm.size() + other.mesh.vertices_mm.size();
+    result.engines.max_mm = std::max(a.max, b.max);
+    result.engines.rms_mm = result.engines.vertices > 0 ? std::sqrt((a.squares + b.squares) / static_cast<double>(result.engines.vertices)) : 0.0;
+    stage_done("check");
+  }
+
   // 7. Compare.
   std::vector<double> deviation;
   if (job.design) {
@@ -249,6 +296,37 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     result.compared = true;
     result.max_gouge_mm = cmp.max_gouge_mm;
     result.max_excess_mm = cmp.max_excess_mm;
+    if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
+      // Every dexel endpoint against the design, exactly: the summary's figures then do not
+      // depend on meshing (the mesh's regions still give areas and outlines).
+      // Points a move made; faces of the initial stock never cut are measured on the mesh.
+      std::vector<removal::DexelEndpoint> points = dexel->endpoints();
+      points.erase(std::remove_if(points.begin(), points.end(), [](const auto& p) { return p.move < 0; }), points.end());
+      std::vector<double> d(points.size());
+      // Fixed chunks of neighbouring points, each query hinted by the one before it.
+      constexpr std::size_t kChunk = 1024;
+      tbb::parallel_for(std::size_t{0}, (points.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+        removal::DistanceHint hint;
+        for (std::size_t i = chunk * kChunk; i < std::min(points.size(), (chunk + 1) * kChunk); ++i)
+          d[i] = distance.signed_distance(points[i].x_mm, hint);
+      });
+      EndpointCheck& e = result.endpoints;
+      e.done = true;
+      e.points = points.size();
+      std::size_t deepest = points.size();
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        if (-d[i] > e.max_gouge_mm) { e.max_gouge_mm = -d[i]; deepest = i; }
+        e.max_excess_mm = std::max(e.max_excess_mm, d[i]);
+        e.gouge_points += -d[i] > job.gouge_tolerance_mm;
+        e.excess_points += d[i] > job.excess_tolerance_mm;
+      }
+      if (deepest < points.size()) {
+        e.deepest_mm = points[deepest].x_mm;
+        if (points[deepest].move >= 0) e.deepest_line = program.where(block_of(points[deepest].move).source);
+      }
+      result.max_gouge_mm = e.max_gouge_mm;
+      result.max_excess_mm = e.max_excess_mm;
+    }
     deviation = cmp.deviation_mm;
     auto record = [&](const removal::Region& r) {
       RegionRecord rec;

@@ -73,12 +73,25 @@ DesignDistance::DesignDistance(DesignDistance&&) noexcept = default;
 bool DesignDistance::closed() const { return impl_->closed; }
 
 double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
+  DistanceHint none;
+  return signed_distance(x, none);
+}
+
+double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& hint) const {
   const Impl& m = *impl_;
-  // CGAL finds the nearest triangle; the nearest point on it and its feature (vertex,
-  // edge, face) come from Ericson's region test (Real-Time Collision Detection, 5.1.5),
-  // so the pseudo-normal that signs the distance is chosen exactly.
-  const auto hit = m.tree.closest_point_and_primitive(K::Point_3(x.x(), x.y(), x.z()));
+  // CGAL finds the nearest triangle (starting from the hint's distance as a bound, when
+  // there is one); the nearest point on it and its feature (vertex, edge, face) come from
+  // Ericson's region test (Real-Time Collision Detection, 5.1.5), so the pseudo-normal that
+  // signs the distance is chosen exactly.
+  const K::Point_3 query(x.x(), x.y(), x.z());
+  const auto hit = hint.triangle < m.triangles.size()
+      ? m.tree.closest_point_and_primitive(
+            query, std::make_pair(K::Point_3(hint.point_mm.x(), hint.point_mm.y(), hint.point_mm.z()),
+                                  m.triangles.begin() + static_cast<std::ptrdiff_t>(hint.triangle)))
+      : m.tree.closest_point_and_primitive(query);
   const std::size_t f = static_cast<std::size_t>(hit.second - m.triangles.begin());
+  hint.triangle = f;
+  hint.point_mm = Eigen::Vector3d(hit.first.x(), hit.first.y(), hit.first.z());
   const Eigen::Vector3i& t = m.corners[f];
   const Eigen::Vector3d& a = m.points[static_cast<std::size_t>(t[0])];
   const Eigen::Vector3d& b = m.points[static_cast<std::size_t>(t[1])];

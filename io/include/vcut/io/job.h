@@ -39,7 +39,7 @@ struct Job {
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
-  std::string engine = "vdb";
+  std::string engine = "dexel";  // dexel | vdb | both (both: the two engines cross-checked)
   double resolution_mm = 0.1;
   int threads = 0;  // 0 = all cores
   std::string out_dir;

@@ -42,6 +42,25 @@ struct CollisionRecord {
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
 };
 
+// Deviation from the design measured at every dexel endpoint (exact point-to-triangle), so
+// the figures do not depend on meshing.
+struct EndpointCheck {
+  bool done = false;
+  std::size_t points = 0;
+  double max_gouge_mm = 0.0, max_excess_mm = 0.0;  // positive figures, 0 when none
+  Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
+  std::string deepest_line;  // "file:line" of the move that made the deepest gouge point
+  std::size_t gouge_points = 0, excess_points = 0;  // beyond the tolerances
+};
+
+// engine: both — the two engines' machined surfaces against each other.
+struct EngineCheck {
+  bool done = false;
+  double max_mm = 0.0, rms_mm = 0.0;
+  std::size_t vertices = 0;
+  double vdb_cut_s = 0.0, vdb_mesh_s = 0.0;
+};
+
 struct SimulationResult {
   std::string job_name;
   std::string out_dir;
@@ -63,6 +82,8 @@ struct SimulationResult {
   double peak_memory_mb = 0.0, stock_memory_mb = 0.0, estimated_memory_mb = 0.0;
   std::vector<std::pair<std::string, std::string>> input_hashes;  // path, sha256
   std::vector<std::string> outputs;
+  EndpointCheck endpoints;
+  EngineCheck engines;
 };
 
 // Runs the job and writes machined.stl, deviation.ply (with a design), report.json and

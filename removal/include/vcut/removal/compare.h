@@ -16,12 +16,20 @@ namespace vcut::removal {
 // Signed distance to a triangle mesh. The sign comes from the angle-weighted pseudo-normal
 // of the closest feature (face, edge or vertex; Baerentzen & Aanaes 2005), exact for
 // closed meshes and the natural choice for open ones.
+// The nearest triangle of a previous query: a bound that speeds up the next query near it.
+// The distance returned never depends on the hint.
+struct DistanceHint {
+  std::size_t triangle = static_cast<std::size_t>(-1);  // none
+  Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
+};
+
 class DesignDistance {
  public:
   explicit DesignDistance(const TriangleMesh& design);
   ~DesignDistance();
   DesignDistance(DesignDistance&&) noexcept;
   double signed_distance(const Eigen::Vector3d& x_mm) const;
+  double signed_distance(const Eigen::Vector3d& x_mm, DistanceHint& hint) const;
   bool closed() const;
 
  private:

@@ -1,0 +1,66 @@
+#!/usr/bin/env python3
+"""Workload W1 (issue 9): a 6 mm ball finishing raster over a 100 x 100 mm freeform surface,
+0.3 mm stepover, 0.5 mm segments, stock 100 x 100 x 40 mm.
+
+The tool tip follows z = surface(x, y) along rasters in x (zig-zag in y). The stock is cut
+from the full block, so each raster line ploughs up to 10 mm deep beside the previous one.
+Writes, into the folder given (default: benchmarks/workloads/w1):
+  w1.ngc      the program (G21 G90 G94, one G1 per 0.5 mm segment)
+  w1.path     the same tip points, one "x y z" per line (for the peers and the error check)
+  tools.yaml  T1: ball D6, flute length 25 mm
+  job.yaml    the vcut job (engine dexel, v = 0.05 mm); `--resolution`/`--threads` override
+Usage: make_w1.py [folder] [--size MM] (a smaller size gives a quick variant of the same kind)
+"""
+import math
+import os
+import sys
+
+
+def surface(x, y):
+    return 32.0 + 3.0 * math.sin(2 * math.pi * x / 50.0) * math.cos(2 * math.pi * y / 40.0) + 0.02 * x
+
+
+def main():
+    args = [a for a in sys.argv[1:] if not a.startswith("--")]
+    size = 100.0
+    if "--size" in sys.argv:
+        size = float(sys.argv[sys.argv.index("--size") + 1])
+        args = [a for a in args if a != sys.argv[sys.argv.index("--size") + 1]]
+    out = args[0] if args else os.path.join(os.path.dirname(os.path.abspath(__file__)), "w1")
+    os.makedirs(out, exist_ok=True)
+    step, stepover = 0.5, 0.3
+    nx = int(round(size / step))
+    ny = int(math.floor(size / stepover)) + 1
+    points = []
+    for j in range(ny):
+        y = j * stepover
+        xs = [i * step for i in range(nx + 1)]
+        if j % 2:
+            xs.reverse()
+        points.extend((x, y, surface(x, y)) for x in xs)
+    safe = 45.0
+    with open(os.path.join(out, "w1.ngc"), "w") as f:
+        f.write("%\n(vcut workload W1: 6 mm ball finishing raster, written by make_w1.py)\n")
+        f.write("G21 G90 G94 G17\nT1 M6\nS12000 M3\n")
+        x0, y0, z0 = points[0]
+        f.write("G0 X%.4f Y%.4f Z%.1f\n" % (x0, y0, safe))
+        f.write("G1 Z%.4f F2000\n" % z0)
+        for x, y, z in points[1:]:
+            f.write("G1 X%.4f Y%.4f Z%.4f\n" % (x, y, z))
+        f.write("G0 Z%.1f\nM5\nM30\n%%\n" % safe)
+    with open(os.path.join(out, "w1.path"), "w") as f:
+        f.write("%.4f %.4f %.1f\n" % (x0, y0, safe))
+        for x, y, z in points:
+            f.write("%.4f %.4f %.4f\n" % (x, y, z))
+    with open(os.path.join(out, "tools.yaml"), "w") as f:
+        f.write("tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25, shank_diameter: 6, length: 40}\n")
+    with open(os.path.join(out, "job.yaml"), "w") as f:
+        f.write("job: w1\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: w1.ngc}\n"
+                "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
+                "engine: {kind: dexel, resolution: 0.05, threads: auto}\n"
+                "report: {out: out}\n" % (size, size))
+    print("W1: %d moves over %g x %g mm -> %s" % (len(points), size, size, out))
+
+
+if __name__ == "__main__":
+    main()
