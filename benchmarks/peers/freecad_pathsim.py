@@ -32,8 +32,10 @@ t_cut = time.perf_counter()
 for x, y, z in points[1:]:
     placement = sim.ApplyCommand(placement, Path.Command("G1", {"X": x, "Y": y, "Z": z}))
 cut_s = time.perf_counter() - t_cut
-meshes = sim.GetResultMesh()
-result = meshes[0]
+meshes = sim.GetResultMesh()  # the stock's sides and bottom, and the machined top
+result = meshes[0].copy()
+for m in meshes[1:]:
+    result.addMesh(m)
 result.write(out)
 total_s = time.perf_counter() - t0
 print(json.dumps({"moves": len(points) - 1, "cut_s": cut_s, "total_s": total_s,
