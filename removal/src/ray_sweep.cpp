@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <utility>
+#include <vector>
 
 namespace vcut::removal::detail {
 namespace {
@@ -152,6 +153,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
       dual_a_ = bn / edge_a_.dot(bn);
       dual_b_ = na / edge_b_.dot(na);
     }
+    for (int axis = 0; axis < 3; ++axis) prepare_ball_family(axis);
   } else if (vertical_axis_) {
     method_ = Method::Upright;
   } else {
@@ -159,7 +161,139 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
   }
 }
 
+void RaySweep::prepare_ball_family(int axis) {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const double r = core_.rounding_mm;
+  BallFamily& f = ball_[axis];
+  std::vector<Vector3d> centres = {c0_};
+  std::vector<std::pair<Vector3d, Vector3d>> edges;
+  if (segments_ == 1) {
+    centres.push_back(c0_ + edge_a_);
+    edges.emplace_back(c0_, edge_a_);
+  } else if (segments_ == 2) {
+    // Order matters to ball_fast: centres c0, c1, top0, top1; edges along the move first.
+    centres = {c0_, c0_ + edge_b_, c0_ + edge_a_, c0_ + edge_a_ + edge_b_};
+    edges = {{c0_, edge_b_}, {c0_ + edge_a_, edge_b_}, {c0_, edge_a_}, {c0_ + edge_b_, edge_a_}};
+  }
+  spheres_ = static_cast<int>(centres.size());
+  edges_ = static_cast<int>(edges.size());
+  for (std::size_t i = 0; i < centres.size(); ++i) {
+    f.sphere[i][0] = centres[i][a1];
+    f.sphere[i][1] = centres[i][a2];
+    f.sphere[i][2] = centres[i][axis];
+  }
+  for (std::size_t i = 0; i < edges.size(); ++i) {
+    const auto& [p, d] = edges[i];
+    Edge& e = f.edge[i];
+    e.p1 = p[a1];
+    e.p2 = p[a2];
+    e.pk2 = p[axis] * p[axis] - r * r;
+    e.d1 = d[a1];
+    e.d2 = d[a2];
+    e.dk = d[axis];
+    e.e0 = -p[axis] * d[axis];
+    e.dd = d.squaredNorm();
+    e.bk = -e.dd * p[axis];
+    e.a = e.dd - e.dk * e.dk;
+    e.parallel = e.a <= 1e-14 * e.dd;
+    e.inv_a = e.parallel ? 0.0 : 1.0 / e.a;
+    e.inv_dk = e.dk != 0.0 ? 1.0 / e.dk : 0.0;
+  }
+  if (segments_ == 2) {
+    const Vector3d* g[3] = {&normal_, &dual_a_, &dual_b_};
+    for (int j = 0; j < 3; ++j) {
+      f.slab.base[j] = -g[j]->dot(c0_);
+      f.slab.c1[j] = (*g[j])[a1];
+      f.slab.c2[j] = (*g[j])[a2];
+      f.slab.flat[j] = (*g[j])[axis] == 0.0;
+      f.slab.inv_slope[j] = f.slab.flat[j] ? 0.0 : 1.0 / (*g[j])[axis];
+    }
+  }
+}
+
+bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) const {
+  const BallFamily& f = ball_[axis];
+  const double r = core_.rounding_mm, r2 = r * r;
+  lo = kInf;
+  hi = -kInf;
+  auto sphere = [&](int i, double& a, double& b) {
+    const double x = u - f.sphere[i][0], y = w - f.sphere[i][1];
+    const double h2 = r2 - x * x - y * y;
+    if (h2 < 0.0) return false;
+    const double h = std::sqrt(h2);
+    a = f.sphere[i][2] - h;
+    b = f.sphere[i][2] + h;
+    return true;
+  };
+  auto cylinder = [&](int i, double& a, double& b) {
+    const Edge& e = f.edge[i];
+    const double x = u - e.p1, y = w - e.p2;
+    const double md = x * e.d1 + y * e.d2 + e.e0;
+    const double c = e.dd * (x * x + y * y + e.pk2) - md * md;
+    double s0 = -kInf, s1 = kInf;
+    if (e.parallel) {
+      if (c > 0.0) return false;
+    } else {
+      const double b = e.bk - e.dk * md;
+      const double disc = b * b - e.a * c;
+      if (disc < 0.0) return false;
+      const double root = std::sqrt(disc);
+      s0 = (-b - root) * e.inv_a;
+      s1 = (-b + root) * e.inv_a;
+    }
+    if (e.dk != 0.0) {
+      double t0 = -md * e.inv_dk, t1 = (e.dd - md) * e.inv_dk;
+      if (t0 > t1) std::swap(t0, t1);
+      s0 = std::max(s0, t0);
+      s1 = std::min(s1, t1);
+    } else if (md < 0.0 || md > e.dd) {
+      return false;
+    }
+    if (s0 > s1) return false;
+    a = s0;
+    b = s1;
+    return true;
+  };
+  double a, b;
+  if (axis == 2 && vertical_axis_ && segments_ == 2) {
+    // A vertical line enters through the sweep of the ball's centre and leaves through the
+    // sweep of the top rounding's centre (the rest lies between the two in z).
+    if (sphere(0, a, b)) lo = std::min(lo, a);
+    if (sphere(1, a, b)) lo = std::min(lo, a);
+    if (cylinder(0, a, b)) lo = std::min(lo, a);
+    if (lo == kInf) return false;
+    if (sphere(2, a, b)) hi = std::max(hi, b);
+    if (sphere(3, a, b)) hi = std::max(hi, b);
+    if (cylinder(1, a, b)) hi = std::max(hi, b);
+    return hi >= lo;
+  }
+  for (int i = 0; i < spheres_; ++i)
+    if (sphere(i, a, b)) widen(lo, hi, a, b);
+  for (int i = 0; i < edges_; ++i)
+    if (cylinder(i, a, b)) widen(lo, hi, a, b);
+  if (segments_ == 2) {
+    // The slab of thickness 2r over the parallelogram's inside.
+    const Slab& sl = f.slab;
+    double s0 = -kInf, s1 = kInf;
+    const double bounds[3][2] = {{-r, r}, {0.0, 1.0}, {0.0, 1.0}};
+    for (int j = 0; j < 3; ++j) {
+      const double v0 = sl.base[j] + sl.c1[j] * u + sl.c2[j] * w;
+      if (sl.flat[j]) {
+        if (v0 < bounds[j][0] || v0 > bounds[j][1]) return lo <= hi;
+        continue;
+      }
+      double e0 = (bounds[j][0] - v0) * sl.inv_slope[j], e1 = (bounds[j][1] - v0) * sl.inv_slope[j];
+      if (e0 > e1) std::swap(e0, e1);
+      s0 = std::max(s0, e0);
+      s1 = std::min(s1, e1);
+    }
+    if (s0 <= s1) widen(lo, hi, s0, s1);
+  }
+  return lo <= hi;
+}
+
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
+  if (method_ == Method::Ball) return ball_fast(axis, u, w, lo, hi);
   Vector3d o;
   o[axis] = 0.0;
   o[axis == 0 ? 1 : 0] = u;

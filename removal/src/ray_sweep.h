@@ -51,7 +51,29 @@ class RaySweep {
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
 
+  // The ball method's pieces with everything that does not depend on the ray worked out per
+  // ray family (no divisions left per ray).
+  struct Edge {  // the cylinder of radius r around p -> p + d
+    // With m = o - p = (u - p1, w - p2, -p_k): m.d = x d1 + y d2 + e0, |m|^2 - r^2 =
+    // x^2 + y^2 + pk2, and the quadratic's half-b = bk - dk (m.d).
+    double p1, p2, pk2, d1, d2, e0, bk, dd, dk, a, inv_a, inv_dk;
+    bool parallel;
+  };
+  struct Slab {  // normal, dual_a, dual_b along the ray: value = base + c1 u + c2 w + slope s
+    double base[3], c1[3], c2[3], inv_slope[3];
+    bool flat[3];
+  };
+  struct BallFamily {
+    double sphere[4][3];  // (u, w, along the ray) of each corner sphere
+    Edge edge[4];
+    Slab slab;
+  };
+  void prepare_ball_family(int axis);
+  bool ball_fast(int axis, double u, double w, double& lo, double& hi) const;
+
   TranslationSweep sweep_;
+  BallFamily ball_[3];
+  int spheres_ = 0, edges_ = 0;
   Method method_;
   CutterCore core_;
   double radius_mm_;       // R
