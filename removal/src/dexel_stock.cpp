@@ -468,13 +468,17 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           for (int iw = w0; iw <= w1; ++iw) {
-            for (int iu = u0; iu <= u1; ++iu) {
+            double row_lo, row_hi;
+            sweep.row_range(a, m.position(iw), row_lo, row_hi);
+            const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
+            const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
+            for (int iu = first_u; iu <= last_u; ++iu) {
               SegmentList& ray = f.at(iu, iw);
               const std::uint32_t n = ray.size();
               // Rays already clear of the sweep's box cost a look only.
               if (n == 0 || ray.data()[0].lo_mm >= box_hi || ray.data()[n - 1].hi_mm <= box_lo) continue;
               double lo, hi;
-              if (!sweep.interval(a, m.position(iu), m.position(iw), lo, hi)) continue;
+              if (!sweep.interval_below(a, m.position(iu), m.position(iw), ray.data()[n - 1].hi_mm, lo, hi)) continue;
               if (move.rapid) {
                 double middle = 0.0;
                 const double depth = overlap(ray, lo, hi, middle);
@@ -550,17 +554,22 @@ SurfaceMesh DexelStock::surface() const {
               Coord c;
               c[a1] = iu;
               c[a2] = iw;
-              c[f.axis] = k;
-              acc.setValueOn(c, background);
-              c[f.axis] = k + 1;
-              acc.setValueOn(c, background);
+              // Two nodes on each side: volumeToMesh's adaptivity reads gradients across
+              // the band, which a one-node band leaves to the background value.
+              for (int step = -1; step <= 2; ++step) {
+                c[f.axis] = k + step;
+                acc.setValueOn(c, background);
+              }
             }
           }
         }
       }
     }
   }
-  // Distance along `axis` from node c to the nearest crossing of its ray within one spacing.
+  // Distance along `axis` from node c to the nearest crossing of its ray within a few
+  // spacings (a plane's intercept on an axis it nearly parallels lies far out; leaving it
+  // out would overestimate the node's distance and spoil the mesh's adaptivity).
+  constexpr double kReach = 4.0;
   auto axis_distance = [&](const Coord& c, int axis) {
     const Family& f = m.families[static_cast<std::size_t>(axis)];
     const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
@@ -570,9 +579,9 @@ SurfaceMesh DexelStock::surface() const {
     double best = std::numeric_limits<double>::infinity();
     for (std::uint32_t i = 0; i < ray.size(); ++i) {
       best = std::min({best, std::abs(ray.data()[i].lo_mm - s), std::abs(ray.data()[i].hi_mm - s)});
-      if (ray.data()[i].lo_mm > s + v) break;
+      if (ray.data()[i].lo_mm > s + kReach * v) break;
     }
-    return best <= v ? best : std::numeric_limits<double>::infinity();
+    return best <= kReach * v ? best : std::numeric_limits<double>::infinity();
   };
   auto value_at = [&](const Coord& c) {
     double inverse = 0.0;
@@ -596,13 +605,14 @@ SurfaceMesh DexelStock::surface() const {
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid->tree());
     leaves.foreach([&](const openvdb::FloatTree::LeafNodeType& leaf, std::size_t) {
       auto& out = missing.local();
+      openvdb::tree::ValueAccessor<const openvdb::FloatTree> acc(grid->tree());
       for (auto it = leaf.cbeginValueOn(); it; ++it) {
         const Coord c = it.getCoord();
         const bool in = *it < 0.0f;
         for (int n = 0; n < 6; ++n) {
           Coord d = c;
           d[n / 2] += (n % 2) ? 1 : -1;
-          if (!grid->tree().isValueOn(d) && m.inside(d.x(), d.y(), d.z()) != in) out.push_back(d);
+          if (!acc.isValueOn(d) && m.inside(d.x(), d.y(), d.z()) != in) out.push_back(d);
         }
       }
     });

@@ -199,6 +199,23 @@ void RaySweep::prepare_ball_family(int axis) {
     e.inv_a = e.parallel ? 0.0 : 1.0 / e.a;
     e.inv_dk = e.dk != 0.0 ? 1.0 / e.dk : 0.0;
   }
+  f.slab_band = false;
+  if (segments_ == 2 && vertical_axis_ && axis != 2) {
+    // The centres' path in the horizontal plane: from (c0_u, c0_s) along (d_u, d_s), with s
+    // the coordinate along the ray; its band |n . (q - c0)| <= r, 0 <= t <= 1.
+    const double du = edge_b_[a1], ds = edge_b_[axis], len2 = du * du + ds * ds;
+    if (len2 > kTiny_mm * kTiny_mm) {
+      const double len = std::sqrt(len2);
+      const double nu = -ds / len, ns = du / len;
+      f.slab_band = true;
+      f.band_n_base = -nu * c0_[a1] - ns * c0_[axis];
+      f.band_n_u = nu;
+      f.band_n_s = ns;
+      f.band_t_base = (-du * c0_[a1] - ds * c0_[axis]) / len2;
+      f.band_t_u = du / len2;
+      f.band_t_s = ds / len2;
+    }
+  }
   if (segments_ == 2) {
     const Vector3d* g[3] = {&normal_, &dual_a_, &dual_b_};
     for (int j = 0; j < 3; ++j) {
@@ -209,6 +226,37 @@ void RaySweep::prepare_ball_family(int axis) {
       f.slab.inv_slope[j] = f.slab.flat[j] ? 0.0 : 1.0 / (*g[j])[axis];
     }
   }
+}
+
+bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, double& b) const {
+  const BallFamily& f = ball_[axis];
+  const Edge& e = f.edge[i];
+  const double x = u - e.p1, y = w - e.p2;
+  const double md = x * e.d1 + y * e.d2 + e.e0;
+  const double c = e.dd * (x * x + y * y + e.pk2) - md * md;
+  double s0 = -kInf, s1 = kInf;
+  if (e.parallel) {
+    if (c > 0.0) return false;
+  } else {
+    const double half_b = e.bk - e.dk * md;
+    const double disc = half_b * half_b - e.a * c;
+    if (disc < 0.0) return false;
+    const double root = std::sqrt(disc);
+    s0 = (-half_b - root) * e.inv_a;
+    s1 = (-half_b + root) * e.inv_a;
+  }
+  if (e.dk != 0.0) {
+    double t0 = -md * e.inv_dk, t1 = (e.dd - md) * e.inv_dk;
+    if (t0 > t1) std::swap(t0, t1);
+    s0 = std::max(s0, t0);
+    s1 = std::min(s1, t1);
+  } else if (md < 0.0 || md > e.dd) {
+    return false;
+  }
+  if (s0 > s1) return false;
+  a = s0;
+  b = s1;
+  return true;
 }
 
 bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) const {
@@ -225,36 +273,40 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) c
     b = f.sphere[i][2] + h;
     return true;
   };
-  auto cylinder = [&](int i, double& a, double& b) {
-    const Edge& e = f.edge[i];
-    const double x = u - e.p1, y = w - e.p2;
-    const double md = x * e.d1 + y * e.d2 + e.e0;
-    const double c = e.dd * (x * x + y * y + e.pk2) - md * md;
-    double s0 = -kInf, s1 = kInf;
-    if (e.parallel) {
-      if (c > 0.0) return false;
-    } else {
-      const double b = e.bk - e.dk * md;
-      const double disc = b * b - e.a * c;
-      if (disc < 0.0) return false;
-      const double root = std::sqrt(disc);
-      s0 = (-b - root) * e.inv_a;
-      s1 = (-b + root) * e.inv_a;
-    }
-    if (e.dk != 0.0) {
-      double t0 = -md * e.inv_dk, t1 = (e.dd - md) * e.inv_dk;
-      if (t0 > t1) std::swap(t0, t1);
-      s0 = std::max(s0, t0);
-      s1 = std::min(s1, t1);
-    } else if (md < 0.0 || md > e.dd) {
-      return false;
-    }
-    if (s0 > s1) return false;
-    a = s0;
-    b = s1;
-    return true;
-  };
+  auto cylinder = [&](int i, double& a, double& b) { return ball_cylinder(axis, i, u, w, a, b); };
   double a, b;
+  if (axis != 2 && vertical_axis_ && segments_ == 2) {
+    // A horizontal line at height w against an upright ball's sweep: below both ball
+    // centres only the centres' swept capsule counts (the parallelogram's nearest points
+    // are on its lower edge); above both top centres only the top capsule; between the
+    // centres' heights and the top centres' heights the sweep's slice is the disc of
+    // radius r swept along the centres' path in the plane.
+    const double c_lo = std::min(f.sphere[0][1], f.sphere[1][1]), c_hi = std::max(f.sphere[0][1], f.sphere[1][1]);
+    const double t_lo = std::min(f.sphere[2][1], f.sphere[3][1]), t_hi = std::max(f.sphere[2][1], f.sphere[3][1]);
+    int first = -1;
+    if (w < c_lo) first = 0;
+    else if (w > t_hi) first = 2;
+    if (first >= 0) {
+      if (sphere(first, a, b)) widen(lo, hi, a, b);
+      if (sphere(first + 1, a, b)) widen(lo, hi, a, b);
+      if (cylinder(first / 2, a, b)) widen(lo, hi, a, b);
+      return lo <= hi;
+    }
+    if (w >= c_hi && w <= t_lo) {
+      // Discs of radius r about the two centres' positions, and the band between them.
+      for (int i = 0; i < 2; ++i) {
+        const double x = u - f.sphere[i][0];
+        const double h2 = r2 - x * x;
+        if (h2 >= 0.0) widen(lo, hi, f.sphere[i][2] - std::sqrt(h2), f.sphere[i][2] + std::sqrt(h2));
+      }
+      if (f.slab_band) {
+        double s0 = -kInf, s1 = kInf;
+        const double n0 = f.band_n_base + f.band_n_u * u, t0 = f.band_t_base + f.band_t_u * u;
+        if (clip(n0, f.band_n_s, -r, r, s0, s1) && clip(t0, f.band_t_s, 0.0, 1.0, s0, s1)) widen(lo, hi, s0, s1);
+      }
+      return lo <= hi;
+    }
+  }
   if (axis == 2 && vertical_axis_ && segments_ == 2) {
     // A vertical line enters through the sweep of the ball's centre and leaves through the
     // sweep of the top rounding's centre (the rest lies between the two in z).
@@ -290,6 +342,72 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) c
     if (s0 <= s1) widen(lo, hi, s0, s1);
   }
   return lo <= hi;
+}
+
+void RaySweep::row_range(int axis, double w, double& u_lo, double& u_hi) const {
+  const int a1 = axis == 0 ? 1 : 0;
+  u_lo = bounds().min()[a1];
+  u_hi = bounds().max()[a1];
+  if (!vertical_axis_) return;
+  const Eigen::Vector3d p1 = p0_ + delta_;
+  if (axis == 2) {
+    // Rays along z in the row y = w: where the row meets the stadium of radius R around the
+    // tip's path in the xy plane (the two end discs and the band between them).
+    const double radius = radius_mm_;
+    double lo = kInf, hi = -kInf;
+    for (const Vector3d* c : {&p0_, &p1}) {
+      const double h2 = radius * radius - (w - c->y()) * (w - c->y());
+      if (h2 >= 0.0) widen(lo, hi, c->x() - std::sqrt(h2), c->x() + std::sqrt(h2));
+    }
+    const double dx = delta_.x(), dy = delta_.y(), len = std::hypot(dx, dy);
+    if (len > kTiny_mm) {
+      // Band: |n . (q - p0)| <= R and 0 <= (q - p0) . d <= |d|^2, q = (x, w), linear in x.
+      const double nx = -dy / len, ny = dx / len;
+      double s0 = -kInf, s1 = kInf;
+      if (clip(ny * (w - p0_.y()) - nx * p0_.x(), nx, -radius, radius, s0, s1) &&
+          clip(dy * (w - p0_.y()) - dx * p0_.x(), dx, 0.0, len * len, s0, s1))
+        widen(lo, hi, s0, s1);
+    }
+    u_lo = std::max(u_lo, lo);
+    u_hi = std::min(u_hi, hi);
+    return;
+  }
+  // Rays along x or y in the row at height z = w: the cutter's widest section over the
+  // heights above the tip the row takes during the move, around the tip's path.
+  const double h_lo = w - std::max(p0_.z(), p1.z()), h_hi = w - std::min(p0_.z(), p1.z());
+  const double h = std::clamp(std::clamp(core_.z_low_mm, h_lo, h_hi), 0.0, height_mm_);
+  if (h_hi < 0.0 || h_lo > height_mm_) {
+    u_lo = 1.0;
+    u_hi = 0.0;
+    return;
+  }
+  const double off = h < core_.z_low_mm ? core_.z_low_mm - h : (h > core_.z_high_mm ? h - core_.z_high_mm : 0.0);
+  const double section = core_.core_radius_mm + std::sqrt(std::max(0.0, core_.rounding_mm * core_.rounding_mm - off * off));
+  u_lo = std::max(u_lo, std::min(p0_[a1], p1[a1]) - section);
+  u_hi = std::min(u_hi, std::max(p0_[a1], p1[a1]) + section);
+}
+
+bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
+  if (method_ == Method::Ball && axis == 2 && vertical_axis_ && segments_ == 2) {
+    // An upright ball on a z ray leaves through the top centres' capsule, never below the
+    // lower top centre: under that the exit is not needed.
+    const BallFamily& f = ball_[2];
+    const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
+    if (top <= floor_of_exit) {
+      const double r2 = core_.rounding_mm * core_.rounding_mm;
+      lo = kInf;
+      for (int i = 0; i < 2; ++i) {
+        const double x = u - f.sphere[i][0], y = w - f.sphere[i][1];
+        const double h2 = r2 - x * x - y * y;
+        if (h2 >= 0.0) lo = std::min(lo, f.sphere[i][2] - std::sqrt(h2));
+      }
+      double a, b;
+      if (ball_cylinder(2, 0, u, w, a, b)) lo = std::min(lo, a);
+      hi = floor_of_exit;
+      return lo < kInf;
+    }
+  }
+  return interval(axis, u, w, lo, hi);
 }
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {

@@ -41,8 +41,15 @@ class RaySweep {
   // other coordinates, in increasing axis order, are (u, w). Returns false when it misses the
   // sweep, else the interval [lo, hi] of the axis coordinate inside it.
   bool interval(int axis, double u, double w, double& lo, double& hi) const;
+  // The same where only the interval's part below `top` matters (the ray holds no material
+  // above it): hi may then be any value >= min(true hi, top).
+  bool interval_below(int axis, double u, double w, double top, double& lo, double& hi) const;
 
   const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
+
+  // A range [u_lo, u_hi] holding every ray of family `axis` in the row at w that can meet
+  // the sweep (tighter than bounds() for an upright tool; the bounds' range otherwise).
+  void row_range(int axis, double w, double& u_lo, double& u_hi) const;
 
  private:
   enum class Method { Ball, Upright, General };
@@ -67,9 +74,13 @@ class RaySweep {
     double sphere[4][3];  // (u, w, along the ray) of each corner sphere
     Edge edge[4];
     Slab slab;
+    // Upright ball, horizontal rays between the centres' and the top centres' heights.
+    bool slab_band = false;
+    double band_n_base = 0, band_n_u = 0, band_n_s = 0, band_t_base = 0, band_t_u = 0, band_t_s = 0;
   };
   void prepare_ball_family(int axis);
   bool ball_fast(int axis, double u, double w, double& lo, double& hi) const;
+  bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi) const;
 
   TranslationSweep sweep_;
   BallFamily ball_[3];
