@@ -17,13 +17,14 @@ ToolLibrary read_tool_library(const std::string& path) {
     const std::string where = "tools." + kv.first.Scalar();
     if (number < 1 || number > 99999) yaml.fail(kv.first, where, "a T number from 1 to 99999");
     const YAML::Node& t = kv.second;
-    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "flute_length", "shank_diameter", "length", "name"});
+    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "angle", "flute_length", "shank_diameter", "length", "name"});
     removal::Cutter c;
     const std::string type = yaml.text(yaml.require(t, "type", where), where + ".type");
     if (type == "flat") c.type = removal::CutterType::Flat;
     else if (type == "ball") c.type = removal::CutterType::Ball;
     else if (type == "bull" || type == "bullnose") c.type = removal::CutterType::BullNose;
-    else yaml.fail(t["type"], where + ".type", "flat, ball or bull");
+    else if (type == "vbit") c.type = removal::CutterType::VBit;
+    else yaml.fail(t["type"], where + ".type", "flat, ball, bull or vbit");
     c.diameter_mm = yaml.positive(yaml.require(t, "diameter", where), where + ".diameter");
     const double radius = 0.5 * c.diameter_mm;
     if (c.type == removal::CutterType::Flat) {
@@ -34,6 +35,11 @@ ToolLibrary read_tool_library(const std::string& path) {
       if (std::abs(c.corner_radius_mm - radius) > 1e-9)
         yaml.fail(t["corner_radius"], where + ".corner_radius", "half the diameter for a ball end mill");
       c.corner_radius_mm = radius;
+    } else if (c.type == removal::CutterType::VBit) {
+      // A pointed chamfer cutter: its included tip angle (deg).
+      c.tip_angle_deg = yaml.positive(yaml.require(t, "angle", where), where + ".angle");
+      if (c.tip_angle_deg >= 180.0) yaml.fail(t["angle"], where + ".angle", "an included tip angle between 0 and 180 degrees");
+      if (t["corner_radius"]) yaml.fail(t["corner_radius"], where + ".corner_radius", "no corner radius for a V-bit");
     } else {
       c.corner_radius_mm = yaml.positive(yaml.require(t, "corner_radius", where), where + ".corner_radius");
       if (c.corner_radius_mm > radius) yaml.fail(t["corner_radius"], where + ".corner_radius", "at most half the diameter");
@@ -44,6 +50,7 @@ ToolLibrary read_tool_library(const std::string& path) {
     c.shank_diameter_mm = t["shank_diameter"] ? yaml.positive(t["shank_diameter"], where + ".shank_diameter") : c.diameter_mm;
     c.length_mm = t["length"] ? yaml.positive(t["length"], where + ".length") : c.flute_length_mm;
     if (c.length_mm < c.flute_length_mm) yaml.fail(t["length"], where + ".length", "at least the flute length");
+    if (c.type != removal::CutterType::VBit && t["angle"]) yaml.fail(t["angle"], where + ".angle", "an angle only for a V-bit");
     if (!library.emplace(number, c).second) yaml.fail(kv.first, where, "each T number once");
   }
   if (library.empty()) yaml.fail(tools, "tools", "at least one tool");

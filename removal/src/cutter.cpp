@@ -2,17 +2,61 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "distance.h"
 
 namespace vcut::removal {
 
 CutterCore core_of(const Cutter& cutter) {
+  if (cutter.type == CutterType::VBit) return {cutter.radius_mm(), 0.0, cutter.flute_length_mm, 0.0};
   const double r = cutter.corner_radius_mm;
   return {cutter.radius_mm() - r, r, std::max(r, cutter.flute_length_mm - r), r};
 }
 
+namespace {
+
+// Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
+// (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that.
+double vbit_profile_distance(const Cutter& c, double rho, double z) {
+  const double slope = std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0);  // radius per height
+  const double height = c.flute_length_mm;
+  const double cone_top = std::min(height, c.radius_mm() / slope);
+  const double radius = cone_top * slope;
+  // Polygon vertices counter-clockwise in (rho, z).
+  const Eigen::Vector2d v[4] = {{0.0, 0.0}, {radius, cone_top}, {radius, height}, {0.0, height}};
+  const Eigen::Vector2d q(rho, z);
+  double best = std::numeric_limits<double>::infinity();
+  bool inside = true;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d a = v[i], b = v[(i + 1) % 4], e = b - a;
+    if (e.squaredNorm() == 0.0) continue;
+    const double t = std::clamp((q - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (q - a - t * e).norm());
+    if (e.x() * (q.y() - a.y()) - e.y() * (q.x() - a.x()) < 0.0) inside = false;
+  }
+  return inside ? -best : best;
+}
+
+}  // namespace
+
+double section_radius(const Cutter& c, double h) {
+  if (h < 0.0 || h > c.flute_length_mm) return 0.0;
+  if (c.type == CutterType::VBit) return std::min(c.radius_mm(), h * std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0));
+  const CutterCore k = core_of(c);
+  const double off = h < k.z_low_mm ? k.z_low_mm - h : (h > k.z_high_mm ? h - k.z_high_mm : 0.0);
+  return k.core_radius_mm + std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
+}
+
+double underside_height(const Cutter& c, double rho) {
+  if (c.type == CutterType::VBit) return rho / std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0);
+  const CutterCore k = core_of(c);
+  const double off = rho - k.core_radius_mm;
+  return off <= 0.0 ? 0.0 : k.rounding_mm - std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
+}
+
 double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p) {
+  if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, std::hypot(p.x(), p.y()), p.z());
   const CutterCore k = core_of(cutter);
   // The core cylinder is a disk extruded over an interval (exact).
   return detail::extrude(std::hypot(p.x(), p.y()) - k.core_radius_mm,
@@ -25,6 +69,7 @@ std::string to_string(CutterType type) {
     case CutterType::Flat: return "flat";
     case CutterType::Ball: return "ball";
     case CutterType::BullNose: return "bull";
+    case CutterType::VBit: return "vbit";
   }
   return "?";
 }

@@ -121,12 +121,14 @@ double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 }  // namespace
 
 RaySweep::RaySweep(const Cutter& cutter, const Move& move)
-    : sweep_(cutter, move), core_(core_of(cutter)), p0_(move.start_mm), delta_(move.end_mm - move.start_mm) {
-  radius_mm_ = core_.core_radius_mm + core_.rounding_mm;
+    : sweep_(cutter, move), cutter_(cutter), core_(core_of(cutter)), p0_(move.start_mm), delta_(move.end_mm - move.start_mm) {
+  radius_mm_ = cutter.type == CutterType::VBit ? section_radius(cutter, cutter.flute_length_mm)
+                                               : core_.core_radius_mm + core_.rounding_mm;
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
   const Vector3d a = move.axis.normalized();
   vertical_axis_ = std::abs(a.x()) <= kTiny_mm && std::abs(a.y()) <= kTiny_mm && a.z() > 0.0;
-  if (core_.core_radius_mm == 0.0) {
+  flat_bottom_ = cutter.type != CutterType::VBit && core_.rounding_mm == 0.0;
+  if (core_.core_radius_mm == 0.0 && cutter.type != CutterType::VBit) {
     method_ = Method::Ball;
     c0_ = p0_ + core_.z_low_mm * a;
     edge_a_ = (core_.z_high_mm - core_.z_low_mm) * a;
@@ -467,7 +469,7 @@ bool RaySweep::ball(int axis, const Vector3d& o, double& lo, double& hi) const {
 }
 
 bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) const {
-  const double radius = radius_mm_, rc = core_.core_radius_mm, r = core_.rounding_mm;
+  const double radius = radius_mm_;
   const double qx = u - p0_.x(), qy = w - p0_.y();
   const double dx = delta_.x(), dy = delta_.y(), dz = delta_.z();
   const double dd = dx * dx + dy * dy, qd = qx * dx + qy * dy, qq = qx * qx + qy * qy;
@@ -483,22 +485,23 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
     tb = std::min(1.0, (qd + root) / dd);
     if (ta > tb) return false;
   }
-  // Height of the cutter's underside above its tip at the line, at move parameter t.
+  // Height of the cutter's underside above its tip at the line, at move parameter t; the
+  // top mirrors it (rounded top of the core model), except a V-bit's, which is flat.
   auto underside = [&](double t) {
-    const double off = std::hypot(qx - t * dx, qy - t * dy) - rc;
-    return off <= 0.0 ? 0.0 : r - std::sqrt(std::max(0.0, r * r - off * off));
+    return underside_height(cutter_, std::min(radius, std::hypot(qx - t * dx, qy - t * dy)));
   };
+  const bool flat_top = cutter_.type == CutterType::VBit || flat_bottom_;
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, std::sqrt(dd + dz * dz));
-  // min over [ta, tb] of t*slope + underside(t): convex (the underside is a convex function
+  // min over [ta, tb] of t*slope + height(t): convex (the underside is a convex function
   // of the distance to the axis, itself convex in t).
-  auto lowest = [&](double slope) {
-    if (r == 0.0) return slope >= 0.0 ? ta * slope : tb * slope;
+  auto lowest = [&](double slope, bool flat) {
+    if (flat) return slope >= 0.0 ? ta * slope : tb * slope;
     if (std::abs(slope) <= kTiny_mm) return underside(dd > 0.0 ? std::clamp(qd / dd, ta, tb) : ta);
     const auto f = [&](double t) { return t * slope + underside(t); };
     return f(golden_argmin(f, ta, tb, t_tolerance));
   };
-  lo = p0_.z() + lowest(dz);
-  hi = p0_.z() + height_mm_ - lowest(-dz);  // the top is the underside mirrored
+  lo = p0_.z() + lowest(dz, flat_bottom_);
+  hi = p0_.z() + height_mm_ - lowest(-dz, flat_top);
   return true;
 }
 
@@ -507,7 +510,6 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   const double c0 = p0_[axis], dc = delta_[axis];
   const double w0 = p0_[across] - u, dw = delta_[across];
   const double h0 = w - p0_.z(), dh = -delta_.z();  // the line's height above the tip
-  const double rc = core_.core_radius_mm, r = core_.rounding_mm;
   double ta = 0.0, tb = 1.0;
   if (std::abs(dh) <= kTiny_mm) {
     if (h0 < 0.0 || h0 > height_mm_) return false;
@@ -515,11 +517,8 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
     return false;
   }
   // Radius of the cutter's cross-section at height h above the tip.
-  auto section = [&](double h) {
-    const double off = h < core_.z_low_mm ? core_.z_low_mm - h : (h > core_.z_high_mm ? h - core_.z_high_mm : 0.0);
-    return rc + std::sqrt(std::max(0.0, r * r - off * off));
-  };
-  if (r == 0.0 || std::abs(dh) <= kTiny_mm) {
+  auto section = [&](double h) { return section_radius(cutter_, std::clamp(h, 0.0, height_mm_)); };
+  if (flat_bottom_ || std::abs(dh) <= kTiny_mm) {
     // The section does not change along the move: a disc swept along a segment in the
     // plane of the line, whose extent along the line has a closed form.
     const double radius = section(h0 + 0.5 * (ta + tb) * dh);
@@ -547,7 +546,7 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
     hi = c0 + t_hi * dc + half(t_hi);
     return true;
   }
-  // A bull-nose moving up or down: the section changes along the move. The line meets the
+  // A bull-nose or V-bit moving up or down: the section changes along the move. The line meets the
   // section while k(t) = |w(t)| - section(h(t)) <= 0, k convex; inside that range the extent
   // along the line is the minimum of a convex and the maximum of a concave function of t.
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, delta_.norm());

@@ -83,6 +83,8 @@ class RaySweep {
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi) const;
 
   TranslationSweep sweep_;
+  Cutter cutter_;
+  bool flat_bottom_ = false;  // flat end mill: underside at the tip, section constant
   BallFamily ball_[3];
   int spheres_ = 0, edges_ = 0;
   Method method_;

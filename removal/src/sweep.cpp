@@ -24,11 +24,13 @@ Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& axis) {
 }  // namespace
 
 TranslationSweep::TranslationSweep(const Cutter& cutter, const Move& move)
-    : core_(core_of(cutter)), to_tool_(rotation_to_z(move.axis)), origin_(move.start_mm) {
+    : core_(core_of(cutter)), cutter_(cutter), to_tool_(rotation_to_z(move.axis)), origin_(move.start_mm) {
   delta_tool_ = to_tool_ * (move.end_mm - move.start_mm);
   delta_length_ = delta_tool_.norm();
   const double across = delta_tool_.head<2>().norm();
-  if (std::abs(delta_tool_.z()) <= kDegenerateMotion_mm) {
+  if (cutter.type == CutterType::VBit) {
+    kind_ = Kind::General;  // the cone is not a core grown by a ball: search along the move
+  } else if (std::abs(delta_tool_.z()) <= kDegenerateMotion_mm) {
     kind_ = Kind::Across;
     delta_tool_.z() = 0.0;
   } else if (across <= kDegenerateMotion_mm) {
@@ -51,6 +53,7 @@ TranslationSweep::TranslationSweep(const Cutter& cutter, const Move& move)
 }
 
 double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
+  if (cutter_.type == CutterType::VBit) return cutter_distance(cutter_, y);
   const double d_radial = std::hypot(y.x(), y.y()) - core_.core_radius_mm;
   return extrude(d_radial, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm));
 }
@@ -75,7 +78,7 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
              core_.rounding_mm;
     }
     case Kind::General: {
-      if (core_.core_radius_mm == 0.0) {
+      if (core_.core_radius_mm == 0.0 && cutter_.type != CutterType::VBit) {
         // Ball end: the core is a segment on the axis, swept into a parallelogram P spanned
         // by the axis and delta; the distance to P is in closed form.
         const Eigen::Vector3d o(0.0, 0.0, core_.z_low_mm);

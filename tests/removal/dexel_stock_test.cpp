@@ -192,6 +192,85 @@ TEST(DexelStock, SmallFeaturesAtFiftyMicrons) {
   }
 }
 
+Cutter vbit(double angle_deg) {
+  Cutter c;
+  c.type = CutterType::VBit;
+  c.diameter_mm = 6;
+  c.tip_angle_deg = angle_deg;
+  c.flute_length_mm = 10;
+  c.length_mm = 30;
+  return c;
+}
+
+TEST(DexelStock, VBitEngravingAlongAPolylineWithCorners) {
+  // A 90 deg V-bit engraving 0.1 mm deep at v = 0.05 mm along a polyline with two sharp
+  // corners. On the straight leg along x at y = 10.013 the groove's walls are the planes
+  // |y - 10.013| = (z + 0.1) tan 45: its width on the y rays at z = -0.075 is 2 * 0.025, its
+  // depth under the z rays 0.012 mm off the tip's line is 0.1 - 0.012; every endpoint the
+  // leg made lies on those planes within 1 um.
+  constexpr double v = 0.05, depth = 0.1, y0 = 10.013;
+  const BoxShape box{{0, 0, -2}, {20, 20, 0}};
+  DexelStock stock(box, v);
+  MoveList list;
+  list.cutters.push_back(vbit(90));
+  list.moves = {line({-1, y0, 1}, {-1, y0, -depth}), line({-1, y0, -depth}, {12, y0, -depth}),
+                line({12, y0, -depth}, {15, 16, -depth}), line({15, 16, -depth}, {13, 18, -depth})};
+  stock.cut(list, {});
+  const Groove g = measure(stock, 7.3, -2);
+  EXPECT_NEAR(g.depth_mm, depth - 0.012, 1e-5);
+  EXPECT_NEAR(g.width_mm, 2 * 0.025, 1e-5);
+  int checked = 0;
+  double worst = 0.0;
+  for (const auto& e : cut_points(stock, 1)) {
+    const Eigen::Vector3d& p = e.x_mm;
+    if (p.x() < 0.5 || p.x() > 11) continue;  // away from the corners
+    worst = std::max(worst, std::abs(std::abs(p.y() - y0) - (p.z() + depth)));
+    ++checked;
+  }
+  EXPECT_LT(worst, kEndpointTol_mm);
+  EXPECT_GT(checked, 400);
+  // Past the corner the next leg (to (15, 16)) cut a groove too: a z ray under its middle.
+  const int ix = static_cast<int>(std::lround(13.5 / v - 0.5)), iy = static_cast<int>(std::lround(13.0 / v - 0.5));
+  const auto ray = stock.ray(2, ix, iy);
+  ASSERT_FALSE(ray.empty());
+  EXPECT_LT(ray.back().hi_mm, -0.05);
+}
+
+TEST(DexelStock, VBitRampMatchesTheConeSweep) {
+  // A 60 deg V-bit ramping down (bracketing search on the section): every endpoint is on
+  // the boundary of the union of the cone's poses, checked by dense sampling along the move.
+  const BoxShape box{{0, 0, -5}, {20, 10, 0}};
+  DexelStock stock(box, 0.1);
+  MoveList list;
+  const Cutter cutter = vbit(60);
+  list.cutters.push_back(cutter);
+  const Eigen::Vector3d a(-1, 4, 0.5), b(21, 6, -1.5);
+  list.moves = {line(a, b)};
+  stock.cut(list, {});
+  double worst = 0.0;
+  int checked = 0;
+  const auto points = cut_points(stock, 0);
+  for (std::size_t i = 0; i < points.size(); i += 5) {
+    const Eigen::Vector3d& x = points[i].x_mm;
+    double best = std::numeric_limits<double>::infinity();
+    double best_t = 0.0;
+    for (int k = 0; k <= 4000; ++k) {
+      const double t = k / 4000.0, d = cutter_distance(cutter, x - (a + t * (b - a)));
+      if (d < best) { best = d; best_t = t; }
+    }
+    double lo = std::max(0.0, best_t - 1e-3), hi = std::min(1.0, best_t + 1e-3);
+    for (int k = 0; k < 100; ++k) {
+      const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
+      if (cutter_distance(cutter, x - (a + m1 * (b - a))) < cutter_distance(cutter, x - (a + m2 * (b - a)))) hi = m2; else lo = m1;
+    }
+    best = std::min(best, cutter_distance(cutter, x - (a + 0.5 * (lo + hi) * (b - a))));
+    worst = std::max(worst, std::abs(best));
+    ++checked;
+  }
+  EXPECT_LT(worst, kEndpointTol_mm);
+  EXPECT_GT(checked, 300);
+}
+
 TEST(DexelStock, MeshStockMatchesTheAnalyticBox) {
   const Eigen::Vector3d lo(0.03, 0.07, -9.96), hi(20.01, 10.02, 0.04);
   DexelStock analytic(BoxShape{lo, hi}, 0.1);

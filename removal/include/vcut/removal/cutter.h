@@ -8,7 +8,9 @@
 
 namespace vcut::removal {
 
-enum class CutterType { Flat, Ball, BullNose };
+// VBit: a pointed chamfer (engraving) cutter, a cone of `tip_angle_deg` included angle up to
+// the diameter, then a cylinder up to the flute length.
+enum class CutterType { Flat, Ball, BullNose, VBit };
 
 struct Cutter {
   CutterType type = CutterType::Flat;
@@ -17,9 +19,15 @@ struct Cutter {
   double flute_length_mm = 0.0;   // height of the cutting part above the tip
   double shank_diameter_mm = 0.0;
   double length_mm = 0.0;  // out of the holder
+  double tip_angle_deg = 0.0;  // VBit: included angle of the cone, (0, 180)
 
   double radius_mm() const { return 0.5 * diameter_mm; }
 };
+
+// Radius of the cutter's cross-section at height h above the tip (0 outside [0, flute length]).
+double section_radius(const Cutter& cutter, double h_mm);
+// Height above the tip of the cutter's underside at distance rho from the axis (rho <= R).
+double underside_height(const Cutter& cutter, double rho_mm);
 
 // The cutting part as a rounded cylinder: a core cylinder K of radius R - r spanning
 // z in [r, max(r, H - r)] grown by a ball of radius r (seed 003's tool model: every APT
@@ -32,6 +40,8 @@ struct CutterCore {
   double rounding_mm;     // r
 };
 
+// A V-bit is not such a sum: its core is its bounding cylinder (radius R, z in [0, H]), used
+// for bounds only.
 CutterCore core_of(const Cutter& cutter);
 
 // Signed distance (mm, negative inside) from a tool-frame point to the cutting part.

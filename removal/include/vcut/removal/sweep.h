@@ -37,6 +37,7 @@ class TranslationSweep {
   double core_distance(const Eigen::Vector3d& y) const;  // y in the tool frame at t = 0
 
   CutterCore core_;
+  Cutter cutter_;  // a V-bit's distance comes from its profile, not from a core
   Eigen::Matrix3d to_tool_;  // workpiece -> tool frame rotation (tool axis to +Z)
   Eigen::Vector3d origin_;   // tip at t = 0
   Eigen::Vector3d delta_tool_;
