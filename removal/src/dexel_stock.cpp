@@ -109,6 +109,27 @@ double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelS
   if (n == 0 || !(a < b)) return 0.0;
   DexelSegment* s = ray.data();
   if (b <= s[0].lo_mm || a >= s[n - 1].hi_mm) return 0.0;
+  if (n == 1 && !(s[0].lo_mm < a && s[0].hi_mm > b)) {
+    // One interval, trimmed at one end or removed whole: in place.
+    DexelSegment& seg = s[0];
+    const double before = static_cast<double>(seg.hi_mm) - seg.lo_mm;
+    if (seg.lo_mm < a) {
+      seg.hi_mm = a;
+      seg.hi_move = move;
+    } else if (seg.hi_mm > b) {
+      seg.lo_mm = b;
+      seg.lo_move = move;
+    } else {
+      ray.assign(nullptr, 0);
+      return before;
+    }
+    const double after = static_cast<double>(seg.hi_mm) - seg.lo_mm;
+    if (after <= kMinSegment_mm) {
+      ray.assign(nullptr, 0);
+      return before;
+    }
+    return before - after;
+  }
   double removed = 0.0;
   scratch.clear();
   bool changed = false;
@@ -472,6 +493,16 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             sweep.row_range(a, m.position(iw), row_lo, row_hi);
             const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
             const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
+            if (a == 2 && !move.rapid) {
+              // A row whose material all lies below the sweep's floor there is clear.
+              const double floor = sweep.row_floor(a, m.position(iw));
+              bool above = false;
+              for (int iu = first_u; iu <= last_u && !above; ++iu) {
+                const SegmentList& ray = f.at(iu, iw);
+                above = ray.size() > 0 && ray.data()[ray.size() - 1].hi_mm > floor;
+              }
+              if (!above) continue;
+            }
             for (int iu = first_u; iu <= last_u; ++iu) {
               SegmentList& ray = f.at(iu, iw);
               const std::uint32_t n = ray.size();
@@ -556,7 +587,7 @@ SurfaceMesh DexelStock::surface() const {
               c[a2] = iw;
               // Two nodes on each side: volumeToMesh's adaptivity reads gradients across
               // the band, which a one-node band leaves to the background value.
-              for (int step = -1; step <= 2; ++step) {
+              for (int step = -1; step <= 1; ++step) {
                 c[f.axis] = k + step;
                 acc.setValueOn(c, background);
               }

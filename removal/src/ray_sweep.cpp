@@ -389,6 +389,17 @@ void RaySweep::row_range(int axis, double w, double& u_lo, double& u_hi) const {
   u_hi = std::min(u_hi, std::max(p0_[a1], p1[a1]) + section);
 }
 
+double RaySweep::row_floor(int axis, double w) const {
+  if (axis != 2 || !vertical_axis_) return -kInf;
+  // The tip never goes below its lower end; at horizontal distance rho from the tip's
+  // path the underside lies underside(rho) higher, rho at least the row's distance from the
+  // path's y range.
+  const double y0 = std::min(p0_.y(), p0_.y() + delta_.y()), y1 = std::max(p0_.y(), p0_.y() + delta_.y());
+  const double rho = w < y0 ? y0 - w : (w > y1 ? w - y1 : 0.0);
+  if (rho > radius_mm_) return kInf;
+  return std::min(p0_.z(), p0_.z() + delta_.z()) + underside_height(cutter_, rho);
+}
+
 bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
   if (method_ == Method::Ball && axis == 2 && vertical_axis_ && segments_ == 2) {
     // An upright ball on a z ray leaves through the top centres' capsule, never below the

@@ -50,6 +50,9 @@ class RaySweep {
   // A range [u_lo, u_hi] holding every ray of family `axis` in the row at w that can meet
   // the sweep (tighter than bounds() for an upright tool; the bounds' range otherwise).
   void row_range(int axis, double w, double& u_lo, double& u_hi) const;
+  // For z rays (axis 2): a height below which the sweep does not reach anywhere in the row
+  // y = w (-inf when no such bound is known): rays with no material above it are clear.
+  double row_floor(int axis, double w) const;
 
  private:
   enum class Method { Ball, Upright, General };
