@@ -102,7 +102,10 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
     e["compared"] = "tri-dexel and OpenVDB machined surfaces, every vertex of each against the other's triangles";
     e["max_mm"] = um(r.engines.max_mm);
     e["rms_mm"] = um(r.engines.rms_mm);
+    e["p99_mm"] = um(r.engines.p99_mm);
+    e["max_at"] = vec(r.engines.max_where_mm);
     e["vertices"] = r.engines.vertices;
+    e["vertices_beyond_quarter_resolution"] = r.engines.beyond_quarter;
     e["vdb_cut_s"] = std::round(r.engines.vdb_cut_s * 1e3) / 1e3;
     e["vdb_mesh_s"] = std::round(r.engines.vdb_mesh_s * 1e3) / 1e3;
     j["engine_check"] = e;

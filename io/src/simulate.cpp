@@ -258,26 +258,35 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
     result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
     const removal::DesignDistance to_other(other.mesh), to_primary(machined.mesh);
-    struct Sums { double max = 0.0, squares = 0.0; };
-    auto measure = [](const removal::DesignDistance& target, const std::vector<Eigen::Vector3d>& points) {
-      return tbb::parallel_reduce(
-          tbb::blocked_range<std::size_t>(0, points.size(), 1024), Sums{},
-          [&](const auto& range, Sums s) {
-            for (std::size_t i = range.begin(); i != range.end(); ++i) {
-              const double d = std::abs(target.signed_distance(points[i]));
-              s.max = std::max(s.max, d);
-              s.squares += d * d;
-            }
-            return s;
-          },
-          [](Sums a, const Sums& b) { return Sums{std::max(a.max, b.max), a.squares + b.squares}; },
-          tbb::static_partitioner());
-    };
-    const Sums a = measure(to_other, machined.mesh.vertices_mm), b = measure(to_primary, other.mesh.vertices_mm);
-    result.engines.done = true;
-    result.engines.vertices = machined.mesh.vertices_mm.size() + other.mesh.vertices_mm.size();
-    result.engines.max_mm = std::max(a.max, b.max);
-    result.engines.rms_mm = result.engines.vertices > 0 ? std::sqrt((a.squares + b.squares) / static_cast<double>(result.engines.vertices)) : 0.0;
+    // Every vertex of each surface against the other's triangles.
+    std::vector<double> d(machined.mesh.vertices_mm.size() + other.mesh.vertices_mm.size());
+    std::vector<Eigen::Vector3d> where(d.size());
+    constexpr std::size_t kChunk = 1024;
+    tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+      removal::DistanceHint hint;
+      for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
+        const bool mine = i < machined.mesh.vertices_mm.size();
+        if (i == machined.mesh.vertices_mm.size()) hint = removal::DistanceHint();
+        where[i] = mine ? machined.mesh.vertices_mm[i] : other.mesh.vertices_mm[i - machined.mesh.vertices_mm.size()];
+        d[i] = std::abs((mine ? to_other : to_primary).signed_distance(where[i], hint));
+      }
+    });
+    EngineCheck& e = result.engines;
+    e.done = true;
+    e.vertices = d.size();
+    double squares = 0.0;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+      squares += d[i] * d[i];
+      if (d[i] > e.max_mm) { e.max_mm = d[i]; e.max_where_mm = where[i]; }
+    }
+    e.rms_mm = d.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(d.size()));
+    std::vector<double> sorted = d;
+    if (!sorted.empty()) {
+      const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+      std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+      e.p99_mm = sorted[k];
+    }
+    for (double x : d) e.beyond_quarter += x > 0.25 * v;
     stage_done("check");
   }
 

@@ -56,8 +56,9 @@ struct EndpointCheck {
 // engine: both — the two engines' machined surfaces against each other.
 struct EngineCheck {
   bool done = false;
-  double max_mm = 0.0, rms_mm = 0.0;
-  std::size_t vertices = 0;
+  double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
+  Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
+  std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
   double vdb_cut_s = 0.0, vdb_mesh_s = 0.0;
 };
 
