@@ -493,6 +493,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             sweep.row_range(a, m.position(iw), row_lo, row_hi);
             const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
             const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
+            const double section = a == 2 ? std::numeric_limits<double>::infinity() : sweep.row_section(a, m.position(iw));
             if (a == 2 && !move.rapid) {
               // A row whose material all lies below the sweep's floor there is clear.
               const double floor = sweep.row_floor(a, m.position(iw));
@@ -508,6 +509,15 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
               const std::uint32_t n = ray.size();
               // Rays already clear of the sweep's box cost a look only.
               if (n == 0 || ray.data()[0].lo_mm >= box_hi || ray.data()[n - 1].hi_mm <= box_lo) continue;
+              if (section < std::numeric_limits<double>::infinity()) {
+                // A tighter window along the ray: the section disc about the tip's path.
+                double win_lo, win_hi;
+                if (!sweep.ray_window(a, m.position(iu), section, win_lo, win_hi)) continue;
+                bool meets = false;
+                for (std::uint32_t k = 0; k < n && !meets; ++k)
+                  meets = ray.data()[k].lo_mm < win_hi && ray.data()[k].hi_mm > win_lo;
+                if (!meets) continue;
+              }
               double lo, hi;
               if (!sweep.interval_below(a, m.position(iu), m.position(iw), ray.data()[n - 1].hi_mm, lo, hi)) continue;
               if (move.rapid) {

@@ -376,17 +376,38 @@ void RaySweep::row_range(int axis, double w, double& u_lo, double& u_hi) const {
   }
   // Rays along x or y in the row at height z = w: the cutter's widest section over the
   // heights above the tip the row takes during the move, around the tip's path.
-  const double h_lo = w - std::max(p0_.z(), p1.z()), h_hi = w - std::min(p0_.z(), p1.z());
-  const double h = std::clamp(std::clamp(core_.z_low_mm, h_lo, h_hi), 0.0, height_mm_);
-  if (h_hi < 0.0 || h_lo > height_mm_) {
+  const double section = row_section(axis, w);
+  if (section < 0.0) {
     u_lo = 1.0;
     u_hi = 0.0;
     return;
   }
-  const double off = h < core_.z_low_mm ? core_.z_low_mm - h : (h > core_.z_high_mm ? h - core_.z_high_mm : 0.0);
-  const double section = core_.core_radius_mm + std::sqrt(std::max(0.0, core_.rounding_mm * core_.rounding_mm - off * off));
   u_lo = std::max(u_lo, std::min(p0_[a1], p1[a1]) - section);
   u_hi = std::min(u_hi, std::max(p0_[a1], p1[a1]) + section);
+}
+
+double RaySweep::row_section(int axis, double w) const {
+  if (!vertical_axis_ || axis == 2) return kInf;
+  const double z1 = p0_.z() + delta_.z();
+  const double h_lo = w - std::max(p0_.z(), z1), h_hi = w - std::min(p0_.z(), z1);
+  if (h_hi < 0.0 || h_lo > height_mm_) return -1.0;
+  // The section grows up to `full` above the tip, then stays or shrinks: its largest value
+  // over [h_lo, h_hi] is at the point of that range nearest to `full`.
+  const double full = cutter_.type == CutterType::VBit ? std::min(height_mm_, underside_height(cutter_, radius_mm_))
+                                                      : core_.z_low_mm;
+  return section_radius(cutter_, std::clamp(std::clamp(full, h_lo, h_hi), 0.0, height_mm_));
+}
+
+bool RaySweep::ray_window(int axis, double u, double section, double& lo, double& hi) const {
+  const int a1 = axis == 0 ? 1 : 0;
+  const double p1u = p0_[a1] + delta_[a1], p1s = p0_[axis] + delta_[axis];
+  const double du = u < std::min(p0_[a1], p1u) ? std::min(p0_[a1], p1u) - u : (u > std::max(p0_[a1], p1u) ? u - std::max(p0_[a1], p1u) : 0.0);
+  const double reach2 = section * section - du * du;
+  if (reach2 < 0.0) return false;
+  const double reach = std::sqrt(reach2);
+  lo = std::min(p0_[axis], p1s) - reach;
+  hi = std::max(p0_[axis], p1s) + reach;
+  return true;
 }
 
 double RaySweep::row_floor(int axis, double w) const {

@@ -53,6 +53,12 @@ class RaySweep {
   // For z rays (axis 2): a height below which the sweep does not reach anywhere in the row
   // y = w (-inf when no such bound is known): rays with no material above it are clear.
   double row_floor(int axis, double w) const;
+  // For x and y rays of an upright tool: the widest section of the cutter over the row at
+  // height w (+inf when unknown, < 0 when the row misses the cutter's height), and from it
+  // a window [lo, hi] along the ray at u holding the ray's meeting with the sweep (false:
+  // the ray misses). The section is a disc of at most that radius about the tip's path.
+  double row_section(int axis, double w) const;
+  bool ray_window(int axis, double u, double section, double& lo, double& hi) const;
 
  private:
   enum class Method { Ball, Upright, General };
