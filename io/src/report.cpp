@@ -87,7 +87,7 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
   if (r.endpoints.done) {
     // Which points the summary's gouge and excess figures were measured at.
     ordered_json e;
-    e["measured_at"] = "dexel endpoints: every point where a ray of the tri-dexel stock enters or leaves material that a move made (faces of the initial stock never cut are measured on the mesh), exact distance to the design's triangles";
+    e["measured_at"] = "dexel endpoints: every point where a ray of the tri-dexel stock enters or leaves material, exact distance to the design's triangles";
     e["points"] = r.endpoints.points;
     e["max_gouge_mm"] = um(r.endpoints.max_gouge_mm);
     e["deepest"] = vec(r.endpoints.deepest_mm);

@@ -308,9 +308,33 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
       // Every dexel endpoint against the design, exactly: the summary's figures then do not
       // depend on meshing (the mesh's regions still give areas and outlines).
-      // Points a move made; faces of the initial stock never cut are measured on the mesh.
       std::vector<removal::DexelEndpoint> points = dexel->endpoints();
-      points.erase(std::remove_if(points.begin(), points.end(), [](const auto& p) { return p.move < 0; }), points.end());
+      // In Morton order of their lattice cells, so that consecutive points are neighbours
+      // (a ray's two ends can lie a stock's length apart).
+      {
+        auto spread = [](std::uint64_t x) {
+          x &= 0x1fffff;
+          x = (x | x << 32) & 0x1f00000000ffffULL;
+          x = (x | x << 16) & 0x1f0000ff0000ffULL;
+          x = (x | x << 8) & 0x100f00f00f00f00fULL;
+          x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
+          x = (x | x << 2) & 0x1249249249249249ULL;
+          return x;
+        };
+        const Eigen::Vector3d origin = stock_box.min();
+        std::vector<std::pair<std::uint64_t, std::size_t>> keys(points.size());
+        for (std::size_t i = 0; i < points.size(); ++i) {
+          const Eigen::Vector3d c = ((points[i].x_mm - origin) / v).array().max(0.0);
+          keys[i] = {spread(static_cast<std::uint64_t>(c.x())) | spread(static_cast<std::uint64_t>(c.y())) << 1 |
+                         spread(static_cast<std::uint64_t>(c.z())) << 2,
+                     i};
+        }
+        std::sort(keys.begin(), keys.end());
+        std::vector<removal::DexelEndpoint> sorted;
+        sorted.reserve(points.size());
+        for (const auto& k : keys) sorted.push_back(points[k.second]);
+        points = std::move(sorted);
+      }
       std::vector<double> d(points.size());
       // Fixed chunks of neighbouring points, each query hinted by the one before it.
       constexpr std::size_t kChunk = 1024;
