@@ -208,8 +208,9 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   const double limit_mb = options.max_memory_mb > 0.0 ? options.max_memory_mb : 0.75 * total_ram_mb();
   if (estimate_mb > limit_mb) {
     std::ostringstream msg;
+    msg << "resolution " << v;
     msg.precision(0);
-    msg << std::fixed << "resolution " << v << " mm needs about " << estimate_mb << " MB for this stock, more than the "
+    msg << std::fixed << " mm needs about " << estimate_mb << " MB for this stock, more than the "
         << limit_mb << " MB allowed (--max-memory): choose a coarser resolution";
     msg.precision(3);
     throw InputError(msg.str());

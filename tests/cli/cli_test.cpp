@@ -234,7 +234,7 @@ TEST_F(Simulate, StockAndProgramDoNotOverlap) {
 }
 
 TEST_F(Simulate, ResolutionBeyondMemoryIsRefused) {
-  expect_error(simulate("--resolution 0.005 --max-memory 100"), "MB");
+  expect_error(simulate("--resolution 0.005 --max-memory 100"), "resolution 0.005 mm needs about");
   EXPECT_TRUE(no_output());
 }
 
