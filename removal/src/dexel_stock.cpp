@@ -588,29 +588,35 @@ SurfaceMesh DexelStock::surface() const {
   transform->postTranslate(openvdb::Vec3d(0.5 * v));
   grid->setTransform(transform);
   {
-    auto acc = grid->getAccessor();
+    // Rows of rays in parallel, each part into a grid of its own; the union of their
+    // topologies does not depend on how the rows were split.
+    tbb::enumerable_thread_specific<SurfaceGrid::Ptr> parts([&] { return SurfaceGrid::create(background); });
     for (const Family& f : m.families) {
       const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
-      for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) {
-        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
-          const SegmentList& ray = f.at(iu, iw);
-          for (std::uint32_t s = 0; s < ray.size(); ++s) {
-            for (float x : {ray.data()[s].lo_mm, ray.data()[s].hi_mm}) {
-              const int k = static_cast<int>(std::floor(m.index_of(x)));
-              Coord c;
-              c[a1] = iu;
-              c[a2] = iw;
-              // Two nodes on each side: volumeToMesh's adaptivity reads gradients across
-              // the band, which a one-node band leaves to the background value.
-              for (int step = -1; step <= 1; ++step) {
-                c[f.axis] = k + step;
-                acc.setValueOn(c, background);
+      tbb::parallel_for(tbb::blocked_range<int>(f.lo_w, f.lo_w + f.n_w, 8), [&](const tbb::blocked_range<int>& rows) {
+        auto acc = parts.local()->getAccessor();
+        for (int iw = rows.begin(); iw != rows.end(); ++iw) {
+          for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+            const SegmentList& ray = f.at(iu, iw);
+            for (std::uint32_t s = 0; s < ray.size(); ++s) {
+              for (float x : {ray.data()[s].lo_mm, ray.data()[s].hi_mm}) {
+                const int k = static_cast<int>(std::floor(m.index_of(x)));
+                Coord c;
+                c[a1] = iu;
+                c[a2] = iw;
+                // A node on either side and one beyond: volumeToMesh's adaptivity reads
+                // gradients across the band, which a thinner band leaves to the background.
+                for (int step = -1; step <= 1; ++step) {
+                  c[f.axis] = k + step;
+                  acc.setValueOn(c, background);
+                }
               }
             }
           }
         }
-      }
+      });
     }
+    for (auto& part : parts) grid->tree().topologyUnion(part->tree());
   }
   // Distance along `axis` from node c to the nearest crossing of its ray within a few
   // spacings (a plane's intercept on an axis it nearly parallels lies far out; leaving it
