@@ -33,6 +33,7 @@ bench: build
 	./$(BUILD)/benchmarks/vcut_benchmarks --benchmark_min_time=0.2
 	scripts/bench-demo $(BUILD)/cli/vcut
 	scripts/bench-peers $(BUILD)/cli/vcut
+	scripts/bench-features $(BUILD)/cli/vcut
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN) $(BUILD).configure.log $(BUILD_SAN).configure.log
