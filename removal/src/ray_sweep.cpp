@@ -532,8 +532,13 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
     const auto f = [&](double t) { return t * slope + underside(t); };
     return f(golden_argmin(f, ta, tb, t_tolerance));
   };
-  lo = p0_.z() + lowest(dz, flat_bottom_);
-  hi = p0_.z() + height_mm_ - lowest(-dz, flat_top);
+  // Where the line stays over the flat core of a bull-nose's underside for the whole move
+  // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
+  const bool over_core = cutter_.type != CutterType::VBit &&
+                         std::max(std::hypot(qx - ta * dx, qy - ta * dy), std::hypot(qx - tb * dx, qy - tb * dy)) <=
+                             core_.core_radius_mm;
+  lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
+  hi = p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
   return true;
 }
 
@@ -550,7 +555,12 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   }
   // Radius of the cutter's cross-section at height h above the tip.
   auto section = [&](double h) { return section_radius(cutter_, std::clamp(h, 0.0, height_mm_)); };
-  if (flat_bottom_ || std::abs(dh) <= kTiny_mm) {
+  // Heights above the tip where the section is the full radius.
+  const double full_lo = cutter_.type == CutterType::VBit ? underside_height(cutter_, radius_mm_) : core_.z_low_mm;
+  const double full_hi = cutter_.type == CutterType::VBit ? height_mm_ : core_.z_high_mm;
+  const double h_a = h0 + ta * dh, h_b = h0 + tb * dh;
+  const bool full_section = std::min(h_a, h_b) >= full_lo && std::max(h_a, h_b) <= full_hi;
+  if (flat_bottom_ || full_section || std::abs(dh) <= kTiny_mm) {
     // The section does not change along the move: a disc swept along a segment in the
     // plane of the line, whose extent along the line has a closed form.
     const double radius = section(h0 + 0.5 * (ta + tb) * dh);
