@@ -499,6 +499,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
             const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
             const double section = a == 2 ? std::numeric_limits<double>::infinity() : sweep.row_section(a, m.position(iw));
+            if (section < 0.0) continue;  // the row passes above or below the cutter throughout
             if (a == 2 && !move.rapid) {
               // A row whose material all lies below the sweep's floor there is clear.
               const double floor = sweep.row_floor(a, m.position(iw));
