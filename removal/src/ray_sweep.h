@@ -6,12 +6,13 @@
 //  - Ball end, any tool axis: the sweep is a parallelogram P (the axis segment of the
 //    core swept along the move) grown by the ball radius r; a line meets P + B(r) in the
 //    hull of its meetings with the four edge capsules and the slab over P: closed form.
-//  - Flat or bull-nose end with the tool axis +Z (three-axis work): the slice of the
+//  - Flat, bull-nose or V-bit with the tool axis +Z (three-axis work): the slice of the
 //    sweep by the plane of the ray and the motion, in (s, t) = (along the ray, along the
 //    move), is convex; its extent in s is the minimum of a convex function of t: closed
-//    form when the cutter's cross-section at the ray does not change along the move, else
-//    a bracketing search to kRaySearchTolerance.
-//  - Anything else (tilted flat or bull-nose): the sweep's signed distance along the ray
+//    form when the cutter's cross-section at the ray does not change along the move (or the
+//    ray stays over a bull-nose's flat core), else a bracketing search to
+//    kRaySearchTolerance_mm.
+//  - Anything else (tilted flat, bull-nose or V-bit): the sweep's signed distance along the ray
 //    is convex in s; its minimum and the two zero crossings are bracketed numerically.
 #pragma once
 

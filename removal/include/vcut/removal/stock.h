@@ -1,5 +1,5 @@
 // The workpiece material being cut, behind one interface for the stock engines
-// (OpenVDB level set now; tri-dexel next). Workpiece frame, mm.
+// (tri-dexel, the default, and OpenVDB level set). Workpiece frame, mm.
 #pragma once
 
 #include <Eigen/Core>
