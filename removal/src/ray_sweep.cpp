@@ -526,11 +526,56 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, std::sqrt(dd + dz * dz));
   // min over [ta, tb] of t*slope + height(t): convex (the underside is a convex function
   // of the distance to the axis, itself convex in t).
+  // Its derivative g'(t) = slope + U'(rho) rho'(t), and g'' in `second` (U the underside
+  // as a function of the distance rho to the axis; infinite where the side is vertical).
+  const double rc = core_.core_radius_mm, r = core_.rounding_mm;
+  const double cone = cutter_.type == CutterType::VBit ? 1.0 / std::tan(0.5 * cutter_.tip_angle_deg * M_PI / 180.0) : 0.0;
+  auto slope_at = [&](double slope, double t, double& second) {
+    const double rho = std::hypot(qx - t * dx, qy - t * dy);
+    const double drho = rho > 0.0 ? (t * dd - qd) / rho : 0.0;
+    const double d2rho = rho > 0.0 ? (dd - drho * drho) / rho : 0.0;
+    if (cutter_.type == CutterType::VBit) {
+      second = cone * d2rho;
+      return slope + cone * drho;
+    }
+    const double e = rho - rc;
+    if (e <= 0.0) {
+      second = 0.0;
+      return slope;
+    }
+    const double s2 = r * r - e * e;
+    if (s2 <= 0.0) {
+      second = kInf;
+      return drho < 0.0 ? -kInf : (drho > 0.0 ? kInf : slope);
+    }
+    const double root = std::sqrt(s2);
+    second = r * r / (s2 * root) * drho * drho + e / root * d2rho;
+    return slope + e / root * drho;
+  };
+  // min over [ta, tb] of g(t) = t*slope + underside(t): g is convex, so its derivative
+  // rises through zero once; safeguarded Newton steps on it from the closest approach,
+  // halving the bracket where a step would leave it.
   auto lowest = [&](double slope, bool flat) {
     if (flat) return slope >= 0.0 ? ta * slope : tb * slope;
     if (std::abs(slope) <= kTiny_mm) return underside(dd > 0.0 ? std::clamp(qd / dd, ta, tb) : ta);
-    const auto f = [&](double t) { return t * slope + underside(t); };
-    return f(golden_argmin(f, ta, tb, t_tolerance));
+    const auto g = [&](double t) { return t * slope + underside(t); };
+    double second;
+    if (slope_at(slope, ta, second) >= 0.0) return g(ta);
+    if (slope_at(slope, tb, second) <= 0.0) return g(tb);
+    double lo_t = ta, hi_t = tb;
+    double t = dd > 0.0 ? std::clamp(qd / dd, ta, tb) : 0.5 * (ta + tb);
+    for (int iteration = 0; iteration < 100 && hi_t - lo_t > t_tolerance; ++iteration) {
+      const double d1 = slope_at(slope, t, second);
+      if (d1 < 0.0) lo_t = t;
+      else if (d1 > 0.0) hi_t = t;
+      else break;
+      double next = second > 0.0 && std::isfinite(second) ? t - d1 / second : 0.5 * (lo_t + hi_t);
+      if (!(next > lo_t && next < hi_t)) next = 0.5 * (lo_t + hi_t);
+      const bool converged = std::abs(next - t) <= t_tolerance;
+      t = next;
+      if (converged) break;
+    }
+    return g(t);
   };
   // Where the line stays over the flat core of a bull-nose's underside for the whole move
   // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
