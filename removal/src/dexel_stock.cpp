@@ -419,13 +419,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   CutResult result;
   const std::size_t total = list.moves.size();
   // Rays' endpoints hold move ids that count across calls: remember every move.
-  const int id_base = static_cast<int>(m.moves.size());
-  const int cutter_base = static_cast<int>(m.cutters.size());
-  m.cutters.insert(m.cutters.end(), list.cutters.begin(), list.cutters.end());
-  for (Move move : list.moves) {
-    move.cutter += cutter_base;
-    m.moves.push_back(move);
-  }
+  const int id_base = detail::remember_moves(list, m.moves, m.cutters);
   // Per rapid: the longest overlap with material seen along each family.
   std::map<int, std::array<Probe, 3>> probes;
   std::array<double, 3> removed_mm = {0.0, 0.0, 0.0};
@@ -681,16 +675,7 @@ SurfaceMesh DexelStock::surface() const {
   std::vector<openvdb::Vec4I> quads;
   openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, kMeshAdaptivity);
   grid.reset();
-  SurfaceMesh mesh;
-  mesh.mesh.vertices_mm.reserve(points.size());
-  for (const auto& p : points) mesh.mesh.vertices_mm.emplace_back(p.x(), p.y(), p.z());
-  // OpenVDB winds level-set polygons clockwise seen from outside; flip to outward CCW.
-  for (const auto& t : triangles)
-    mesh.mesh.triangles.emplace_back(static_cast<int>(t[0]), static_cast<int>(t[2]), static_cast<int>(t[1]));
-  for (const auto& q : quads) {
-    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[2]), static_cast<int>(q[1]));
-    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[3]), static_cast<int>(q[2]));
-  }
+  SurfaceMesh mesh = detail::mesh_from_polygons(points, triangles, quads);
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
   const std::size_t count = points.size();
   std::vector<std::vector<int>> nearby(count);

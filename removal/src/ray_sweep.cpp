@@ -56,17 +56,6 @@ void widen(double& lo, double& hi, double a, double b) {
   hi = std::max(hi, b);
 }
 
-// The line o + s*e_axis (o[axis] = 0) against a ball.
-bool line_sphere(int axis, const Vector3d& o, const Vector3d& c, double r, double& lo, double& hi) {
-  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
-  const double h2 = r * r - (o[a1] - c[a1]) * (o[a1] - c[a1]) - (o[a2] - c[a2]) * (o[a2] - c[a2]);
-  if (h2 < 0.0) return false;
-  const double h = std::sqrt(h2);
-  lo = c[axis] - h;
-  hi = c[axis] + h;
-  return true;
-}
-
 }  // namespace
 
 bool line_cylinder(int axis, const Vector3d& o, const Vector3d& p, const Vector3d& d, double r,
@@ -261,7 +250,7 @@ bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, dou
   return true;
 }
 
-bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) const {
+bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, double top) const {
   const BallFamily& f = ball_[axis];
   const double r = core_.rounding_mm, r2 = r * r;
   lo = kInf;
@@ -316,6 +305,13 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi) c
     if (sphere(1, a, b)) lo = std::min(lo, a);
     if (cylinder(0, a, b)) lo = std::min(lo, a);
     if (lo == kInf) return false;
+    // The exit is never below the lower top centre: with no material above that, it is
+    // not needed.
+    const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
+    if (top <= floor_of_exit) {
+      hi = floor_of_exit;
+      return true;
+    }
     if (sphere(2, a, b)) hi = std::max(hi, b);
     if (sphere(3, a, b)) hi = std::max(hi, b);
     if (cylinder(1, a, b)) hi = std::max(hi, b);
@@ -422,82 +418,24 @@ double RaySweep::row_floor(int axis, double w) const {
 }
 
 bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
-  if (method_ == Method::Ball && axis == 2 && vertical_axis_ && segments_ == 2) {
-    // An upright ball on a z ray leaves through the top centres' capsule, never below the
-    // lower top centre: under that the exit is not needed.
-    const BallFamily& f = ball_[2];
-    const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
-    if (top <= floor_of_exit) {
-      const double r2 = core_.rounding_mm * core_.rounding_mm;
-      lo = kInf;
-      for (int i = 0; i < 2; ++i) {
-        const double x = u - f.sphere[i][0], y = w - f.sphere[i][1];
-        const double h2 = r2 - x * x - y * y;
-        if (h2 >= 0.0) lo = std::min(lo, f.sphere[i][2] - std::sqrt(h2));
-      }
-      double a, b;
-      if (ball_cylinder(2, 0, u, w, a, b)) lo = std::min(lo, a);
-      hi = floor_of_exit;
-      return lo < kInf;
-    }
-  }
+  if (method_ == Method::Ball) return ball_fast(axis, u, w, lo, hi, top);
   return interval(axis, u, w, lo, hi);
 }
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
-  if (method_ == Method::Ball) return ball_fast(axis, u, w, lo, hi);
-  Vector3d o;
-  o[axis] = 0.0;
-  o[axis == 0 ? 1 : 0] = u;
-  o[axis == 2 ? 1 : 2] = w;
   switch (method_) {
-    case Method::Ball: return ball(axis, o, lo, hi);
+    case Method::Ball: return ball_fast(axis, u, w, lo, hi);
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
-    case Method::General: return general(axis, o, lo, hi);
+    case Method::General: {
+      Vector3d o;
+      o[axis] = 0.0;
+      o[axis == 0 ? 1 : 0] = u;
+      o[axis == 2 ? 1 : 2] = w;
+      return general(axis, o, lo, hi);
+    }
   }
   return false;
-}
-
-bool RaySweep::ball(int axis, const Vector3d& o, double& lo, double& hi) const {
-  const double r = core_.rounding_mm;
-  double a, b;
-  lo = kInf;
-  hi = -kInf;
-  if (segments_ == 0) return line_sphere(axis, o, c0_, r, lo, hi);
-  if (segments_ == 1) {
-    if (line_sphere(axis, o, c0_, r, a, b)) widen(lo, hi, a, b);
-    if (line_sphere(axis, o, c0_ + edge_a_, r, a, b)) widen(lo, hi, a, b);
-    if (line_cylinder(axis, o, c0_, edge_a_, r, a, b)) widen(lo, hi, a, b);
-    return lo <= hi;
-  }
-  const Vector3d c1 = c0_ + edge_b_, top0 = c0_ + edge_a_, top1 = c1 + edge_a_;
-  if (axis == 2 && vertical_axis_) {
-    // A vertical line enters through the sweep of the ball's centre and leaves through the
-    // sweep of the top rounding's centre (the rest lies between the two in z).
-    if (line_sphere(axis, o, c0_, r, a, b)) lo = std::min(lo, a);
-    if (line_sphere(axis, o, c1, r, a, b)) lo = std::min(lo, a);
-    if (line_cylinder(axis, o, c0_, edge_b_, r, a, b)) lo = std::min(lo, a);
-    if (lo == kInf) return false;
-    if (line_sphere(axis, o, top0, r, a, b)) hi = std::max(hi, b);
-    if (line_sphere(axis, o, top1, r, a, b)) hi = std::max(hi, b);
-    if (line_cylinder(axis, o, top0, edge_b_, r, a, b)) hi = std::max(hi, b);
-    return hi >= lo;
-  }
-  for (const Vector3d* c : {&c0_, &c1, &top0, &top1})
-    if (line_sphere(axis, o, *c, r, a, b)) widen(lo, hi, a, b);
-  if (line_cylinder(axis, o, c0_, edge_b_, r, a, b)) widen(lo, hi, a, b);
-  if (line_cylinder(axis, o, top0, edge_b_, r, a, b)) widen(lo, hi, a, b);
-  if (line_cylinder(axis, o, c0_, edge_a_, r, a, b)) widen(lo, hi, a, b);
-  if (line_cylinder(axis, o, c1, edge_a_, r, a, b)) widen(lo, hi, a, b);
-  // The slab of thickness 2r over the parallelogram's inside.
-  const Vector3d m = o - c0_;
-  double s0 = -kInf, s1 = kInf;
-  if (clip(normal_.dot(m), normal_[axis], -r, r, s0, s1) &&
-      clip(dual_a_.dot(m), dual_a_[axis], 0.0, 1.0, s0, s1) &&
-      clip(dual_b_.dot(m), dual_b_[axis], 0.0, 1.0, s0, s1))
-    widen(lo, hi, s0, s1);
-  return lo <= hi;
 }
 
 bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) const {

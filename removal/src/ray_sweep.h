@@ -19,6 +19,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <limits>
+
 #include "vcut/removal/cutter.h"
 #include "vcut/removal/move.h"
 #include "vcut/removal/sweep.h"
@@ -63,7 +65,6 @@ class RaySweep {
 
  private:
   enum class Method { Ball, Upright, General };
-  bool ball(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
   bool upright_vertical(double u, double w, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
@@ -89,7 +90,9 @@ class RaySweep {
     double band_n_base = 0, band_n_u = 0, band_n_s = 0, band_t_base = 0, band_t_u = 0, band_t_s = 0;
   };
   void prepare_ball_family(int axis);
-  bool ball_fast(int axis, double u, double w, double& lo, double& hi) const;
+  // `top`: as for interval_below.
+  bool ball_fast(int axis, double u, double w, double& lo, double& hi,
+                 double top = std::numeric_limits<double>::infinity()) const;
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi) const;
 
   TranslationSweep sweep_;

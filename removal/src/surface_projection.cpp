@@ -25,6 +25,33 @@ std::function<double(const Eigen::Vector3d&)> initial_distance(
   return [d = mesh_distance](const Eigen::Vector3d& x) { return d->signed_distance(x); };
 }
 
+int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<Cutter>& cutters) {
+  const int id_base = static_cast<int>(moves.size());
+  const int cutter_base = static_cast<int>(cutters.size());
+  cutters.insert(cutters.end(), list.cutters.begin(), list.cutters.end());
+  for (Move move : list.moves) {
+    move.cutter += cutter_base;
+    moves.push_back(move);
+  }
+  return id_base;
+}
+
+SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points,
+                               const std::vector<openvdb::Vec3I>& triangles,
+                               const std::vector<openvdb::Vec4I>& quads) {
+  SurfaceMesh mesh;
+  mesh.mesh.vertices_mm.reserve(points.size());
+  for (const auto& p : points) mesh.mesh.vertices_mm.emplace_back(p.x(), p.y(), p.z());
+  mesh.mesh.triangles.reserve(triangles.size() + 2 * quads.size());
+  for (const auto& t : triangles)
+    mesh.mesh.triangles.emplace_back(static_cast<int>(t[0]), static_cast<int>(t[2]), static_cast<int>(t[1]));
+  for (const auto& q : quads) {
+    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[2]), static_cast<int>(q[1]));
+    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[3]), static_cast<int>(q[2]));
+  }
+  return mesh;
+}
+
 void project_onto_machined_surface(const std::vector<Move>& moves, const std::vector<Cutter>& cutters,
                                    const std::function<double(const Eigen::Vector3d&)>& initial,
                                    const std::vector<std::vector<int>>& nearby, double max_travel_mm,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <openvdb/Types.h>
 
 #include <functional>
 #include <vector>
@@ -11,6 +12,17 @@
 #include "vcut/removal/stock.h"
 
 namespace vcut::removal::detail {
+
+// Appends the list's moves (cutter indices shifted) and cutters to an engine's record of
+// every move cut so far, whose indices are the move ids the stock stores; returns the id
+// of the list's first move.
+int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<Cutter>& cutters);
+
+// volumeToMesh's polygons as an outward, counter-clockwise triangle mesh (OpenVDB winds
+// level-set polygons clockwise seen from outside; quads are split in two).
+SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points,
+                               const std::vector<openvdb::Vec3I>& triangles,
+                               const std::vector<openvdb::Vec4I>& quads);
 
 // Moves every vertex onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0
 // by Newton steps, where the moves m are `nearby[v]` (those that shaped the stock around

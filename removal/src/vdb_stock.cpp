@@ -385,13 +385,7 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
   std::map<int, Collision> collisions;
   double removed_voxels = 0.0;
   // Move ids in the id grid count across calls: remember every move with its cutter.
-  const int id_base = static_cast<int>(m.moves.size());
-  const int cutter_base = static_cast<int>(m.cutters.size());
-  m.cutters.insert(m.cutters.end(), list.cutters.begin(), list.cutters.end());
-  for (Move move : list.moves) {
-    move.cutter += cutter_base;
-    m.moves.push_back(move);
-  }
+  const int id_base = detail::remember_moves(list, m.moves, m.cutters);
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
     const std::size_t last = std::min(total, first + kBatchMoves);
     std::vector<TranslationSweep> sweeps;
@@ -456,16 +450,7 @@ SurfaceMesh VdbStock::surface() const {
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
   openvdb::tools::volumeToMesh(*m.grid, points, triangles, quads, 0.0, kMeshAdaptivity);
-  SurfaceMesh mesh;
-  mesh.mesh.vertices_mm.reserve(points.size());
-  for (const auto& p : points) mesh.mesh.vertices_mm.emplace_back(p.x(), p.y(), p.z());
-  // OpenVDB winds level-set polygons clockwise seen from outside; flip to outward CCW.
-  for (const auto& t : triangles)
-    mesh.mesh.triangles.emplace_back(static_cast<int>(t[0]), static_cast<int>(t[2]), static_cast<int>(t[1]));
-  for (const auto& q : quads) {
-    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[2]), static_cast<int>(q[1]));
-    mesh.mesh.triangles.emplace_back(static_cast<int>(q[0]), static_cast<int>(q[3]), static_cast<int>(q[2]));
-  }
+  SurfaceMesh mesh = detail::mesh_from_polygons(points, triangles, quads);
   // Each vertex goes onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0,
   // where the moves m are those that shaped the voxels around it, by Newton steps; it
   // takes the id of the move whose sweep is its surface (-1: the initial stock).
