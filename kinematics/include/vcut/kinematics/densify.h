@@ -9,13 +9,9 @@
 #include <vector>
 
 #include "vcut/kinematics/program.h"
+#include "vcut/kinematics/tool_pose.h"
 
 namespace vcut::kinematics {
-
-struct ToolPose {
-  Eigen::Vector3d tip_mm = Eigen::Vector3d::Zero();
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit, tip -> spindle
-};
 
 // The motion from the previous sample to this one belongs to `block` (the first sample,
 // the start of the first block, has block -1).
