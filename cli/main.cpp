@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "machine_commands.h"
 #include "progress.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
@@ -62,6 +63,8 @@ int main(int argc, char** argv) {
   simulate->add_option("--max-memory", max_memory, "Refuse a stock needing more than this many MB (default 75% of RAM)")
       ->check(CLI::PositiveNumber);
   simulate->add_flag("--quiet,-q", quiet, "Print nothing but errors and warnings");
+  vcut::cli::MachineCommands machine_commands;
+  vcut::cli::add_machine_commands(app, machine_commands);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -75,6 +78,7 @@ int main(int argc, char** argv) {
       options.max_memory_mb = max_memory;
       return run_simulate(job_file, options, quiet);
     }
+    if (vcut::cli::run_machine_commands(machine_commands)) return 0;
   } catch (const vcut::InputError& e) {
     std::fprintf(stderr, "vcut: error: %s\n", e.what());
     return 2;

@@ -190,6 +190,9 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
 
   // Every branch x winding, then the linear axes.
   std::vector<double> w0, w1;
+  w0.reserve(4);
+  w1.reserve(4);
+  result.solutions.reserve(8);
   for (size_t br = 0; br < branches.size(); ++br) {
     AxisValues base = m.zero();
     std::string violation;
@@ -211,24 +214,26 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
     }
     if (nr < 1) w0.assign(1, 0.0);
     if (nr < 2) w1.assign(1, 0.0);
+    // The linear axes depend on the rotations only, the same for every winding: solve once.
+    if (nr > 0) base[m.rotary_axis(0)] = w0.front();
+    if (nr > 1) base[m.rotary_axis(1)] = w1.front();
+    if (!solve_linear(m, base, pose.tip_mm, tool_length_mm) && violation.empty())
+      violation = "linear axes cannot reach the tip at these angles (singular linear solve)";
+    for (int i = 0; i < m.axis_count() && violation.empty(); ++i) {
+      const AxisSpec& a = m.axis(i);
+      if (a.kind == AxisKind::Linear && a.limits &&
+          (base[i] < a.limits->first - kLimitSlack || base[i] > a.limits->second + kLimitSlack))
+        violation = limit_text(a) + ": needs " + value_in_file_units(a, base[i]);
+    }
     for (double q0 : w0) {
       for (double q1 : w1) {
-        IkSolution s;
+        IkSolution& s = result.solutions.emplace_back();
         s.branch = static_cast<int>(br);
         s.q = base;
         if (nr > 0) s.q[m.rotary_axis(0)] = q0;
         if (nr > 1) s.q[m.rotary_axis(1)] = q1;
         s.violation = violation;
-        if (!solve_linear(m, s.q, pose.tip_mm, tool_length_mm) && s.violation.empty())
-          s.violation = "linear axes cannot reach the tip at these angles (singular linear solve)";
-        for (int i = 0; i < m.axis_count() && s.violation.empty(); ++i) {
-          const AxisSpec& a = m.axis(i);
-          if (a.kind == AxisKind::Linear && a.limits &&
-              (s.q[i] < a.limits->first - kLimitSlack || s.q[i] > a.limits->second + kLimitSlack))
-            s.violation = limit_text(a) + ": needs " + value_in_file_units(a, s.q[i]);
-        }
-        s.within_limits = s.violation.empty();
-        result.solutions.push_back(s);
+        s.within_limits = violation.empty();
       }
     }
   }

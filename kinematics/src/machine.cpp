@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 namespace vcut::kinematics {
@@ -14,7 +15,7 @@ constexpr double kParallelSine = 1e-6;       // linear axes whose directions' si
 
 std::string fixed(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
+  std::snprintf(buf, sizeof buf, "%.9g", v);
   return buf;
 }
 

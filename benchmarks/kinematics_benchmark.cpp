@@ -1,0 +1,101 @@
+// Google Benchmark of the pose engine per pose: forward and inverse kinematics on a
+// table-table AC trunnion and a head-head AC fork head, ideal and with geometric errors,
+// and error compensation. Issue #3's target: <= 1 us per inverse kinematics.
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "vcut/kinematics/compensation.h"
+#include "vcut/kinematics/forward_kinematics.h"
+#include "vcut/kinematics/inverse_kinematics.h"
+
+namespace {
+
+using namespace vcut::kinematics;
+
+AxisSpec axis(char letter, AxisKind kind, Eigen::Vector3d dir, Eigen::Vector3d center, double lo, double hi) {
+  AxisSpec a;
+  a.letter = letter;
+  a.kind = kind;
+  a.direction = dir;
+  a.center_mm = center;
+  a.limits = std::make_pair(lo, hi);
+  return a;
+}
+
+Machine make(bool head_head, bool errors) {
+  MachineSpec s;
+  const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), z = Eigen::Vector3d::UnitZ();
+  s.topology = head_head ? "WFXYZCAT" : "WCAFXYZT";
+  s.axes = {axis('X', AxisKind::Linear, x, Eigen::Vector3d::Zero(), -500, 500), axis('Y', AxisKind::Linear, Eigen::Vector3d::UnitY(), Eigen::Vector3d::Zero(), -500, 500),
+            axis('Z', AxisKind::Linear, z, Eigen::Vector3d::Zero(), -500, 500),
+            axis('A', AxisKind::Rotary, x, {0, head_head ? 0.0 : 20.0, head_head ? 180.0 : 10.0}, -2.0, 2.0),
+            axis('C', AxisKind::Rotary, z, Eigen::Vector3d::Zero(), -2 * M_PI, 2 * M_PI)};
+  if (errors) {
+    for (AxisSpec& a : s.axes) {
+      for (int i = 0; i < 3; ++i) {
+        a.errors.translation_mm[static_cast<size_t>(i)] = {{-500, 0, 500}, {0.01, -0.005, 0.02}};
+        a.errors.rotation_rad[static_cast<size_t>(i)] = {{-500, 500}, {20e-6, -30e-6}};
+      }
+      a.location.tilt_rad = {30e-6, -20e-6, 10e-6};
+      if (a.kind == AxisKind::Rotary) a.location.offset_mm = {0.01, -0.02, 0.005};
+    }
+  }
+  return Machine(s);
+}
+
+std::vector<AxisValues> samples(const Machine& m) {
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> lin(-200, 200), ang(-1.5, 1.5);
+  std::vector<AxisValues> out;
+  for (int n = 0; n < 1024; ++n) {
+    AxisValues q(5);
+    q << lin(rng), lin(rng), lin(rng), ang(rng), 2 * ang(rng);
+    out.push_back(q);
+  }
+  (void)m;
+  return out;
+}
+
+void BM_Forward(benchmark::State& state) {
+  const Machine m = make(state.range(0) != 0, state.range(1) != 0);
+  const std::vector<AxisValues> qs = samples(m);
+  const Geometry g = state.range(1) ? Geometry::Actual : Geometry::Ideal;
+  size_t i = 0;
+  for (auto _ : state) benchmark::DoNotOptimize(forward(m, qs[i++ & 1023], 50.0, g));
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Forward)->ArgNames({"head_head", "errors"})->Args({0, 0})->Args({0, 1})->Args({1, 0})->Args({1, 1});
+
+void BM_Inverse(benchmark::State& state) {
+  const Machine m = make(state.range(0) != 0, false);
+  std::vector<ToolPose> poses;
+  for (const AxisValues& q : samples(m)) poses.push_back(forward(m, q, 50.0));
+  const std::vector<AxisValues> qs = samples(m);
+  size_t i = 0;
+  for (auto _ : state) {
+    const size_t k = i++ & 1023;
+    benchmark::DoNotOptimize(inverse(m, poses[k], 50.0, &qs[(k + 1023) & 1023]));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_Inverse)->ArgNames({"head_head"})->Arg(0)->Arg(1);
+
+// Inverse kinematics of a machine with errors: the ideal solve, then compensation.
+void BM_InverseCompensated(benchmark::State& state) {
+  const Machine m = make(state.range(0) != 0, true);
+  std::vector<ToolPose> poses;
+  for (const AxisValues& q : samples(m)) poses.push_back(forward(m, q, 50.0));
+  size_t i = 0;
+  for (auto _ : state) {
+    const size_t k = i++ & 1023;
+    const IkResult r = inverse(m, poses[k], 50.0);
+    benchmark::DoNotOptimize(compensate(m, poses[k], 50.0, r.q()));
+  }
+  state.SetItemsProcessed(state.iterations());
+}
+BENCHMARK(BM_InverseCompensated)->ArgNames({"head_head"})->Arg(0)->Arg(1);
+
+}  // namespace

@@ -1,0 +1,81 @@
+#include "vcut/io/csv.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+
+#include "vcut/io/input_error.h"
+
+namespace vcut::io {
+namespace {
+
+std::string trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+// Fields with their 1-based starting columns.
+std::vector<std::pair<std::string, int>> split(const std::string& line) {
+  std::vector<std::pair<std::string, int>> out;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    const std::string field = line.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+    out.push_back({trim(field), static_cast<int>(start) + 1});
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+int CsvTable::column(const std::string& name) const {
+  for (size_t i = 0; i < header.size(); ++i)
+    if (header[i] == name) return static_cast<int>(i);
+  return -1;
+}
+
+CsvTable read_csv(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path, 0, 0, "cannot open file for reading");
+  CsvTable table;
+  table.file = path;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::string t = trim(line);
+    if (t.empty() || t[0] == '#') continue;
+    const auto fields = split(line);
+    if (table.header.empty()) {
+      for (const auto& [name, col] : fields) {
+        if (name.empty()) throw InputError(path, number, col, "a column name in the header (empty name)");
+        if (table.column(name) >= 0) throw InputError(path, number, col, "distinct column names (duplicate '" + name + "')");
+        table.header.push_back(name);
+      }
+      continue;
+    }
+    if (fields.size() != table.header.size())
+      throw InputError(path, number, 1,
+                       std::to_string(table.header.size()) + " fields as in the header (got " + std::to_string(fields.size()) + ")");
+    std::vector<double> row;
+    for (const auto& [text, col] : fields) {
+      char* end = nullptr;
+      errno = 0;
+      const double v = std::strtod(text.c_str(), &end);
+      if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v))
+        throw InputError(path, number, col, "a finite number, not '" + text + "'");
+      row.push_back(v);
+    }
+    table.rows.push_back(std::move(row));
+    table.lines.push_back(number);
+  }
+  if (in.bad()) throw InputError(path, 0, 0, "cannot read file");
+  if (table.header.empty()) throw InputError(path, 1, 1, "a header row of column names (the file is empty)");
+  return table;
+}
+
+}  // namespace vcut::io
