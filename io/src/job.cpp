@@ -2,6 +2,7 @@
 
 #include <filesystem>
 
+#include "vcut/io/machine_file.h"
 #include "yaml_util.h"
 
 namespace vcut::io {
@@ -24,8 +25,14 @@ Job read_job(const std::string& path) {
   job.file = path;
   job.name = root["job"] ? yaml.text(root["job"], "job") : fs::path(path).stem().string();
   if (root["machine"]) job.machine = yaml.text(root["machine"], "machine");
-  if (job.machine != "3axis")
-    yaml.fail(root["machine"], "machine", "the bundled machine '3axis' (machine files come with the five-axis pose engine)");
+  // A bundled machine's name or a machine file relative to the job; read and validated here
+  // so that a bad machine file stops the job before anything is cut.
+  job.machine_file = resolve_machine(job.machine);
+  if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
+  if (!fs::exists(job.machine_file))
+    yaml.fail(root["machine"], "machine", "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
+                                          "head-head-ac, gantry-wyxzcat) or a machine file (not found: " + job.machine_file + ")");
+  job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
 
   job.tools_file = resolve(base, yaml.text(yaml.require(root, "tools", ""), "tools"));
   job.tools = read_tool_library(job.tools_file);

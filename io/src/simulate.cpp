@@ -120,7 +120,8 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   }
   for (auto& f : program.files) f = display_name(f, job.file);
   result.blocks = program.blocks.size();
-  result.warnings = program.warnings;
+  result.warnings = job.warnings;
+  result.warnings.insert(result.warnings.end(), program.warnings.begin(), program.warnings.end());
   stage_done("read");
 
   // 2. Tools: every block's tool must be in the library; cutting needs a tool.
@@ -165,7 +166,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
 
   // 4. Stock.
   removal::StockShape shape;
-  std::vector<std::string> hashed = {job.file, job.tools_file};
+  std::vector<std::string> hashed = {job.file, job.machine_file, job.tools_file};
   hashed.insert(hashed.end(), job.program_files.begin(), job.program_files.end());
   switch (job.stock.kind) {
     case StockSpec::Kind::Box: shape = job.stock.box; break;

@@ -42,12 +42,15 @@ CompensationResult compensate(const Machine& m, const ToolPose& target, double t
     out.residual_tip_um = e.tip_um.norm();
     out.residual_axis_urad = e.axis_tilt_urad;
   };
-  auto done = [&]() {
-    return out.residual_tip_um <= kCompensationTipToleranceMm * 1000.0 &&
-           (!full || out.residual_axis_urad <= kCompensationAxisToleranceRad * 1e6);
+  // Iterate to a hundredth of the bounds (Newton gets there in one more step, far above the
+  // ~1e-10 um rounding floor) so that the result is not just barely inside them.
+  auto within = [&](double fraction) {
+    return out.residual_tip_um <= fraction * kCompensationTipToleranceMm * 1000.0 &&
+           (!full || out.residual_axis_urad <= fraction * kCompensationAxisToleranceRad * 1e6);
   };
+  auto done = [&]() { return within(1.0); };
   measure(out.q);
-  for (; out.iterations < kMaxIterations && !done(); ++out.iterations) {
+  for (; out.iterations < kMaxIterations && !within(0.01); ++out.iterations) {
     const Eigen::Matrix<double, 6, 1> r = residual(m, out.q, nominal, tool_length_mm);
     Eigen::MatrixXd J(rows, n);
     for (int c = 0; c < n; ++c) {

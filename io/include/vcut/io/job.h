@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "vcut/io/tool_library.h"
+#include "vcut/kinematics/machine.h"
 #include "vcut/removal/stock.h"
 
 namespace vcut::io {
@@ -30,7 +31,10 @@ struct StockSpec {
 struct Job {
   std::string file;  // the job file itself
   std::string name;
-  std::string machine = "3axis";
+  std::string machine = "3axis";  // as written: a bundled machine's name or a path
+  std::string machine_file;        // the machine file it names
+  kinematics::MachineSpec machine_spec;
+  std::vector<std::string> warnings;  // from reading the job's files
   std::string tools_file;
   ToolLibrary tools;
   std::vector<std::string> program_files;
