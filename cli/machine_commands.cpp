@@ -180,7 +180,7 @@ int run_machine(const std::string& file) {
     const std::string e = error_words(m, i);
     if (!e.empty()) errors += "  axis " + std::string(1, m.axis(i).letter) + ":\n" + e;
   }
-  std::printf("geometric errors:%s\n", errors.empty() ? " none" : ("\n" + errors).c_str());
+  std::printf("geometric errors:%s", errors.empty() ? " none\n" : ("\n" + errors).c_str());  // error lines end in \n
   for (const auto& [node, models] : s.models)
     for (const ModelSpec& model : models)
       std::printf("model on %c: %s at %s\n", node, model.file.c_str(), vec(model.origin_mm).c_str());

@@ -4,10 +4,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <optional>
+
+#include "vcut/kinematics/forward_kinematics.h"
 
 namespace vcut::kinematics {
 namespace {
 constexpr double kTwoPi = 2.0 * M_PI;
+constexpr int kMaxMovesPerBlock = 1 << 20;  // tolerance search cap
 }
 
 int arc_chord_count(double radius_mm, double angle_rad, double tolerance_mm) {
@@ -42,34 +47,326 @@ Eigen::Vector3d arc_point(const Block& b, double s) {
   return b.center_mm + radius * dir + s * rise * n;
 }
 
-std::vector<PoseSample> densify(const Program& program, const DensifySettings& settings) {
-  std::vector<PoseSample> samples;
-  if (program.blocks.empty()) return samples;
-  samples.reserve(program.blocks.size() + 1);
-  samples.push_back({{program.blocks.front().start_mm, Eigen::Vector3d::UnitZ()}, -1});
-  for (std::size_t i = 0; i < program.blocks.size(); ++i) {
-    const Block& b = program.blocks[i];
-    const int id = static_cast<int>(i);
-    if (b.kind == MotionKind::Arc) {
-      const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(b.normal) * b.normal).norm();
-      const double angle = arc_angle_rad(b);
-      int q = arc_chord_count(radius, angle, settings.chord_tolerance_mm);
-      if (settings.step_mm > 0.0) {
-        const double rise = std::abs((b.end_mm - b.start_mm).dot(b.normal));
-        q = std::max(q, static_cast<int>(std::ceil(std::hypot(radius * angle, rise) / settings.step_mm)));
+Eigen::Vector3d great_circle(const Eigen::Vector3d& u0, const Eigen::Vector3d& u1, double s) {
+  const Eigen::Vector3d cross = u0.cross(u1);
+  const double sin_angle = cross.norm(), cos_angle = u0.dot(u1);
+  const double angle = std::atan2(sin_angle, cos_angle);
+  if (angle < 1e-15) return u0;
+  Eigen::Vector3d k;
+  if (sin_angle > 1e-12) {
+    k = cross / sin_angle;
+  } else {  // opposite: any perpendicular, the same one every time
+    const Eigen::Vector3d helper = std::abs(u0.x()) < 0.9 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
+    k = u0.cross(helper).normalized();
+  }
+  return Eigen::AngleAxisd(s * angle, k) * u0;
+}
+
+namespace {
+
+// The angle a cone block turns its tool axis about Block::cone_axis: from start to end in the
+// block's sense, in (0, 2 pi] (a full turn when they coincide).
+double cone_turn_rad(const Block& b) {
+  const Eigen::Vector3d k = b.cone_axis.normalized();
+  Eigen::Vector3d a = b.start_axis - b.start_axis.dot(k) * k, c = b.end_axis - b.end_axis.dot(k) * k;
+  double angle = std::atan2(k.dot(a.cross(c)), a.dot(c));  // counterclockwise about k, (-pi, pi]
+  if (b.orientation == OrientationMode::ConeClockwise) angle = -angle;
+  if (angle <= 1e-12) angle += kTwoPi;
+  return b.orientation == OrientationMode::ConeClockwise ? -angle : angle;
+}
+
+Eigen::Vector3d tip_at(const Block& b, double s) {
+  return b.kind == MotionKind::Arc ? arc_point(b, s) : Eigen::Vector3d(b.start_mm + s * (b.end_mm - b.start_mm));
+}
+
+double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+// A block's controller path: the pose (and, where the axes are what is interpolated, the
+// machine axes) at fraction s.
+class BlockPath {
+ public:
+  BlockPath(const Block& b, const DensifyMachine& dm, const AxisValues* start_axes, BlockReport& report)
+      : b_(b), machine_(dm.machine) {
+    const auto length = dm.tool_length_mm.find(b.tool);
+    tool_length_mm_ = length == dm.tool_length_mm.end() ? 0.0 : length->second;
+    if (!b.tool_pose) {
+      // Axis program: every axis linear. X Y Z are the linear axes zeroed so that at
+      // all-zero rotary axes the tip is at the programmed point (the operator's setup).
+      if (!machine_) {
+        report.note = "axis program without a machine: taken as tool poses";
+        return;
       }
-      for (int k = 1; k < q; ++k) samples.push_back({{arc_point(b, static_cast<double>(k) / q), Eigen::Vector3d::UnitZ()}, id});
-      samples.push_back({{b.end_mm, Eigen::Vector3d::UnitZ()}, id});
-    } else {
-      int q = 1;
-      if (settings.step_mm > 0.0 && b.kind == MotionKind::Linear)
-        q = std::max(1, static_cast<int>(std::ceil((b.end_mm - b.start_mm).norm() / settings.step_mm)));
-      for (int k = 1; k < q; ++k)
-        samples.push_back({{b.start_mm + (b.end_mm - b.start_mm) * (static_cast<double>(k) / q), Eigen::Vector3d::UnitZ()}, id});
-      samples.push_back({{b.end_mm, Eigen::Vector3d::UnitZ()}, id});
+      mode_ = Mode::AxesLinear;
+      q0_ = axis_values(b.start_mm, b.start_rotary, report);
+      q1_ = axis_values(b.end_mm, b.end_rotary, report);
+    } else if (b.orientation == OrientationMode::Axes && (b.start_axis - b.end_axis).norm() > 0.0) {
+      if (!machine_ || !start_axes || machine_->rotary_count() == 0) {
+        report.note = "ORIAXES without a five-axis machine: interpolated as ORIVECT";
+        return;
+      }
+      // ORIAXES under TCP: the rotary axes go linearly from the start's to the end's
+      // solution (the one nearest the start), the tip along its path.
+      const IkResult end = inverse(*machine_, {b.end_mm, b.end_axis}, tool_length_mm_, start_axes, dm.ik);
+      if (!end.ok()) {
+        report.unreachable = end.reason;
+        return;
+      }
+      mode_ = Mode::RotaryLinear;
+      q0_ = *start_axes;
+      q1_ = end.q();
     }
   }
-  return samples;
+
+  bool axes_known() const { return mode_ != Mode::Pose; }
+
+  AxisValues axes(double s) const {
+    AxisValues q = q0_ + s * (q1_ - q0_);
+    if (mode_ == Mode::AxesLinear && b_.kind == MotionKind::Arc) {
+      AxisValues lin = q;
+      for (int k = 0; k < machine_->rotary_count(); ++k) lin[machine_->rotary_axis(k)] = 0.0;
+      solve_linear_axes(*machine_, lin, arc_point(b_, s), tool_length_mm_);
+      for (int i = 0; i < machine_->axis_count(); ++i)
+        if (machine_->axis(i).kind == AxisKind::Linear) q[i] = lin[i];
+    }
+    if (mode_ == Mode::RotaryLinear) solve_linear_axes(*machine_, q, tip_at(b_, s), tool_length_mm_);
+    return q;
+  }
+
+  ToolPose pose(double s) const {
+    if (mode_ == Mode::AxesLinear) return forward(*machine_, axes(s), tool_length_mm_);
+    ToolPose p;
+    p.tip_mm = tip_at(b_, s);
+    if (mode_ == Mode::RotaryLinear) {
+      p.axis = forward(*machine_, q0_ + s * (q1_ - q0_), tool_length_mm_).axis;
+    } else if (b_.orientation == OrientationMode::ConeClockwise || b_.orientation == OrientationMode::ConeCounterClockwise) {
+      p.axis = Eigen::AngleAxisd(s * cone_turn_rad(b_), b_.cone_axis.normalized()) * b_.start_axis;
+    } else {
+      p.axis = great_circle(b_.start_axis, b_.end_axis, s);
+    }
+    return p;
+  }
+
+  double tool_length_mm() const { return tool_length_mm_; }
+
+  // Tip path length and orientation change for q = max(ceil(L / lambda), ceil(theta / phi)).
+  double length_mm() const {
+    if (mode_ == Mode::AxesLinear) {
+      double l = 0.0;
+      Eigen::Vector3d prev = pose(0.0).tip_mm;
+      for (int i = 1; i <= 64; ++i) {
+        const Eigen::Vector3d p = pose(i / 64.0).tip_mm;
+        l += (p - prev).norm();
+        prev = p;
+      }
+      return l;
+    }
+    if (b_.kind != MotionKind::Arc) return (b_.end_mm - b_.start_mm).norm();
+    const Eigen::Vector3d n = b_.normal.normalized();
+    const double radius = (b_.start_mm - b_.center_mm - (b_.start_mm - b_.center_mm).dot(n) * n).norm();
+    return std::hypot(radius * arc_angle_rad(b_), (b_.end_mm - b_.start_mm).dot(n));
+  }
+
+  double turn_rad() const {
+    if (mode_ != Mode::Pose) {
+      double t = 0.0;
+      for (int k = 0; k < machine_->rotary_count(); ++k)
+        t = std::max(t, std::abs(q1_[machine_->rotary_axis(k)] - q0_[machine_->rotary_axis(k)]));
+      return t;
+    }
+    if (b_.orientation == OrientationMode::ConeClockwise || b_.orientation == OrientationMode::ConeCounterClockwise) {
+      const Eigen::Vector3d k = b_.cone_axis.normalized();
+      return std::abs(cone_turn_rad(b_)) * (b_.start_axis - b_.start_axis.dot(k) * k).norm();  // arc on the sphere
+    }
+    return angle_between(b_.start_axis, b_.end_axis);
+  }
+
+  // Axis programs: the largest distance of the tip path from the chord, and where.
+  void nonlinear_error(BlockReport& report) const {
+    if (mode_ != Mode::AxesLinear) return;
+    const Eigen::Vector3d a = pose(0.0).tip_mm, c = pose(1.0).tip_mm;
+    const Eigen::Vector3d d = c - a;
+    auto distance = [&](double s) {
+      const Eigen::Vector3d p = pose(s).tip_mm;
+      const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      return (p - (a + t * d)).norm();
+    };
+    constexpr int kScan = 64;
+    int best = 0;
+    double best_d = 0.0;
+    for (int i = 0; i <= kScan; ++i) {
+      const double di = distance(static_cast<double>(i) / kScan);
+      if (di > best_d) best_d = di, best = i;
+    }
+    // Golden-section refinement around the best scan point.
+    double lo = std::max(0.0, (best - 1.0) / kScan), hi = std::min(1.0, (best + 1.0) / kScan);
+    const double g = (std::sqrt(5.0) - 1.0) / 2.0;
+    for (int it = 0; it < 60; ++it) {
+      const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
+      if (distance(m1) > distance(m2)) hi = m2;
+      else lo = m1;
+    }
+    const double s = 0.5 * (lo + hi);
+    if (distance(s) > best_d) best_d = distance(s);
+    else if (best_d > 0.0) lo = hi = static_cast<double>(best) / kScan;
+    report.nonlinear_error_mm = best_d;
+    report.nonlinear_at_mm = pose(0.5 * (lo + hi)).tip_mm;
+  }
+
+ private:
+  enum class Mode { Pose, AxesLinear, RotaryLinear };
+
+  AxisValues axis_values(const Eigen::Vector3d& xyz, const RotaryWords& words, BlockReport& report) const {
+    AxisValues q = machine_->zero();
+    if (!solve_linear_axes(*machine_, q, xyz, tool_length_mm_) && report.unreachable.empty())
+      report.unreachable = "the machine's linear axes cannot be solved";
+    for (int k = 0; k < 3; ++k) {
+      if (!words.given[static_cast<size_t>(k)]) continue;
+      const char letter = static_cast<char>('A' + k);
+      const int i = machine_->axis_index(letter);
+      if (i < 0) {
+        if (report.unreachable.empty()) report.unreachable = std::string("the machine has no axis ") + letter;
+        continue;
+      }
+      q[i] = words.angle_rad[static_cast<size_t>(k)];
+    }
+    return q;
+  }
+
+  const Block& b_;
+  const Machine* machine_ = nullptr;
+  double tool_length_mm_ = 0.0;
+  Mode mode_ = Mode::Pose;
+  AxisValues q0_, q1_;
+};
+
+// The largest distance, over the cutting part, between the controller's pose and the move
+// through the densified poses k and k + 1 (tip straight, axis on the great circle) at s.
+double move_deviation(const BlockPath& path, const ToolPose& a, const ToolPose& b, double s0, double s1,
+                      const DensifySettings& settings) {
+  double worst = 0.0;
+  for (double t : {0.25, 0.5, 0.75}) {
+    const ToolPose truth = path.pose(s0 + t * (s1 - s0));
+    const Eigen::Vector3d tip = a.tip_mm + t * (b.tip_mm - a.tip_mm);
+    const Eigen::Vector3d axis = great_circle(a.axis, b.axis, t);
+    const Eigen::Vector3d d = truth.tip_mm - tip, e = truth.axis - axis;
+    // Points on the axis deviate by d + h e, largest at h = 0 or h = cutter length; points
+    // off the axis add at most radius x the angle between the axes.
+    const double along = std::max(d.norm(), (d + settings.cutter_length_mm * e).norm());
+    worst = std::max(worst, along + settings.cutter_radius_mm * angle_between(truth.axis, axis));
+  }
+  return worst;
+}
+
+double deviation_for(const BlockPath& path, int q, const DensifySettings& settings) {
+  double worst = 0.0;
+  ToolPose prev = path.pose(0.0);
+  for (int k = 1; k <= q; ++k) {
+    const ToolPose next = path.pose(static_cast<double>(k) / q);
+    worst = std::max(worst, move_deviation(path, prev, next, static_cast<double>(k - 1) / q, static_cast<double>(k) / q, settings));
+    prev = next;
+  }
+  return worst;
+}
+
+int moves_for(const Block& b, const BlockPath& path, const DensifySettings& settings) {
+  if (settings.tolerance_mm > 0.0) {
+    if (deviation_for(path, 1, settings) <= settings.tolerance_mm) return 1;
+    int hi = 2;
+    while (hi < kMaxMovesPerBlock && deviation_for(path, hi, settings) > settings.tolerance_mm) hi *= 2;
+    int lo = hi / 2;  // fails; hi meets the tolerance (or is the cap)
+    while (hi - lo > 1) {
+      const int mid = lo + (hi - lo) / 2;
+      (deviation_for(path, mid, settings) <= settings.tolerance_mm ? hi : lo) = mid;
+    }
+    return hi;
+  }
+  const double turn = path.turn_rad();
+  if (b.kind == MotionKind::Rapid && turn == 0.0 && !path.axes_known()) return 1;
+  int q = 1;
+  if (b.kind == MotionKind::Arc) {
+    const Eigen::Vector3d n = b.normal.normalized();
+    const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
+    q = arc_chord_count(radius, arc_angle_rad(b), settings.chord_tolerance_mm);
+  }
+  if (settings.step_mm > 0.0 && (b.kind != MotionKind::Rapid || path.axes_known()))
+    q = std::max(q, static_cast<int>(std::ceil(path.length_mm() / settings.step_mm - 1e-12)));
+  if (settings.angle_step_rad > 0.0) q = std::max(q, static_cast<int>(std::ceil(turn / settings.angle_step_rad - 1e-12)));
+  return std::clamp(q, 1, kMaxMovesPerBlock);
+}
+
+}  // namespace
+
+ToolPose block_pose(const Block& block, double s) {
+  BlockReport unused;
+  return BlockPath(block, DensifyMachine{}, nullptr, unused).pose(s);
+}
+
+Densified densify(const Program& program, const DensifySettings& settings, const DensifyMachine& dm) {
+  Densified out;
+  if (program.blocks.empty()) return out;
+  out.samples.reserve(program.blocks.size() + 1);
+  out.blocks.resize(program.blocks.size());
+  const Machine* machine = dm.machine;
+
+  // The program's start.
+  {
+    BlockReport start_report;
+    const Block& first = program.blocks.front();
+    BlockPath path(first, dm, nullptr, start_report);
+    PoseSample s;
+    s.pose = path.pose(0.0);
+    if (machine) {
+      if (path.axes_known()) {
+        s.axes = path.axes(0.0);
+      } else {
+        const IkResult r = inverse(*machine, s.pose, path.tool_length_mm(), nullptr, dm.ik);
+        s.axes = r.ok() ? r.q() : machine->zero();
+        s.singular = r.status == IkStatus::Singular;
+        if (!r.ok()) out.blocks.front().unreachable = r.reason;
+      }
+    }
+    out.samples.push_back(s);
+  }
+
+  for (std::size_t i = 0; i < program.blocks.size(); ++i) {
+    const Block& b = program.blocks[i];
+    BlockReport& report = out.blocks[i];
+    const AxisValues* start_axes = machine ? &out.samples.back().axes : nullptr;
+    const BlockPath path(b, dm, start_axes, report);
+    path.nonlinear_error(report);
+    report.q = moves_for(b, path, settings);
+    for (int k = 1; k <= report.q; ++k) {
+      const double s = static_cast<double>(k) / report.q;
+      PoseSample sample;
+      sample.block = static_cast<int>(i);
+      // The end of the block is exactly the programmed pose.
+      sample.pose = (k == report.q && b.tool_pose) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
+      if (machine) {
+        if (path.axes_known()) {
+          sample.axes = path.axes(s);
+        } else {
+          const AxisValues& previous = out.samples.back().axes;
+          const IkResult r = inverse(*machine, sample.pose, path.tool_length_mm(), &previous, dm.ik);
+          if (r.ok()) {
+            sample.axes = r.q();
+            sample.singular = r.status == IkStatus::Singular;
+            report.singular = report.singular || sample.singular;
+          } else {
+            sample.axes = previous;
+            if (report.unreachable.empty()) report.unreachable = r.reason;
+          }
+        }
+      }
+      out.samples.push_back(std::move(sample));
+    }
+  }
+  return out;
+}
+
+std::vector<PoseSample> densify(const Program& program, const DensifySettings& settings) {
+  return densify(program, settings, DensifyMachine{}).samples;
 }
 
 }  // namespace vcut::kinematics

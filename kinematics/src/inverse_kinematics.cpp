@@ -50,7 +50,9 @@ std::string limit_text(const AxisSpec& a) {
 // The linear axis values that put the tip at `tip_mm` once the rotary values in q are fixed.
 // The tip is affine in them: tip = b + J s, with column i = +-R_W^T R_prefix d_i (+ on the
 // tool side, - on the workpiece side, R_prefix the rotations between the frame and the axis).
-bool solve_linear(const Machine& m, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm) {
+}  // namespace
+
+bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm) {
   using detail::Rigid;
   std::array<int, 3> index{};
   Eigen::Matrix3d J;
@@ -89,6 +91,8 @@ bool solve_linear(const Machine& m, AxisValues& q, const Eigen::Vector3d& tip_mm
   for (int c = 0; c < 3; ++c) q[index[static_cast<size_t>(c)]] = s[c];
   return true;
 }
+
+namespace {
 
 // The values of a rotary axis equal to `angle` modulo 2 pi that the axis can take: every
 // winding within its limits, or for a continuous axis the one nearest the previous value.
@@ -217,7 +221,7 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
     // The linear axes depend on the rotations only, the same for every winding: solve once.
     if (nr > 0) base[m.rotary_axis(0)] = w0.front();
     if (nr > 1) base[m.rotary_axis(1)] = w1.front();
-    if (!solve_linear(m, base, pose.tip_mm, tool_length_mm) && violation.empty())
+    if (!solve_linear_axes(m, base, pose.tip_mm, tool_length_mm) && violation.empty())
       violation = "linear axes cannot reach the tip at these angles (singular linear solve)";
     for (int i = 0; i < m.axis_count() && violation.empty(); ++i) {
       const AxisSpec& a = m.axis(i);

@@ -2,9 +2,7 @@
 // file:line:column, the report naming the NC line of a gouge, and no half-written output.
 // Geometry expectations are the slot's closed forms (see tests/removal).
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -13,29 +11,15 @@
 #include <sstream>
 
 #include "../removal/test_meshes.h"
+#include "run_vcut.h"
 
 namespace {
 namespace fs = std::filesystem;
 
-struct CommandResult {
-  int exit_code;
-  std::string output;  // stdout and stderr
-};
-
-CommandResult run_vcut(const std::string& args) {
-  const std::string command = std::string(VCUT_BINARY) + " " + args + " 2>&1";
-  CommandResult r{-1, ""};
-  FILE* pipe = ::popen(command.c_str(), "r");
-  char buffer[4096];
-  while (pipe && std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
-  const int status = pipe ? ::pclose(pipe) : -1;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-void write(const fs::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+using vcut::cli::test::CommandResult;
+using vcut::cli::test::expect_error;
+using vcut::cli::test::run_vcut;
+using vcut::cli::test::write;
 
 void write_ascii_stl(const fs::path& path, const vcut::removal::TriangleMesh& m) {
   std::ofstream out(path);
@@ -187,14 +171,8 @@ TEST_F(Simulate, FlagsOverrideJobKeys) {
   EXPECT_EQ(j["settings"]["threads"], 1);
 }
 
-// Each bad input: exit code 2, one line naming the place, nothing left in the output folder.
-void expect_error(const CommandResult& r, const std::string& fragment) {
-  EXPECT_EQ(r.exit_code, 2) << r.output;
-  EXPECT_NE(r.output.find("vcut: error: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << r.output;
-  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
-}
-
+// Each bad input: exit code 2, one line naming the place (expect_error), nothing left in the
+// output folder.
 TEST_F(Simulate, UnknownGCode) {
   program = "G21\nT1 M6\nG1 X1 F100\nG5 X3\n";
   expect_error(simulate(), "slot.ngc:4:1");

@@ -1,13 +1,20 @@
-// Densification: the programmed blocks become a sequence of tool poses in the workpiece
-// frame (tip in mm, unit axis) whose straight segments follow the controller's path:
-// lines as they are (split by a step length if asked), arcs and helices by chords within
-// a tolerance. This version handles three-axis programs (tool axis +Z).
+// Densification (ARCHITECTURE §5, seed 000 §3): the programmed blocks become a sequence of
+// tool poses in the workpiece frame (tip in mm, unit axis) whose moves follow the
+// controller's interpolation. Per block q = max(1, ceil(L / lambda), ceil(theta / phi)) (and
+// arcs by a chord tolerance), or in tolerance mode the q that keeps every point of the
+// cutter within epsilon of the controller's path. Orientation as the 840D does it: ORIVECT
+// (great circle, Rodrigues rotation), ORIAXES (rotary axes linear), ORICONE (about a cone
+// axis); axis programs interpolate the axes linearly and the tip follows from the machine.
 #pragma once
 
 #include <Eigen/Core>
 
+#include <map>
+#include <string>
 #include <vector>
 
+#include "vcut/kinematics/inverse_kinematics.h"
+#include "vcut/kinematics/machine.h"
 #include "vcut/kinematics/program.h"
 #include "vcut/kinematics/tool_pose.h"
 
@@ -18,11 +25,43 @@ namespace vcut::kinematics {
 struct PoseSample {
   ToolPose pose;
   int block = -1;
+  AxisValues axes;        // machine axis values (mm, rad) when densified with a machine
+  bool singular = false;  // the inverse kinematics kept a free angle here
 };
 
 struct DensifySettings {
   double chord_tolerance_mm = 0.005;  // max distance of an arc chord from its arc
   double step_mm = 0.0;               // lambda: max tip step per sample; 0 = no limit
+  double angle_step_rad = 0.0;        // phi: max orientation step per sample; 0 = no limit
+  // Tolerance mode (> 0 replaces lambda, phi and the chord tolerance): every point of the
+  // cutting part (up to cutter_length_mm above the tip, cutter_radius_mm off the axis) stays
+  // within this distance of where the controller's interpolation puts it.
+  double tolerance_mm = 0.0;
+  double cutter_length_mm = 0.0;
+  double cutter_radius_mm = 0.0;
+};
+
+// The machine side of densification: needed for axis programs, ORIAXES and axis values.
+struct DensifyMachine {
+  const Machine* machine = nullptr;
+  std::map<int, double> tool_length_mm;  // by T number (spindle nose to tip); missing = 0
+  IkSettings ik;
+};
+
+struct BlockReport {
+  int q = 1;  // moves this block was split into
+  // Axis programs: the largest distance of the tip's path (forward kinematics of linearly
+  // interpolated axes) from the straight line between the block's end points, and where.
+  double nonlinear_error_mm = 0.0;
+  Eigen::Vector3d nonlinear_at_mm = Eigen::Vector3d::Zero();
+  bool singular = false;    // a pose of this block is singular (free angle kept)
+  std::string unreachable;  // why a pose of this block cannot be reached ("" = all reached)
+  std::string note;         // e.g. ORIAXES without a machine, done as ORIVECT
+};
+
+struct Densified {
+  std::vector<PoseSample> samples;
+  std::vector<BlockReport> blocks;  // one per program block
 };
 
 // Number of chords for an arc of radius r (mm) turning angle_rad with chord error <= tol:
@@ -35,6 +74,18 @@ double arc_angle_rad(const Block& block);
 // The point of an arc block at fraction s in [0, 1] of its angle (helix included).
 Eigen::Vector3d arc_point(const Block& block, double s);
 
+// ORIVECT: the unit vector at fraction s of the great circle from u0 to u1 (Rodrigues
+// rotation about u0 x u1, seed 000 eqs. 2-4). Opposite vectors turn about a fixed
+// perpendicular.
+Eigen::Vector3d great_circle(const Eigen::Vector3d& u0, const Eigen::Vector3d& u1, double s);
+
+// The controller's pose of a block at fraction s in [0, 1] (tool-pose blocks; for axis
+// blocks and ORIAXES see densify). Exposed for tests and the tolerance search.
+ToolPose block_pose(const Block& block, double s);
+
+Densified densify(const Program& program, const DensifySettings& settings, const DensifyMachine& machine);
+
+// Three-axis convenience: no machine, poses only.
 std::vector<PoseSample> densify(const Program& program, const DensifySettings& settings);
 
 }  // namespace vcut::kinematics

@@ -4,6 +4,8 @@
 // Ideal geometry; `compensate` (compensation.h) handles a machine with errors.
 #pragma once
 
+#include <Eigen/Core>
+
 #include <string>
 #include <vector>
 
@@ -50,5 +52,9 @@ struct IkResult {
 // preferred sign decides, then the angles nearest zero.
 IkResult inverse(const Machine& machine, const ToolPose& pose, double tool_length_mm,
                  const AxisValues* previous = nullptr, const IkSettings& settings = {});
+
+// The linear axis values (written into q) that put the tip at `tip_mm` with q's rotary values
+// held, ideal geometry; false when the linear axes cannot (a singular 3x3 system).
+bool solve_linear_axes(const Machine& machine, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm);
 
 }  // namespace vcut::kinematics

@@ -1,0 +1,45 @@
+// Runs the real `vcut` binary as a user does (VCUT_BINARY, set by tests/CMakeLists.txt) and
+// checks its one-line errors; shared by the command-line tests.
+#pragma once
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace vcut::cli::test {
+
+struct CommandResult {
+  int exit_code;
+  std::string output;  // stdout and stderr
+};
+
+inline CommandResult run_vcut(const std::string& args) {
+  const std::string command = std::string(VCUT_BINARY) + " " + args + " 2>&1";
+  CommandResult r{-1, ""};
+  FILE* pipe = ::popen(command.c_str(), "r");
+  char buffer[4096];
+  while (pipe && std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
+  const int status = pipe ? ::pclose(pipe) : -1;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+inline void write(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream(path) << text;
+}
+
+// A bad input: exit code 2 and one line "vcut: error: ..." containing `fragment`.
+inline void expect_error(const CommandResult& r, const std::string& fragment) {
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("vcut: error: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(fragment), std::string::npos)
+      << "expected '" << fragment << "' in: " << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+}
+
+}  // namespace vcut::cli::test
