@@ -1,0 +1,46 @@
+// Time along the densified poses (ARCHITECTURE §5, seed 000 eqs. 5-7, seed 001): a
+// jerk-limited S-curve per block with look-ahead junction speeds, bounded by the programmed
+// feed (G94 mm/min, G93 inverse time), by each machine axis's velocity, acceleration and
+// jerk through the kinematics at every densified pose, by exact stop (G61/G9) or blending
+// (G64 P); rapids at axis speed. Every pose gets a time stamp. Units: mm, s, mm/s.
+#pragma once
+
+#include <vector>
+
+#include "vcut/kinematics/densify.h"
+#include "vcut/kinematics/machine.h"
+#include "vcut/kinematics/program.h"
+
+namespace vcut::kinematics {
+
+struct FeedSettings {
+  // Path limits used where no machine is given, or in addition to the machine's axes.
+  double path_acceleration_mm_per_s2 = 2000.0;
+  double path_jerk_mm_per_s3 = 50000.0;
+  double rapid_mm_per_min = 10000.0;  // rapid path speed when no machine is given
+  int lookahead_blocks = 1000;        // junction speeds see at least this many blocks ahead
+  double start_speed_mm_per_s = 0.0;  // program start and end (seed 000: 0)
+  double end_speed_mm_per_s = 0.0;
+  // Corner rule where a block gives no G64 P: the blend arc may pass this far (mm) from the
+  // programmed corner. 0 stops at every corner.
+  double default_blend_tolerance_mm = 0.01;
+};
+
+struct FeedPlan {
+  std::vector<double> t_s;                // per sample of the densified list, ascending
+  std::vector<double> speed_mm_per_s;     // path speed of the tip at each sample
+  std::vector<double> block_time_s;       // per program block
+  double cycle_time_s = 0.0;
+  // Where a machine axis limit (not the programmed feed) set the speed: sample indices.
+  std::vector<int> axis_limited_samples;
+};
+
+// `samples` from densify(); `axes` (may be null) the machine axis values of each sample (same
+// length) and `machine` (may be null) their limits: then every segment's path speed is also
+// bounded so that each axis stays within its velocity, acceleration and jerk. Blocks whose
+// tip stands still while the tool turns are timed on the rotary motion (LinuxCNC: F in
+// deg/min; the path limits then read deg/s^2 and deg/s^3); their tip speed is 0.
+FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples,
+                   const std::vector<AxisValues>* axes, const Machine* machine, const FeedSettings& settings);
+
+}  // namespace vcut::kinematics
