@@ -1,6 +1,7 @@
 // A move: the rigid motion of the cutter between two consecutive tool poses in the
-// workpiece frame (mm). This version moves the cutter by pure translation (tool axis
-// constant); the block index leads back to the NC line.
+// workpiece frame (mm). The engines cut translations (tool axis constant) exactly; a
+// five-axis move (the axis turning on a great circle) becomes a few such translations with
+// a stated error bound (five_axis_pieces). The block index leads back to the NC line.
 #pragma once
 
 #include <Eigen/Core>
@@ -24,5 +25,21 @@ struct MoveList {
   std::vector<Cutter> cutters;
   std::vector<Move> moves;
 };
+
+// A five-axis move: the tip goes straight from `move.start_mm` to `move.end_mm` while the tool
+// axis turns on the great circle from axis0 to axis1 (ARCHITECTURE §8). It is cut as n
+// pieces, piece k a translation along its share of the tip path with the axis at the
+// piece's middle instant. At every instant each point of the cutting part then lies within
+// R_max * angle / (2 n) of where the rigid motion puts it (R_max: the cutting part's farthest
+// point from the tip, sqrt(R^2 + H^2)), so every cutter instance's signed distance, and hence
+// the sweep's (their minimum), is off by at most that much. Sampling instances instead
+// would be first order in the step at a sharp rim; here only the rotation is discretised.
+double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces);
+// The fewest pieces that keep the error within bound_mm (at least 1).
+int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
+                     double bound_mm);
+// Appends the n pieces of `move` (its `axis` is ignored) to `out`.
+void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
+                           const Eigen::Vector3d& axis1, int pieces);
 
 }  // namespace vcut::removal
