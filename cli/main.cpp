@@ -6,9 +6,12 @@
 #include <iostream>
 
 #include "machine_commands.h"
+#include "program_command.h"
 #include "progress.h"
+#include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
+#include "vcut/io/pose_pipeline.h"
 #include "vcut/io/simulate.h"
 
 namespace {
@@ -44,6 +47,52 @@ int run_simulate(const std::string& job_file, const vcut::io::SimulateOptions& b
   return 0;
 }
 
+int run_poses(const std::string& job_file, std::string out, bool quiet) {
+  const vcut::io::Job job = vcut::io::read_job(job_file);
+  if (out.empty()) {
+    vcut::io::ensure_writable_folder(job.out_dir);
+    out = job.out_dir + "/poses.csv";
+  }
+  const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
+  vcut::io::write_poses_csv(out, job, run);
+  for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  for (const auto& w : run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  if (quiet) return 0;
+  std::printf("job %s on %s: %zu blocks, %zu poses (q %d..%d, mean %.2f), cycle time %.3f s\n", job.name.c_str(),
+              job.machine.c_str(), run.program.blocks.size(), run.densified.samples.size(), run.q_min, run.q_max,
+              run.q_mean, run.feed.cycle_time_s);
+  if (run.max_nonlinear_error_mm > 0.0)
+    std::printf("max non-linear tip error %.4f mm at %s\n", run.max_nonlinear_error_mm, run.max_nonlinear_line.c_str());
+  if (!run.actual.empty())
+    std::printf("contour error: max %.2f um at %s, RMS %.2f um\n", run.max_contour_error_um, run.max_contour_line.c_str(),
+                run.rms_contour_error_um);
+  size_t shown = 0;
+  for (const auto& e : run.events)
+    if (shown++ < 10) std::printf("%s at %s: %s\n", e.kind.c_str(), e.line.c_str(), e.detail.c_str());
+  if (run.events.size() > 10) std::printf("... %zu events in all\n", run.events.size());
+  std::printf("poses: %s\n", out.c_str());
+  return 0;
+}
+
+int run_compensate(const std::string& job_file, std::string out, bool quiet) {
+  const vcut::io::Job job = vcut::io::read_job(job_file);
+  if (out.empty()) {
+    vcut::io::ensure_writable_folder(job.out_dir);
+    out = job.out_dir + "/compensated.ngc";
+  }
+  const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
+  const vcut::io::CompensationReport r = vcut::io::write_compensated_program(out, job, run);
+  if (quiet) return r.not_converged == 0 ? 0 : 1;
+  std::printf("compensated %zu poses on %s: uncompensated tip error up to %.3f um (%s)\n", r.poses, job.machine.c_str(),
+              r.max_error_before_um, r.max_error_line.c_str());
+  std::printf("residual after compensation: tip %.2e um, axis %.2e urad (bounds 0.01 um, 0.01 urad)\n", r.max_residual_tip_um,
+              r.max_residual_axis_urad);
+  if (r.not_converged > 0)
+    std::printf("%zu poses did not converge; first: %s\n", r.not_converged, r.first_failure.c_str());
+  std::printf("program: %s\n", out.c_str());
+  return r.not_converged == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -63,8 +112,22 @@ int main(int argc, char** argv) {
   simulate->add_option("--max-memory", max_memory, "Refuse a stock needing more than this many MB (default 75% of RAM)")
       ->check(CLI::PositiveNumber);
   simulate->add_flag("--quiet,-q", quiet, "Print nothing but errors and warnings");
+  auto* poses = app.add_subcommand("poses", "Densified, time-stamped tool poses of the job's program (CSV)");
+  std::string poses_job, poses_out;
+  bool poses_quiet = false;
+  poses->add_option("job", poses_job, "Job file (YAML)")->required();
+  poses->add_option("--out", poses_out, "Output CSV (default: the job's output folder/poses.csv)");
+  poses->add_flag("--quiet,-q", poses_quiet, "Print nothing but errors and warnings");
+  auto* compensate = app.add_subcommand("compensate", "Error-compensated axis program of the job (machine errors)");
+  std::string compensate_job, compensate_out;
+  bool compensate_quiet = false;
+  compensate->add_option("job", compensate_job, "Job file (YAML)")->required();
+  compensate->add_option("--out", compensate_out, "Output G-code (default: the job's output folder/compensated.ngc)");
+  compensate->add_flag("--quiet,-q", compensate_quiet, "Print nothing but errors and warnings");
   vcut::cli::MachineCommands machine_commands;
   vcut::cli::add_machine_commands(app, machine_commands);
+  vcut::cli::ProgramCommand program_command;
+  vcut::cli::add_program_command(app, program_command);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -78,7 +141,10 @@ int main(int argc, char** argv) {
       options.max_memory_mb = max_memory;
       return run_simulate(job_file, options, quiet);
     }
+    if (*poses) return run_poses(poses_job, poses_out, poses_quiet);
+    if (*compensate) return run_compensate(compensate_job, compensate_out, compensate_quiet);
     if (vcut::cli::run_machine_commands(machine_commands)) return 0;
+    if (vcut::cli::run_program_command(program_command)) return 0;
   } catch (const vcut::InputError& e) {
     std::fprintf(stderr, "vcut: error: %s\n", e.what());
     return 2;

@@ -29,7 +29,8 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
     if (b.kind == MotionKind::Rapid) require(b.feed_mm_per_min == 0.0);
     if (b.kind != MotionKind::Rapid) require(b.feed_mm_per_min > 0.0);
     if (b.kind != MotionKind::Arc) {
-      require(b.start_mm != b.end_mm);  // zero-length moves are dropped
+      // Blocks that neither move nor turn are dropped.
+      require(b.start_mm != b.end_mm || b.start_rotary.angle_rad != b.end_rotary.angle_rad);
       continue;
     }
     require(b.turns >= 1);

@@ -1,6 +1,5 @@
 #include "vcut/io/csv.h"
 
-#include <cerrno>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -47,6 +46,14 @@ CsvTable read_csv(const std::string& path) {
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
+    // A UTF-8 byte order mark (spreadsheets write one) is not part of the first name.
+    if (number == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);
+    // Lines end with \n or \r\n; a carriage return elsewhere would join lines into one.
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (const size_t cr = line.find('\r'); cr != std::string::npos)
+      throw InputError(path, number, static_cast<int>(cr) + 1,
+                       "lines that end with \\n or \\r\\n (a carriage return inside the line: "
+                       "old Mac line ends?)");
     const std::string t = trim(line);
     if (t.empty() || t[0] == '#') continue;
     const auto fields = split(line);
@@ -64,9 +71,10 @@ CsvTable read_csv(const std::string& path) {
     std::vector<double> row;
     for (const auto& [text, col] : fields) {
       char* end = nullptr;
-      errno = 0;
       const double v = std::strtod(text.c_str(), &end);
-      if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v))
+      // Overflow gives +-inf; underflow (1e-400, ERANGE) rounds to zero or a subnormal, a
+      // finite number as written.
+      if (text.empty() || end != text.c_str() + text.size() || !std::isfinite(v))
         throw InputError(path, number, col, "a finite number, not '" + text + "'");
       row.push_back(v);
     }

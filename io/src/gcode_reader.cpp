@@ -573,7 +573,22 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
 // to date. Blocks made while an axis is unknown hold that axis still; when the axis is first
 // programmed they take its value, so that the first move only moves the programmed axes.
 void Reader::append(Block block, const std::array<bool, 3>& programmed) {
-  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm;
+  // Rotary words (degrees, G90/G91 like the linear axes; G20 does not apply).
+  kinematics::RotaryWords rotary = state_.rotary;
+  for (int r = 0; r < 3; ++r) {
+    const Word& w = word(static_cast<char>('A' + r));
+    if (!w.present) continue;
+    const double v = w.value * M_PI / 180.0;
+    rotary.angle_rad[static_cast<size_t>(r)] = state_.incremental ? rotary.angle_rad[static_cast<size_t>(r)] + v : v;
+    rotary.given[static_cast<size_t>(r)] = true;
+    state_.rotary_program = true;
+  }
+  block.start_rotary = state_.rotary;
+  block.end_rotary = rotary;
+  block.tool_pose = !state_.rotary_program;
+  const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
+  state_.rotary = rotary;
+  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns;
   if (moves) {
     block.feed_mode = kinematics::FeedMode::UnitsPerMinute;
     block.tool = state_.tool;
@@ -845,13 +860,17 @@ bool Reader::execute() {
   }
 
   // --- Letters this reader does not move.
-  for (char letter : {'A', 'B', 'C', 'U', 'V', 'W'}) {
+  for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
     if (w.present) {
       unsupported(w.column, std::string(1, letter),
-                  std::string(1, letter) +
-                      " words (rotary and extra axes) are not supported: this reader moves X Y Z");
+                  std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
     }
+  }
+  for (char letter : {'A', 'B', 'C'}) {
+    const Word& w = word(letter);
+    if (w.present && !(std::abs(w.value) <= kMaxMagnitude))
+      fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6 deg)");
   }
 
   // --- Modes, in rs274ngc's order of execution within a line, except that G20/G21 apply
@@ -957,11 +976,12 @@ bool Reader::execute() {
   }
 
   // --- Motion.
-  const bool has_axis = word('X').present || word('Y').present || word('Z').present;
+  const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
+                        word('B').present || word('C').present;
   const Code* motion_code = by_group[kMotion];
   const bool explicit_motion = motion_code != nullptr && motion_code->number <= 30;
   int axis_column = INT_MAX;  // the first axis word
-  for (char letter : {'X', 'Y', 'Z'}) {
+  for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
     if (word(letter).present) axis_column = std::min(axis_column, word(letter).column);
   }
   // Motion errors point at the G0..G3 word, or at the first axis word of a modal motion.

@@ -15,11 +15,18 @@ std::string resolve(const fs::path& base, const std::string& relative) {
 }
 }  // namespace
 
+std::string display_name(const std::string& path, const std::string& job_file) {
+  const fs::path base = fs::absolute(job_file).parent_path();
+  const fs::path rel = fs::path(path).lexically_relative(base);
+  return rel.empty() || *rel.begin() == ".." ? path : rel.string();
+}
+
 Job read_job(const std::string& path) {
   const YamlReader yaml(path);
   const YAML::Node root = yaml.load();
   if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
-  yaml.only_keys(root, "", {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify"});
+  yaml.only_keys(root, "", {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify",
+                            "feed", "servo", "errors"});
   const fs::path base = fs::absolute(fs::path(path)).parent_path();
   Job job;
   job.file = path;
@@ -49,8 +56,9 @@ Job read_job(const std::string& path) {
   }
   if (program["dialect"]) {
     job.dialect = yaml.text(program["dialect"], "program.dialect");
-    if (job.dialect != "auto" && job.dialect != "gcode" && job.dialect != "linuxcnc" && job.dialect != "fanuc")
-      yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc or fanuc");
+    if (job.dialect != "auto" && job.dialect != "gcode" && job.dialect != "linuxcnc" && job.dialect != "fanuc" &&
+        job.dialect != "apt")
+      yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc, fanuc or apt");
   }
   if (program["unsupported"]) {
     const std::string mode = yaml.text(program["unsupported"], "program.unsupported");
@@ -134,8 +142,42 @@ Job read_job(const std::string& path) {
       job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
   }
   if (const YAML::Node densify = root["densify"]) {
-    yaml.only_keys(densify, "densify", {"chord_tolerance"});
+    yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
     if (densify["chord_tolerance"]) job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
+    if (densify["step"]) job.step_mm = yaml.positive(densify["step"], "densify.step");
+    if (densify["angle"]) job.angle_step_deg = yaml.positive(densify["angle"], "densify.angle");
+    if (densify["tolerance"]) job.densify_tolerance_mm = yaml.positive(densify["tolerance"], "densify.tolerance");
+  }
+  if (const YAML::Node feed = root["feed"]) {
+    yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
+    if (feed["acceleration"]) job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
+    if (feed["jerk"]) job.feed.path_jerk_mm_per_s3 = yaml.positive(feed["jerk"], "feed.jerk");
+    if (feed["rapid"]) job.feed.rapid_mm_per_min = yaml.positive(feed["rapid"], "feed.rapid");
+    if (feed["lookahead"]) {
+      job.feed.lookahead_blocks = yaml.integer(feed["lookahead"], "feed.lookahead");
+      if (job.feed.lookahead_blocks < 1) yaml.fail(feed["lookahead"], "feed.lookahead", "a positive number of blocks");
+    }
+  }
+  if (const YAML::Node servo = root["servo"]) {
+    // Present: every machine axis gets this loop (seed 004's parameters by default).
+    yaml.only_keys(servo, "servo", {"kv", "omega_n", "zeta", "period", "feed_forward"});
+    kinematics::ServoSettings s;
+    kinematics::ServoAxis axis;
+    if (servo["kv"]) axis.kv_per_s = yaml.positive(servo["kv"], "servo.kv");
+    if (servo["omega_n"]) axis.omega_n_per_s = yaml.non_negative(servo["omega_n"], "servo.omega_n");
+    if (servo["zeta"]) axis.zeta = yaml.positive(servo["zeta"], "servo.zeta");
+    if (servo["period"]) s.period_s = yaml.positive(servo["period"], "servo.period");
+    if (servo["feed_forward"]) {
+      axis.feed_forward = yaml.non_negative(servo["feed_forward"], "servo.feed_forward");
+      if (axis.feed_forward > 1.0) yaml.fail(servo["feed_forward"], "servo.feed_forward", "a fraction from 0 to 1");
+    }
+    s.axes = {axis};
+    job.servo = s;
+  }
+  if (const YAML::Node errors = root["errors"]) {
+    const std::string e = yaml.text(errors, "errors");
+    if (e != "machine" && e != "none") yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
+    job.apply_errors = e == "machine";
   }
   return job;
 }

@@ -28,9 +28,18 @@ std::string join(const std::string& where, const std::string& key) {
   return where.empty() ? key : where + "." + key;
 }
 
+// A key that is a list, a map or null ("? [a, b]: 1", "~: 1") is never one of ours (and
+// yaml-cpp cannot give its text).
+void scalar_keys(const YamlReader& yaml, const YAML::Node& map, const std::string& where) {
+  for (const auto& kv : map)
+    if (!kv.first.IsScalar())
+      yaml.fail(kv.first, where.empty() ? "machine" : where, "a plain key (not a list, map or null)");
+}
+
 // yaml-cpp keeps both entries of a repeated key and answers map[key] with the first one, so
 // a repeated key would silently lose a value.
 void unique_keys(const YamlReader& yaml, const YAML::Node& map, const std::string& where) {
+  scalar_keys(yaml, map, where);
   std::set<std::string> seen;
   for (const auto& kv : map)
     if (!seen.insert(kv.first.Scalar()).second)
@@ -39,6 +48,7 @@ void unique_keys(const YamlReader& yaml, const YAML::Node& map, const std::strin
 
 void check_keys(const YamlReader& yaml, const YAML::Node& map, const std::string& where,
                 std::initializer_list<const char*> allowed) {
+  if (map.IsMap()) scalar_keys(yaml, map, where);
   yaml.only_keys(map, where, allowed);
   unique_keys(yaml, map, where);
 }
@@ -211,7 +221,12 @@ InputError problem_at(const std::string& file, const YAML::Node& root,
 }
 
 MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::path& base) {
-  if (!root.IsMap()) yaml.fail(root, "machine", "a map of machine settings");
+  if (!root.IsMap()) {
+    // An empty file (or one of comments only) has no node to point at: its first line.
+    if (root.Mark().is_null())
+      throw InputError(yaml.file(), 1, 1, "'machine': expected a map of machine settings (the file is empty)");
+    yaml.fail(root, "machine", "a map of machine settings");
+  }
   check_keys(yaml, root, "",
              {"machine", "topology", "axes", "spindle", "workpiece", "singularity_deg", "models",
               "errors"});

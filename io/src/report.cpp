@@ -110,6 +110,27 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
     e["vdb_mesh_s"] = std::round(r.engines.vdb_mesh_s * 1e3) / 1e3;
     j["engine_check"] = e;
   }
+  {
+    // The pose engine (issue #5): time, densification, machine reach, servo and errors.
+    const PoseRun& p = r.pose_run;
+    ordered_json e;
+    e["cycle_time_s"] = std::round(p.feed.cycle_time_s * 1e3) / 1e3;
+    e["poses"] = p.densified.samples.size();
+    e["q"] = {{"min", p.q_min}, {"max", p.q_max}, {"mean", std::round(p.q_mean * 1e3) / 1e3}};
+    e["rotating_moves"] = r.rotating_moves;
+    e["max_nonlinear_error_mm"] = um(p.max_nonlinear_error_mm);
+    if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
+    e["cut_with"] = p.actual.empty() ? "nominal poses" : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
+                                                         : job.servo ? "actual poses (servo lag)" : "actual poses (machine errors)";
+    if (!p.actual.empty()) {
+      e["max_contour_error_um"] = std::round(p.max_contour_error_um * 1e3) / 1e3;
+      e["max_contour_line"] = p.max_contour_line;
+      e["rms_contour_error_um"] = std::round(p.rms_contour_error_um * 1e3) / 1e3;
+    }
+    e["events"] = ordered_json::array();
+    for (const PoseEvent& ev : p.events) e["events"].push_back({{"kind", ev.kind}, {"line", ev.line}, {"detail", ev.detail}});
+    j["pose_engine"] = e;
+  }
   j["warnings"] = r.warnings;
   ordered_json settings;
   settings["job_file"] = job.file;

@@ -16,6 +16,8 @@
 
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/gcode_reader.h"
+#include "vcut/io/pose_pipeline.h"
+#include "vcut/io/program_reader.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/io/report.h"
@@ -47,12 +49,6 @@ using Clock = std::chrono::steady_clock;
 double total_ram_mb() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) / (1024.0 * 1024.0) : 4096.0;
-}
-
-std::string display_name(const std::string& path, const std::string& job_file) {
-  const fs::path base = fs::absolute(job_file).parent_path();
-  const fs::path rel = fs::path(path).lexically_relative(base);
-  return rel.empty() || *rel.begin() == ".." ? path : rel.string();
 }
 
 // "file:12", "file:14-19": consecutive lines of one file merge into a range.
@@ -107,24 +103,20 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   // Fail on an unwritable output folder before hours of cutting, not after.
   ensure_writable_folder(result.out_dir);
 
-  // 1. Program.
-  kinematics::Program program;
-  GcodeOptions gcode;
-  gcode.work_offsets_mm = job.offsets_mm;
-  gcode.unsupported_as_warning = job.unsupported_as_warning;
-  GcodeState state;
-  for (const std::string& file : job.program_files) {
-    std::ifstream in(file);
-    if (!in) throw InputError(file, 0, 0, "cannot open program file for reading");
-    read_gcode(in, file, gcode, program, state);
-  }
-  for (auto& f : program.files) f = display_name(f, job.file);
+  // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
+  // with servo or machine errors the actual poses, which are what the machine cuts).
+  result.pose_run = run_pose_engine(job, read_job_program(job), v);
+  const PoseRun& run = result.pose_run;
+  const kinematics::Program& program = run.program;
   result.blocks = program.blocks.size();
   result.warnings = job.warnings;
   result.warnings.insert(result.warnings.end(), program.warnings.begin(), program.warnings.end());
+  for (const PoseEvent& e : run.events)
+    if (e.kind == "unreachable") result.warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
   stage_done("read");
 
-  // 2. Tools: every block's tool must be in the library; cutting needs a tool.
+  // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut
+  // as translation pieces within v/10 of the rigid motion (removal::five_axis_pieces).
   std::map<int, int> cutter_index;
   removal::MoveList moves;
   for (const auto& b : program.blocks) {
@@ -134,32 +126,37 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
       continue;
     }
     if (cutter_index.count(b.tool)) continue;
-    const auto it = job.tools.find(b.tool);
-    if (it == job.tools.end())
-      throw InputError(program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library " +
-                       display_name(job.tools_file, job.file));
     cutter_index[b.tool] = static_cast<int>(moves.cutters.size());
-    moves.cutters.push_back(it->second);
+    moves.cutters.push_back(run.tools.at(b.tool));
   }
-
-  // 3. Poses and moves.
-  kinematics::DensifySettings densify;
-  densify.chord_tolerance_mm = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : v / 20.0;
-  const std::vector<kinematics::PoseSample> poses = kinematics::densify(program, densify);
-  result.poses = poses.size();
-  for (std::size_t i = 1; i < poses.size(); ++i) {
-    const auto& b = program.blocks[static_cast<std::size_t>(poses[i].block)];
+  const auto& samples = run.densified.samples;
+  const bool cut_actual = !run.actual.empty();
+  auto pose_at = [&](std::size_t i) -> const kinematics::ToolPose& { return cut_actual ? run.actual[i] : samples[i].pose; };
+  const double rotation_bound_mm = v / 10.0;
+  result.poses = samples.size();
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    const auto& b = program.blocks[static_cast<std::size_t>(samples[i].block)];
     if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
+    const kinematics::ToolPose& from = pose_at(i - 1);
+    const kinematics::ToolPose& to = pose_at(i);
     removal::Move m;
-    m.start_mm = poses[i - 1].pose.tip_mm;
-    m.end_mm = poses[i].pose.tip_mm;
-    if ((m.end_mm - m.start_mm).norm() < 1e-12) continue;
-    m.axis = poses[i].pose.axis;
+    m.start_mm = from.tip_mm;
+    m.end_mm = to.tip_mm;
+    m.axis = to.axis;
     m.cutter = cutter_index.at(b.tool);
-    m.block = poses[i].block;
+    m.block = samples[i].block;
     m.rapid = b.kind == kinematics::MotionKind::Rapid;
+    const bool turns = (from.axis - to.axis).norm() > 1e-12;
+    if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
     result.cutting_moves += !m.rapid;
-    moves.moves.push_back(m);
+    if (turns) {
+      const int pieces = removal::five_axis_pieces(moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
+                                                   rotation_bound_mm);
+      removal::append_five_axis_move(moves.moves, m, from.axis, to.axis, pieces);
+      result.rotating_moves += 1;
+    } else {
+      moves.moves.push_back(m);
+    }
   }
   result.moves = moves.moves.size();
   stage_done("densify");

@@ -503,10 +503,10 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;
   const Program p = read(
-      "G0 X0 Y0 Z0\nG93\nG93\nM123\nG1 X1 A10 F10\nG5 I1 J1 P1 Q1 X9\n"
+      "G0 X0 Y0 Z0\nG93\nG93\nM123\nG1 X1 U10 F10\nG5 I1 J1 P1 Q1 X9\n"
       "G0 X2\n",
       options);
-  // One warning per distinct word (G93, M123, A, G5), each naming its first place.
+  // One warning per distinct word (G93, M123, U, G5), each naming its first place.
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
   EXPECT_NE(p.warnings[0].find("G93"), std::string::npos);
@@ -539,7 +539,8 @@ TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
   EXPECT_INPUT_ERROR("#1 = 5\n", 1, 1, "parameters");
   EXPECT_INPUT_ERROR("G0 X[1+2]\n", 1, 4, "expected a number");
   EXPECT_INPUT_ERROR("o100 sub\n", 1, 1, "O-words");
-  EXPECT_INPUT_ERROR("G0 A10\n", 1, 4, "A words");
+  EXPECT_INPUT_ERROR("G0 U10\n", 1, 4, "U words");
+  EXPECT_INPUT_ERROR("G0 A10000000\n", 1, 4, "out of range");
   EXPECT_INPUT_ERROR("G0\rX1\n", 1, 3, "carriage return");
   EXPECT_INPUT_ERROR("G0 X1.2.3\n", 1, 8, "'.'");
 }
@@ -651,6 +652,40 @@ TEST(GcodeReaderErrors, BadOptions) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("G60"), std::string::npos);
   }
+}
+
+}  // namespace
+}  // namespace vcut::io
+
+namespace vcut::io {
+namespace {
+
+TEST(GcodeReaderRotary, AxisProgramWithAbsoluteAndIncrementalRotaryWords) {
+  // A B C are degrees whatever G20/G21 says; G91 adds to the last value. Once a rotary word
+  // appears the blocks are axis blocks: X Y Z are the linear axes, the words axis values.
+  const Program p = read("G20 G0 X1 Y0 Z0\nG1 A30 C-45 F10\nG91 G1 X1 C90\nG90 G0 B5\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  const auto& turn = p.blocks[0];
+  EXPECT_FALSE(turn.tool_pose);
+  EXPECT_EQ(turn.start_mm, turn.end_mm);  // a pure rotation is still a block
+  EXPECT_NEAR(turn.end_rotary.angle_rad[0], 30 * M_PI / 180, 1e-15);
+  EXPECT_NEAR(turn.end_rotary.angle_rad[2], -45 * M_PI / 180, 1e-15);
+  EXPECT_TRUE(turn.end_rotary.given[0] && turn.end_rotary.given[2] && !turn.end_rotary.given[1]);
+  EXPECT_FALSE(turn.start_rotary.given[0]);
+  const auto& inc = p.blocks[1];
+  EXPECT_NEAR(inc.end_mm.x(), 2 * 25.4, 1e-12);
+  EXPECT_NEAR(inc.start_rotary.angle_rad[2], -45 * M_PI / 180, 1e-15);
+  EXPECT_NEAR(inc.end_rotary.angle_rad[2], 45 * M_PI / 180, 1e-15);
+  EXPECT_NEAR(inc.end_rotary.angle_rad[0], 30 * M_PI / 180, 1e-15);  // A holds
+  EXPECT_NEAR(p.blocks[2].end_rotary.angle_rad[1], 5 * M_PI / 180, 1e-15);
+  EXPECT_EQ(p.blocks[2].kind, kinematics::MotionKind::Rapid);
+}
+
+TEST(GcodeReaderRotary, ThreeAxisProgramsStayToolPoses) {
+  const Program p = read("G0 X1 Y2 Z3\nG1 X4 F100\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  EXPECT_TRUE(p.blocks[0].tool_pose);
+  EXPECT_FALSE(p.blocks[0].end_rotary.any());
 }
 
 }  // namespace

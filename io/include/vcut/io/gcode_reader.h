@@ -52,6 +52,11 @@ struct GcodeState {
   // axis still, and take its value when it is first programmed.
   std::array<std::vector<std::size_t>, 3> pending;
 
+  // Rotary axes A B C (rad) as last programmed; once any is programmed the program is an
+  // axis program (Block::tool_pose false: X Y Z are the linear axes, A B C axis values).
+  kinematics::RotaryWords rotary;
+  bool rotary_program = false;
+
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;

@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "vcut/io/tool_library.h"
+#include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/machine.h"
+#include "vcut/kinematics/servo.h"
 #include "vcut/removal/stock.h"
 
 namespace vcut::io {
@@ -38,6 +40,8 @@ struct Job {
   std::string tools_file;
   ToolLibrary tools;
   std::vector<std::string> program_files;
+  // auto (io::detect_dialect per file) | gcode | linuxcnc | fanuc | apt. APT programs define
+  // their cutters (CUTTER/); the tool library wins for a T number it has.
   std::string dialect = "auto";
   bool unsupported_as_warning = false;
   std::map<std::string, Eigen::Vector3d> offsets_mm;
@@ -51,9 +55,18 @@ struct Job {
   double excess_tolerance_mm = 0.1;
   double collision_tolerance_mm = 0.01;
   double chord_tolerance_mm = 0.0;  // arcs; 0 = resolution / 20
+  double step_mm = 0.0;               // densify.step: lambda; 0 = none
+  double angle_step_deg = 0.0;        // densify.angle: phi; 0 = none
+  double densify_tolerance_mm = 0.0;  // densify.tolerance: epsilon (tolerance mode); 0 = off
+  kinematics::FeedSettings feed;                  // feed: acceleration, jerk, lookahead, rapid
+  std::optional<kinematics::ServoSettings> servo;  // servo: present = simulate servo lag
+  bool apply_errors = false;                      // errors: machine
 };
 
 // Throws vcut::InputError (file:line:column, key, what was expected).
 Job read_job(const std::string& path);
+
+// A path as the job's user wrote it: relative to the job file's folder when inside it.
+std::string display_name(const std::string& path, const std::string& job_file);
 
 }  // namespace vcut::io

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "vcut/io/job.h"
+#include "vcut/io/pose_pipeline.h"
 
 namespace vcut::io {
 
@@ -66,6 +67,8 @@ struct SimulationResult {
   std::string job_name;
   std::string out_dir;
   std::size_t blocks = 0, poses = 0, moves = 0, cutting_moves = 0;
+  std::size_t rotating_moves = 0;  // five-axis moves (the tool axis turns), cut in pieces
+  PoseRun pose_run;                // the pose engine's output: time, events, contour error
   double resolution_mm = 0.0;
   int threads = 0;
   double initial_volume_mm3 = 0.0, final_volume_mm3 = 0.0, removed_volume_mm3 = 0.0;

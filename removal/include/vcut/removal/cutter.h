@@ -19,6 +19,7 @@ struct Cutter {
   double flute_length_mm = 0.0;   // height of the cutting part above the tip
   double shank_diameter_mm = 0.0;
   double length_mm = 0.0;  // out of the holder
+  double gauge_length_mm = 0.0;  // spindle nose (gauge line) to tip, for the machine's kinematics
   double tip_angle_deg = 0.0;  // VBit: included angle of the cone, (0, 180)
 
   double radius_mm() const { return 0.5 * diameter_mm; }

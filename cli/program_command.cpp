@@ -1,0 +1,122 @@
+#include "program_command.h"
+
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "vcut/io/input_error.h"
+#include "vcut/io/machine_file.h"
+#include "vcut/io/program_reader.h"
+
+namespace vcut::cli {
+namespace {
+
+using json = nlohmann::ordered_json;
+using namespace vcut::kinematics;
+
+constexpr double kDegPerRad = 180.0 / M_PI;
+
+double clean(double v) { return v + 0.0; }  // no -0 in the output
+json array(const Eigen::Vector3d& v) {
+  return json::array({clean(v.x()), clean(v.y()), clean(v.z())});
+}
+
+json rotary(const RotaryWords& words) {
+  json j = json::object();
+  for (int k = 0; k < 3; ++k) {
+    if (words.given[static_cast<size_t>(k)]) {
+      j[std::string(1, static_cast<char>('A' + k))] =
+          clean(words.angle_rad[static_cast<size_t>(k)] * kDegPerRad);
+    }
+  }
+  return j;
+}
+
+const char* kind_name(MotionKind kind) {
+  switch (kind) {
+    case MotionKind::Rapid:
+      return "rapid";
+    case MotionKind::Linear:
+      return "linear";
+    case MotionKind::Arc:
+      return "arc";
+  }
+  return "?";
+}
+
+const char* orientation_name(OrientationMode mode) {
+  switch (mode) {
+    case OrientationMode::Axes:
+      return "axes";
+    case OrientationMode::Vector:
+      return "vector";
+    case OrientationMode::ConeClockwise:
+      return "cone-cw";
+    case OrientationMode::ConeCounterClockwise:
+      return "cone-ccw";
+  }
+  return "?";
+}
+
+json record(const Program& program, const Block& b) {
+  json j;
+  j["kind"] = kind_name(b.kind);
+  j["start"] = array(b.start_mm);
+  j["end"] = array(b.end_mm);
+  if (b.start_rotary.any()) j["start_rotary"] = rotary(b.start_rotary);
+  if (b.end_rotary.any()) j["rotary"] = rotary(b.end_rotary);
+  if (b.kind == MotionKind::Arc) {
+    j["center"] = array(b.center_mm);
+    j["normal"] = array(b.normal);
+    j["turns"] = b.turns;
+  }
+  j["feed"] = clean(b.feed_mm_per_min);
+  j["feed_mode"] = b.feed_mode == FeedMode::InverseTime ? "inverse-time" : "mm/min";
+  j["tool"] = b.tool;
+  j["tcp"] = b.tool_pose;
+  j["start_axis"] = array(b.start_axis);
+  j["end_axis"] = array(b.end_axis);
+  j["orientation_mode"] = orientation_name(b.orientation);
+  if (b.orientation == OrientationMode::ConeClockwise ||
+      b.orientation == OrientationMode::ConeCounterClockwise) {
+    j["cone_axis"] = array(b.cone_axis);
+  }
+  j["source"] = program.where(b.source);
+  return j;
+}
+
+}  // namespace
+
+void add_program_command(CLI::App& app, ProgramCommand& c) {
+  c.program = app.add_subcommand(
+      "program", "Print a program's canonical motion list as JSON lines, one record per motion");
+  c.program->add_option("file", c.file, "NC program: G-code or APT CL data")->required();
+  c.program->add_option("--dialect", c.dialect,
+                        "auto (default: from the extension, then the content), gcode, linuxcnc, "
+                        "fanuc, apt or sinumerik");
+  c.program->add_option("--machine", c.machine, "Machine file (YAML) or bundled machine name");
+}
+
+bool run_program_command(const ProgramCommand& c) {
+  if (!c.program || !*c.program) return false;
+  if (!c.machine.empty()) {
+    // Checked now so that a bad machine stops here; the motion list does not depend on it yet.
+    std::vector<std::string> warnings;
+    io::read_machine_file(io::resolve_machine(c.machine), &warnings);
+    for (const auto& w : warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  }
+  const io::LoadedProgram loaded = io::read_program(c.file, c.dialect);
+  for (const auto& w : loaded.program.warnings)
+    std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  std::string line;
+  for (const Block& b : loaded.program.blocks) {
+    line = record(loaded.program, b).dump();
+    line += '\n';
+    std::fwrite(line.data(), 1, line.size(), stdout);
+  }
+  std::fflush(stdout);
+  return true;
+}
+
+}  // namespace vcut::cli

@@ -1,0 +1,21 @@
+// `vcut program FILE [--dialect D] [--machine M]`: the canonical motion list of an NC program
+// as JSON lines, one record per Block (the contract later stages and outside checks use).
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <string>
+
+namespace vcut::cli {
+
+struct ProgramCommand {
+  CLI::App* program = nullptr;
+  std::string file;
+  std::string dialect = "auto";
+  std::string machine;  // validated, recorded for the stages that will need it
+};
+
+void add_program_command(CLI::App& app, ProgramCommand& command);
+// Runs it if it was given; false when it was not. Bad input: vcut::InputError.
+bool run_program_command(const ProgramCommand& command);
+
+}  // namespace vcut::cli

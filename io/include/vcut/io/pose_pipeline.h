@@ -1,0 +1,80 @@
+// The pose engine run on a job (ARCHITECTURE §1, issue #5): program -> densified tool poses
+// with axis values -> time stamps (jerk-limited feed with look-ahead) -> optional servo lag
+// and geometric errors -> actual poses and contour error. `vcut poses` writes it as CSV.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <string>
+#include <vector>
+
+#include "vcut/io/job.h"
+#include "vcut/kinematics/densify.h"
+#include "vcut/kinematics/feed_planner.h"
+#include "vcut/kinematics/program.h"
+
+namespace vcut::io {
+
+// A block-level finding with its NC line: an axis limit, a singular pose, a limited speed.
+struct PoseEvent {
+  std::string kind;  // "unreachable", "singular", "axis_limited_speed"
+  std::string line;  // "file:line"
+  std::string detail;
+};
+
+// The job's program files read into one Program (file names relative to the job), and the
+// tools: the library, plus APT CUTTER/ shapes for T numbers the library lacks.
+struct JobProgram {
+  kinematics::Program program;
+  ToolLibrary tools;
+};
+JobProgram read_job_program(const Job& job);
+
+struct PoseRun {
+  kinematics::Program program;
+  ToolLibrary tools;
+  kinematics::Densified densified;
+  kinematics::FeedPlan feed;
+  std::vector<double> tool_length_mm;  // per sample (0 before the first tool)
+  // Servo and/or geometric errors: the actual pose per sample and the distance of its tip
+  // from the commanded path (um). Empty when neither is on.
+  std::vector<kinematics::ToolPose> actual;
+  std::vector<double> contour_error_um;
+  std::vector<PoseEvent> events;
+  // Summary.
+  double max_nonlinear_error_mm = 0.0;
+  std::string max_nonlinear_line;
+  double max_contour_error_um = 0.0;
+  std::string max_contour_line;
+  double rms_contour_error_um = 0.0;
+  int q_min = 0, q_max = 0;
+  double q_mean = 0.0;
+};
+
+PoseRun run_pose_engine(const Job& job);
+// With the program already read; `resolution_mm` sets the default arc chord tolerance (/20).
+PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm);
+
+// One row per densified pose: block, source, t, x y z (tip), i j k (axis), the axis values by
+// letter (mm, deg), feed (mm/min); with servo or errors also actual_x .. actual_k and
+// contour_error_um. Written atomically.
+void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run);
+
+// `vcut compensate`: for every densified pose, the axis commands whose error-aware forward
+// kinematics put the tool on the nominal pose (kinematics::compensate), written as a G-code
+// axis program (one line per pose; X Y Z are the linear axes zeroed so that at all-zero
+// rotary axes the tip is at the programmed point, the convention of axis programs; A B C in
+// deg; a comment names each pose's source line). Throws InputError when the machine has no
+// geometric errors.
+struct CompensationReport {
+  std::size_t poses = 0;
+  std::size_t not_converged = 0;
+  double max_residual_tip_um = 0.0;
+  double max_residual_axis_urad = 0.0;
+  double max_error_before_um = 0.0;  // uncompensated volumetric tip error
+  std::string max_error_line;
+  std::string first_failure;  // "file:line: note" of the first pose that did not converge
+};
+CompensationReport write_compensated_program(const std::string& path, const Job& job, const PoseRun& run);
+
+}  // namespace vcut::io

@@ -1,0 +1,45 @@
+// Which reader an NC program file needs (its dialect), and one entry point that reads any
+// program into the canonical motion list (kinematics::Program, workpiece frame, mm).
+// Bad input is a vcut::InputError naming file:line:column.
+#pragma once
+
+#include <vcut/io/apt_reader.h>
+#include <vcut/io/gcode_reader.h>
+#include <vcut/kinematics/program.h>
+#include <vcut/removal/cutter.h>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+
+// "gcode", "apt" or "sinumerik". First the extension: .apt .cl .cls .aptsource -> apt;
+// .mpf .spf -> sinumerik; .ngc .nc .tap .gcode -> gcode (case-insensitive). Otherwise the
+// first meaningful lines: APT statements (GOTO/ FEDRAT/ CUTTER/ FROM/ ..., `$$` comments) ->
+// apt; SINUMERIK words (TRAORI, ORIVECT, ORIWKS, CR=, DEF ..., or `;` comments with N blocks
+// written letter-space-number, "N7 X -1320") -> sinumerik; anything else (and a file that
+// cannot be read, which its reader then reports) -> gcode.
+std::string detect_dialect(const std::string& path);
+
+struct ProgramOptions {
+  GcodeOptions gcode;
+  AptOptions apt;
+};
+
+struct LoadedProgram {
+  kinematics::Program program;
+  std::map<int, removal::Cutter> cutters;  // cutters the program itself defines (APT CUTTER/)
+  std::string dialect;                     // the reader used: "gcode" or "apt"
+};
+
+// `dialect`: auto (detect_dialect per file), gcode, linuxcnc, fanuc (the G-code reader), apt,
+// or sinumerik (not supported yet: an error). A file with a NUL byte in its first 64 KiB is
+// "not a text file". Several files run in sequence with one modal state; all must be of one
+// dialect.
+LoadedProgram read_program(const std::string& path, const std::string& dialect,
+                           const ProgramOptions& options = {});
+LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
+                            const ProgramOptions& options = {});
+
+}  // namespace vcut::io

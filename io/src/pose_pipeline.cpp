@@ -1,0 +1,250 @@
+#include "vcut/io/pose_pipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+#include "vcut/io/atomic_file.h"
+#include "vcut/io/program_reader.h"
+#include "vcut/io/input_error.h"
+#include "vcut/kinematics/compensation.h"
+#include "vcut/kinematics/forward_kinematics.h"
+#include "vcut/kinematics/servo.h"
+
+namespace vcut::io {
+namespace fs = std::filesystem;
+namespace {
+
+// Distance from p to the segment [a, b].
+double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector3d d = b - a;
+  const double len2 = d.squaredNorm();
+  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
+  return (p - (a + t * d)).norm();
+}
+
+std::string num(double v, int digits = 10) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, v + 0.0);
+  return buf;
+}
+
+}  // namespace
+
+JobProgram read_job_program(const Job& job) {
+  // G-code and APT CL data (read_programs picks the reader from the job's dialect or from
+  // each file). An APT program's CUTTER/ shapes fill in the T numbers the tool library lacks:
+  // the library, written for the machine, wins where it has the number.
+  ProgramOptions reading;
+  reading.gcode.work_offsets_mm = job.offsets_mm;
+  reading.gcode.unsupported_as_warning = job.unsupported_as_warning;
+  LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
+  JobProgram out;
+  out.program = std::move(loaded.program);
+  for (auto& f : out.program.files) f = display_name(f, job.file);
+  out.tools = job.tools;
+  out.tools.insert(loaded.cutters.begin(), loaded.cutters.end());  // insert keeps existing numbers
+  return out;
+}
+
+PoseRun run_pose_engine(const Job& job) { return run_pose_engine(job, read_job_program(job), job.resolution_mm); }
+
+PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) {
+  PoseRun run;
+  run.program = std::move(input.program);
+  run.tools = std::move(input.tools);
+  const kinematics::Program& program = run.program;
+  const kinematics::Machine machine(job.machine_spec);
+
+  // Tools: their gauge lengths for the kinematics, and the largest cutting part for the
+  // tolerance mode (a conservative bound for every tool).
+  kinematics::DensifyMachine dm;
+  dm.machine = &machine;
+  kinematics::DensifySettings settings;
+  for (const auto& b : program.blocks) {
+    if (b.tool == 0 || dm.tool_length_mm.count(b.tool)) continue;
+    const auto it = run.tools.find(b.tool);
+    if (it == run.tools.end())
+      throw InputError(program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library " +
+                       display_name(job.tools_file, job.file));
+    dm.tool_length_mm[b.tool] = it->second.gauge_length_mm;
+    settings.cutter_length_mm = std::max(settings.cutter_length_mm, it->second.flute_length_mm);
+    settings.cutter_radius_mm = std::max(settings.cutter_radius_mm, it->second.radius_mm());
+  }
+  settings.chord_tolerance_mm = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : resolution_mm / 20.0;
+  settings.step_mm = job.step_mm;
+  settings.angle_step_rad = job.angle_step_deg * M_PI / 180.0;
+  settings.tolerance_mm = job.densify_tolerance_mm;
+  run.densified = kinematics::densify(program, settings, dm);
+  const auto& samples = run.densified.samples;
+
+  // Time.
+  std::vector<kinematics::AxisValues> axes;
+  axes.reserve(samples.size());
+  for (const auto& s : samples) axes.push_back(s.axes);
+  run.feed = kinematics::plan_feed(program, samples, &axes, &machine, job.feed);
+
+  run.tool_length_mm.resize(samples.size(), 0.0);
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const int block = std::max(0, samples[i].block);
+    const auto it = program.blocks.empty() ? dm.tool_length_mm.end() : dm.tool_length_mm.find(program.blocks[static_cast<size_t>(block)].tool);
+    run.tool_length_mm[i] = it == dm.tool_length_mm.end() ? 0.0 : it->second;
+  }
+
+  // Actual poses: servo lag on the axes, then the machine's geometric errors.
+  if (job.servo || job.apply_errors) {
+    std::vector<kinematics::AxisValues> actual_axes = axes;
+    if (job.servo) actual_axes = kinematics::simulate_servo(run.feed.t_s, axes, *job.servo);
+    const auto geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
+    run.actual.reserve(samples.size());
+    run.contour_error_um.resize(samples.size(), 0.0);
+    for (size_t i = 0; i < samples.size(); ++i)
+      run.actual.push_back(kinematics::forward(machine, actual_axes[i], run.tool_length_mm[i], geometry));
+    // Contour error: the distance of the actual tip from the commanded tip path. The lag
+    // moves forward with the path, so the nearest segment is searched from the previous
+    // one's index onward (and a little back), up to the sample itself and a little beyond.
+    size_t from = 0, feed_samples = 0;
+    double sum2 = 0.0;
+    for (size_t i = 0; i < samples.size(); ++i) {
+      const Eigen::Vector3d& p = run.actual[i].tip_mm;
+      double best = std::numeric_limits<double>::infinity();
+      size_t best_seg = from;
+      const size_t lo = from > 8 ? from - 8 : 0, hi = std::min(samples.size() - 1, i + 8);
+      for (size_t k = lo; k < hi; ++k) {
+        const double d = segment_distance(p, samples[k].pose.tip_mm, samples[k + 1].pose.tip_mm);
+        if (d < best) best = d, best_seg = k;
+      }
+      if (hi == lo) best = (p - samples[lo].pose.tip_mm).norm();
+      from = best_seg;
+      run.contour_error_um[i] = best * 1000.0;
+      // The summary covers feed moves: rapids cut corners by design.
+      const bool feed_move =
+          samples[i].block >= 0 && program.blocks[static_cast<size_t>(samples[i].block)].kind != kinematics::MotionKind::Rapid;
+      if (!feed_move) continue;
+      ++feed_samples;
+      sum2 += best * best * 1e6;
+      if (run.contour_error_um[i] > run.max_contour_error_um) {
+        run.max_contour_error_um = run.contour_error_um[i];
+        run.max_contour_line = program.where(program.blocks[static_cast<size_t>(samples[i].block)].source);
+      }
+    }
+    run.rms_contour_error_um = feed_samples == 0 ? 0.0 : std::sqrt(sum2 / static_cast<double>(feed_samples));
+  }
+
+  // Per-block findings and q statistics.
+  const auto& blocks = run.densified.blocks;
+  double q_sum = 0.0;
+  for (size_t i = 0; i < blocks.size(); ++i) {
+    const auto& r = blocks[i];
+    const std::string line = program.where(program.blocks[i].source);
+    q_sum += r.q;
+    run.q_min = i == 0 ? r.q : std::min(run.q_min, r.q);
+    run.q_max = std::max(run.q_max, r.q);
+    if (r.nonlinear_error_mm > run.max_nonlinear_error_mm) {
+      run.max_nonlinear_error_mm = r.nonlinear_error_mm;
+      run.max_nonlinear_line = line;
+    }
+    if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable});
+    if (r.singular) run.events.push_back({"singular", line, "tool axis in the singular cone: the free rotary angle was kept"});
+  }
+  run.q_mean = blocks.empty() ? 0.0 : q_sum / static_cast<double>(blocks.size());
+  int last_block = -1;
+  for (int s : run.feed.axis_limited_samples) {
+    const int block = samples[static_cast<size_t>(s)].block;
+    if (block < 0 || block == last_block) continue;
+    last_block = block;
+    run.events.push_back({"axis_limited_speed", program.where(program.blocks[static_cast<size_t>(block)].source),
+                          "a machine axis limit, not the programmed feed, set the speed"});
+  }
+  return run;
+}
+
+void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run) {
+  const kinematics::Machine machine(job.machine_spec);
+  const bool actual = !run.actual.empty();
+  std::string text = "block,source,t,x,y,z,i,j,k";
+  for (int a = 0; a < machine.axis_count(); ++a) text += std::string(",") + machine.axis(a).letter;
+  text += ",feed";
+  if (actual) text += ",actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um";
+  text += "\n";
+  const auto& samples = run.densified.samples;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const auto& s = samples[i];
+    const std::string source =
+        s.block >= 0 ? run.program.where(run.program.blocks[static_cast<size_t>(s.block)].source) : "";
+    text += std::to_string(s.block) + "," + source + "," + num(run.feed.t_s[i]);
+    for (int k = 0; k < 3; ++k) text += "," + num(s.pose.tip_mm[k]);
+    for (int k = 0; k < 3; ++k) text += "," + num(s.pose.axis[k]);
+    for (int a = 0; a < machine.axis_count(); ++a) {
+      const double v = s.axes.size() > a ? s.axes[a] : 0.0;
+      text += "," + num(machine.axis(a).kind == kinematics::AxisKind::Rotary ? v * 180.0 / M_PI : v);
+    }
+    text += "," + num(run.feed.speed_mm_per_s[i] * 60.0);
+    if (actual) {
+      for (int k = 0; k < 3; ++k) text += "," + num(run.actual[i].tip_mm[k]);
+      for (int k = 0; k < 3; ++k) text += "," + num(run.actual[i].axis[k]);
+      text += "," + num(run.contour_error_um[i]);
+    }
+    text += "\n";
+  }
+  write_text_atomically(path, text);
+}
+
+CompensationReport write_compensated_program(const std::string& path, const Job& job, const PoseRun& run) {
+  const kinematics::Machine machine(job.machine_spec);
+  if (!machine.has_errors())
+    throw InputError(job.machine_file, 0, 0, "geometric errors to compensate (the machine file has no 'errors')");
+  CompensationReport report;
+  const auto& samples = run.densified.samples;
+  const auto& program = run.program;
+  std::string text = "(vcut compensate: " + job.name + " on " + machine.name() + ", one line per densified pose)\n";
+  text += "G21 G90 G94\n";
+  int tool = -1;
+  double feed = -1.0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const auto& s = samples[i];
+    const kinematics::Block* block = s.block >= 0 ? &program.blocks[static_cast<size_t>(s.block)] : nullptr;
+    const double length = run.tool_length_mm[i];
+    const kinematics::CompensationResult c = kinematics::compensate(machine, s.pose, length, s.axes);
+    ++report.poses;
+    const double before = kinematics::pose_error(s.pose, kinematics::forward(machine, s.axes, length, kinematics::Geometry::Actual))
+                              .tip_um.norm();
+    const std::string line = block ? program.where(block->source) : "start";
+    if (before > report.max_error_before_um) report.max_error_before_um = before, report.max_error_line = line;
+    report.max_residual_tip_um = std::max(report.max_residual_tip_um, c.residual_tip_um);
+    report.max_residual_axis_urad = std::max(report.max_residual_axis_urad, c.residual_axis_urad);
+    if (!c.converged) {
+      ++report.not_converged;
+      if (report.first_failure.empty()) report.first_failure = line + ": " + c.note;
+    }
+    if (block && block->tool != tool && block->tool > 0) {
+      tool = block->tool;
+      text += "T" + std::to_string(tool) + " M6\n";
+      if (block->spindle_rpm > 0) text += "S" + num(block->spindle_rpm) + (block->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
+    }
+    // X Y Z of an axis program: the tip at all-zero rotary axes for these linear axes.
+    kinematics::AxisValues linear = c.q;
+    for (int k = 0; k < machine.rotary_count(); ++k) linear[machine.rotary_axis(k)] = 0.0;
+    const Eigen::Vector3d xyz = kinematics::forward(machine, linear, length).tip_mm;
+    const bool rapid = !block || block->kind == kinematics::MotionKind::Rapid;
+    std::string g = rapid ? "G0" : "G1";
+    g += " X" + num(xyz.x(), 12) + " Y" + num(xyz.y(), 12) + " Z" + num(xyz.z(), 12);
+    for (int k = 0; k < machine.rotary_count(); ++k) {
+      const int a = machine.rotary_axis(k);
+      g += std::string(" ") + machine.axis(a).letter + num(c.q[a] * 180.0 / M_PI, 12);
+    }
+    if (!rapid && block->feed_mm_per_min != feed) {
+      feed = block->feed_mm_per_min;
+      g += " F" + num(feed);
+    }
+    text += g + " (" + line + ")\n";
+  }
+  text += "M2\n";
+  write_text_atomically(path, text);
+  return report;
+}
+
+}  // namespace vcut::io

@@ -1,0 +1,227 @@
+// Dialect detection and the one entry point for reading NC programs of any dialect.
+#include <vcut/io/input_error.h>
+#include <vcut/io/program_reader.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <utility>
+
+namespace vcut::io {
+namespace {
+
+namespace fs = std::filesystem;
+
+// How much of a file the detector and the binary check look at: the header of any NC program.
+constexpr std::size_t kSniffBytes = std::size_t{1} << 16;
+constexpr int kSniffLines = 200;
+
+std::string lower(std::string s) {
+  for (char& c : s) c = (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
+  return s;
+}
+std::string upper(std::string s) {
+  for (char& c : s) c = (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
+  return s;
+}
+bool is_alnum(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+}
+bool is_digit(char c) { return c >= '0' && c <= '9'; }
+bool is_blank(char c) { return c == ' ' || c == '\t'; }
+
+std::string sniff(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return {};
+  std::string head(kSniffBytes, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(std::max<std::streamsize>(0, in.gcount())));
+  return head;
+}
+
+// `word` in `line` as a whole word (not part of a longer name).
+bool has_word(const std::string& line, const char* word) {
+  const std::size_t n = std::strlen(word);
+  for (std::size_t at = line.find(word); at != std::string::npos; at = line.find(word, at + 1)) {
+    const bool left = at == 0 || !is_alnum(line[at - 1]);
+    const bool right = at + n >= line.size() || !is_alnum(line[at + n]) || !is_alnum(word[n - 1]);
+    if (left && right) return true;
+  }
+  return false;
+}
+
+// An APT statement word followed by '/' (or a bare APT word) at the start of the line.
+bool apt_statement(const std::string& line) {
+  static const char* const kSlashWords[] = {"GOTO",   "FEDRAT", "CUTTER", "FROM",   "LOADTL",
+                                            "MULTAX", "TLAXIS", "CIRCLE", "SPINDL", "UNITS",
+                                            "GODLTA", "COOLNT", "INTOL",  "OUTTOL"};
+  static const char* const kBareWords[] = {"PARTNO", "PPRINT", "MULTAX", "FINI", "RAPID"};
+  std::size_t j = 0;
+  while (j < line.size() && is_alnum(line[j])) ++j;
+  const std::string word = line.substr(0, j);
+  while (j < line.size() && is_blank(line[j])) ++j;
+  if (j < line.size() && line[j] == '/') {
+    for (const char* w : kSlashWords) {
+      if (word == w) return true;
+    }
+  }
+  for (const char* w : kBareWords) {
+    if (word == w && (j == line.size() || word == "PARTNO" || word == "PPRINT")) return true;
+  }
+  return false;
+}
+
+// "N7 X -1320": an N block whose words are written letter, blank, number.
+bool letter_space_number(const std::string& line) {
+  if (line.empty() || line[0] != 'N' || line.size() < 2 || !is_digit(line[1])) return false;
+  for (std::size_t i = 1; i + 2 < line.size(); ++i) {
+    if (!(line[i] >= 'A' && line[i] <= 'Z') || is_alnum(line[i - 1]) || !is_blank(line[i + 1])) {
+      continue;
+    }
+    std::size_t j = i + 1;
+    while (j < line.size() && is_blank(line[j])) ++j;
+    if (j < line.size() && (line[j] == '-' || line[j] == '+')) ++j;
+    if (j < line.size() && (is_digit(line[j]) || line[j] == '.')) return true;
+  }
+  return false;
+}
+
+std::string detect_from_text(const std::string& head) {
+  static const char* const kSinumerikWords[] = {
+      "TRAORI",   "TRAFOOF",   "ORIVECT",  "ORIAXES",  "ORIWKS", "ORIMKS", "ORIPLANE",
+      "ORICONCW", "ORICONCCW", "ORICONIO", "ORICONTO", "G641",   "G642"};
+  bool semicolon = false, letter_space = false, gcode_sign = false;
+  std::size_t start = 0;
+  for (int lines = 0; start < head.size() && lines < kSniffLines; ++lines) {
+    std::size_t end = head.find('\n', start);
+    if (end == std::string::npos) end = head.size();
+    std::string line = upper(head.substr(start, end - start));
+    start = end + 1;
+    std::size_t i = 0;
+    while (i < line.size() && (is_blank(line[i]) || line[i] == '\r')) ++i;
+    line.erase(0, i);
+    while (!line.empty() && (line.back() == '\r' || is_blank(line.back()))) line.pop_back();
+    if (line.empty()) continue;
+    if (line.rfind("$$", 0) == 0) return "apt";
+    if (apt_statement(line)) return "apt";
+    // G-code and SINUMERIK: look at the words only, not at comments.
+    std::string words;
+    bool paren = false;
+    for (char c : line) {
+      if (paren) {
+        paren = c != ')';
+      } else if (c == '(' && !words.empty() && words.back() >= 'A' && words.back() <= 'Z') {
+        words += c;  // AC( IC( MSG( ...: a SINUMERIK call, not a comment
+      } else if (c == '(') {
+        paren = true;
+        gcode_sign = true;
+      } else if (c == ';') {
+        semicolon = true;
+        break;
+      } else {
+        words += c;
+      }
+    }
+    if (words.empty()) continue;
+    if (words[0] == '%' || words[0] == 'O' || words.find('#') != std::string::npos) {
+      gcode_sign = true;
+    }
+    for (const char* w : kSinumerikWords) {
+      if (has_word(words, w)) return "sinumerik";
+    }
+    if (words.find("CR=") != std::string::npos || words.find("MSG(") != std::string::npos ||
+        words.find("AC(") != std::string::npos || words.find("IC(") != std::string::npos ||
+        words.rfind("DEF ", 0) == 0) {
+      return "sinumerik";
+    }
+    if (letter_space_number(words)) letter_space = true;
+  }
+  return semicolon && letter_space && !gcode_sign ? "sinumerik" : "gcode";
+}
+
+std::string reader_of(const std::string& dialect) {
+  if (dialect == "gcode" || dialect == "linuxcnc" || dialect == "fanuc") return "gcode";
+  if (dialect == "apt" || dialect == "sinumerik") return dialect;
+  throw InputError("unknown program dialect '" + dialect +
+                   "' (expected auto, gcode, linuxcnc, fanuc, apt or sinumerik)");
+}
+
+const char* describe_dialect(const std::string& reader) {
+  return reader == "apt" ? "APT CL data" : reader == "sinumerik" ? "SINUMERIK" : "G-code";
+}
+
+// A NUL byte does not occur in any NC program in text; it does in every binary file.
+void check_text(const std::string& path, const std::string& head) {
+  const std::size_t nul = head.find('\0');
+  if (nul == std::string::npos) return;
+  const std::size_t line_start = head.rfind('\n', nul);
+  const int line = 1 + static_cast<int>(std::count(head.begin(), head.begin() + nul, '\n'));
+  const int column =
+      static_cast<int>(nul - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
+  throw InputError(path, line, column, "not a text file (a NUL byte; expected an NC program)");
+}
+
+}  // namespace
+
+std::string detect_dialect(const std::string& path) {
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext == ".apt" || ext == ".cl" || ext == ".cls" || ext == ".aptsource") return "apt";
+  if (ext == ".mpf" || ext == ".spf") return "sinumerik";
+  if (ext == ".ngc" || ext == ".nc" || ext == ".tap" || ext == ".gcode") return "gcode";
+  return detect_from_text(sniff(path));
+}
+
+LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
+                            const ProgramOptions& options) {
+  if (dialect != "auto") reader_of(dialect);  // an unknown dialect fails before any file
+  LoadedProgram out;
+  GcodeState gcode_state;
+  AptState apt_state;
+  AptProgram apt;
+  for (const std::string& path : paths) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) {
+      throw InputError(path, 0, 0, "is a directory (expected a program file)");
+    }
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+      throw InputError(
+          path, 0, 0, std::string("cannot open program file for reading: ") + std::strerror(errno));
+    }
+    check_text(path, sniff(path));
+    const std::string reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
+    if (out.dialect.empty()) {
+      out.dialect = reader;
+    } else if (reader != out.dialect) {
+      throw InputError(path, 0, 0,
+                       std::string("is ") + describe_dialect(reader) + " but " + paths.front() +
+                           " is " + describe_dialect(out.dialect) +
+                           " (expected one dialect for all program files)");
+    }
+    if (reader == "sinumerik") {
+      throw InputError(path, 0, 0,
+                       "SINUMERIK 840D programs are not supported yet (expected G-code or APT CL "
+                       "data; name the dialect in the job or with --dialect if the file is one "
+                       "of those)");
+    }
+    if (reader == "gcode") {
+      read_gcode(in, path, options.gcode, out.program, gcode_state);
+    } else {
+      read_apt(in, path, options.apt, apt, apt_state);
+    }
+  }
+  if (out.dialect == "apt") {
+    out.program = std::move(apt.program);
+    out.cutters = std::move(apt.cutters);
+  }
+  return out;
+}
+
+LoadedProgram read_program(const std::string& path, const std::string& dialect,
+                           const ProgramOptions& options) {
+  return read_programs({path}, dialect, options);
+}
+
+}  // namespace vcut::io
