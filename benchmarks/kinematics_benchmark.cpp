@@ -132,4 +132,52 @@ void BM_PlanFeed(benchmark::State& state) {
 }
 BENCHMARK(BM_PlanFeed)->Unit(benchmark::kMillisecond);
 
+// The pose engine on a five-axis program (issue #5's benchmark): densification (ORIVECT,
+// lambda 0.1 mm, phi 0.5 deg), inverse kinematics per pose on the table-table AC trunnion and
+// feed planning with the axis limits. 4,510 blocks (the size of LinuxCNC's impeller demo) of
+// a smooth five-axis path: the tip on a spiral, the axis tilting 10..40 deg and turning.
+// Items: densified poses per second (target >= 200,000/s).
+void BM_PoseEngine(benchmark::State& state) {
+  const Machine m = make(false, false);
+  Program program;
+  program.files = {"spiral.apt"};
+  auto pose_at = [](int k) {
+    const double s = k / 4510.0, turn = 6.0 * 2 * M_PI * s;
+    const double tilt = (10.0 + 30.0 * s) * M_PI / 180.0;
+    ToolPose p;
+    p.tip_mm = {(20 + 40 * s) * std::cos(turn), (20 + 40 * s) * std::sin(turn), -10.0 * s};
+    p.axis = {std::sin(tilt) * std::cos(turn), std::sin(tilt) * std::sin(turn), std::cos(tilt)};
+    return p;
+  };
+  for (int k = 0; k < 4510; ++k) {
+    Block b;
+    const ToolPose a = pose_at(k), c = pose_at(k + 1);
+    b.start_mm = a.tip_mm;
+    b.end_mm = c.tip_mm;
+    b.start_axis = a.axis;
+    b.end_axis = c.axis;
+    b.feed_mm_per_min = 2000;
+    b.tool = 1;
+    program.blocks.push_back(b);
+  }
+  DensifySettings settings;
+  settings.step_mm = 0.1;
+  settings.angle_step_rad = 0.5 * M_PI / 180.0;
+  DensifyMachine dm;
+  dm.machine = &m;
+  dm.tool_length_mm = {{1, 50.0}};
+  size_t poses = 0;
+  for (auto _ : state) {
+    const Densified d = densify(program, settings, dm);
+    std::vector<AxisValues> axes;
+    axes.reserve(d.samples.size());
+    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
+    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
+    poses = d.samples.size();
+  }
+  state.counters["poses"] = static_cast<double>(poses);
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
+}
+BENCHMARK(BM_PoseEngine)->Unit(benchmark::kMillisecond);
+
 }  // namespace
