@@ -2,10 +2,9 @@
 // path, so they go to a temporary file first). The only exception allowed out of the
 // reader is vcut::InputError, and a table it returns must be well formed: distinct
 // non-empty column names, every row as long as the header and finite, ascending lines.
+#include <unistd.h>
 #include <vcut/io/csv.h>
 #include <vcut/io/input_error.h>
-
-#include <unistd.h>
 
 #include <cmath>
 #include <cstddef>
@@ -40,7 +39,8 @@ const std::string& temp_path() {
   return path;
 }
 
-void check(const vcut::io::CsvTable& table, const std::string& path, const uint8_t* data, size_t size) {
+void check(const vcut::io::CsvTable& table, const std::string& path, const uint8_t* data,
+           size_t size) {
   require(table.file == path, "the table names its file");
   require(!table.header.empty(), "a header");
   for (size_t i = 0; i < table.header.size(); ++i) {
@@ -52,8 +52,9 @@ void check(const vcut::io::CsvTable& table, const std::string& path, const uint8
   // A UTF-8 byte order mark that starts the file is not part of the first name (a second
   // one after it is junk, a name of its own).
   const char* bom = "\xEF\xBB\xBF";
-  if (size >= 3 && std::memcmp(data, bom, 3) == 0 && !(size >= 6 && std::memcmp(data + 3, bom, 3) == 0))
-    require(table.header.front().rfind("\xEF\xBB\xBF", 0) != 0, "no byte order mark in a column name");
+  const bool one_bom = size >= 3 && std::memcmp(data, bom, 3) == 0 &&
+                       !(size >= 6 && std::memcmp(data + 3, bom, 3) == 0);
+  if (one_bom) require(table.header.front().rfind(bom, 0) != 0, "no byte order mark in a name");
   require(table.rows.size() == table.lines.size(), "a line for every row");
   int previous = 0;
   for (size_t r = 0; r < table.rows.size(); ++r) {
@@ -78,7 +79,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const vcut::io::CsvTable table = vcut::io::read_csv(path);
     check(table, path, data, size);
     if (verbose())
-      std::fprintf(stderr, "read %zu column(s), %zu row(s)\n", table.header.size(), table.rows.size());
+      std::fprintf(stderr, "read %zu column(s), %zu row(s)\n", table.header.size(),
+                   table.rows.size());
   } catch (const vcut::InputError& e) {
     // Expected for bad input; it names this file and a position in it.
     if (verbose()) std::fprintf(stderr, "InputError: %s\n", e.what());

@@ -3,13 +3,12 @@
 // out of the reader is vcut::InputError; a machine it accepts must build, and forward
 // kinematics at zero axes followed by inverse kinematics of that pose must run without any
 // exception and agree with each other.
+#include <unistd.h>
 #include <vcut/io/input_error.h>
 #include <vcut/io/machine_file.h>
 #include <vcut/kinematics/forward_kinematics.h>
 #include <vcut/kinematics/inverse_kinematics.h>
 #include <vcut/kinematics/machine.h>
-
-#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -71,14 +70,14 @@ void check_spec(const kin::MachineSpec& spec) {
     for (int i = 0; i < 3; ++i)
       for (const kin::ErrorTable* t : {&a.errors.translation_mm[static_cast<size_t>(i)],
                                        &a.errors.rotation_rad[static_cast<size_t>(i)]}) {
-        require(t->positions.empty() ? t->values.size() <= 1
-                                     : t->positions.size() == t->values.size() &&
-                                           t->positions.size() >= 2,
+        require(t->positions.empty()
+                    ? t->values.size() <= 1
+                    : t->positions.size() == t->values.size() && t->positions.size() >= 2,
                 "error table shape");
-        require(std::is_sorted(t->positions.begin(), t->positions.end()) &&
-                    std::adjacent_find(t->positions.begin(), t->positions.end()) ==
-                        t->positions.end(),
-                "error table positions strictly ascending");
+        require(
+            std::is_sorted(t->positions.begin(), t->positions.end()) &&
+                std::adjacent_find(t->positions.begin(), t->positions.end()) == t->positions.end(),
+            "error table positions strictly ascending");
         for (double v : t->values) require(std::isfinite(v), "finite error value");
         for (double p : t->positions) require(std::isfinite(p), "finite error position");
       }
@@ -110,7 +109,8 @@ void check_kinematics(const kin::Machine& machine, double tool_length_mm) {
   double scale = 1.0 + std::abs(tool_length_mm);
   scale = std::max(scale, spec.gauge_point_mm.cwiseAbs().maxCoeff());
   scale = std::max(scale, spec.workpiece_origin_mm.cwiseAbs().maxCoeff());
-  for (const kin::AxisSpec& a : spec.axes) scale = std::max(scale, a.center_mm.cwiseAbs().maxCoeff());
+  for (const kin::AxisSpec& a : spec.axes)
+    scale = std::max(scale, a.center_mm.cwiseAbs().maxCoeff());
   const double tip_tolerance = 1e-5 * scale;
 
   const kin::IkResult ik = kin::inverse(machine, pose, tool_length_mm);
@@ -132,9 +132,9 @@ void check_kinematics(const kin::Machine& machine, double tool_length_mm) {
     if (!a.limits) continue;
     const double margin = a.kind == kin::AxisKind::Linear ? 1e-3 * scale : 1e-6;
     const double lo = a.limits->first, hi = a.limits->second;
-    zero_inside = zero_inside && (a.kind == kin::AxisKind::Linear
-                                      ? lo + margin <= 0.0 && 0.0 <= hi - margin
-                                      : zero_winding_inside(lo, hi, margin));
+    zero_inside =
+        zero_inside && (a.kind == kin::AxisKind::Linear ? lo + margin <= 0.0 && 0.0 <= hi - margin
+                                                        : zero_winding_inside(lo, hi, margin));
   }
   if (zero_inside) require(ik.ok(), "inverse of the zero pose within limits is found");
 }
@@ -162,7 +162,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   std::remove(path.c_str());
-  for (const std::string& w : warnings) require(w.rfind(path + ":", 0) == 0, "warning names the file");
+  for (const std::string& w : warnings)
+    require(w.rfind(path + ":", 0) == 0, "warning names the file");
   check_spec(spec);
   // A spec the reader accepted has passed validate(): Machine must not throw.
   const kin::Machine machine(spec);

@@ -8,14 +8,17 @@ folder it generates N mutants into a temporary folder, runs the driver on them i
 and when a batch exits non-zero (abort from a broken invariant, an exception other than
 vcut::InputError, a crash, a sanitizer report) or runs past the time limit (a hang), it
 runs that batch's files one by one to find the offending inputs, copies them to --out and
-reports each with its symptom. With --minimise each offending input is also shrunk (lines,
-then bytes) while it fails the same way, and the shrunk copy is written next to it.
+reports each with its symptom. With --minimise the first offending input of each kind of
+failure (its symptom and the line that says what broke) is also shrunk (lines, then bytes)
+while it fails the same way, and the shrunk copy is written next to it as <name>.min.
 
 Mutations, one to four stacked per mutant, chosen by a seeded random generator (the same
 --seed gives the same mutants): bit flips, random bytes set, inserted or deleted, a range
 duplicated, truncation, lines deleted, duplicated or swapped, a splice of two seeds (the
 head of one and the tail of another), a token (a word or a number) replaced by a special
-value of the format, and a special value inserted at a random place. Special values for
+value of the format, a number replaced by an interesting number (0, 1e-9, 1.0000005, 360,
+1e9, 1e400, .nan, ...; the file stays readable more often, so that what comes after the
+parser runs too), and a special value inserted at a random place. Special values for
 YAML (--format yaml): .nan, .inf, ~, [, {, &a, *a, !!binary, merge keys, huge and tiny
 numbers, error names, deep nesting, ...; for CSV (--format csv): nan, -nan, inf, 1e400,
 quotes, commas, CR, BOM, hex floats, ...
@@ -314,7 +317,12 @@ def main():
     scratch = tempfile.mkdtemp(prefix="vcut-mutate-")
     global ENV
     driver, ENV = snapshot(driver, os.path.join(scratch, "driver"))
+    # The drivers write each input to a temporary file; one left by a crash goes with scratch.
+    ENV = dict(ENV if ENV is not None else os.environ)
+    ENV["TMPDIR"] = os.path.join(scratch, "tmp")
+    os.makedirs(ENV["TMPDIR"])
     failures = []
+    minimised = set()  # signatures of the failures already shrunk
     done = 0
     try:
         while done < args.n:
@@ -339,10 +347,11 @@ def main():
                     kept = os.path.join(out_dir, os.path.basename(path))
                     shutil.copyfile(path, kept)
                     report = "%s: %s\n  %s" % (kept, one, one_tail.strip().replace("\n", "\n  ")[-600:])
-                    if args.minimise:
+                    sig = signature(one, one_tail)
+                    if args.minimise and sig not in minimised:
+                        minimised.add(sig)
                         with open(path, "rb") as f:
-                            small = minimise(driver, f.read(), signature(one, one_tail),
-                                             args.timeout, scratch)
+                            small = minimise(driver, f.read(), sig, args.timeout, scratch)
                         with open(kept + ".min", "wb") as f:
                             f.write(small)
                         report += "\n  minimised (%d bytes): %s.min" % (len(small), kept)

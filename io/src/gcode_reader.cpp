@@ -177,6 +177,7 @@ constexpr GEntry kGCodes[] = {
     {0, {kMotion, true}}, {10, {kMotion, true}}, {20, {kMotion, true}}, {30, {kMotion, true}},
     {800, {kMotion, true}},
     {40, {kNonModal, true}},  // G4 dwell: no motion
+    {90, {kNonModal, true}},  // G9 exact stop at the end of this line's move
     {170, {kPlane, true}}, {180, {kPlane, true}}, {190, {kPlane, true}},
     {200, {kUnits, true}}, {210, {kUnits, true}},
     {400, {kCutterComp, true}},
@@ -190,7 +191,7 @@ constexpr GEntry kGCodes[] = {
     {591, {kCoordinateSystem, true}}, {592, {kCoordinateSystem, true}},
     {593, {kCoordinateSystem, true}},
     // G61/G61.1/G64: exact stop vs. blending changes the timing, not the programmed path;
-    // the Block has no field for it yet.
+    // Block::exact_stop and blend_tolerance_mm carry it to the feed planner.
     {610, {kPathControl, true}}, {611, {kPathControl, true}}, {640, {kPathControl, true}},
     {900, {kDistance, true}}, {910, {kDistance, true}},
     {901, {kArcDistance, true}}, {911, {kArcDistance, true}},
@@ -353,6 +354,7 @@ class Reader {
   Line line_words_;
   std::array<bool, 26> used_{};  // words consumed by some code on this line
   bool lenient_ = false;         // an ignored unsupported code may consume any word
+  bool exact_stop_line_ = false;  // G9 on this line
   int o_column_ = 0;             // column of a Fanuc program number on this line
 };
 
@@ -586,6 +588,8 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed) {
   block.start_rotary = state_.rotary;
   block.end_rotary = rotary;
   block.tool_pose = !state_.rotary_program;
+  block.exact_stop = state_.exact_stop || exact_stop_line_;
+  block.blend_tolerance_mm = state_.blend_tolerance_mm;
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   state_.rotary = rotary;
   const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns;
@@ -938,8 +942,12 @@ bool Reader::execute() {
     used_['H' - 'A'] = true;
   }
   if (const Code* g = by_group[kCoordinateSystem]; g != nullptr) state_.work_offset = g->text;
+  exact_stop_line_ = by_group[kNonModal] != nullptr && by_group[kNonModal]->number == 90;
+  if (const Code* g = by_group[kPathControl]; g != nullptr && g->number != 640) {
+    state_.exact_stop = true;  // G61, G61.1
+  }
   if (const Code* g = by_group[kPathControl]; g != nullptr && g->number == 640) {
-    // G64 P (blending tolerance) and Q (naive CAM tolerance): lengths >= 0, not used here.
+    // G64 P (blending tolerance) and Q (naive CAM tolerance, not used): lengths >= 0.
     for (char letter : {'P', 'Q'}) {
       const Word& w = word(letter);
       if (w.present && w.value < 0.0) {
@@ -947,6 +955,8 @@ bool Reader::execute() {
              std::string("G64 ") + letter + " " + num(w.value) + " (expected a tolerance >= 0)");
       }
     }
+    state_.exact_stop = false;
+    state_.blend_tolerance_mm = p.present ? p.value * unit() : -1.0;
     if (p.present) use_p(g->text);
     used_['Q' - 'A'] = true;
   }

@@ -33,7 +33,8 @@ std::string join(const std::string& where, const std::string& key) {
 void scalar_keys(const YamlReader& yaml, const YAML::Node& map, const std::string& where) {
   for (const auto& kv : map)
     if (!kv.first.IsScalar())
-      yaml.fail(kv.first, where.empty() ? "machine" : where, "a plain key (not a list, map or null)");
+      yaml.fail(kv.first, where.empty() ? "machine" : where,
+                "a plain key (not a list, map or null)");
 }
 
 // yaml-cpp keeps both entries of a repeated key and answers map[key] with the first one, so
@@ -105,14 +106,16 @@ AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::No
     axis.limits = std::make_pair(yaml.number(limits[0], where + ".limits") * unit,
                                  yaml.number(limits[1], where + ".limits") * unit);
   }
-  if (a["max_velocity"])
-    axis.max_velocity_per_s =
-        yaml.positive(a["max_velocity"], where + ".max_velocity") * unit * kMinPerS;
-  if (a["max_acceleration"])
-    axis.max_acceleration_per_s2 =
-        yaml.positive(a["max_acceleration"], where + ".max_acceleration") * unit;
-  if (a["max_jerk"])
-    axis.max_jerk_per_s3 = yaml.positive(a["max_jerk"], where + ".max_jerk") * unit;
+  // 0 inside means "not given": a positive value so tiny that it rounds to 0 (4.9e-324) is
+  // an error, not silence.
+  const auto rate = [&](const char* key, double factor) {
+    const double v = yaml.positive(a[key], join(where, key)) * factor;
+    if (!(v > 0.0)) yaml.fail(a[key], join(where, key), "a positive number of sensible size");
+    return v;
+  };
+  if (a["max_velocity"]) axis.max_velocity_per_s = rate("max_velocity", unit * kMinPerS);
+  if (a["max_acceleration"]) axis.max_acceleration_per_s2 = rate("max_acceleration", unit);
+  if (a["max_jerk"]) axis.max_jerk_per_s3 = rate("max_jerk", unit);
   return axis;
 }
 
@@ -130,15 +133,15 @@ ErrorTable read_error_table(const YamlReader& yaml, const YAML::Node& node,
   const YAML::Node rows = yaml.require(node, "table", where);
   if (!rows.IsSequence() || rows.size() < 2)
     yaml.fail(rows, where + ".table", "a list of at least two rows [position, value]");
-  double last = 0.0;
   for (const auto& row : rows) {
     if (!row.IsSequence() || row.size() != 2)
       yaml.fail(row, where + ".table", "a row [position, value]");
-    const double position = yaml.number(row[0], where + ".table");
-    if (!table.positions.empty() && !(position > last))
+    // Compared in internal units: deg -> rad can round two tiny positions (0 and 4.9e-324
+    // deg) to the same one.
+    const double position = yaml.number(row[0], where + ".table") * position_unit;
+    if (!table.positions.empty() && !(position > table.positions.back()))
       yaml.fail(row[0], where + ".table", "positions in strictly ascending order");
-    last = position;
-    table.positions.push_back(position * position_unit);
+    table.positions.push_back(position);
     table.values.push_back(yaml.number(row[1], where + ".table") * value_unit);
   }
   return table;
@@ -224,7 +227,8 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
   if (!root.IsMap()) {
     // An empty file (or one of comments only) has no node to point at: its first line.
     if (root.Mark().is_null())
-      throw InputError(yaml.file(), 1, 1, "'machine': expected a map of machine settings (the file is empty)");
+      throw InputError(yaml.file(), 1, 1,
+                       "'machine': expected a map of machine settings (the file is empty)");
     yaml.fail(root, "machine", "a map of machine settings");
   }
   check_keys(yaml, root, "",

@@ -32,6 +32,17 @@ std::string num(double v, int digits = 10) {
   return buf;
 }
 
+// A G-code number: fixed point, as rs274 reads it (no exponent: a tiny compensated angle like
+// 2.7e-12 in %g form is a syntax error), 9 decimals (1e-9 mm, 1e-9 deg), trailing zeros cut.
+std::string gcode_num(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.9f", v);
+  std::string s = buf;
+  s.erase(s.find_last_not_of('0') + 1);
+  if (s.back() == '.') s.pop_back();
+  return s == "-0" ? "0" : s;
+}
+
 }  // namespace
 
 JobProgram read_job_program(const Job& job) {
@@ -148,7 +159,27 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
       run.max_nonlinear_line = line;
     }
     if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable});
-    if (r.singular) run.events.push_back({"singular", line, "tool axis in the singular cone: the free rotary angle was kept"});
+  }
+  // Singular poses, one event per run of consecutive blocks (a three-axis program on a
+  // five-axis machine sits on the pole throughout: one event, not thousands).
+  for (size_t i = 0; i < blocks.size();) {
+    if (!blocks[i].singular) {
+      ++i;
+      continue;
+    }
+    size_t j = i;
+    double miss = 0.0;
+    while (j < blocks.size() && blocks[j].singular) miss = std::max(miss, blocks[j++].singular_miss_rad);
+    const kinematics::SourceRef a = program.blocks[i].source, b = program.blocks[j - 1].source;
+    std::string where = program.where(a);
+    if (b.file == a.file && b.line != a.line) where += "-" + std::to_string(b.line);
+    else if (b.file != a.file) where += " to " + program.where(b);
+    char detail[160];
+    std::snprintf(detail, sizeof detail,
+                  "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "
+                  "(largest tool-axis miss %.3g urad)", j - i, miss * 1e6);
+    run.events.push_back({"singular", where, detail});
+    i = j;
   }
   run.q_mean = blocks.empty() ? 0.0 : q_sum / static_cast<double>(blocks.size());
   int last_block = -1;
@@ -220,10 +251,13 @@ CompensationReport write_compensated_program(const std::string& path, const Job&
       ++report.not_converged;
       if (report.first_failure.empty()) report.first_failure = line + ": " + c.note;
     }
-    if (block && block->tool != tool && block->tool > 0) {
-      tool = block->tool;
+    // The start pose was computed with the first block's tool (run.tool_length_mm), so its
+    // tool change comes before the start line: read back, the line then has the same length.
+    const kinematics::Block* holder = block ? block : program.blocks.empty() ? nullptr : &program.blocks.front();
+    if (holder && holder->tool != tool && holder->tool > 0) {
+      tool = holder->tool;
       text += "T" + std::to_string(tool) + " M6\n";
-      if (block->spindle_rpm > 0) text += "S" + num(block->spindle_rpm) + (block->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
+      if (holder->spindle_rpm > 0) text += "S" + gcode_num(holder->spindle_rpm) + (holder->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
     }
     // X Y Z of an axis program: the tip at all-zero rotary axes for these linear axes.
     kinematics::AxisValues linear = c.q;
@@ -231,14 +265,14 @@ CompensationReport write_compensated_program(const std::string& path, const Job&
     const Eigen::Vector3d xyz = kinematics::forward(machine, linear, length).tip_mm;
     const bool rapid = !block || block->kind == kinematics::MotionKind::Rapid;
     std::string g = rapid ? "G0" : "G1";
-    g += " X" + num(xyz.x(), 12) + " Y" + num(xyz.y(), 12) + " Z" + num(xyz.z(), 12);
+    g += " X" + gcode_num(xyz.x()) + " Y" + gcode_num(xyz.y()) + " Z" + gcode_num(xyz.z());
     for (int k = 0; k < machine.rotary_count(); ++k) {
       const int a = machine.rotary_axis(k);
-      g += std::string(" ") + machine.axis(a).letter + num(c.q[a] * 180.0 / M_PI, 12);
+      g += std::string(" ") + machine.axis(a).letter + gcode_num(c.q[a] * 180.0 / M_PI);
     }
     if (!rapid && block->feed_mm_per_min != feed) {
       feed = block->feed_mm_per_min;
-      g += " F" + num(feed);
+      g += " F" + gcode_num(feed);
     }
     text += g + " (" + line + ")\n";
   }

@@ -353,6 +353,7 @@ Densified densify(const Program& program, const DensifySettings& settings, const
             sample.axes = r.q();
             sample.singular = r.status == IkStatus::Singular;
             report.singular = report.singular || sample.singular;
+            report.singular_miss_rad = std::max(report.singular_miss_rad, r.orientation_error_rad);
           } else {
             sample.axes = previous;
             if (report.unreachable.empty()) report.unreachable = r.reason;

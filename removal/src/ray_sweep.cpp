@@ -51,6 +51,40 @@ double bisect(F&& f, double outside, double inside, double tolerance) {
   return inside;
 }
 
+// The first root of a convex, 1-Lipschitz f met walking from `from` toward `toward`, where
+// f(from) > 0. Each step takes the farther of the sphere step (f is 1-Lipschitz: no root
+// nearer than f) and the secant step (f is convex: beyond two points before the root f lies
+// above their secant, so the secant's zero comes at or before the root): it never passes the
+// root and converges superlinearly. False when f stops decreasing first (the line misses)
+// or the walk leaves the range; `converged` false when it ran out of steps.
+template <class F>
+bool march_to_root(F&& f, double from, double toward, double tolerance, double& root, bool& converged) {
+  const double dir = toward > from ? 1.0 : -1.0;
+  double s0 = from, f0 = f(s0);
+  converged = true;
+  if (f0 <= tolerance) {
+    root = from;
+    return true;
+  }
+  double s1 = s0 + dir * f0;
+  for (int step = 0; step < 100; ++step) {
+    if ((s1 - toward) * dir > 0.0) return false;
+    const double f1 = f(s1);
+    if (f1 <= tolerance) {
+      root = s1;
+      return true;
+    }
+    if (f1 >= f0) return false;
+    const double secant = s1 + (s1 - s0) * f1 / (f0 - f1);
+    const double sphere = s1 + dir * f1;
+    s0 = s1;
+    f0 = f1;
+    s1 = dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere);
+  }
+  converged = false;
+  return false;
+}
+
 void widen(double& lo, double& hi, double a, double b) {
   lo = std::min(lo, a);
   hi = std::max(hi, b);
@@ -601,8 +635,16 @@ bool RaySweep::general(int axis, const Vector3d& o, double& lo, double& hi) cons
     x[axis] = s;
     return sweep_.distance(x);
   };
-  // The sweep's signed distance is convex along the line: bracket its minimum, then the
-  // two zero crossings on either side of it.
+  // The sweep's signed distance is convex and 1-Lipschitz along the line: march to its first
+  // zero from each end (exact to the distance's own tolerance, kGeneralSweepTolerance_mm).
+  bool converged_lo = false, converged_hi = false;
+  if (march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
+    if (march_to_root(f, sb, sa, kGeneralSweepTolerance_mm, hi, converged_hi) && hi >= lo) return true;
+    if (converged_hi) return false;
+  } else if (converged_lo) {
+    return false;
+  }
+  // Out of steps (not seen in practice): bracket the minimum, then the two zero crossings.
   const double s_min = golden_argmin(f, sa, sb, kRaySearchTolerance_mm);
   if (f(s_min) > 0.0) return false;
   lo = f(sa) > 0.0 ? bisect(f, sa, s_min, kRaySearchTolerance_mm) : sa;

@@ -681,6 +681,22 @@ TEST(GcodeReaderRotary, AxisProgramWithAbsoluteAndIncrementalRotaryWords) {
   EXPECT_EQ(p.blocks[2].kind, kinematics::MotionKind::Rapid);
 }
 
+TEST(GcodeReaderPathControl, ExactStopAndBlendingReachTheBlocks) {
+  // G61 stops at every block end until G64; G9 stops at the end of its own line only; G64 P
+  // is the blending tolerance (in program units: 0.002 in = 0.0508 mm).
+  const Program p = read("G0 X0 Y0 Z0\nG61 G1 X1 F100\nX2\nG64 P0.05 X3\nG9 X4\nX5\nG20 G64 P0.002 X0.5\n");
+  ASSERT_EQ(p.blocks.size(), 6u);
+  EXPECT_TRUE(p.blocks[0].exact_stop);
+  EXPECT_TRUE(p.blocks[1].exact_stop);
+  EXPECT_FALSE(p.blocks[2].exact_stop);
+  EXPECT_DOUBLE_EQ(p.blocks[2].blend_tolerance_mm, 0.05);
+  EXPECT_TRUE(p.blocks[3].exact_stop);
+  EXPECT_FALSE(p.blocks[4].exact_stop);
+  EXPECT_DOUBLE_EQ(p.blocks[4].blend_tolerance_mm, 0.05);
+  EXPECT_NEAR(p.blocks[5].blend_tolerance_mm, 0.0508, 1e-12);
+  EXPECT_LT(read("G0 X0 Y0 Z0\nG64 G1 X1 F100\n").blocks[0].blend_tolerance_mm, 0.0);
+}
+
 TEST(GcodeReaderRotary, ThreeAxisProgramsStayToolPoses) {
   const Program p = read("G0 X1 Y2 Z3\nG1 X4 F100\n");
   ASSERT_EQ(p.blocks.size(), 1u);

@@ -56,6 +56,8 @@ struct GcodeState {
   // axis program (Block::tool_pose false: X Y Z are the linear axes, A B C axis values).
   kinematics::RotaryWords rotary;
   bool rotary_program = false;
+  bool exact_stop = false;           // G61 / G61.1 (G64 clears it)
+  double blend_tolerance_mm = -1.0;  // G64 P; < 0: none given
 
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
