@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -49,12 +48,12 @@ void check(const vcut::io::CsvTable& table, const std::string& path, const uint8
     require(name.find_first_of(",\r\n") == std::string::npos, "a column name is one field");
     require(table.column(name) == static_cast<int>(i), "distinct column names");
   }
-  // A UTF-8 byte order mark that starts the file is not part of the first name (a second
-  // one after it is junk, a name of its own).
+  // A UTF-8 byte order mark that starts the file is not part of the first name (any other one
+  // is junk, part of a name).
+  const std::string text(reinterpret_cast<const char*>(data), size);
   const char* bom = "\xEF\xBB\xBF";
-  const bool one_bom = size >= 3 && std::memcmp(data, bom, 3) == 0 &&
-                       !(size >= 6 && std::memcmp(data + 3, bom, 3) == 0);
-  if (one_bom) require(table.header.front().rfind(bom, 0) != 0, "no byte order mark in a name");
+  if (text.rfind(bom, 0) == 0 && text.find(bom, 3) == std::string::npos)
+    require(table.header.front().rfind(bom, 0) != 0, "no byte order mark in a name");
   require(table.rows.size() == table.lines.size(), "a line for every row");
   int previous = 0;
   for (size_t r = 0; r < table.rows.size(); ++r) {

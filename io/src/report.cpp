@@ -129,6 +129,15 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
     }
     e["events"] = ordered_json::array();
     for (const PoseEvent& ev : p.events) e["events"].push_back({{"kind", ev.kind}, {"line", ev.line}, {"detail", ev.detail}});
+    if (r.nominal.done) {
+      e["nominal_vs_actual"] = {{"compared", "the part cut with the actual poses against the part cut with the nominal ones"},
+                                {"max_mm", um(r.nominal.max_mm)},
+                                {"rms_mm", um(r.nominal.rms_mm)},
+                                {"p99_mm", um(r.nominal.p99_mm)},
+                                {"max_at", vec(r.nominal.max_where_mm)},
+                                {"max_line", r.nominal.max_line},
+                                {"vertices", r.nominal.vertices}};
+    }
     j["pose_engine"] = e;
   }
   j["warnings"] = r.warnings;

@@ -10,6 +10,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <memory>
 #include <map>
 #include <set>
 #include <sstream>
@@ -77,6 +79,43 @@ removal::TriangleMesh transformed(removal::TriangleMesh mesh, const DesignSpec& 
   return mesh;
 }
 
+// Every vertex of each surface against the other's triangles.
+SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v) {
+  const removal::DesignDistance to_b(b.mesh), to_a(a.mesh);
+  std::vector<double> d(a.mesh.vertices_mm.size() + b.mesh.vertices_mm.size());
+  std::vector<Eigen::Vector3d> where(d.size());
+  constexpr std::size_t kChunk = 1024;
+  tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    removal::DistanceHint hint;
+    for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
+      const bool in_a = i < a.mesh.vertices_mm.size();
+      if (i == a.mesh.vertices_mm.size()) hint = removal::DistanceHint();
+      where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - a.mesh.vertices_mm.size()];
+      d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
+    }
+  });
+  SurfaceDifference e;
+  e.done = true;
+  e.vertices = d.size();
+  double squares = 0.0;
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    squares += d[i] * d[i];
+    if (d[i] > e.max_mm) {
+      e.max_mm = d[i];
+      e.max_where_mm = where[i];
+    }
+  }
+  e.rms_mm = d.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(d.size()));
+  std::vector<double> sorted = d;
+  if (!sorted.empty()) {
+    const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
+    e.p99_mm = sorted[k];
+  }
+  for (double x : d) e.beyond_quarter += x > 0.25 * v;
+  return e;
+}
+
 }  // namespace
 
 SimulationResult simulate(const Job& job, const SimulateOptions& options) {
@@ -131,32 +170,40 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   }
   const auto& samples = run.densified.samples;
   const bool cut_actual = !run.actual.empty();
-  auto pose_at = [&](std::size_t i) -> const kinematics::ToolPose& { return cut_actual ? run.actual[i] : samples[i].pose; };
   const double rotation_bound_mm = v / 10.0;
   result.poses = samples.size();
-  for (std::size_t i = 1; i < samples.size(); ++i) {
-    const auto& b = program.blocks[static_cast<std::size_t>(samples[i].block)];
-    if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
-    const kinematics::ToolPose& from = pose_at(i - 1);
-    const kinematics::ToolPose& to = pose_at(i);
-    removal::Move m;
-    m.start_mm = from.tip_mm;
-    m.end_mm = to.tip_mm;
-    m.axis = to.axis;
-    m.cutter = cutter_index.at(b.tool);
-    m.block = samples[i].block;
-    m.rapid = b.kind == kinematics::MotionKind::Rapid;
-    const bool turns = (from.axis - to.axis).norm() > 1e-12;
-    if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
-    result.cutting_moves += !m.rapid;
-    if (turns) {
-      const int pieces = removal::five_axis_pieces(moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
-                                                   rotation_bound_mm);
-      removal::append_five_axis_move(moves.moves, m, from.axis, to.axis, pieces);
-      result.rotating_moves += 1;
-    } else {
-      moves.moves.push_back(m);
+  // The moves through the actual poses (servo, errors) when there are any, else the nominal.
+  auto append_moves = [&](removal::MoveList& out, bool actual, bool count) {
+    for (std::size_t i = 1; i < samples.size(); ++i) {
+      const auto& b = program.blocks[static_cast<std::size_t>(samples[i].block)];
+      if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
+      const kinematics::ToolPose& from = actual ? run.actual[i - 1] : samples[i - 1].pose;
+      const kinematics::ToolPose& to = actual ? run.actual[i] : samples[i].pose;
+      removal::Move m;
+      m.start_mm = from.tip_mm;
+      m.end_mm = to.tip_mm;
+      m.axis = to.axis;
+      m.cutter = cutter_index.at(b.tool);
+      m.block = samples[i].block;
+      m.rapid = b.kind == kinematics::MotionKind::Rapid;
+      const bool turns = (from.axis - to.axis).norm() > 1e-12;
+      if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
+      if (count) result.cutting_moves += !m.rapid;
+      if (turns) {
+        const int pieces = removal::five_axis_pieces(out.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
+                                                     rotation_bound_mm);
+        removal::append_five_axis_move(out.moves, m, from.axis, to.axis, pieces);
+        if (count) result.rotating_moves += 1;
+      } else {
+        out.moves.push_back(m);
+      }
     }
+  };
+  append_moves(moves, cut_actual, true);
+  removal::MoveList nominal_moves;
+  if (cut_actual) {
+    nominal_moves.cutters = moves.cutters;
+    append_moves(nominal_moves, false, false);
   }
   result.moves = moves.moves.size();
   stage_done("densify");
@@ -256,37 +303,30 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     const removal::SurfaceMesh other = second->surface();
     result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
     result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    const removal::DesignDistance to_other(other.mesh), to_primary(machined.mesh);
-    // Every vertex of each surface against the other's triangles.
-    std::vector<double> d(machined.mesh.vertices_mm.size() + other.mesh.vertices_mm.size());
-    std::vector<Eigen::Vector3d> where(d.size());
-    constexpr std::size_t kChunk = 1024;
-    tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
-      removal::DistanceHint hint;
-      for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
-        const bool mine = i < machined.mesh.vertices_mm.size();
-        if (i == machined.mesh.vertices_mm.size()) hint = removal::DistanceHint();
-        where[i] = mine ? machined.mesh.vertices_mm[i] : other.mesh.vertices_mm[i - machined.mesh.vertices_mm.size()];
-        d[i] = std::abs((mine ? to_other : to_primary).signed_distance(where[i], hint));
-      }
-    });
-    EngineCheck& e = result.engines;
-    e.done = true;
-    e.vertices = d.size();
-    double squares = 0.0;
-    for (std::size_t i = 0; i < d.size(); ++i) {
-      squares += d[i] * d[i];
-      if (d[i] > e.max_mm) { e.max_mm = d[i]; e.max_where_mm = where[i]; }
-    }
-    e.rms_mm = d.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(d.size()));
-    std::vector<double> sorted = d;
-    if (!sorted.empty()) {
-      const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
-      std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
-      e.p99_mm = sorted[k];
-    }
-    for (double x : d) e.beyond_quarter += x > 0.25 * v;
+    static_cast<SurfaceDifference&>(result.engines) = surface_difference(machined, other, v);
     stage_done("check");
+  }
+
+  if (cut_actual) {
+    // The machine cut with the actual poses; cut the nominal ones too (same engine) and
+    // measure how far the real part departs from the programmed one.
+    progress("nominal", 0, 1);
+    std::unique_ptr<removal::Stock> nominal;
+    if (use_dexel) nominal = std::make_unique<removal::DexelStock>(shape, v);
+    else nominal = std::make_unique<removal::VdbStock>(shape, v);
+    nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
+    const removal::SurfaceMesh nominal_surface = nominal->surface();
+    static_cast<SurfaceDifference&>(result.nominal) = surface_difference(machined, nominal_surface, v);
+    // The NC line: the machined vertex nearest the largest difference.
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < machined.mesh.vertices_mm.size(); ++i) {
+      const double d = (machined.mesh.vertices_mm[i] - result.nominal.max_where_mm).squaredNorm();
+      if (d < best && machined.vertex_move[i] >= 0) {
+        best = d;
+        result.nominal.max_line = program.where(block_of(machined.vertex_move[i]).source);
+      }
+    }
+    stage_done("nominal");
   }
 
   // 7. Compare.

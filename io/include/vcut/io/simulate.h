@@ -55,12 +55,23 @@ struct EndpointCheck {
 };
 
 // engine: both — the two engines' machined surfaces against each other.
-struct EngineCheck {
+// The distance between two machined surfaces, every vertex of each against the other's
+// triangles.
+struct SurfaceDifference {
   bool done = false;
   double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
   Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
   std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
+};
+
+struct EngineCheck : SurfaceDifference {
   double vdb_cut_s = 0.0, vdb_mesh_s = 0.0;
+};
+
+// With servo or machine errors the machine cuts with the actual poses; the nominal cut is
+// made too, and this is how far the real part departs from the programmed one.
+struct NominalCheck : SurfaceDifference {
+  std::string max_line;  // NC line of the actual surface's point farthest from the nominal one
 };
 
 struct SimulationResult {
@@ -88,6 +99,7 @@ struct SimulationResult {
   std::vector<std::string> outputs;
   EndpointCheck endpoints;
   EngineCheck engines;
+  NominalCheck nominal;
 };
 
 // Runs the job and writes machined.stl, deviation.ply (with a design), report.json and
