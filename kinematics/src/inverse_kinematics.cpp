@@ -17,6 +17,7 @@ constexpr double kTwoPi = 2.0 * M_PI;
 constexpr double kLimitSlack = 1e-9;   // mm or rad: a value this far past a limit is still on it
 constexpr double kFreeAngleSine = 1e-12;  // a vector this close to a rotation axis has no angle about it
 constexpr double kRadToDeg = 180.0 / M_PI;
+constexpr double kMaxWindings = 4.0;  // windings listed per axis when its limits span more turns
 
 std::string num(double v) {
   char buf[32];
@@ -103,7 +104,15 @@ void windings(const AxisSpec& a, double angle, const double* previous, std::vect
     return;
   }
   const double lo = a.limits->first - kLimitSlack, hi = a.limits->second + kLimitSlack;
-  for (double n = std::ceil((lo - angle) / kTwoPi); angle + n * kTwoPi <= hi; n += 1.0) out.push_back(angle + n * kTwoPi);
+  const double first = std::ceil((lo - angle) / kTwoPi), last = std::floor((hi - angle) / kTwoPi);
+  if (last - first + 1.0 <= kMaxWindings) {
+    for (double n = first; n <= last; n += 1.0) out.push_back(angle + n * kTwoPi);
+    return;
+  }
+  // Limits many turns wide: the windings nearest the previous value (or zero), not all.
+  const double centre = std::clamp(std::round(((previous ? *previous : 0.0) - angle) / kTwoPi), first, last);
+  const double from = std::clamp(centre - kMaxWindings / 2, first, last - kMaxWindings + 1.0);
+  for (double n = from; n < from + kMaxWindings; n += 1.0) out.push_back(angle + n * kTwoPi);
 }
 
 }  // namespace

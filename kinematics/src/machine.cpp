@@ -110,7 +110,8 @@ std::vector<SpecProblem> validate(MachineSpec& spec) {
       if (lin[i]->direction.cross(lin[j]->direction).norm() < kParallelSine)
         out.push_back({std::string("axes.") + lin[j]->letter + ".direction",
                        std::string("a direction not parallel to axis ") + lin[i]->letter + " (parallel linear axes)", false});
-  if (lin.size() == 3 && out.empty() &&
+  const bool errors_so_far = std::any_of(out.begin(), out.end(), [](const SpecProblem& p) { return !p.warning; });
+  if (lin.size() == 3 && !errors_so_far &&
       std::abs(lin[0]->direction.cross(lin[1]->direction).dot(lin[2]->direction)) < kParallelSine)
     out.push_back({std::string("axes.") + lin[2]->letter + ".direction",
                    "three linear directions that span space (all three lie in one plane)", false});

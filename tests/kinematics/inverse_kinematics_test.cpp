@@ -118,6 +118,35 @@ TEST(InverseKinematics, ContinuousAndWideAxesListEveryWinding) {
   EXPECT_EQ(r.solutions.size(), 4u);  // two branches (B = +-30) x two windings
 }
 
+TEST(InverseKinematics, LimitsManyTurnsWideListTheWindingsNearThePrevious) {
+  // C limited to +-1e6 deg (2,778 turns each way): listing every winding would take seconds
+  // and hundreds of MB (found by fuzzing). The four nearest the previous value are listed.
+  MachineSpec s = machines()[2];
+  s.axes[4].limits = std::make_pair(-1e6 * kDeg, 1e6 * kDeg);
+  const Machine m(s);
+  const int B = m.axis_index('B'), C = m.axis_index('C');
+  AxisValues q = m.zero();
+  q[B] = 30 * kDeg;
+  q[C] = 100 * kDeg + 500 * 2 * M_PI;  // 500 turns out
+  const ToolPose pose = forward(m, q, 10.0);
+  const IkResult r = inverse(m, pose, 10.0, &q);
+  ASSERT_TRUE(r.ok());
+  EXPECT_LE(r.solutions.size(), 8u);  // two branches x four windings
+  EXPECT_NEAR(r.q()[C], q[C], 1e-9);
+  EXPECT_NEAR(r.q()[B], q[B], 1e-9);
+}
+
+TEST(MachineValidation, CoplanarLinearAxesAreAnErrorEvenAfterANormalisation) {
+  // A warning (the spindle axis normalised) must not hide the error (found by fuzzing).
+  MachineSpec s = machines()[0];
+  s.axes[2].direction = Eigen::Vector3d(0.6, 0.8, 0.0);
+  s.spindle_axis = Eigen::Vector3d(1e-7, 0, 1);
+  bool coplanar = false;
+  for (const SpecProblem& p : validate(s)) coplanar = coplanar || (!p.warning && p.message.find("one plane") != std::string::npos);
+  EXPECT_TRUE(coplanar);
+  EXPECT_THROW(Machine{s}, std::invalid_argument);
+}
+
 TEST(InverseKinematics, LeastRotaryMotionAndPreferredSign) {
   const Machine hh(machines()[4]);  // head-head AC, C in [-360, 360]
   const int A = hh.axis_index('A'), C = hh.axis_index('C');
