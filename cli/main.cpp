@@ -55,6 +55,10 @@ int run_poses(const std::string& job_file, std::string out, bool quiet) {
   }
   const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
   vcut::io::write_poses_csv(out, job, run);
+  // Per-block figures beside it: poses.csv -> poses_blocks.csv.
+  const std::string blocks_out = (out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out) +
+                                 "_blocks.csv";
+  vcut::io::write_blocks_csv(blocks_out, job, run);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   if (quiet) return 0;
@@ -70,7 +74,7 @@ int run_poses(const std::string& job_file, std::string out, bool quiet) {
   for (const auto& e : run.events)
     if (shown++ < 10) std::printf("%s at %s: %s\n", e.kind.c_str(), e.line.c_str(), e.detail.c_str());
   if (run.events.size() > 10) std::printf("... %zu events in all\n", run.events.size());
-  std::printf("poses: %s\n", out.c_str());
+  std::printf("poses: %s\nper block: %s\n", out.c_str(), blocks_out.c_str());
   return 0;
 }
 

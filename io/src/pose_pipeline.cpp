@@ -224,6 +224,50 @@ void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run
   write_text_atomically(path, text);
 }
 
+void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run) {
+  (void)job;
+  const bool actual = !run.actual.empty();
+  const auto& samples = run.densified.samples;
+  const auto& blocks = run.densified.blocks;
+  // Per block: the contour error over its poses (the motion into each sample belongs to the
+  // sample's block).
+  std::vector<double> max_um(blocks.size(), 0.0), sum2(blocks.size(), 0.0);
+  std::vector<size_t> count(blocks.size(), 0), argmax(blocks.size(), 0);
+  if (actual) {
+    for (size_t i = 1; i < samples.size(); ++i) {
+      const auto b = static_cast<size_t>(samples[i].block);
+      const double e = run.contour_error_um[i];
+      sum2[b] += e * e;
+      ++count[b];
+      if (e >= max_um[b]) max_um[b] = e, argmax[b] = i;
+    }
+  }
+  std::string text = "block,source,kind,q,time_s,nonlinear_error_mm,nonlinear_x,nonlinear_y,nonlinear_z,singular,unreachable";
+  if (actual) text += ",contour_max_um,contour_rms_um,contour_max_x,contour_max_y,contour_max_z";
+  text += "\n";
+  auto quoted = [](const std::string& t) {
+    std::string q = "\"";
+    for (char c : t) q += c == '"' ? std::string("\"\"") : std::string(1, c);
+    return q + "\"";
+  };
+  static const char* kKinds[] = {"rapid", "linear", "arc"};
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    const auto& block = run.program.blocks[b];
+    const auto& r = blocks[b];
+    text += std::to_string(b) + "," + run.program.where(block.source) + "," + kKinds[static_cast<int>(block.kind)] + "," +
+            std::to_string(r.q) + "," + num(b < run.feed.block_time_s.size() ? run.feed.block_time_s[b] : 0.0) + "," +
+            num(r.nonlinear_error_mm);
+    for (int k = 0; k < 3; ++k) text += "," + num(r.nonlinear_at_mm[k]);
+    text += std::string(",") + (r.singular ? "1" : "0") + "," + quoted(r.unreachable);
+    if (actual) {
+      text += "," + num(max_um[b]) + "," + num(count[b] ? std::sqrt(sum2[b] / static_cast<double>(count[b])) : 0.0);
+      for (int k = 0; k < 3; ++k) text += "," + num(count[b] ? run.actual[argmax[b]].tip_mm[k] : 0.0);
+    }
+    text += "\n";
+  }
+  write_text_atomically(path, text);
+}
+
 CompensationReport write_compensated_program(const std::string& path, const Job& job, const PoseRun& run) {
   const kinematics::Machine machine(job.machine_spec);
   if (!machine.has_errors())

@@ -167,6 +167,17 @@ TEST_F(PoseCli, ThreeAxisRestToRestBlockTime) {
   ASSERT_GE(t_start, 0.0);
   EXPECT_NEAR(t_end - t_start, L / v + v / a + a / j, kTimePrecision);
   EXPECT_NEAR(max_feed, F, 1e-6);  // cruise reached
+  // The per-block file beside it: one row per block, the G1's time the same closed form.
+  const Csv blocks = read_csv(dir / "line_blocks.csv");
+  ASSERT_TRUE(blocks.has("time_s") && blocks.has("q") && blocks.has("source"));
+  bool block_found = false;
+  for (size_t r = 0; r < blocks.rows.size(); ++r) {
+    if (blocks.text(r, "source") != "line.ngc:5") continue;
+    block_found = true;
+    EXPECT_EQ(blocks.text(r, "kind"), "linear");
+    EXPECT_NEAR(blocks.num(r, "time_s"), L / v + v / a + a / j, kTimePrecision);
+  }
+  EXPECT_TRUE(block_found);
   // The acceleration phase ends v T_acc / 2 = 3 mm into the block (x = 57) at T_acc = 0.3 s.
   bool found = false;
   for (size_t r = 0; r < csv.rows.size(); ++r) {

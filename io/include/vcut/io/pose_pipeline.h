@@ -55,6 +55,11 @@ PoseRun run_pose_engine(const Job& job);
 // With the program already read; `resolution_mm` sets the default arc chord tolerance (/20).
 PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm);
 
+// One row per program block: block, source, kind, q, time_s, nonlinear_error_mm (and where),
+// singular, unreachable, and with servo or errors the contour error of its poses (max, RMS,
+// where). Written atomically.
+void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run);
+
 // One row per densified pose: block, source, t, x y z (tip), i j k (axis), the axis values by
 // letter (mm, deg), feed (mm/min); with servo or errors also actual_x .. actual_k and
 // contour_error_um. Written atomically.
