@@ -82,9 +82,9 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
   const vcut::io::Job job = vcut::io::read_job(job_file);
   if (out.empty()) {
     vcut::io::ensure_writable_folder(job.out_dir);
-    out = job.out_dir + "/compensated.ngc";
   }
   const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
+  if (out.empty()) out = job.out_dir + (run.dialect == "apt" ? "/compensated.apt" : "/compensated.ngc");
   const vcut::io::CompensationReport r = vcut::io::write_compensated_program(out, job, run);
   if (quiet) return r.not_converged == 0 ? 0 : 1;
   std::printf("compensated %zu poses on %s: uncompensated tip error up to %.3f um (%s)\n", r.poses, job.machine.c_str(),
@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   std::string compensate_job, compensate_out;
   bool compensate_quiet = false;
   compensate->add_option("job", compensate_job, "Job file (YAML)")->required();
-  compensate->add_option("--out", compensate_out, "Output G-code (default: the job's output folder/compensated.ngc)");
+  compensate->add_option("--out", compensate_out, "Output program (default: the job's output folder/compensated.ngc or .apt)");
   compensate->add_flag("--quiet,-q", compensate_quiet, "Print nothing but errors and warnings");
   vcut::cli::MachineCommands machine_commands;
   vcut::cli::add_machine_commands(app, machine_commands);

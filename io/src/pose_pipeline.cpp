@@ -58,6 +58,7 @@ JobProgram read_job_program(const Job& job) {
   for (auto& f : out.program.files) f = display_name(f, job.file);
   out.tools = job.tools;
   out.tools.insert(loaded.cutters.begin(), loaded.cutters.end());  // insert keeps existing numbers
+  out.dialect = loaded.dialect;
   return out;
 }
 
@@ -67,6 +68,7 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
+  run.dialect = input.dialect;
   const kinematics::Program& program = run.program;
   const kinematics::Machine machine(job.machine_spec);
 
@@ -275,8 +277,11 @@ CompensationReport write_compensated_program(const std::string& path, const Job&
   CompensationReport report;
   const auto& samples = run.densified.samples;
   const auto& program = run.program;
-  std::string text = "(vcut compensate: " + job.name + " on " + machine.name() + ", one line per densified pose)\n";
-  text += "G21 G90 G94\n";
+  const bool apt = run.dialect == "apt";
+  std::string text = apt ? "$$ vcut compensate: " + job.name + " on " + machine.name() +
+                               ", one GOTO per densified pose\nUNITS/MM\nMULTAX/ON\n"
+                         : "(vcut compensate: " + job.name + " on " + machine.name() +
+                               ", one line per densified pose)\nG21 G90 G94\n";
   int tool = -1;
   double feed = -1.0;
   for (size_t i = 0; i < samples.size(); ++i) {
@@ -298,6 +303,27 @@ CompensationReport write_compensated_program(const std::string& path, const Job&
     // The start pose was computed with the first block's tool (run.tool_length_mm), so its
     // tool change comes before the start line: read back, the line then has the same length.
     const kinematics::Block* holder = block ? block : program.blocks.empty() ? nullptr : &program.blocks.front();
+    if (holder && holder->tool != tool && holder->tool > 0 && apt) {
+      tool = holder->tool;
+      text += "LOADTL/" + std::to_string(tool) + "\n";
+    }
+    if (apt) {
+      // The pose a tool-centre-point controller turns into the compensated commands.
+      const kinematics::ToolPose p = kinematics::forward(machine, c.q, length);
+      const bool rapid = !block || block->kind == kinematics::MotionKind::Rapid;
+      if (!block) {
+        text += "FROM/";
+      } else {
+        if (!rapid && block->feed_mm_per_min != feed) {
+          feed = block->feed_mm_per_min;
+          text += "FEDRAT/" + gcode_num(feed) + ",MMPM\n";
+        }
+        text += rapid ? "RAPID\nGOTO/" : "GOTO/";
+      }
+      text += gcode_num(p.tip_mm.x()) + "," + gcode_num(p.tip_mm.y()) + "," + gcode_num(p.tip_mm.z()) + "," +
+              gcode_num(p.axis.x()) + "," + gcode_num(p.axis.y()) + "," + gcode_num(p.axis.z()) + " $$ " + line + "\n";
+      continue;
+    }
     if (holder && holder->tool != tool && holder->tool > 0) {
       tool = holder->tool;
       text += "T" + std::to_string(tool) + " M6\n";
@@ -320,7 +346,7 @@ CompensationReport write_compensated_program(const std::string& path, const Job&
     }
     text += g + " (" + line + ")\n";
   }
-  text += "M2\n";
+  text += apt ? "FINI\n" : "M2\n";
   write_text_atomically(path, text);
   return report;
 }

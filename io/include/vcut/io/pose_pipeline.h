@@ -27,12 +27,14 @@ struct PoseEvent {
 struct JobProgram {
   kinematics::Program program;
   ToolLibrary tools;
+  std::string dialect;  // the reader used: "gcode" or "apt"
 };
 JobProgram read_job_program(const Job& job);
 
 struct PoseRun {
   kinematics::Program program;
   ToolLibrary tools;
+  std::string dialect;  // of the program: "gcode" or "apt"
   kinematics::Densified densified;
   kinematics::FeedPlan feed;
   std::vector<double> tool_length_mm;  // per sample (0 before the first tool)
@@ -66,11 +68,14 @@ void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& ru
 void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run);
 
 // `vcut compensate`: for every densified pose, the axis commands whose error-aware forward
-// kinematics put the tool on the nominal pose (kinematics::compensate), written as a G-code
-// axis program (one line per pose; X Y Z are the linear axes zeroed so that at all-zero
-// rotary axes the tip is at the programmed point, the convention of axis programs; A B C in
-// deg; a comment names each pose's source line). Throws InputError when the machine has no
-// geometric errors.
+// kinematics put the tool on the nominal pose (kinematics::compensate), written in the
+// program's dialect, one motion per pose with its source line as a comment. G-code: an axis
+// program (X Y Z the linear axes zeroed so that at all-zero rotary axes the tip is at the
+// programmed point, the convention of axis programs; A B C in deg). APT: the tool poses a
+// tool-centre-point controller turns into those commands (the ideal forward kinematics of
+// the compensated axes), as GOTO/x,y,z,i,j,k - provided the controller picks the same
+// branch (near the pole, where both tie on rotary motion, it may not). Throws InputError
+// when the machine has no geometric errors.
 struct CompensationReport {
   std::size_t poses = 0;
   std::size_t not_converged = 0;
