@@ -3,6 +3,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 namespace vcut::io {
 
@@ -13,7 +14,15 @@ YAML::Node YamlReader::load() const {
   text << in.rdbuf();
   if (in.bad()) throw InputError(file_, 0, 0, "cannot read file");
   try {
-    return YAML::Load(text.str());
+    // One document: a second one after '---' would be silently ignored by YAML::Load.
+    const std::vector<YAML::Node> documents = YAML::LoadAll(text.str());
+    if (documents.size() > 1) {
+      const YAML::Mark mark = documents[1].Mark();
+      const bool known = !mark.is_null();
+      throw InputError(file_, known ? mark.line + 1 : 0, known ? mark.column + 1 : 0,
+                       "one YAML document (found a second one after '---')");
+    }
+    return documents.empty() ? YAML::Node() : documents.front();
   } catch (const YAML::ParserException& e) {
     throw InputError(file_, e.mark.line + 1, e.mark.column + 1, "invalid YAML: " + e.msg);
   }

@@ -263,6 +263,11 @@ TEST(MachineFile, OptionalSectionsTakeTheirDefaults) {
 
 // --- mistakes found by kinematics::validate, placed at the key it names ---
 
+TEST(MachineFileError, SecondYamlDocument) {
+  // YAML::Load would read the first document and drop the rest without a word.
+  EXPECT_MACHINE_ERROR(kBase + std::string("---\nmachine: other\n"), "machine: other", "one YAML document");
+}
+
 TEST(MachineFileError, UnknownLetterInTopology) {
   EXPECT_MACHINE_ERROR(replace(kBase, "WCAFXYZT", "WCAFXYZQT"), "topology:", "'topology'",
                        "unknown", "Q");
