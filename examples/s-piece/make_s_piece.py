@@ -864,7 +864,7 @@ def main():
                   "program: {file: program.apt, dialect: apt}\n"
                   "stock: {box: {min: [%g, %g, %g], max: [%g, %g, %g]}}\n" % (STOCK_MIN + STOCK_MAX) +
                   "design: {file: part.stl}\n"
-                  "engine: {kind: dexel, resolution: 0.2}\n"
+                  "engine: {kind: dexel, resolution: 0.1}\n"
                   "report: {out: out/s-piece, gouge_tolerance: 0.05, excess_tolerance: 0.1}\n"
                   "densify: {angle: 0.5}\n")
 

@@ -149,6 +149,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
                                                : core_.core_radius_mm + core_.rounding_mm;
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
   const Vector3d a = move.axis.normalized();
+  tool_axis_ = a;
   vertical_axis_ = std::abs(a.x()) <= kTiny_mm && std::abs(a.y()) <= kTiny_mm && a.z() > 0.0;
   flat_bottom_ = cutter.type != CutterType::VBit && core_.rounding_mm == 0.0;
   if (core_.core_radius_mm == 0.0 && cutter.type != CutterType::VBit) {
@@ -466,6 +467,11 @@ bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) co
       o[axis] = 0.0;
       o[axis == 0 ? 1 : 0] = u;
       o[axis == 2 ? 1 : 2] = w;
+      if (flat_bottom_) {
+        bool decided = false;
+        const bool hit = tilted_flat(axis, o, lo, hi, decided);
+        if (decided) return hit;
+      }
       return general(axis, o, lo, hi);
     }
   }
@@ -622,6 +628,92 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   const auto far_end = [&](double t) { return -(c0 + t * dc + half(t)); };
   lo = near_end(golden_argmin(near_end, t_first, t_last, t_tolerance));
   hi = -far_end(golden_argmin(far_end, t_first, t_last, t_tolerance));
+  return true;
+}
+
+bool RaySweep::tilted_flat(int axis, const Vector3d& o, double& lo, double& hi, bool& decided) const {
+  // The point o + s e - p(t), p(t) = p0 + t delta, in the tool frame: height along the axis
+  // h = hw + he s - hd t, offset from the axis W + s E - t D (all normal to the axis).
+  decided = true;
+  const Vector3d& a = tool_axis_;
+  const Vector3d w = o - p0_;
+  const double hw = w.dot(a), he = a[axis], hd = delta_.dot(a);
+  Vector3d e = Vector3d::Zero();
+  e[axis] = 1.0;
+  const Vector3d W = w - hw * a, E = e - he * a, D = delta_ - hd * a;
+  const double R = radius_mm_, H = height_mm_;
+  // q(s, t) = |W + s E - t D|^2 - R^2 <= 0: an ellipse when E and D are not parallel.
+  const double EE = E.dot(E), ED = E.dot(D), DD = D.dot(D), WE = W.dot(E), WD = W.dot(D), WW = W.dot(W) - R * R;
+  const double det = EE * DD - ED * ED;
+  if (EE < 1e-12 || DD < 1e-12 || det <= 1e-9 * EE * DD) {
+    decided = false;  // degenerate: a strip, not an ellipse
+    return false;
+  }
+  auto q = [&](double s, double t) { return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW; };
+  constexpr double kSlack = 1e-12;  // mm (and mm^2 for q): points on a boundary count as inside
+  auto inside_lines = [&](double s, double t) {
+    const double h = hw + he * s - hd * t;
+    return t >= -kSlack && t <= 1.0 + kSlack && h >= -kSlack && h <= H + kSlack;
+  };
+  double s_lo = std::numeric_limits<double>::infinity(), s_hi = -s_lo;
+  auto take = [&](double s) {
+    s_lo = std::min(s_lo, s);
+    s_hi = std::max(s_hi, s);
+  };
+  // 1. The ellipse's extremes in s (where dq/dt = 0: t = (ED s + WD) / DD).
+  {
+    const double A = det / DD, B = 2.0 * (WE - WD * ED / DD), C = WW - WD * WD / DD;
+    const double disc = B * B - 4.0 * A * C;
+    if (disc < 0.0) return false;  // the ellipse is empty: the line never comes within R of the axis
+    const double root = std::sqrt(disc);
+    for (double s : {(-B - root) / (2.0 * A), (-B + root) / (2.0 * A)}) {
+      const double t = (ED * s + WD) / DD;
+      if (inside_lines(s, t)) take(s);
+    }
+  }
+  // 2. Where each line (t = 0, t = 1, h = 0, h = H) crosses the ellipse, inside the others.
+  // A line is p + lambda d in (s, t); q along it is quadratic in lambda.
+  struct Line {
+    double ps, pt, ds, dt;
+  };
+  Line lines[4];
+  int n_lines = 0;
+  lines[n_lines++] = {0.0, 0.0, 1.0, 0.0};
+  lines[n_lines++] = {0.0, 1.0, 1.0, 0.0};
+  const double nn = he * he + hd * hd;  // the h lines: he s - hd t = c - hw
+  if (nn > 1e-24) {
+    for (double c : {0.0, H}) {
+      const double k = (c - hw) / nn;
+      lines[n_lines++] = {he * k, -hd * k, hd, he};
+    }
+  } else if (hw < 0.0 || hw > H) {
+    return false;  // the height does not change along the line or the move: never within [0, H]
+  }
+  for (int i = 0; i < n_lines; ++i) {
+    const Line& l = lines[i];
+    const double qa = EE * l.ds * l.ds - 2.0 * ED * l.ds * l.dt + DD * l.dt * l.dt;
+    const double qb = 2.0 * (EE * l.ps * l.ds - ED * (l.ps * l.dt + l.pt * l.ds) + DD * l.pt * l.dt + WE * l.ds - WD * l.dt);
+    const double qc = q(l.ps, l.pt);
+    if (qa <= 0.0) continue;
+    const double disc = qb * qb - 4.0 * qa * qc;
+    if (disc < 0.0) continue;
+    const double root = std::sqrt(disc);
+    for (double lambda : {(-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)}) {
+      const double s = l.ps + lambda * l.ds, t = l.pt + lambda * l.dt;
+      if (inside_lines(s, t)) take(s);
+    }
+  }
+  // 3. The corners where a t line meets an h line, inside the ellipse.
+  if (std::abs(he) > 1e-12) {
+    for (double t : {0.0, 1.0})
+      for (double c : {0.0, H}) {
+        const double s = (c - hw + hd * t) / he;
+        if (q(s, t) <= kSlack * (1.0 + R * R)) take(s);
+      }
+  }
+  if (!(s_lo <= s_hi)) return false;
+  lo = s_lo;
+  hi = s_hi;
   return true;
 }
 

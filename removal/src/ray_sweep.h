@@ -12,8 +12,12 @@
 //    form when the cutter's cross-section at the ray does not change along the move (or the
 //    ray stays over a bull-nose's flat core), else a bracketing search to
 //    kRaySearchTolerance_mm.
-//  - Anything else (tilted flat, bull-nose or V-bit): the sweep's signed distance along the ray
-//    is convex in s; its minimum and the two zero crossings are bracketed numerically.
+//  - Flat end mill, tilted: a point of the ray at s is inside the instance at t when its
+//    distance from the tool axis is at most R (an ellipse in (s, t)) and its height along the
+//    axis lies in [0, H] (two lines), with t in [0, 1] (two more): the convex region's extent
+//    in s, from the ellipse's s-extremes, its meetings with the lines and the lines' corners.
+//  - Anything else (tilted bull-nose or V-bit): the sweep's signed distance along the ray is
+//    convex and 1-Lipschitz in s; its two zero crossings are found by a safe root march.
 #pragma once
 
 #include <Eigen/Core>
@@ -68,6 +72,9 @@ class RaySweep {
   bool upright_vertical(double u, double w, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
+  // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
+  // (motion along the tool axis, a ray along it) that general() then takes.
+  bool tilted_flat(int axis, const Eigen::Vector3d& o, double& lo, double& hi, bool& decided) const;
 
   // The ball method's pieces with everything that does not depend on the ray worked out per
   // ray family (no divisions left per ray).
@@ -105,6 +112,7 @@ class RaySweep {
   double radius_mm_;       // R
   double height_mm_;       // H = z_high + r, the top of the cutting part
   Eigen::Vector3d p0_, delta_;
+  Eigen::Vector3d tool_axis_ = Eigen::Vector3d::UnitZ();
   // Ball: the parallelogram c0 + a*A + b*B, a, b in [0, 1].
   Eigen::Vector3d c0_, edge_a_, edge_b_;
   Eigen::Vector3d normal_, dual_a_, dual_b_;  // slab normal and dual basis (no slab if zero)

@@ -8,12 +8,14 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <random>
 #include <cstring>
 #include <limits>
 
 #include "test_meshes.h"
 #include "vcut/removal/cutter.h"
 #include "vcut/removal/mesh.h"
+#include "vcut/removal/sweep.h"
 
 namespace vcut::removal {
 namespace {
@@ -147,6 +149,56 @@ TEST(DexelStock, TiltedFlatEndMillFlank) {
   }
   EXPECT_LT(worst, kEndpointTol_mm);
   EXPECT_GT(checked, 1000);
+}
+
+TEST(DexelStock, RandomTiltedFlatMovesMatchTheSweepDistance) {
+  // Flat end mills at random tilts (5..70 deg) moving in random directions (along, across
+  // and against the tool axis): every endpoint a move made lies on its swept volume's
+  // surface, and no material is left inside it, measured with TranslationSweep's distance
+  // (a golden-section search over the move, independent of the rays' closed form).
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double v = 0.25;
+  for (int trial = 0; trial < 8; ++trial) {
+    const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+    DexelStock stock(box, v);
+    MoveList list;
+    list.cutters.push_back(make(CutterType::Flat, 4 + 8 * unit(rng), 0, 20));
+    const double tilt = (5 + 65 * unit(rng)) * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
+    const Eigen::Vector3d axis(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
+    const Eigen::Vector3d a(8 + 24 * unit(rng), 6 + 18 * unit(rng), -10 * unit(rng));
+    Eigen::Vector3d step(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+    if (trial % 3 == 0) step += 2.0 * axis;  // a strong component along the tool axis
+    const Move m = line(a, a + 12.0 * step.normalized(), axis);
+    list.moves = {m};
+    stock.cut(list, {});
+    const TranslationSweep sweep(list.cutters[0], m);
+    double worst = 0.0;
+    int checked = 0;
+    for (const auto& e : cut_points(stock, 0)) {
+      worst = std::max(worst, std::abs(sweep.distance(e.x_mm)));
+      ++checked;
+    }
+    EXPECT_LT(worst, kEndpointTol_mm) << "trial " << trial;
+    EXPECT_GT(checked, 100) << "trial " << trial;
+    // Material left: every remaining segment's midpoint is outside the sweep (a ray the
+    // move should have cut but did not keeps a segment through it).
+    const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};  // the box at v = 0.25
+    double deepest = 0.0;
+    for (int family = 0; family < 3; ++family) {
+      const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+      for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+        for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
+          for (const DexelSegment& seg : stock.ray(family, iu, iw)) {
+            Eigen::Vector3d x;
+            x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
+            x[a1] = (iu + 0.5) * v;
+            x[a2] = (iw + 0.5) * v;
+            deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
+          }
+    }
+    EXPECT_EQ(deepest, 0.0) << "trial " << trial;
+  }
 }
 
 // Groove geometry read off the rays: depth from the z rays, width from the y rays at one
