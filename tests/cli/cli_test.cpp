@@ -240,3 +240,25 @@ TEST_F(Simulate, UnwritableOutputFolder) {
 }
 
 }  // namespace
+
+// The bundled five-axis example end to end at a coarse resolution: the S-piece's deliberate
+// gouge (make_s_piece.py pushes the poses on program.apt:2009-2011 0.3 mm into the wall) is
+// found on those lines, and it is the deepest gouge.
+TEST_F(Simulate, SPieceFindsItsDeliberateGouge) {
+  const std::string job_file = std::string(VCUT_SOURCE_DIR) + "/examples/s-piece/job.yaml";
+  const CommandResult r =
+      run_vcut("simulate --quiet " + job_file + " --resolution 0.5 --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = report();
+  ASSERT_FALSE(j["gouges"].empty());
+  const nlohmann::json& deepest = j["gouges"][0];
+  EXPECT_GT(deepest["depth_mm"].get<double>(), 0.25);
+  EXPECT_LT(deepest["depth_mm"].get<double>(), 0.35);
+  bool names_it = false;
+  for (const auto& line : deepest["lines"])
+    for (const char* gouge_line : {"program.apt:2009", "program.apt:2010", "program.apt:2011", "program.apt:2012"})
+      names_it = names_it || line.get<std::string>().rfind(gouge_line, 0) == 0;
+  EXPECT_TRUE(names_it) << deepest.dump();
+  EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
+  EXPECT_EQ(j["settings"]["machine"], "table-table-ac");
+}
