@@ -93,12 +93,12 @@ AxisValues values(const Machine& m, std::initializer_list<std::pair<char, double
   return q;
 }
 
-const NodePose& node(const std::vector<NodePose>& poses, char letter) {
+// By value: callers pass the temporary that node_poses() returns.
+NodePose node(const std::vector<NodePose>& poses, char letter) {
   for (const NodePose& p : poses)
     if (p.node == letter) return p;
   ADD_FAILURE() << "no pose for node " << letter;
-  static const NodePose none;
-  return none;
+  return NodePose{};
 }
 
 const ModelPose& model(const std::vector<ModelPose>& poses, const std::string& file) {
@@ -197,7 +197,7 @@ TEST(ForwardTableTableAC, ClosedFormOnRandomGeometriesAndAxes) {
 
       // The workpiece node at its programming zero: T_W = T_A T_C Tr(o), so its origin is
       // cA + Rx(a)(cC + Rz(c)(o - cC) - cA) and its rotation Rx(a) Rz(c).
-      const NodePose& w = node(node_poses(machine, q), 'W');
+      const NodePose w = node(node_poses(machine, q), 'W');
       EXPECT_TRUE(near(w.pose.translation(), cA + rx(a) * (cC + rz(c) * (o - cC) - cA), kExactMm));
       EXPECT_TRUE(near_rotation(w.pose.linear(), rx(a) * rz(c), kExactUnit));
     }
@@ -631,7 +631,7 @@ TEST(ErrorLocation, X0CDisplacesTheTableInTheFrameAtEveryAngle) {
     }
   }
   // The C node itself (A = 0, C = 90): Tr(d) Rz(90) about cC = 0 -> origin d = (0.010, 0, 0).
-  const NodePose& c_node =
+  const NodePose c_node =
       node(node_poses(machine, values(machine, {{'C', 90 * kDeg}}), Geometry::Actual), 'C');
   EXPECT_TRUE(near(c_node.pose.translation(), {0.010, 0, 0}, kExactMm));
   EXPECT_TRUE(near_rotation(c_node.pose.linear(), rz(kPi / 2), kExactUnit));
