@@ -30,7 +30,8 @@ int run_simulate(const std::string& job_file, const vcut::io::SimulateOptions& b
                 r.peak_memory_mb);
     std::printf("removed %.1f mm3 of %.1f mm3\n", r.removed_volume_mm3, r.initial_volume_mm3);
     for (const auto& c : r.collisions)
-      std::printf("collision: %s at %s, %.3f mm deep (T%d)\n", c.kind.c_str(), c.line.c_str(), c.depth_mm, c.tool);
+      std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", c.kind.c_str(), c.part.c_str(), c.tool,
+                  c.line.c_str(), c.depth_mm, c.deepest_line.c_str());
     if (r.compared) {
       std::printf("max gouge %.4f mm in %zu region(s), max excess %.4f mm in %zu region(s)\n", r.max_gouge_mm,
                   r.gouges.size(), r.max_excess_mm, r.excess.size());

@@ -75,7 +75,8 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
   for (const auto& e : r.excess) j["excess"].push_back(region(e));
   j["collisions"] = ordered_json::array();
   for (const auto& c : r.collisions)
-    j["collisions"].push_back({{"kind", c.kind}, {"line", c.line}, {"tool", c.tool}, {"depth_mm", um(c.depth_mm)}, {"where", vec(c.where_mm)}});
+    j["collisions"].push_back({{"kind", c.kind}, {"part", c.part}, {"line", c.line}, {"deepest_line", c.deepest_line},
+                               {"tool", c.tool}, {"depth_mm", um(c.depth_mm)}, {"where", vec(c.where_mm)}, {"moves", c.moves}});
   ordered_json h;
   h["unit"] = "mm";
   h["edges_mm"] = ordered_json::array();

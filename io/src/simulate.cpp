@@ -116,6 +116,65 @@ SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const remova
   return e;
 }
 
+const char* collision_kind(removal::ProbeKind probe) {
+  switch (probe) {
+    case removal::ProbeKind::Rapid: return "rapid_into_stock";
+    case removal::ProbeKind::Shank: return "shank_collision";
+    case removal::ProbeKind::Holder: return "holder_collision";
+    case removal::ProbeKind::SpindleStopped: return "spindle_stopped_cut";
+  }
+  return "collision";
+}
+
+const char* collision_part(removal::ProbeKind probe) {
+  switch (probe) {
+    case removal::ProbeKind::Shank: return "shank";
+    case removal::ProbeKind::Holder: return "holder";
+    default: return "cutting part";
+  }
+}
+
+// One record per run of consecutive blocks with the same kind of collision (a shank
+// dragging through material for a hundred moves is one event): lines as a range, the
+// deepest depth and where it was.
+std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, const removal::MoveList& moves,
+                                               const kinematics::Program& program) {
+  std::vector<removal::Collision> sorted = found;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
+  std::vector<CollisionRecord> out;
+  std::map<std::string, std::size_t> open;  // kind -> its latest record
+  for (const removal::Collision& c : sorted) {
+    const removal::Move& m = moves.moves[static_cast<std::size_t>(c.move)];
+    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(m.block)];
+    const std::string kind = collision_kind(m.probe);
+    const auto it = open.find(kind);
+    CollisionRecord* r = nullptr;
+    if (it != open.end() && out[it->second].tool == b.tool && m.block <= out[it->second].last_block + 1) r = &out[it->second];
+    if (r == nullptr) {
+      open[kind] = out.size();
+      r = &out.emplace_back();
+      r->kind = kind;
+      r->part = collision_part(m.probe);
+      r->line = program.where(b.source);
+      r->first_line = b.source;
+      r->tool = b.tool;
+      r->first_block = r->last_block = m.block;
+    }
+    if (m.block != r->last_block) {
+      r->last_block = m.block;
+      if (b.source.file == r->first_line.file && b.source.line > r->first_line.line)
+        r->line = program.where(r->first_line) + "-" + std::to_string(b.source.line);
+    }
+    ++r->moves;
+    if (c.depth_mm > r->depth_mm) {
+      r->depth_mm = c.depth_mm;
+      r->where_mm = c.where_mm;
+      r->deepest_line = program.where(b.source);
+    }
+  }
+  return out;
+}
+
 }  // namespace
 
 SimulationResult simulate(const Job& job, const SimulateOptions& options) {
@@ -168,12 +227,17 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     cutter_index[b.tool] = static_cast<int>(moves.cutters.size());
     moves.cutters.push_back(run.tools.at(b.tool));
   }
+  // The shank and holder of every tool follow each move as probes (collisions).
+  const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(moves);
   const auto& samples = run.densified.samples;
   const bool cut_actual = !run.actual.empty();
   const double rotation_bound_mm = v / 10.0;
   result.poses = samples.size();
   // The moves through the actual poses (servo, errors) when there are any, else the nominal.
+  // With `probes`, the tool's shank and holder follow every move and a feed move made with
+  // the spindle stopped is probed before it cuts (collisions); the nominal cut has none.
   auto append_moves = [&](removal::MoveList& out, bool actual, bool count) {
+    const bool probes = count;
     for (std::size_t i = 1; i < samples.size(); ++i) {
       const auto& b = program.blocks[static_cast<std::size_t>(samples[i].block)];
       if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
@@ -189,6 +253,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
       const bool turns = (from.axis - to.axis).norm() > 1e-12;
       if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
       if (count) result.cutting_moves += !m.rapid;
+      const std::size_t first_piece = out.moves.size();
       if (turns) {
         const int pieces = removal::five_axis_pieces(out.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
                                                      rotation_bound_mm);
@@ -196,6 +261,19 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
         if (count) result.rotating_moves += 1;
       } else {
         out.moves.push_back(m);
+      }
+      if (!probes) continue;
+      const std::vector<removal::Move> pieces(out.moves.begin() + static_cast<std::ptrdiff_t>(first_piece), out.moves.end());
+      out.moves.resize(first_piece);
+      for (const removal::Move& piece : pieces) {
+        if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
+          removal::Move stopped = piece;
+          stopped.rapid = true;
+          stopped.probe = removal::ProbeKind::SpindleStopped;
+          out.moves.push_back(stopped);
+        }
+        out.moves.push_back(piece);
+        removal::append_body_probes(out.moves, piece, bodies[static_cast<std::size_t>(piece.cutter)]);
       }
     }
   };
@@ -205,7 +283,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     nominal_moves.cutters = moves.cutters;
     append_moves(nominal_moves, false, false);
   }
-  result.moves = moves.moves.size();
+  for (const auto& m : moves.moves) result.moves += !m.rapid || m.probe == removal::ProbeKind::Rapid;
   stage_done("densify");
 
   // 4. Stock.
@@ -280,10 +358,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   auto block_of = [&](int move) -> const kinematics::Block& {
     return program.blocks[static_cast<std::size_t>(moves.moves[static_cast<std::size_t>(move)].block)];
   };
-  for (const auto& c : cut.collisions) {
-    const auto& b = block_of(c.move);
-    result.collisions.push_back({"rapid_into_stock", program.where(b.source), b.tool, c.depth_mm, c.where_mm});
-  }
+  result.collisions = collision_records(cut.collisions, moves, program);
   stage_done("cut");
 
   // 6. Mesh.

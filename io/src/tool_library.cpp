@@ -17,7 +17,7 @@ ToolLibrary read_tool_library(const std::string& path) {
     const std::string where = "tools." + kv.first.Scalar();
     if (number < 1 || number > 99999) yaml.fail(kv.first, where, "a T number from 1 to 99999");
     const YAML::Node& t = kv.second;
-    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "angle", "flute_length", "shank_diameter", "length", "gauge_length", "name"});
+    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "angle", "flute_length", "shank_diameter", "length", "gauge_length", "holder_diameter", "holder_length", "name"});
     removal::Cutter c;
     const std::string type = yaml.text(yaml.require(t, "type", where), where + ".type");
     if (type == "flat") c.type = removal::CutterType::Flat;
@@ -50,10 +50,22 @@ ToolLibrary read_tool_library(const std::string& path) {
     c.shank_diameter_mm = t["shank_diameter"] ? yaml.positive(t["shank_diameter"], where + ".shank_diameter") : c.diameter_mm;
     c.length_mm = t["length"] ? yaml.positive(t["length"], where + ".length") : c.flute_length_mm;
     if (c.length_mm < c.flute_length_mm) yaml.fail(t["length"], where + ".length", "at least the flute length");
-    // The machine's kinematics need the spindle nose to tip distance; without a holder
-    // length the tool sits right in the nose.
-    c.gauge_length_mm = t["gauge_length"] ? yaml.positive(t["gauge_length"], where + ".gauge_length") : c.length_mm;
-    if (c.gauge_length_mm < c.length_mm) yaml.fail(t["gauge_length"], where + ".gauge_length", "at least the length out of the holder");
+    // The holder (checked for collisions when its diameter is given): a cylinder from the
+    // length out of the holder up to the spindle nose, or holder_length long.
+    if (t["holder_length"] && !t["holder_diameter"])
+      yaml.fail(t["holder_length"], where + ".holder_length", "holder_diameter with it");
+    if (t["holder_diameter"]) {
+      c.holder_diameter_mm = yaml.positive(t["holder_diameter"], where + ".holder_diameter");
+      if (t["holder_length"]) c.holder_length_mm = yaml.positive(t["holder_length"], where + ".holder_length");
+      else if (t["gauge_length"]) c.holder_length_mm = yaml.positive(t["gauge_length"], where + ".gauge_length") - c.length_mm;
+      if (!(c.holder_length_mm > 0.0))
+        yaml.fail(t["holder_diameter"], where + ".holder_diameter", "holder_length (or a gauge_length beyond the length) with it");
+    }
+    // The machine's kinematics need the spindle nose to tip distance; without one the tool
+    // and its holder sit right in the nose.
+    c.gauge_length_mm = t["gauge_length"] ? yaml.positive(t["gauge_length"], where + ".gauge_length") : c.length_mm + c.holder_length_mm;
+    if (c.gauge_length_mm < c.length_mm + c.holder_length_mm - 1e-9)
+      yaml.fail(t["gauge_length"], where + ".gauge_length", "at least the length out of the holder plus the holder length");
     if (c.type != removal::CutterType::VBit && t["angle"]) yaml.fail(t["angle"], where + ".angle", "an angle only for a V-bit");
     if (!library.emplace(number, c).second) yaml.fail(kv.first, where, "each T number once");
   }

@@ -378,6 +378,20 @@ std::size_t estimate_dexel_memory_bytes(const StockShape& shape, double spacing_
   return static_cast<std::size_t>(rays * sizeof(SegmentList) + surface_cells * 110.0);
 }
 
+namespace {
+
+// A shank or holder probe whose axis is a lattice axis: that axis's rays alone find any
+// material in its way thicker than the spacing, and its depth along them; the other two
+// families would test thousands of rays per move for nothing more. -1: all three.
+int probe_family(const Move& move) {
+  if (!move.rapid || (move.probe != ProbeKind::Shank && move.probe != ProbeKind::Holder)) return -1;
+  for (int a = 0; a < 3; ++a)
+    if (std::abs(move.axis[a]) > 1.0 - 1e-12) return a;
+  return -1;
+}
+
+}  // namespace
+
 DexelStock::DexelStock(const StockShape& shape, double spacing_mm) : impl_(std::make_unique<Impl>()) {
   if (!(spacing_mm > 0.0)) throw std::invalid_argument("ray spacing must be positive");
   Impl& m = *impl_;
@@ -441,7 +455,9 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
     // within a tile the moves stay in program order).
     std::fill(start.begin(), start.end(), 0);
     auto for_each_tile = [&](std::size_t i, auto&& visit) {
+      const int only = probe_family(list.moves[i]);
       for (int a = 0; a < 3; ++a) {
+        if (only >= 0 && a != only) continue;
         const Family& f = m.families[static_cast<std::size_t>(a)];
         int u0, u1, w0, w1;
         if (!m.ray_range(f, sweeps[i - first].bounds(), u0, u1, w0, w1)) continue;

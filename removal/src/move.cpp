@@ -45,4 +45,48 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
   }
 }
 
+std::vector<ToolBody> add_tool_bodies(MoveList& list) {
+  const std::size_t n = list.cutters.size();
+  std::vector<ToolBody> bodies(n);
+  auto cylinder = [&](double diameter_mm, double length_mm) {
+    Cutter c;
+    c.type = CutterType::Flat;
+    c.diameter_mm = diameter_mm;
+    c.shank_diameter_mm = diameter_mm;
+    c.flute_length_mm = length_mm;
+    c.length_mm = length_mm;
+    list.cutters.push_back(c);
+    return static_cast<int>(list.cutters.size() - 1);
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const Cutter c = list.cutters[i];  // a copy: push_back may move the vector
+    const double shank_mm = c.length_mm - c.flute_length_mm;
+    const double shank_diameter_mm = c.shank_diameter_mm > 0.0 ? c.shank_diameter_mm : c.diameter_mm;
+    if (shank_mm > 1e-9 && shank_diameter_mm > 0.0) {
+      bodies[i].shank = cylinder(shank_diameter_mm, shank_mm);
+      bodies[i].shank_height_mm = c.flute_length_mm;
+    }
+    if (c.holder_diameter_mm > 0.0 && c.holder_length_mm > 0.0) {
+      bodies[i].holder = cylinder(c.holder_diameter_mm, c.holder_length_mm);
+      bodies[i].holder_height_mm = std::max(c.length_mm, c.flute_length_mm);
+    }
+  }
+  return bodies;
+}
+
+void append_body_probes(std::vector<Move>& out, const Move& move, const ToolBody& body) {
+  auto probe = [&](int cutter, double height_mm, ProbeKind kind) {
+    if (cutter < 0) return;
+    Move p = move;
+    p.start_mm = move.start_mm + height_mm * move.axis;
+    p.end_mm = move.end_mm + height_mm * move.axis;
+    p.cutter = cutter;
+    p.rapid = true;
+    p.probe = kind;
+    out.push_back(p);
+  };
+  probe(body.shank, body.shank_height_mm, ProbeKind::Shank);
+  probe(body.holder, body.holder_height_mm, ProbeKind::Holder);
+}
+
 }  // namespace vcut::removal

@@ -116,6 +116,43 @@ TEST_F(Simulate, RapidThroughStockIsACollisionWithItsLine) {
   EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), 0.0, 1e-6);  // rapids do not cut
 }
 
+// A 10 mm flat end mill with 5 mm of flutes, an 8 mm shank 15 mm long above them and a
+// 30 mm holder from 20 mm above the tip. Slotting 8 mm deep drags the shank 3 mm deep
+// through the material the flutes cannot reach (z in [-3, 0]); retracting at rapid then
+// meets that material with the cutting part; plunging 22 mm puts the holder's face 2 mm
+// into the stock around the hole; a cut after M5 is a cut with the spindle stopped. Depths
+// along the z rays: 3, 3, 2 and 1 mm exactly (dexel engine).
+TEST_F(Simulate, ShankHolderAndStoppedSpindleCollisionsWithTheirLines) {
+  write(dir / "tools.yaml",
+        "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: 30, holder_length: 40}\n");
+  program = "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5\nG1 Z-8 F500\nG1 X30\nG0 Z5\nG0 X45\nG1 Z-22\nG0 Z50\nM5\n"
+            "G0 X-10 Y10\nG1 Z-1\nG1 X20\nG0 Z50\nM30\n";
+  job = std::regex_replace(job, std::regex("engine: \\{kind: vdb, "), "engine: {");
+  job = std::regex_replace(job, std::regex("min: \\[0, 0, -20\\]"), "min: [0, 0, -30]");
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto c = report()["collisions"];
+  ASSERT_EQ(c.size(), 4u) << c.dump(1);
+  auto expect = [&](std::size_t i, const char* kind, const char* part, const char* lines, double depth_mm) {
+    EXPECT_EQ(c[i]["kind"], kind);
+    EXPECT_EQ(c[i]["part"], part);
+    EXPECT_EQ(c[i]["line"], lines);
+    EXPECT_NEAR(c[i]["depth_mm"].get<double>(), depth_mm, 1e-3) << kind;
+  };
+  expect(0, "shank_collision", "shank", "slot.ngc:6-7", 3.0);
+  expect(1, "rapid_into_stock", "cutting part", "slot.ngc:7", 3.0);
+  expect(2, "holder_collision", "holder", "slot.ngc:9-10", 2.0);
+  expect(3, "spindle_stopped_cut", "cutting part", "slot.ngc:14", 1.0);
+  EXPECT_EQ(c[0]["deepest_line"], "slot.ngc:6");
+}
+
+TEST_F(Simulate, HolderLengthNeedsAHolderDiameter) {
+  write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, holder_length: 40}\n");
+  expect_error(simulate(), "tools.yaml:2:");
+  write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, length: 20, holder_diameter: 30, gauge_length: 50, holder_length: 40}\n");
+  expect_error(simulate(), "gauge_length");
+}
+
 TEST_F(Simulate, DexelEngineMeasuresTheGougeAtItsEndpoints) {
   // The default engine: the slot's floor made 0.05 mm too deep for the design is found at
   // the dexel endpoints the cutting line made (issue 9: figures independent of meshing).

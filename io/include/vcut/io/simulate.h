@@ -35,12 +35,19 @@ struct RegionRecord {
   bool initial_stock = false;      // part of the region was never cut
 };
 
+// Consecutive blocks with the same collision make one record.
 struct CollisionRecord {
-  std::string kind;  // "rapid_into_stock"
-  std::string line;  // "file:line"
+  // rapid_into_stock | shank_collision | holder_collision | spindle_stopped_cut
+  std::string kind;
+  std::string part;          // "cutting part", "shank", "holder"
+  std::string line;          // "file:line" or "file:first-last"
+  std::string deepest_line;  // "file:line" of the deepest point
   int tool = 0;
-  double depth_mm = 0.0;
+  double depth_mm = 0.0;  // deepest overlap with material along the rays
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
+  std::size_t moves = 0;  // moves that collided
+  int first_block = -1, last_block = -1;
+  kinematics::SourceRef first_line;
 };
 
 // Deviation from the design measured at every dexel endpoint (exact point-to-triangle), so

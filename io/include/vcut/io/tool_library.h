@@ -1,6 +1,8 @@
 // The tool library (YAML): cutters keyed by T number. Lengths in mm.
 //   tools: {1: {type: flat|ball|bull, diameter: 10, corner_radius: 0, flute_length: 25,
-//               shank_diameter: 10, length: 40}}
+//               shank_diameter: 10, length: 40, holder_diameter: 32, holder_length: 50,
+//               gauge_length: 90}}
+// length: out of the holder; gauge_length: spindle nose to tip (default length + holder).
 #pragma once
 
 #include <map>

@@ -6,11 +6,21 @@
 
 #include <Eigen/Core>
 
+#include <cstdint>
 #include <vector>
 
 #include "vcut/removal/cutter.h"
 
 namespace vcut::removal {
+
+// What a probe (a move with `rapid` set: it never cuts, and material it meets is a
+// collision) stands for.
+enum class ProbeKind : std::uint8_t {
+  Rapid,           // the cutting part at rapid traverse (G0)
+  Shank,           // the shank, from the flute length to the holder, following a move
+  Holder,          // the holder, following a move
+  SpindleStopped,  // the cutting part of a feed move made with the spindle stopped
+};
 
 struct Move {
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();  // tool tip
@@ -19,6 +29,7 @@ struct Move {
   int cutter = 0;      // index into MoveList::cutters
   int block = -1;      // index of the NC block it came from
   bool rapid = false;  // rapids never cut: touching material is a collision
+  ProbeKind probe = ProbeKind::Rapid;  // with `rapid`: what the probe stands for
 };
 
 struct MoveList {
@@ -41,5 +52,21 @@ int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const E
 // Appends the n pieces of `move` (its `axis` is ignored) to `out`.
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, int pieces);
+
+// The non-cutting parts of the tools: for each cutter, the index in MoveList::cutters of its
+// shank and its holder (flat cylinders, tip at their lower face), -1 where it has none, and
+// the height of that face above the cutter's tip (mm).
+struct ToolBody {
+  int shank = -1, holder = -1;
+  double shank_height_mm = 0.0, holder_height_mm = 0.0;
+};
+// Adds the shank and holder cylinders of every cutter in `list` to its cutters. A shank
+// exists when the tool sticks out of the holder beyond its flutes, a holder when its
+// diameter and length are given.
+std::vector<ToolBody> add_tool_bodies(MoveList& list);
+// Appends the shank and holder probes riding on `move` (a translation) to `out`: each the
+// same motion raised along the tool axis to the part's lower face. Placed after the move
+// itself, they meet what the cutting part left.
+void append_body_probes(std::vector<Move>& out, const Move& move, const ToolBody& body);
 
 }  // namespace vcut::removal
