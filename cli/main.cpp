@@ -2,6 +2,7 @@
 // vcut::InputError, printed here on one line with exit code 2.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -9,6 +10,7 @@
 #include "program_command.h"
 #include "progress.h"
 #include "vcut/io/atomic_file.h"
+#include "vcut/io/check.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
 #include "vcut/io/pose_pipeline.h"
@@ -98,6 +100,29 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
   return r.not_converged == 0 ? 0 : 1;
 }
 
+int run_check(const std::string& job_file, const std::string& json_out, bool quiet) {
+  const vcut::io::Job job = vcut::io::read_job(job_file);
+  const vcut::io::CheckResult r = vcut::io::run_check(job);
+  for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  for (const auto& w : r.run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  if (!json_out.empty()) vcut::io::write_check_json(json_out, job, r);
+  if (!quiet) {
+    const double t = r.run.feed.cycle_time_s;
+    std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(), job.machine.c_str(),
+                r.run.program.blocks.size(), r.run.densified.samples.size(), t, static_cast<int>(t / 3600),
+                static_cast<int>(std::fmod(t, 3600.0) / 60), static_cast<int>(std::fmod(t, 60.0)));
+    for (const auto& e : r.events) std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), e.line.c_str(), e.detail.c_str());
+    for (const auto& c : r.tools) {
+      if (!c.has_holder) std::printf("T%d: no holder in the tool library (not checked)\n", c.tool);
+      else if (!c.over_stock) std::printf("T%d: its holder never comes over the stock\n", c.tool);
+      else std::printf("T%d: holder %.3f mm %s the stock's top at its lowest over the stock (%s)\n", c.tool, std::abs(c.holder_clearance_mm),
+                       c.holder_clearance_mm >= 0.0 ? "above" : "below", c.holder_line.c_str());
+    }
+    std::printf("%s: %zu error(s), %zu warning(s) in %.2f s\n", r.errors == 0 ? "go" : "no-go", r.errors, r.warnings, r.wall_time_s);
+  }
+  return r.errors == 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -129,6 +154,13 @@ int main(int argc, char** argv) {
   compensate->add_option("job", compensate_job, "Job file (YAML)")->required();
   compensate->add_option("--out", compensate_out, "Output program (default: the job's output folder/compensated.ngc or .apt)");
   compensate->add_flag("--quiet,-q", compensate_quiet, "Print nothing but errors and warnings");
+  auto* check = app.add_subcommand("check", "Everything but the cut: parse, densify, time, reach, limits, singularities, "
+                                            "tool clearance against the stock's box; exit 1 on errors");
+  std::string check_job, check_json;
+  bool check_quiet = false;
+  check->add_option("job", check_job, "Job file (YAML)")->required();
+  check->add_option("--json", check_json, "Also write the findings as JSON to this file");
+  check->add_flag("--quiet,-q", check_quiet, "Print nothing but errors and warnings");
   vcut::cli::MachineCommands machine_commands;
   vcut::cli::add_machine_commands(app, machine_commands);
   vcut::cli::ProgramCommand program_command;
@@ -147,6 +179,7 @@ int main(int argc, char** argv) {
       return run_simulate(job_file, options, quiet);
     }
     if (*poses) return run_poses(poses_job, poses_out, poses_quiet);
+    if (*check) return run_check(check_job, check_json, check_quiet);
     if (*compensate) return run_compensate(compensate_job, compensate_out, compensate_quiet);
     if (vcut::cli::run_machine_commands(machine_commands)) return 0;
     if (vcut::cli::run_program_command(program_command)) return 0;

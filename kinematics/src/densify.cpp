@@ -231,6 +231,7 @@ class BlockPath {
       }
       q[i] = words.angle_rad[static_cast<size_t>(k)];
     }
+    if (report.unreachable.empty()) report.unreachable = limit_violation(*machine_, q);
     return q;
   }
 

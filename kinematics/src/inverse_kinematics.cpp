@@ -53,6 +53,15 @@ std::string limit_text(const AxisSpec& a) {
 // tool side, - on the workpiece side, R_prefix the rotations between the frame and the axis).
 }  // namespace
 
+std::string limit_violation(const Machine& m, const AxisValues& q) {
+  for (int i = 0; i < m.axis_count(); ++i) {
+    const AxisSpec& a = m.axis(i);
+    if (a.limits && (q[i] < a.limits->first - kLimitSlack || q[i] > a.limits->second + kLimitSlack))
+      return limit_text(a) + ": needs " + value_in_file_units(a, q[i]);
+  }
+  return "";
+}
+
 bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm) {
   using detail::Rigid;
   std::array<int, 3> index{};

@@ -58,5 +58,8 @@ IkResult inverse(const Machine& machine, const ToolPose& pose, double tool_lengt
 // The linear axis values (written into q) that put the tip at `tip_mm` with q's rotary values
 // held, ideal geometry; false when the linear axes cannot (a singular 3x3 system).
 bool solve_linear_axes(const Machine& machine, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm);
+// The first axis of q outside its limits, as "axis A limits [-120, 30]: needs 60 deg"; empty
+// when every axis is within them.
+std::string limit_violation(const Machine& machine, const AxisValues& q);
 
 }  // namespace vcut::kinematics

@@ -1,0 +1,55 @@
+// `vcut check`: everything but the cut, as a fast go/no-go before a long simulation or a
+// real machine. Reads the program, densifies and times it on the machine, and checks reach,
+// axis limits, singular poses, tools, the spindle, and the tool's clearance against the
+// stock's bounding box (the stock is not cut, so a pass through a pocket the program has
+// already made shows as a possible collision: the simulation settles it).
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "vcut/io/job.h"
+#include "vcut/io/pose_pipeline.h"
+
+namespace vcut::io {
+
+enum class Severity { Error, Warning, Note };
+const char* to_string(Severity severity);
+
+struct CheckEvent {
+  Severity severity = Severity::Warning;
+  std::string kind;    // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
+                       // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
+  std::string line;    // "file:line" or "file:first-last"
+  std::string detail;
+  double depth_mm = 0.0;  // how far into the stock's box (0 where it does not apply)
+  Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
+  bool has_where = false;
+};
+
+// Per tool: the lowest its holder comes to the stock's top face over the stock's footprint.
+struct ToolClearance {
+  int tool = 0;
+  bool has_holder = false;
+  double holder_clearance_mm = 0.0;  // min (holder face z - stock top z) over moves above the stock; < 0 enters
+  std::string holder_line;           // where that minimum is
+  bool over_stock = false;           // the tool ever came over the stock's footprint
+};
+
+struct CheckResult {
+  PoseRun run;
+  Eigen::AlignedBox3d stock_box;
+  std::vector<CheckEvent> events;  // in program order of their first line
+  std::vector<ToolClearance> tools;
+  std::size_t errors = 0, warnings = 0;
+  double wall_time_s = 0.0;
+};
+
+// Bad input (job, program, machine, tools) is a vcut::InputError as for simulate.
+CheckResult run_check(const Job& job);
+void write_check_json(const std::string& path, const Job& job, const CheckResult& result);
+
+}  // namespace vcut::io

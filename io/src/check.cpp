@@ -1,0 +1,260 @@
+#include "vcut/io/check.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <map>
+
+#include "vcut/io/atomic_file.h"
+#include "vcut/io/mesh_io.h"
+#include "vcut/removal/move.h"
+#include "vcut/removal/stock.h"
+#include "vcut/removal/sweep.h"
+
+namespace vcut::io {
+
+const char* to_string(Severity severity) {
+  switch (severity) {
+    case Severity::Error: return "error";
+    case Severity::Warning: return "warning";
+    case Severity::Note: return "note";
+  }
+  return "note";
+}
+
+namespace {
+
+Eigen::AlignedBox3d stock_bounds(const Job& job) {
+  switch (job.stock.kind) {
+    case StockSpec::Kind::Box: return removal::bounds_of(job.stock.box);
+    case StockSpec::Kind::Cylinder: return removal::bounds_of(job.stock.cylinder);
+    case StockSpec::Kind::Mesh: break;
+  }
+  removal::TriangleMesh mesh = read_mesh(job.stock.mesh_file);
+  return removal::bounds_of(removal::StockShape(std::move(mesh)));
+}
+
+// How far one box reaches into the other: the smallest of the three overlaps (the way out
+// that is shortest); <= 0 when they do not overlap.
+double penetration_mm(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b) {
+  double depth = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) depth = std::min(depth, std::min(a.max()[k], b.max()[k]) - std::max(a.min()[k], b.min()[k]));
+  return depth;
+}
+
+// Events of one kind on consecutive blocks merge into one, with the line range.
+class EventLog {
+ public:
+  explicit EventLog(const kinematics::Program& program) : program_(program) {}
+
+  void add(Severity severity, const std::string& kind, int block, const std::string& detail, double depth_mm,
+           const Eigen::Vector3d& where_mm) {
+    const kinematics::SourceRef& src = program_.blocks[static_cast<std::size_t>(block)].source;
+    auto it = open_.find(kind);
+    if (it != open_.end()) {
+      Open& o = it->second;
+      CheckEvent& e = events_[o.index];
+      if (block <= o.last_block + 1) {
+        if (block != o.last_block && src.file == o.first.file && src.line > o.first.line)
+          e.line = program_.where(o.first) + "-" + std::to_string(src.line);
+        o.last_block = block;
+        if (depth_mm > e.depth_mm) {
+          e.depth_mm = depth_mm;
+          e.where_mm = where_mm;
+          e.detail = detail;
+        }
+        return;
+      }
+    }
+    open_[kind] = Open{events_.size(), block, block, src};
+    CheckEvent e;
+    e.severity = severity;
+    e.kind = kind;
+    e.line = program_.where(src);
+    e.detail = detail;
+    e.depth_mm = depth_mm;
+    e.where_mm = where_mm;
+    e.has_where = true;
+    events_.push_back(e);
+    first_block_.push_back(block);
+  }
+  void add_line(Severity severity, const std::string& kind, const std::string& line, const std::string& detail, int block) {
+    CheckEvent e;
+    e.severity = severity;
+    e.kind = kind;
+    e.line = line;
+    e.detail = detail;
+    events_.push_back(e);
+    first_block_.push_back(block);
+  }
+  // In program order (stable: the order of detection within a block).
+  std::vector<CheckEvent> take() {
+    std::vector<std::size_t> order(events_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return first_block_[a] < first_block_[b]; });
+    std::vector<CheckEvent> out;
+    for (std::size_t i : order) out.push_back(events_[i]);
+    return out;
+  }
+
+ private:
+  struct Open {
+    std::size_t index;
+    int first_block, last_block;
+    kinematics::SourceRef first;
+  };
+  const kinematics::Program& program_;
+  std::vector<CheckEvent> events_;
+  std::vector<int> first_block_;
+  std::map<std::string, Open> open_;
+};
+
+std::string mm(double x) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.3f mm", x);
+  return s;
+}
+
+}  // namespace
+
+CheckResult run_check(const Job& job) {
+  const auto t0 = std::chrono::steady_clock::now();
+  CheckResult result;
+  result.run = run_pose_engine(job);
+  const PoseRun& run = result.run;
+  const kinematics::Program& program = run.program;
+  result.stock_box = stock_bounds(job);
+  const Eigen::AlignedBox3d& box = result.stock_box;
+  const double tolerance_mm = job.collision_tolerance_mm;
+  EventLog log(program);
+
+  // The pose engine's findings, by the block of their line.
+  std::map<std::string, int> block_of_line;
+  for (std::size_t i = 0; i < program.blocks.size(); ++i) block_of_line.emplace(program.where(program.blocks[i].source), static_cast<int>(i));
+  for (const PoseEvent& e : run.events) {
+    const std::string first = e.line.substr(0, e.line.find_first_of("- "));
+    const auto it = block_of_line.find(first);
+    const int block = it == block_of_line.end() ? 0 : it->second;
+    const Severity s = e.kind == "unreachable" ? Severity::Error : e.kind == "singular" ? Severity::Warning : Severity::Note;
+    log.add_line(s, e.kind, e.line, e.detail, block);
+  }
+
+  // The tools' cutting parts, shanks and holders against the stock's box, move by move.
+  removal::MoveList parts;
+  std::map<int, int> cutter_of_tool;
+  for (const auto& [number, cutter] : run.tools) {
+    cutter_of_tool[number] = static_cast<int>(parts.cutters.size());
+    parts.cutters.push_back(cutter);
+  }
+  const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(parts);
+  std::map<int, ToolClearance> clearance;
+  const auto& samples = run.densified.samples;
+  std::vector<removal::Move> probes;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    const int block = samples[i].block;
+    if (block < 0) continue;
+    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(block)];
+    const bool rapid = b.kind == kinematics::MotionKind::Rapid;
+    if (b.tool == 0) {
+      if (!rapid) log.add(Severity::Error, "no_tool", block, "a feed move with no tool in the spindle", 0.0, samples[i].pose.tip_mm);
+      continue;
+    }
+    const int c = cutter_of_tool.at(b.tool);
+    removal::Move m;
+    m.start_mm = samples[i - 1].pose.tip_mm;
+    m.end_mm = samples[i].pose.tip_mm;
+    m.cutter = c;
+    m.block = block;
+    // A retract straight up the tool axis meets nothing the move before it did not: skip.
+    const Eigen::Vector3d step = m.end_mm - m.start_mm;
+    const Eigen::Vector3d axis_now = samples[i].pose.axis.normalized();
+    if (samples[i - 1].pose.axis.isApprox(samples[i].pose.axis, 1e-12) && step.dot(axis_now) > 0.0 &&
+        step.cross(axis_now).norm() <= 1e-9 * step.norm())
+      continue;
+    // A turning move: both end orientations (the box of the pieces between lies within).
+    for (const Eigen::Vector3d& axis : {samples[i - 1].pose.axis, samples[i].pose.axis}) {
+      m.axis = axis.normalized();
+      const Eigen::AlignedBox3d cut = removal::TranslationSweep(parts.cutters[static_cast<std::size_t>(c)], m).bounds();
+      const double depth = penetration_mm(cut, box);
+      if (depth > tolerance_mm) {
+        if (rapid)
+          log.add(Severity::Warning, "rapid_in_stock_box", block,
+                  "a rapid with the cutting part " + mm(depth) + " inside the stock's box (a collision unless that material is gone)",
+                  depth, m.end_mm);
+        else if (b.spindle == kinematics::SpindleState::Off)
+          log.add(Severity::Error, "spindle_stopped_feed", block,
+                  "a feed move into the stock's box (" + mm(depth) + ") with the spindle stopped", depth, m.end_mm);
+      }
+      probes.clear();
+      removal::append_body_probes(probes, m, bodies[static_cast<std::size_t>(c)]);
+      for (const removal::Move& p : probes) {
+        const Eigen::AlignedBox3d part = removal::TranslationSweep(parts.cutters[static_cast<std::size_t>(p.cutter)], p).bounds();
+        const bool holder = p.probe == removal::ProbeKind::Holder;
+        if (holder) {
+          ToolClearance& t = clearance[b.tool];
+          t.tool = b.tool;
+          t.has_holder = true;
+          const bool over = part.min().x() < box.max().x() && part.max().x() > box.min().x() &&
+                            part.min().y() < box.max().y() && part.max().y() > box.min().y();
+          const double gap = part.min().z() - box.max().z();
+          if (over && (!t.over_stock || gap < t.holder_clearance_mm)) {
+            t.holder_clearance_mm = gap;
+            t.holder_line = program.where(b.source);
+          }
+          t.over_stock = t.over_stock || over;
+        }
+        const double d = penetration_mm(part, box);
+        if (d > tolerance_mm)
+          log.add(Severity::Warning, holder ? "holder_in_stock_box" : "shank_in_stock_box", block,
+                  std::string(holder ? "the holder" : "the shank") + " of T" + std::to_string(b.tool) + " " + mm(d) +
+                      " inside the stock's box (a collision unless that material is gone)",
+                  d, p.end_mm);
+      }
+    }
+  }
+  for (const auto& b : program.blocks)
+    if (b.tool != 0 && !clearance.count(b.tool)) clearance[b.tool].tool = b.tool;  // no holder given
+  for (const auto& [tool, t] : clearance) result.tools.push_back(t);
+  result.events = log.take();
+  for (const CheckEvent& e : result.events) {
+    result.errors += e.severity == Severity::Error;
+    result.warnings += e.severity == Severity::Warning;
+  }
+  result.wall_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return result;
+}
+
+void write_check_json(const std::string& path, const Job& job, const CheckResult& r) {
+  using nlohmann::ordered_json;
+  auto vec = [](const Eigen::Vector3d& v) { return ordered_json::array({v.x(), v.y(), v.z()}); };
+  ordered_json j;
+  j["schema"] = "vcut-check/1";
+  j["job"] = job.name;
+  j["machine"] = job.machine;
+  j["verdict"] = r.errors == 0 ? "go" : "no-go";
+  j["errors"] = r.errors;
+  j["warnings"] = r.warnings;
+  j["blocks"] = r.run.program.blocks.size();
+  j["poses"] = r.run.densified.samples.size();
+  j["cycle_time_s"] = r.run.feed.cycle_time_s;
+  j["stock_box"] = {{"min", vec(r.stock_box.min())}, {"max", vec(r.stock_box.max())}};
+  j["events"] = ordered_json::array();
+  for (const CheckEvent& e : r.events) {
+    ordered_json x{{"severity", to_string(e.severity)}, {"kind", e.kind}, {"line", e.line}, {"detail", e.detail}};
+    x["depth_mm"] = e.has_where ? ordered_json(e.depth_mm) : ordered_json(nullptr);
+    x["where"] = e.has_where ? vec(e.where_mm) : ordered_json(nullptr);
+    j["events"].push_back(x);
+  }
+  j["tools"] = ordered_json::array();
+  for (const ToolClearance& t : r.tools)
+    j["tools"].push_back({{"tool", t.tool}, {"holder", t.has_holder},
+                          {"holder_clearance_mm", t.over_stock ? ordered_json(t.holder_clearance_mm) : ordered_json(nullptr)},
+                          {"line", t.holder_line}});
+  j["wall_time_s"] = r.wall_time_s;
+  write_text_atomically(path, j.dump(1) + "\n");
+}
+
+}  // namespace vcut::io
