@@ -16,9 +16,10 @@ build: deps
 
 demo: build
 	./$(BUILD)/cli/vcut simulate examples/demo/job.yaml
-	@echo "Open examples/demo/out/demo/deviation.ply (coloured deviation) or read examples/demo/out/demo/report.json"
+	@echo "Open examples/demo/out/demo/report.html in a browser (the part coloured by deviation, gouges and their NC lines)"
 
 test-release: build
+	@scripts/install-deps --test
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
 
 test-sanitize: deps

@@ -23,6 +23,8 @@
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/io/report.h"
+#include "vcut/io/report_page.h"
+#include "vcut/io/snapshot.h"
 #include "vcut/io/sha256.h"
 #include "vcut/kinematics/densify.h"
 #include "vcut/removal/compare.h"
@@ -406,9 +408,11 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
 
   // 7. Compare.
   std::vector<double> deviation;
+  std::optional<removal::TriangleMesh> design_mesh;  // kept for the report page
   if (job.design) {
     progress("compare", 0, 1);
-    const removal::TriangleMesh design = transformed(read_mesh(job.design->file), *job.design);
+    design_mesh = transformed(read_mesh(job.design->file), *job.design);
+    const removal::TriangleMesh& design = *design_mesh;
     hashed.push_back(job.design->file);
     const removal::DesignDistance distance(design);
     if (!distance.closed())
@@ -531,8 +535,42 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
     result.outputs.push_back("deviation.ply");
   }
+  {
+    // Pictures for reports and CI artefacts: the deviation map (or the bare machined stock
+    // when there is no design) from three fixed views.
+    progress("snapshots", 0, 1);
+    SnapshotOptions options;
+    std::vector<Rgb> colours;
+    std::string stem = "machined";
+    options.title = job.name.empty() ? std::string("machined stock") : job.name;
+    if (result.compared) {
+      const double scale = std::max(3.0 * job.gouge_tolerance_mm, job.excess_tolerance_mm);
+      const double s = scale > 0.0 ? scale : v;
+      for (double d : deviation) colours.push_back(deviation_color(d, s));
+      options.legend = ColourScale{"deviation (mm): red gouge, blue excess", -s, s,
+                                   [s](double d) { return deviation_color(d, s); }, 5};
+      stem = "deviation";
+    }
+    for (const auto& f : write_snapshots(out.string(), stem, machined.mesh, colours, options))
+      result.outputs.push_back(f);
+  }
   write_gouges_csv((out / "gouges.csv").string(), result);
   result.outputs.push_back("gouges.csv");
+  if (const std::string page = report_template_path(); !page.empty()) {
+    progress("page", 0, 1);
+    ReportPageInput in;
+    in.machined = &machined;
+    in.moves = &moves;
+    in.deviation_mm = deviation;
+    in.design = design_mesh ? &*design_mesh : nullptr;
+    in.stock_box = stock_box;
+    result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+    result.peak_memory_mb = peak_memory_mb();
+    write_report_page((out / "report.html").string(), page, job, result, in);
+    result.outputs.push_back("report.html");
+  } else {
+    result.warnings.push_back("report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from web/)");
+  }
   stage_done("write");
   result.outputs.push_back("report.json");
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();

@@ -2,6 +2,8 @@
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <OpenMesh/Core/System/omstream.hh>
+#include <OpenMesh/Tools/Decimater/DecimaterT.hh>
+#include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 
 #include <algorithm>
 #include <unordered_map>
@@ -73,6 +75,55 @@ std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh) {
     for (int c = 0; c < 3; ++c) area[static_cast<std::size_t>(t[c])] += third;
   }
   return area;
+}
+
+TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept) {
+  kept.clear();
+  if (mesh.triangles.size() <= max_triangles) {
+    kept.resize(mesh.vertices_mm.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = static_cast<int>(i);
+    return mesh;
+  }
+  OMesh om;
+  OpenMesh::VPropHandleT<int> original;
+  om.add_property(original);
+  std::vector<OMesh::VertexHandle> handles;
+  handles.reserve(mesh.vertices_mm.size());
+  for (std::size_t i = 0; i < mesh.vertices_mm.size(); ++i) {
+    const auto& p = mesh.vertices_mm[i];
+    handles.push_back(om.add_vertex(OMesh::Point(p.x(), p.y(), p.z())));
+    om.property(original, handles.back()) = static_cast<int>(i);
+  }
+  omerr().disable();
+  for (const auto& t : mesh.triangles)
+    om.add_face(handles[static_cast<std::size_t>(t[0])], handles[static_cast<std::size_t>(t[1])], handles[static_cast<std::size_t>(t[2])]);
+  omerr().enable();
+  om.request_vertex_status();
+  om.request_edge_status();
+  om.request_halfedge_status();
+  om.request_face_status();
+  OpenMesh::Decimater::DecimaterT<OMesh> decimater(om);
+  OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
+  decimater.add(quadric);
+  decimater.initialize();
+  decimater.decimate_to_faces(0, max_triangles);
+  om.garbage_collection();
+  TriangleMesh out;
+  std::vector<int> index(om.n_vertices(), -1);
+  for (const auto& vh : om.vertices()) {
+    if (om.is_isolated(vh)) continue;
+    index[static_cast<std::size_t>(vh.idx())] = static_cast<int>(out.vertices_mm.size());
+    const OMesh::Point& p = om.point(vh);
+    out.vertices_mm.emplace_back(p[0], p[1], p[2]);
+    kept.push_back(om.property(original, vh));
+  }
+  for (const auto& fh : om.faces()) {
+    Eigen::Vector3i t;
+    int c = 0;
+    for (const auto& vh : om.fv_range(fh)) t[c++] = index[static_cast<std::size_t>(vh.idx())];
+    out.triangles.push_back(t);
+  }
+  return out;
 }
 
 bool is_closed(const TriangleMesh& mesh) {

@@ -95,6 +95,51 @@ TEST_F(Simulate, GougeNamesItsLine) {
   EXPECT_NE(text.str().find("slot.ngc:7"), std::string::npos);
 }
 
+// The report page carries the run's data in a <script> element: an NC comment holding
+// "</script>" or "<!--" must not end it early, and the gouge's line comes with its text. A
+// stand-in template (one marker) keeps the test independent of the web build. The deviation
+// snapshots are PNG files of the default 1600 x 1200 px.
+TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
+  write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 1.95));
+  job += "design: {file: part.stl}\n";
+  program.replace(program.find("G1 X70"), 6, "G1 X70 (</script><!-- floor)");
+  const std::string open = "<script id=\"vcut-data\" type=\"application/json\">";
+  write(dir / "template.html", "<html>" + open + "__VCUT_REPORT_DATA__</script></html>\n");
+  ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
+  const CommandResult r = simulate();
+  ::unsetenv("VCUT_REPORT_TEMPLATE");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+
+  std::ifstream page_in(dir / "out" / "report.html");
+  std::stringstream page;
+  page << page_in.rdbuf();
+  const std::string html = page.str();
+  const std::size_t a = html.find(open), b = html.find("</script>", a);
+  ASSERT_NE(a, std::string::npos);
+  ASSERT_NE(b, std::string::npos);
+  EXPECT_EQ(html.substr(b), "</script></html>\n");  // the data did not close the element early
+  const std::string data = html.substr(a + open.size(), b - a - open.size());
+  EXPECT_EQ(data.find("<!--"), std::string::npos);
+  const auto j = nlohmann::json::parse(data);
+  ASSERT_FALSE(j["regions"].empty());
+  EXPECT_EQ(j["regions"][0]["kind"], "gouge");
+  ASSERT_FALSE(j["regions"][0]["nc"].empty());
+  EXPECT_EQ(j["regions"][0]["nc"][0]["file"], "slot.ngc");
+  EXPECT_EQ(j["regions"][0]["nc"][0]["line"], 7);
+  EXPECT_EQ(j["regions"][0]["nc"][0]["text"], "G1 X70 (</script><!-- floor)");
+
+  for (const char* view : {"iso", "top", "front"}) {
+    std::ifstream png(dir / "out" / ("deviation_" + std::string(view) + ".png"), std::ios::binary);
+    ASSERT_TRUE(png) << view;
+    unsigned char header[24] = {};
+    png.read(reinterpret_cast<char*>(header), sizeof header);
+    EXPECT_EQ(std::string(reinterpret_cast<char*>(header) + 1, 3), "PNG") << view;
+    const auto be32 = [&](int at) { return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3]; };
+    EXPECT_EQ(be32(16), 1600) << view;  // IHDR width
+    EXPECT_EQ(be32(20), 1200) << view;  // IHDR height
+  }
+}
+
 TEST_F(Simulate, DesignEqualToTheCutHasNoGouge) {
   write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 2.0));
   job += "design: {file: part.stl}\n";

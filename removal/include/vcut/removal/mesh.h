@@ -5,6 +5,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <cstddef>
 #include <vector>
 
 namespace vcut::removal {
@@ -23,6 +24,13 @@ std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
 
 // A third of the area of every incident triangle (mm^2): vertex areas sum to the mesh area.
 std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh);
+
+// Fewer triangles, for display: OpenMesh's quadric decimater collapses edges until at most
+// max_triangles remain. Each collapse keeps one of its two vertices, so every vertex left is
+// an original one: `kept` gets, per vertex of the result, its index in `mesh` (its
+// attributes carry over). Triangles OpenMesh cannot take (complex edges at thin features)
+// are left out. A mesh already small enough comes back as it is.
+TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept);
 
 // Whether every edge is shared by exactly two triangles with opposite orientation.
 bool is_closed(const TriangleMesh& mesh);

@@ -1,0 +1,350 @@
+#include "vcut/io/report_page.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "vcut/io/atomic_file.h"
+#include "vcut/io/input_error.h"
+
+namespace vcut::io {
+namespace {
+
+using nlohmann::ordered_json;
+
+ordered_json vec(const Eigen::Vector3d& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
+
+template <typename T>
+std::string typed_base64(const std::vector<T>& values) {
+  return base64(values.data(), values.size() * sizeof(T));  // x86-64: little-endian, as the page reads
+}
+
+ordered_json encode_mesh(const removal::TriangleMesh& mesh) {
+  std::vector<float> positions;
+  positions.reserve(mesh.vertices_mm.size() * 3);
+  for (const auto& p : mesh.vertices_mm)
+    for (int k = 0; k < 3; ++k) positions.push_back(static_cast<float>(p[k]));
+  std::vector<std::uint32_t> indices;
+  indices.reserve(mesh.triangles.size() * 3);
+  for (const auto& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) indices.push_back(static_cast<std::uint32_t>(t[k]));
+  return {{"vertices", mesh.vertices_mm.size()},
+          {"triangles", mesh.triangles.size()},
+          {"positions", typed_base64(positions)},
+          {"indices", typed_base64(indices)}};
+}
+
+// The NC lines a report names, with their text: "finish.ngc:10183", "finish.ngc:10180-10185"
+// and "a.ngc:5 to b.ngc:7" (the first file's line only), at most `limit` lines each.
+class SourceTexts {
+ public:
+  SourceTexts(const kinematics::Program& program, const std::vector<std::string>& paths) : program_(program), paths_(paths) {}
+
+  // Index in the sources table of a program line (registered for reading).
+  int index(int file, int line) {
+    const auto key = std::make_pair(file, line);
+    const auto it = index_.find(key);
+    if (it != index_.end()) return it->second;
+    const int i = static_cast<int>(refs_.size());
+    index_.emplace(key, i);
+    refs_.push_back(key);
+    return i;
+  }
+  // The references in a line string, each registered.
+  std::vector<int> parse(const std::string& where, std::size_t limit = 20) {
+    std::vector<int> out;
+    const std::string first = where.substr(0, where.find(' '));
+    const std::size_t colon = first.rfind(':');
+    if (colon == std::string::npos) return out;
+    const std::string name = first.substr(0, colon);
+    int file = -1;
+    for (std::size_t f = 0; f < program_.files.size(); ++f)
+      if (program_.files[f] == name) file = static_cast<int>(f);
+    if (file < 0) return out;
+    const std::string range = first.substr(colon + 1);
+    const long a = std::strtol(range.c_str(), nullptr, 10);
+    const std::size_t dash = range.find('-');
+    const long b = dash == std::string::npos ? a : std::strtol(range.c_str() + dash + 1, nullptr, 10);
+    for (long l = a; l <= b && out.size() < limit; ++l) out.push_back(index(file, static_cast<int>(l)));
+    return out;
+  }
+  // Reads every registered line's text (each file once, streaming) and returns the table.
+  ordered_json table() const {
+    std::map<int, std::set<int>> wanted;
+    for (const auto& [file, line] : refs_) wanted[file].insert(line);
+    std::map<std::pair<int, int>, std::string> text;
+    for (const auto& [file, lines] : wanted) {
+      if (file < 0 || static_cast<std::size_t>(file) >= paths_.size()) continue;
+      std::ifstream in(paths_[static_cast<std::size_t>(file)]);
+      std::string s;
+      int n = 0;
+      auto next = lines.begin();
+      while (next != lines.end() && std::getline(in, s)) {
+        if (++n < *next) continue;
+        if (!s.empty() && s.back() == '\r') s.pop_back();
+        if (s.size() > 200) s = s.substr(0, 200) + "...";
+        text[{file, n}] = s;
+        ++next;
+      }
+    }
+    ordered_json out = ordered_json::array();
+    for (const auto& key : refs_) {
+      const auto it = text.find(key);
+      out.push_back({{"file", program_.files[static_cast<std::size_t>(key.first)]},
+                     {"line", key.second},
+                     {"text", it == text.end() ? std::string() : it->second}});
+    }
+    return out;
+  }
+  ordered_json lines_of(const std::vector<int>& indices, const ordered_json& table) const {
+    ordered_json out = ordered_json::array();
+    for (int i : indices) out.push_back(table[static_cast<std::size_t>(i)]);
+    return out;
+  }
+
+ private:
+  const kinematics::Program& program_;
+  const std::vector<std::string>& paths_;
+  std::map<std::pair<int, int>, int> index_;
+  std::vector<std::pair<int, int>> refs_;
+};
+
+std::string fixed(double x, int digits, const char* unit) {
+  std::ostringstream s;
+  s.precision(digits);
+  s << std::fixed << x << (*unit ? " " : "") << unit;
+  return s.str();
+}
+
+}  // namespace
+
+std::string base64(const void* data, std::size_t bytes) {
+  static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  const auto* p = static_cast<const std::uint8_t*>(data);
+  std::string out;
+  out.reserve((bytes + 2) / 3 * 4);
+  std::size_t i = 0;
+  for (; i + 3 <= bytes; i += 3) {
+    const std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
+    for (int k = 18; k >= 0; k -= 6) out += kAlphabet[(v >> k) & 63];
+  }
+  if (i < bytes) {
+    std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16;
+    if (i + 1 < bytes) v |= static_cast<std::uint32_t>(p[i + 1]) << 8;
+    out += kAlphabet[(v >> 18) & 63];
+    out += kAlphabet[(v >> 12) & 63];
+    out += i + 1 < bytes ? kAlphabet[(v >> 6) & 63] : '=';
+    out += '=';
+  }
+  return out;
+}
+
+std::string report_template_path() {
+  if (const char* env = std::getenv("VCUT_REPORT_TEMPLATE"); env != nullptr && *env != '\0') return env;
+#ifdef VCUT_REPORT_TEMPLATE
+  if (std::filesystem::exists(VCUT_REPORT_TEMPLATE)) return VCUT_REPORT_TEMPLATE;
+#endif
+  return "";
+}
+
+void write_report_page(const std::string& path, const std::string& template_path, const Job& job, const SimulationResult& r,
+                       const ReportPageInput& input) {
+  std::string page;
+  {
+    std::ifstream in(template_path, std::ios::binary);
+    if (!in) throw InputError(template_path, 0, 0, "cannot read the report page template");
+    std::ostringstream s;
+    s << in.rdbuf();
+    page = s.str();
+  }
+  const std::size_t slot = page.find(kReportDataMarker);
+  if (slot == std::string::npos)
+    throw InputError(template_path, 0, 0, std::string("not a report page template (no ") + kReportDataMarker + " slot)");
+
+  const PoseRun& run = r.pose_run;
+  const kinematics::Program& program = run.program;
+  SourceTexts sources(program, job.program_files);
+  ordered_json j;
+  j["schema"] = "vcut-report-page/1";
+  j["title"] = r.job_name;
+
+  // Job settings, as rows a person reads.
+  ordered_json settings = ordered_json::array();
+  auto row = [&](const std::string& k, const std::string& v) { settings.push_back({k, v}); };
+  std::string files;
+  for (const auto& f : program.files) files += (files.empty() ? "" : ", ") + f;
+  row("program", files + " (" + run.dialect + ")");
+  row("machine", job.machine);
+  row("engine", job.engine + ", " + fixed(r.resolution_mm, 3, "mm") + ", " + std::to_string(r.threads) + " threads");
+  if (job.step_mm > 0.0) row("densify step", fixed(job.step_mm, 3, "mm"));
+  if (job.angle_step_deg > 0.0) row("densify angle", fixed(job.angle_step_deg, 3, "deg"));
+  if (job.densify_tolerance_mm > 0.0) row("densify tolerance", fixed(job.densify_tolerance_mm, 4, "mm"));
+  row("chord tolerance", fixed(job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : r.resolution_mm / 20.0, 4, "mm"));
+  row("servo", job.servo ? "on" : "off");
+  row("machine errors", job.apply_errors ? "on" : "off");
+  row("tolerances", "gouge " + fixed(job.gouge_tolerance_mm, 3, "mm") + ", excess " + fixed(job.excess_tolerance_mm, 3, "mm") +
+                        ", collision " + fixed(job.collision_tolerance_mm, 3, "mm"));
+  for (const auto& [number, tool] : run.tools)
+    row("T" + std::to_string(number), removal::to_string(tool.type) + " D" + fixed(tool.diameter_mm, 3, "") + " r" +
+                                          fixed(tool.corner_radius_mm, 3, "") + ", flutes " + fixed(tool.flute_length_mm, 1, "mm") +
+                                          ", out of holder " + fixed(tool.length_mm, 1, "mm") +
+                                          (tool.holder_diameter_mm > 0.0 ? ", holder D" + fixed(tool.holder_diameter_mm, 1, "") : ""));
+  j["job"] = {{"name", job.name},
+              {"file", job.file},
+              {"engine", job.engine},
+              {"resolution_mm", r.resolution_mm},
+              {"threads", r.threads},
+              {"machine", job.machine},
+              {"gouge_tolerance_mm", job.gouge_tolerance_mm},
+              {"excess_tolerance_mm", job.excess_tolerance_mm},
+              {"collision_tolerance_mm", job.collision_tolerance_mm},
+              {"settings", settings}};
+
+  // The machined mesh, decimated for the page; each vertex keeps its deviation and NC line.
+  const removal::SurfaceMesh& machined = *input.machined;
+  std::vector<int> kept;
+  const removal::TriangleMesh shown = removal::decimate(machined.mesh, input.max_triangles, kept);
+  ordered_json mesh = encode_mesh(shown);
+  if (!input.deviation_mm.empty()) {
+    std::vector<float> deviation;
+    deviation.reserve(kept.size());
+    for (int k : kept) deviation.push_back(static_cast<float>(input.deviation_mm[static_cast<std::size_t>(k)]));
+    mesh["deviation"] = typed_base64(deviation);
+  } else {
+    mesh["deviation"] = nullptr;
+  }
+  std::vector<std::int32_t> vertex_source;
+  vertex_source.reserve(kept.size());
+  for (int k : kept) {
+    const int move = machined.vertex_move[static_cast<std::size_t>(k)];
+    if (move < 0 || input.moves == nullptr || static_cast<std::size_t>(move) >= input.moves->moves.size()) {
+      vertex_source.push_back(-1);
+      continue;
+    }
+    const kinematics::SourceRef& src = program.blocks[static_cast<std::size_t>(input.moves->moves[static_cast<std::size_t>(move)].block)].source;
+    vertex_source.push_back(sources.index(src.file, src.line));
+  }
+  mesh["source"] = typed_base64(vertex_source);
+  j["mesh"] = mesh;
+  if (input.design != nullptr) {
+    std::vector<int> design_kept;
+    j["design"] = encode_mesh(removal::decimate(*input.design, input.max_triangles / 4, design_kept));
+  } else {
+    j["design"] = nullptr;
+  }
+  j["stock"] = {{"box", {{"min", vec(input.stock_box.min())}, {"max", vec(input.stock_box.max())}}}};
+
+  // Regions and events, each with its NC lines.
+  std::vector<std::pair<ordered_json, std::vector<int>>> regions, events;
+  auto add_regions = [&](const char* kind, const std::vector<RegionRecord>& list) {
+    for (const RegionRecord& g : list) {
+      std::vector<int> refs;
+      for (const auto& l : g.lines)
+        for (int i : sources.parse(l, 20 - std::min<std::size_t>(20, refs.size()))) refs.push_back(i);
+      regions.push_back({{{"kind", kind},
+                          {"depth_mm", g.depth_mm},
+                          {"area_mm2", g.area_mm2},
+                          {"centroid", vec(g.centroid_mm)},
+                          {"deepest", vec(g.deepest_mm)},
+                          {"lines", g.lines},
+                          {"tools", g.tools},
+                          {"initial_stock", g.initial_stock}},
+                         refs});
+    }
+  };
+  add_regions("gouge", r.gouges);
+  add_regions("excess", r.excess);
+  for (const CollisionRecord& c : r.collisions) {
+    std::ostringstream detail;
+    detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at " << c.deepest_line;
+    events.push_back({{{"kind", c.kind}, {"line", c.line}, {"detail", detail.str()}, {"depth_mm", c.depth_mm}, {"where", vec(c.where_mm)}},
+                      sources.parse(c.line)});
+  }
+  for (const PoseEvent& e : run.events)
+    events.push_back({{{"kind", e.kind}, {"line", e.line}, {"detail", e.detail}, {"depth_mm", nullptr}, {"where", nullptr}},
+                      sources.parse(e.line)});
+
+  // Feed and contour error over time, at most 4,000 points (each the largest contour error
+  // of its stretch, so peaks survive).
+  ordered_json timeline = nullptr;
+  const auto& t = run.feed.t_s;
+  if (t.size() > 1 && run.feed.speed_mm_per_s.size() == t.size()) {
+    const std::size_t n = t.size(), points = std::min<std::size_t>(n, 4000);
+    const bool contour = run.contour_error_um.size() == n;
+    ordered_json ts = ordered_json::array(), feed = ordered_json::array(), err = ordered_json::array();
+    for (std::size_t p = 0; p < points; ++p) {
+      const std::size_t a = p * n / points, b = std::max(a + 1, (p + 1) * n / points);
+      std::size_t pick = a;
+      if (contour)
+        for (std::size_t i = a; i < b; ++i)
+          if (run.contour_error_um[i] > run.contour_error_um[pick]) pick = i;
+      ts.push_back(std::round(t[pick] * 1e4) / 1e4);
+      feed.push_back(std::round(run.feed.speed_mm_per_s[pick] * 60.0 * 10) / 10);
+      if (contour) err.push_back(std::round(run.contour_error_um[pick] * 1e3) / 1e3);
+    }
+    timeline = {{"t_s", ts}, {"feed_mm_min", feed}, {"contour_error_um", contour ? err : ordered_json(nullptr)}};
+  }
+
+  const ordered_json table = sources.table();
+  j["sources"] = table;
+  j["regions"] = ordered_json::array();
+  for (auto& [record, refs] : regions) {
+    record["nc"] = sources.lines_of(refs, table);
+    j["regions"].push_back(record);
+  }
+  j["events"] = ordered_json::array();
+  for (auto& [record, refs] : events) {
+    record["nc"] = sources.lines_of(refs, table);
+    j["events"].push_back(record);
+  }
+  if (r.compared) {
+    ordered_json edges = ordered_json::array();
+    for (double e : r.histogram_edges_mm) edges.push_back(std::isinf(e) ? ordered_json(nullptr) : ordered_json(e));
+    j["histogram"] = {{"edges_mm", edges}, {"counts", r.histogram_counts}, {"area_mm2", r.histogram_area_mm2}};
+  } else {
+    j["histogram"] = nullptr;
+  }
+  j["timeline"] = timeline;
+
+  ordered_json stages = ordered_json::array();
+  for (const auto& [name, seconds] : r.stage_seconds) stages.push_back({name, seconds});
+  j["summary"] = {{"blocks", r.blocks},
+                  {"moves", r.moves},
+                  {"cutting_moves", r.cutting_moves},
+                  {"removed_volume_mm3", r.removed_volume_mm3},
+                  {"initial_volume_mm3", r.initial_volume_mm3},
+                  {"max_gouge_mm", r.max_gouge_mm},
+                  {"max_gouge_line", r.endpoints.done ? r.endpoints.deepest_line : std::string()},
+                  {"max_excess_mm", r.max_excess_mm},
+                  {"wall_time_s", r.wall_time_s},
+                  {"peak_memory_mb", r.peak_memory_mb},
+                  {"cycle_time_s", run.feed.cycle_time_s},
+                  {"stage_seconds", stages},
+                  {"triangles_shown", shown.triangles.size()},
+                  {"triangles_machined", machined.mesh.triangles.size()}};
+
+  // Inside a <script> element neither "</script" nor "<!--" may appear (an NC comment could
+  // hold either). '<' occurs only inside JSON strings, where "\u003c" is the same character.
+  std::string data = j.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+  std::string safe;
+  safe.reserve(data.size() + 64);
+  for (char c : data) {
+    if (c == '<')
+      safe += "\\u003c";
+    else
+      safe += c;
+  }
+  page.replace(slot, std::strlen(kReportDataMarker), safe);
+  write_text_atomically(path, page);
+}
+
+}  // namespace vcut::io

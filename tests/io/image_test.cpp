@@ -1,0 +1,322 @@
+// Tests of the PNG writer, the 2D canvas and the mesh snapshots. PNG files are decoded here
+// from the spec (ISO/IEC 15948: chunk CRCs with zlib's crc32, IDAT inflated with zlib's
+// uncompress, the five row filters undone), not by the writer's code. Pixel counts of
+// rendered shapes are worked out from the view fit by hand, each in a comment beside it.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+#include <vcut/io/image.h>
+#include <vcut/io/input_error.h>
+#include <vcut/io/snapshot.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+namespace {
+namespace fs = std::filesystem;
+using removal::TriangleMesh;
+
+constexpr double kPi = 3.14159265358979323846;
+
+fs::path test_dir() {
+  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  const fs::path dir = fs::path(::testing::TempDir()) / "vcut_image" / info->name();
+  fs::create_directories(dir);
+  return dir;
+}
+
+std::uint32_t read_u32(const std::string& s, size_t at) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v = (v << 8) | static_cast<std::uint8_t>(s[at + i]);
+  return v;
+}
+
+// Decodes an 8-bit RGB non-interlaced PNG; any deviation from the spec is a test failure.
+Image decode_png(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  const std::string file((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_EQ(file.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  Image image;
+  std::string idat;
+  bool ended = false;
+  for (size_t at = 8; at + 12 <= file.size() && !ended;) {
+    const std::uint32_t length = read_u32(file, at);
+    const std::string type = file.substr(at + 4, 4), data = file.substr(at + 8, length);
+    const uLong crc = crc32(0, reinterpret_cast<const Bytef*>(file.data() + at + 4), length + 4);
+    EXPECT_EQ(read_u32(file, at + 8 + length), crc) << "CRC of chunk " << type;
+    if (type == "IHDR") {
+      image.width = static_cast<int>(read_u32(data, 0));
+      image.height = static_cast<int>(read_u32(data, 4));
+      EXPECT_EQ(data.substr(8), std::string("\x08\x02\x00\x00\x00", 5))
+          << "8-bit RGB, no interlace";
+    } else if (type == "IDAT") {
+      idat += data;
+    }
+    ended = type == "IEND";
+    at += 12 + length;
+  }
+  EXPECT_TRUE(ended);
+  const size_t stride = static_cast<size_t>(image.width) * 3;
+  std::vector<std::uint8_t> raw((stride + 1) * image.height);
+  uLongf raw_size = raw.size();
+  EXPECT_EQ(
+      uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()),
+      Z_OK);
+  EXPECT_EQ(raw_size, raw.size());
+  image.rgb.assign(stride * image.height, 0);
+  for (int y = 0; y < image.height; ++y) {
+    const int type = raw[y * (stride + 1)];
+    const std::uint8_t* in_row = &raw[y * (stride + 1) + 1];
+    std::uint8_t* out = &image.rgb[y * stride];
+    for (size_t i = 0; i < stride; ++i) {
+      const int a = i >= 3 ? out[i - 3] : 0, b = y > 0 ? out[i - stride] : 0;
+      const int c = i >= 3 && y > 0 ? out[i - stride - 3] : 0;
+      const int p = a + b - c, pa = std::abs(p - a), pb = std::abs(p - b), pc = std::abs(p - c);
+      const int paeth = pa <= pb && pa <= pc ? a : pb <= pc ? b : c;
+      const int predictor[5] = {0, a, b, (a + b) / 2, paeth};
+      EXPECT_LT(type, 5);
+      out[i] = static_cast<std::uint8_t>(in_row[i] + predictor[type < 5 ? type : 0]);
+    }
+  }
+  return image;
+}
+
+TEST(Png, EveryPixelSurvivesTheRoundTrip) {
+  // Flat areas, gradients and noise, so that the writer picks different row filters.
+  Image image(97, 61);
+  std::mt19937 random(7);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const Rgb noise{std::uint8_t(random()), std::uint8_t(random()), std::uint8_t(random())};
+      const Rgb ramp{std::uint8_t(3 * x), std::uint8_t(4 * y), std::uint8_t(x * y)};
+      image.set(x, y, y < 15 ? Rgb{10, 200, 30} : y < 40 ? ramp : noise);
+    }
+  const std::string path = (test_dir() / "round_trip.png").string();
+  write_png(path, image);
+  const Image decoded = decode_png(path);
+  EXPECT_EQ(decoded.width, 97);
+  EXPECT_EQ(decoded.height, 61);
+  EXPECT_EQ(decoded.rgb, image.rgb);
+}
+
+TEST(Canvas, LineColoursThePixelsOnIt) {
+  Image image(100, 80);
+  const Point2 a{10.3, 20.7}, b{90.1, 61.2};
+  draw_line(image, a, b, {0, 0, 0}, 1.0);
+  // The pixel holding a point of the segment has its centre within sqrt(2)/2 of the line, so
+  // a coverage of at least 1 - 0.71; a pixel whose centre is over 1 px off is untouched.
+  for (double t = 0; t <= 1; t += 0.001) {
+    const int x = static_cast<int>(a.x + t * (b.x - a.x)),
+              y = static_cast<int>(a.y + t * (b.y - a.y));
+    EXPECT_LT(image.get(x, y)[0], 255 - 70) << x << "," << y;
+  }
+  const double dx = b.x - a.x, dy = b.y - a.y, length = std::hypot(dx, dy);
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) {
+      const double px = x + 0.5 - a.x, py = y + 0.5 - a.y, along = (px * dx + py * dy) / length;
+      const double off = along < 0        ? std::hypot(px, py)
+                         : along > length ? std::hypot(x + 0.5 - b.x, y + 0.5 - b.y)
+                                          : std::abs(px * dy - py * dx) / length;
+      if (off > 1.0) {
+        EXPECT_EQ(image.get(x, y), (Rgb{255, 255, 255})) << x << "," << y;
+      }
+      if (off < 0.5) {  // coverage 1 - off for a 1 px line, as the header says
+        EXPECT_NEAR(image.get(x, y)[0], 255 * off, 1.0) << x << "," << y;
+      }
+    }
+}
+
+TEST(Canvas, RectangleCoverageIsExact) {
+  Image image(10, 10);
+  fill_rect(image, 2.5, 3.0, 5.0, 4.0, {0, 0, 0});
+  EXPECT_EQ(image.get(2, 3), (Rgb{128, 128, 128}));  // half covered: 255 - 127.5 rounds to 128
+  EXPECT_EQ(image.get(3, 3), (Rgb{0, 0, 0}));
+  EXPECT_EQ(image.get(4, 3), (Rgb{0, 0, 0}));
+  EXPECT_EQ(image.get(5, 3), (Rgb{255, 255, 255}));
+  EXPECT_EQ(image.get(3, 4), (Rgb{255, 255, 255}));
+}
+
+TEST(Canvas, TextScalesWithItsHeight) {
+  const std::string text = "Accuracy 0.005 mm, 1e-3 (q = 12) {ok}";
+  const double small = text_width(text, 12.0);
+  EXPECT_GT(small, 0.0);
+  EXPECT_NEAR(text_width(text, 36.0), 3 * small, 1e-9);
+  // Widths add up to the letter spacing, which "..": 2 advances - 1 spacing, shows.
+  const double spacing = text_width("..", 12.0) - 2 * text_width(".", 12.0);
+  EXPECT_GT(spacing, 0.0);
+  EXPECT_NEAR(text_width(text + text, 12.0), 2 * small + spacing, 1e-9);
+  EXPECT_EQ(text_width("", 20.0), 0.0);
+
+  // Ink of capitals spans the height (cap height) above the baseline, up to the stroke's
+  // half-width and a pixel of anti-aliasing; it starts at x and ends by text_width.
+  const double height = 40, stroke = height / 10;
+  Image image(400, 100);
+  draw_text(image, "HELLO", {20.0, 70.0}, height, {0, 0, 0});
+  int top = 100, bottom = -1, left = 400, right = -1;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x)
+      if (image.get(x, y)[0] < 128)
+        top = std::min(top, y), bottom = std::max(bottom, y), left = std::min(left, x),
+        right = std::max(right, x);
+  EXPECT_NEAR(top, 70 - height, stroke / 2 + 1);
+  EXPECT_NEAR(bottom + 1, 70, stroke / 2 + 1);
+  EXPECT_NEAR(left, 20, stroke / 2 + 1);
+  EXPECT_NEAR(right + 1, 20 + text_width("HELLO", height), stroke / 2 + 1);
+}
+
+TEST(Canvas, Labels) {
+  EXPECT_EQ(format_label(0.005), "0.005");
+  EXPECT_EQ(format_label(1e-5), "1e-5");
+  EXPECT_EQ(format_label(1.5e6), "1.5e6");
+  EXPECT_EQ(format_label(250.0), "250");
+  EXPECT_EQ(format_label(0.1 + 0.2), "0.3");
+  EXPECT_EQ(format_label(-2e-7, 2), "-2e-7");
+}
+
+TriangleMesh square(double side_mm, double angle_rad) {
+  TriangleMesh mesh;
+  const double c = std::cos(angle_rad), s = std::sin(angle_rad);
+  for (const auto& [u, v] : {std::pair{0.0, 0.0}, {1.0, 0.0}, {1.0, 1.0}, {0.0, 1.0}})
+    mesh.vertices_mm.emplace_back(side_mm * (c * u - s * v), side_mm * (s * u + c * v), 0.0);
+  mesh.triangles = {{0, 1, 2}, {0, 2, 3}};
+  return mesh;
+}
+
+int count_not(const Image& image, Rgb background) {
+  int n = 0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) n += image.get(x, y) != background;
+  return n;
+}
+
+TEST(Snapshot, SquareFromTopCoversItsArea) {
+  SnapshotOptions options;
+  options.width_px = 300, options.height_px = 200, options.margin = 0.1;
+  const std::vector<Rgb> red(4, Rgb{200, 0, 0});
+  // Margin 0.1 * 200 = 20 px: room 260 x 160 px, so 16 px/mm; the 10 mm square is 160 px a
+  // side, centred at (150, 100): corners on whole pixels, no pixel centre on its outline, and
+  // the shared diagonal through pixel centres counted once: exactly 160^2 pixels, unshaded.
+  const Image image = render_snapshot(square(10, 0), red, view_direction("top"), options);
+  EXPECT_EQ(count_not(image, options.background), 160 * 160);
+  EXPECT_EQ(image.get(150, 100), (Rgb{200, 0, 0}));
+  EXPECT_EQ(image.get(69, 100), options.background);
+  EXPECT_EQ(image.get(71, 100), (Rgb{200, 0, 0}));
+  EXPECT_EQ(image.get(70, 100), (Rgb{60, 0, 0})) << "outlined: 0.3 times";
+
+  // Turned 30 deg: the box is 10 (cos 30 + sin 30) = 13.66 mm wide and high, fitted into
+  // 400 - 2 * 20 = 360 px about the image centre. Centre sampling differs from the area only in
+  // pixels the outline crosses: at most the perimeter times (|cos| + |sin|) of its slope, plus
+  // the corners. A second count, pixel centres inside the square mapped by hand, may differ
+  // only where the 1/256 px snapping of the corners moves the outline past a centre.
+  options.width_px = options.height_px = 400, options.margin = 0.05;
+  const double angle = kPi / 6, spread = std::cos(angle) + std::sin(angle);
+  const double scale = 360 / (10 * spread), side_px = 10 * scale;
+  const TriangleMesh turned = square(10, angle);
+  const int n =
+      count_not(render_snapshot(turned, red, view_direction("top"), options), options.background);
+  EXPECT_NEAR(n, side_px * side_px, 4 * side_px * spread + 4);
+
+  const double centre_x_mm = 10 * (std::cos(angle) - std::sin(angle)) / 2,
+               centre_y_mm = 10 * spread / 2;
+  int inside = 0;
+  for (int y = 0; y < 400; ++y)
+    for (int x = 0; x < 400; ++x) {
+      // Back to the square's own (u, v) in mm: undo the screen map, then the turn.
+      const double X = (x + 0.5 - 200) / scale + centre_x_mm,
+                   Y = -(y + 0.5 - 200) / scale + centre_y_mm;
+      const double u = std::cos(angle) * X + std::sin(angle) * Y,
+                   v = -std::sin(angle) * X + std::cos(angle) * Y;
+      inside += u > 0 && u < 10 && v > 0 && v < 10;
+    }
+  EXPECT_NEAR(n, inside, 4 * side_px / 64);
+}
+
+// The unit cube, outward counter-clockwise triangles, coloured (255 x, 255 y, 255 z).
+TriangleMesh unit_cube(std::vector<Rgb>& colours) {
+  TriangleMesh mesh;
+  for (int i = 0; i < 8; ++i) {
+    mesh.vertices_mm.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+    colours.push_back({std::uint8_t(255 * (i & 1)), std::uint8_t(255 * ((i >> 1) & 1)),
+                       std::uint8_t(255 * ((i >> 2) & 1))});
+  }
+  mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                    {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  return mesh;
+}
+
+TEST(Snapshot, NearerFacesHideFartherOnes) {
+  std::vector<Rgb> colours;
+  TriangleMesh cube = unit_cube(colours);
+  SnapshotOptions options;
+  options.width_px = options.height_px = 101;
+  for (int order = 0; order < 2; ++order) {
+    // From the top the z = 1 face is seen face-on (shade 1): its colour at the middle is
+    // (127.5, 127.5, 255) give or take the half-pixel offset; the z = 0 face would have blue 0.
+    const Image top = render_snapshot(cube, colours, view_direction("top"), options);
+    EXPECT_EQ(top.get(50, 50)[2], 255) << "order " << order;
+    EXPECT_NEAR(top.get(50, 50)[0], 127.5, 2.0);
+    // From the front (-y) the y = 0 face: green 0 everywhere it shows.
+    const Image front = render_snapshot(cube, colours, view_direction("front"), options);
+    EXPECT_EQ(front.get(50, 50)[1], 0) << "order " << order;
+    EXPECT_NEAR(front.get(50, 50)[2], 127.5, 2.0);
+    std::reverse(cube.triangles.begin(), cube.triangles.end());
+  }
+}
+
+// A soup of overlapping random triangles: many depth tests and ties between bands.
+TEST(Snapshot, SameBytesForOneAndTwoThreads) {
+  std::mt19937 random(11);
+  std::uniform_real_distribution<double> coordinate(0.0, 50.0), jitter(-3.0, 3.0);
+  TriangleMesh mesh;
+  std::vector<Rgb> colours;
+  for (int t = 0; t < 20000; ++t) {
+    const Eigen::Vector3d centre(coordinate(random), coordinate(random), coordinate(random));
+    for (int k = 0; k < 3; ++k) {
+      mesh.vertices_mm.push_back(centre +
+                                 Eigen::Vector3d(jitter(random), jitter(random), jitter(random)));
+      colours.push_back({std::uint8_t(random()), std::uint8_t(random()), std::uint8_t(random())});
+    }
+    mesh.triangles.emplace_back(3 * t, 3 * t + 1, 3 * t + 2);
+  }
+  SnapshotOptions options;
+  options.width_px = 640, options.height_px = 480, options.title = "Threads";
+  options.legend = ColourScale{"value (mm)", -0.05, 0.05,
+                               [](double v) {
+                                 return Rgb{std::uint8_t(128 + 2000 * v), 0, 0};
+                               },
+                               5};
+  std::vector<Image> images;
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    images.push_back(render_snapshot(mesh, colours, view_direction("iso"), options));
+  }
+  EXPECT_EQ(images[0].rgb, images[1].rgb);
+  EXPECT_GT(count_not(images[0], options.background), 640 * 480 / 4);
+}
+
+TEST(Snapshot, WritesThreeViews) {
+  std::vector<Rgb> colours;
+  const TriangleMesh cube = unit_cube(colours);
+  SnapshotOptions options;
+  options.width_px = 320, options.height_px = 240, options.title = "Cube";
+  const fs::path folder = test_dir() / "views";
+  const auto names = write_snapshots(folder.string(), "cube", cube, colours, options);
+  ASSERT_EQ(names, (std::vector<std::string>{"cube_iso.png", "cube_top.png", "cube_front.png"}));
+  for (const auto& name : names) {
+    const Image image = decode_png((folder / name).string());
+    EXPECT_EQ(image.width, 320);
+    EXPECT_EQ(image.height, 240);
+  }
+  EXPECT_THROW(view_direction("left"), InputError);
+}
+
+}  // namespace
+}  // namespace vcut::io

@@ -1,0 +1,220 @@
+// Real-browser test of a filled vcut report page (headless Chromium via playwright-core).
+//   node tests/web/report_page_test.mjs REPORT.html "file:line" SCREENSHOT.png
+// Checks: no console/page errors and no network request; the page becomes ready; the gouge
+// table has a row whose NC lines contain file:line; clicking it flies the camera to the
+// region's deepest point (from the page's own data) and shows the line's text in the NC
+// panel; the WebGL canvas drew an image (not one flat colour).
+// Exit 0: all checks passed. 1: a check failed (each printed) or the report is missing.
+// 2: usage. 77 (skip): no Chromium at $VCUT_CHROMIUM or /usr/bin/chromium.
+
+import { createRequire } from 'node:module';
+import { existsSync } from 'node:fs';
+import { readFile } from 'node:fs/promises';
+import path from 'node:path';
+import { fileURLToPath, pathToFileURL } from 'node:url';
+
+const here = path.dirname(fileURLToPath(import.meta.url));
+const webDir = path.resolve(here, '..', '..', 'web');
+const TARGET_TOLERANCE_MM = 1e-3; // camera target vs region.deepest after the fly-to
+const READY_TIMEOUT_MS = 60000;
+
+const [reportArg, lineArg, shotArg] = process.argv.slice(2);
+if (!reportArg || !lineArg || !shotArg || process.argv.length > 5) {
+  console.error('usage: node tests/web/report_page_test.mjs REPORT.html "file:line" SCREENSHOT.png');
+  process.exit(2);
+}
+const executablePath = process.env.VCUT_CHROMIUM || '/usr/bin/chromium';
+if (!existsSync(executablePath)) {
+  console.log(`SKIP: no Chromium at ${executablePath} (install chromium, or set VCUT_CHROMIUM)`);
+  process.exit(77);
+}
+const lm = /^(.*):(\d+)$/.exec(lineArg);
+if (!lm) {
+  console.error(`bad line argument "${lineArg}": expected file:line`);
+  process.exit(2);
+}
+const wantFile = lm[1];
+const wantLine = Number(lm[2]);
+const reportPath = path.resolve(reportArg);
+if (!existsSync(reportPath)) {
+  console.log(`FAIL no such report: ${reportPath}`);
+  process.exit(1);
+}
+
+// ---- helpers ------------------------------------------------------------------------------
+
+// The report JSON, read from the HTML file itself (the page clears its data element after
+// parsing). Cached per run.
+let reportDoc = null;
+async function reportJson(reportFile) {
+  if (reportDoc) return reportDoc;
+  const html = await readFile(reportFile, 'utf8');
+  const open = '<script id="vcut-data" type="application/json">';
+  const a = html.indexOf(open);
+  const b = a >= 0 ? html.indexOf('</script>', a + open.length) : -1;
+  if (a < 0 || b < 0) throw new Error('report has no vcut-data element');
+  reportDoc = JSON.parse(html.slice(a + open.length, b));
+  return reportDoc;
+}
+async function readRegions(file) {
+  return (await reportJson(file)).regions || [];
+}
+async function readSources(file) {
+  return (await reportJson(file)).sources || [];
+}
+
+function ncText(region, regions, file, line, sources) {
+  const hit = (e) => e && sameFile(String(e.file), file) && Number(e.line) === line && typeof e.text === 'string';
+  for (const e of region.nc || []) if (hit(e)) return e.text;
+  for (const e of sources) if (hit(e)) return e.text;
+  for (const r of regions) for (const e of r.nc || []) if (hit(e)) return e.text;
+  return null;
+}
+
+// Distinct colours and the share of the most common one, decoded in the page with a 2D
+// canvas (the PNG goes in as a data: URL, which the network check allows).
+async function imageStats(page, png) {
+  return page.evaluate(async (b64) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${b64}`;
+    await img.decode();
+    const c = document.createElement('canvas');
+    c.width = img.width;
+    c.height = img.height;
+    const ctx = c.getContext('2d');
+    ctx.drawImage(img, 0, 0);
+    const px = ctx.getImageData(0, 0, c.width, c.height).data;
+    const counts = new Map();
+    for (let i = 0; i < px.length; i += 4) {
+      const k = (px[i] << 16) | (px[i + 1] << 8) | px[i + 2];
+      counts.set(k, (counts.get(k) || 0) + 1);
+    }
+    let max = 0;
+    for (const v of counts.values()) max = Math.max(max, v);
+    return { distinct: counts.size, dominantShare: max / (px.length / 4) };
+  }, png.toString('base64'));
+}
+
+// ---- the test ---------------------------------------------------------------------------
+
+let chromium;
+try {
+  ({ chromium } = createRequire(path.join(webDir, 'package.json'))('playwright-core'));
+} catch (e) {
+  console.error(`cannot load playwright-core from ${webDir}/node_modules (run npm ci in web/): ${e.message}`);
+  process.exit(1);
+}
+
+const failures = [];
+const check = (ok, what) => {
+  if (ok) console.log(`ok   ${what}`);
+  else { console.log(`FAIL ${what}`); failures.push(what); }
+  return ok;
+};
+
+const sameFile = (a, b) => a === b || path.basename(a) === path.basename(b);
+function refCovers(ref) {
+  const m = /^(.*):(\d+)(?:-(\d+))?$/.exec(String(ref).trim());
+  if (!m || !sameFile(m[1], wantFile)) return false;
+  const from = Number(m[2]);
+  const to = m[3] != null ? Number(m[3]) : from;
+  return wantLine >= from && wantLine <= to;
+}
+
+const consoleErrors = [];
+const pageErrors = [];
+const badRequests = new Set();
+const allowedScheme = (url) => /^(file|data|blob):/i.test(url);
+
+const browser = await chromium.launch({
+  executablePath,
+  headless: true,
+  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--disable-quic',
+    '--no-first-run', '--disable-component-update', '--disable-sync'],
+});
+let exitCode = 1;
+try {
+  const context = await browser.newContext({ viewport: { width: 1600, height: 1000 }, deviceScaleFactor: 1 });
+  const page = await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  page.on('pageerror', (e) => pageErrors.push(String(e && e.stack ? e.stack : e)));
+  page.on('request', (r) => { if (!allowedScheme(r.url())) badRequests.add(r.url()); });
+  page.on('websocket', (ws) => badRequests.add(ws.url()));
+  await context.route('**/*', (route) => {
+    const url = route.request().url();
+    if (allowedScheme(url)) return route.continue();
+    badRequests.add(url);
+    return route.abort('blockedbyclient');
+  });
+
+  await page.goto(pathToFileURL(reportPath).href, { waitUntil: 'load', timeout: READY_TIMEOUT_MS });
+  let ready = false;
+  try {
+    await page.waitForFunction(() => window.vcutReady === true || typeof window.vcutError === 'string',
+      null, { timeout: READY_TIMEOUT_MS, polling: 100 });
+    ready = await page.evaluate(() => window.vcutReady === true);
+  } catch (e) {
+    // timed out: reported below
+  }
+  const pageError = await page.evaluate(() => window.vcutError || null);
+  check(ready, `page ready (window.vcutReady)${pageError ? `: page reports "${pageError}"` : ''}`);
+
+  if (ready) {
+    const rows = await page.$$eval('#gouge-table tbody tr[data-kind="gouge"]', (trs) =>
+      trs.map((tr) => ({ index: Number(tr.getAttribute('data-region-index')), lines: tr.getAttribute('data-lines') || '' })));
+    const regions = await readRegions(reportPath);
+    let rowIndex = -1;
+    for (let k = 0; k < rows.length; k++) {
+      const r = regions[rows[k].index];
+      const refs = r && Array.isArray(r.lines) ? r.lines : rows[k].lines.split(/\s+/);
+      if (refs.some(refCovers)) { rowIndex = k; break; }
+    }
+    if (check(rowIndex >= 0, `gouge table has a row for ${lineArg} (${rows.length} gouge rows)`)) {
+      const region = regions[rows[rowIndex].index];
+      const before = await page.evaluate(() => window.vcutViewer.cameraState());
+      await page.locator('#gouge-table tbody tr[data-kind="gouge"]').nth(rowIndex).click();
+      await page.waitForTimeout(50);
+      await page.waitForFunction(() => window.vcutViewer.isAnimating() === false, null, { timeout: 10000, polling: 50 });
+      const after = await page.evaluate(() => window.vcutViewer.cameraState());
+      const deepest = region.deepest || region.centroid;
+      const dist = (a, b) => Math.hypot(a[0] - b[0], a[1] - b[1], a[2] - b[2]);
+      if (check(Array.isArray(deepest) && deepest.length === 3, 'region has a deepest point in the data')) {
+        const d = dist(after.target, deepest);
+        check(d <= TARGET_TOLERANCE_MM, `camera target at the deepest point (${d.toExponential(2)} mm away)`);
+      }
+      check(dist(before.position, after.position) > 1e-6, 'camera position changed');
+
+      const text = ncText(region, regions, wantFile, wantLine, await readSources(reportPath));
+      if (check(text != null, `data gives the text of ${lineArg}`)) {
+        const panel = await page.locator('#nc-panel').innerText();
+        check(panel.includes(text.trim()), `NC panel shows "${text.trim()}"`);
+        check(panel.includes(String(wantLine)), `NC panel shows line number ${wantLine}`);
+      }
+    }
+
+    // Let the frame with the marker land, then capture.
+    await page.waitForTimeout(200);
+    await page.screenshot({ path: shotArg, fullPage: true });
+    // Hide the HTML overlays (toolbar, legend, labels) so only WebGL pixels are judged.
+    await page.addStyleTag({ content: '#viewport > :not(canvas) { visibility: hidden !important; }' });
+    const canvasPng = await page.locator('#viewport canvas').first().screenshot();
+    const stats = await imageStats(page, canvasPng);
+    check(stats.distinct >= 64 && stats.dominantShare < 0.97,
+      `WebGL canvas drew an image (${stats.distinct} distinct colours, dominant ${(stats.dominantShare * 100).toFixed(1)} %)`);
+  } else {
+    await page.screenshot({ path: shotArg, fullPage: true }).catch(() => {});
+  }
+
+  check(pageErrors.length === 0, `no page errors${pageErrors.length ? `: ${pageErrors.join(' | ')}` : ''}`);
+  check(consoleErrors.length === 0, `no console errors${consoleErrors.length ? `: ${consoleErrors.join(' | ')}` : ''}`);
+  check(badRequests.size === 0, `no network requests${badRequests.size ? `: ${[...badRequests].join(' ')}` : ''}`);
+  exitCode = failures.length === 0 ? 0 : 1;
+} catch (e) {
+  console.log(`FAIL test error: ${e && e.stack ? e.stack : e}`);
+  exitCode = 1;
+} finally {
+  await browser.close().catch(() => {});
+}
+if (exitCode === 0) console.log(`PASS (screenshot ${shotArg})`);
+else console.log(`${failures.length || 1} check(s) failed`);
+process.exit(exitCode);
