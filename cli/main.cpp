@@ -15,6 +15,7 @@
 #include "vcut/io/job.h"
 #include "vcut/io/pose_pipeline.h"
 #include "vcut/io/simulate.h"
+#include "vcut/io/study.h"
 
 namespace {
 
@@ -123,6 +124,48 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   return r.errors == 0 ? 0 : 1;
 }
 
+int run_study(const std::string& job_file, vcut::io::StudyOptions options, bool quiet) {
+  const vcut::io::Job job = vcut::io::read_job(job_file);
+  vcut::cli::ProgressBar bar(!quiet);
+  std::string current;
+  options.on_run = [&](std::size_t index, std::size_t count, const std::string& label) {
+    current = (index + 1 == count ? "reference " : "setting " + std::to_string(index + 1) + "/" + std::to_string(count - 1) + " ") + label;
+  };
+  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) { bar.update(current + ": " + stage, done, total); };
+  const vcut::io::StudyResult s = vcut::io::run_densification_study(job, options);
+  bar.finish();
+  for (const auto& w : s.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  const vcut::io::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
+  if (!quiet) {
+    std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n", s.job_name.c_str(),
+                s.varied.c_str(), s.engine.c_str(), s.resolution_mm, s.threads, s.accuracy_mm);
+    std::printf("  %-28s %10s %12s %12s %10s\n", "setting", "poses", "max mm", "RMS mm", "time s");
+    for (const auto& r : s.rows) {
+      if (!r.error.empty()) {
+        std::printf("  %-28s not run: %s\n", r.label.c_str(), r.error.c_str());
+        continue;
+      }
+      std::printf("  %-28s %10zu %12.6f %12.6f %10.2f%s\n", r.label.c_str(), r.poses, r.max_mm, r.rms_mm, r.wall_time_s,
+                  &r == best ? "  <- recommended" : r.meets ? "  meets" : "");
+    }
+    std::printf("  %-28s %10zu %12s %12s %10.2f  (reference)\n", s.reference.label.c_str(), s.reference.poses, "-", "-",
+                s.reference.wall_time_s);
+    if (best)
+      std::printf("recommended: %s, the coarsest setting within %.4g mm of the reference (%.4g mm)\n", best->label.c_str(),
+                  s.accuracy_mm, best->max_mm);
+    for (const auto& f : s.outputs) std::printf("%s\n", f.c_str());
+  }
+  if (!best) {
+    double finest = -1.0;
+    for (const auto& r : s.rows)
+      if (r.error.empty() && (finest < 0.0 || r.max_mm < finest)) finest = r.max_mm;
+    std::fprintf(stderr, "vcut: no setting is within %.4g mm of the reference (the closest: %.4g mm); try finer settings\n",
+                 s.accuracy_mm, finest);
+    return 1;
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -161,6 +204,32 @@ int main(int argc, char** argv) {
   check->add_option("job", check_job, "Job file (YAML)")->required();
   check->add_option("--json", check_json, "Also write the findings as JSON to this file");
   check->add_flag("--quiet,-q", check_quiet, "Print nothing but errors and warnings");
+  auto* study = app.add_subcommand("study", "Studies of the job: how a setting trades accuracy for time");
+  study->require_subcommand(1);
+  auto* densification = study->add_subcommand(
+      "densification", "Cut the job at a series of densification settings and a much finer reference; per setting the "
+                       "distance from the reference cut, poses and time; recommends the coarsest within --accuracy");
+  std::string study_job;
+  bool study_quiet = false;
+  vcut::io::StudyOptions study_options;
+  double study_resolution = 0.0, study_accuracy = 0.0, ref_step = 0.0, ref_angle = 0.0, ref_tolerance = 0.0;
+  int study_threads = -1;
+  std::string study_out;
+  densification->add_option("job", study_job, "Job file (YAML)")->required();
+  densification->add_option("--steps", study_options.steps_mm, "Tip steps lambda to try, mm (comma-separated)")->delimiter(',');
+  densification->add_option("--angles", study_options.angles_deg, "Orientation steps phi to try, deg (comma-separated; "
+                                                                  "paired with --steps by position when both are given)")
+      ->delimiter(',');
+  densification->add_option("--tolerances", study_options.tolerances_mm, "Tolerance-mode epsilons to try, mm (comma-separated)")
+      ->delimiter(',');
+  densification->add_option("--reference-step", ref_step, "Reference lambda, mm (default: the finest step / 4)");
+  densification->add_option("--reference-angle", ref_angle, "Reference phi, deg (default: the finest angle / 4)");
+  densification->add_option("--reference-tolerance", ref_tolerance, "Reference epsilon, mm (default: the finest tolerance / 4)");
+  densification->add_option("--accuracy", study_accuracy, "Required accuracy, mm (default: the job's gouge tolerance)");
+  densification->add_option("--resolution", study_resolution, "Voxel size in mm (overrides engine.resolution)")->check(CLI::PositiveNumber);
+  densification->add_option("--threads", study_threads, "Worker threads, 0 = all cores")->check(CLI::NonNegativeNumber);
+  densification->add_option("--out", study_out, "Folder for study.csv, .json, .svg and .png (default: the job's output folder)");
+  densification->add_flag("--quiet,-q", study_quiet, "Print nothing but errors and warnings");
   vcut::cli::MachineCommands machine_commands;
   vcut::cli::add_machine_commands(app, machine_commands);
   vcut::cli::ProgramCommand program_command;
@@ -179,6 +248,16 @@ int main(int argc, char** argv) {
       return run_simulate(job_file, options, quiet);
     }
     if (*poses) return run_poses(poses_job, poses_out, poses_quiet);
+    if (*densification) {
+      if (densification->count("--reference-step")) study_options.reference_step_mm = ref_step;
+      if (densification->count("--reference-angle")) study_options.reference_angle_deg = ref_angle;
+      if (densification->count("--reference-tolerance")) study_options.reference_tolerance_mm = ref_tolerance;
+      if (densification->count("--accuracy")) study_options.accuracy_mm = study_accuracy;
+      if (study_resolution > 0.0) study_options.resolution_mm = study_resolution;
+      if (study_threads >= 0) study_options.threads = study_threads;
+      if (!study_out.empty()) study_options.out_dir = study_out;
+      return run_study(study_job, study_options, study_quiet);
+    }
     if (*check) return run_check(check_job, check_json, check_quiet);
     if (*compensate) return run_compensate(compensate_job, compensate_out, compensate_quiet);
     if (vcut::cli::run_machine_commands(machine_commands)) return 0;

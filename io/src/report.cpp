@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "vcut/io/atomic_file.h"
+#include "vcut/io/csv.h"
 
 namespace vcut::io {
 namespace {
@@ -30,13 +31,6 @@ ordered_json region(const RegionRecord& r) {
   j["tools"] = r.tools;
   j["initial_stock"] = r.initial_stock;
   return j;
-}
-
-std::string csv_field(const std::string& s) {
-  if (s.find_first_of(",\"\n") == std::string::npos) return s;
-  std::string q = "\"";
-  for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-  return q + "\"";
 }
 
 }  // namespace

@@ -48,6 +48,93 @@ double peak_memory_mb() {
 
 namespace {
 
+// Per vertex: does an incident face's normal stray more than `limit_deg` from the mean of
+// the incident faces' normals (area weighted)?
+std::vector<bool> sharp_vertices(const removal::TriangleMesh& mesh, double limit_deg) {
+  const std::size_t n = mesh.vertices_mm.size();
+  std::vector<Eigen::Vector3d> mean(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> face(mesh.triangles.size());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    const Eigen::Vector3d& p0 = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
+    face[f] = (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - p0).cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - p0);
+    for (int c = 0; c < 3; ++c) mean[static_cast<std::size_t>(t[c])] += face[f];
+  }
+  const double cos_limit = std::cos(limit_deg * M_PI / 180.0);
+  std::vector<bool> sharp(n, false);
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const double area2 = face[f].norm();
+    if (area2 <= 0.0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t i = static_cast<std::size_t>(mesh.triangles[f][c]);
+      const double m = mean[i].norm();
+      if (m <= 0.0 || face[f].dot(mean[i]) < cos_limit * area2 * m) sharp[i] = true;
+    }
+  }
+  // And the ring of vertices around each: their nearest triangles of the other meshing are
+  // the ones its edge cuts across.
+  std::vector<bool> near = sharp;
+  for (const auto& t : mesh.triangles)
+    if (sharp[static_cast<std::size_t>(t[0])] || sharp[static_cast<std::size_t>(t[1])] || sharp[static_cast<std::size_t>(t[2])])
+      for (int c = 0; c < 3; ++c) near[static_cast<std::size_t>(t[c])] = true;
+  return near;
+}
+
+}  // namespace
+
+SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
+                                     double sharp_edge_deg) {
+  const removal::DesignDistance to_b(b.mesh), to_a(a.mesh);
+  const std::size_t na = a.mesh.vertices_mm.size();
+  std::vector<double> d(na + b.mesh.vertices_mm.size());
+  std::vector<Eigen::Vector3d> where(d.size());
+  std::vector<bool> skip(d.size(), false);
+  if (sharp_edge_deg > 0.0) {
+    const std::vector<bool> sa = sharp_vertices(a.mesh, sharp_edge_deg), sb = sharp_vertices(b.mesh, sharp_edge_deg);
+    std::copy(sa.begin(), sa.end(), skip.begin());
+    std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
+  }
+  constexpr std::size_t kChunk = 1024;
+  tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    removal::DistanceHint hint;
+    for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
+      const bool in_a = i < na;
+      if (i == na) hint = removal::DistanceHint();
+      where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
+      d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
+    }
+  });
+  SurfaceDifference e;
+  e.done = true;
+  double squares = 0.0;
+  std::vector<double> counted;
+  counted.reserve(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (skip[i]) {
+      ++e.edge_vertices;
+      e.edge_max_mm = std::max(e.edge_max_mm, d[i]);
+      continue;
+    }
+    counted.push_back(d[i]);
+    squares += d[i] * d[i];
+    e.beyond_quarter += d[i] > 0.25 * v;
+    if (d[i] > e.max_mm) {
+      e.max_mm = d[i];
+      e.max_where_mm = where[i];
+    }
+  }
+  e.vertices = counted.size();
+  e.rms_mm = counted.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(counted.size()));
+  if (!counted.empty()) {
+    const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(counted.size() - 1));
+    std::nth_element(counted.begin(), counted.begin() + static_cast<std::ptrdiff_t>(k), counted.end());
+    e.p99_mm = counted[k];
+  }
+  return e;
+}
+
+namespace {
+
 using Clock = std::chrono::steady_clock;
 
 double total_ram_mb() {
@@ -79,43 +166,6 @@ removal::TriangleMesh transformed(removal::TriangleMesh mesh, const DesignSpec& 
                                 .toRotationMatrix();
   for (auto& p : mesh.vertices_mm) p = r * p + d.translate_mm;
   return mesh;
-}
-
-// Every vertex of each surface against the other's triangles.
-SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v) {
-  const removal::DesignDistance to_b(b.mesh), to_a(a.mesh);
-  std::vector<double> d(a.mesh.vertices_mm.size() + b.mesh.vertices_mm.size());
-  std::vector<Eigen::Vector3d> where(d.size());
-  constexpr std::size_t kChunk = 1024;
-  tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
-    removal::DistanceHint hint;
-    for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
-      const bool in_a = i < a.mesh.vertices_mm.size();
-      if (i == a.mesh.vertices_mm.size()) hint = removal::DistanceHint();
-      where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - a.mesh.vertices_mm.size()];
-      d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
-    }
-  });
-  SurfaceDifference e;
-  e.done = true;
-  e.vertices = d.size();
-  double squares = 0.0;
-  for (std::size_t i = 0; i < d.size(); ++i) {
-    squares += d[i] * d[i];
-    if (d[i] > e.max_mm) {
-      e.max_mm = d[i];
-      e.max_where_mm = where[i];
-    }
-  }
-  e.rms_mm = d.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(d.size()));
-  std::vector<double> sorted = d;
-  if (!sorted.empty()) {
-    const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(sorted.size() - 1));
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(k), sorted.end());
-    e.p99_mm = sorted[k];
-  }
-  for (double x : d) e.beyond_quarter += x > 0.25 * v;
-  return e;
 }
 
 const char* collision_kind(removal::ProbeKind probe) {
@@ -201,7 +251,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   if (!(v > 0.0) || !std::isfinite(v)) throw InputError("--resolution: expected a positive number of mm");
 
   // Fail on an unwritable output folder before hours of cutting, not after.
-  ensure_writable_folder(result.out_dir);
+  if (options.outputs) ensure_writable_folder(result.out_dir);
 
   // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
   // with servo or machine errors the actual poses, which are what the machine cuts).
@@ -344,7 +394,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   std::unique_ptr<removal::Stock> primary, second;
   if (use_dexel) primary = std::make_unique<removal::DexelStock>(shape, v);
   else primary = std::make_unique<removal::VdbStock>(shape, v);
-  if (use_dexel && use_vdb) second = std::make_unique<removal::VdbStock>(shape, v);
+  if (use_dexel && use_vdb && options.outputs) second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");
@@ -365,10 +415,16 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
 
   // 6. Mesh.
   progress("mesh", 0, 1);
-  const removal::SurfaceMesh machined = stock.surface();
+  removal::SurfaceMesh machined = stock.surface();
   result.machined_vertices = machined.mesh.vertices_mm.size();
   result.machined_triangles = machined.mesh.triangles.size();
   stage_done("mesh");
+  if (!options.outputs) {
+    result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+    result.peak_memory_mb = peak_memory_mb();
+    result.surface = std::make_shared<const removal::SurfaceMesh>(std::move(machined));
+    return result;
+  }
 
   if (second) {
     // engine: both — cut again with the OpenVDB engine; the distance between the two

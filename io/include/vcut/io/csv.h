@@ -21,4 +21,8 @@ struct CsvTable {
 // wrong number of fields, a field that is not a finite number.
 CsvTable read_csv(const std::string& path);
 
+// A text field of a CSV file we write: as is, or quoted (RFC 4180) when it holds a comma, a
+// quote or a line break.
+std::string csv_field(const std::string& text);
+
 }  // namespace vcut::io

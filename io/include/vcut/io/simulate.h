@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <utility>
@@ -13,6 +14,7 @@
 
 #include "vcut/io/job.h"
 #include "vcut/io/pose_pipeline.h"
+#include "vcut/removal/stock.h"
 
 namespace vcut::io {
 
@@ -21,6 +23,9 @@ struct SimulateOptions {
   std::optional<int> threads;           // overrides engine.threads (0 = all cores)
   std::optional<std::string> out_dir;   // overrides report.out
   double max_memory_mb = 0.0;           // refuse a stock larger than this; 0 = 75 % of RAM
+  // false (a study's runs): poses, moves, cut and mesh only, no engine cross-check, no
+  // comparison, no files; the machined surface is kept in the result instead.
+  bool outputs = true;
   // Progress: (stage, done, total); from the calling thread.
   std::function<void(const std::string&, std::size_t, std::size_t)> progress;
 };
@@ -69,7 +74,18 @@ struct SurfaceDifference {
   double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
   Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
   std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
+  // With sharp edges left out: how many vertices were, and the largest distance among them.
+  std::size_t edge_vertices = 0;
+  double edge_max_mm = 0.0;
 };
+
+// Every vertex of each surface against the other's triangles (exact point-to-triangle);
+// beyond_quarter counts those farther than v/4 (v: the voxel size, mm). With
+// sharp_edge_deg > 0 the vertices on sharp edges (an incident face's normal more than that
+// from their mean) are left out of max, RMS and p99: meshing places them within about v/2
+// of the edge, so two meshings of nearly the same solid differ there by that much.
+SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
+                                     double sharp_edge_deg = 0.0);
 
 struct EngineCheck : SurfaceDifference {
   double vdb_cut_s = 0.0, vdb_mesh_s = 0.0;
@@ -107,6 +123,7 @@ struct SimulationResult {
   EndpointCheck endpoints;
   EngineCheck engines;
   NominalCheck nominal;
+  std::shared_ptr<const removal::SurfaceMesh> surface;  // the machined surface, without outputs
 };
 
 // Runs the job and writes machined.stl, deviation.ply (with a design), report.json and

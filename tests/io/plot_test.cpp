@@ -1,0 +1,149 @@
+// Tests of the study plots (plot.h): axis mapping and ticks worked out by hand, the SVG and
+// the PNG agreeing on where a marker is, escaping, and atomic writing.
+#include <gtest/gtest.h>
+#include <vcut/io/input_error.h>
+#include <vcut/io/plot.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+namespace {
+namespace fs = std::filesystem;
+
+TEST(PlotAxis, LinearAndLogMapping) {
+  PlotAxis linear;
+  linear.min = 0.0;
+  linear.max = 10.0;
+  linear.px_min = 100.0;
+  linear.px_max = 300.0;
+  EXPECT_DOUBLE_EQ(linear.to_px(0.0), 100.0);
+  EXPECT_DOUBLE_EQ(linear.to_px(2.5), 150.0);
+  EXPECT_DOUBLE_EQ(linear.to_px(10.0), 300.0);
+  // A y axis runs upward: px_min (the bottom) is the larger pixel row.
+  PlotAxis log;
+  log.log = true;
+  log.min = 1e-3;
+  log.max = 1e-1;
+  log.px_min = 500.0;
+  log.px_max = 100.0;
+  EXPECT_NEAR(log.to_px(1e-2), 300.0, 1e-9);  // the middle decade, half way
+  EXPECT_NEAR(log.to_px(1e-1), 100.0, 1e-9);
+  EXPECT_NEAR(log.to_px(0.0), 500.0, 1e-9);    // not drawable on a log scale: the minimum
+  EXPECT_NEAR(log.to_px(-5.0), 500.0, 1e-9);
+  EXPECT_NEAR(log.to_px(1e-5), 500.0, 1e-9);   // below the range: the minimum
+}
+
+TEST(PlotAxis, Ticks) {
+  PlotAxis a;
+  a.min = 0.0;
+  a.max = 10.0;
+  EXPECT_EQ(a.ticks(), (std::vector<double>{0, 2, 4, 6, 8, 10}));  // 10 / 5 = 2: a 1-2-5 step
+  a.min = -0.3;
+  a.max = 0.75;
+  const std::vector<double> t = a.ticks();  // 1.05 / 5 = 0.21 -> step 0.5: 0 and 0.5 lie within
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_EQ(t[0], 0.0);
+  EXPECT_NEAR(t[1], 0.5, 1e-12);
+  a.log = true;
+  a.min = 1e-4;
+  a.max = 1e-1;
+  const std::vector<double> decades = a.ticks();  // four decades: no 2s and 5s
+  ASSERT_EQ(decades.size(), 4u);
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(decades[static_cast<std::size_t>(i)], std::pow(10.0, -4 + i), 1e-18);
+  a.min = 0.03;
+  a.max = 0.7;  // one decade inside: 0.05, 0.1, 0.2, 0.5
+  const std::vector<double> filled = a.ticks();
+  ASSERT_EQ(filled.size(), 4u);
+  EXPECT_NEAR(filled[0], 0.05, 1e-15);
+  EXPECT_NEAR(filled[1], 0.1, 1e-15);
+  EXPECT_NEAR(filled[2], 0.2, 1e-15);
+  EXPECT_NEAR(filled[3], 0.5, 1e-15);
+}
+
+Plot sample_plot() {
+  Plot plot;
+  plot.title = "a <&> \"title\"";
+  PlotPanel p;
+  p.title = "log-log";
+  p.log_x = p.log_y = true;
+  p.series.push_back({"max", {214, 39, 40}, {{50, 0.07}, {100, 0.017}, {200, 0.004}}, true, true, {"8", "4", "2"}});
+  p.marks.push_back({true, 0.01, "accuracy", {200, 40, 40}});
+  p.highlights.push_back({{200, 0.004}, "recommended", {0, 150, 60}});
+  PlotPanel q;
+  q.title = "linear";
+  q.series.push_back({"one", {31, 119, 180}, {{1.0, 2.0}, {3.0, 0.0}}, false, true, {}});
+  plot.panels = {p, q};
+  return plot;
+}
+
+// The marker at (3, 0) in the second panel: a 4 px disc in its colour, at the pixel the
+// frame maps it to, in both back ends.
+TEST(Plot, SvgAndPngPutAMarkerWhereTheFrameSays) {
+  const Plot plot = sample_plot();
+  const PanelFrame f = panel_frame(plot, 1);
+  EXPECT_GT(f.x.px_min, plot.width_px / 2.0);  // the second panel is the right half
+  const double x = f.x.to_px(3.0), y = f.y.to_px(0.0);
+  const Image image = render_png(plot);
+  const Rgb c = image.get(static_cast<int>(x), static_cast<int>(y));
+  EXPECT_EQ(c, (Rgb{31, 119, 180}));
+  char cx[32], cy[32];
+  std::snprintf(cx, sizeof cx, "%.2f", x);
+  std::snprintf(cy, sizeof cy, "%.2f", y);
+  const std::string svg = render_svg(plot);
+  EXPECT_NE(svg.find("<circle cx=\"" + std::string(cx) + "\" cy=\"" + cy + "\" r=\"4.00\" fill=\"#1f77b4\"/>"), std::string::npos)
+      << svg;
+  EXPECT_NE(svg.find("a &lt;&amp;&gt; &quot;title&quot;"), std::string::npos);
+  EXPECT_EQ(svg.find("<&>"), std::string::npos);
+  EXPECT_EQ(svg.rfind("</svg>\n"), svg.size() - 7);
+  // The log panel: the x range holds 50..200, the y range 0.004..0.07 and the mark.
+  const PanelFrame g = panel_frame(plot, 0);
+  EXPECT_LT(g.x.min, 50.0);
+  EXPECT_GT(g.x.max, 200.0);
+  EXPECT_LT(g.y.min, 0.004);
+  EXPECT_GT(g.y.max, 0.07);
+}
+
+TEST(Plot, WriteIsAtomicAndNamesAnUnwritablePath) {
+  const fs::path dir = fs::path(::testing::TempDir()) / "vcut_plot_write";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  write_plot((dir / "p.svg").string(), (dir / "p.png").string(), sample_plot());
+  EXPECT_GT(fs::file_size(dir / "p.svg"), 1000u);
+  EXPECT_GT(fs::file_size(dir / "p.png"), 1000u);
+  std::ofstream(dir / "blocker") << "a file where a folder should be";
+  try {
+    write_plot((dir / "blocker" / "p.svg").string(), (dir / "blocker" / "p.png").string(), sample_plot());
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("blocker"), std::string::npos) << e.what();
+  }
+  std::size_t files = 0;
+  for (const auto& entry : fs::directory_iterator(dir)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 3u);  // p.svg, p.png, blocker: no temporaries left
+  fs::remove_all(dir);
+}
+
+// An empty panel and a panel whose values are all one number still get a drawable range.
+TEST(Plot, DegenerateRanges) {
+  Plot plot;
+  PlotPanel empty, flat;
+  empty.log_y = true;
+  flat.series.push_back({"flat", {0, 0, 0}, {{2.0, 5.0}, {2.0, 5.0}}, true, true, {}});
+  plot.panels = {empty, flat};
+  for (std::size_t i = 0; i < 2; ++i) {
+    const PanelFrame f = panel_frame(plot, i);
+    EXPECT_LT(f.x.min, f.x.max);
+    EXPECT_LT(f.y.min, f.y.max);
+    EXPECT_TRUE(std::isfinite(f.y.to_px(5.0)));
+  }
+  EXPECT_NO_THROW(render_png(plot));
+}
+
+}  // namespace
+}  // namespace vcut::io
