@@ -134,12 +134,17 @@ Job read_job(const std::string& path) {
 
   job.out_dir = resolve(base, "out/" + job.name);
   if (const YAML::Node report = root["report"]) {
-    yaml.only_keys(report, "report", {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance"});
+    yaml.only_keys(report, "report", {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
     if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
     if (report["gouge_tolerance"]) job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
     if (report["excess_tolerance"]) job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
     if (report["collision_tolerance"])
       job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
+    if (const YAML::Node page = report["page_triangles"]) {
+      const int n = yaml.integer(page, "report.page_triangles");
+      if (n < 1000) yaml.fail(page, "report.page_triangles", "a count of at least 1000 (the machined mesh shown in report.html)");
+      job.page_triangles = static_cast<std::size_t>(n);
+    }
   }
   if (const YAML::Node densify = root["densify"]) {
     yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});

@@ -620,6 +620,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     in.deviation_mm = deviation;
     in.design = design_mesh ? &*design_mesh : nullptr;
     in.stock_box = stock_box;
+    in.max_triangles = job.page_triangles;
     result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     result.peak_memory_mb = peak_memory_mb();
     write_report_page((out / "report.html").string(), page, job, result, in);

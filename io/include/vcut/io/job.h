@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <map>
 #include <optional>
 #include <string>
@@ -53,6 +54,7 @@ struct Job {
   std::string out_dir;
   double gouge_tolerance_mm = 0.01;
   double excess_tolerance_mm = 0.1;
+  std::size_t page_triangles = 2'000'000;  // report.html shows the machined mesh decimated to this
   double collision_tolerance_mm = 0.01;
   double chord_tolerance_mm = 0.0;  // arcs; 0 = resolution / 20
   double step_mm = 0.0;               // densify.step: lambda; 0 = none

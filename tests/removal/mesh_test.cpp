@@ -1,0 +1,75 @@
+// Decimation for the report page (removal::decimate): a finely triangulated sphere reduced
+// to a budget keeps only original vertices (their attributes carry over through `kept`),
+// stays closed, and keeps the sphere's volume; the expectations are the sphere's closed
+// forms, not the decimater's output.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "test_meshes.h"
+#include "vcut/removal/mesh.h"
+
+namespace vcut::removal {
+namespace {
+
+// A UV sphere of radius r: `rings` bands of `segments` quads (triangles at the poles),
+// outward facing.
+TriangleMesh uv_sphere(double r_mm, int rings, int segments) {
+  TriangleMesh m;
+  m.vertices_mm.push_back({0, 0, r_mm});
+  for (int i = 1; i < rings; ++i) {
+    const double theta = M_PI * i / rings;
+    for (int j = 0; j < segments; ++j) {
+      const double phi = 2.0 * M_PI * j / segments;
+      m.vertices_mm.push_back({r_mm * std::sin(theta) * std::cos(phi), r_mm * std::sin(theta) * std::sin(phi), r_mm * std::cos(theta)});
+    }
+  }
+  m.vertices_mm.push_back({0, 0, -r_mm});
+  const int south = static_cast<int>(m.vertices_mm.size()) - 1;
+  auto at = [&](int ring, int j) { return 1 + (ring - 1) * segments + (j % segments); };
+  for (int j = 0; j < segments; ++j) m.triangles.push_back({0, at(1, j), at(1, j + 1)});
+  for (int i = 1; i < rings - 1; ++i)
+    for (int j = 0; j < segments; ++j) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  for (int j = 0; j < segments; ++j) m.triangles.push_back({south, at(rings - 1, j + 1), at(rings - 1, j)});
+  return m;
+}
+
+TEST(Decimate, SphereToABudgetKeepsOriginalVerticesClosureAndVolume) {
+  const double r = 10.0;
+  const TriangleMesh sphere = uv_sphere(r, 120, 240);  // 2 * 240 * 119 = 57,120 triangles
+  ASSERT_EQ(sphere.triangles.size(), 57120u);
+  ASSERT_TRUE(is_closed(sphere));
+  ASSERT_GT(signed_volume_mm3(sphere), 0.0);
+  std::vector<int> kept;
+  const TriangleMesh small = decimate(sphere, 2000, kept);
+  EXPECT_LE(small.triangles.size(), 2000u);
+  EXPECT_GT(small.triangles.size(), 1000u);
+  ASSERT_EQ(kept.size(), small.vertices_mm.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    ASSERT_GE(kept[i], 0);
+    ASSERT_LT(static_cast<std::size_t>(kept[i]), sphere.vertices_mm.size());
+    EXPECT_EQ(small.vertices_mm[i], sphere.vertices_mm[static_cast<std::size_t>(kept[i])]) << i;
+  }
+  EXPECT_TRUE(is_closed(small));
+  // 2,000 triangles on a 10 mm sphere: an edge of about 1.6 mm, a facet's sagitta under
+  // 0.05 mm, so the volume falls short of 4/3 pi r^3 by well under 2 %.
+  const double sphere_mm3 = 4.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_NEAR(signed_volume_mm3(small), sphere_mm3, 0.02 * sphere_mm3);
+  EXPECT_LE(signed_volume_mm3(small), sphere_mm3);  // inscribed: every vertex on the sphere
+}
+
+TEST(Decimate, SmallMeshComesBackAsItIs) {
+  const TriangleMesh box = test::box_mesh({0, 0, 0}, {1, 2, 3});
+  std::vector<int> kept;
+  const TriangleMesh same = decimate(box, 100, kept);
+  EXPECT_EQ(same.triangles, box.triangles);
+  EXPECT_EQ(same.vertices_mm, box.vertices_mm);
+  ASSERT_EQ(kept.size(), box.vertices_mm.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept[i], static_cast<int>(i));
+}
+
+}  // namespace
+}  // namespace vcut::removal
