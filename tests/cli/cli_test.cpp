@@ -282,6 +282,12 @@ TEST_F(Simulate, WrongTypeNamesKey) {
   expect_error(simulate(), "engine.resolution");
 }
 
+TEST_F(Simulate, PageTrianglesMustBeAUsefulCount) {
+  job.replace(job.find("excess_tolerance: 0.02"), 22, "excess_tolerance: 0.02, page_triangles: 10");
+  expect_error(simulate(), "report.page_triangles");
+  EXPECT_TRUE(no_output());
+}
+
 TEST_F(Simulate, ZeroToolDiameter) {
   write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 0, flute_length: 25}\n");
   expect_error(simulate(), "tools.1.diameter");
