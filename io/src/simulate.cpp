@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -48,6 +49,10 @@ double peak_memory_mb() {
 
 namespace {
 
+// How far from a sharp edge (in voxels) two meshings of nearly one solid may differ by the
+// edge's chamfer.
+constexpr double kEdgeReach = 2.0;
+
 // Per vertex: does an incident face's normal stray more than `limit_deg` from the mean of
 // the incident faces' normals (area weighted)?
 std::vector<bool> sharp_vertices(const removal::TriangleMesh& mesh, double limit_deg) {
@@ -71,12 +76,33 @@ std::vector<bool> sharp_vertices(const removal::TriangleMesh& mesh, double limit
       if (m <= 0.0 || face[f].dot(mean[i]) < cos_limit * area2 * m) sharp[i] = true;
     }
   }
-  // And the ring of vertices around each: their nearest triangles of the other meshing are
-  // the ones its edge cuts across.
-  std::vector<bool> near = sharp;
-  for (const auto& t : mesh.triangles)
-    if (sharp[static_cast<std::size_t>(t[0])] || sharp[static_cast<std::size_t>(t[1])] || sharp[static_cast<std::size_t>(t[2])])
-      for (int c = 0; c < 3; ++c) near[static_cast<std::size_t>(t[c])] = true;
+  return sharp;
+}
+
+// Vertices of `mesh` within `radius_mm` of any of `points` (a hash grid of that cell size).
+std::vector<char> near_points(const removal::TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& points, double radius_mm) {
+  auto cell = [&](const Eigen::Vector3d& p) {
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)), static_cast<long>(std::floor(p.y() / radius_mm)),
+                               static_cast<long>(std::floor(p.z() / radius_mm))};
+  };
+  std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> grid;
+  for (const auto& p : points) grid[cell(p)].push_back(p);
+  std::vector<char> near(mesh.vertices_mm.size(), 0);  // char: written from several threads
+  tbb::parallel_for(std::size_t{0}, mesh.vertices_mm.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& v = mesh.vertices_mm[i];
+    const auto c = cell(v);
+    for (long dx = -1; dx <= 1 && !near[i]; ++dx)
+      for (long dy = -1; dy <= 1 && !near[i]; ++dy)
+        for (long dz = -1; dz <= 1 && !near[i]; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (const auto& p : it->second)
+            if ((p - v).squaredNorm() <= radius_mm * radius_mm) {
+              near[i] = 1;
+              break;
+            }
+        }
+  });
   return near;
 }
 
@@ -90,7 +116,15 @@ SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const remova
   std::vector<Eigen::Vector3d> where(d.size());
   std::vector<bool> skip(d.size(), false);
   if (sharp_edge_deg > 0.0) {
-    const std::vector<bool> sa = sharp_vertices(a.mesh, sharp_edge_deg), sb = sharp_vertices(b.mesh, sharp_edge_deg);
+    // Near a sharp edge of either surface: the other meshing may cut that edge's corner
+    // anywhere within a cell or two of it.
+    std::vector<Eigen::Vector3d> edge_points;
+    for (const removal::SurfaceMesh* m : {&a, &b}) {
+      const std::vector<bool> sharp = sharp_vertices(m->mesh, sharp_edge_deg);
+      for (std::size_t i = 0; i < sharp.size(); ++i)
+        if (sharp[i]) edge_points.push_back(m->mesh.vertices_mm[i]);
+    }
+    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v), sb = near_points(b.mesh, edge_points, kEdgeReach * v);
     std::copy(sa.begin(), sa.end(), skip.begin());
     std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
   }

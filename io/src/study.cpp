@@ -19,9 +19,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// Vertices on sharp edges are left out of the figures (surface_difference): an edge is
-// where an incident face turns more than this from the vertex's mean normal. A 90 deg edge
-// turns 45; the corners a coarse densification leaves between chords turn half the step.
+// Vertices within 2 v of sharp edges are left out of the figures (surface_difference): an
+// edge is where an incident face turns more than this from the vertex's mean normal. A
+// 90 deg edge turns 45; the corners a coarse densification leaves between chords turn half
+// the step.
 constexpr double kSharpEdgeDeg = 20.0;
 
 std::string number(double x) {
@@ -178,8 +179,9 @@ void write_study_files(const std::string& folder, const StudyResult& s, const Jo
   j["accuracy_mm"] = s.accuracy_mm;
   j["metric"] =
       "distance of each setting's machined surface from the reference's: every vertex of each against the other's triangles, "
-      "vertices on sharp edges (a face turned more than 20 deg from the vertex's mean normal) apart: meshing puts them within "
-      "about half the resolution of the edge, so their largest distance is edge_max_mm, not max_mm";
+      "vertices within 2 voxels of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) apart: meshing "
+      "cuts such an edge's corner anywhere within a cell or two, so their largest distance is edge_max_mm, not max_mm; "
+      "what is left resolves about resolution / 100";
   j["reference"] = row_json(s.reference);
   j["settings"] = nlohmann::ordered_json::array();
   for (const StudyRow& r : s.rows) j["settings"].push_back(row_json(r));
@@ -250,6 +252,11 @@ StudyResult run_densification_study(const Job& job, const StudyOptions& options)
   s.accuracy_mm = options.accuracy_mm.value_or(job.gouge_tolerance_mm);
   if (!(s.accuracy_mm > 0.0) || !std::isfinite(s.accuracy_mm))
     throw InputError("--accuracy: " + number(s.accuracy_mm) + " is not a positive number of mm");
+
+  const double resolution_mm = options.resolution_mm.value_or(job.resolution_mm);
+  if (s.accuracy_mm < resolution_mm / 100.0)
+    s.warnings.push_back("accuracy " + number(s.accuracy_mm) + " mm is below what meshes at " + number(resolution_mm) +
+                         " mm resolve (about 1/100 of it): figures near it are meshing noise; choose a finer --resolution");
 
   // Fail on an unwritable output folder before the runs, not after.
   ensure_writable_folder(s.out_dir);

@@ -81,9 +81,10 @@ struct SurfaceDifference {
 
 // Every vertex of each surface against the other's triangles (exact point-to-triangle);
 // beyond_quarter counts those farther than v/4 (v: the voxel size, mm). With
-// sharp_edge_deg > 0 the vertices on sharp edges (an incident face's normal more than that
-// from their mean) are left out of max, RMS and p99: meshing places them within about v/2
-// of the edge, so two meshings of nearly the same solid differ there by that much.
+// sharp_edge_deg > 0 the vertices within 2 v of a sharp edge of either surface (a vertex
+// where an incident face's normal strays more than that from their mean) are left out of
+// max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
+// within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
 SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
                                      double sharp_edge_deg = 0.0);
 
