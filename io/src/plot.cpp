@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 #include "vcut/io/atomic_file.h"
 
@@ -179,6 +180,119 @@ class SvgCanvas : public Canvas {
   }
 };
 
+// ---- Label placement ------------------------------------------------------------------------
+// Each label tries a few spots around what it names and takes the first with the least clutter
+// under it. Boxes are those of the stroke font (cap height above the baseline, descenders
+// below); sans-serif SVG text is narrower, so it fits the same boxes.
+
+struct Box {
+  double x0, y0, x1, y1;
+};
+
+Box text_box(const std::string& text, Point2 at, double height_px, Align align) {
+  const double w = text_width(text, height_px);
+  const double left = align == Align::kLeft ? at.x : align == Align::kCenter ? at.x - w / 2 : at.x - w;
+  return {left, at.y - height_px, left + w, at.y + height_px / 3.0};
+}
+
+Box around(Point2 p, double r) { return {p.x - r, p.y - r, p.x + r, p.y + r}; }
+
+double overlap_area(const Box& a, const Box& b) {
+  const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+  const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+  return w > 0.0 && h > 0.0 ? w * h : 0.0;
+}
+
+bool within(const Box& inner, const Box& outer) {
+  return inner.x0 >= outer.x0 && inner.x1 <= outer.x1 && inner.y0 >= outer.y0 && inner.y1 <= outer.y1;
+}
+
+// Whether the segment ab passes through the box (Liang-Barsky clipping).
+bool crosses(Point2 a, Point2 b, const Box& box) {
+  const double dx = b.x - a.x, dy = b.y - a.y;
+  const double p[4] = {-dx, dx, -dy, dy};
+  const double q[4] = {a.x - box.x0, box.x1 - a.x, a.y - box.y0, box.y1 - a.y};
+  double t0 = 0.0, t1 = 1.0;
+  for (int i = 0; i < 4; ++i) {
+    if (p[i] == 0.0) {
+      if (q[i] < 0.0) return false;
+      continue;
+    }
+    const double t = q[i] / p[i];
+    if (p[i] < 0.0)
+      t0 = std::max(t0, t);  // entering
+    else
+      t1 = std::min(t1, t);  // leaving
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+struct Spot {
+  Point2 at;  // baseline
+  Align align;
+};
+
+class LabelPlacer {
+ public:
+  explicit LabelPlacer(Box area) : area_(area) {}
+  void add_text(const Box& b) { text_.push_back(b); }    // never covered by a label
+  void add_mark(const Box& b) { marks_.push_back(b); }   // covered only when nothing else fits
+  void add_line(Point2 a, Point2 b) { lines_.push_back({a, b}); }
+
+  // The first of `spots` with the least clutter under it, its box then taken. A label that
+  // would leave the frame or cover other text gets no spot, unless `always`: then the
+  // least bad one.
+  std::optional<Spot> place(const std::string& text, double height_px,
+                            const std::vector<Spot>& spots, bool always) {
+    std::optional<Spot> best;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (const Spot& s : spots) {
+      const Box b = text_box(text, s.at, height_px, s.align);
+      // Hard faults (outside, over text) outweigh any clutter of markers and lines.
+      double cost = within(b, area_) ? 0.0 : 1e9;
+      for (const Box& t : text_) cost += 1e6 * overlap_area(b, t);
+      // Covering a marker hides data; crossing a line only makes the text harder to read.
+      for (const Box& m : marks_) cost += 10.0 * overlap_area(b, m);
+      for (const auto& [p, q] : lines_) cost += crosses(p, q, b) ? 20.0 : 0.0;
+      if (cost < best_cost) best_cost = cost, best = s;
+    }
+    if (!best || (!always && best_cost >= 1e6)) return std::nullopt;
+    text_.push_back(text_box(text, best->at, height_px, best->align));
+    return best;
+  }
+
+ private:
+  Box area_;
+  std::vector<Box> text_, marks_;
+  std::vector<std::array<Point2, 2>> lines_;
+};
+
+// Spots beside a marker of radius r: right, left, above, below, the upper ones first.
+std::vector<Spot> spots_beside(Point2 p, double r, double height_px) {
+  const double gap = r + 2.0, below = p.y + gap + height_px, above = p.y - gap;
+  return {{{p.x + gap, above}, Align::kLeft},         {{p.x + gap, below}, Align::kLeft},
+          {{p.x - gap, above}, Align::kRight},        {{p.x - gap, below}, Align::kRight},
+          {{p.x, above - 2.0}, Align::kCenter},       {{p.x, below + 2.0}, Align::kCenter},
+          {{p.x + gap + 2.0, p.y + height_px / 2.0}, Align::kLeft},
+          {{p.x - gap - 2.0, p.y + height_px / 2.0}, Align::kRight}};
+}
+
+// Spots along a mark line at pixel `at_px` (a row when horizontal, else a column): near its
+// right (or top) end first.
+std::vector<Spot> spots_along_mark(bool horizontal, double at_px, const Box& frame) {
+  const double h = kPointText;
+  if (!horizontal)
+    return {{{at_px + 5.0, frame.y0 + 16.0}, Align::kLeft}, {{at_px - 5.0, frame.y0 + 16.0}, Align::kRight},
+            {{at_px + 5.0, frame.y1 - 8.0}, Align::kLeft}, {{at_px - 5.0, frame.y1 - 8.0}, Align::kRight}};
+  const double mid = (frame.x0 + frame.x1) / 2.0, above = at_px - 5.0, below = at_px + 5.0 + h;
+  return {{{frame.x1 - 6.0, above}, Align::kRight}, {{frame.x1 - 6.0, below}, Align::kRight},
+          {{frame.x0 + 6.0, above}, Align::kLeft},  {{frame.x0 + 6.0, below}, Align::kLeft},
+          {{mid, above}, Align::kCenter},           {{mid, below}, Align::kCenter}};
+}
+
+constexpr double kMarkerRadius = 4.0, kRingRadius = 9.0;
+
 void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
   const PlotPanel& panel = plot.panels[index];
   const PanelFrame f = panel_frame(plot, index);
@@ -200,69 +314,92 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
   canvas.text(panel.x_label, {(x0 + x1) / 2.0, y1 + 44.0}, kLabelText, kInk, Align::kCenter, false);
   canvas.text(panel.y_label, {x0 - 62.0, (y0 + y1) / 2.0}, kLabelText, kInk, Align::kCenter, true);
 
+  const auto finite = [](const Point2& p) { return std::isfinite(p.x) && std::isfinite(p.y); };
+  const auto to_px = [&](const Point2& p) { return Point2{f.x.to_px(p.x), f.y.to_px(p.y)}; };
+  // Labels may use the margin kept right of the frame, short of the next panel's axis labels.
+  LabelPlacer placer({x0 + 2.0, y0 + 2.0, x1 + kRight - 6.0, y1 - 2.0});
+
   for (const PlotMarkLine& m : panel.marks) {
-    if (m.horizontal) {
-      const double y = f.y.to_px(m.value);
-      canvas.line({x0, y}, {x1, y}, m.colour, 1.5, true);
-      canvas.text(m.label, {x1 - 6.0, y - 5.0}, kPointText, m.colour, Align::kRight, false);
-    } else {
-      const double x = f.x.to_px(m.value);
-      canvas.line({x, y0}, {x, y1}, m.colour, 1.5, true);
-      canvas.text(m.label, {x + 5.0, y0 + 16.0}, kPointText, m.colour, Align::kLeft, false);
-    }
+    if (!std::isfinite(m.value)) continue;
+    Point2 a{x0, f.y.to_px(m.value)}, b{x1, a.y};
+    if (!m.horizontal) a = {f.x.to_px(m.value), y0}, b = {a.x, y1};
+    canvas.line(a, b, m.colour, 1.5, true);
+    placer.add_line(a, b);
   }
   for (const PlotSeries& s : panel.series) {
     std::vector<Point2> px;
     for (const Point2& p : s.points)
-      if (std::isfinite(p.x) && std::isfinite(p.y)) px.push_back({f.x.to_px(p.x), f.y.to_px(p.y)});
-    if (s.line && px.size() > 1) canvas.polyline(px, s.colour, 2.0);
-    if (s.markers)
-      for (const Point2& p : px) canvas.disc(p, 4.0, s.colour);
-  }
-  for (const PlotSeries& s : panel.series)
-    for (std::size_t i = 0; i < s.points.size() && i < s.labels.size(); ++i) {
-      const Point2& p = s.points[i];
-      if (!std::isfinite(p.x) || !std::isfinite(p.y) || s.labels[i].empty()) continue;
-      canvas.text(s.labels[i], {f.x.to_px(p.x) + 7.0, f.y.to_px(p.y) - 7.0}, kPointText, kMuted, Align::kLeft, false);
+      if (finite(p)) px.push_back(to_px(p));
+    if (s.line && px.size() > 1) {
+      canvas.polyline(px, s.colour, 2.0);
+      for (std::size_t i = 1; i < px.size(); ++i) placer.add_line(px[i - 1], px[i]);
     }
+    for (const Point2& p : px) {
+      if (s.markers) canvas.disc(p, kMarkerRadius, s.colour);
+      placer.add_mark(around(p, kMarkerRadius));
+    }
+  }
   for (const PlotHighlight& h : panel.highlights) {
-    const Point2 p{f.x.to_px(h.at.x), f.y.to_px(h.at.y)};
-    canvas.ring(p, 9.0, h.colour, 2.0);
-    canvas.text(h.label, {p.x + 12.0, p.y + 20.0}, kPointText, h.colour, Align::kLeft, false);
+    if (!finite(h.at)) continue;
+    const Point2 p = to_px(h.at);
+    canvas.ring(p, kRingRadius, h.colour, 2.0);
+    placer.add_mark(around(p, kRingRadius + 1.0));
   }
 
-  // Legend: top right inside the frame.
+  // Legend: in the corner with the fewest points, rings and labels (at their first choice of
+  // spot) under it; top right on a tie.
   std::vector<std::pair<std::string, Rgb>> entries;
   for (const PlotSeries& s : panel.series)
     if (!s.name.empty()) entries.push_back({s.name, s.colour});
-  if (entries.empty()) return;
   double text_px = 0.0;
   for (const auto& e : entries) text_px = std::max(text_px, text_width(e.first, kLabelText));
   const double row = 20.0, w = 40.0 + text_px, h = 10.0 + row * static_cast<double>(entries.size());
-  // In the corner with the fewest points, labels and rings under it (top right on a tie).
   double lx = x1 - 10.0 - w, ly = y0 + 10.0;
   int fewest = std::numeric_limits<int>::max();
-  for (const Point2 corner : {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0}, Point2{x1 - 10.0 - w, y1 - 10.0 - h},
-                              Point2{x0 + 10.0, y1 - 10.0 - h}}) {
+  for (const Point2 corner : {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0},
+                              Point2{x1 - 10.0 - w, y1 - 10.0 - h}, Point2{x0 + 10.0, y1 - 10.0 - h}}) {
+    const Box legend{corner.x, corner.y, corner.x + w, corner.y + h};
     int under = 0;
-    auto count = [&](double x, double y, double margin) {
-      under += x > corner.x - margin && x < corner.x + w + margin && y > corner.y - margin && y < corner.y + h + margin;
-    };
     for (const PlotSeries& s : panel.series)
       for (std::size_t i = 0; i < s.points.size(); ++i) {
-        const Point2& p = s.points[i];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y)) continue;
-        const double x = f.x.to_px(p.x), y = f.y.to_px(p.y);
-        count(x, y, 6.0);
-        if (i < s.labels.size() && !s.labels[i].empty()) count(x + 7.0 + text_width(s.labels[i], kPointText), y - 7.0, 4.0);
+        if (!finite(s.points[i])) continue;
+        const Point2 p = to_px(s.points[i]);
+        under += overlap_area(around(p, kMarkerRadius + 2.0), legend) > 0.0;
+        if (i < s.labels.size() && !s.labels[i].empty()) {
+          const Spot first = spots_beside(p, kMarkerRadius, kPointText).front();
+          under += overlap_area(text_box(s.labels[i], first.at, kPointText, first.align), legend) > 0.0;
+        }
       }
-    for (const PlotHighlight& hl : panel.highlights) count(f.x.to_px(hl.at.x), f.y.to_px(hl.at.y), 12.0);
-    if (under < fewest) {
-      fewest = under;
-      lx = corner.x;
-      ly = corner.y;
-    }
+    for (const PlotHighlight& hl : panel.highlights)
+      if (finite(hl.at)) under += overlap_area(around(to_px(hl.at), kRingRadius + 3.0), legend) > 0.0;
+    if (under < fewest) fewest = under, lx = corner.x, ly = corner.y;
   }
+  if (!entries.empty()) placer.add_text({lx, ly, lx + w, ly + h});
+
+  // Labels, the most important first: marks, highlights, then the points in series order. A
+  // point label with no free spot is left out rather than drawn over other text.
+  for (const PlotMarkLine& m : panel.marks) {
+    if (!std::isfinite(m.value) || m.label.empty()) continue;
+    const double at_px = m.horizontal ? f.y.to_px(m.value) : f.x.to_px(m.value);
+    const std::vector<Spot> spots = spots_along_mark(m.horizontal, at_px, {x0, y0, x1, y1});
+    if (const auto spot = placer.place(m.label, kPointText, spots, true))
+      canvas.text(m.label, spot->at, kPointText, m.colour, spot->align, false);
+  }
+  for (const PlotHighlight& hl : panel.highlights) {
+    if (!finite(hl.at) || hl.label.empty()) continue;
+    const Point2 p = to_px(hl.at);
+    if (const auto spot = placer.place(hl.label, kPointText, spots_beside(p, kRingRadius, kPointText), true))
+      canvas.text(hl.label, spot->at, kPointText, hl.colour, spot->align, false);
+  }
+  for (const PlotSeries& s : panel.series)
+    for (std::size_t i = 0; i < s.points.size() && i < s.labels.size(); ++i) {
+      if (!finite(s.points[i]) || s.labels[i].empty()) continue;
+      const Point2 p = to_px(s.points[i]);
+      if (const auto spot = placer.place(s.labels[i], kPointText, spots_beside(p, kMarkerRadius, kPointText), false))
+        canvas.text(s.labels[i], spot->at, kPointText, kMuted, spot->align, false);
+    }
+
+  if (entries.empty()) return;
   const Rgb legend_fill{250, 250, 250};
   canvas.rect(lx, ly, lx + w, ly + h, legend_fill, &kFrame);
   for (std::size_t i = 0; i < entries.size(); ++i) {

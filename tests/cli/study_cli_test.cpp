@@ -1,6 +1,6 @@
 // `vcut study densification` through the real binary (issue 7). The job turns the table of
 // table-table-ac a full turn (G1 C360) with the tool's axis 28 mm from the C axis, so the
-// tool cuts a ring groove. Densified by phi, the tip runs on chords of the 28 mm circle
+// tool cuts a ring groove 3 mm deep. Densified by phi, the tip runs on chords of the 28 mm circle
 // (axis programs interpolate the axes; the study cuts straight moves between poses), so both
 // groove walls sit closer to the axis than the true circle by the chord's sagitta
 // 28 (1 - cos(phi / 2)) mm at each chord's middle: 0.06820 mm at 8 deg, 0.01706 at 4,
@@ -36,9 +36,9 @@ class Study : public ::testing::Test {
     fs::remove_all(dir);
     fs::create_directories(dir);
     write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 6, flute_length: 20, shank_diameter: 6, length: 30}\n");
-    program = "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X40 Y0 Z5 A0 C0\nG1 Z-10 F500\nG1 X28\nG1 C360 F2000\nG0 Z5\nM30\n";
+    program = "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X40 Y0 Z5 A0 C0\nG1 Z-3 F500\nG1 X28\nG1 C360 F2000\nG0 Z5\nM30\n";
     job = "job: turn\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: turn.ngc}\n"
-          "stock: {cylinder: {center: [0, 0, -20], radius: 30, height: 20}}\n"
+          "stock: {cylinder: {center: [0, 0, -6], radius: 30, height: 6}}\n"
           "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out, gouge_tolerance: 0.01}\n";
   }
   void TearDown() override { fs::remove_all(dir); }
@@ -103,13 +103,15 @@ TEST_F(Study, ChordSagittaOfATurningTableAndTheRecommendation) {
   EXPECT_EQ(std::string(signature + 1, 3), "PNG");
 }
 
-// No setting meets a 0.1 um accuracy: exit 1, the files complete, no recommendation.
+// No setting meets a 0.1 um accuracy: exit 1, the files complete, no recommendation. (At
+// 0.5 mm: the figures do not matter here, and such an accuracy is also warned about.)
 TEST_F(Study, NoSettingMeetsTheAccuracy) {
-  const CommandResult r = study("--angles 8,4 --accuracy 0.0001 -q");
+  const CommandResult r = study("--angles 8,4 --accuracy 0.0001 --resolution 0.5 -q");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   EXPECT_NE(r.output.find("no setting is within 0.0001 mm of the reference"), std::string::npos) << r.output;
   const nlohmann::json j = json();
   EXPECT_TRUE(j["recommended"].is_null());
+  EXPECT_NE(r.output.find("warning: accuracy 0.0001 mm is below what meshes at 0.5 mm resolve"), std::string::npos) << r.output;
   EXPECT_EQ(j["reference"]["setting"], "angle 1 deg");  // the finest / 4
   EXPECT_TRUE(fs::exists(dir / "out" / "study.png"));
 }

@@ -145,5 +145,87 @@ TEST(Plot, DegenerateRanges) {
   EXPECT_NO_THROW(render_png(plot));
 }
 
+// A value a log axis cannot show (0) is drawn, at the bottom of the frame, not dropped.
+TEST(Plot, LogValueZeroIsDrawnAtTheAxisMinimum) {
+  Plot plot;
+  PlotPanel p;
+  p.log_y = true;
+  p.series.push_back({"", {214, 39, 40}, {{1.0, 0.1}, {2.0, 0.0}, {3.0, 0.01}}, false, true, {}});
+  plot.panels = {p};
+  const PanelFrame f = panel_frame(plot, 0);
+  EXPECT_NEAR(f.y.to_px(0.0), f.y.px_min, 1e-9);
+  const Image image = render_png(plot);
+  EXPECT_EQ(image.get(static_cast<int>(f.x.to_px(2.0)), static_cast<int>(f.y.px_min)),
+            (Rgb{214, 39, 40}));
+}
+
+struct DrawnText {
+  double x0, y0, x1, y1;  // its box in the stroke font's metrics (an upper bound of sans-serif)
+  std::string text;
+};
+
+// The <text> elements of an SVG whose text starts with `prefix`, with their boxes: cap height
+// font-size * 0.72 above the baseline (the SVG back end's conversion), a third of it below.
+std::vector<DrawnText> svg_texts(const std::string& svg, const std::string& prefix) {
+  static const std::regex element(
+      "<text x=\"([-0-9.]+)\" y=\"([-0-9.]+)\" font-size=\"([0-9.]+)\" fill=\"#[0-9a-f]{6}\" "
+      "text-anchor=\"(start|middle|end)\">([^<]*)</text>");
+  std::vector<DrawnText> out;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), element); it != std::sregex_iterator();
+       ++it) {
+    const std::smatch& m = *it;
+    if (m[5].str().rfind(prefix, 0) != 0) continue;
+    const double x = std::stod(m[1]), y = std::stod(m[2]), height = std::stod(m[3]) * 0.72;
+    const double w = text_width(m[5], height);
+    const double left = m[4] == "start" ? x : m[4] == "middle" ? x - w / 2 : x - w;
+    out.push_back({left, y - height, left + w, y + height / 3, m[5]});
+  }
+  return out;
+}
+
+// Ten long labels on points crowded into a plateau: the ones drawn do not overlap each other,
+// the mark's label or the legend, and stay in the panel's column; spread out, all are drawn.
+TEST(Plot, PointLabelsDoNotOverlap) {
+  Plot plot;
+  plot.width_px = 1000;
+  PlotPanel crowded;
+  crowded.log_x = crowded.log_y = true;
+  PlotSeries s{"label test series", {214, 39, 40}, {}, true, true, {}};
+  for (int i = 0; i < 10; ++i) {
+    s.points.push_back({std::pow(2.0, i), 0.001 * (1.0 + 0.02 * i)});
+    s.labels.push_back("setting " + std::to_string(i) + " mm/0.125 deg");
+  }
+  crowded.series = {s};
+  crowded.marks.push_back({true, 0.00102, "setting mark", {200, 40, 40}});
+  PlotPanel spread = crowded;
+  spread.marks.clear();
+  for (int i = 0; i < 10; ++i) spread.series[0].points[static_cast<std::size_t>(i)].y = std::pow(2.0, -i);
+  plot.panels = {crowded, spread};
+  const std::string svg = render_svg(plot);
+  const std::vector<DrawnText> texts = svg_texts(svg, "setting");
+  const std::vector<DrawnText> legend = svg_texts(svg, "label test series");
+  ASSERT_EQ(legend.size(), 2u);
+  std::size_t in_spread = 0;
+  for (std::size_t i = 0; i < texts.size(); ++i) {
+    const DrawnText& a = texts[i];
+    const bool second = a.x0 >= plot.width_px / 2.0;
+    in_spread += second && a.text != "setting mark";
+    // Within its column: half of the width each.
+    EXPECT_GE(a.x0, second ? plot.width_px / 2.0 : 0.0) << a.text;
+    EXPECT_LE(a.x1, second ? plot.width_px : plot.width_px / 2.0) << a.text;
+    const PanelFrame f = panel_frame(plot, second ? 1 : 0);
+    EXPECT_GE(a.y0, f.y.px_max) << a.text;
+    EXPECT_LE(a.y1, f.y.px_min) << a.text;
+    std::vector<DrawnText> others(texts.begin() + static_cast<std::ptrdiff_t>(i) + 1, texts.end());
+    others.insert(others.end(), legend.begin(), legend.end());
+    for (const DrawnText& b : others) {
+      const bool apart = a.x1 <= b.x0 || b.x1 <= a.x0 || a.y1 <= b.y0 || b.y1 <= a.y0;
+      EXPECT_TRUE(apart) << "'" << a.text << "' overlaps '" << b.text << "'";
+    }
+  }
+  EXPECT_EQ(in_spread, 10u);
+  EXPECT_GE(texts.size() - in_spread, 3u);  // the mark's label and at least a couple of points
+}
+
 }  // namespace
 }  // namespace vcut::io
