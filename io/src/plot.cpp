@@ -180,6 +180,18 @@ class SvgCanvas : public Canvas {
   }
 };
 
+// Tick labels with as many significant digits as it takes to tell neighbours apart (a narrow
+// range, 0.001 to 0.00102, needs more than the usual 3).
+std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
+  std::vector<std::string> labels;
+  for (int digits = 3; digits <= 12; ++digits) {
+    labels.clear();
+    for (double t : ticks) labels.push_back(format_label(t, digits));
+    if (std::adjacent_find(labels.begin(), labels.end()) == labels.end()) break;
+  }
+  return labels;
+}
+
 // ---- Label placement ------------------------------------------------------------------------
 // Each label tries a few spots around what it names and takes the first with the least clutter
 // under it. Boxes are those of the stroke font (cap height above the baseline, descenders
@@ -241,8 +253,8 @@ class LabelPlacer {
   void add_line(Point2 a, Point2 b) { lines_.push_back({a, b}); }
 
   // The first of `spots` with the least clutter under it, its box then taken. A label that
-  // would leave the frame or cover other text gets no spot, unless `always`: then the
-  // least bad one.
+  // would leave the area or cover other text gets no spot, unless `always`: then the least
+  // bad one.
   std::optional<Spot> place(const std::string& text, double height_px,
                             const std::vector<Spot>& spots, bool always) {
     std::optional<Spot> best;
@@ -291,7 +303,7 @@ std::vector<Spot> spots_along_mark(bool horizontal, double at_px, const Box& fra
           {{mid, above}, Align::kCenter},           {{mid, below}, Align::kCenter}};
 }
 
-constexpr double kMarkerRadius = 4.0, kRingRadius = 9.0;
+constexpr double kMarkerRadius = 4.0, kRingRadius = 9.0, kLegendRow = 20.0;
 
 void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
   const PlotPanel& panel = plot.panels[index];
@@ -299,15 +311,18 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
   const double x0 = f.x.px_min, x1 = f.x.px_max, y0 = f.y.px_max, y1 = f.y.px_min;  // y0 top, y1 bottom
   const Rgb white{255, 255, 255};
   canvas.rect(x0, y0, x1, y1, white, nullptr);
-  for (double t : f.x.ticks()) {
-    const double x = f.x.to_px(t);
+  const std::vector<double> x_ticks = f.x.ticks(), y_ticks = f.y.ticks();
+  const std::vector<std::string> x_labels = tick_labels(x_ticks), y_labels = tick_labels(y_ticks);
+  for (std::size_t i = 0; i < x_ticks.size(); ++i) {
+    const double x = f.x.to_px(x_ticks[i]);
     canvas.line({x, y0}, {x, y1}, kGrid, 1.0, false);
-    canvas.text(format_label(t), {x, y1 + 18.0}, kTickText, kMuted, Align::kCenter, false);
+    canvas.text(x_labels[i], {x, y1 + 18.0}, kTickText, kMuted, Align::kCenter, false);
   }
-  for (double t : f.y.ticks()) {
-    const double y = f.y.to_px(t);
+  for (std::size_t i = 0; i < y_ticks.size(); ++i) {
+    const double y = f.y.to_px(y_ticks[i]);
     canvas.line({x0, y}, {x1, y}, kGrid, 1.0, false);
-    canvas.text(format_label(t), {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight, false);
+    canvas.text(y_labels[i], {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight,
+                false);
   }
   canvas.polyline({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}, kFrame, 1.0);
   canvas.text(panel.title, {(x0 + x1) / 2.0, y0 - 14.0}, kPanelTitleText, kInk, Align::kCenter, false);
@@ -346,67 +361,83 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     placer.add_mark(around(p, kRingRadius + 1.0));
   }
 
-  // Legend: in the corner with the fewest points, rings and labels (at their first choice of
-  // spot) under it; top right on a tie.
+  // The labels, the most important first: marks, highlights, then the points in series order.
+  // A point label with no free spot is left out rather than drawn over other text.
+  struct Label {
+    std::string text;
+    Spot spot;
+    Rgb colour;
+  };
+  const auto place_labels = [&](LabelPlacer p, std::size_t& left_out) {
+    std::vector<Label> out;
+    left_out = 0;
+    for (const PlotMarkLine& m : panel.marks) {
+      if (!std::isfinite(m.value) || m.label.empty()) continue;
+      const double at_px = m.horizontal ? f.y.to_px(m.value) : f.x.to_px(m.value);
+      const std::vector<Spot> spots = spots_along_mark(m.horizontal, at_px, {x0, y0, x1, y1});
+      if (const auto spot = p.place(m.label, kPointText, spots, true))
+        out.push_back({m.label, *spot, m.colour});
+    }
+    for (const PlotHighlight& hl : panel.highlights) {
+      if (!finite(hl.at) || hl.label.empty()) continue;
+      const std::vector<Spot> spots = spots_beside(to_px(hl.at), kRingRadius, kPointText);
+      if (const auto spot = p.place(hl.label, kPointText, spots, true))
+        out.push_back({hl.label, *spot, hl.colour});
+    }
+    for (const PlotSeries& s : panel.series)
+      for (std::size_t i = 0; i < s.points.size() && i < s.labels.size(); ++i) {
+        if (!finite(s.points[i]) || s.labels[i].empty()) continue;
+        const std::vector<Spot> spots = spots_beside(to_px(s.points[i]), kMarkerRadius, kPointText);
+        if (const auto spot = p.place(s.labels[i], kPointText, spots, false))
+          out.push_back({s.labels[i], *spot, kMuted});
+        else
+          ++left_out;
+      }
+    return out;
+  };
+
+  // Legend: in the corner where the fewest points and rings lie under it and the fewest labels
+  // are left out for it; top right on a tie.
   std::vector<std::pair<std::string, Rgb>> entries;
   for (const PlotSeries& s : panel.series)
     if (!s.name.empty()) entries.push_back({s.name, s.colour});
-  double text_px = 0.0;
-  for (const auto& e : entries) text_px = std::max(text_px, text_width(e.first, kLabelText));
-  const double row = 20.0, w = 40.0 + text_px, h = 10.0 + row * static_cast<double>(entries.size());
-  double lx = x1 - 10.0 - w, ly = y0 + 10.0;
-  int fewest = std::numeric_limits<int>::max();
-  for (const Point2 corner : {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0},
-                              Point2{x1 - 10.0 - w, y1 - 10.0 - h}, Point2{x0 + 10.0, y1 - 10.0 - h}}) {
-    const Box legend{corner.x, corner.y, corner.x + w, corner.y + h};
-    int under = 0;
-    for (const PlotSeries& s : panel.series)
-      for (std::size_t i = 0; i < s.points.size(); ++i) {
-        if (!finite(s.points[i])) continue;
-        const Point2 p = to_px(s.points[i]);
-        under += overlap_area(around(p, kMarkerRadius + 2.0), legend) > 0.0;
-        if (i < s.labels.size() && !s.labels[i].empty()) {
-          const Spot first = spots_beside(p, kMarkerRadius, kPointText).front();
-          under += overlap_area(text_box(s.labels[i], first.at, kPointText, first.align), legend) > 0.0;
-        }
-      }
-    for (const PlotHighlight& hl : panel.highlights)
-      if (finite(hl.at)) under += overlap_area(around(to_px(hl.at), kRingRadius + 3.0), legend) > 0.0;
-    if (under < fewest) fewest = under, lx = corner.x, ly = corner.y;
-  }
-  if (!entries.empty()) placer.add_text({lx, ly, lx + w, ly + h});
-
-  // Labels, the most important first: marks, highlights, then the points in series order. A
-  // point label with no free spot is left out rather than drawn over other text.
-  for (const PlotMarkLine& m : panel.marks) {
-    if (!std::isfinite(m.value) || m.label.empty()) continue;
-    const double at_px = m.horizontal ? f.y.to_px(m.value) : f.x.to_px(m.value);
-    const std::vector<Spot> spots = spots_along_mark(m.horizontal, at_px, {x0, y0, x1, y1});
-    if (const auto spot = placer.place(m.label, kPointText, spots, true))
-      canvas.text(m.label, spot->at, kPointText, m.colour, spot->align, false);
-  }
-  for (const PlotHighlight& hl : panel.highlights) {
-    if (!finite(hl.at) || hl.label.empty()) continue;
-    const Point2 p = to_px(hl.at);
-    if (const auto spot = placer.place(hl.label, kPointText, spots_beside(p, kRingRadius, kPointText), true))
-      canvas.text(hl.label, spot->at, kPointText, hl.colour, spot->align, false);
-  }
-  for (const PlotSeries& s : panel.series)
-    for (std::size_t i = 0; i < s.points.size() && i < s.labels.size(); ++i) {
-      if (!finite(s.points[i]) || s.labels[i].empty()) continue;
-      const Point2 p = to_px(s.points[i]);
-      if (const auto spot = placer.place(s.labels[i], kPointText, spots_beside(p, kMarkerRadius, kPointText), false))
-        canvas.text(s.labels[i], spot->at, kPointText, kMuted, spot->align, false);
+  std::size_t left_out = 0;
+  std::vector<Label> labels = place_labels(placer, left_out);
+  Box legend{};
+  if (!entries.empty()) {
+    double text_px = 0.0;
+    for (const auto& e : entries) text_px = std::max(text_px, text_width(e.first, kLabelText));
+    const double w = 40.0 + text_px, h = 10.0 + kLegendRow * static_cast<double>(entries.size());
+    std::size_t fewest = std::numeric_limits<std::size_t>::max();
+    for (const Point2 corner :
+         {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0},
+          Point2{x1 - 10.0 - w, y1 - 10.0 - h}, Point2{x0 + 10.0, y1 - 10.0 - h}}) {
+      const Box box{corner.x, corner.y, corner.x + w, corner.y + h};
+      LabelPlacer with_legend = placer;
+      with_legend.add_text(box);
+      std::size_t under = 0;
+      std::vector<Label> placed = place_labels(with_legend, under);
+      for (const PlotSeries& s : panel.series)
+        for (const Point2& p : s.points)
+          if (finite(p)) under += overlap_area(around(to_px(p), kMarkerRadius + 2.0), box) > 0.0;
+      for (const PlotHighlight& hl : panel.highlights)
+        if (finite(hl.at))
+          under += overlap_area(around(to_px(hl.at), kRingRadius + 3.0), box) > 0.0;
+      if (under < fewest) fewest = under, legend = box, labels = std::move(placed);
     }
+  }
 
+  for (const Label& l : labels)
+    canvas.text(l.text, l.spot.at, kPointText, l.colour, l.spot.align, false);
   if (entries.empty()) return;
   const Rgb legend_fill{250, 250, 250};
-  canvas.rect(lx, ly, lx + w, ly + h, legend_fill, &kFrame);
+  canvas.rect(legend.x0, legend.y0, legend.x1, legend.y1, legend_fill, &kFrame);
   for (std::size_t i = 0; i < entries.size(); ++i) {
-    const double y = ly + 5.0 + row * (static_cast<double>(i) + 0.5);
-    canvas.line({lx + 8.0, y}, {lx + 28.0, y}, entries[i].second, 2.0, false);
-    canvas.disc({lx + 18.0, y}, 3.5, entries[i].second);
-    canvas.text(entries[i].first, {lx + 34.0, y + kLabelText / 2.0}, kLabelText, kInk, Align::kLeft, false);
+    const double y = legend.y0 + 5.0 + kLegendRow * (static_cast<double>(i) + 0.5);
+    canvas.line({legend.x0 + 8.0, y}, {legend.x0 + 28.0, y}, entries[i].second, 2.0, false);
+    canvas.disc({legend.x0 + 18.0, y}, 3.5, entries[i].second);
+    canvas.text(entries[i].first, {legend.x0 + 34.0, y + kLabelText / 2.0}, kLabelText, kInk,
+                Align::kLeft, false);
   }
 }
 
