@@ -177,6 +177,8 @@ void write_study_files(const std::string& folder, const StudyResult& s, const Jo
   j["threads"] = s.threads;
   j["varied"] = s.varied;
   j["accuracy_mm"] = s.accuracy_mm;
+  // What the settings leave as the job has it (0 = not set).
+  j["job_densify"] = {{"step_mm", job.step_mm}, {"angle_deg", job.angle_step_deg}, {"tolerance_mm", job.densify_tolerance_mm}};
   j["metric"] =
       "distance of each setting's machined surface from the reference's: every vertex of each against the other's triangles, "
       "vertices within 2 voxels of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) apart: meshing "
@@ -230,6 +232,14 @@ StudyResult run_densification_study(const Job& job, const StudyOptions& options)
   if (!steps.empty() && !angles.empty() && steps.size() != angles.size())
     throw InputError("--steps and --angles: expected the same number of values (they are paired by position), got " +
                      std::to_string(steps.size()) + " and " + std::to_string(angles.size()));
+  auto reference_needs = [](const std::optional<double>& reference, const std::vector<double>& values, const char* option,
+                            const char* list) {
+    if (reference && values.empty())
+      throw InputError(std::string(option) + " without " + list + ": the reference refines the settings " + list + " lists");
+  };
+  reference_needs(options.reference_step_mm, steps, "--reference-step", "--steps");
+  reference_needs(options.reference_angle_deg, angles, "--reference-angle", "--angles");
+  reference_needs(options.reference_tolerance_mm, tolerances, "--reference-tolerance", "--tolerances");
   require_finer(options.reference_step_mm, steps, "--reference-step", "mm");
   require_finer(options.reference_angle_deg, angles, "--reference-angle", "deg");
   require_finer(options.reference_tolerance_mm, tolerances, "--reference-tolerance", "mm");

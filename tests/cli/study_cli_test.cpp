@@ -120,6 +120,7 @@ TEST_F(Study, BadOptionsAreClearErrorsAndWriteNothing) {
   expect_error(study("--angles 8,0"), "--angles: 0 is not a positive number of deg");
   expect_error(study("--angles 8,2 --reference-angle 4"), "--reference-angle: 4 deg is not finer than the finest setting (2 deg)");
   expect_error(study("--angles 8 --tolerances 0.01"), "--tolerances cannot be combined with --steps or --angles");
+  expect_error(study("--angles 8,4 --reference-step 0.1"), "--reference-step without --steps");
   expect_error(study("--steps 1,0.5 --angles 8"), "expected the same number of values");
   expect_error(study(""), "no settings: give --steps, --angles or --tolerances");
   expect_error(study("--angles 8 --accuracy -1"), "--accuracy: -1 is not a positive number of mm");
