@@ -6,7 +6,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
@@ -292,16 +291,7 @@ std::string encode_png(const Image& image) {
   return png;
 }
 
-void write_png(const std::string& path, const Image& image) {
-  const std::string png = encode_png(image);
-  write_atomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw InputError(path, 0, 0, "cannot write output (cannot create the file)");
-    out.write(png.data(), static_cast<std::streamsize>(png.size()));
-    out.close();
-    if (!out) throw InputError(path, 0, 0, "cannot write output (write failed: disk full?)");
-  });
-}
+void write_png(const std::string& path, const Image& image) { write_text_atomically(path, encode_png(image)); }
 
 void draw_line(Image& image, Point2 from, Point2 to, Rgb colour, double width_px) {
   stroke(image, {{from, to}}, colour, width_px);

@@ -126,9 +126,10 @@ Plot study_plot(const StudyResult& s) {
 nlohmann::ordered_json row_json(const StudyRow& r) {
   nlohmann::ordered_json j;
   j["setting"] = r.label;
-  j["step_mm"] = r.setting.step_mm > 0.0 ? nlohmann::ordered_json(r.setting.step_mm) : nlohmann::ordered_json(nullptr);
-  j["angle_deg"] = r.setting.angle_deg > 0.0 ? nlohmann::ordered_json(r.setting.angle_deg) : nlohmann::ordered_json(nullptr);
-  j["tolerance_mm"] = r.setting.tolerance_mm > 0.0 ? nlohmann::ordered_json(r.setting.tolerance_mm) : nlohmann::ordered_json(nullptr);
+  const auto set_or_null = [](double x) { return x > 0.0 ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
+  j["step_mm"] = set_or_null(r.setting.step_mm);
+  j["angle_deg"] = set_or_null(r.setting.angle_deg);
+  j["tolerance_mm"] = set_or_null(r.setting.tolerance_mm);
   if (!r.error.empty()) {
     j["error"] = r.error;
     return j;

@@ -13,15 +13,14 @@ namespace {
 namespace fs = std::filesystem;
 using vcut::cli::test::CommandResult;
 using vcut::cli::test::expect_error;
+using vcut::cli::test::fresh_test_dir;
 using vcut::cli::test::run_vcut;
 using vcut::cli::test::write;
 
 class Check : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("vcut_check_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = fresh_test_dir("vcut_check_");
     // 10 mm flat end mill: 5 mm of flutes, an 8 mm shank up to 20 mm, a 30 mm holder above.
     write(dir / "tools.yaml",
           "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: 30, holder_length: 40}\n");

@@ -29,6 +29,15 @@ inline CommandResult run_vcut(const std::string& args) {
   return r;
 }
 
+// An empty folder of its own for the running test: <tmp>/<prefix><test name>.
+inline std::filesystem::path fresh_test_dir(const std::string& prefix) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                    (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
 inline void write(const std::filesystem::path& path, const std::string& text) {
   std::ofstream(path) << text;
 }

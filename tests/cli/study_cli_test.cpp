@@ -23,6 +23,7 @@ namespace {
 namespace fs = std::filesystem;
 using vcut::cli::test::CommandResult;
 using vcut::cli::test::expect_error;
+using vcut::cli::test::fresh_test_dir;
 using vcut::cli::test::run_vcut;
 using vcut::cli::test::write;
 
@@ -32,9 +33,7 @@ double sagitta_mm(double phi_deg) { return kPathRadiusMm * (1.0 - std::cos(phi_d
 class Study : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("vcut_study_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(dir);
-    fs::create_directories(dir);
+    dir = fresh_test_dir("vcut_study_");
     write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 6, flute_length: 20, shank_diameter: 6, length: 30}\n");
     program = "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X40 Y0 Z5 A0 C0\nG1 Z-3 F500\nG1 X28\nG1 C360 F2000\nG0 Z5\nM30\n";
     job = "job: turn\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: turn.ngc}\n"
