@@ -5,6 +5,8 @@
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 
+#include "rs274_expression.h"
+
 #include <algorithm>
 #include <charconv>
 #include <climits>
@@ -14,6 +16,8 @@
 #include <filesystem>
 #include <fstream>
 #include <istream>
+#include <map>
+#include <memory>
 #include <new>
 #include <stdexcept>
 #include <system_error>
@@ -197,7 +201,14 @@ constexpr GEntry kGCodes[] = {
     {901, {kArcDistance, true}}, {911, {kArcDistance, true}},
     {940, {kFeedMode, true}},
     {970, {kSpindleMode, true}},
-    {980, {kReturnMode, true}}, {990, {kReturnMode, true}},  // no effect without cycles
+    {980, {kReturnMode, true}}, {990, {kReturnMode, true}},
+    {930, {kFeedMode, true}},
+    // Canned cycles in G17 (others are refused where they are used).
+    {730, {kMotion, true}}, {810, {kMotion, true}}, {820, {kMotion, true}}, {830, {kMotion, true}},
+    {850, {kMotion, true}}, {890, {kMotion, true}},
+    {100, {kNonModal, true}},  // G10 L2 / L20 (coordinate systems); L1 L10 L11 (tool table)
+    {530, {kNonModal, true}},  // G53: this line's G0/G1 in machine (workpiece-frame) coordinates
+    {920, {kNonModal, true}}, {921, {kNonModal, true}}, {922, {kNonModal, true}}, {923, {kNonModal, true}},
 
     {50, {kMotion, false, true, false, "spline/NURBS"}},
     {51, {kMotion, false, true, false, "spline/NURBS"}},
@@ -207,29 +218,17 @@ constexpr GEntry kGCodes[] = {
     {331, {kMotion, false, true, false, "spindle-synchronized motion"}},
     {382, {kMotion, false, true, false, "probing"}}, {383, {kMotion, false, true, false, "probing"}},
     {384, {kMotion, false, true, false, "probing"}}, {385, {kMotion, false, true, false, "probing"}},
-    {730, {kMotion, false, true, false, "canned cycle"}},
     {740, {kMotion, false, true, false, "canned cycle"}},
     {760, {kMotion, false, true, false, "canned cycle"}},
-    {810, {kMotion, false, true, false, "canned cycle"}},
-    {820, {kMotion, false, true, false, "canned cycle"}},
-    {830, {kMotion, false, true, false, "canned cycle"}},
     {840, {kMotion, false, true, false, "canned cycle"}},
-    {850, {kMotion, false, true, false, "canned cycle"}},
     {860, {kMotion, false, true, false, "canned cycle"}},
     {870, {kMotion, false, true, false, "canned cycle"}},
     {880, {kMotion, false, true, false, "canned cycle"}},
-    {890, {kMotion, false, true, false, "canned cycle"}},
-    {100, {kNonModal, false, true, false, "setting offsets"}},
     {280, {kNonModal, false, true, true, "move to a stored position"}},
     {300, {kNonModal, false, true, true, "move to a stored position"}},
     {281, {kNonModal, false, false, false, "store a position"}},
     {301, {kNonModal, false, false, false, "store a position"}},
     {520, {kNonModal, false, true, true, "local coordinate offset"}},
-    {530, {kNonModal, false, true, false, "move in machine coordinates"}},
-    {920, {kNonModal, false, true, true, "coordinate system offset"}},
-    {921, {kNonModal, false, true, true, "coordinate system offset"}},
-    {922, {kNonModal, false, true, true, "coordinate system offset"}},
-    {923, {kNonModal, false, true, true, "coordinate system offset"}},
     {171, {kPlane, false, false, false, "UVW plane"}},
     {181, {kPlane, false, false, false, "UVW plane"}},
     {191, {kPlane, false, false, false, "UVW plane"}},
@@ -239,7 +238,6 @@ constexpr GEntry kGCodes[] = {
     {421, {kCutterComp, false, false, false, "cutter radius compensation"}},
     {431, {kToolLength, false, false, false, "dynamic tool length offset"}},
     {432, {kToolLength, false, false, false, "dynamic tool length offset"}},
-    {930, {kFeedMode, false, false, false, "inverse-time feed"}},
     {950, {kFeedMode, false, false, false, "feed per revolution"}},
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
@@ -299,23 +297,86 @@ void validate_options(const std::string& name, const GcodeOptions& options) {
   }
 }
 
-class Reader {
- public:
-  Reader(const std::string& name, const GcodeOptions& options, Program& program, GcodeState& state,
-         int file_index)
-      : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
+// One program file being read: its stream, where the reader is in it, and its '%' state.
+struct Source {
+  std::istream* in = nullptr;
+  std::unique_ptr<std::ifstream> owned;  // a subroutine file the reader opened
+  std::string name;
+  int file_index = 0;
+  int line = 0;                    // number of the line last read
+  std::streamoff offset = 0;       // where the next line starts
+  std::streamoff line_start = 0;   // where the line last read starts
+  bool seekable = false;
+  bool seen_content = false;       // a non-blank line has been read (the opening '%' is one)
+  bool opened_with_percent = false;
+};
 
-  // One line without its '\n'. Returns false once the program has ended (M2, M30, a
-  // closing '%'): LinuxCNC reads nothing after that either.
-  bool line(std::string& text, int number);
+// A place to read on from: the line after `line`, at byte `offset` of `source`.
+struct Mark {
+  Source* source = nullptr;
+  std::streamoff offset = 0;
+  int line = 0;
+};
+
+struct Loop {
+  enum class Kind { While, Do, Repeat } kind = Kind::While;
+  std::string label;
+  Mark start;             // While: its own line (re-read to test); Do, Repeat: the line after
+  double remaining = 0.0;  // Repeat: passes still to run
+  std::size_t if_depth = 0;  // conditionals open when the loop began
+  std::string where;       // file:line of the opening line
+};
+
+// The main program or one subroutine call.
+struct Frame {
+  std::string sub;         // canonical o-word name; empty for the main program
+  std::string call_where;  // file:line of the call
+  Mark return_to;
+  std::array<double, 30> saved_numbered{};   // the caller's #1..#30
+  std::map<std::string, double> saved_locals;  // the caller's named locals
+  std::vector<Loop> loops;
+  std::vector<std::pair<std::string, std::string>> ifs;  // label, file:line of the if
+};
+
+struct SubDefinition {
+  Mark body;          // the line after "o<name> sub"
+  std::string where;  // file:line of the sub line
+};
+
+// An o-word line: "o<name> keyword ..." or "o123 keyword ...".
+struct OLine {
+  std::string label;     // canonical
+  std::string keyword;   // lower case; empty for a Fanuc program number
+  std::size_t rest = 0;  // index after the keyword
+  int column = 0;        // of the 'O'
+};
+
+struct Assignment {
+  detail::ParameterRef target;
+  double value = 0.0;
+  int column = 0;
+};
+
+class Reader : public detail::ValueContext {
+ public:
+  Reader(const GcodeOptions& options, Program& program, GcodeState& state)
+      : options_(options), program_(program), state_(state) {}
+
+  void run(std::istream& in, const std::string& name);
+
+  // detail::ValueContext
+  double numbered_parameter(int number, int column) override;
+  double named_parameter(const std::string& name, int column) override;
+  bool named_parameter_exists(const std::string& name) override;
+  [[noreturn]] void fail(int column, const std::string& message) const override {
+    throw InputError(current_->name, current_->line, column, message + call_chain());
+  }
 
  private:
-  [[noreturn]] void fail(int column, const std::string& message) const {
-    throw InputError(name_, line_, column, message);
-  }
   std::string where(int column) const {
-    return name_ + ":" + std::to_string(line_) + ":" + std::to_string(column);
+    return current_->name + ":" + std::to_string(current_->line) + ":" + std::to_string(column);
   }
+  std::string here() const { return current_->name + ":" + std::to_string(current_->line); }
   void warn(int column, const std::string& message) {
     program_.warnings.push_back(where(column) + ": " + message);
   }
@@ -325,69 +386,557 @@ class Reader {
     if (state_.warned.insert(key).second) warn(column, message + "; ignored");
   }
 
+  // Lines and jumps.
+  bool next_line(std::string& text);
+  Mark mark_after() const { return {current_, current_->offset, current_->line}; }
+  Mark mark_this() const { return {current_, current_->line_start, current_->line - 1}; }
+  void jump(const Mark& mark);
+  bool line(std::string& text);
+
+  // o-words.
+  static bool o_line(const std::string& s, OLine& o);
+  bool o_word(const std::string& s, const OLine& o);
+  // Reads on (not executing) to the line "o<label> keyword" with a keyword of `ends`.
+  OLine skip_to(const std::string& label, std::initializer_list<const char*> ends, const std::string& opened,
+                std::string& text);
+  double condition(const std::string& s, const OLine& o);
+  void call(const std::string& s, const OLine& o);
+  void leave_sub(const std::string& s, const OLine& o);
+  const SubDefinition* find_sub(const std::string& name, int column);
+  Frame& frame() { return frames_.back(); }
+  std::string call_chain() const;
+
   void lex(const std::string& s, size_t i);
-  double read_number(const std::string& s, size_t& i, char letter, int column,
-                     std::string& text) const;
+  double word_value(const std::string& s, size_t& i, char letter, std::string& text);
   size_t skip_comment(const std::string& s, size_t i) const;
   bool execute();
 
-  Eigen::Vector3d work_offset() const {
-    const auto it = options_.work_offsets_mm.find(state_.work_offset);
-    return it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero() : it->second;
-  }
   double unit() const { return state_.inches ? kMmPerInch : 1.0; }
   const Word& word(char letter) const { return line_words_.words[letter - 'A']; }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   void straight(MotionKind kind, int column);
   void arc(int column);
+  void cycle(int column, bool new_series);
+  void set_offsets(const Code& g);
   void append(Block block, const std::array<bool, 3>& programmed);
   void forget_axes(bool all);
+  void select_system(int index);
+  double feed_of_line(int column) const;
 
-  const std::string& name_;
   const GcodeOptions& options_;
   Program& program_;
   GcodeState& state_;
-  const int file_index_;
-  int line_ = 0;
-  bool seen_content_ = false;  // a non-blank line has been read (the opening '%' is the first)
-  bool opened_with_percent_ = false;
+  std::vector<std::unique_ptr<Source>> sources_;
+  Source* current_ = nullptr;
+  std::vector<Frame> frames_;
+  std::map<std::string, SubDefinition> subs_;
+  long long lines_read_ = 0;
   Line line_words_;
+  std::vector<Assignment> assignments_;
   std::array<bool, 26> used_{};  // words consumed by some code on this line
   bool lenient_ = false;         // an ignored unsupported code may consume any word
   bool exact_stop_line_ = false;  // G9 on this line
+  bool machine_coordinates_ = false;  // G53 on this line
   int o_column_ = 0;             // column of a Fanuc program number on this line
 };
 
-bool Reader::line(std::string& text, int number) {
-  line_ = number;
+// The coordinate system of a G54..G59.3 code (x10): 0..8.
+int system_index(int code) {
+  return code <= 590 ? (code - 540) / 10 : 6 + (code - 591);
+}
+const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
+constexpr int kG92Parameter = 5211;  // X of the G92 offset
+constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
+
+double Reader::numbered_parameter(int number, int column) {
+  (void)column;
+  if (number == 5220) return 1.0 + system_index(static_cast<int>(std::lround(std::stod(state_.work_offset.substr(1)) * 10)));
+  if (number == 5400) return state_.tool;
+  if (number >= kPositionParameter && number < kPositionParameter + 9) {
+    const int a = number - kPositionParameter;
+    if (a < 3) return (state_.position_mm[a] - state_.g5x_mm[a] - state_.g92_mm[a]) / unit();
+    if (a < 6) return state_.rotary.angle_rad[static_cast<size_t>(a - 3)] * 180.0 / M_PI;
+    return 0.0;
+  }
+  return state_.parameters[static_cast<size_t>(number)];
+}
+
+double Reader::named_parameter(const std::string& name, int column) {
+  if (name.size() > 1 && name[0] == '_') {
+    static const char* const kAxes[] = {"_x", "_y", "_z", "_a", "_b", "_c", "_u", "_v", "_w"};
+    for (int a = 0; a < 9; ++a) {
+      if (name == kAxes[a]) return numbered_parameter(kPositionParameter + a, column);
+    }
+    if (name == "_feed") return state_.feed_mm_per_min / unit();
+    if (name == "_rpm") return state_.spindle_rpm;
+    if (name == "_current_tool") return state_.tool;
+    if (name == "_selected_tool") return state_.selected_tool;
+    if (name == "_metric") return state_.inches ? 0.0 : 1.0;
+    if (name == "_imperial") return state_.inches ? 1.0 : 0.0;
+    if (name == "_absolute") return state_.incremental ? 0.0 : 1.0;
+    if (name == "_incremental") return state_.incremental ? 1.0 : 0.0;
+    if (name == "_inverse_time") return state_.inverse_time ? 1.0 : 0.0;
+    if (name == "_units_per_minute") return state_.inverse_time ? 0.0 : 1.0;
+    if (name == "_line") return current_->line;
+    if (name == "_value" || name == "_value_returned") {
+      const auto it = state_.globals.find(name);
+      return it == state_.globals.end() ? 0.0 : it->second;
+    }
+    const auto it = state_.globals.find(name);
+    if (it != state_.globals.end()) return it->second;
+  } else {
+    const auto it = state_.locals.find(name);
+    if (it != state_.locals.end()) return it->second;
+  }
+  fail(column, "#<" + name + "> is not defined (expected it to be set before it is read)");
+}
+
+bool Reader::named_parameter_exists(const std::string& name) {
+  if (name.size() > 1 && name[0] == '_') return state_.globals.count(name) > 0;
+  return state_.locals.count(name) > 0;
+}
+
+// --- Lines and jumps.
+
+bool Reader::next_line(std::string& text) {
+  Source& src = *current_;
+  if (!std::getline(*src.in, text)) return false;
+  if (++lines_read_ > options_.max_lines) {
+    throw InputError(src.name, src.line + 1, 0,
+                     "read " + std::to_string(options_.max_lines) +
+                         " lines without reaching the end (a loop that never ends? the limit is "
+                         "the job's program.max_lines)" + call_chain());
+  }
+  if (src.line == INT_MAX) throw InputError(src.name, src.line, 0, "too many lines");
+  ++src.line;
+  src.line_start = src.offset;
+  src.offset += static_cast<std::streamoff>(text.size()) + (src.in->eof() ? 0 : 1);
+  return true;
+}
+
+void Reader::jump(const Mark& mark) {
+  Source& src = *mark.source;
+  if (!src.seekable) {
+    throw InputError(src.name, src.line, 0,
+                     "loops and subroutines need to read lines again, and this input cannot seek "
+                     "(expected a regular file)");
+  }
+  src.in->clear();
+  src.in->seekg(mark.offset);
+  if (!*src.in) throw InputError(src.name, src.line, 0, "read error going back in the file");
+  src.offset = mark.offset;
+  src.line = mark.line;
+  current_ = &src;
+}
+
+std::string Reader::call_chain() const {
+  std::string chain;
+  for (size_t f = frames_.size(); f-- > 1;) {
+    chain += (chain.empty() ? " (in o<" : ", in o<") + frames_[f].sub + "> called at " + frames_[f].call_where;
+  }
+  return chain.empty() ? chain : chain + ")";
+}
+
+void Reader::run(std::istream& in, const std::string& name) {
+  auto main = std::make_unique<Source>();
+  main->in = &in;
+  main->name = name;
+  main->file_index = static_cast<int>(program_.files.size());
+  program_.files.push_back(name);
+  const std::streampos start = in.tellg();
+  main->seekable = start != std::streampos(-1);
+  main->offset = main->seekable ? static_cast<std::streamoff>(start) : 0;
+  current_ = main.get();
+  sources_.push_back(std::move(main));
+  frames_.emplace_back();
+  if (state_.parameters.empty()) {
+    state_.parameters.assign(5400, 0.0);
+    for (const auto& [key, offset] : options_.work_offsets_mm) {
+      for (int k = 0; k < 9; ++k) {
+        if (key != kSystemNames[k]) continue;
+        for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset[a];
+      }
+    }
+    select_system(0);
+  }
+  std::string text;
+  try {
+    while (true) {
+      if (!next_line(text)) {
+        if (frames_.size() > 1) {
+          fail(0, "the file ends inside o<" + frame().sub + "> (expected o<" + frame().sub + "> endsub)");
+        }
+        if (!frame().loops.empty()) {
+          fail(0, "the file ends inside the loop o" + frame().loops.back().label + " opened at " +
+                      frame().loops.back().where);
+        }
+        if (!frame().ifs.empty()) {
+          fail(0, "the file ends inside o" + frame().ifs.back().first + " if, opened at " +
+                      frame().ifs.back().second + " (expected endif)");
+        }
+        break;
+      }
+      if (!line(text)) break;
+    }
+  } catch (const std::bad_alloc&) {
+    fail(0, "out of memory (a line too long, or too many moves)");
+  } catch (const std::length_error&) {
+    fail(0, "out of memory (a line too long, or too many moves)");
+  } catch (const std::ios_base::failure&) {
+    fail(0, "read error (expected a readable text file)");
+  }
+  if (current_->in->bad()) fail(0, "read error (expected a readable text file)");
+}
+
+bool Reader::line(std::string& text) {
+  Source& src = *current_;
   if (!text.empty() && text.back() == '\r') text.pop_back();  // CRLF files
   const size_t i = skip_blanks(text, 0);
   if (i == text.size()) return true;
   if (text[i] == '%') {
     // rs274ngc: a '%' on the first line opens the program and the next '%' line ends it.
     line_words_.clear();
+    assignments_.clear();
     lex(text, i + 1);
-    if (!line_words_.g.empty() || !line_words_.m.empty() || o_column_ != 0 ||
+    if (!line_words_.g.empty() || !line_words_.m.empty() || o_column_ != 0 || !assignments_.empty() ||
         std::any_of(line_words_.words.begin(), line_words_.words.end(),
                     [](const Word& w) { return w.present; })) {
       fail(column_of(i), "words after '%' (expected '%' alone on its line)");
     }
-    if (!seen_content_) {
-      seen_content_ = opened_with_percent_ = true;
+    if (!src.seen_content) {
+      src.seen_content = src.opened_with_percent = true;
       return true;
     }
-    if (!opened_with_percent_) {
+    if (!src.opened_with_percent) {
       fail(column_of(i), "closing '%' in a program that did not open with '%' on its first line");
     }
     return false;
   }
-  seen_content_ = true;
+  src.seen_content = true;
   // Block delete: rs274ngc skips a line starting with '/' when the block-delete switch is on;
   // this reader always has it on.
   if (text[i] == '/') return true;
+  OLine o;
+  if (o_line(text, o) && !o.keyword.empty()) return o_word(text, o);
   line_words_.clear();
+  assignments_.clear();
   lex(text, i);
+  // rs274ngc: every value on the line is read before any parameter is set.
+  for (const Assignment& a : assignments_) {
+    if (a.target.name.empty()) {
+      if (a.target.number >= 5000 && a.target.number != 5220 && (a.target.number == 5400 ||
+          (a.target.number >= kPositionParameter && a.target.number < kPositionParameter + 9))) {
+        fail(a.column, "#" + std::to_string(a.target.number) + " is read-only");
+      }
+      state_.parameters[static_cast<size_t>(a.target.number)] = a.value;
+    } else if (a.target.name[0] == '_') {
+      state_.globals[a.target.name] = a.value;
+    } else {
+      state_.locals[a.target.name] = a.value;
+    }
+  }
   return execute();
+}
+
+// --- o-words.
+
+bool Reader::o_line(const std::string& s, OLine& o) {
+  size_t i = skip_blanks(s, 0);
+  if (i < s.size() && (s[i] == 'N' || s[i] == 'n')) {  // a line number before the o-word
+    size_t j = skip_blanks(s, i + 1);
+    if (j >= s.size() || !is_digit(s[j])) return false;
+    while (j < s.size() && (is_digit(s[j]) || is_blank(s[j]))) ++j;
+    i = j;
+  }
+  if (i >= s.size() || (s[i] != 'O' && s[i] != 'o')) return false;
+  o.column = column_of(i);
+  i = skip_blanks(s, i + 1);
+  if (i < s.size() && s[i] == '<') {
+    const size_t close = s.find('>', i + 1);
+    if (close == std::string::npos) return false;  // lex reports it
+    o.label.clear();
+    for (size_t k = i + 1; k < close; ++k) {
+      if (is_blank(s[k])) continue;
+      o.label += (s[k] >= 'A' && s[k] <= 'Z') ? static_cast<char>(s[k] - 'A' + 'a') : s[k];
+    }
+    o.label = "<" + o.label + ">";
+    i = close + 1;
+  } else {
+    if (i >= s.size() || !is_digit(s[i])) return false;
+    std::string digits;
+    while (i < s.size() && (is_digit(s[i]) || is_blank(s[i]))) {
+      if (is_digit(s[i]) && !(digits.empty() && s[i] == '0')) digits += s[i];
+      ++i;
+    }
+    o.label = digits.empty() ? "0" : digits;
+  }
+  i = skip_blanks(s, i);
+  o.keyword.clear();
+  while (i < s.size() && is_letter(s[i])) o.keyword += static_cast<char>(std::tolower(static_cast<unsigned char>(s[i++])));
+  o.rest = i;
+  return true;
+}
+
+double Reader::condition(const std::string& s, const OLine& o) {
+  size_t i = skip_blanks(s, o.rest);
+  if (i >= s.size() || s[i] != '[') {
+    fail(column_of(std::min(i, s.size())), "o" + o.label + " " + o.keyword + " without its condition (expected [expression])");
+  }
+  const double v = detail::read_expression(s, i, *this);
+  i = skip_blanks(s, i);
+  if (i < s.size() && s[i] == '(') i = skip_blanks(s, skip_comment(s, i));
+  if (i < s.size() && s[i] != ';') fail(column_of(i), "unexpected " + describe(s[i]) + " after the condition");
+  return v;
+}
+
+OLine Reader::skip_to(const std::string& label, std::initializer_list<const char*> ends, const std::string& opened,
+                      std::string& text) {
+  OLine o;
+  while (next_line(text)) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (!o_line(text, o) || o.label != label) continue;
+    for (const char* e : ends) {
+      if (o.keyword == e) return o;
+    }
+  }
+  std::string expected;
+  for (const char* e : ends) expected += (expected.empty() ? "" : " or ") + std::string("o") + label + " " + e;
+  throw InputError(current_->name, current_->line, 0,
+                   "the file ends before " + expected + " (opened at " + opened + ")" + call_chain());
+}
+
+const SubDefinition* Reader::find_sub(const std::string& name, int column) {
+  if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
+  if (name.front() != '<') return nullptr;
+  // A subroutine file: <name>.ngc holding "o<name> sub", in the calling program's folder or
+  // on the search path.
+  const std::string file = name.substr(1, name.size() - 2) + ".ngc";
+  std::vector<std::filesystem::path> folders;
+  folders.push_back(std::filesystem::path(sources_.front()->name).parent_path());
+  for (const std::string& p : options_.subroutine_path) folders.emplace_back(p);
+  for (const auto& folder : folders) {
+    const std::filesystem::path path = folder / file;
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) continue;
+    auto src = std::make_unique<Source>();
+    src->owned = std::make_unique<std::ifstream>(path, std::ios::binary);
+    if (!*src->owned) fail(column, "cannot open the subroutine file " + path.string());
+    src->in = src->owned.get();
+    src->name = path.string();
+    src->file_index = static_cast<int>(program_.files.size());
+    src->seekable = true;
+    program_.files.push_back(src->name);
+    Source* caller = current_;
+    current_ = src.get();
+    sources_.push_back(std::move(src));
+    std::string text;
+    OLine o;
+    while (next_line(text)) {
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      if (o_line(text, o) && o.label == name && o.keyword == "sub") {
+        subs_[name] = SubDefinition{mark_after(), here()};
+        current_ = caller;
+        return &subs_[name];
+      }
+    }
+    const std::string where = current_->name;
+    current_ = caller;
+    fail(column, where + " does not define o" + name + " sub");
+  }
+  return nullptr;
+}
+
+void Reader::call(const std::string& s, const OLine& o) {
+  const SubDefinition* sub = find_sub(o.label, o.column);
+  if (sub == nullptr) {
+    std::string folders = std::filesystem::path(sources_.front()->name).parent_path().string();
+    for (const std::string& p : options_.subroutine_path) folders += ", " + p;
+    fail(o.column, "o" + o.label + " call: no such subroutine (expected o" + o.label +
+                       " sub earlier in the program" +
+                       (o.label.front() == '<' ? ", or the file " + o.label.substr(1, o.label.size() - 2) +
+                                                     ".ngc in " + (folders.empty() ? std::string(".") : folders)
+                                               : std::string()) + ")");
+  }
+  if (frames_.size() > 64) fail(o.column, "subroutine calls nested more than 64 deep (a call that never returns?)");
+  // Arguments: bracketed expressions, to #1..#30 of the call.
+  std::vector<double> args;
+  size_t i = skip_blanks(s, o.rest);
+  while (i < s.size()) {
+    if (s[i] == '(') { i = skip_blanks(s, skip_comment(s, i)); continue; }
+    if (s[i] == ';') break;
+    if (s[i] != '[') fail(column_of(i), "unexpected " + describe(s[i]) + " in the call (expected arguments in [ ])");
+    if (args.size() == 30) fail(column_of(i), "more than 30 arguments (expected at most 30)");
+    args.push_back(detail::read_expression(s, i, *this));
+    i = skip_blanks(s, i);
+  }
+  Frame f;
+  f.sub = o.label.front() == '<' ? o.label.substr(1, o.label.size() - 2) : o.label;
+  f.call_where = here();
+  f.return_to = mark_after();
+  for (size_t k = 0; k < 30; ++k) {
+    f.saved_numbered[k] = state_.parameters[k + 1];
+    state_.parameters[k + 1] = k < args.size() ? args[k] : 0.0;
+  }
+  f.saved_locals.swap(state_.locals);
+  const Mark body = sub->body;
+  frames_.push_back(std::move(f));
+  jump(body);
+}
+
+void Reader::leave_sub(const std::string& s, const OLine& o) {
+  if (frames_.size() <= 1) {
+    fail(o.column, "o" + o.label + " " + o.keyword + " outside a subroutine call");
+  }
+  size_t i = skip_blanks(s, o.rest);
+  bool returned = false;
+  double value = 0.0;
+  if (i < s.size() && s[i] == '[') {
+    value = detail::read_expression(s, i, *this);
+    returned = true;
+  }
+  Frame& f = frame();
+  for (size_t k = 0; k < 30; ++k) state_.parameters[k + 1] = f.saved_numbered[k];
+  state_.locals.swap(f.saved_locals);
+  state_.globals["_value"] = value;
+  state_.globals["_value_returned"] = returned ? 1.0 : 0.0;
+  const Mark back = f.return_to;
+  frames_.pop_back();
+  jump(back);
+}
+
+bool Reader::o_word(const std::string& s, const OLine& o) {
+  const std::string& k = o.keyword;
+  const std::string& label = o.label;
+  Frame& f = frame();
+  auto only_comment_after = [&](size_t i) {
+    i = skip_blanks(s, i);
+    while (i < s.size() && s[i] == '(') i = skip_blanks(s, skip_comment(s, i));
+    if (i < s.size() && s[i] != ';') fail(column_of(i), "unexpected " + describe(s[i]) + " after o" + label + " " + k);
+  };
+  auto find_loop = [&]() -> Loop& {
+    for (size_t n = f.loops.size(); n-- > 0;) {
+      if (f.loops[n].label == label) {
+        if (n + 1 != f.loops.size()) {
+          fail(o.column, "o" + label + " " + k + " while the inner loop o" + f.loops.back().label + " is open");
+        }
+        return f.loops[n];
+      }
+    }
+    fail(o.column, "o" + label + " " + k + " outside a loop o" + label);
+  };
+  std::string text;
+  if (k == "sub") {
+    if (frames_.size() > 1) fail(o.column, "o" + label + " sub inside the subroutine o<" + f.sub + "> (expected definitions at the top level)");
+    only_comment_after(o.rest);
+    subs_[label] = SubDefinition{mark_after(), here()};
+    skip_to(label, {"endsub"}, here(), text);
+    return true;
+  }
+  if (k == "endsub" || k == "return") {
+    leave_sub(s, o);
+    return true;
+  }
+  if (k == "call") {
+    call(s, o);
+    return true;
+  }
+  if (k == "if") {
+    const std::string opened = here();
+    f.ifs.emplace_back(label, opened);
+    if (condition(s, o) != 0.0) return true;
+    // Read on to the branch to run, or to endif.
+    while (true) {
+      const OLine next = skip_to(label, {"elseif", "else", "endif"}, opened, text);
+      if (next.keyword == "endif") {
+        f.ifs.pop_back();
+        return true;
+      }
+      if (next.keyword == "else" || condition(text, next) != 0.0) return true;
+    }
+  }
+  if (k == "elseif" || k == "else") {
+    // The branch that ran ends here.
+    if (f.ifs.empty() || f.ifs.back().first != label) fail(o.column, "o" + label + " " + k + " without o" + label + " if");
+    const std::string opened = f.ifs.back().second;
+    skip_to(label, {"endif"}, opened, text);
+    f.ifs.pop_back();
+    return true;
+  }
+  if (k == "endif") {
+    if (f.ifs.empty() || f.ifs.back().first != label) fail(o.column, "o" + label + " endif without o" + label + " if");
+    only_comment_after(o.rest);
+    f.ifs.pop_back();
+    return true;
+  }
+  if (k == "do") {
+    only_comment_after(o.rest);
+    f.loops.push_back(Loop{Loop::Kind::Do, label, mark_after(), 0.0, f.ifs.size(), here()});
+    return true;
+  }
+  if (k == "while") {
+    if (!f.loops.empty() && f.loops.back().label == label && f.loops.back().kind == Loop::Kind::Do) {
+      // The end of a do loop.
+      if (condition(s, o) != 0.0) {
+        jump(f.loops.back().start);
+      } else {
+        f.loops.pop_back();
+      }
+      return true;
+    }
+    const bool again = !f.loops.empty() && f.loops.back().label == label && f.loops.back().kind == Loop::Kind::While;
+    if (!again) f.loops.push_back(Loop{Loop::Kind::While, label, mark_this(), 0.0, f.ifs.size(), here()});
+    if (condition(s, o) != 0.0) return true;
+    const std::string opened = f.loops.back().where;
+    f.loops.pop_back();
+    skip_to(label, {"endwhile"}, opened, text);
+    return true;
+  }
+  if (k == "endwhile") {
+    Loop& loop = find_loop();
+    if (loop.kind != Loop::Kind::While) fail(o.column, "o" + label + " endwhile ends a loop that is not a while loop");
+    jump(loop.start);
+    return true;
+  }
+  if (k == "repeat") {
+    const double n = condition(s, o);
+    if (n >= 1.0) {
+      f.loops.push_back(Loop{Loop::Kind::Repeat, label, mark_after(), std::floor(n), f.ifs.size(), here()});
+    } else {
+      skip_to(label, {"endrepeat"}, here(), text);
+    }
+    return true;
+  }
+  if (k == "endrepeat") {
+    Loop& loop = find_loop();
+    if (loop.kind != Loop::Kind::Repeat) fail(o.column, "o" + label + " endrepeat ends a loop that is not a repeat");
+    if (--loop.remaining >= 1.0) {
+      jump(loop.start);
+    } else {
+      f.loops.pop_back();
+    }
+    return true;
+  }
+  if (k == "break" || k == "continue") {
+    Loop& loop = find_loop();
+    f.ifs.resize(loop.if_depth);
+    const std::string opened = loop.where;
+    const char* end = loop.kind == Loop::Kind::While ? "endwhile" : loop.kind == Loop::Kind::Repeat ? "endrepeat" : "while";
+    if (k == "break") {
+      f.loops.pop_back();
+      skip_to(label, {end}, opened, text);
+      return true;
+    }
+    // continue: on to the loop's test.
+    if (loop.kind == Loop::Kind::While) {
+      jump(loop.start);
+      return true;
+    }
+    const OLine test = skip_to(label, {end}, opened, text);
+    return o_word(text, test);
+  }
+  fail(o.column, "unknown o-word keyword '" + k + "' (expected sub, endsub, call, return, if, elseif, else, endif, "
+                 "while, endwhile, do, break, continue, repeat or endrepeat)");
 }
 
 size_t Reader::skip_comment(const std::string& s, size_t i) const {
@@ -399,60 +948,22 @@ size_t Reader::skip_comment(const std::string& s, size_t i) const {
   fail(column_of(i), "unterminated comment: '(' without ')'");
 }
 
-// rs274ngc's real_value without expressions: [+|-] digits [. [digits]] | [+|-] . digits.
-// Blanks may sit anywhere in it: LinuxCNC removes them before parsing, so "X 1 0.5" is X10.5.
-// There is no exponent, and no nan or inf.
-double Reader::read_number(const std::string& s, size_t& i, char letter, int column,
-                           std::string& text) const {
-  const size_t n = s.size();
+// A word's value: a plain number (the fast path) or any rs274ngc real value. Errors about
+// the value's start point at the word's letter.
+double Reader::word_value(const std::string& s, size_t& i, char letter, std::string& text) {
+  const int column = column_of(i - 1);
   size_t j = skip_blanks(s, i);
-  bool negative = false;
-  if (j < n && (s[j] == '+' || s[j] == '-')) {
-    negative = s[j] == '-';
-    j = skip_blanks(s, j + 1);
+  if (j < s.size() && (s[j] == '+' || s[j] == '-')) j = skip_blanks(s, j + 1);
+  if (j < s.size() && (is_digit(s[j]) || s[j] == '.')) {
+    return detail::read_plain_number(s, i, letter, *this, text, column);
   }
-  std::string digits;
-  bool point = false;
-  bool any_digit = false;
-  bool integer_part_nonzero = false;
-  for (; j < n; ++j) {
-    const char c = s[j];
-    if (is_digit(c)) {
-      digits += c;
-      any_digit = true;
-      if (!point && c != '0') integer_part_nonzero = true;
-    } else if (c == '.' && !point) {
-      digits += c;
-      point = true;
-    } else if (!is_blank(c)) {
-      break;
-    }
-  }
-  if (!any_digit) {
+  if (j >= s.size() || !(s[j] == '#' || s[j] == '[' || detail::function_at(s, j))) {
     fail(column, std::string("expected a number after '") + letter + "', found " +
-                     (j < n ? describe(s[j]) : std::string("end of line")));
+                     (j < s.size() ? describe(s[j]) : std::string("end of line")));
   }
-  // "X1e5": an exponent. ("X1 E5" reads as an E word, an unknown letter.)
-  if (j < n && (s[j] == 'e' || s[j] == 'E') && !is_blank(s[j - 1])) {
-    fail(column, std::string("exponent in the ") + letter +
-                     " number (rs274 numbers have none; expected digits with an optional '.')");
-  }
-  i = j;
-  text = (negative ? "-" : "") + (digits.size() > 24 ? digits.substr(0, 24) + "..." : digits);
-  double value = 0.0;
-  const char* first = digits.data();
-  const char* last = digits.data() + digits.size();
-  const auto [end, ec] = std::from_chars(first, last, value, std::chars_format::fixed);
-  if (ec == std::errc::result_out_of_range) {
-    if (integer_part_nonzero) {
-      fail(column, std::string(1, letter) + " value " + text +
-                       " is out of range (expected |value| <= 1000000)");
-    }
-    value = 0.0;  // underflow: smaller than any length or speed that matters
-  } else if (ec != std::errc() || end != last) {
-    fail(column, std::string("malformed ") + letter + " number " + text);
-  }
-  return negative ? -value : value;
+  const double value = detail::read_real_value(s, i, letter, *this);
+  text = num(value);
+  return value;
 }
 
 void Reader::lex(const std::string& s, size_t i) {
@@ -469,9 +980,25 @@ void Reader::lex(const std::string& s, size_t i) {
       continue;
     }
     if (c == ';') return;  // LinuxCNC: the rest of the line is a comment
+    if (c == '#') {
+      // A parameter setting: #n = value or #<name> = value (set once the line is read).
+      if (o_column_ != 0) fail(o_column_, "a program number O<digits> with more on its line (expected it alone)");
+      ++i;
+      const detail::ParameterRef ref = detail::read_parameter_ref(s, i, *this);
+      i = skip_blanks(s, i);
+      if (i >= n || s[i] != '=') {
+        fail(column_of(i), "expected '=' after the parameter, found " +
+                               (i >= n ? std::string("end of line") : describe(s[i])) +
+                               " (a parameter is set with #n = value, or read as a word's value)");
+      }
+      ++i;
+      const double value = detail::read_real_value(s, i, 0, *this);
+      assignments_.push_back({ref, value, column});
+      first_word = false;
+      continue;
+    }
     if (!is_letter(c)) {
-      if (c == '#') fail(column, "parameters (#) are not supported (expected a word)");
-      if (c == '[') fail(column, "expressions ([ ]) are not supported (expected a number)");
+      if (c == '[') fail(column, "expression without its word (expected a letter before '[')");
       if (c == '\r')
         fail(column, "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column, "unexpected " + describe(c) + " (expected a word: a letter and a number)");
@@ -480,17 +1007,18 @@ void Reader::lex(const std::string& s, size_t i) {
     ++i;
     if (o_column_ != 0) {
       fail(o_column_,
-           "O-words (subroutines, loops, conditionals) are not supported "
-           "(expected a program number O<digits> alone on its line)");
+           "o-word without a keyword (expected o<name> or o<number> followed by sub, call, if, "
+           "while, ..., or a program number O<digits> alone on its line)");
     }
     if (letter == 'O') {
       // A Fanuc program number ("O1234" alone on a line) is accepted and ignored.
       const size_t j = skip_blanks(s, i);
       if (!first_word || j >= n || !is_digit(s[j])) {
-        fail(column, "O-words (subroutines, loops, conditionals) are not supported");
+        fail(column, "o-word not at the start of its line, or without a keyword (expected o<name> or "
+                     "o<number> followed by sub, call, if, while, ...)");
       }
       std::string text;
-      read_number(s, i, letter, column, text);
+      detail::read_plain_number(s, i, letter, *this, text, column);
       o_column_ = column;
       first_word = false;
       continue;
@@ -499,7 +1027,8 @@ void Reader::lex(const std::string& s, size_t i) {
       fail(column, "unknown word letter 'E' (expected one of A-D, F-N, P-Z)");
     }
     std::string text;
-    const double value = read_number(s, i, letter, column, text);
+    const double value = letter == 'N' ? detail::read_plain_number(s, i, letter, *this, text, column)
+                                       : word_value(s, i, letter, text);
     if (letter != 'N' && std::abs(value) > kMaxMagnitude) {
       fail(column, std::string(1, letter) + " value " + text +
                        " is out of range (expected |value| <= 1000000)");
@@ -547,13 +1076,16 @@ void Reader::lex(const std::string& s, size_t i) {
 // the line names.
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   Eigen::Vector3d end = state_.position_mm;
-  const Eigen::Vector3d offset = work_offset();
+  const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
   for (int a = 0; a < 3; ++a) {
     const Word& w = word(kAxisLetter[a]);
     programmed[a] = w.present;
     if (!w.present) continue;
     const double v = w.value * unit();
-    if (state_.incremental) {
+    if (machine_coordinates_) {
+      if (state_.incremental) fail(w.column, "G53 in incremental mode G91 (expected G90)");
+      end[a] = v;  // machine coordinates: no work offsets
+    } else if (state_.incremental) {
       if (!state_.known[a]) {
         fail(w.column, std::string("incremental (G91) ") + kAxisLetter[a] + " move while the " +
                            kAxisLetter[a] + " position is unknown (expected an absolute " +
@@ -594,11 +1126,12 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed) {
   state_.rotary = rotary;
   const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns;
   if (moves) {
-    block.feed_mode = kinematics::FeedMode::UnitsPerMinute;
+    block.feed_mode = state_.inverse_time && block.kind != MotionKind::Rapid ? kinematics::FeedMode::InverseTime
+                                                                             : kinematics::FeedMode::UnitsPerMinute;
     block.tool = state_.tool;
     block.spindle = state_.spindle;
     block.spindle_rpm = state_.spindle_rpm;
-    block.source = kinematics::SourceRef{file_index_, line_};
+    block.source = kinematics::SourceRef{current_->file_index, current_->line};
     program_.blocks.push_back(block);
     for (int a = 0; a < 3; ++a) {
       if (!state_.known[a] && !programmed[a]) {
@@ -650,9 +1183,7 @@ void Reader::forget_axes(bool all) {
 }
 
 void Reader::straight(MotionKind kind, int column) {
-  if (kind == MotionKind::Linear && state_.feed_mm_per_min <= 0.0) {
-    fail(column, "feed move without F (expected an F word on this line or before it)");
-  }
+  const double feed = kind == MotionKind::Rapid ? 0.0 : feed_of_line(column);
   std::array<bool, 3> programmed{};
   Block block;
   block.kind = kind;
@@ -661,7 +1192,7 @@ void Reader::straight(MotionKind kind, int column) {
   for (int a = 0; a < 3; ++a) {
     if (!state_.known[a]) block.start_mm[a] = block.end_mm[a];
   }
-  block.feed_mm_per_min = kind == MotionKind::Rapid ? 0.0 : state_.feed_mm_per_min;
+  block.feed_mm_per_min = feed;
   append(block, programmed);
 }
 
@@ -691,9 +1222,7 @@ void Reader::arc(int column) {
   if (r.present && ijk) {
     fail(r.column, std::string(code) + " arc with both R and I/J/K (expected one or the other)");
   }
-  if (state_.feed_mm_per_min <= 0.0) {
-    fail(column, "feed move without F (expected an F word on this line or before it)");
-  }
+  const double feed = feed_of_line(column);
   for (int axis : {a, b}) {
     if (!state_.known[axis]) {
       fail(column, std::string(code) + " arc from an unknown " + kAxisLetter[axis] +
@@ -724,7 +1253,7 @@ void Reader::arc(int column) {
                                    "-plane arc (expected " + kCenterLetter[a] + " and " +
                                    kCenterLetter[b] + ")");
     }
-    const Eigen::Vector3d offset = work_offset();
+    const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
     for (int k = 0; k < 2; ++k) {
       const int axis = k == 0 ? a : b;
       const Word& w = word(kCenterLetter[axis]);
@@ -788,8 +1317,204 @@ void Reader::arc(int column) {
   block.normal = Eigen::Vector3d::Zero();
   block.normal[c] = clockwise ? -1.0 : 1.0;
   block.turns = turns;
-  block.feed_mm_per_min = state_.feed_mm_per_min;
+  block.feed_mm_per_min = feed;
   append(block, programmed);
+}
+
+void Reader::select_system(int index) {
+  for (int a = 0; a < 3; ++a) {
+    state_.g5x_mm[a] = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + a)];
+  }
+  state_.parameters[5220] = index + 1;
+}
+
+double Reader::feed_of_line(int column) const {
+  if (state_.inverse_time) {
+    const Word& f = word('F');
+    if (!f.present) {
+      fail(column, "feed move in inverse-time mode G93 without F (expected an F word on every G1/G2/G3 line)");
+    }
+    return f.value;  // 1 / minutes
+  }
+  if (state_.feed_mm_per_min <= 0.0) {
+    fail(column, "feed move without F (expected an F word on this line or before it)");
+  }
+  return state_.feed_mm_per_min;
+}
+
+// G10 L2/L20 (coordinate system offsets), L1/L10/L11 (the tool table: no effect on the tip's
+// path here) and G92, G92.1, G92.2, G92.3, as LinuxCNC documents them; offsets in mm.
+void Reader::set_offsets(const Code& g) {
+  for (char letter : {'A', 'B', 'C'}) {
+    const Word& w = word(letter);
+    if (w.present && w.value != 0.0) {
+      unsupported(w.column, g.text + std::string(1, letter), g.text + " with a rotary offset " + letter +
+                                                                 " (this reader offsets X Y Z only)");
+    }
+    used_[letter - 'A'] = true;
+  }
+  if (g.number == 100) {
+    const Word& l = word('L');
+    const Word& p = word('P');
+    used_['L' - 'A'] = used_['P' - 'A'] = used_['R' - 'A'] = true;
+    for (char letter : {'I', 'J', 'K', 'Q'}) used_[letter - 'A'] = true;  // tool-table words
+    if (!l.present) fail(g.column, "G10 without L (expected L2 or L20 for a coordinate system, L1/L10/L11 for a tool)");
+    if (l.value == 1.0 || l.value == 10.0 || l.value == 11.0) return;
+    if (l.value != 2.0 && l.value != 20.0) {
+      fail(l.column, "G10 L" + num(l.value) + " (expected L1, L2, L10, L11 or L20)");
+    }
+    if (!p.present || p.value < 0.0 || p.value > 9.0 || !is_whole(p.value)) {
+      fail(p.present ? p.column : l.column, "G10 L" + num(l.value) + " needs P0..P9 (the coordinate system, 0 = active)");
+    }
+    if (const Word& r = word('R'); r.present && r.value != 0.0) {
+      unsupported(r.column, "G10R", "G10 R (a rotated coordinate system) is not supported");
+    }
+    const int active = static_cast<int>(std::lround(state_.parameters[5220])) - 1;
+    const int k = p.value == 0.0 ? active : static_cast<int>(p.value) - 1;
+    for (int a = 0; a < 3; ++a) {
+      const Word& w = word(kAxisLetter[a]);
+      if (!w.present) continue;
+      double offset = w.value * unit();
+      if (l.value == 20.0) {
+        if (!state_.known[a]) {
+          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] + " position is unknown (expected a move first)");
+        }
+        offset = state_.position_mm[a] - state_.g92_mm[a] - offset;
+      }
+      state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset;
+    }
+    if (k == active) select_system(k);
+    return;
+  }
+  if (g.number == 920) {
+    for (int a = 0; a < 3; ++a) {
+      const Word& w = word(kAxisLetter[a]);
+      if (!w.present) continue;
+      if (!state_.known[a]) {
+        fail(w.column, std::string("G92 while the ") + kAxisLetter[a] + " position is unknown (expected a move first)");
+      }
+      state_.g92_mm[a] = state_.position_mm[a] - state_.g5x_mm[a] - w.value * unit();
+    }
+  } else if (g.number == 921 || g.number == 922) {
+    state_.g92_mm.setZero();
+  } else {  // G92.3: back to the offset kept in the parameters
+    for (int a = 0; a < 3; ++a) state_.g92_mm[a] = state_.parameters[static_cast<size_t>(kG92Parameter + a)];
+  }
+  if (g.number != 922) {
+    for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG92Parameter + a)] = state_.g92_mm[a];
+    state_.parameters[5210] = g.number == 920 || g.number == 923 ? 1.0 : 0.0;
+  }
+}
+
+// Canned cycles G73 G81 G82 G83 G85 G89 in the XY plane, as LinuxCNC documents them: an
+// optional first move up to the R plane, then for each of the L holes a rapid in X Y at the
+// current height, a rapid down to R, the cycle's own in-and-out, and the retract to R (G99)
+// or to the height the line started at (G98). Heights in program coordinates.
+void Reader::cycle(int column, bool new_series) {
+  const char* name = state_.cycle == 730 ? "G73" : state_.cycle == 810 ? "G81" : state_.cycle == 820 ? "G82"
+                     : state_.cycle == 830 ? "G83" : state_.cycle == 850 ? "G85" : "G89";
+  if (state_.plane != Plane::XY) {
+    unsupported(column, std::string(name) + "plane", std::string(name) + " outside the XY plane (this reader drills along Z, G17)");
+    forget_axes(true);
+    return;
+  }
+  if (state_.inverse_time) fail(column, std::string(name) + " in inverse-time mode G93 (expected G94)");
+  const double feed = feed_of_line(column);
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[a]) {
+      fail(column, std::string(name) + " from an unknown " + kAxisLetter[a] + " position (expected a move first)");
+    }
+  }
+  const Word& r_word = word('R');
+  const Word& z_word = word('Z');
+  const Word& q_word = word('Q');
+  const Word& p_word = word('P');
+  const Word& l_word = word('L');
+  if (r_word.present) state_.cycle_r = r_word.value;
+  if (z_word.present) state_.cycle_z = z_word.value;
+  if (q_word.present) state_.cycle_q = q_word.value;
+  if (p_word.present) state_.cycle_p = p_word.value;
+  if (new_series && !r_word.present) fail(column, std::string(name) + " without R (expected the retract plane R on the cycle's first line)");
+  if (new_series && !z_word.present) fail(column, std::string(name) + " without Z (expected the hole bottom Z on the cycle's first line)");
+  const bool pecks = state_.cycle == 730 || state_.cycle == 830;
+  if (pecks && !(state_.cycle_q > 0.0)) {
+    fail(q_word.present ? q_word.column : column, std::string(name) + " needs Q > 0 (the peck depth)");
+  }
+  if ((state_.cycle == 820 || state_.cycle == 890) && state_.cycle_p < 0.0) {
+    fail(p_word.present ? p_word.column : column, std::string(name) + " P " + num(state_.cycle_p) + " (expected a dwell >= 0 s)");
+  }
+  int repeats = 1;
+  if (l_word.present) {
+    if (l_word.value < 0.0 || !is_whole(l_word.value) || l_word.value > 1e5) {
+      fail(l_word.column, "L " + num(l_word.value) + " (expected a whole number of repeats 0..100000)");
+    }
+    repeats = static_cast<int>(l_word.value);
+  }
+  const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
+  Eigen::Vector3d at = state_.position_mm - offset;  // program coordinates, mm
+  const double u = unit();
+  double r = state_.cycle_r * u, bottom = state_.cycle_z * u;
+  Eigen::Vector2d hole = at.head<2>(), step = Eigen::Vector2d::Zero();
+  if (state_.incremental) {
+    r = at.z() + r;        // R from the current height
+    bottom = r + bottom;   // Z from R
+    for (int a = 0; a < 2; ++a) {
+      if (word(kAxisLetter[a]).present) step[a] = word(kAxisLetter[a]).value * u;
+    }
+  } else {
+    for (int a = 0; a < 2; ++a) {
+      if (word(kAxisLetter[a]).present) hole[a] = word(kAxisLetter[a]).value * u;
+    }
+  }
+  if (bottom > r) {
+    fail(z_word.present ? z_word.column : column, std::string(name) + " with the bottom Z " + num(bottom / u) +
+                                                      " above R " + num(r / u) + " (expected Z <= R)");
+  }
+  const std::array<bool, 3> all = {true, true, true};
+  auto move = [&](MotionKind kind, double x, double y, double z) {
+    Block block;
+    block.kind = kind;
+    block.start_mm = state_.position_mm;
+    block.end_mm = Eigen::Vector3d(x, y, z) + offset;
+    block.feed_mm_per_min = kind == MotionKind::Rapid ? 0.0 : feed;
+    append(block, all);
+    at = Eigen::Vector3d(x, y, z);
+  };
+  if (new_series && at.z() < r) move(MotionKind::Rapid, at.x(), at.y(), r);
+  const double clear = state_.retract_to_r ? r : at.z();
+  const double rapid_delta = 0.254;  // mm: LinuxCNC's 0.010 inch back-off before the next peck
+  double height = at.z();
+  for (int n = 0; n < repeats; ++n) {
+    if (state_.incremental) hole += step;
+    const double x = hole.x(), y = hole.y();
+    move(MotionKind::Rapid, x, y, height);
+    if (height != r) move(MotionKind::Rapid, x, y, r);
+    switch (state_.cycle) {
+      case 730:
+      case 830: {
+        const double delta = state_.cycle_q * u;
+        for (double depth = r - delta; depth > bottom; depth -= delta) {
+          move(MotionKind::Linear, x, y, depth);
+          move(MotionKind::Rapid, x, y, state_.cycle == 830 ? r : depth + rapid_delta);
+          if (state_.cycle == 830) move(MotionKind::Rapid, x, y, depth + rapid_delta);
+        }
+        move(MotionKind::Linear, x, y, bottom);
+        move(MotionKind::Rapid, x, y, clear);
+        break;
+      }
+      case 850:
+      case 890:
+        move(MotionKind::Linear, x, y, bottom);
+        move(MotionKind::Linear, x, y, r);
+        if (clear != r) move(MotionKind::Rapid, x, y, clear);
+        break;
+      default:  // G81, G82
+        move(MotionKind::Linear, x, y, bottom);
+        move(MotionKind::Rapid, x, y, clear);
+        break;
+    }
+    height = clear;
+  }
 }
 
 bool Reader::execute() {
@@ -833,6 +1558,14 @@ bool Reader::execute() {
     fail(later->column, axis_user->text + " and " + by_group[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
+  const Code* non_modal = by_group[kNonModal];
+  const bool sets_offsets = non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920);
+  if (sets_offsets && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
+    const Code* later = non_modal->column > by_group[kMotion]->column ? non_modal : by_group[kMotion];
+    fail(later->column, non_modal->text + " and " + by_group[kMotion]->text +
+                            " both use the axis words (expected them on separate lines)");
+  }
+  machine_coordinates_ = non_modal != nullptr && non_modal->number == 530;
 
   // --- M codes.
   std::array<const Code*, 10> m_by_group{};
@@ -890,7 +1623,11 @@ bool Reader::execute() {
                          num(w.value * unit()) + " mm is out of range (expected within +-1e6 mm)");
     }
   }
-  if (const Word& f = word('F'); f.present) {
+  if (const Code* g = by_group[kFeedMode]) state_.inverse_time = g->number == 930;
+  if (const Word& f = word('F'); f.present && state_.inverse_time) {
+    // G93: F is the inverse of the move's time in minutes, on every feed move's line.
+    if (!(f.value > 0.0)) fail(f.column, "F " + num(f.value) + " (expected an inverse time > 0, 1/min)");
+  } else if (f.present) {
     const double feed = f.value * unit();
     if (!(feed > 0.0)) fail(f.column, "F " + num(f.value) + " (expected a feed > 0)");
     if (feed > kMaxMagnitude) {
@@ -941,7 +1678,10 @@ bool Reader::execute() {
     }
     used_['H' - 'A'] = true;
   }
-  if (const Code* g = by_group[kCoordinateSystem]; g != nullptr) state_.work_offset = g->text;
+  if (const Code* g = by_group[kCoordinateSystem]; g != nullptr) {
+    state_.work_offset = g->text;
+    select_system(system_index(g->number));
+  }
   exact_stop_line_ = by_group[kNonModal] != nullptr && by_group[kNonModal]->number == 90;
   if (const Code* g = by_group[kPathControl]; g != nullptr && g->number != 640) {
     state_.exact_stop = true;  // G61, G61.1
@@ -962,6 +1702,12 @@ bool Reader::execute() {
   }
   if (const Code* g = by_group[kDistance]) state_.incremental = g->number == 910;
   if (const Code* g = by_group[kArcDistance]) state_.arc_center_absolute = g->number == 901;
+  if (const Code* g = by_group[kReturnMode]) state_.retract_to_r = g->number == 990;
+  if (non_modal != nullptr && (non_modal->number == 100 || (non_modal->number >= 920 && non_modal->number <= 923))) {
+    set_offsets(*non_modal);
+  }
+  const bool was_cycle = state_.motion == Motion::Cycle;
+  const int previous_cycle = state_.cycle;
   if (const Code* g = by_group[kMotion]) {
     switch (g->number) {
       case 0:
@@ -978,6 +1724,10 @@ bool Reader::execute() {
         break;
       case 800:
         state_.motion = Motion::None;
+        break;
+      case 730: case 810: case 820: case 830: case 850: case 890:
+        state_.motion = Motion::Cycle;
+        state_.cycle = g->number;
         break;
       default:
         state_.motion = Motion::Unsupported;
@@ -996,8 +1746,13 @@ bool Reader::execute() {
   }
   // Motion errors point at the G0..G3 word, or at the first axis word of a modal motion.
   const int column = explicit_motion ? motion_code->column : axis_column;
+  if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
+    fail(non_modal->column, "G53 without a G0 or G1 move on its line (expected G53 G0/G1 with axis words)");
+  }
   if (axis_user != nullptr) {
     forget_axes(axis_user_all);
+  } else if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
+    // G10 and G92 took the axis words.
   } else if (has_axis || explicit_motion) {
     switch (state_.motion) {
       case Motion::None:
@@ -1016,6 +1771,11 @@ bool Reader::execute() {
         if (has_axis) {
           straight(state_.motion == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear, column);
         }
+        break;
+      case Motion::Cycle:
+        for (char letter : {'R', 'Q', 'L'}) used_[letter - 'A'] = true;
+        if (p.present) use_p(motion_code != nullptr ? motion_code->text : "the canned cycle");
+        cycle(column, !(was_cycle && previous_cycle == state_.cycle));
         break;
       case Motion::ArcClockwise:
       case Motion::ArcCounterClockwise:
@@ -1037,13 +1797,16 @@ bool Reader::execute() {
         case 'J':
         case 'K':
         case 'R':
-          users = "G2/G3 arc";
+          users = "G2/G3 arc, G10 or a canned cycle";
           break;
         case 'P':
-          users = "G4, G2/G3 or G64";
+          users = "G4, G2/G3, G10, G64 or a canned cycle";
           break;
         case 'Q':
-          users = "G64";
+          users = "G64 or G73/G83";
+          break;
+        case 'L':
+          users = "G10 or a canned cycle";
           break;
         case 'H':
           users = "G43";
@@ -1073,25 +1836,8 @@ bool Reader::execute() {
 void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options,
                 kinematics::Program& program, GcodeState& state) {
   validate_options(name, options);
-  const int file_index = static_cast<int>(program.files.size());
-  program.files.push_back(name);
-  Reader reader(name, options, program, state, file_index);
-  std::string text;
-  int number = 0;
-  try {
-    while (std::getline(in, text)) {
-      if (number == INT_MAX) throw InputError(name, number, 0, "too many lines");
-      ++number;
-      if (!reader.line(text, number)) break;
-    }
-  } catch (const std::bad_alloc&) {
-    throw InputError(name, number + 1, 0, "out of memory (a line too long, or too many moves)");
-  } catch (const std::length_error&) {
-    throw InputError(name, number + 1, 0, "out of memory (a line too long, or too many moves)");
-  } catch (const std::ios_base::failure&) {
-    throw InputError(name, number + 1, 0, "read error (expected a readable text file)");
-  }
-  if (in.bad()) throw InputError(name, number + 1, 0, "read error (expected a readable text file)");
+  Reader reader(options, program, state);
+  reader.run(in, name);
   for (int a = 0; a < 3; ++a) {
     if (state.pending[a].empty()) continue;
     program.warnings.push_back(name + ": " + kAxisLetter[a] +

@@ -23,6 +23,12 @@ struct GcodeOptions {
   bool unsupported_as_warning =
       false;  // an unsupported word: one warning per distinct word, then ignored
   double arc_tolerance_mm = 0.002;  // radius mismatch allowed between start and end of an I J K arc
+  // Folders searched for the file <name>.ngc of a subroutine called but not defined in the
+  // program (LinuxCNC's SUBROUTINE_PATH), after the calling program's own folder.
+  std::vector<std::string> subroutine_path;
+  // Lines read (executed or skipped) before the reader stops with an error: loops that never
+  // end. Each loop pass counts its lines again.
+  long long max_lines = 100'000'000;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 // Appends to `program` (so several files can run in sequence; the modal state and the
@@ -36,15 +42,16 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
 // (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool,
 // position unknown) and pass the same one, with the same Program, for each file in sequence.
 struct GcodeState {
-  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Unsupported };
+  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
+  int cycle = 0;                 // the canned cycle's G code x10 (810 for G81) when Motion::Cycle
   Plane plane = Plane::XY;
   bool inches = false;               // G20
   bool incremental = false;          // G91
   bool arc_center_absolute = false;  // G90.1 (default G91.1)
-  std::string work_offset = "G54";
+  std::string work_offset = "G54";  // the active coordinate system
 
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // workpiece frame, where known
   std::array<bool, 3> known = {false, false, false};      // X Y Z programmed yet?
@@ -62,9 +69,29 @@ struct GcodeState {
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;
+  bool inverse_time = false;     // G93: F is 1 / minutes per move
   int tool = 0;                  // in the spindle (after M6)
   int selected_tool = -1;        // last T word, -1 if none
   std::set<std::string> warned;  // unsupported words already warned about
+
+  // Programmed X Y Z (mm) + g5x + g92 = workpiece frame. The coordinate systems' offsets live
+  // in the parameters as in LinuxCNC (#5221 + 20 k .. for G54 + k, mm), taken from
+  // GcodeOptions::work_offsets_mm when the first file starts; selecting a system (G54..) or
+  // G10 on the active one brings g5x_mm up to date.
+  Eigen::Vector3d g5x_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d g92_mm = Eigen::Vector3d::Zero();  // G92 offset (#5211..#5213)
+  // Numbered parameters #1..#5399 (index = number; empty until the first file starts) and
+  // the named ones: globals (#<_name>) and the main program's locals.
+  std::vector<double> parameters;
+  std::map<std::string, double> globals, locals;
+  // Canned cycles (G81..G89): the retract height G98 goes back to (mm, programmed Z of the
+  // first cycle of a series) and whether a series is under way.
+  bool cycle_series = false;
+  double cycle_initial_z_mm = 0.0;
+  bool retract_to_r = false;  // G99 (default G98: back to the initial Z)
+  // Sticky cycle words as last given (program units; R and Z as written, G91 increments
+  // included): a later line of the same series may give only X and Y.
+  double cycle_r = 0.0, cycle_z = 0.0, cycle_q = 0.0, cycle_p = 0.0;
 };
 
 }  // namespace vcut::io

@@ -1,0 +1,600 @@
+#!/usr/bin/env python3
+"""Oracle test: vcut's G-code reader against LinuxCNC's standalone interpreter rs274.
+
+Usage: rs274_oracle.py --vcut PATH/TO/vcut [--report FILE] [--install] [PROGRAMS...]
+
+For each program (default: every sample program of Debian's linuxcnc-uspace, see census.py)
+this runs
+
+  rs274 -g -b -i TMP/oracle.ini -t TMP/tool.tbl -v TMP/params.var PROGRAM   (cwd TMP)
+  vcut program PROGRAM --dialect gcode
+
+and compares the two motion lists. Status per program:
+
+  PASS      same motions (after the alignment rules below), ends/centres within tolerance
+  SKIPPED   vcut rejects the program with an "unsupported"/"not supported" error (the feature
+            is named in the detail column), whatever rs274 did
+  REJECTED  both reject the program (rs274 with an interpreter error, vcut with an error that is
+            not "unsupported"); nothing to compare
+  FAIL      anything else: a differing motion (the first one is printed with both records),
+            a different count, vcut rejecting what rs274 runs, or vcut accepting what rs274
+            rejects
+
+Exit status: 1 if any FAIL, 0 otherwise, 77 (ctest's skip code) if rs274 is missing and
+--install was not given (or the install failed). Python 3 standard library only.
+
+What rs274 prints (2.9.0~pre1, src/emc/sai/saicanon.cc), and how it is brought into vcut's frame:
+  * One canonical call per line: "%5d N..... NAME(args)" (or "N<number>" when the block has an
+    N word; the source line number is not printed). Numbers are printf %.4f.
+  * Coordinates are PROGRAM coordinates in PROGRAM units (inches after G20): G5x, G92, G52,
+    XY rotation (G10 L2 R) and the tool length offset are not applied. rs274 reports those as
+    SET_G5X_OFFSET(n, x, y, z, a, b, c), SET_G92_OFFSET(x, y, z, a, b, c),
+    SET_XY_ROTATION(deg) and USE_TOOL_LENGTH_OFFSET(...), each in the units in force when it
+    is printed (it does not re-send them when G20/G21 changes). LinuxCNC's canon (emccanon.cc,
+    rotate_and_offset_pos) makes the machine position as
+        machine = rotate_z(program_mm + g92_mm, xy_rotation) + g5x_mm + tool_offset_mm
+    vcut's blocks are "workpiece frame" = programmed point + work offset (job file, default
+    zero), with G43 accepted as a no-op (the programmed point is the tool tip). So the oracle
+    computes rotate_z(p + g92) + g5x in mm and leaves the tool length offset out. The var file
+    the oracle gives rs274 is empty, so every work offset starts at zero, as vcut's defaults.
+  * STRAIGHT_TRAVERSE(x, y, z, a, b, c), STRAIGHT_FEED(x, y, z, a, b, c) (no U V W: rs274's
+    axis mask is XYZABC and it rejects U V W words with "Bad character 'u' used").
+  * ARC_FEED(first_end, second_end, first_axis, second_axis, rotation, axis_end_point, a, b, c):
+    G17: first/second = X/Y, axis = Z; G18: first/second = Z/X, axis = Y; G19: first/second =
+    Y/Z, axis = X. first_axis/second_axis are the centre. rotation = +turns for G3 (counter-
+    clockwise, i.e. a right-hand turn about first x second = +Z, +Y, +X), -turns for G2;
+    |rotation| is the P word (default 1). vcut: normal = sign(rotation) * (+Z | +Y | +X),
+    turns = |rotation|.
+  * SET_FEED_RATE(f) in program units per minute (or inverse time / per rev, announced by a
+    COMMENT("interpreter: feed mode set to ...") line). LinuxCNC reads the F word BEFORE it
+    applies G20/G21 of the same line (rs274ngc's order of execution).
+
+Alignment rules (where the two may legitimately split the motion differently). Each is applied
+only when the rs274 record does not match the next vcut record as it stands:
+  R1 zero-length moves: rs274 emits STRAIGHT_TRAVERSE/STRAIGHT_FEED that do not move (e.g. G28's
+     intermediate point when it is the current position, "G0 X0" at X0); vcut drops blocks
+     whose start equals their end. Such rs274 records are dropped.
+  R2 unknown start position: rs274 starts at machine zero; vcut has no start position: until an
+     axis has been programmed vcut holds it still, drops moves that move only such axes, and
+     later patches the held value in earlier blocks to the axis's first programmed value
+     (it warns "... ran while X was unknown; they hold X at V mm"). The oracle treats an axis
+     as "possibly unknown to vcut" until its rs274 value first changes from 0; an rs274 record
+     that changes only possibly-unknown axes may be dropped, and while an axis is possibly
+     unknown, vcut's value for it may be 0 (rs274's) or the V of vcut's warning for that axis.
+  R3 no program end: rs274 executes the whole file and then fails with "File ended with no
+     percent sign or program end" when there is no M2/M30/closing '%'; vcut does not require
+     one. That error alone is not a rejection: the motions are compared (PASS notes R3).
+Nothing else is forgiven: a motion in one list and not the other, a different kind, an end or
+centre beyond the tolerance, a different normal or turn count, a different feed.
+
+Tolerance: positions are compared within max(--tol, the rounding of the printed numbers that
+entered the value: 0.5e-4 program units each for the position, the G92 and the G5x offset)
+plus 1e-9 mm.
+"""
+import argparse
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import census  # noqa: E402  (same directory; standard library only)
+
+MM_PER_INCH = 25.4
+HALF_ULP = 0.5e-4  # rs274 prints %.4f
+SKIP_EXIT = 77
+
+# ---------------------------------------------------------------------------------------------
+# Running rs274
+
+
+def find_rs274(explicit=None):
+    if explicit:
+        return explicit if os.path.isfile(explicit) and os.access(explicit, os.X_OK) else None
+    found = shutil.which("rs274")
+    if found:
+        return found
+    for p in ("/usr/bin/rs274", "/usr/local/bin/rs274"):
+        if os.access(p, os.X_OK):
+            return p
+    return None
+
+
+def install_rs274():
+    """apt-get install linuxcnc-uspace (Debian 12). Returns (ok, message)."""
+    apt = shutil.which("apt-get")
+    if not apt:
+        return False, "no apt-get on this system"
+    prefix = [] if os.geteuid() == 0 else (["sudo", "-n"] if shutil.which("sudo") else None)
+    if prefix is None:
+        return False, "not root and no sudo"
+    env = dict(os.environ, DEBIAN_FRONTEND="noninteractive")
+    t0 = time.time()
+    cmd = prefix + [apt, "install", "-y", "--no-install-recommends", "linuxcnc-uspace"]
+    r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    if r.returncode != 0:
+        # The package lists may be missing (fresh container): update once and retry.
+        subprocess.run(prefix + [apt, "update"], env=env, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+        r = subprocess.run(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                           text=True)
+    if r.returncode != 0:
+        tail = r.stdout.strip().splitlines()[-1:] if r.stdout else []
+        return False, "apt-get failed: " + (tail[0] if tail else "(no output)")
+    return True, "installed linuxcnc-uspace in %.0f s" % (time.time() - t0)
+
+
+_TOOL_WORD = re.compile(r"(?i)(?<![A-Z#<_])[TH]\s*(\d{1,5})(?!\d)")
+
+
+def tool_table_text(program_text):
+    """A tool table (LinuxCNC format) with tools 1..99 and every T/H number in the program, all
+    with zero length and diameter. rs274 errors on G43 Hn / M6 with a tool that is not in its
+    table, and without -t it loads the sample table (lengths in inches). Zero lengths keep
+    USE_TOOL_LENGTH_OFFSET at zero (vcut ignores tool lengths anyway). Note: rs274's machine
+    units are inches, so a real table's Z and D would be read as inches."""
+    tools = set(range(1, 100))
+    for m in _TOOL_WORD.finditer(program_text):
+        n = int(m.group(1))
+        if 0 < n <= 99999:
+            tools.add(n)
+    lines = ["T%d P%d Z0 D0 ;oracle" % (t, i + 1) for i, t in enumerate(sorted(tools))]
+    return "\n".join(lines) + "\n"
+
+
+def run_rs274(rs274, program, program_text, sub_dirs, timeout):
+    """Runs rs274 on `program` in a scratch directory. Returns (rc, stdout, stderr_lines)."""
+    with tempfile.TemporaryDirectory(prefix="rs274-oracle-") as tmp:
+        tbl = os.path.join(tmp, "tool.tbl")
+        var = os.path.join(tmp, "params.var")
+        ini = os.path.join(tmp, "oracle.ini")
+        with open(tbl, "w") as f:
+            f.write(tool_table_text(program_text))
+        open(var, "w").close()  # empty: all parameters (work offsets, G28/G30 points) zero
+        with open(ini, "w") as f:
+            # o<name> call looks for name.ngc in SUBROUTINE_PATH (':'-separated, relative to the
+            # cwd), [DISPLAY]PROGRAM_PREFIX and the cwd; not in the program's own directory.
+            f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % ":".join(sub_dirs))
+        cmd = [rs274, "-g", "-b", "-i", ini, "-t", tbl, "-v", var, os.path.abspath(program)]
+        try:
+            r = subprocess.run(cmd, cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, timeout=timeout)
+        except subprocess.TimeoutExpired as e:
+            out = (e.stdout or b"").decode("utf-8", "replace")
+            return 124, out, ["rs274 timed out after %d s (an endless loop?)" % timeout]
+        out = r.stdout.decode("utf-8", "replace")
+        err = [l for l in r.stderr.decode("utf-8", "replace").splitlines()
+               if l.strip() and l.strip() != "executing"]
+        return r.returncode, out, err
+
+
+# ---------------------------------------------------------------------------------------------
+# Parsing rs274's canonical calls into motions in vcut's frame
+
+_CANON = re.compile(r"^\s*(\d+)\s+N(\S*)\s*([A-Z_0-9]+)\((.*)\)\s*$")
+_NUM = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:nan|inf)", re.I)
+
+PLANE_AXES = {  # plane -> (first, second, normal) axis indices
+    "XY": (0, 1, 2),
+    "XZ": (2, 0, 1),  # G18: first = Z, second = X, axis = Y
+    "YZ": (1, 2, 0),
+}
+
+
+def rotate_z(v, deg):
+    if deg == 0.0:
+        return list(v)
+    t = math.radians(deg)
+    c, s = math.cos(t), math.sin(t)
+    return [v[0] * c - v[1] * s, v[0] * s + v[1] * c, v[2]]
+
+
+class Rs274Motion:
+    __slots__ = ("index", "line", "kind", "end", "abc", "center", "normal", "turns", "feed",
+                 "feed_mode", "tol", "changed", "unseen")
+
+    def describe(self):
+        s = "#%d %s end=%s" % (self.index, self.kind, fmt_vec(self.end))
+        if self.abc != [0.0, 0.0, 0.0]:
+            s += " abc=%s" % fmt_vec(self.abc)
+        if self.kind == "arc":
+            s += " center=%s normal=%s turns=%d" % (fmt_vec(self.center), fmt_vec(self.normal),
+                                                    self.turns)
+        if self.kind != "rapid" and self.feed is not None:
+            s += " feed=%s%s" % (fmt_num(self.feed),
+                                 "" if self.feed_mode == "upm" else " (%s)" % self.feed_mode)
+        s += "  <- rs274 line %s: %s" % (self.line[0], self.line[1].strip())
+        return s
+
+
+def parse_rs274(stdout):
+    """Returns the list of Rs274Motion in vcut's frame (mm, offsets applied, no TLO)."""
+    units = 1.0  # mm per program unit
+    g5x = [0.0] * 6
+    g92 = [0.0] * 6
+    g5x_ulp = 0.0  # rounding (mm) in the offsets as printed
+    g92_ulp = 0.0
+    rot = 0.0
+    plane = "XY"
+    feed = None  # mm/min (or the raw number in other modes)
+    feed_mode = "upm"
+    pos = [0.0] * 6  # machine (vcut frame) position, xyz mm + abc deg
+    motions = []
+    seen = [False, False, False]  # rs274 X/Y/Z has changed from its initial 0
+
+    def to_frame(p6):
+        xyz = [p6[i] * units + g92[i] for i in range(3)]
+        xyz = rotate_z(xyz, rot)
+        xyz = [xyz[i] + g5x[i] for i in range(3)]
+        abc = [p6[3 + i] + g92[3 + i] + g5x[3 + i] for i in range(3)]
+        return xyz, abc
+
+    for number, raw in enumerate(stdout.splitlines(), 1):
+        m = _CANON.match(raw)
+        if not m:
+            continue  # (print,...) output and the like
+        name, args = m.group(3), m.group(4)
+        nums = [float(x) for x in _NUM.findall(args)]
+        if name == "USE_LENGTH_UNITS":
+            units = MM_PER_INCH if "INCH" in args else 1.0
+        elif name == "SET_G5X_OFFSET" and len(nums) >= 7:
+            g5x = [nums[1 + i] * (units if i < 3 else 1.0) for i in range(6)]
+            g5x_ulp = HALF_ULP * units
+        elif name == "SET_G92_OFFSET" and len(nums) >= 6:
+            g92 = [nums[i] * (units if i < 3 else 1.0) for i in range(6)]
+            g92_ulp = HALF_ULP * units
+        elif name == "SET_XY_ROTATION" and nums:
+            rot = nums[0]
+        elif name == "SELECT_PLANE":
+            plane = "XY" if "XY" in args else "XZ" if "XZ" in args else "YZ" if "YZ" in args else "?"
+        elif name == "SET_FEED_RATE" and nums:
+            feed = nums[0] * units if feed_mode == "upm" else nums[0]
+        elif name == "COMMENT" and "feed mode set to" in args:
+            feed_mode = ("inverse-time" if "inverse" in args else
+                         "per-rev" if "revolution" in args else "upm")
+        elif name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "ARC_FEED", "STRAIGHT_PROBE",
+                      "RIGID_TAP") or name.startswith("NURBS") or name.startswith("SPLINE"):
+            mo = Rs274Motion()
+            mo.index = len(motions)
+            mo.line = (number, raw)
+            mo.feed = feed
+            mo.feed_mode = feed_mode
+            mo.center = mo.normal = None
+            mo.turns = 0
+            if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE") and len(nums) >= 6:
+                mo.kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "linear",
+                           "STRAIGHT_PROBE": "probe"}[name]
+                mo.end, mo.abc = to_frame(nums[:6])
+            elif name == "ARC_FEED" and len(nums) >= 9 and plane in PLANE_AXES:
+                fe, se, fc, sc, turn, ae = nums[:6]
+                a, b, c = PLANE_AXES[plane]
+                end = [0.0] * 6
+                end[a], end[b], end[c] = fe, se, ae
+                end[3:6] = nums[6:9]
+                cen = [0.0] * 6
+                cen[a], cen[b] = fc, sc
+                cen[c] = ae  # the normal coordinate is not compared (see compare())
+                mo.kind = "arc"
+                mo.end, mo.abc = to_frame(end)
+                mo.center, _ = to_frame(cen)
+                n = [0.0, 0.0, 0.0]
+                n[c] = 1.0 if turn > 0 else -1.0
+                mo.normal = rotate_z(n, rot)
+                mo.turns = int(abs(turn))
+            else:
+                mo.kind = name.lower()  # RIGID_TAP, NURBS...: vcut has nothing like it
+                mo.end, mo.abc = list(pos[:3]), list(pos[3:])
+            mo.tol = HALF_ULP * units + g5x_ulp + g92_ulp
+            mo.changed = [abs(mo.end[i] - pos[i]) > 1e-9 for i in range(3)] + \
+                         [abs(mo.abc[i] - pos[3 + i]) > 1e-9 for i in range(3)]
+            mo.unseen = [not s for s in seen]
+            for i in range(3):
+                # "changed from 0": against the printed program value, whatever the offsets
+                if mo.changed[i]:
+                    seen[i] = True
+            pos = mo.end + mo.abc
+            motions.append(mo)
+    return motions
+
+
+# ---------------------------------------------------------------------------------------------
+# Running vcut
+
+
+def run_vcut(vcut, program, timeout):
+    import json
+    try:
+        r = subprocess.run([vcut, "program", program, "--dialect", "gcode"],
+                           stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return 124, [], ["vcut timed out after %d s" % timeout]
+    records = []
+    for line in r.stdout.decode("utf-8", "replace").splitlines():
+        line = line.strip()
+        if line.startswith("{"):
+            try:
+                records.append(json.loads(line))
+            except ValueError:
+                records.append({"kind": "?unparsable", "raw": line})
+    err = [l for l in r.stderr.decode("utf-8", "replace").splitlines() if l.strip()]
+    return r.returncode, records, err
+
+
+_UNKNOWN_HOLD = re.compile(r"ran while ([XYZ]) was unknown; they hold \1 at (\S+) mm")
+_UNSUPPORTED = re.compile(r"unsupported|not supported", re.I)
+
+
+def vcut_error_message(err_lines):
+    errs = [l for l in err_lines if "warning:" not in l]
+    return errs[-1] if errs else (err_lines[-1] if err_lines else "(no message)")
+
+
+def unsupported_feature(msg):
+    """'...: parameters (#) are not supported (expected a word)' -> 'parameters (#)'."""
+    m = re.search(r"unsupported ([^;(]*(?:\([^)]*\))?)", msg, re.I)
+    if m:
+        return m.group(1).strip()
+    m = re.search(r"(?::\s*)?([^:]*?)\s+(?:is|are) not supported", msg)
+    if m:
+        return m.group(1).strip()
+    return msg
+
+
+# ---------------------------------------------------------------------------------------------
+# Comparison
+
+
+def fmt_num(v):
+    return ("%.6f" % v).rstrip("0").rstrip(".") if isinstance(v, float) else str(v)
+
+
+def fmt_vec(v):
+    return "(" + ", ".join(fmt_num(float(x)) for x in v) + ")" if v is not None else "-"
+
+
+def describe_vcut(j, rec):
+    keys = ("kind", "start", "end", "center", "normal", "turns", "feed", "rotary", "source")
+    parts = []
+    for k in keys:
+        if k in rec:
+            v = rec[k]
+            parts.append("%s=%s" % (k, fmt_vec(v) if isinstance(v, list) else
+                                    ("{" + ", ".join("%s: %s" % (a, fmt_num(float(b)))
+                                                     for a, b in v.items()) + "}")
+                                    if isinstance(v, dict) else fmt_num(v)))
+    return "#%d %s" % (j, " ".join(parts))
+
+
+def compare_pair(r, v, args, holds):
+    """Returns None when rs274 motion r and vcut record v agree, else the reason."""
+    if v.get("kind") != r.kind:
+        return "kind %s vs %s" % (r.kind, v.get("kind"))
+    tol = max(args.tol, r.tol) + 1e-9
+    end = v.get("end") or [math.nan] * 3
+    for i in range(3):
+        d = abs(end[i] - r.end[i])
+        if d <= tol:
+            continue
+        # R2: an axis vcut did not know yet holds its first programmed value V (its warning).
+        if r.unseen[i] and not r.changed[i] and "XYZ"[i] in holds and \
+                abs(end[i] - holds["XYZ"[i]]) <= tol:
+            continue
+        return "end %s differs by %.6g mm (tolerance %.3g)" % ("XYZ"[i], d, tol)
+    rotary = v.get("rotary") or {}
+    for i, a in enumerate("ABC"):
+        want = r.abc[i]
+        got = rotary.get(a)
+        if got is None:
+            if abs(want) > tol:
+                return "%s: rs274 %s deg, vcut has no %s" % (a, fmt_num(want), a)
+        elif abs(got - want) > max(tol, HALF_ULP) + 1e-9:
+            return "%s differs: %s vs %s deg" % (a, fmt_num(want), fmt_num(float(got)))
+    if r.kind == "arc":
+        n = v.get("normal") or [0, 0, 0]
+        dot = sum(n[i] * r.normal[i] for i in range(3))
+        if dot < 1 - 1e-9:
+            return "normal %s vs %s (turn direction or plane)" % (fmt_vec(r.normal), fmt_vec(n))
+        if int(v.get("turns", 0)) != r.turns:
+            return "turns %d vs %s" % (r.turns, v.get("turns"))
+        c = v.get("center") or [math.nan] * 3
+        d = [c[i] - r.center[i] for i in range(3)]
+        along = sum(d[i] * r.normal[i] for i in range(3))
+        d = [d[i] - along * r.normal[i] for i in range(3)]  # the normal coordinate is free
+        # Per axis, like the end point: each printed centre coordinate is rounded on its own.
+        worst = max(range(3), key=lambda i: abs(d[i]))
+        if not abs(d[worst]) <= tol:
+            return "centre %s differs by %.6g mm (tolerance %.3g)" % ("XYZ"[worst], abs(d[worst]),
+                                                                     tol)
+    if r.kind in ("linear", "arc") and r.feed_mode == "upm" and r.feed is not None and \
+            not args.no_feed:
+        vf = float(v.get("feed", math.nan))
+        ftol = max(1e-6 * abs(r.feed), r.tol * 1.0) + 1e-9
+        if not abs(vf - r.feed) <= ftol:
+            return "feed %s vs %s mm/min" % (fmt_num(r.feed), fmt_num(vf))
+    return None
+
+
+def align(rs, vc, args, holds):
+    """Walks both lists. Returns (ok, detail, stats)."""
+    i = j = 0
+    dropped_zero = dropped_unknown = 0
+    while i < len(rs):
+        r = rs[i]
+        why = compare_pair(r, vc[j], args, holds) if j < len(vc) else "vcut has no more motions"
+        if why is None:
+            i += 1
+            j += 1
+            continue
+        moves = any(r.changed) or r.kind == "arc"
+        if not moves and r.kind in ("rapid", "linear"):
+            dropped_zero += 1  # R1
+            i += 1
+            continue
+        if r.kind in ("rapid", "linear") and \
+                all(r.unseen[k] or not r.changed[k] for k in range(3)) and not any(r.changed[3:]):
+            dropped_unknown += 1  # R2
+            i += 1
+            continue
+        stats = (len(rs), len(vc), dropped_zero, dropped_unknown)
+        detail = ["first difference at rs274 motion %d / vcut motion %d: %s" % (i, j, why),
+                  "  rs274: " + r.describe(),
+                  "  vcut:  " + (describe_vcut(j, vc[j]) if j < len(vc) else "(none)")]
+        return False, detail, stats
+    stats = (len(rs), len(vc), dropped_zero, dropped_unknown)
+    if j < len(vc):
+        return False, ["vcut has %d more motion(s) than rs274; first extra:" % (len(vc) - j),
+                       "  vcut:  " + describe_vcut(j, vc[j])], stats
+    return True, [], stats
+
+
+# ---------------------------------------------------------------------------------------------
+
+
+def check_program(path, args, rs274):
+    display = path
+    work = None
+    program = path
+    if path.endswith(".gz"):  # both tools read plain text: decompress to a scratch copy
+        work = tempfile.mkdtemp(prefix="rs274-oracle-gz-")
+        program = os.path.join(work, os.path.basename(path)[:-3])
+        with open(program, "w") as f:
+            f.write(census.read_text(path))
+    try:
+        text = census.read_text(program)
+        sub_dirs = [os.path.dirname(os.path.abspath(path))] + \
+                   [os.path.abspath(d) for d in args.subroutine_path]
+        rc, out, rerr = run_rs274(rs274, program, text, sub_dirs, args.timeout)
+        vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout)
+    finally:
+        if work:
+            shutil.rmtree(work, ignore_errors=True)
+    rs_ok = rc == 0
+    rs_msg = " | ".join(rerr[:2]) if rerr else ""
+    # R3: rs274ngc requires M2, M30 or a closing '%' and reports "File ended with no percent sign
+    # or program end" when it reaches the end of the file without one - after executing every
+    # line before it. vcut does not require a program end. So that error alone does not count as
+    # a rejection: the motions (all of the file's) are compared, and the detail says so.
+    no_end = not rs_ok and rc != 124 and bool(rerr) and \
+        rerr[0].startswith("File ended with no percent sign or program end")
+    if no_end:
+        rs_ok = True
+    if vrc != 0:
+        vmsg = vcut_error_message(verr)
+        if _UNSUPPORTED.search(vmsg):
+            return "SKIPPED", "-", unsupported_feature(vmsg), [
+                "vcut: " + vmsg] + (["rs274 also fails: " + rs_msg] if not rs_ok else [])
+        if not rs_ok:
+            return "REJECTED", "-", "both reject; rs274: %s" % rs_msg, ["vcut: " + vmsg]
+        rs = parse_rs274(out)
+        return "FAIL", "%d/-" % len(rs), "vcut rejects what rs274 runs: " + vmsg, []
+    rs = parse_rs274(out)
+    if not rs_ok:
+        return "FAIL", "%d/%d" % (len(rs), len(vrecs)), \
+            "rs274 rejects (%s) but vcut accepts" % rs_msg, []
+    holds = {}
+    for l in verr:
+        m = _UNKNOWN_HOLD.search(l)
+        if m:
+            holds[m.group(1)] = float(m.group(2))
+    ok, detail, (nr, nv, dz, du) = align(rs, vrecs, args, holds)
+    motions = "%d/%d" % (nr, nv)
+    extra = []
+    if dz:
+        extra.append("%d zero-length dropped (R1)" % dz)
+    if du:
+        extra.append("%d unknown-start dropped (R2)" % du)
+    if no_end:
+        extra.append("no M2/M30/%: rs274 errors at the end of the file, vcut does not (R3)")
+    if ok:
+        return "PASS", motions, "; ".join(extra) or "identical", []
+    return "FAIL", motions, detail[0], detail[1:] + (["(" + "; ".join(extra) + ")"] if extra else [])
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(
+        description="Compare vcut's G-code reader with LinuxCNC's rs274 interpreter.")
+    ap.add_argument("programs", nargs="*",
+                    help="programs or directories (default: the linuxcnc-uspace samples)")
+    ap.add_argument("--vcut", required=True, help="the vcut binary")
+    ap.add_argument("--report", help="also write the summary and the details to this file")
+    ap.add_argument("--install", action="store_true",
+                    help="apt-get install linuxcnc-uspace when rs274 is missing")
+    ap.add_argument("--rs274", help="the rs274 binary (default: from PATH)")
+    ap.add_argument("--tol", type=float, default=1e-4, help="position tolerance, mm (1e-4)")
+    ap.add_argument("--timeout", type=int, default=60, help="seconds per tool run (60)")
+    ap.add_argument("--subroutine-path", action="append", default=[],
+                    help="more directories for o<name> call files (the program's own directory "
+                         "is always searched)")
+    ap.add_argument("--no-feed", action="store_true", help="do not compare feeds")
+    ap.add_argument("-v", "--verbose", action="store_true",
+                    help="print the details of SKIPPED/REJECTED programs too")
+    args = ap.parse_args(argv)
+
+    if not (os.path.isfile(args.vcut) and os.access(args.vcut, os.X_OK)):
+        print("rs274_oracle: --vcut %s is not an executable" % args.vcut, file=sys.stderr)
+        return 2
+    rs274 = find_rs274(args.rs274)
+    if not rs274 and args.install and not args.rs274:
+        ok, msg = install_rs274()
+        print("rs274_oracle: " + msg, file=sys.stderr)
+        rs274 = find_rs274()
+    if not rs274:
+        print("rs274_oracle: SKIP: LinuxCNC's rs274 is not installed (Debian 12: apt-get install "
+              "--no-install-recommends linuxcnc-uspace, or pass --install)", file=sys.stderr)
+        return SKIP_EXIT
+
+    programs = []
+    for p in args.programs:
+        programs.extend(census.find_programs(p) if os.path.isdir(p) else [p])
+    if not args.programs:
+        programs = census.default_programs()
+        args.subroutine_path = args.subroutine_path + [
+            d for d in census.DEFAULT_SUBROUTINE_DIRS if os.path.isdir(d)]
+    if not programs:
+        print("rs274_oracle: SKIP: no programs (the linuxcnc-uspace samples are not under %s)"
+              % census.NCFILES_DIR, file=sys.stderr)
+        return SKIP_EXIT
+
+    results = []
+    for p in programs:
+        status, motions, detail, more = check_program(p, args, rs274)
+        results.append((p, status, motions, detail, more))
+
+    common = os.path.commonpath([os.path.abspath(p) for p in programs]) if len(programs) > 1 else ""
+    name_w = 0
+    rows = []
+    for p, status, motions, detail, more in results:
+        name = os.path.relpath(os.path.abspath(p), common) if common else p
+        name_w = max(name_w, len(name))
+        rows.append((name, status, motions, detail, more))
+    lines = ["%-*s  %-8s  %-11s  %s" % (name_w, "program", "status", "rs274/vcut", "detail")]
+    for name, status, motions, detail, more in rows:
+        lines.append("%-*s  %-8s  %-11s  %s" % (name_w, name, status, motions, detail))
+    counts = {}
+    for r in results:
+        counts[r[1]] = counts.get(r[1], 0) + 1
+    lines.append("")
+    lines.append("rs274: %s; vcut: %s; %d programs: %s" % (
+        rs274, args.vcut, len(results),
+        ", ".join("%d %s" % (counts[k], k) for k in ("PASS", "SKIPPED", "REJECTED", "FAIL")
+                  if k in counts)))
+    details = []
+    for name, status, motions, detail, more in rows:
+        if status == "FAIL" or (args.verbose and more):
+            details.append("%s %s: %s" % (status, name, detail))
+            details.extend("    " + m for m in more)
+    text = "\n".join(lines) + ("\n\n" + "\n".join(details) if details else "") + "\n"
+    sys.stdout.write(text)
+    if args.report:
+        with open(args.report, "w") as f:
+            f.write(text)
+    return 1 if counts.get("FAIL") else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
