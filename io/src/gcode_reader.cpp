@@ -551,7 +551,7 @@ void Reader::run(std::istream& in, const std::string& name) {
   sources_.push_back(std::move(main));
   frames_.emplace_back();
   if (state_.parameters.empty()) {
-    state_.parameters.assign(5400, 0.0);
+    state_.parameters.assign(5602, 0.0);
     for (const auto& [key, offset] : options_.work_offsets_mm) {
       for (int k = 0; k < 9; ++k) {
         if (key != kSystemNames[k]) continue;

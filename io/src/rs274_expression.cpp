@@ -12,7 +12,7 @@ namespace {
 constexpr double kDegPerRad = 180.0 / M_PI;
 constexpr double kEqualTolerance = 1e-4;       // LinuxCNC's TOLERANCE_EQUAL for EQ and NE
 constexpr double kWholeTolerance = 1e-4;       // a parameter number this close to whole is whole
-constexpr int kMaxParameter = 5399;
+constexpr int kMaxParameter = 5601;  // LinuxCNC 2.9 has #1..#5601
 constexpr int kMaxNesting = 64;                // brackets and functions within one value
 
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
@@ -171,7 +171,7 @@ class Parser {
       context_.fail(column_at(at), "parameter number " + num(v) + " (expected a whole number)");
     }
     if (whole < 1.0 || whole > kMaxParameter) {
-      context_.fail(column_at(at), "parameter number " + num(whole) + " (expected 1..5399)");
+      context_.fail(column_at(at), "parameter number " + num(whole) + " (expected 1..5601)");
     }
     return ParameterRef{static_cast<int>(whole), {}};
   }

@@ -10,7 +10,7 @@
 // - FIX rounds down, FUP rounds up, ROUND to the nearest (halves away from zero);
 // - logical results are 1.0 or 0.0; any non-zero value is true;
 // - EQ and NE compare with a tolerance of 1e-4 (LinuxCNC's TOLERANCE_EQUAL);
-// - a parameter number must be whole (to 1e-4) and in 1..5399.
+// - a parameter number must be whole (to 1e-4) and in 1..5601.
 #pragma once
 
 #include <cstddef>
@@ -50,7 +50,7 @@ double read_real_value(const std::string& s, std::size_t& i, char letter, ValueC
 // A bracketed expression starting at the '[' at s[i].
 double read_expression(const std::string& s, std::size_t& i, ValueContext& context);
 
-// After a '#' at s[i - 1]: the parameter reference, as a number (1..5399) or a canonical name.
+// After a '#' at s[i - 1]: the parameter reference, as a number (1..5601) or a canonical name.
 struct ParameterRef {
   int number = 0;    // 0 when named
   std::string name;  // canonical, when named

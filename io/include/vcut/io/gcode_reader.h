@@ -80,7 +80,7 @@ struct GcodeState {
   // G10 on the active one brings g5x_mm up to date.
   Eigen::Vector3d g5x_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d g92_mm = Eigen::Vector3d::Zero();  // G92 offset (#5211..#5213)
-  // Numbered parameters #1..#5399 (index = number; empty until the first file starts) and
+  // Numbered parameters #1..#5601 (index = number; empty until the first file starts) and
   // the named ones: globals (#<_name>) and the main program's locals.
   std::vector<double> parameters;
   std::map<std::string, double> globals, locals;

@@ -1,0 +1,360 @@
+// rs274ngc beyond the three-axis core: parameters, expressions, o-word control flow and
+// subroutines, offsets (G10, G92, G53), inverse time (G93) and canned cycles. Expected values
+// are worked by hand from LinuxCNC's G-code documentation (G-code overview, O codes, G10,
+// G92, G53, G73/G81/G82/G83/G85/G89, G98/G99); none is copied from the reader's output.
+#include <gtest/gtest.h>
+#include <vcut/io/gcode_reader.h>
+#include <vcut/io/input_error.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Block;
+using kinematics::FeedMode;
+using kinematics::MotionKind;
+using kinematics::Program;
+
+constexpr double kTol = 1e-9;
+
+Program read(const std::string& text, const GcodeOptions& options = {}, const std::string& name = "test.ngc") {
+  Program program;
+  GcodeState state;
+  std::istringstream in(text);
+  read_gcode(in, name, options, program, state);
+  return program;
+}
+
+std::string error_of(const std::string& text, const GcodeOptions& options = {}) {
+  try {
+    read(text, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return {};
+}
+
+// The X the reader computes for `value` (a word value: number, parameter, expression).
+double x_of(const std::string& value, const std::string& before = "") {
+  const Program p = read("G0 X-1000 Y0 Z0\n" + before + "G0 X" + value + "\n");
+  EXPECT_EQ(p.blocks.size(), 1u) << value;
+  return p.blocks.empty() ? NAN : p.blocks.back().end_mm.x();
+}
+
+// End points of the blocks, as (x, y, z) rows.
+std::vector<Eigen::Vector3d> ends(const Program& p) {
+  std::vector<Eigen::Vector3d> out;
+  for (const Block& b : p.blocks) out.push_back(b.end_mm);
+  return out;
+}
+
+void expect_path(const Program& p, const std::vector<std::pair<MotionKind, Eigen::Vector3d>>& expected) {
+  ASSERT_EQ(p.blocks.size(), expected.size());
+  for (size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_EQ(p.blocks[i].kind, expected[i].first) << "block " << i;
+    EXPECT_LT((p.blocks[i].end_mm - expected[i].second).norm(), kTol)
+        << "block " << i << ": " << p.blocks[i].end_mm.transpose() << " vs " << expected[i].second.transpose();
+  }
+}
+
+constexpr MotionKind R = MotionKind::Rapid;
+constexpr MotionKind F = MotionKind::Linear;
+
+// ------------------------------------------------------------------ expressions
+
+TEST(Rs274Expressions, PrecedenceAndAssociativity) {
+  EXPECT_NEAR(x_of("[1 + 2 * 3]"), 7.0, kTol);
+  EXPECT_NEAR(x_of("[[1 + 2] * 3]"), 9.0, kTol);
+  EXPECT_NEAR(x_of("[10 - 4 - 3]"), 3.0, kTol);      // left to right
+  EXPECT_NEAR(x_of("[2 ** 3 ** 2]"), 64.0, kTol);    // (2^3)^2: left to right as well
+  EXPECT_NEAR(x_of("[2 * 3 ** 2]"), 18.0, kTol);     // ** before *
+  EXPECT_NEAR(x_of("[12 / 4 / 3]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[1 + 2 GT 2]"), 1.0, kTol);      // + before GT
+  EXPECT_NEAR(x_of("[1 GT 2 OR 3 GT 2]"), 1.0, kTol);  // GT before OR
+  EXPECT_NEAR(x_of("[1 AND 0 XOR 1]"), 1.0, kTol);   // (1 AND 0) XOR 1
+  EXPECT_NEAR(x_of("[-2 * -3]"), 6.0, kTol);
+  EXPECT_NEAR(x_of("-[2 + 3]"), -5.0, kTol);
+  EXPECT_NEAR(x_of("[ 1 0 . 5 ]"), 10.5, kTol);      // blanks inside numbers are ignored
+}
+
+TEST(Rs274Expressions, ModuloComparisonAndLogic) {
+  EXPECT_NEAR(x_of("[7 MOD 3]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[-7 MOD 3]"), 2.0, kTol);   // never negative: -1 + 3
+  EXPECT_NEAR(x_of("[7.5 mod 2]"), 1.5, kTol);
+  EXPECT_NEAR(x_of("[1 EQ 1.00005]"), 1.0, kTol);  // EQ within 1e-4
+  EXPECT_NEAR(x_of("[1 EQ 1.001]"), 0.0, kTol);
+  EXPECT_NEAR(x_of("[1 NE 1.001]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[2 GE 2]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[2 LT 2]"), 0.0, kTol);
+  EXPECT_NEAR(x_of("[2 LE 2]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[0.5 AND 2]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("[0 OR 0]"), 0.0, kTol);
+  EXPECT_NEAR(x_of("[1 XOR 1]"), 0.0, kTol);
+}
+
+TEST(Rs274Expressions, Functions) {
+  EXPECT_NEAR(x_of("COS[60]"), 0.5, 1e-12);     // degrees
+  EXPECT_NEAR(x_of("SIN[30]"), 0.5, 1e-12);
+  EXPECT_NEAR(x_of("TAN[45]"), 1.0, 1e-12);
+  EXPECT_NEAR(x_of("ACOS[0]"), 90.0, 1e-12);
+  EXPECT_NEAR(x_of("ASIN[-1]"), -90.0, 1e-12);
+  EXPECT_NEAR(x_of("ATAN[1]/[-1]"), 135.0, 1e-12);  // the angle of (x, y) = (-1, 1)
+  EXPECT_NEAR(x_of("ATAN[-1]/[0]"), -90.0, 1e-12);
+  EXPECT_NEAR(x_of("SQRT[16]"), 4.0, kTol);
+  EXPECT_NEAR(x_of("EXP[0]"), 1.0, kTol);
+  EXPECT_NEAR(x_of("LN[1]"), 0.0, kTol);
+  EXPECT_NEAR(x_of("ABS[-3]"), 3.0, kTol);
+  EXPECT_NEAR(x_of("FIX[-2.5]"), -3.0, kTol);   // down
+  EXPECT_NEAR(x_of("FUP[-2.5]"), -2.0, kTol);   // up
+  EXPECT_NEAR(x_of("ROUND[2.5]"), 3.0, kTol);   // halves away from zero
+  EXPECT_NEAR(x_of("ROUND[-2.5]"), -3.0, kTol);
+  EXPECT_NEAR(x_of("[2 * abs[-1.5]]"), 3.0, kTol);  // case-insensitive
+  EXPECT_NEAR(x_of("[EXISTS[#<a>] * 10 + EXISTS[#<b>]]", "#<a> = 1\n"), 10.0, kTol);
+}
+
+TEST(Rs274Expressions, Errors) {
+  auto expect_error = [](const std::string& line, const std::string& where, const std::string& fragment) {
+    const std::string e = error_of("G0 X0 Y0 Z0\n" + line + "\n");
+    EXPECT_EQ(e.rfind("test.ngc:2:" + where + ": ", 0), 0u) << e;
+    EXPECT_NE(e.find(fragment), std::string::npos) << e;
+  };
+  expect_error("G0 X[1 / 0]", "8", "division by zero");
+  expect_error("G0 X[1 MOD 0]", "8", "division by zero");
+  expect_error("G0 X[SQRT[-1]]", "6", "SQRT");
+  expect_error("G0 X[LN[0]]", "6", "LN");
+  expect_error("G0 X[ACOS[2]]", "6", "-1..1");
+  expect_error("G0 X[-8 ** 0.5]", "9", "non-whole power");
+  expect_error("G0 X[1 + 2", "5", "expected ']'");
+  expect_error("G0 X[1 + ]", "10", "expected a number");
+  expect_error("G0 X[FOO[1]]", "6", "unknown function 'FOO'");
+  expect_error("G0 XATAN[1]", "12", "ATAN[y]/[x]");
+  expect_error("G0 X[10 ** 400]", "9", "not a finite number");
+  expect_error("G0 X#0", "6", "1..5601");
+  expect_error("G0 X#1.5", "6", "whole number");
+  expect_error("G0 X#<nope>", "5", "#<nope> is not defined");
+  expect_error("G0 X#<_nope>", "5", "not defined");
+  expect_error("G0 X#<a", "6", "'>'");
+  expect_error("G0 X[1 + [2 * [3]]] X1", "21", "second X word");
+  // Deeply nested brackets are refused, not a stack overflow.
+  expect_error("G0 X" + std::string(100, '[') + "1" + std::string(100, ']'), "69", "nested");
+}
+
+// ------------------------------------------------------------------ parameters
+
+TEST(Rs274Parameters, NumberedNamedAndIndirect) {
+  EXPECT_NEAR(x_of("#1", "#1 = 4.5\n"), 4.5, kTol);
+  EXPECT_NEAR(x_of("##2", "#2 = 7\n#7 = 3\n"), 3.0, kTol);          // #[#2] = #7
+  EXPECT_NEAR(x_of("#[1 + 1]", "#2 = 8\n"), 8.0, kTol);
+  EXPECT_NEAR(x_of("#<my depth>", "#<MyDepth> = 2.5\n"), 2.5, kTol);  // blanks and case ignored
+  EXPECT_NEAR(x_of("#<_g>", "#<_g> = -1\n"), -1.0, kTol);
+  EXPECT_NEAR(x_of("#99", ""), 0.0, kTol);                           // unset numbered: 0
+  // Every value on a line is read before any parameter of the line is set.
+  EXPECT_NEAR(x_of("#1", "#1 = 1\n#1 = 2 #2 = #1\n#1 = #2\n"), 1.0, kTol);
+  EXPECT_NEAR(x_of("#3", "#3 = 1 #3 = 2\n"), 2.0, kTol);  // the last setting wins
+}
+
+TEST(Rs274Parameters, PositionAndModes) {
+  // #5420.. and #<_x>..: the current position in program coordinates (G54 X offset 10 here).
+  GcodeOptions options;
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(10, 0, 0);
+  const Program p = read("G0 X1 Y2 Z3\nG0 X[#5420 + #<_y> + #5422]\n", options);
+  ASSERT_EQ(p.blocks.size(), 1u);
+  EXPECT_NEAR(p.blocks[0].end_mm.x(), 10 + 6.0, kTol);
+  // #5220: the coordinate system (G55 = 2); #5221.. G54's offsets.
+  const Program q = read("G55\nG0 X#5220 Y#5221 Z0\nG0 X0\n", options);
+  ASSERT_EQ(q.blocks.size(), 1u);
+  EXPECT_NEAR(q.blocks[0].start_mm.x(), 2.0, kTol);
+  EXPECT_NEAR(q.blocks[0].start_mm.y(), 10.0, kTol);
+  EXPECT_NE(error_of("#5420 = 1\n").find("read-only"), std::string::npos);
+}
+
+// ------------------------------------------------------------------ control flow
+
+TEST(Rs274ControlFlow, IfElseifElse) {
+  for (int n = 1; n <= 3; ++n) {
+    const std::string program = "#1 = " + std::to_string(n) +
+                                "\nG0 X0 Y0 Z0\n"
+                                "o10 if [#1 EQ 1]\n  G0 X10\n"
+                                "o10 elseif [#1 EQ 2]\n  G0 X20\n"
+                                "o10 else\n  G0 X30\n"
+                                "o10 endif\nG0 Y1\n";
+    const Program p = read(program);
+    ASSERT_EQ(p.blocks.size(), 2u);
+    EXPECT_NEAR(p.blocks[0].end_mm.x(), 10.0 * n, kTol);
+    EXPECT_EQ(p.blocks[0].source.line, 4 + 2 * (n - 1));
+  }
+}
+
+TEST(Rs274ControlFlow, WhileDoRepeatBreakContinue) {
+  // while: X = 0, 1, 2 then stop at 3.
+  Program p = read("G0 X0 Y0 Z0\n#1 = 1\no1 while [#1 LT 4]\n  G0 X#1\n  #1 = [#1 + 1]\no1 endwhile\nG0 Y5\n");
+  std::vector<double> xs;
+  for (const Block& b : p.blocks) xs.push_back(b.end_mm.x());
+  EXPECT_EQ(xs, (std::vector<double>{1, 2, 3, 3}));
+  // do runs its body once even when the test fails at once.
+  p = read("G0 X0 Y0 Z0\no2 do\n  G0 X7\no2 while [0]\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  // repeat: three passes of an incremental move; repeat [0] skips its body.
+  p = read("G0 X0 Y0 Z0\nG91\no3 repeat [3]\n  G0 X2\no3 endrepeat\no4 repeat [0]\n  G0 Y9\no4 endrepeat\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  EXPECT_NEAR(p.blocks[2].end_mm.x(), 6.0, kTol);
+  // break leaves the loop; continue skips the rest of one pass (X 1..5, Y only for odd ones).
+  p = read("G0 X0 Y0 Z0\n#1 = 0\no5 while [1]\n  #1 = [#1 + 1]\n  o6 if [#1 GT 5]\n    o5 break\n  o6 endif\n"
+           "  G0 X#1\n  o7 if [[#1 MOD 2] EQ 0]\n    o5 continue\n  o7 endif\n  G0 Y#1\no5 endwhile\nG0 Z1\n");
+  std::vector<Eigen::Vector3d> expected = {{1, 0, 0}, {1, 1, 0}, {2, 1, 0}, {3, 1, 0}, {3, 3, 0},
+                                           {4, 3, 0}, {5, 3, 0}, {5, 5, 0}, {5, 5, 1}};
+  const auto got = ends(p);
+  ASSERT_EQ(got.size(), expected.size());
+  for (size_t i = 0; i < got.size(); ++i) EXPECT_LT((got[i] - expected[i]).norm(), kTol) << i;
+}
+
+TEST(Rs274ControlFlow, SubroutinesArgumentsScopeAndReturn) {
+  const Program p = read(
+      "o<square> sub\n"             // #1 = side, #2 = z
+      "  #<half> = [#1 / 2]\n"
+      "  G1 X#<half> Y[-#<half>] Z#2 F100\n"
+      "  G1 Y#<half>\n"
+      "  o<square> return [#1 * #1]\n"
+      "o<square> endsub\n"
+      "#1 = 99\n#<half> = 42\n"
+      "G0 X0 Y0 Z5\n"
+      "o<square> call [4] [-1]\n"
+      "G0 X#<_value> Y#1 Z#<half>\n");
+  expect_path(p, {{F, {2, -2, -1}}, {F, {2, 2, -1}}, {R, {16, 99, 42}}});
+  EXPECT_EQ(p.blocks[0].source.line, 3);
+  EXPECT_EQ(p.blocks[2].source.line, 11);
+}
+
+TEST(Rs274ControlFlow, SubroutineFileOnTheSearchPath) {
+  const auto dir = std::filesystem::temp_directory_path() / "vcut_rs274_sub_test";
+  std::filesystem::create_directories(dir / "lib");
+  std::ofstream(dir / "lib" / "peck.ngc") << "(a subroutine file)\no<peck> sub\n  G1 Z#1 F50\n  G0 Z2\no<peck> endsub\nM2\n";
+  GcodeOptions options;
+  options.subroutine_path = {(dir / "lib").string()};
+  const Program p = read("G0 X0 Y0 Z2\no<peck> call [-3]\nG0 X5\no<PECK> call [-4]\n", options,
+                         (dir / "main.ngc").string());
+  expect_path(p, {{F, {0, 0, -3}}, {R, {0, 0, 2}}, {R, {5, 0, 2}}, {F, {5, 0, -4}}, {R, {5, 0, 2}}});
+  ASSERT_EQ(p.files.size(), 2u);
+  EXPECT_EQ(p.where(p.blocks[0].source), (dir / "lib" / "peck.ngc").string() + ":3");
+  EXPECT_EQ(p.where(p.blocks[2].source), (dir / "main.ngc").string() + ":3");
+  // An error inside the subroutine names the call chain.
+  std::ofstream(dir / "lib" / "bad.ngc") << "o<bad> sub\n  G1 X[1/0]\no<bad> endsub\n";
+  try {
+    read("G0 X0 Y0 Z0\nF10\no<bad> call\n", options, (dir / "main.ngc").string());
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.rfind((dir / "lib" / "bad.ngc").string() + ":2:", 0), 0u) << what;
+    EXPECT_NE(what.find("in o<bad> called at " + (dir / "main.ngc").string() + ":3"), std::string::npos) << what;
+  }
+  EXPECT_NE(error_of("o<nowhere> call\n", options).find("no such subroutine"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Rs274ControlFlow, Errors) {
+  GcodeOptions limited;
+  limited.max_lines = 1000;
+  const std::string endless = error_of("o1 while [1]\no1 endwhile\n", limited);
+  EXPECT_NE(endless.find("1000 lines"), std::string::npos) << endless;
+  EXPECT_NE(endless.find("loop"), std::string::npos) << endless;
+  EXPECT_NE(error_of("o1 if [1]\nG0 X0\n").find("ends inside o1 if, opened at test.ngc:1"), std::string::npos);
+  EXPECT_NE(error_of("o1 if [0]\nG0 X0\n").find("before o1 elseif or o1 else or o1 endif (opened at test.ngc:1)"),
+            std::string::npos);
+  EXPECT_NE(error_of("o2 endif\n").find("without o2 if"), std::string::npos);
+  EXPECT_NE(error_of("o3 endwhile\n").find("outside a loop"), std::string::npos);
+  EXPECT_NE(error_of("o3 return\n").find("outside a subroutine"), std::string::npos);
+  EXPECT_NE(error_of("o<s> sub\nG0 X0\n").find("before o<s> endsub"), std::string::npos);
+  EXPECT_NE(error_of("o4 if\n").find("without its condition"), std::string::npos);
+  EXPECT_NE(error_of("o4 frobnicate\n").find("unknown o-word keyword 'frobnicate'"), std::string::npos);
+  // A subroutine that calls itself forever stops at the nesting limit.
+  EXPECT_NE(error_of("o<r> sub\no<r> call\no<r> endsub\no<r> call\n").find("nested more than 64"), std::string::npos);
+}
+
+// ------------------------------------------------------------------ offsets
+
+TEST(Rs274Offsets, G10G92G53) {
+  // G10 L2 P1 X10: G54's X offset is 10 mm, so X0 is at 10.
+  expect_path(read("G0 X0 Y0 Z0\nG10 L2 P1 X10\nG0 X0 Y1\n"), {{R, {10, 1, 0}}});
+  // G10 L20 P0 X0 at X = 5: the active system's offset becomes 5, so X1 is at 6.
+  expect_path(read("G0 X5 Y0 Z0\nG10 L20 P0 X0\nG0 X1\n"), {{R, {6, 0, 0}}});
+  // G10 on an inactive system takes effect when it is selected.
+  expect_path(read("G0 X0 Y0 Z0\nG10 L2 P2 Y-3\nG0 Y0\nG55 G0 Y0\n"), {{R, {0, -3, 0}}});
+  // G92 X0 at X = 5 adds 5; G92.1 takes it away; G92.3 brings back the kept #5211.
+  expect_path(read("G0 X5 Y0 Z0\nG92 X0\nG0 X1\nG92.1\nG0 X1\n"), {{R, {6, 0, 0}}, {R, {1, 0, 0}}});
+  expect_path(read("G0 X5 Y0 Z0\nG92 X0\nG92.2\nG0 X2\nG92.3\nG0 X2\n"), {{R, {2, 0, 0}}, {R, {7, 0, 0}}});
+  // G53: this line in machine (workpiece-frame) coordinates, whatever the offsets.
+  GcodeOptions options;
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(10, 20, 0);
+  expect_path(read("G0 X0 Y0 Z0\nG53 G0 X3\nG0 Y1\n", options), {{R, {3, 20, 0}}, {R, {3, 21, 0}}});
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG91 G53 G0 X3\n").find("G53 in incremental mode"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG53 X3 G2 I1\n").find("G53"), std::string::npos);
+  EXPECT_NE(error_of("G92 X0\n").find("unknown"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG92 G1 X0\n").find("both use the axis words"), std::string::npos);
+}
+
+TEST(Rs274Feed, InverseTime) {
+  const Program p = read("G0 X0 Y0 Z0\nG93 G1 X10 F2\nG1 X20 F0.5\nG94 F100 G1 X30\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  EXPECT_EQ(p.blocks[0].feed_mode, FeedMode::InverseTime);
+  EXPECT_NEAR(p.blocks[0].feed_mm_per_min, 2.0, kTol);  // 1/F = 0.5 min for this move
+  EXPECT_NEAR(p.blocks[1].feed_mm_per_min, 0.5, kTol);
+  EXPECT_EQ(p.blocks[2].feed_mode, FeedMode::UnitsPerMinute);
+  EXPECT_NEAR(p.blocks[2].feed_mm_per_min, 100.0, kTol);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG93 G1 X10 F2\nG1 X20\n").find("without F"), std::string::npos);
+}
+
+// ------------------------------------------------------------------ canned cycles
+
+TEST(Rs274Cycles, G81G98AndG99) {
+  // From Z10: rapid over the hole, rapid to R2, feed to Z-5, back to the starting height
+  // (G98) or to R (G99). The second hole, in G99, starts at R: no rapid down.
+  expect_path(read("G0 X0 Y0 Z10\nF100\nG98 G81 X5 Y5 Z-5 R2\nG99 X8\nG80\n"),
+              {{R, {5, 5, 10}}, {R, {5, 5, 2}}, {F, {5, 5, -5}}, {R, {5, 5, 10}},
+               {R, {8, 5, 10}}, {R, {8, 5, 2}}, {F, {8, 5, -5}}, {R, {8, 5, 2}}});
+  // Starting below R: first a rapid straight up to R.
+  expect_path(read("G0 X0 Y0 Z0\nF100\nG81 X1 Z-1 R3\n"),
+              {{R, {0, 0, 3}}, {R, {1, 0, 3}}, {F, {1, 0, -1}}, {R, {1, 0, 3}}});
+  // G91 with L3: R from the current Z (5 - 3 = 2), Z from R (2 - 4 = -2), holes 2 mm apart.
+  const Program p = read("G0 X0 Y0 Z5\nF100\nG91 G99 G81 X2 R-3 Z-4 L3\n");
+  expect_path(p, {{R, {2, 0, 5}}, {R, {2, 0, 2}}, {F, {2, 0, -2}}, {R, {2, 0, 2}},
+                  {R, {4, 0, 2}}, {F, {4, 0, -2}}, {R, {4, 0, 2}},
+                  {R, {6, 0, 2}}, {F, {6, 0, -2}}, {R, {6, 0, 2}}});
+  EXPECT_NEAR(p.blocks[2].feed_mm_per_min, 100.0, kTol);
+}
+
+TEST(Rs274Cycles, PeckingG83AndG73) {
+  // Q2 from R1 to Z-5: pecks to -1 and -3, then the bottom. G83 retracts to R after each
+  // peck and comes back to 0.254 mm (0.010 in) above it; G73 only backs off 0.254 mm.
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG83 Z-5 R1 Q2\n"),
+              {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, 1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
+               {R, {0, 0, 1}}, {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG73 Z-5 R1 Q2\n"),
+              {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
+               {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
+}
+
+TEST(Rs274Cycles, BoringG85AndDwellG82G89) {
+  // G85 and G89 feed back out to R, then rapid to the G98 height.
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG85 Z-2 R1\n"),
+              {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}, {R, {0, 0, 5}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG99 G89 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG82 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
+}
+
+TEST(Rs274Cycles, Errors) {
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG81 Z-2\n").find("without R"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG81 Z2 R1\n").find("above R"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG83 Z-2 R1\n").find("Q > 0"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nG81 Z-2 R1\n").find("without F"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0\nF100\nG81 Z-2 R1\n").find("unknown Z"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG18 G81 Z-2 R1\n").find("XY plane"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vcut::io
