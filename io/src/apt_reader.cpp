@@ -23,10 +23,7 @@
 #include <tuple>
 #include <vector>
 
-#if defined(__linux__)
-#include <sys/mman.h>
-#include <unistd.h>
-#endif
+#include "block_room.h"
 
 namespace vcut::io {
 namespace {
@@ -105,26 +102,6 @@ bool same_cutter(const Cutter& a, const Cutter& b) {
          a.corner_radius_mm == b.corner_radius_mm && a.flute_length_mm == b.flute_length_mm &&
          a.shank_diameter_mm == b.shank_diameter_mm && a.length_mm == b.length_mm &&
          a.gauge_length_mm == b.gauge_length_mm && a.tip_angle_deg == b.tip_angle_deg;
-}
-
-// The Blocks of a long program are hundreds of MB written once, and first touches of fresh
-// pages are what reading them costs most: ask Linux for transparent huge pages on the reserved
-// room, so that they fault per 2 MiB instead of per 4 KiB (300 MB on the development VM: 1.0 s
-// of page faults without, 0.04 s with). Advice only: where it is refused nothing changes.
-void prefer_huge_pages(void* data, size_t bytes) {
-#if defined(__linux__) && defined(MADV_HUGEPAGE)
-  constexpr size_t kWorthIt = size_t{8} << 20;
-  const long page = ::sysconf(_SC_PAGESIZE);
-  if (bytes < kWorthIt || page <= 0) return;
-  const auto p = static_cast<uintptr_t>(page);
-  const auto first = reinterpret_cast<uintptr_t>(data);
-  const uintptr_t begin = (first + p - 1) / p * p;
-  const uintptr_t end = (first + bytes) / p * p;
-  if (end > begin) ::madvise(reinterpret_cast<void*>(begin), end - begin, MADV_HUGEPAGE);
-#else
-  (void)data;
-  (void)bytes;
-#endif
 }
 
 // Lines from a stream in 64 KiB reads, each at most kMaxLineBytes (a binary file with no line
@@ -351,14 +328,7 @@ void Reader::run(std::istream& in) {
     if (r == LineSource::kEnd) break;
     if (!reserved) {
       reserved = true;
-      auto& blocks = out_.program.blocks;
-      try {
-        blocks.reserve(blocks.size() + source.estimate_lines(static_cast<double>(available)));
-        prefer_huge_pages(blocks.data() + blocks.size(),
-                          (blocks.capacity() - blocks.size()) * sizeof(Block));
-      } catch (const std::exception&) {
-        // Too large to reserve at once: the vector grows as it goes.
-      }
+      detail::reserve_blocks(out_.program.blocks, source.estimate_lines(static_cast<double>(available)));
     }
     if (number == INT_MAX) fail_at(number, 0, "too many lines");
     ++number;
