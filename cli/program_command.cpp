@@ -96,6 +96,11 @@ void add_program_command(CLI::App& app, ProgramCommand& c) {
                         "auto (default: from the extension, then the content), gcode, linuxcnc, "
                         "fanuc, apt or sinumerik");
   c.program->add_option("--machine", c.machine, "Machine file (YAML) or bundled machine name");
+  c.program->add_option("--subroutine-path", c.subroutine_path,
+                        "G-code: a folder searched for <name>.ngc when o<name> is called but not defined "
+                        "(after the program's own folder; repeatable)");
+  c.program->add_option("--max-lines", c.max_lines, "G-code: lines read before a loop is taken to be endless")
+      ->check(CLI::PositiveNumber);
 }
 
 bool run_program_command(const ProgramCommand& c) {
@@ -106,7 +111,10 @@ bool run_program_command(const ProgramCommand& c) {
     io::read_machine_file(io::resolve_machine(c.machine), &warnings);
     for (const auto& w : warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   }
-  const io::LoadedProgram loaded = io::read_program(c.file, c.dialect);
+  io::ProgramOptions options;
+  options.gcode.subroutine_path = c.subroutine_path;
+  options.gcode.max_lines = c.max_lines;
+  const io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
   for (const auto& w : loaded.program.warnings)
     std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   std::string line;

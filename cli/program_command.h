@@ -1,9 +1,10 @@
-// `vcut program FILE [--dialect D] [--machine M]`: the canonical motion list of an NC program
+// `vcut program FILE [--dialect D] [--machine M] [--subroutine-path DIR]... [--max-lines N]`: the canonical motion list of an NC program
 // as JSON lines, one record per Block (the contract later stages and outside checks use).
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <string>
+#include <vector>
 
 namespace vcut::cli {
 
@@ -12,6 +13,8 @@ struct ProgramCommand {
   std::string file;
   std::string dialect = "auto";
   std::string machine;  // validated, recorded for the stages that will need it
+  std::vector<std::string> subroutine_path;  // G-code: folders for <name>.ngc subroutine files
+  long long max_lines = 100'000'000;
 };
 
 void add_program_command(CLI::App& app, ProgramCommand& command);

@@ -1,5 +1,6 @@
 #include "vcut/io/job.h"
 
+#include <cmath>
 #include <filesystem>
 
 #include "vcut/io/machine_file.h"
@@ -45,7 +46,7 @@ Job read_job(const std::string& path) {
   job.tools = read_tool_library(job.tools_file);
 
   const YAML::Node program = yaml.require(root, "program", "");
-  yaml.only_keys(program, "program", {"file", "files", "dialect", "unsupported"});
+  yaml.only_keys(program, "program", {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines"});
   if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
   if (program["file"]) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
@@ -59,6 +60,15 @@ Job read_job(const std::string& path) {
     if (job.dialect != "auto" && job.dialect != "gcode" && job.dialect != "linuxcnc" && job.dialect != "fanuc" &&
         job.dialect != "apt")
       yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc, fanuc or apt");
+  }
+  if (const YAML::Node path = program["subroutine_path"]) {
+    if (!path.IsSequence()) yaml.fail(path, "program.subroutine_path", "a list of folders");
+    for (const auto& f : path) job.subroutine_path.push_back(resolve(base, yaml.text(f, "program.subroutine_path")));
+  }
+  if (program["max_lines"]) {
+    const double n = yaml.positive(program["max_lines"], "program.max_lines");
+    if (n != std::floor(n) || n > 1e12) yaml.fail(program["max_lines"], "program.max_lines", "a whole number of lines up to 1e12");
+    job.max_lines = static_cast<long long>(n);
   }
   if (program["unsupported"]) {
     const std::string mode = yaml.text(program["unsupported"], "program.unsupported");

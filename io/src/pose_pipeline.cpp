@@ -52,6 +52,8 @@ JobProgram read_job_program(const Job& job) {
   ProgramOptions reading;
   reading.gcode.work_offsets_mm = job.offsets_mm;
   reading.gcode.unsupported_as_warning = job.unsupported_as_warning;
+  reading.gcode.subroutine_path = job.subroutine_path;
+  reading.gcode.max_lines = job.max_lines;
   LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
   JobProgram out;
   out.program = std::move(loaded.program);

@@ -45,6 +45,8 @@ struct Job {
   // their cutters (CUTTER/); the tool library wins for a T number it has.
   std::string dialect = "auto";
   bool unsupported_as_warning = false;
+  std::vector<std::string> subroutine_path;  // G-code: folders searched for <name>.ngc subroutine files
+  long long max_lines = 100'000'000;          // G-code: lines read before a loop is taken to be endless
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
