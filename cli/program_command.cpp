@@ -75,8 +75,11 @@ json record(const Program& program, const Block& b) {
   j["feed_mode"] = b.feed_mode == FeedMode::InverseTime ? "inverse-time" : "mm/min";
   j["tool"] = b.tool;
   j["tcp"] = b.tool_pose;
-  j["start_axis"] = array(b.start_axis);
-  j["end_axis"] = array(b.end_axis);
+  if (!(b.tool_pose && b.end_rotary.any())) {
+    // A TCP block with rotary words (G43.4) has its tool axis from the machine, not the program.
+    j["start_axis"] = array(b.start_axis);
+    j["end_axis"] = array(b.end_axis);
+  }
   j["orientation_mode"] = orientation_name(b.orientation);
   if (b.orientation == OrientationMode::ConeClockwise ||
       b.orientation == OrientationMode::ConeCounterClockwise) {
@@ -101,6 +104,10 @@ void add_program_command(CLI::App& app, ProgramCommand& c) {
                         "(after the program's own folder; repeatable)");
   c.program->add_option("--max-lines", c.max_lines, "G-code: lines read before a loop is taken to be endless")
       ->check(CLI::PositiveNumber);
+  c.program->add_option("--tcp-on", c.tcp_on, "G-code: an M code number that switches TCP on, like G43.4 (repeatable)")
+      ->check(CLI::Range(10, 999));
+  c.program->add_option("--tcp-off", c.tcp_off, "G-code: an M code number that switches TCP off (repeatable)")
+      ->check(CLI::Range(10, 999));
 }
 
 bool run_program_command(const ProgramCommand& c) {
@@ -114,6 +121,8 @@ bool run_program_command(const ProgramCommand& c) {
   io::ProgramOptions options;
   options.gcode.subroutine_path = c.subroutine_path;
   options.gcode.max_lines = c.max_lines;
+  for (int m : c.tcp_on) options.gcode.tcp_m_codes[m] = true;
+  for (int m : c.tcp_off) options.gcode.tcp_m_codes[m] = false;
   const io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
   for (const auto& w : loaded.program.warnings)
     std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());

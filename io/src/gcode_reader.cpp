@@ -190,6 +190,7 @@ constexpr GEntry kGCodes[] = {
     // point is taken to be the tip, which is what a CAM post with G43 H means; tool lengths
     // are the machine model's business.
     {430, {kToolLength, true}}, {490, {kToolLength, true}},
+    {434, {kToolLength, true}}, {435, {kToolLength, true}},  // tool centre point (Fanuc)
     {540, {kCoordinateSystem, true}}, {550, {kCoordinateSystem, true}},
     {560, {kCoordinateSystem, true}}, {570, {kCoordinateSystem, true}},
     {580, {kCoordinateSystem, true}}, {590, {kCoordinateSystem, true}},
@@ -438,6 +439,8 @@ class Reader : public detail::ValueContext {
   bool lenient_ = false;         // an ignored unsupported code may consume any word
   bool exact_stop_line_ = false;  // G9 on this line
   bool machine_coordinates_ = false;  // G53 on this line
+  Eigen::Vector3d line_axis_ = Eigen::Vector3d::UnitZ();  // G43.5: this line's tool axis
+  int tcp_m_code_ = -1;  // a job-mapped TCP M code on this line: 1 on, 0 off
   int o_column_ = 0;             // column of a Fanuc program number on this line
 };
 
@@ -1131,12 +1134,23 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed) {
   }
   block.start_rotary = state_.rotary;
   block.end_rotary = rotary;
-  block.tool_pose = !state_.rotary_program;
+  // Under TCP the block is a tool pose: the tip, and the tool axis from the rotary words
+  // (G43.4: the machine's axes at those values) or from I J K (G43.5).
+  block.tool_pose = state_.tcp != GcodeState::Tcp::Off || !state_.rotary_program;
+  bool reorients = false;
+  if (state_.tcp == GcodeState::Tcp::Angles) {
+    block.orientation = kinematics::OrientationMode::Axes;
+  } else if (state_.tcp == GcodeState::Tcp::Vector) {
+    block.start_axis = state_.tool_axis;
+    block.end_axis = line_axis_;
+    reorients = line_axis_ != state_.tool_axis;
+    state_.tool_axis = line_axis_;
+  }
   block.exact_stop = state_.exact_stop || exact_stop_line_;
   block.blend_tolerance_mm = state_.blend_tolerance_mm;
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   state_.rotary = rotary;
-  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns;
+  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns || reorients;
   if (moves) {
     block.feed_mode = state_.inverse_time && block.kind != MotionKind::Rapid ? kinematics::FeedMode::InverseTime
                                                                              : kinematics::FeedMode::UnitsPerMinute;
@@ -1533,6 +1547,7 @@ bool Reader::execute() {
   Line& ln = line_words_;
   used_.fill(false);
   lenient_ = false;
+  tcp_m_code_ = -1;
   if (o_column_ != 0) return true;  // a Fanuc program number alone on its line
 
   // --- G codes: one per modal group, supported or reported.
@@ -1595,6 +1610,10 @@ bool Reader::execute() {
                            m.text + " (expected at most one)");
       }
       slot = &m;
+    }
+    if (const auto tcp = options_.tcp_m_codes.find(m.number); m.number >= 0 && tcp != options_.tcp_m_codes.end()) {
+      tcp_m_code_ = tcp->second ? 1 : 0;
+      continue;
     }
     if (m.number >= 0 && m_supported(m.number)) {
       if (m.number == 2 || m.number == 30) {
@@ -1683,7 +1702,12 @@ bool Reader::execute() {
   if (const Code* g = by_group[kPlane]; g != nullptr && g_info(g->number).supported) {
     state_.plane = g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ;
   }
-  if (const Code* g = by_group[kToolLength]; g != nullptr && g->number == 430) {
+  if (const Code* g = by_group[kToolLength]) {
+    state_.tcp = g->number == 434 ? GcodeState::Tcp::Angles
+                 : g->number == 435 ? GcodeState::Tcp::Vector : GcodeState::Tcp::Off;
+  }
+  if (tcp_m_code_ >= 0) state_.tcp = tcp_m_code_ ? GcodeState::Tcp::Angles : GcodeState::Tcp::Off;
+  if (const Code* g = by_group[kToolLength]; g != nullptr && g->number != 490) {
     const Word& h = word('H');
     if (h.present && (h.value < 0.0 || !is_whole(h.value))) {
       fail(h.column, "H " + num(h.value) + " (expected a tool number, a whole number >= 0)");
@@ -1765,7 +1789,8 @@ bool Reader::execute() {
     forget_axes(axis_user_all);
   } else if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
     // G10 and G92 took the axis words.
-  } else if (has_axis || explicit_motion) {
+  } else if (has_axis || explicit_motion ||
+             (state_.tcp == GcodeState::Tcp::Vector && (word('I').present || word('J').present || word('K').present))) {
     switch (state_.motion) {
       case Motion::None:
         if (has_axis) {
@@ -1780,6 +1805,27 @@ bool Reader::execute() {
         break;
       case Motion::Rapid:
       case Motion::Linear:
+        line_axis_ = state_.tool_axis;
+        if (state_.tcp == GcodeState::Tcp::Vector) {
+          for (char letter : {'A', 'B', 'C'}) {
+            if (word(letter).present) {
+              fail(word(letter).column, std::string(1, letter) + " word in G43.5 (the tool axis is I J K; expected G43.4 for rotary words)");
+            }
+          }
+          const bool ijk = word('I').present || word('J').present || word('K').present;
+          if (ijk) {
+            // Fanuc: the components not given are 0.
+            const Eigen::Vector3d v(word('I').value, word('J').value, word('K').value);
+            if (!(v.norm() > 1e-9)) fail(word('I').present ? word('I').column : word('J').present ? word('J').column : word('K').column,
+                                        "G43.5 tool axis I J K of zero length (expected a direction)");
+            line_axis_ = v.normalized();
+            for (char letter : {'I', 'J', 'K'}) used_[letter - 'A'] = true;
+          }
+          if (ijk && !has_axis) {
+            straight(state_.motion == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear, column);
+            break;
+          }
+        }
         if (has_axis) {
           straight(state_.motion == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear, column);
         }

@@ -46,7 +46,8 @@ Job read_job(const std::string& path) {
   job.tools = read_tool_library(job.tools_file);
 
   const YAML::Node program = yaml.require(root, "program", "");
-  yaml.only_keys(program, "program", {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines"});
+  yaml.only_keys(program, "program",
+                 {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes"});
   if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
   if (program["file"]) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
@@ -64,6 +65,24 @@ Job read_job(const std::string& path) {
   if (const YAML::Node path = program["subroutine_path"]) {
     if (!path.IsSequence()) yaml.fail(path, "program.subroutine_path", "a list of folders");
     for (const auto& f : path) job.subroutine_path.push_back(resolve(base, yaml.text(f, "program.subroutine_path")));
+  }
+  if (const YAML::Node codes = program["tcp_m_codes"]) {
+    // {M428: on, M429: off}: M codes that switch tool-centre-point kinematics (LinuxCNC's
+    // table-rotary-tilting demos); on acts like G43.4.
+    if (!codes.IsMap()) yaml.fail(codes, "program.tcp_m_codes", "a map like {M428: on, M429: off}");
+    for (const auto& kv : codes) {
+      const std::string name = kv.first.Scalar();
+      const std::string key = "program.tcp_m_codes." + name;
+      int number = -1;
+      if (name.size() >= 2 && (name[0] == 'M' || name[0] == 'm') && name.size() <= 4 &&
+          name.find_first_not_of("0123456789", 1) == std::string::npos) {
+        number = std::stoi(name.substr(1));
+      }
+      if (number < 10 || number == 30) yaml.fail(kv.first, key, "an M code M10..M999 other than M30");
+      const std::string state = yaml.text(kv.second, key);
+      if (state != "on" && state != "off") yaml.fail(kv.second, key, "on or off");
+      job.tcp_m_codes[number] = state == "on";
+    }
   }
   if (program["max_lines"]) {
     const double n = yaml.positive(program["max_lines"], "program.max_lines");

@@ -101,6 +101,16 @@ class BlockPath {
       mode_ = Mode::AxesLinear;
       q0_ = axis_values(b.start_mm, b.start_rotary, report);
       q1_ = axis_values(b.end_mm, b.end_rotary, report);
+    } else if (b.end_rotary.any()) {
+      // TCP with rotary words (G43.4, direct A/B/C under TRAORI): the rotary axes go
+      // linearly from the start's values to the end's, the tip along its path.
+      if (!machine_ || machine_->rotary_count() == 0) {
+        report.note = "rotary words under TCP without a five-axis machine: the tool axis stays as it was";
+        return;
+      }
+      mode_ = Mode::RotaryLinear;
+      q0_ = tcp_axis_values(b.start_mm, b.start_rotary, start_axes, report);
+      q1_ = tcp_axis_values(b.end_mm, b.end_rotary, start_axes, report);
     } else if (b.orientation == OrientationMode::Axes && (b.start_axis - b.end_axis).norm() > 0.0) {
       if (!machine_ || !start_axes || machine_->rotary_count() == 0) {
         report.note = "ORIAXES without a five-axis machine: interpolated as ORIVECT";
@@ -235,6 +245,27 @@ class BlockPath {
     return q;
   }
 
+  // Axis values putting the tip at `tip` with the rotary axes at the words' values (those not
+  // given stay where they were, else at zero).
+  AxisValues tcp_axis_values(const Eigen::Vector3d& tip, const RotaryWords& words, const AxisValues* previous,
+                             BlockReport& report) const {
+    AxisValues q = previous ? *previous : machine_->zero();
+    for (int k = 0; k < 3; ++k) {
+      if (!words.given[static_cast<size_t>(k)]) continue;
+      const char letter = static_cast<char>('A' + k);
+      const int i = machine_->axis_index(letter);
+      if (i < 0) {
+        if (report.unreachable.empty()) report.unreachable = std::string("the machine has no axis ") + letter;
+        continue;
+      }
+      q[i] = words.angle_rad[static_cast<size_t>(k)];
+    }
+    if (!solve_linear_axes(*machine_, q, tip, tool_length_mm_) && report.unreachable.empty())
+      report.unreachable = "the machine's linear axes cannot be solved";
+    if (report.unreachable.empty()) report.unreachable = limit_violation(*machine_, q);
+    return q;
+  }
+
   const Block& b_;
   const Machine* machine_ = nullptr;
   double tool_length_mm_ = 0.0;
@@ -343,7 +374,7 @@ Densified densify(const Program& program, const DensifySettings& settings, const
       PoseSample sample;
       sample.block = static_cast<int>(i);
       // The end of the block is exactly the programmed pose.
-      sample.pose = (k == report.q && b.tool_pose) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
+      sample.pose = (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
       if (machine) {
         if (path.axes_known()) {
           sample.axes = path.axes(s);

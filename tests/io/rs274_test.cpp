@@ -309,6 +309,40 @@ TEST(Rs274Feed, InverseTime) {
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG93 G1 X10 F2\nG1 X20\n").find("without F"), std::string::npos);
 }
 
+// ------------------------------------------------------------------ tool centre point
+
+TEST(Rs274Tcp, Blocks) {
+  const Program p = read(
+      "G0 X0 Y0 Z10 A0 C0\nF100\n"
+      "G43.4 H1\nG1 X1 A30 C90\n"
+      "G49\nG1 X2\n"
+      "G43.5 H1\nG1 X3 I0 J3 K4\nK1\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  // G43.4: a tool pose whose rotary words are the axes.
+  EXPECT_TRUE(p.blocks[0].tool_pose);
+  EXPECT_EQ(p.blocks[0].orientation, kinematics::OrientationMode::Axes);
+  EXPECT_NEAR(p.blocks[0].end_rotary.angle_rad[0], 30 * M_PI / 180, kTol);
+  EXPECT_NEAR(p.blocks[0].end_rotary.angle_rad[2], 90 * M_PI / 180, kTol);
+  // G49: axis words again.
+  EXPECT_FALSE(p.blocks[1].tool_pose);
+  // G43.5: I J K normalised; K1 alone means (0, 0, 1): the components not given are 0.
+  EXPECT_TRUE(p.blocks[2].tool_pose);
+  EXPECT_LT((p.blocks[2].start_axis - Eigen::Vector3d(0, 0, 1)).norm(), kTol);
+  EXPECT_LT((p.blocks[2].end_axis - Eigen::Vector3d(0, 0.6, 0.8)).norm(), kTol);
+  EXPECT_LT((p.blocks[3].end_axis - Eigen::Vector3d(0, 0, 1)).norm(), kTol);
+  EXPECT_LT((p.blocks[3].end_mm - p.blocks[3].start_mm).norm(), kTol);  // a turn in place
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nF100\nG43.5\nG1 X1 I0 J0 K0\n").find("zero length"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nF100\nG43.5\nG1 X1 A10\n").find("G43.5"), std::string::npos);
+  // A job-mapped M code switches TCP like G43.4; unmapped it is an unknown M code.
+  GcodeOptions options;
+  options.tcp_m_codes = {{428, true}, {429, false}};
+  const Program q = read("G0 X0 Y0 Z10 A0\nF100\nM428\nG1 X1 A10\nM429\nG1 X2\n", options);
+  ASSERT_EQ(q.blocks.size(), 2u);
+  EXPECT_TRUE(q.blocks[0].tool_pose);
+  EXPECT_FALSE(q.blocks[1].tool_pose);
+  EXPECT_NE(error_of("M428\n").find("M428"), std::string::npos);
+}
+
 // ------------------------------------------------------------------ canned cycles
 
 TEST(Rs274Cycles, G81G98AndG99) {

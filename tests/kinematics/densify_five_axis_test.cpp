@@ -151,6 +151,39 @@ TEST(DensifyFiveAxis, OriaxesFollowsLinearlyInterpolatedAngles) {
   }
 }
 
+TEST(DensifyFiveAxis, TcpRotaryWordsSetTheAxesAndKeepTheTip) {
+  // G43.4: X Y Z the tip in the workpiece frame, A C the rotary axes themselves. The axes go
+  // linearly from the start's words to the end's; the tool axis is the trunnion's closed form.
+  const Machine m(machines()[1]);
+  DensifyMachine dm;
+  dm.machine = &m;
+  dm.tool_length_mm = {{1, 30.0}};
+  const double a0 = -20 * kDeg, c0 = 10 * kDeg, a1 = -50 * kDeg, c1 = 70 * kDeg;
+  Program p;
+  p.files = {"t"};
+  Block b = tool_pose_block({1, 2, 3}, Eigen::Vector3d::UnitZ(), {11, -4, 8}, Eigen::Vector3d::UnitZ(),
+                            OrientationMode::Axes);
+  b.tool = 1;
+  b.start_rotary.angle_rad = {a0, 0.0, c0};
+  b.start_rotary.given = {true, false, true};
+  b.end_rotary.angle_rad = {a1, 0.0, c1};
+  b.end_rotary.given = {true, false, true};
+  p.blocks.push_back(b);
+  DensifySettings s;
+  s.angle_step_rad = 1 * kDeg;
+  const Densified d = densify(p, s, dm);
+  ASSERT_EQ(d.samples.size(), 61u);
+  const int A = m.axis_index('A'), C = m.axis_index('C');
+  for (size_t k = 0; k < d.samples.size(); ++k) {
+    const double f = static_cast<double>(k) / 60.0;
+    const double a = a0 + f * (a1 - a0), c = c0 + f * (c1 - c0);
+    EXPECT_NEAR(d.samples[k].axes[A], a, kExact) << k;
+    EXPECT_NEAR(d.samples[k].axes[C], c, kExact) << k;
+    EXPECT_LT((d.samples[k].pose.axis - trt_axis(a, c)).norm(), kExact) << k;
+    EXPECT_LT((d.samples[k].pose.tip_mm - (b.start_mm + f * (b.end_mm - b.start_mm))).norm(), kExact) << k;
+  }
+}
+
 TEST(DensifyFiveAxis, AxisProgramNonlinearErrorOfAPureRotation) {
   // C turns 60 deg at A = 0 with X Y Z still: the tip circles the C axis at radius R, and
   // its largest distance from the chord is the sagitta R (1 - cos(30 deg)). Program point

@@ -29,6 +29,9 @@ struct GcodeOptions {
   // Lines read (executed or skipped) before the reader stops with an error: loops that never
   // end. Each loop pass counts its lines again.
   long long max_lines = 100'000'000;
+  // M codes that switch tool-centre-point kinematics on (true) or off (false), such as
+  // LinuxCNC's M428/M429 in its table-rotary-tilting demos: on acts like G43.4.
+  std::map<int, bool> tcp_m_codes;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 // Appends to `program` (so several files can run in sequence; the modal state and the
@@ -63,6 +66,11 @@ struct GcodeState {
   // axis program (Block::tool_pose false: X Y Z are the linear axes, A B C axis values).
   kinematics::RotaryWords rotary;
   bool rotary_program = false;
+  // Tool centre point: G43.4 (or a job-mapped M code) takes X Y Z as the tip in the workpiece
+  // frame and A B C as the rotary axes; G43.5 takes I J K as the tool axis; G43/G49 end it.
+  enum class Tcp { Off, Angles, Vector };
+  Tcp tcp = Tcp::Off;
+  Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();  // G43.5: the last I J K, unit
   bool exact_stop = false;           // G61 / G61.1 (G64 clears it)
   double blend_tolerance_mm = -1.0;  // G64 P; < 0: none given
 

@@ -47,6 +47,7 @@ struct Job {
   bool unsupported_as_warning = false;
   std::vector<std::string> subroutine_path;  // G-code: folders searched for <name>.ngc subroutine files
   long long max_lines = 100'000'000;          // G-code: lines read before a loop is taken to be endless
+  std::map<int, bool> tcp_m_codes;            // G-code: M codes switching TCP on (true) / off
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
