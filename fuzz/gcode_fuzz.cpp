@@ -22,7 +22,7 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
   // Coordinates are bounded by 1e6 mm; a pending axis may hold a value from the offsets.
   constexpr double kBound = 1e6 + 1e-6;
   for (const auto& b : program.blocks) {
-    require(b.source.file == 0 && b.source.line >= 1);
+    require(b.source.file >= 0 && static_cast<size_t>(b.source.file) < program.files.size() && b.source.line >= 1);
     require(b.start_mm.allFinite() && b.end_mm.allFinite() && b.center_mm.allFinite());
     require(b.start_mm.cwiseAbs().maxCoeff() <= kBound && b.end_mm.cwiseAbs().maxCoeff() <= kBound);
     require(b.feed_mm_per_min >= 0.0 && b.feed_mm_per_min <= 1e6);
@@ -30,7 +30,9 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
     if (b.kind != MotionKind::Rapid) require(b.feed_mm_per_min > 0.0);
     if (b.kind != MotionKind::Arc) {
       // Blocks that neither move nor turn are dropped.
-      require(b.start_mm != b.end_mm || b.start_rotary.angle_rad != b.end_rotary.angle_rad);
+      require(b.start_mm != b.end_mm || b.start_rotary.angle_rad != b.end_rotary.angle_rad ||
+              b.start_axis != b.end_axis);
+      require(std::abs(b.start_axis.norm() - 1.0) < 1e-12 && std::abs(b.end_axis.norm() - 1.0) < 1e-12);
       continue;
     }
     require(b.turns >= 1);
@@ -52,6 +54,8 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   vcut::io::GcodeOptions options;
+  options.max_lines = 200000;  // a loop that never ends stops here, not at the default 1e8
+  options.tcp_m_codes = {{428, true}, {429, false}};
   // The first byte also picks the options, so that both the strict and the warning paths and
   // a non-zero offset are fuzzed.
   if (size > 0) {

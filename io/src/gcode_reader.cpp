@@ -20,6 +20,7 @@
 #include <map>
 #include <memory>
 #include <new>
+#include <optional>
 #include <stdexcept>
 #include <system_error>
 
@@ -37,6 +38,9 @@ constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inc
 // Any number beyond this (mm, mm/min, rpm, s, turns, tool numbers) is a typo or garbage:
 // a 1 km stroke or a 1000 m/min feed exists on no milling machine.
 constexpr double kMaxMagnitude = 1e6;
+// Feeds: programs write F99999 or more for "as fast as the machine goes" (LinuxCNC clamps to
+// the machine's limits, and so does the feed planner); beyond this it is garbage.
+constexpr double kMaxFeed_mm_per_min = 1e9;
 // Points closer than this coincide (full circles, zero radius): far below any machine's
 // resolution, far above the rounding of mm values up to kMaxMagnitude (~1e-10).
 constexpr double kSamePointMm = 1e-9;
@@ -244,6 +248,10 @@ constexpr GEntry kGCodes[] = {
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
     {80, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
+    {700, {kMotion, false, true, false, "lathe cycle"}}, {710, {kMotion, false, true, false, "lathe cycle"}},
+    {711, {kMotion, false, true, false, "lathe cycle"}}, {712, {kMotion, false, true, false, "lathe cycle"}},
+    {720, {kMotion, false, true, false, "lathe cycle"}}, {721, {kMotion, false, true, false, "lathe cycle"}},
+    {722, {kMotion, false, true, false, "lathe cycle"}},
 };
 
 GInfo g_info(int g) {
@@ -257,7 +265,9 @@ GInfo g_info(int g) {
 int m_group(int m) {
   switch (m) {
     case 0: case 1: case 2: case 30: case 60: return 4;
-    case 6: return 6;
+    case 6: case 61: return 6;
+    case 62: case 63: case 64: case 65: case 66: case 67: case 68: return 5;
+    case 70: case 71: case 72: case 73: return 10;
     case 3: case 4: case 5: return 7;
     case 7: case 8: case 9: return 8;
     case 48: case 49: case 50: case 51: case 52: case 53: return 9;
@@ -266,7 +276,12 @@ int m_group(int m) {
 }
 // clang-format on
 
-bool m_supported(int m) { return (m >= 0 && m <= 9) || m == 30; }
+// Supported: the path-changing ones, and those that leave the path alone (pauses, coolant,
+// overrides M48..M53, digital and analog I/O M62..M68).
+bool m_supported(int m) {
+  return (m >= 0 && m <= 9) || m == 30 || (m >= 48 && m <= 53) || m == 60 || m == 61 || (m >= 62 && m <= 68) ||
+         (m >= 70 && m <= 73);
+}
 
 bool valid_offset_name(const std::string& name) {
   static const char* const kNames[] = {"G54", "G55",   "G56",   "G57",  "G58",
@@ -299,6 +314,11 @@ void validate_options(const std::string& name, const GcodeOptions& options) {
   }
 }
 
+// The coordinate system of a G54..G59.3 code (x10): 0..8.
+int system_index(int code) {
+  return code <= 590 ? (code - 540) / 10 : 6 + (code - 591);
+}
+
 // One program file being read: its stream, where the reader is in it, and its '%' state.
 struct Source {
   std::istream* in = nullptr;
@@ -329,6 +349,18 @@ struct Loop {
   std::string where;       // file:line of the opening line
 };
 
+// What M70 saves and M72 restores (LinuxCNC: units, distance modes, feed mode, plane, tool
+// length mode, coordinate system, path control, retract mode, spindle, feed and speed).
+struct ModalState {
+  bool inches, incremental, arc_center_absolute, inverse_time, exact_stop, retract_to_r;
+  GcodeState::Plane plane;
+  GcodeState::Tcp tcp;
+  double blend_tolerance_mm, feed_mm_per_min, spindle_rpm;
+  kinematics::SpindleState spindle;
+  std::string work_offset;
+  Eigen::Vector3d g5x_mm;
+};
+
 // The main program or one subroutine call.
 struct Frame {
   std::string sub;         // canonical o-word name; empty for the main program
@@ -338,6 +370,7 @@ struct Frame {
   std::map<std::string, double> saved_locals;  // the caller's named locals
   std::vector<Loop> loops;
   std::vector<std::pair<std::string, std::string>> ifs;  // label, file:line of the if
+  std::optional<ModalState> autorestore;  // M73: restored when this call returns
 };
 
 struct SubDefinition {
@@ -441,13 +474,25 @@ class Reader : public detail::ValueContext {
   bool machine_coordinates_ = false;  // G53 on this line
   Eigen::Vector3d line_axis_ = Eigen::Vector3d::UnitZ();  // G43.5: this line's tool axis
   int tcp_m_code_ = -1;  // a job-mapped TCP M code on this line: 1 on, 0 off
+  std::optional<ModalState> saved_modes_;  // M70
+
+  ModalState save_modes() const {
+    const GcodeState& g = state_;
+    return {g.inches, g.incremental, g.arc_center_absolute, g.inverse_time, g.exact_stop, g.retract_to_r,
+            g.plane, g.tcp, g.blend_tolerance_mm, g.feed_mm_per_min, g.spindle_rpm, g.spindle, g.work_offset, g.g5x_mm};
+  }
+  void restore_modes(const ModalState& m) {
+    GcodeState& g = state_;
+    g.inches = m.inches, g.incremental = m.incremental, g.arc_center_absolute = m.arc_center_absolute;
+    g.inverse_time = m.inverse_time, g.exact_stop = m.exact_stop, g.retract_to_r = m.retract_to_r;
+    g.plane = m.plane, g.tcp = m.tcp, g.blend_tolerance_mm = m.blend_tolerance_mm;
+    g.feed_mm_per_min = m.feed_mm_per_min, g.spindle_rpm = m.spindle_rpm, g.spindle = m.spindle;
+    g.work_offset = m.work_offset, g.g5x_mm = m.g5x_mm;
+    g.parameters[5220] = 1 + system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10)));
+  }
   int o_column_ = 0;             // column of a Fanuc program number on this line
 };
 
-// The coordinate system of a G54..G59.3 code (x10): 0..8.
-int system_index(int code) {
-  return code <= 590 ? (code - 540) / 10 : 6 + (code - 591);
-}
 const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
 constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
 constexpr int kG92Parameter = 5211;  // X of the G92 offset
@@ -487,8 +532,9 @@ double Reader::named_parameter(const std::string& name, int column) {
       const auto it = state_.globals.find(name);
       return it == state_.globals.end() ? 0.0 : it->second;
     }
+    // An unset global reads as 0 (LinuxCNC's rs274 does so; an unset local is an error).
     const auto it = state_.globals.find(name);
-    if (it != state_.globals.end()) return it->second;
+    return it != state_.globals.end() ? it->second : 0.0;
   } else {
     const auto it = state_.locals.find(name);
     if (it != state_.locals.end()) return it->second;
@@ -723,6 +769,21 @@ OLine Reader::skip_to(const std::string& label, std::initializer_list<const char
 
 const SubDefinition* Reader::find_sub(const std::string& name, int column) {
   if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
+  // Defined further down the calling file (after M2, say): read ahead for it, as rs274 does.
+  if (current_->seekable) {
+    const Mark back = mark_after();
+    std::string text;
+    OLine o;
+    while (next_line(text)) {
+      if (!text.empty() && text.back() == '\r') text.pop_back();
+      if (o_line(text, o) && o.label == name && o.keyword == "sub") {
+        subs_[name] = SubDefinition{mark_after(), here()};
+        break;
+      }
+    }
+    jump(back);
+    if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
+  }
   if (name.front() != '<') return nullptr;
   // A subroutine file: <name>.ngc holding "o<name> sub", in the calling program's folder or
   // on the search path.
@@ -811,6 +872,7 @@ void Reader::leave_sub(const std::string& s, const OLine& o) {
     returned = true;
   }
   Frame& f = frame();
+  if (f.autorestore) restore_modes(*f.autorestore);
   for (size_t k = 0; k < 30; ++k) state_.parameters[k + 1] = f.saved_numbered[k];
   state_.locals.swap(f.saved_locals);
   state_.globals["_value"] = value;
@@ -1014,6 +1076,7 @@ void Reader::lex(const std::string& s, size_t i) {
     }
     if (!is_letter(c)) {
       if (c == '[') fail(column, "expression without its word (expected a letter before '[')");
+      if (c == '@' || c == '^') fail(column, "polar coordinates (@ radius, ^ angle) are not supported");
       if (c == '\r')
         fail(column, "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column, "unexpected " + describe(c) + " (expected a word: a letter and a number)");
@@ -1038,13 +1101,11 @@ void Reader::lex(const std::string& s, size_t i) {
       first_word = false;
       continue;
     }
-    if (letter == 'E') {
-      fail(column, "unknown word letter 'E' (expected one of A-D, F-N, P-Z)");
-    }
+
     std::string text;
     const double value = letter == 'N' ? detail::read_plain_number(s, i, letter, *this, text, column)
                                        : word_value(s, i, letter, text);
-    if (letter != 'N' && std::abs(value) > kMaxMagnitude) {
+    if (letter != 'N' && letter != 'F' && std::abs(value) > kMaxMagnitude) {
       fail(column, std::string(1, letter) + " value " + text +
                        " is out of range (expected |value| <= 1000000)");
     }
@@ -1103,8 +1164,8 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     } else if (state_.incremental) {
       if (!state_.known[a]) {
         fail(w.column, std::string("incremental (G91) ") + kAxisLetter[a] + " move while the " +
-                           kAxisLetter[a] + " position is unknown (expected an absolute " +
-                           kAxisLetter[a] + " move first)");
+                           kAxisLetter[a] + " position is unknown is not supported: vcut assumes no start "
+                           "position (expected an absolute " + kAxisLetter[a] + " move first)");
       }
       end[a] = state_.position_mm[a] + v;
     } else {
@@ -1403,7 +1464,8 @@ void Reader::set_offsets(const Code& g) {
       double offset = w.value * unit();
       if (l.value == 20.0) {
         if (!state_.known[a]) {
-          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] + " position is unknown (expected a move first)");
+          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] +
+                             " position is unknown is not supported: vcut assumes no start position (expected a move first)");
         }
         offset = state_.position_mm[a] - state_.g92_mm[a] - offset;
       }
@@ -1417,7 +1479,8 @@ void Reader::set_offsets(const Code& g) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
       if (!state_.known[a]) {
-        fail(w.column, std::string("G92 while the ") + kAxisLetter[a] + " position is unknown (expected a move first)");
+        fail(w.column, std::string("G92 while the ") + kAxisLetter[a] +
+                           " position is unknown is not supported: vcut assumes no start position (expected a move first)");
       }
       state_.g92_mm[a] = state_.position_mm[a] - state_.g5x_mm[a] - w.value * unit();
     }
@@ -1595,17 +1658,15 @@ bool Reader::execute() {
   machine_coordinates_ = non_modal != nullptr && non_modal->number == 530;
 
   // --- M codes.
-  std::array<const Code*, 10> m_by_group{};
-  bool m_code[10] = {};  // supported M codes present, by number (all are < 10 but M30)
+  std::array<const Code*, 11> m_by_group{};  // by M group 0..10
+  bool m_code[74] = {};  // supported M codes present, by number (M2 and M30 end the program)
   bool program_end = false;
   for (const Code& m : ln.m) {
     const int group = m.number >= 0 ? m_group(m.number) : -1;
     if (group >= 0) {
       const Code*& slot = m_by_group[static_cast<size_t>(group)];
-      // rs274ngc lets M7 and M8 share a line; every other pair of one group is an error.
-      const bool coolant_pair = group == 8 && slot != nullptr && slot->number != 9 &&
-                                m.number != 9 && slot->number != m.number;
-      if (slot != nullptr && !coolant_pair) {
+      // LinuxCNC's rs274 refuses two M codes of one group on a line, M7 with M8 included.
+      if (slot != nullptr) {
         fail(m.column, "two M codes of one modal group on one line, " + slot->text + " and " +
                            m.text + " (expected at most one)");
       }
@@ -1619,7 +1680,7 @@ bool Reader::execute() {
       if (m.number == 2 || m.number == 30) {
         program_end = true;
       } else {
-        m_code[m.number] = true;
+        m_code[static_cast<size_t>(m.number)] = true;
       }
       continue;
     }
@@ -1641,9 +1702,10 @@ bool Reader::execute() {
       fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6 deg)");
   }
 
-  // --- Modes, in rs274ngc's order of execution within a line, except that G20/G21 apply
-  // to every number of their line, F included (LinuxCNC would read an F on the G20 line in
-  // the previous units; nobody writes "G20 F10" meaning mm/min).
+  // --- Modes, in rs274ngc's order of execution within a line: F is set before G20/G21, so an
+  // F on a G20/G21 line is in the units before it (as LinuxCNC's rs274 reads it); the
+  // lengths of the line are in the new units.
+  const double feed_unit = unit();
   if (const Code* g = by_group[kUnits]) state_.inches = g->number == 200;
 
   // Lengths beyond 1e6 mm after conversion are as absurd as before it.
@@ -1658,11 +1720,12 @@ bool Reader::execute() {
   if (const Word& f = word('F'); f.present && state_.inverse_time) {
     // G93: F is the inverse of the move's time in minutes, on every feed move's line.
     if (!(f.value > 0.0)) fail(f.column, "F " + num(f.value) + " (expected an inverse time > 0, 1/min)");
+    if (f.value > kMaxFeed_mm_per_min) fail(f.column, "F " + num(f.value) + " is out of range (expected <= 1e9 1/min)");
   } else if (f.present) {
-    const double feed = f.value * unit();
+    const double feed = f.value * feed_unit;
     if (!(feed > 0.0)) fail(f.column, "F " + num(f.value) + " (expected a feed > 0)");
-    if (feed > kMaxMagnitude) {
-      fail(f.column, "F " + num(feed) + " mm/min is out of range (expected <= 1e6 mm/min)");
+    if (feed > kMaxFeed_mm_per_min) {
+      fail(f.column, "F " + num(feed) + " mm/min is out of range (expected <= 1e9 mm/min)");
     }
     state_.feed_mm_per_min = feed;
   }
@@ -1682,7 +1745,37 @@ bool Reader::execute() {
   if (m_code[3]) state_.spindle = SpindleState::Clockwise;
   if (m_code[4]) state_.spindle = SpindleState::CounterClockwise;
   if (m_code[5]) state_.spindle = SpindleState::Off;
-  // M0/M1 (pauses) and M7/M8/M9 (coolant) do not change the path.
+  // M0/M1 (pauses), M7/M8/M9 (coolant), M48..M53 (overrides) do not change the path; nor
+  // do M62..M68 (I/O), which take P, E, L and Q.
+  for (int m = 62; m <= 68; ++m) {
+    if (m_code[m]) {
+      for (char letter : {'P', 'E', 'L', 'Q'}) used_[letter - 'A'] = true;
+    }
+  }
+  if (m_code[61]) {  // M61 Q: the tool in the spindle is Q, without a change
+    const Word& q = word('Q');
+    if (!q.present || q.value < 0.0 || !is_whole(q.value)) {
+      fail(q.present ? q.column : m_by_group[6]->column, "M61 needs Q, the tool number (a whole number >= 0)");
+    }
+    state_.tool = state_.selected_tool = static_cast<int>(q.value);
+    used_['Q' - 'A'] = true;
+  }
+  // M70 saves the modal state, M71 forgets it, M72 restores it, M73 saves it to be restored
+  // when the current subroutine returns.
+  if (m_code[70] || m_code[73]) {
+    ModalState saved = save_modes();
+    if (m_code[70]) {
+      saved_modes_ = saved;
+    } else {
+      if (frames_.size() <= 1) fail(m_by_group[10]->column, "M73 outside a subroutine (expected it in a called o-word sub)");
+      frame().autorestore = saved;
+    }
+  }
+  if (m_code[71]) saved_modes_.reset();
+  if (m_code[72]) {
+    if (!saved_modes_) fail(m_by_group[10]->column, "M72 without a state saved by M70");
+    restore_modes(*saved_modes_);
+  }
 
   const Word& p = word('P');
   std::string p_user;  // the code that took the P word
@@ -1846,10 +1939,11 @@ bool Reader::execute() {
 
   // --- Words no code on the line used (rs274ngc: "X word with no G code that uses it").
   if (!lenient_) {
-    for (char letter : {'I', 'J', 'K', 'R', 'P', 'Q', 'H', 'D', 'L'}) {
+    for (char letter : {'I', 'J', 'K', 'R', 'P', 'Q', 'H', 'D', 'L', 'E'}) {
       const Word& w = word(letter);
       if (!w.present || used_[letter - 'A']) continue;
       std::string users = "a G code that uses it";
+      if (letter == 'E') fail(w.column, "word letter 'E' with no M66, M67 or M68 to use it");
       switch (letter) {
         case 'I':
         case 'J':
@@ -1865,6 +1959,9 @@ bool Reader::execute() {
           break;
         case 'L':
           users = "G10 or a canned cycle";
+          break;
+        case 'E':
+          users = "M66, M67 or M68";
           break;
         case 'H':
           users = "G43";

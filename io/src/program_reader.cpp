@@ -1,6 +1,7 @@
 // Dialect detection and the one entry point for reading NC programs of any dialect.
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
+#include <vcut/io/sinumerik_reader.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -180,6 +181,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
   GcodeState gcode_state;
   AptState apt_state;
   AptProgram apt;
+  SinumerikState sinumerik_state;
   for (const std::string& path : paths) {
     std::error_code ec;
     if (fs::is_directory(path, ec)) {
@@ -201,12 +203,14 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
                            " (expected one dialect for all program files)");
     }
     if (reader == "sinumerik") {
-      throw InputError(path, 0, 0,
-                       "SINUMERIK 840D programs are not supported yet (expected G-code or APT CL "
-                       "data; name the dialect in the job or with --dialect if the file is one "
-                       "of those)");
-    }
-    if (reader == "gcode") {
+      // The SINUMERIK reader takes the G-code options that apply to it: the job's work offsets
+      // (G54..G57), unsupported words as warnings and the arc tolerance.
+      SinumerikOptions sinumerik;
+      sinumerik.work_offsets_mm = options.gcode.work_offsets_mm;
+      sinumerik.unsupported_as_warning = options.gcode.unsupported_as_warning;
+      sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
+      read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
+    } else if (reader == "gcode") {
       read_gcode(in, path, options.gcode, out.program, gcode_state);
     } else {
       read_apt(in, path, options.apt, apt, apt_state);

@@ -663,8 +663,8 @@ TEST_F(ProgramFiles, ReadProgramErrors) {
     }
     return "no error";
   };
-  const std::string mpf = write("s.mpf", "N10 TRAORI\n");
-  EXPECT_NE(message([&] { read_program(mpf, "auto"); }).find("not supported yet"),
+  const std::string mpf = write("s.mpf", "N10 TRAORI\nN20 CYCLE800()\n");
+  EXPECT_NE(message([&] { read_program(mpf, "auto"); }).find(":2:5: CYCLE800 is not supported"),
             std::string::npos);
   EXPECT_NE(message([&] { read_program(mpf, "heidenhain"); }).find("unknown program dialect"),
             std::string::npos);

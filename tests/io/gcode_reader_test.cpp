@@ -534,7 +534,8 @@ TEST(GcodeReaderErrors, UnknownGAndMCodes) {
 
 TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
   EXPECT_INPUT_ERROR("G0 E5\n", 1, 4, "'E'");
-  EXPECT_INPUT_ERROR("G0 X1 @\n", 1, 7, "'@'");
+  EXPECT_INPUT_ERROR("G0 X1 $\n", 1, 7, "'$'");
+  EXPECT_INPUT_ERROR("G0 X1 @2\n", 1, 7, "polar coordinates");
   EXPECT_INPUT_ERROR("#1 + 5\n", 1, 4, "expected '='");
   EXPECT_INPUT_ERROR("G0 [1+2]\n", 1, 4, "expected a letter before '['");
   EXPECT_INPUT_ERROR("G0 X0 O100\n", 1, 7, "o-word");
@@ -576,7 +577,7 @@ TEST(GcodeReaderErrors, BadNumbers) {
   // 40000 in = 1016000 mm, beyond 1e6 mm after conversion.
   EXPECT_INPUT_ERROR("G20 G0 X40000\n", 1, 8, "out of range");
   EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG91\nG0 X600000\n X600000\n", 4, 2, "out of range");
-  EXPECT_INPUT_ERROR("G1 X1 F2000000\n", 1, 7, "out of range");
+  EXPECT_INPUT_ERROR("G1 X1 F2000000000\n", 1, 7, "out of range");
   EXPECT_INPUT_ERROR("S1000001 M3\n", 1, 1, "out of range");
   EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG3 I-1 P0.5 F10\n", 2, 8, "turns");
   EXPECT_INPUT_ERROR("T1.5 M6\n", 1, 1, "tool number");

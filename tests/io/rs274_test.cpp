@@ -138,7 +138,6 @@ TEST(Rs274Expressions, Errors) {
   expect_error("G0 X#0", "6", "1..5601");
   expect_error("G0 X#1.5", "6", "whole number");
   expect_error("G0 X#<nope>", "5", "#<nope> is not defined");
-  expect_error("G0 X#<_nope>", "5", "not defined");
   expect_error("G0 X#<a", "6", "'>'");
   expect_error("G0 X[1 + [2 * [3]]] X1", "21", "second X word");
   // Deeply nested brackets are refused, not a stack overflow.
@@ -154,6 +153,7 @@ TEST(Rs274Parameters, NumberedNamedAndIndirect) {
   EXPECT_NEAR(x_of("#<my depth>", "#<MyDepth> = 2.5\n"), 2.5, kTol);  // blanks and case ignored
   EXPECT_NEAR(x_of("#<_g>", "#<_g> = -1\n"), -1.0, kTol);
   EXPECT_NEAR(x_of("#99", ""), 0.0, kTol);                           // unset numbered: 0
+  EXPECT_NEAR(x_of("[#<_unset> + 1]", ""), 1.0, kTol);               // unset global: 0
   // Every value on a line is read before any parameter of the line is set.
   EXPECT_NEAR(x_of("#1", "#1 = 1\n#1 = 2 #2 = #1\n#1 = #2\n"), 1.0, kTol);
   EXPECT_NEAR(x_of("#3", "#3 = 1 #3 = 2\n"), 2.0, kTol);  // the last setting wins
@@ -257,6 +257,13 @@ TEST(Rs274ControlFlow, SubroutineFileOnTheSearchPath) {
   std::filesystem::remove_all(dir);
 }
 
+TEST(Rs274ControlFlow, SubroutineDefinedAfterTheProgramEnd) {
+  // rs274 reads ahead for a subroutine defined further down the file, past M2.
+  const Program p = read("G0 X0 Y0 Z0\no<later> call [2]\nG0 Y1\nM2\no<later> sub\n  G0 X#1\no<later> endsub\n");
+  expect_path(p, {{R, {2, 0, 0}}, {R, {2, 1, 0}}});
+  EXPECT_EQ(p.blocks[0].source.line, 6);
+}
+
 TEST(Rs274ControlFlow, Errors) {
   GcodeOptions limited;
   limited.max_lines = 1000;
@@ -307,6 +314,33 @@ TEST(Rs274Feed, InverseTime) {
   EXPECT_EQ(p.blocks[2].feed_mode, FeedMode::UnitsPerMinute);
   EXPECT_NEAR(p.blocks[2].feed_mm_per_min, 100.0, kTol);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG93 G1 X10 F2\nG1 X20\n").find("without F"), std::string::npos);
+}
+
+TEST(Rs274Modes, SaveRestoreToolAndUnitsOfF) {
+  // M70 saves G91 and F100; after G90 F50, M72 brings back G91 and F100.
+  Program p = read("G0 X0 Y0 Z0\nG91 F100\nM70\nG90 F50\nM72\nG1 X1\n");
+  expect_path(p, {{F, {1, 0, 0}}});
+  EXPECT_NEAR(p.blocks[0].feed_mm_per_min, 100.0, kTol);
+  p = read("G0 X5 Y0 Z0\nG91 F100\nM70\nG90\nM72\nG1 X1\n");
+  expect_path(p, {{F, {6, 0, 0}}});  // incremental again
+  // M73 in a subroutine: its mode changes end with the call.
+  p = read("o<s> sub\nM73\nG91\nG1 X1\no<s> endsub\nG0 X0 Y0 Z0\nF10\no<s> call\nG1 X3\n");
+  expect_path(p, {{F, {1, 0, 0}}, {F, {3, 0, 0}}});  // G90 again after the call
+  EXPECT_NE(error_of("M72\n").find("M70"), std::string::npos);
+  // M61 Q: the tool in the spindle without a change.
+  p = read("M61 Q7\nG0 X0 Y0 Z0\nG0 X1\n");
+  EXPECT_EQ(p.blocks[0].tool, 7);
+  // F on a G21 line is in the units before it (inch/min here): 10 in/min = 254 mm/min.
+  p = read("G20 G0 X0 Y0 Z0\nG21 G1 X10 F10\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
+  EXPECT_NEAR(p.blocks[0].feed_mm_per_min, 254.0, kTol);
+  EXPECT_NEAR(p.blocks[0].end_mm.x(), 10.0, kTol);
+  // Two M codes of one group on a line, M7 with M8 included, are refused as by rs274.
+  EXPECT_NE(error_of("M7 M8\n").find("two M codes"), std::string::npos);
+  // I/O M codes take their words and leave the path alone.
+  p = read("G0 X0 Y0 Z0\nM64 P1\nM66 P0 L3 Q2\nM68 E0 Q0.5\nG0 X1\n");
+  expect_path(p, {{R, {1, 0, 0}}});
+  EXPECT_NE(error_of("G0 X0 E1\n").find("'E'"), std::string::npos);
 }
 
 // ------------------------------------------------------------------ tool centre point

@@ -67,9 +67,10 @@ only when the rs274 record does not match the next vcut record as it stands:
 Nothing else is forgiven: a motion in one list and not the other, a different kind, an end or
 centre beyond the tolerance, a different normal or turn count, a different feed.
 
-Tolerance: positions are compared within max(--tol, the rounding of the printed numbers that
-entered the value: 0.5e-4 program units each for the position, the G92 and the G5x offset)
-plus 1e-9 mm.
+Tolerance: positions are compared per axis within max(--tol (1e-4 mm), the rounding of the
+printed numbers that entered the value: 0.5e-4 program units each for the position, the G92
+and the G5x offset (an offset printed as all zeros counts as exact)) plus 1e-9 mm. So 1e-4 mm
+for a G21 program without offsets, 1.27e-3 mm for a G20 one.
 """
 import argparse
 import math
@@ -81,6 +82,7 @@ import sys
 import tempfile
 import time
 
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import census  # noqa: E402  (same directory; standard library only)
 
@@ -195,7 +197,7 @@ def rotate_z(v, deg):
 
 class Rs274Motion:
     __slots__ = ("index", "line", "kind", "end", "abc", "center", "normal", "turns", "feed",
-                 "feed_mode", "tol", "changed", "unseen")
+                 "feed_mode", "feed_units", "tol", "changed", "unseen")
 
     def describe(self):
         s = "#%d %s end=%s" % (self.index, self.kind, fmt_vec(self.end))
@@ -222,6 +224,7 @@ def parse_rs274(stdout):
     plane = "XY"
     feed = None  # mm/min (or the raw number in other modes)
     feed_mode = "upm"
+    feed_units = 1.0
     pos = [0.0] * 6  # machine (vcut frame) position, xyz mm + abc deg
     motions = []
     seen = [False, False, False]  # rs274 X/Y/Z has changed from its initial 0
@@ -243,16 +246,18 @@ def parse_rs274(stdout):
             units = MM_PER_INCH if "INCH" in args else 1.0
         elif name == "SET_G5X_OFFSET" and len(nums) >= 7:
             g5x = [nums[1 + i] * (units if i < 3 else 1.0) for i in range(6)]
-            g5x_ulp = HALF_ULP * units
+            # printed zeros are taken as exact (the empty var file, G10 L2 X0 ...)
+            g5x_ulp = HALF_ULP * units if any(nums[1:7]) else 0.0
         elif name == "SET_G92_OFFSET" and len(nums) >= 6:
             g92 = [nums[i] * (units if i < 3 else 1.0) for i in range(6)]
-            g92_ulp = HALF_ULP * units
+            g92_ulp = HALF_ULP * units if any(nums[0:6]) else 0.0
         elif name == "SET_XY_ROTATION" and nums:
             rot = nums[0]
         elif name == "SELECT_PLANE":
             plane = "XY" if "XY" in args else "XZ" if "XZ" in args else "YZ" if "YZ" in args else "?"
         elif name == "SET_FEED_RATE" and nums:
             feed = nums[0] * units if feed_mode == "upm" else nums[0]
+            feed_units = units
         elif name == "COMMENT" and "feed mode set to" in args:
             feed_mode = ("inverse-time" if "inverse" in args else
                          "per-rev" if "revolution" in args else "upm")
@@ -263,6 +268,7 @@ def parse_rs274(stdout):
             mo.line = (number, raw)
             mo.feed = feed
             mo.feed_mode = feed_mode
+            mo.feed_units = feed_units
             mo.center = mo.normal = None
             mo.turns = 0
             if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE") and len(nums) >= 6:
@@ -313,6 +319,8 @@ def run_vcut(vcut, program, timeout):
                            stderr=subprocess.PIPE, timeout=timeout)
     except subprocess.TimeoutExpired:
         return 124, [], ["vcut timed out after %d s" % timeout]
+    except OSError as e:  # e.g. the binary is being relinked
+        return 126, [], ["cannot run vcut: %s" % e]
     records = []
     for line in r.stdout.decode("utf-8", "replace").splitlines():
         line = line.strip()
@@ -370,8 +378,8 @@ def describe_vcut(j, rec):
     return "#%d %s" % (j, " ".join(parts))
 
 
-def compare_pair(r, v, args, holds):
-    """Returns None when rs274 motion r and vcut record v agree, else the reason."""
+def compare_end(r, v, args, holds):
+    """Returns None when rs274 motion r and vcut record v are of one kind and end at one point."""
     if v.get("kind") != r.kind:
         return "kind %s vs %s" % (r.kind, v.get("kind"))
     tol = max(args.tol, r.tol) + 1e-9
@@ -385,6 +393,46 @@ def compare_pair(r, v, args, holds):
                 abs(end[i] - holds["XYZ"[i]]) <= tol:
             continue
         return "end %s differs by %.6g mm (tolerance %.3g)" % ("XYZ"[i], d, tol)
+    return None
+
+
+def motion_length(v):
+    """(length, angular) of vcut record v: the XYZ path length in mm (helical for arcs), or,
+    when X Y Z do not move, the A B C distance in degrees (rs274ngc's find_straight_length)."""
+    s = v.get("start") or [0.0] * 3
+    e = v.get("end") or [0.0] * 3
+    if v.get("kind") == "arc":
+        c = v["center"]
+        n = v["normal"]
+        a = [s[i] - c[i] for i in range(3)]
+        b = [e[i] - c[i] for i in range(3)]
+        an = sum(a[i] * n[i] for i in range(3))
+        bn = sum(b[i] * n[i] for i in range(3))
+        a = [a[i] - an * n[i] for i in range(3)]
+        b = [b[i] - bn * n[i] for i in range(3)]
+        radius = math.sqrt(sum(x * x for x in a))
+        cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+        theta = math.atan2(sum(cross[i] * n[i] for i in range(3)), sum(a[i] * b[i] for i in range(3)))
+        if theta <= 1e-12:
+            theta += 2 * math.pi
+        theta += 2 * math.pi * (int(v.get("turns", 1)) - 1)
+        height = bn - an
+        return math.hypot(radius * theta, height), False
+    xyz = math.sqrt(sum((e[i] - s[i]) ** 2 for i in range(3)))
+    if xyz > 1e-9:
+        return xyz, False
+    r0 = v.get("start_rotary") or {}
+    r1 = v.get("rotary") or {}
+    return math.sqrt(sum((float(r1.get(k, 0.0)) - float(r0.get(k, 0.0))) ** 2
+                         for k in "ABC")), True
+
+
+def compare_pair(r, v, args, holds):
+    """Returns None when rs274 motion r and vcut record v agree, else the reason."""
+    why = compare_end(r, v, args, holds)
+    if why:
+        return why
+    tol = max(args.tol, r.tol) + 1e-9
     rotary = v.get("rotary") or {}
     for i, a in enumerate("ABC"):
         want = r.abc[i]
@@ -410,13 +458,41 @@ def compare_pair(r, v, args, holds):
         if not abs(d[worst]) <= tol:
             return "centre %s differs by %.6g mm (tolerance %.3g)" % ("XYZ"[worst], abs(d[worst]),
                                                                      tol)
-    if r.kind in ("linear", "arc") and r.feed_mode == "upm" and r.feed is not None and \
-            not args.no_feed:
+    if r.kind in ("linear", "arc") and r.feed is not None and not args.no_feed and \
+            r.feed_mode in ("upm", "inverse-time"):
+        want_mode = "mm/min" if r.feed_mode == "upm" else "inverse-time"
+        if v.get("feed_mode", want_mode) != want_mode:
+            return "feed mode %s vs %s" % (want_mode, v.get("feed_mode"))
         vf = float(v.get("feed", math.nan))
-        ftol = max(1e-6 * abs(r.feed), r.tol * 1.0) + 1e-9
-        if not abs(vf - r.feed) <= ftol:
-            return "feed %s vs %s mm/min" % (fmt_num(r.feed), fmt_num(vf))
+        if r.feed_mode == "upm":
+            # program units/min, converted to mm/min with the units of SET_FEED_RATE's time
+            ftol = max(1e-6 * abs(r.feed), r.tol) + 1e-9
+            if not abs(vf - r.feed) <= ftol:
+                return "feed %s vs %s mm/min" % (fmt_num(r.feed), fmt_num(vf))
+        else:
+            # G93: rs274ngc turns the F word (1/min) into a rate before SET_FEED_RATE
+            # (inverse_time_rate_straight/_arc): F x the move's length in program units (the
+            # XYZ length, or for a move of A B C only their length in degrees; the helical
+            # length for arcs). The printed value is compared with vcut's F x that length.
+            length, angular = motion_length(v)
+            want = vf * (length if angular else length / r.feed_units)
+            ftol = max(1e-6 * abs(r.feed), HALF_ULP) + 1e-6 * abs(vf) + 1e-9
+            if not abs(want - r.feed) <= ftol:
+                return "inverse-time feed: rs274's rate %s %s/min is F x length; vcut's F %s " \
+                       "x length %s gives %s" % (fmt_num(r.feed), "deg" if angular else
+                                                 ("in" if r.feed_units != 1.0 else "mm"),
+                                                 fmt_num(vf), fmt_num(length), fmt_num(want))
     return None
+
+
+def stats_of(rs, vc, dropped_zero, dropped_unknown):
+    return (len(rs), len(vc), dropped_zero, dropped_unknown)
+
+
+def mismatch(i, j, r, vc, why):
+    return ["first difference at rs274 motion %d / vcut motion %d: %s" % (i, j, why),
+            "  rs274: " + r.describe(),
+            "  vcut:  " + (describe_vcut(j, vc[j]) if j < len(vc) else "(none)")]
 
 
 def align(rs, vc, args, holds):
@@ -430,6 +506,12 @@ def align(rs, vc, args, holds):
             i += 1
             j += 1
             continue
+        if j < len(vc) and compare_end(r, vc[j], args, holds) is None:
+            # Same kind and end point but a different centre, normal, turns, rotary or feed:
+            # the two agree on where this motion goes, so it is this pair that differs. (Without
+            # this, R2 could drop the record and report a later, misleading difference.)
+            return False, mismatch(i, j, r, vc, why), stats_of(rs, vc, dropped_zero,
+                                                               dropped_unknown)
         moves = any(r.changed) or r.kind == "arc"
         if not moves and r.kind in ("rapid", "linear"):
             dropped_zero += 1  # R1
@@ -440,12 +522,8 @@ def align(rs, vc, args, holds):
             dropped_unknown += 1  # R2
             i += 1
             continue
-        stats = (len(rs), len(vc), dropped_zero, dropped_unknown)
-        detail = ["first difference at rs274 motion %d / vcut motion %d: %s" % (i, j, why),
-                  "  rs274: " + r.describe(),
-                  "  vcut:  " + (describe_vcut(j, vc[j]) if j < len(vc) else "(none)")]
-        return False, detail, stats
-    stats = (len(rs), len(vc), dropped_zero, dropped_unknown)
+        return False, mismatch(i, j, r, vc, why), stats_of(rs, vc, dropped_zero, dropped_unknown)
+    stats = stats_of(rs, vc, dropped_zero, dropped_unknown)
     if j < len(vc):
         return False, ["vcut has %d more motion(s) than rs274; first extra:" % (len(vc) - j),
                        "  vcut:  " + describe_vcut(j, vc[j])], stats
@@ -483,6 +561,10 @@ def check_program(path, args, rs274):
         rerr[0].startswith("File ended with no percent sign or program end")
     if no_end:
         rs_ok = True
+    if vrc < 0 or vrc >= 124 or (vrc != 0 and not any("error" in l for l in verr)):
+        # A signal (crash), the loader's 127, a timeout: not an answer about the program.
+        return "FAIL", "-", "vcut did not run properly (exit status %d): %s" % (
+            vrc, " | ".join(verr[-2:]) or "(no message)"), []
     if vrc != 0:
         vmsg = vcut_error_message(verr)
         if _UNSUPPORTED.search(vmsg):

@@ -1,0 +1,108 @@
+// The SINUMERIK 840D reader: a subset of Siemens 840D sl part programs (.mpf/.spf) in, Blocks
+// out, in the workpiece frame in mm (inches converted, work offsets applied), each naming its
+// line. Five-axis programs under TRAORI become tool poses (tip and unit tool axis, ORIWKS).
+// Bad input is a vcut::InputError naming file:line:column; nothing else is ever thrown.
+//
+// Read (case-insensitive; blanks allowed between an address letter and its number,
+// "N7 X -1320 Y -1320 Z 1000 A 0 C 0"; `;` starts a comment; lines starting with `%`, such as
+// %_N_NAME_MPF, are headers and skipped):
+//   N blocks; G0 G1 G2 G3 (G1 at the start, Siemens' default) with I J K (centre relative to the
+//   start; I=AC(..) absolute) or CR= (negative: the arc longer than 180 deg); G4 (dwell: no
+//   motion, its F is a time); G17 G18 G19; G90 G91 and X=AC(..) X=IC(..) on one coordinate;
+//   G54..G57 (SinumerikOptions::work_offsets_mm) and G500 (no offset, the default); G70 G71
+//   (inch/metric lengths) and G700 G710 (lengths and feed); G94 (mm/min) G93 (inverse time: F in
+//   every G1/G2/G3 block); F S M3 M4 M5 T (a number, or T="n" with a number) M6 D (ignored);
+//   G60 (exact stop, the default) G9 (exact stop in its block) G64 G641 G642 (blending) with
+//   ADIS= (G1/G2/G3) and ADISPOS= (G0) as Block::blend_tolerance_mm; G601 G602 G603 G40
+//   (accepted, no effect); M0 M1 M7 M8 M9 (ignored: no motion); M2 M17 M30 (end of the file).
+//   R0..R999 (0 at the start, kept across files): R1=10, R2=R1*2+SIN(30), with + - * / ( )
+//   SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT (square) TRUNC ROUND (angles in degrees) and
+//   numbers such as 1.5EX3; any value may be such an expression after `=`: X=R1+5.
+//   TRAORI (or TRAORI(1)) / TRAFOOF: TCP on/off. Under TRAORI, X Y Z are the tool tip and the
+//   orientation is A3= B3= C3= (the tool vector in the workpiece frame, ORIWKS; components not
+//   programmed are 0; normalised) or A B C (rotary axis positions: Blocks with end_rotary, whose
+//   tool axis the pose engine solves through the machine). Without TRAORI, A B C are axis words
+//   (Blocks with tool_pose false), as in the G-code reader.
+//   ORIWKS ORIMKS (ORIMKS only while no vector is programmed), ORIVECT ORIPLANE (great circle),
+//   ORIAXES, ORICONCW ORICONCCW (about the cone axis A6= B6= C6=, modal).
+//   MSG("...") (ignored).
+// Refused always (the reader would otherwise approximate or change the program's flow):
+// ORICONIO, ORICONTO, A7/B7/C7, NUT=, program flow and definitions (IF, GOTOF, WHILE, DEF ...),
+// T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
+// axis positions. Any other word is an error, or with unsupported_as_warning one warning per
+// distinct word, then ignored.
+#pragma once
+
+#include <vcut/kinematics/program.h>
+
+#include <Eigen/Core>
+#include <array>
+#include <cstddef>
+#include <iosfwd>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+
+struct SinumerikOptions {
+  // Settable work offsets by name ("G54".."G57"): the workpiece-frame position (mm) of that
+  // system's zero. Block coordinates = programmed coordinates (mm) + the active offset. G500
+  // (the default) is no offset. Other names are not used.
+  std::map<std::string, Eigen::Vector3d> work_offsets_mm;
+  bool unsupported_as_warning = false;  // an unsupported word: one warning per word, ignored
+  double arc_tolerance_mm = 0.002;  // radius mismatch allowed between start and end of an arc
+};
+
+// The modal state between lines and between files. Start from a default-constructed one
+// (Siemens' reset values: G1 G17 G90 G71 G94 G500 G60 ORIWKS ORIVECT TRAFOOF, position unknown)
+// and pass the same one, with the same Program, for each file in sequence.
+struct SinumerikState {
+  enum class Motion { Rapid, Linear, ArcClockwise, ArcCounterClockwise };
+  enum class Plane { XY, ZX, YZ };  // G17, G18, G19
+
+  Motion motion = Motion::Linear;
+  Plane plane = Plane::XY;
+  bool incremental = false;   // G91
+  bool inch = false;          // G70 / G700: lengths in inches
+  bool inch_feed = false;     // G700: F in inches per minute too
+  bool inverse_time = false;  // G93
+  std::string work_offset = "G500";
+
+  Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // workpiece frame, where known
+  std::array<bool, 3> known = {false, false, false};      // X Y Z programmed yet?
+  // Blocks (indices into Program::blocks) made while an axis was unknown: they hold it still
+  // and take its value when it is first programmed.
+  std::array<std::vector<std::size_t>, 3> pending;
+
+  // Rotary axes A B C (rad) as last programmed (given: known to the reader).
+  kinematics::RotaryWords rotary;
+  bool rotary_program = false;  // A B C programmed without TRAORI: axis blocks from then on
+  bool traori = false;
+  bool orimks = false;
+  kinematics::OrientationMode orientation = kinematics::OrientationMode::Vector;
+  Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();  // the last tool vector, unit
+  int axis_set_by_rotary_line = 0;  // > 0: the orientation was last set by A B C on that line
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();  // A6 B6 C6, unit; zero: none yet
+
+  bool exact_stop = true;        // G60 (default); G64 G641 G642 clear it
+  double adis_mm = -1.0;         // ADIS=; < 0: none given
+  double adispos_mm = -1.0;      // ADISPOS=
+  double feed_mm_per_min = 0.0;  // 0: no F yet
+  double spindle_rpm = 0.0;
+  kinematics::SpindleState spindle = kinematics::SpindleState::Off;
+  int tool = 0;            // in the spindle (after M6)
+  int selected_tool = -1;  // last T, -1 if none
+  std::vector<double> r;   // R0..R999 (sized when the first file starts)
+  std::set<std::string> warned;  // unsupported words already warned about
+};
+
+// Reads one program file; errors are vcut::InputError naming file:line:column.
+kinematics::Program read_sinumerik(const std::string& path, const SinumerikOptions& options = {});
+// Appends one program read from `in` (named `name` in errors and sources) to `program`.
+// Memory: one line at a time (lines up to 1 MiB), plus the output.
+void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOptions& options,
+                    kinematics::Program& program, SinumerikState& state);
+
+}  // namespace vcut::io

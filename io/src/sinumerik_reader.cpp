@@ -1,0 +1,1303 @@
+// Reads the SINUMERIK 840D subset described in sinumerik_reader.h. The semantics follow the
+// SINUMERIK 840D sl programming manuals (Fundamentals; Job planning §"Transformations" for
+// TRAORI and the orientation modes); where this reader picks one reading it says so here.
+// Memory: one line at a time, plus the Blocks.
+#include <vcut/io/input_error.h>
+#include <vcut/io/sinumerik_reader.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <istream>
+#include <new>
+#include <stdexcept>
+#include <system_error>
+#include <vector>
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Block;
+using kinematics::MotionKind;
+using kinematics::OrientationMode;
+using kinematics::SpindleState;
+using Motion = SinumerikState::Motion;
+using Plane = SinumerikState::Plane;
+
+constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inch
+// Any length (mm), feed (mm/min), speed (rpm) or angle (deg) beyond this is a typo or garbage:
+// a 1 km stroke or a 1000 m/min feed exists on no milling machine.
+constexpr double kMaxMagnitude = 1e6;
+// Points closer than this coincide (full circles, zero radius); as in the G-code reader.
+constexpr double kSamePointMm = 1e-9;
+// CR arcs: |CR| may fall short of half the chord by this times max(1, |CR|) (print rounding).
+constexpr double kRadiusRoundingRelative = 1e-9;
+// I J K arcs: a radius mismatch up to this times r on top of arc_tolerance_mm (as G-code).
+constexpr double kArcRelativeTolerance = 1e-6;
+// A tool or cone vector shorter than this has no direction (CAM prints 4 to 9 decimals).
+constexpr double kMinVectorNorm = 1e-6;
+// Two tool vectors this close to opposite (cosine) have no single great circle between them.
+constexpr double kOppositeAxisCosine = -1.0 + 1e-12;
+// Cone interpolation: start and end vectors must make the same angle with the cone axis within
+// this (rad): 1e-4 rad is a vector printed with 4 decimals.
+constexpr double kConeAngleToleranceRad = 1e-4;
+constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
+constexpr int kMaxExpressionDepth = 64;  // nesting of ( ) and unary signs
+constexpr int kRParameters = 1000;       // R0..R999
+constexpr int kMaxToolNumber = 99999;    // as the tool library
+constexpr double kDegToRad = M_PI / 180.0;
+
+constexpr char kAxisLetter[3] = {'X', 'Y', 'Z'};
+constexpr char kCenterLetter[3] = {'I', 'J', 'K'};
+
+bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
+bool is_digit(char c) { return c >= '0' && c <= '9'; }
+bool is_upper(char c) { return (c >= 'A' && c <= 'Z') || c == '_'; }
+char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
+
+int clamp_int(std::size_t v) { return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v); }
+
+std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+std::string describe(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  char buf[16];
+  if (u > 32 && u < 127) {
+    std::snprintf(buf, sizeof buf, "'%c'", c);
+  } else {
+    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
+  }
+  return buf;
+}
+
+// Lines from a stream in 64 KiB reads, each at most kMaxLineBytes (a binary file with no line
+// breaks cannot take all the memory). As in the APT reader.
+class LineSource {
+ public:
+  explicit LineSource(std::istream& in) : in_(in), buffer_(std::size_t{1} << 16) {}
+  enum Result { kLine, kEnd, kTooLong };
+  Result next(std::string& line) {
+    line.clear();
+    bool any = false;
+    while (true) {
+      if (pos_ == end_) {
+        if (eof_) return any ? kLine : kEnd;
+        in_.read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+        end_ = static_cast<std::size_t>(in_.gcount());
+        pos_ = 0;
+        if (!in_) eof_ = true;
+        if (end_ == 0) return any ? kLine : kEnd;
+      }
+      const char* start = buffer_.data() + pos_;
+      const auto* newline = static_cast<const char*>(std::memchr(start, '\n', end_ - pos_));
+      const std::size_t n = newline ? static_cast<std::size_t>(newline - start) : end_ - pos_;
+      if (line.size() + n > kMaxLineBytes) return kTooLong;
+      line.append(start, n);
+      any = true;
+      pos_ += n;
+      if (newline) {
+        ++pos_;
+        return kLine;
+      }
+    }
+  }
+
+ private:
+  std::istream& in_;
+  std::vector<char> buffer_;
+  std::size_t pos_ = 0, end_ = 0;
+  bool eof_ = false;
+};
+
+// One programmed value of a block.
+struct Value {
+  bool present = false;
+  double value = 0.0;
+  int column = 0;
+  enum class Mode { Modal, Absolute, Incremental } mode = Mode::Modal;  // AC( / IC(
+};
+
+// The words of one block, as read (program units, degrees), before they are executed.
+struct Line {
+  Value axis[3];    // X Y Z
+  Value rotary[3];  // A B C
+  Value center[3];  // I J K
+  Value vector[3];  // A3 B3 C3
+  Value cone[3];    // A6 B6 C6
+  Value cr, f, s, t, d, adis, adispos;
+  int motion = -1, motion_column = 0;  // G0..G3 in this block
+  int dwell_column = 0;                // G4
+  bool exact_stop = false;             // G9
+  bool m6 = false, end = false;
+  int m6_column = 0;
+  int spindle = -1, spindle_column = 0;  // M3 M4 M5
+  int first_column = 0;                  // of the block's first word
+};
+
+class Reader {
+ public:
+  Reader(const std::string& name, const SinumerikOptions& options, kinematics::Program& program,
+         SinumerikState& state, int file_index)
+      : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
+
+  void run(std::istream& in) {
+    LineSource source(in);
+    std::string text;
+    int number = 0;
+    while (true) {
+      const LineSource::Result r = source.next(text);
+      if (r == LineSource::kEnd) break;
+      if (number == INT_MAX) fail_at(number, 0, "too many lines");
+      ++number;
+      line_ = number;
+      if (r == LineSource::kTooLong) fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
+      if (!block(text)) break;
+    }
+    if (in.bad()) fail_at(number + 1, 0, "read error (expected a readable text file)");
+  }
+
+ private:
+  [[noreturn]] void fail_at(int line, int column, const std::string& message) const {
+    throw InputError(name_, line, column, message);
+  }
+  [[noreturn]] void fail(int column, const std::string& message) const { fail_at(line_, column, message); }
+  [[noreturn]] void fail_here(const std::string& message) const { fail(column(i_), message); }
+  int column(std::size_t i) const { return clamp_int(i + 1); }
+  std::string where(int column) const {
+    return name_ + ":" + std::to_string(line_) + ":" + std::to_string(column);
+  }
+  void warn(int column, const std::string& message) { program_.warnings.push_back(where(column) + ": " + message); }
+
+  // An unsupported word: an error, or one warning per distinct word (then ignored).
+  void unsupported(const std::string& word, int column, const std::string& why = {}) {
+    const std::string text = word + " is not supported" + (why.empty() ? "" : " (" + why + ")");
+    if (!options_.unsupported_as_warning) fail(column, text);
+    if (state_.warned.insert(word).second) {
+      warn(column, text + "; ignored (and so is every later " + word + ")");
+    }
+  }
+
+  bool block(std::string& text);
+  void word();
+  void assignment(const std::string& address, int column);
+  void skip_argument();
+  void code(char letter, int column);
+  void keyword(const std::string& name, int column);
+  void set(Value& v, const char* name, double value, int column, Value::Mode mode = Value::Mode::Modal);
+  double literal();
+  double expression(int depth);
+  double term(int depth);
+  double factor(int depth);
+  double primary(int depth);
+  double function(const std::string& name, int column, int depth);
+  double finite(double v, int column, const char* what) const;
+  void skip_blanks() {
+    while (i_ < s_.size() && is_blank(s_[i_])) ++i_;
+  }
+  bool at(char c) {
+    skip_blanks();
+    return i_ < s_.size() && s_[i_] == c;
+  }
+  void expect(char c, const std::string& message) {
+    if (!at(c)) fail_here(message);
+    ++i_;
+  }
+  std::string letters() {
+    const std::size_t start = i_;
+    while (i_ < s_.size() && is_upper(s_[i_])) ++i_;
+    return s_.substr(start, i_ - start);
+  }
+
+  void execute();
+  void motion();
+  double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
+  Eigen::Vector3d offset() const {
+    const auto it = options_.work_offsets_mm.find(state_.work_offset);
+    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero()
+                                                                                : it->second;
+  }
+  Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
+  bool orient(Block& block);
+  void arc(Block& block, bool clockwise);
+  void append(Block block, const std::array<bool, 3>& programmed, bool reorients);
+
+  const std::string& name_;
+  const SinumerikOptions& options_;
+  kinematics::Program& program_;
+  SinumerikState& state_;
+  int file_index_;
+  int line_ = 0;
+  std::string s_;  // the block, upper case outside strings
+  std::size_t i_ = 0;
+  Line l_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// Parsing
+
+bool Reader::block(std::string& text) {
+  std::size_t n = text.size();
+  if (n > 0 && text[n - 1] == '\r') --n;  // CRLF files
+  std::size_t begin = 0;
+  if (line_ == 1 && n >= 3 && std::memcmp(text.data(), "\xEF\xBB\xBF", 3) == 0) begin = 3;  // BOM
+  s_.assign(text, 0, n);
+  bool quoted = false;
+  for (std::size_t k = begin; k < n; ++k) {
+    const char c = s_[k];
+    const auto u = static_cast<unsigned char>(c);
+    if (u < 0x20 || u == 0x7F) {
+      if (c == '\t' || c == '\f' || c == '\v') continue;
+      if (c == '\r') fail(column(k), "carriage return inside a line (expected \\n or \\r\\n line ends)");
+      fail(column(k), "not a text file: control byte " + describe(c) + " (expected an NC program)");
+    }
+    if (c == '"') quoted = !quoted;
+    if (!quoted) s_[k] = upper(c);
+  }
+  i_ = begin;
+  skip_blanks();
+  if (i_ < n && s_[i_] == '%') return true;  // %_N_NAME_MPF, %MPF100: a header
+  l_ = Line{};
+  while (true) {
+    skip_blanks();
+    if (i_ >= n || s_[i_] == ';') break;
+    if (l_.first_column == 0) l_.first_column = column(i_);
+    word();
+  }
+  execute();
+  return !l_.end;
+}
+
+void Reader::word() {
+  const std::size_t start = i_;
+  const int col = column(start);
+  const char c = s_[i_];
+  if (c == '$') {
+    ++i_;
+    const std::string name = "$" + letters();
+    unsupported(name, col, "system variables");
+    skip_argument();
+    return;
+  }
+  if (c == '/' && l_.first_column == col) {
+    ++i_;
+    unsupported("/", col, "block skip");
+    return;
+  }
+  if (!is_upper(c)) fail(col, "unexpected " + describe(c) + " (expected a word: an address and its value)");
+  const std::string name = letters();
+  // An address with a numeric extension (R1, A3, CR...) is always followed by '='; a letter
+  // followed by digits and no '=' is the letter and its value (X10, G1, A3 = A at 3 deg).
+  std::size_t j = i_;
+  while (j < s_.size() && is_digit(s_[j])) ++j;
+  std::size_t k = j;
+  while (k < s_.size() && is_blank(s_[k])) ++k;
+  if (k < s_.size() && s_[k] == '=') {
+    const std::string address = name + s_.substr(i_, j - i_);
+    i_ = k + 1;
+    assignment(address, col);
+    return;
+  }
+  if (name.size() == 1) {
+    code(name[0], col);
+    return;
+  }
+  const std::string full = name + s_.substr(i_, j - i_);
+  i_ = j;
+  keyword(full, col);
+}
+
+void Reader::set(Value& v, const char* name, double value, int column, Value::Mode mode) {
+  if (v.present) fail(column, std::string(name) + " programmed twice in one block");
+  v.present = true;
+  v.value = value;
+  v.column = column;
+  v.mode = mode;
+}
+
+// A number written after an address letter without '=': [sign] digits [. digits] [EX [sign] digits].
+double Reader::literal() {
+  skip_blanks();
+  const std::size_t start = i_;
+  std::string text;
+  if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) text += s_[i_++];
+  bool digits = false;
+  while (i_ < s_.size() && is_digit(s_[i_])) text += s_[i_++], digits = true;
+  if (i_ < s_.size() && s_[i_] == '.') {
+    text += s_[i_++];
+    while (i_ < s_.size() && is_digit(s_[i_])) text += s_[i_++], digits = true;
+  }
+  if (!digits) {
+    i_ = start;
+    fail_here(i_ < s_.size() ? "unexpected " + describe(s_[i_]) + " (expected a number)"
+                             : std::string("end of the block (expected a number)"));
+  }
+  if (i_ + 1 < s_.size() && s_[i_] == 'E' && s_[i_ + 1] == 'X') {
+    i_ += 2;
+    text += 'e';
+    if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) text += s_[i_++];
+    bool exponent = false;
+    while (i_ < s_.size() && is_digit(s_[i_])) text += s_[i_++], exponent = true;
+    if (!exponent) fail_here("EX without its exponent (expected digits, as in 1.5EX3)");
+  }
+  if (text.size() > 400) fail(column(start), "number with more than 400 characters");
+  errno = 0;
+  const double v = std::strtod(text.c_str(), nullptr);
+  if (!std::isfinite(v) || (errno == ERANGE && std::abs(v) > 1.0)) {
+    fail(column(start), "number " + text + " is out of range (expected a finite value)");
+  }
+  return v;
+}
+
+double Reader::finite(double v, int column, const char* what) const {
+  if (!std::isfinite(v)) fail(column, std::string(what) + " is not a finite number");
+  return v;
+}
+
+double Reader::expression(int depth) {
+  if (depth > kMaxExpressionDepth) fail_here("expression nested more than 64 deep");
+  double v = term(depth);
+  while (true) {
+    skip_blanks();
+    if (i_ >= s_.size() || (s_[i_] != '+' && s_[i_] != '-')) return v;
+    const char op = s_[i_];
+    const int col = column(i_);
+    ++i_;
+    const double w = term(depth);
+    v = finite(op == '+' ? v + w : v - w, col, "the result");
+  }
+}
+
+double Reader::term(int depth) {
+  double v = factor(depth);
+  while (true) {
+    skip_blanks();
+    if (i_ >= s_.size() || (s_[i_] != '*' && s_[i_] != '/')) return v;
+    const char op = s_[i_];
+    const int col = column(i_);
+    ++i_;
+    const double w = factor(depth);
+    if (op == '/' && w == 0.0) fail(col, "division by zero");
+    v = finite(op == '*' ? v * w : v / w, col, "the result");
+  }
+}
+
+double Reader::factor(int depth) {
+  if (depth > kMaxExpressionDepth) fail_here("expression nested more than 64 deep");
+  skip_blanks();
+  if (i_ < s_.size() && (s_[i_] == '+' || s_[i_] == '-')) {
+    const bool minus = s_[i_] == '-';
+    ++i_;
+    const double v = factor(depth + 1);
+    return minus ? -v : v;
+  }
+  return primary(depth);
+}
+
+double Reader::primary(int depth) {
+  skip_blanks();
+  if (i_ >= s_.size() || s_[i_] == ';') fail_here("end of the block (expected a value)");
+  const char c = s_[i_];
+  const int col = column(i_);
+  if (is_digit(c) || c == '.') return literal();
+  if (c == '(') {
+    ++i_;
+    const double v = expression(depth + 1);
+    expect(')', "'(' without its closing ')'");
+    return v;
+  }
+  if (c == '$') fail(col, "system variables ($...) are not supported in expressions");
+  if (!is_upper(c)) fail(col, "unexpected " + describe(c) + " (expected a value)");
+  const std::size_t start = i_;
+  while (i_ < s_.size() && (is_upper(s_[i_]) || is_digit(s_[i_]))) ++i_;
+  const std::string name = s_.substr(start, i_ - start);
+  if (name.size() > 1 && name[0] == 'R' &&
+      std::all_of(name.begin() + 1, name.end(), [](char ch) { return is_digit(ch); })) {
+    if (name.size() > 4) fail(col, name + " (expected R0..R999)");
+    return state_.r[static_cast<std::size_t>(std::stoi(name.substr(1)))];
+  }
+  if (at('(')) {
+    if (name == "AC" || name == "IC") {
+      fail(col, name + "( inside an expression (expected it as the whole value of one coordinate, X=" +
+                    name + "(...))");
+    }
+    ++i_;
+    return function(name, col, depth + 1);
+  }
+  fail(col, "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
+}
+
+double Reader::function(const std::string& name, int col, int depth) {
+  static const char* const kKnown[] = {"SIN", "COS",  "TAN", "ASIN", "ACOS",  "ATAN2",
+                                       "SQRT", "ABS", "POT", "TRUNC", "ROUND"};
+  if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return name == k; })) {
+    fail(col, "unknown function " + name +
+                  "( (expected SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT TRUNC ROUND)");
+  }
+  const double x = expression(depth);
+  double y = 0.0;
+  if (name == "ATAN2") {
+    expect(',', "ATAN2 with one argument (expected ATAN2(y, x))");
+    y = expression(depth);
+  }
+  expect(')', name + "( without its closing ')'");
+  double v = 0.0;
+  if (name == "SIN") {
+    v = std::sin(x * kDegToRad);
+  } else if (name == "COS") {
+    v = std::cos(x * kDegToRad);
+  } else if (name == "TAN") {
+    v = std::tan(x * kDegToRad);
+  } else if (name == "ASIN" || name == "ACOS") {
+    if (!(std::abs(x) <= 1.0)) fail(col, name + " of " + num(x) + " (expected a value in [-1, 1])");
+    v = (name == "ASIN" ? std::asin(x) : std::acos(x)) / kDegToRad;
+  } else if (name == "ATAN2") {
+    if (x == 0.0 && y == 0.0) fail(col, "ATAN2(0, 0) has no angle");
+    v = std::atan2(x, y) / kDegToRad;
+  } else if (name == "SQRT") {
+    if (x < 0.0) fail(col, "SQRT of " + num(x) + " (expected a value >= 0)");
+    v = std::sqrt(x);
+  } else if (name == "ABS") {
+    v = std::abs(x);
+  } else if (name == "POT") {
+    v = x * x;  // POT: the square (Siemens)
+  } else if (name == "TRUNC") {
+    v = std::trunc(x);
+  } else {
+    v = std::round(x);
+  }
+  return finite(v, col, (name + "(...)").c_str());
+}
+
+// Skips an ignored word's value: `=` and what follows up to a blank outside ( ) and quotes, or
+// a ( ) argument list.
+void Reader::skip_argument() {
+  skip_blanks();
+  if (i_ < s_.size() && s_[i_] == '=') ++i_;
+  int depth = 0;
+  bool quoted = false;
+  const std::size_t start = i_;
+  while (i_ < s_.size()) {
+    const char c = s_[i_];
+    if (quoted) {
+      quoted = c != '"';
+    } else if (c == '"') {
+      quoted = true;
+    } else if (c == '(' || c == '[') {
+      ++depth;
+    } else if (c == ')' || c == ']') {
+      --depth;
+    } else if ((is_blank(c) || c == ';') && depth <= 0) {
+      break;
+    }
+    ++i_;
+  }
+  if (quoted) fail(column(start), "string without its closing '\"'");
+  if (depth > 0) fail(column(start), "'(' without its closing ')'");
+}
+
+// `address=value`.
+void Reader::assignment(const std::string& address, int col) {
+  skip_blanks();
+  if (address.size() == 1) {
+    const char a = address[0];
+    const char* kCoordinates = "XYZABCIJK";
+    if (std::strchr(kCoordinates, a) != nullptr) {
+      // X=AC(..) / X=IC(..): absolute or incremental for this coordinate only.
+      Value::Mode mode = Value::Mode::Modal;
+      if (i_ + 2 < s_.size() && (s_.compare(i_, 2, "AC") == 0 || s_.compare(i_, 2, "IC") == 0)) {
+        std::size_t k = i_ + 2;
+        while (k < s_.size() && is_blank(s_[k])) ++k;
+        if (k < s_.size() && s_[k] == '(') {
+          mode = s_[i_] == 'A' ? Value::Mode::Absolute : Value::Mode::Incremental;
+          const std::string fn = s_.substr(i_, 2);
+          i_ = k + 1;
+          const double v = expression(1);
+          expect(')', fn + "( without its closing ')'");
+          Value* slot = nullptr;
+          if (a >= 'X') slot = &l_.axis[a - 'X'];
+          else if (a >= 'I') slot = &l_.center[a - 'I'];
+          else slot = &l_.rotary[a - 'A'];
+          set(*slot, address.c_str(), v, col, mode);
+          return;
+        }
+      }
+      const double v = expression(0);
+      Value* slot = a >= 'X' ? &l_.axis[a - 'X'] : a >= 'I' ? &l_.center[a - 'I'] : &l_.rotary[a - 'A'];
+      set(*slot, address.c_str(), v, col);
+      return;
+    }
+    if (a == 'T' && at('"')) {
+      const std::size_t start = i_++;
+      const std::size_t close = s_.find('"', i_);
+      if (close == std::string::npos) fail(column(start), "string without its closing '\"'");
+      const std::string text = s_.substr(i_, close - i_);
+      i_ = close + 1;
+      const bool numeric = !text.empty() && text.size() <= 5 &&
+                           std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
+      if (!numeric) {
+        fail(col, "tool name T=\"" + text.substr(0, 64) +
+                      "\" (expected a tool number, T1 or T=\"1\": tools are numbered in the tool library)");
+      }
+      set(l_.t, "T", std::stod(text), col);
+      return;
+    }
+    if (a == 'F') return set(l_.f, "F", expression(0), col);
+    if (a == 'S') return set(l_.s, "S", expression(0), col);
+    if (a == 'T') return set(l_.t, "T", expression(0), col);
+    if (a == 'D') return set(l_.d, "D", expression(0), col);
+  }
+  if (address[0] == 'R' && address.size() > 1 && is_digit(address[1])) {
+    const std::string digits = address.substr(1);
+    if (digits.size() > 3) fail(col, address + " (expected R0..R999)");
+    const double v = expression(0);
+    state_.r[static_cast<std::size_t>(std::stoi(digits))] = v;
+    return;
+  }
+  if (address == "CR") return set(l_.cr, "CR", expression(0), col);
+  if (address == "ADIS") return set(l_.adis, "ADIS", expression(0), col);
+  if (address == "ADISPOS") return set(l_.adispos, "ADISPOS", expression(0), col);
+  static const char* const kVector[3] = {"A3", "B3", "C3"};
+  static const char* const kCone[3] = {"A6", "B6", "C6"};
+  for (int k = 0; k < 3; ++k) {
+    if (address == kVector[k]) return set(l_.vector[k], kVector[k], expression(0), col);
+    if (address == kCone[k]) return set(l_.cone[k], kCone[k], expression(0), col);
+  }
+  if (address == "A7" || address == "B7" || address == "C7") {
+    fail(col, address +
+                  "= (the intermediate orientation of ORICONIO) is not supported (expected the cone by "
+                  "ORICONCW or ORICONCCW with A6 B6 C6)");
+  }
+  if (address == "NUT") {
+    fail(col,
+         "NUT= (the cone's opening angle) is not supported (expected the cone by its axis A6 B6 C6 "
+         "and the end vector A3 B3 C3)");
+  }
+  unsupported(address + "=", col);
+  skip_argument();
+}
+
+// A letter and its number: X10, G1, N7, M30, "X -1320".
+void Reader::code(char letter, int col) {
+  switch (letter) {
+    case 'X':
+    case 'Y':
+    case 'Z':
+      return set(l_.axis[letter - 'X'], std::string(1, letter).c_str(), literal(), col);
+    case 'A':
+    case 'B':
+    case 'C':
+      return set(l_.rotary[letter - 'A'], std::string(1, letter).c_str(), literal(), col);
+    case 'I':
+    case 'J':
+    case 'K':
+      return set(l_.center[letter - 'I'], std::string(1, letter).c_str(), literal(), col);
+    case 'F':
+      return set(l_.f, "F", literal(), col);
+    case 'S':
+      return set(l_.s, "S", literal(), col);
+    case 'T':
+      return set(l_.t, "T", literal(), col);
+    case 'D':
+      return set(l_.d, "D", literal(), col);
+    case 'R':
+      fail(col, "R parameter without '=' (expected an assignment such as R1=10)");
+    case 'N': {
+      const double v = literal();
+      if (v < 0.0 || v != std::floor(v)) fail(col, "block number N" + num(v) + " (expected a whole number)");
+      return;
+    }
+    default:
+      break;
+  }
+  if (letter != 'G' && letter != 'M') {
+    std::string word(1, letter);
+    skip_blanks();
+    if (i_ < s_.size() && (is_digit(s_[i_]) || s_[i_] == '.' || s_[i_] == '-' || s_[i_] == '+')) {
+      literal();
+    }
+    unsupported(word, col);
+    if (at('(')) skip_argument();
+    return;
+  }
+  const double v = literal();
+  if (!(v >= 0.0 && v <= 9999.0 && v == std::floor(v))) {
+    fail(col, std::string(1, letter) + num(v) + " (expected a whole " + letter + " code)");
+  }
+  const int n = static_cast<int>(v);
+  const std::string word = std::string(1, letter) + std::to_string(n);
+  if (letter == 'M') {
+    switch (n) {
+      case 0:
+      case 1:
+      case 7:
+      case 8:
+      case 9:
+        return;  // stops and coolant: no motion
+      case 2:
+      case 17:
+      case 30:
+        l_.end = true;
+        return;
+      case 3:
+      case 4:
+      case 5:
+        if (l_.spindle >= 0) fail(col, "two spindle codes (M3 M4 M5) in one block");
+        l_.spindle = n;
+        l_.spindle_column = col;
+        return;
+      case 6:
+        l_.m6 = true;
+        l_.m6_column = col;
+        return;
+      default:
+        return unsupported(word, col);
+    }
+  }
+  switch (n) {
+    case 0:
+    case 1:
+    case 2:
+    case 3:
+      if (l_.motion >= 0) fail(col, "two motion codes (G0 G1 G2 G3) in one block");
+      l_.motion = n;
+      l_.motion_column = col;
+      return;
+    case 4:
+      l_.dwell_column = col;
+      return;
+    case 9:
+      l_.exact_stop = true;
+      return;
+    case 17:
+      state_.plane = Plane::XY;
+      return;
+    case 18:
+      state_.plane = Plane::ZX;
+      return;
+    case 19:
+      state_.plane = Plane::YZ;
+      return;
+    case 40:
+    case 601:
+    case 602:
+    case 603:
+      return;  // no radius compensation; exact-stop windows (G601..G603) do not change the path
+    case 54:
+    case 55:
+    case 56:
+    case 57:
+    case 500:
+      state_.work_offset = word;
+      return;
+    case 60:
+      state_.exact_stop = true;
+      return;
+    case 64:
+    case 641:
+    case 642:
+      state_.exact_stop = false;
+      return;
+    case 70:
+    case 700:
+      state_.inch = true;
+      state_.inch_feed = n == 700;
+      return;
+    case 71:
+    case 710:
+      state_.inch = false;
+      state_.inch_feed = false;
+      return;
+    case 90:
+      state_.incremental = false;
+      return;
+    case 91:
+      state_.incremental = true;
+      return;
+    case 93:
+      state_.inverse_time = true;
+      return;
+    case 94:
+      state_.inverse_time = false;
+      return;
+    case 25:
+    case 26:
+    case 53:
+    case 58:
+    case 59:
+    case 74:
+    case 75:
+    case 110:
+    case 111:
+    case 112:
+    case 153:
+      fail(col, word + " is not supported: its axis words are not a motion to the programmed point "
+                       "(expected G0 G1 G2 G3 moves in the workpiece frame)");
+    case 33:
+    case 34:
+    case 35:
+    case 331:
+    case 332:
+      fail(col, word + " (thread cutting) is not supported (expected G0 G1 G2 G3)");
+    default:
+      return unsupported(word, col);
+  }
+}
+
+void Reader::keyword(const std::string& name, int col) {
+  static const char* const kFlow[] = {"IF",     "ELSE", "ENDIF", "WHILE", "ENDWHILE", "FOR",
+                                      "ENDFOR", "LOOP", "ENDLOOP", "REPEAT", "UNTIL", "GOTO",
+                                      "GOTOF",  "GOTOB", "GOTOC", "CASE",  "PROC",  "RET",
+                                      "DEF",    "CALL", "PCALL", "MCALL", "EXTCALL", "REPEATB"};
+  for (const char* w : kFlow) {
+    if (name == w) {
+      fail(col, name +
+                    " (program flow, calls and definitions) is not supported: skipping it would change "
+                    "what the program does (expected a program of motion blocks)");
+    }
+  }
+  // Frames and motion types whose axis words would otherwise be read as a plain move.
+  static const char* const kNotMoves[] = {"TRANS", "ATRANS", "ROT",    "AROT",    "SCALE",  "ASCALE",
+                                          "MIRROR", "AMIRROR", "ROTS", "AROTS",   "CROTS",  "SUPA",
+                                          "CIP",   "CT",     "ASPLINE", "BSPLINE", "CSPLINE", "POLY",
+                                          "INVCW", "INVCCW", "TRACYL", "TRANSMIT", "TRAANG", "OFFN"};
+  for (const char* w : kNotMoves) {
+    if (name == w) {
+      fail(col, name + " is not supported: it changes the frame or the kind of motion, so the "
+                       "block's axis words cannot be read as a plain move (expected G0 G1 G2 G3 "
+                       "in the workpiece frame)");
+    }
+  }
+  if (name == "TRAORI") {
+    if (at('(')) {
+      ++i_;
+      if (!at(')')) {
+        const double v = expression(1);
+        if (v != 1.0) {
+          fail(col, "TRAORI(" + num(v) +
+                        ") (expected TRAORI or TRAORI(1): the machine file has one transformation)");
+        }
+      }
+      expect(')', "TRAORI( without its closing ')'");
+    }
+    state_.traori = true;
+    return;
+  }
+  if (name == "TRAFOOF") {
+    state_.traori = false;
+    return;
+  }
+  if (name == "ORIWKS") {
+    state_.orimks = false;
+    return;
+  }
+  if (name == "ORIMKS") {
+    state_.orimks = true;
+    return;
+  }
+  if (name == "ORIVECT" || name == "ORIPLANE") {
+    state_.orientation = OrientationMode::Vector;  // ORIPLANE is identical to ORIVECT (Siemens)
+    return;
+  }
+  if (name == "ORIAXES") {
+    state_.orientation = OrientationMode::Axes;
+    return;
+  }
+  if (name == "ORICONCW" || name == "ORICONCCW") {
+    state_.orientation =
+        name == "ORICONCW" ? OrientationMode::ConeClockwise : OrientationMode::ConeCounterClockwise;
+    return;
+  }
+  if (name == "ORICONIO" || name == "ORICONTO") {
+    fail(col, name + (name == "ORICONIO" ? " (cone through an intermediate orientation)"
+                                         : " (cone with a tangential transition)") +
+                  " is not supported (expected ORIVECT, ORIPLANE, ORIAXES, ORICONCW or ORICONCCW)");
+  }
+  if (name == "MSG") {
+    if (at('(')) skip_argument();
+    return;
+  }
+  unsupported(name, col);
+  skip_blanks();
+  if (i_ < s_.size() && (s_[i_] == '(' || s_[i_] == '=')) skip_argument();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Executing a block
+
+void Reader::execute() {
+  Line& l = l_;
+  // Tool: T selects, M6 loads (Siemens' tool change with M6).
+  if (l.t.present) {
+    const double t = l.t.value;
+    if (!(t >= 0.0 && t <= kMaxToolNumber && t == std::floor(t))) {
+      fail(l.t.column, "tool number T" + num(t) + " (expected a whole number 0..99999)");
+    }
+    state_.selected_tool = static_cast<int>(t);
+  }
+  if (l.m6) {
+    if (state_.selected_tool < 0) fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
+    state_.tool = state_.selected_tool;
+  }
+  if (l.d.present) {
+    const double d = l.d.value;
+    if (!(d >= 0.0 && d <= kMaxToolNumber && d == std::floor(d))) {
+      fail(l.d.column, "tool offset D" + num(d) + " (expected a whole number 0..99999)");
+    }
+  }
+  if (l.s.present) {
+    if (!(l.s.value >= 0.0 && l.s.value <= kMaxMagnitude)) {
+      fail(l.s.column, "spindle speed S" + num(l.s.value) + " (expected 0..1e6 rpm)");
+    }
+    state_.spindle_rpm = l.s.value;
+  }
+  if (l.spindle >= 0) {
+    state_.spindle = l.spindle == 3 ? SpindleState::Clockwise
+                     : l.spindle == 4 ? SpindleState::CounterClockwise
+                                      : SpindleState::Off;
+  }
+  const double unit = state_.inch ? kMmPerInch : 1.0;
+  for (Value* v : {&l.adis, &l.adispos}) {
+    if (!v->present) continue;
+    if (!(v->value >= 0.0 && v->value * unit <= kMaxMagnitude)) {
+      fail(v->column, std::string(v == &l.adis ? "ADIS" : "ADISPOS") + " " + num(v->value) +
+                          " (expected a distance 0..1e6 mm)");
+    }
+    (v == &l.adis ? state_.adis_mm : state_.adispos_mm) = v->value * unit;
+  }
+  if (l.motion >= 0) {
+    state_.motion = l.motion == 0   ? Motion::Rapid
+                    : l.motion == 1 ? Motion::Linear
+                    : l.motion == 2 ? Motion::ArcClockwise
+                                    : Motion::ArcCounterClockwise;
+  }
+  bool moves = false;
+  for (int k = 0; k < 3; ++k) moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
+  if (l.dwell_column > 0) {
+    // G4 F.. (s) or S.. (revolutions): a dwell. Its F and S are not the feed and speed.
+    if (moves) fail(l.dwell_column, "G4 (dwell) with axis words in the same block (expected G4 alone)");
+    return;
+  }
+  if (l.f.present) {
+    const double f = l.f.value * (state_.inch_feed ? kMmPerInch : 1.0);
+    if (!(f > 0.0 && f <= kMaxMagnitude)) {
+      fail(l.f.column, "feed F" + num(l.f.value) + " (expected > 0 and at most 1e6 mm/min)");
+    }
+    if (!state_.inverse_time) state_.feed_mm_per_min = f;
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (l.cone[k].present) {
+      if (state_.orimks) {
+        fail(l.cone[k].column, "cone axis A6 B6 C6 under ORIMKS (machine-frame vectors) is not supported "
+                               "(expected ORIWKS)");
+      }
+      Eigen::Vector3d c(l.cone[0].value, l.cone[1].value, l.cone[2].value);  // missing: 0
+      if (!c.allFinite() || c.norm() < kMinVectorNorm || c.cwiseAbs().maxCoeff() > kMaxMagnitude) {
+        fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " + num(c.z()) +
+                                   ") (expected a vector of nonzero length)");
+      }
+      state_.cone_axis = c.normalized();
+      break;
+    }
+  }
+  const bool arc = state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
+  if (!arc) {
+    for (int k = 0; k < 3; ++k) {
+      if (l.center[k].present) {
+        fail(l.center[k].column, std::string(1, kCenterLetter[k]) + " outside an arc (expected G2 or G3)");
+      }
+    }
+    if (l.cr.present) fail(l.cr.column, "CR= outside an arc (expected G2 or G3)");
+  }
+  const bool centre = l.center[0].present || l.center[1].present || l.center[2].present;
+  if (moves || (arc && (centre || l.cr.present))) motion();
+  if (l.end) {
+    // M30/M2/M17: nothing after this line is read; the end resets G91 and the feed mode as
+    // Siemens' reset values do (the tool and the position stay).
+    state_.incremental = false;
+  }
+}
+
+// The block's end point (workpiece frame, mm): programmed axes in G90/G91 or AC/IC, others stay.
+Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
+  Eigen::Vector3d end = state_.position_mm;
+  const Eigen::Vector3d off = offset();
+  for (int a = 0; a < 3; ++a) {
+    const Value& w = l_.axis[a];
+    if (!w.present) continue;
+    programmed[static_cast<std::size_t>(a)] = true;
+    const double v = length_mm(w);
+    const bool incremental = w.mode == Value::Mode::Incremental ||
+                             (w.mode == Value::Mode::Modal && state_.incremental);
+    if (incremental) {
+      if (!state_.known[static_cast<std::size_t>(a)]) {
+        fail(w.column, std::string("incremental ") + kAxisLetter[a] + " from an unknown " + kAxisLetter[a] +
+                           " position (expected an absolute " + kAxisLetter[a] + " first)");
+      }
+      end[a] = state_.position_mm[a] + v;
+    } else {
+      end[a] = v + off[a];
+    }
+    if (!(std::abs(end[a]) <= kMaxMagnitude)) {
+      fail(w.column, std::string(1, kAxisLetter[a]) + " position " + num(end[a]) +
+                         " mm is out of range (expected within +-1e6 mm)");
+    }
+  }
+  return end;
+}
+
+// The block's orientation. Returns whether it changes the tool axis or the rotary axes.
+bool Reader::orient(Block& block) {
+  const Line& l = l_;
+  const bool vector = l.vector[0].present || l.vector[1].present || l.vector[2].present;
+  const bool axes = l.rotary[0].present || l.rotary[1].present || l.rotary[2].present;
+  const int vector_column = l.vector[0].present ? l.vector[0].column
+                            : l.vector[1].present ? l.vector[1].column
+                                                  : l.vector[2].column;
+  // Rotary words: degrees, G90/G91 or AC/IC as the linear axes (G70 does not apply).
+  kinematics::RotaryWords rotary = state_.rotary;
+  for (int r = 0; r < 3; ++r) {
+    const Value& w = l.rotary[r];
+    if (!w.present) continue;
+    const auto k = static_cast<std::size_t>(r);
+    const char letter = static_cast<char>('A' + r);
+    if (!(std::abs(w.value) <= kMaxMagnitude)) {
+      fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6)");
+    }
+    const bool incremental = w.mode == Value::Mode::Incremental ||
+                             (w.mode == Value::Mode::Modal && state_.incremental);
+    if (incremental && !rotary.given[k]) {
+      fail(w.column, std::string("incremental ") + letter + " from an unknown " + letter +
+                         " position (expected an absolute " + letter + " first)");
+    }
+    rotary.angle_rad[k] = (incremental ? rotary.angle_rad[k] : 0.0) + w.value * kDegToRad;
+    rotary.given[k] = true;
+  }
+  block.start_rotary = state_.rotary;
+  block.end_rotary = rotary;
+  const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
+  if (!state_.traori) {
+    if (vector) {
+      fail(vector_column, "tool vector A3 B3 C3 without TRAORI (expected TRAORI before vector orientation)");
+    }
+    if (axes) state_.rotary_program = true;
+    state_.rotary = rotary;
+    block.tool_pose = !state_.rotary_program;
+    if (!block.tool_pose) {
+      block.orientation = OrientationMode::Axes;
+      if (axes) state_.axis_set_by_rotary_line = line_;
+      return turns;
+    }
+    block.start_axis = block.end_axis = state_.tool_axis;
+    return false;
+  }
+  block.tool_pose = true;
+  block.orientation = state_.orientation;
+  const bool cone = state_.orientation == OrientationMode::ConeClockwise ||
+                    state_.orientation == OrientationMode::ConeCounterClockwise;
+  if (vector && axes) {
+    fail(vector_column, "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
+  }
+  if (axes) {
+    // Direct rotary axis positions under TRAORI: the pose engine solves the tool axis.
+    if (cone) {
+      fail(l.rotary[0].present ? l.rotary[0].column : l.rotary[1].present ? l.rotary[1].column : l.rotary[2].column,
+           "rotary axes A B C under ORICONCW/ORICONCCW (expected the end orientation as A3 B3 C3)");
+    }
+    state_.rotary = rotary;
+    state_.axis_set_by_rotary_line = line_;
+    return turns;
+  }
+  if (state_.axis_set_by_rotary_line > 0) {
+    if (vector) {
+      fail(vector_column,
+           "tool vector A3 B3 C3 after the orientation was set by rotary axes A B C (line " +
+               std::to_string(state_.axis_set_by_rotary_line) +
+               "): the reader cannot tell the vector those axes give without the machine (expected "
+               "the orientation as A3 B3 C3 throughout, or as A B C throughout)");
+    }
+    // The rotary axes hold where they were programmed; the tip moves under TCP.
+    block.start_rotary = block.end_rotary = state_.rotary;
+    return false;
+  }
+  if (!vector) {
+    block.start_axis = block.end_axis = state_.tool_axis;
+    block.orientation = cone ? OrientationMode::Vector : state_.orientation;
+    return false;
+  }
+  if (state_.orimks) {
+    fail(vector_column, "tool vector A3 B3 C3 under ORIMKS (machine-frame vectors) is not supported "
+                        "(expected ORIWKS)");
+  }
+  // Components not programmed are 0 (Siemens: "vector components that have not been programmed
+  // are set to zero"); the length does not matter.
+  const Eigen::Vector3d v(l.vector[0].value, l.vector[1].value, l.vector[2].value);
+  if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxMagnitude || v.norm() < kMinVectorNorm) {
+    fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) +
+                            ") (expected a vector of nonzero length)");
+  }
+  const Eigen::Vector3d axis = v.normalized();
+  block.start_axis = state_.tool_axis;
+  block.end_axis = axis;
+  state_.rotary.given = {false, false, false};  // the axes that give this vector are not known
+  if (axis == state_.tool_axis) {
+    // The same vector again (CAM repeats it in every block): no turn, also under a cone mode.
+    block.orientation = cone ? OrientationMode::Vector : state_.orientation;
+    return false;
+  }
+  if (cone) {
+    if (state_.cone_axis.isZero()) {
+      fail(vector_column, "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
+    }
+    const Eigen::Vector3d& k = state_.cone_axis;
+    const double a0 = std::acos(std::clamp(block.start_axis.dot(k), -1.0, 1.0));
+    const double a1 = std::acos(std::clamp(axis.dot(k), -1.0, 1.0));
+    if (std::abs(a0 - a1) > kConeAngleToleranceRad) {
+      fail(vector_column, "end vector at " + num(a1 / kDegToRad) + " deg from the cone axis but the start at " +
+                              num(a0 / kDegToRad) +
+                              " deg (expected both on one cone about A6 B6 C6, within 0.006 deg)");
+    }
+    if (a0 < kConeAngleToleranceRad || M_PI - a0 < kConeAngleToleranceRad) {
+      fail(vector_column, "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
+    }
+    block.cone_axis = k;
+  } else if (state_.orientation == OrientationMode::Vector && block.start_axis.dot(axis) <= kOppositeAxisCosine) {
+    fail(vector_column, "tool vector opposite to the previous one (expected less than 180 deg of turn: "
+                        "no single great circle joins opposite vectors)");
+  }
+  state_.tool_axis = axis;
+  return true;
+}
+
+void Reader::arc(Block& block, bool clockwise) {
+  const char* code = clockwise ? "G2" : "G3";
+  int a = 0, b = 1, c = 2;  // the plane's first and second axes and its normal, as in G-code
+  const char* plane_name = "XY";
+  if (state_.plane == Plane::ZX) {
+    a = 2, b = 0, c = 1;
+    plane_name = "ZX";
+  } else if (state_.plane == Plane::YZ) {
+    a = 1, b = 2, c = 0;
+    plane_name = "YZ";
+  }
+  const Value& cr = l_.cr;
+  const bool ijk = l_.center[0].present || l_.center[1].present || l_.center[2].present;
+  const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
+  if (!cr.present && !ijk) fail(column, std::string(code) + " arc without I J K or CR= (expected the centre or the radius)");
+  if (cr.present && ijk) fail(cr.column, std::string(code) + " arc with both CR= and I J K (expected one or the other)");
+  for (int axis : {a, b}) {
+    if (!state_.known[static_cast<std::size_t>(axis)]) {
+      fail(column, std::string(code) + " arc from an unknown " + kAxisLetter[axis] +
+                       " position (expected a move that sets " + kAxisLetter[axis] + " before the first arc)");
+    }
+  }
+  const Eigen::Vector3d start = block.start_mm;
+  Eigen::Vector3d& end = block.end_mm;
+  const Eigen::Vector2d s(start[a], start[b]);
+  const Eigen::Vector2d e(end[a], end[b]);
+  Eigen::Vector2d center;
+  if (ijk) {
+    const Value& normal_word = l_.center[c];
+    if (normal_word.present) {
+      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name + "-plane arc (expected " +
+                                   kCenterLetter[a] + " and " + kCenterLetter[b] + ")");
+    }
+    const Eigen::Vector3d off = offset();
+    for (int k = 0; k < 2; ++k) {
+      const int axis = k == 0 ? a : b;
+      const Value& w = l_.center[axis];
+      // Missing: 0 relative to the start; I=AC(..) is the centre in the active frame.
+      const double v = w.present ? length_mm(w) : 0.0;
+      center[k] = w.present && w.mode == Value::Mode::Absolute ? v + off[axis] : start[axis] + v;
+      if (!(std::abs(center[k]) <= kMaxMagnitude)) {
+        fail(w.column, std::string(1, kCenterLetter[axis]) + " gives a centre out of range (expected within +-1e6 mm)");
+      }
+    }
+    const double r_start = (s - center).norm();
+    const double r_end = (e - center).norm();
+    if (r_start <= kSamePointMm || r_end <= kSamePointMm) {
+      fail(column, std::string("zero-radius ") + code + " arc (expected the centre away from the start and the end)");
+    }
+    const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
+    if (std::abs(r_end - r_start) > allowed) {
+      fail(column, std::string(code) + " arc end is not on its circle: radius " + num(r_start) +
+                       " mm at the start, " + num(r_end) + " mm at the end (expected equal within " +
+                       num(allowed) + " mm)");
+    }
+    if ((e - s).norm() <= kSamePointMm) {  // a full circle: start and end coincide exactly
+      end[a] = start[a];
+      end[b] = start[b];
+    }
+  } else {
+    // The centre lies on the chord's perpendicular bisector, to the right of start->end for G2
+    // with CR > 0 or G3 with CR < 0 (negative CR: the arc longer than 180 deg).
+    const double radius = length_mm(cr);
+    const Eigen::Vector2d d = e - s;
+    const double chord = d.norm();
+    if (chord <= kSamePointMm) {
+      fail(cr.column, std::string(code) + " CR= arc that ends where it starts (expected I J K for a full circle)");
+    }
+    const double abs_r = std::abs(radius);
+    if (!(abs_r <= kMaxMagnitude)) fail(cr.column, "CR=" + num(cr.value) + " (expected |CR| <= 1e6 mm)");
+    double half = chord / 2.0;
+    if (half - abs_r > kRadiusRoundingRelative * std::max(1.0, abs_r)) {
+      fail(cr.column, "arc radius |CR| = " + num(abs_r) + " mm is less than half the chord, " + num(half) +
+                          " mm (expected |CR| >= " + num(half) + " mm)");
+    }
+    half = std::min(half, abs_r);
+    const double to_center = std::sqrt((abs_r - half) * (abs_r + half));
+    const Eigen::Vector2d left = Eigen::Vector2d(-d.y(), d.x()) / chord;
+    const bool right = (clockwise && radius > 0.0) || (!clockwise && radius < 0.0);
+    center = (s + e) / 2.0 + (right ? -to_center : to_center) * left;
+  }
+  block.kind = MotionKind::Arc;
+  block.center_mm = start;
+  block.center_mm[a] = center[0];
+  block.center_mm[b] = center[1];
+  block.normal = Eigen::Vector3d::Zero();
+  block.normal[c] = clockwise ? -1.0 : 1.0;  // right-hand rule: G2 in G17 turns about -Z
+  block.turns = 1;
+}
+
+void Reader::motion() {
+  const Motion m = state_.motion;
+  Block block;
+  block.kind = m == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear;
+  std::array<bool, 3> programmed{};
+  block.end_mm = target(programmed);
+  block.start_mm = state_.position_mm;
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[static_cast<std::size_t>(a)]) block.start_mm[a] = block.end_mm[a];
+  }
+  const bool reorients = orient(block);
+  if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise) arc(block, m == Motion::ArcClockwise);
+  const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
+  if (m != Motion::Rapid) {
+    if (state_.inverse_time) {
+      if (!l_.f.present) {
+        fail(column, "G93 (inverse time) motion without F (expected F, 1 / minutes, in every G1 G2 G3 block)");
+      }
+      block.feed_mm_per_min = l_.f.value;
+      block.feed_mode = kinematics::FeedMode::InverseTime;
+    } else {
+      if (!(state_.feed_mm_per_min > 0.0)) {
+        fail(column, "feed motion without a feed (expected F in mm/min in this block or before; G1 is "
+                     "active from the start)");
+      }
+      block.feed_mm_per_min = state_.feed_mm_per_min;
+    }
+  }
+  block.exact_stop = state_.exact_stop || l_.exact_stop;
+  if (!state_.exact_stop) {
+    block.blend_tolerance_mm = m == Motion::Rapid ? state_.adispos_mm : state_.adis_mm;
+  }
+  append(block, programmed, reorients);
+}
+
+// Appends a block (unless it does not move) and brings the position and the unknown axes up
+// to date, as the G-code reader does: blocks made while an axis is unknown hold it still and
+// take its value when it is first programmed.
+void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reorients) {
+  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || reorients;
+  if (moves) {
+    block.tool = state_.tool;
+    block.spindle = state_.spindle;
+    block.spindle_rpm = state_.spindle_rpm;
+    block.source = kinematics::SourceRef{file_index_, line_};
+    program_.blocks.push_back(block);
+    for (std::size_t a = 0; a < 3; ++a) {
+      if (!state_.known[a] && !programmed[a]) state_.pending[a].push_back(program_.blocks.size() - 1);
+    }
+  }
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (!programmed[a] || state_.known[a]) continue;
+    state_.known[a] = true;
+    auto& pending = state_.pending[a];
+    if (pending.empty()) continue;
+    const double value = block.end_mm[static_cast<int>(a)];
+    std::size_t patched = 0;
+    std::string first;
+    for (std::size_t index : pending) {
+      if (index >= program_.blocks.size()) continue;  // a different Program was passed in
+      Block& b = program_.blocks[index];
+      if (first.empty() && b.source.file >= 0 && static_cast<std::size_t>(b.source.file) < program_.files.size()) {
+        first = program_.where(b.source);
+      }
+      b.start_mm[static_cast<int>(a)] = b.end_mm[static_cast<int>(a)] = value;
+      if (b.kind == MotionKind::Arc) b.center_mm[static_cast<int>(a)] = value;  // only the normal axis
+      ++patched;
+    }
+    pending.clear();
+    if (patched > 0) {
+      warn(l_.axis[a].column, std::to_string(patched) + " earlier move(s) (first at " + first + ") ran while " +
+                                  kAxisLetter[a] + " was unknown; they hold " + kAxisLetter[a] + " at " +
+                                  num(value) + " mm, its first programmed value");
+    }
+  }
+  state_.position_mm = block.end_mm;
+}
+
+void validate(const std::string& name, const SinumerikOptions& options) {
+  if (!std::isfinite(options.arc_tolerance_mm) || options.arc_tolerance_mm < 0.0) {
+    throw InputError(name, 0, 0, "arc tolerance " + num(options.arc_tolerance_mm) +
+                                     " mm in the options (expected a finite value >= 0)");
+  }
+  for (const auto& [key, offset] : options.work_offsets_mm) {
+    if (!offset.allFinite() || offset.cwiseAbs().maxCoeff() > kMaxMagnitude) {
+      throw InputError(name, 0, 0, "work offset " + key + " in the options (expected finite values within +-1e6 mm)");
+    }
+  }
+}
+
+}  // namespace
+
+void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOptions& options,
+                    kinematics::Program& program, SinumerikState& state) {
+  validate(name, options);
+  if (state.r.size() != static_cast<std::size_t>(kRParameters)) state.r.assign(kRParameters, 0.0);
+  const int file_index = static_cast<int>(program.files.size());
+  program.files.push_back(name);
+  Reader reader(name, options, program, state, file_index);
+  try {
+    reader.run(in);
+  } catch (const std::bad_alloc&) {
+    throw InputError(name, 0, 0, "out of memory (too many moves)");
+  } catch (const std::length_error&) {
+    throw InputError(name, 0, 0, "out of memory (too many moves)");
+  } catch (const std::ios_base::failure&) {
+    throw InputError(name, 0, 0, "read error (expected a readable text file)");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (state.pending[static_cast<std::size_t>(a)].empty()) continue;
+    program.warnings.push_back(name + ": " + kAxisLetter[a] + " has not been programmed by the end of this file; " +
+                               std::to_string(state.pending[static_cast<std::size_t>(a)].size()) +
+                               " move(s) hold it at 0 unless a later file sets it");
+  }
+}
+
+kinematics::Program read_sinumerik(const std::string& path, const SinumerikOptions& options) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw InputError(path, 0, 0, "is a directory (expected a SINUMERIK program file)");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    throw InputError(path, 0, 0, std::string("cannot open the SINUMERIK program: ") + std::strerror(errno));
+  }
+  kinematics::Program program;
+  SinumerikState state;
+  read_sinumerik(in, path, options, program, state);
+  return program;
+}
+
+}  // namespace vcut::io

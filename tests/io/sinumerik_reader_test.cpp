@@ -1,0 +1,451 @@
+// Tests of the SINUMERIK 840D reader. Expected values are worked by hand from the SINUMERIK
+// 840D sl programming manuals' semantics (noted where used): CR= centres from the chord and the
+// radius, I J K relative to the start, AC/IC per coordinate, R-parameter arithmetic in degrees,
+// normalised A3 B3 C3 vectors as closed forms, 25.4 mm/in; none is copied from the reader.
+#include <gtest/gtest.h>
+#include <vcut/io/input_error.h>
+#include <vcut/io/program_reader.h>
+#include <vcut/io/sinumerik_reader.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Block;
+using kinematics::FeedMode;
+using kinematics::MotionKind;
+using kinematics::OrientationMode;
+using kinematics::Program;
+using kinematics::SpindleState;
+
+// Hand values are exact decimals or closed forms in double: only the rounding of a few
+// operations separates them from the reader's results.
+constexpr double kTol = 1e-9;
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+Program read(const std::string& text, const SinumerikOptions& options = {}) {
+  Program program;
+  SinumerikState state;
+  std::istringstream in(text);
+  read_sinumerik(in, "test.mpf", options, program, state);
+  return program;
+}
+
+InputError error_of(const std::string& text, const SinumerikOptions& options = {}) {
+  try {
+    read(text, options);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return InputError("none");
+}
+
+// The error names test.mpf:line:column first and contains `fragment`.
+#define EXPECT_MPF_ERROR(text, line_, column_, fragment)                                      \
+  do {                                                                                        \
+    const InputError e_ = error_of(text);                                                     \
+    const std::string where_ = std::string("test.mpf:") + std::to_string(line_) + ":" +       \
+                               std::to_string(column_) + ": ";                                \
+    EXPECT_EQ(std::string(e_.what()).rfind(where_, 0), 0u) << e_.what();                      \
+    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();         \
+  } while (false)
+
+void expect_vec(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double tol = kTol) {
+  EXPECT_LE((got - want).norm(), tol) << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
+}
+
+// Seed 000, Fig. 6: the letter-space-number blocks of the gantry program, without TRAORI: axis
+// blocks (tool_pose false) with A and C as axis values in rad.
+TEST(SinumerikReader, SeedFig6AxisBlocks) {
+  const Program p = read(
+      "%_N_FIG6_MPF\n"
+      ";$PATH=/_N_MPF_DIR\n"
+      "N6 G1 F1000 ; feed for the blocks below\n"
+      "N7 X -1320 Y -1320 Z 1000 A 0 C 0\n"
+      "N8 X -1100 Y -1100 Z 800 A 45.330289 C 0\n"
+      "N9 X -700 Y -700 Z 500 A 60.562182 C -33.005382\n");
+  // N7 starts from an unknown position and does not turn (A 0 C 0 from 0): it only sets the
+  // position, as the first move of the G-code reader does.
+  ASSERT_EQ(p.blocks.size(), 2u);
+  const Block& b = p.blocks[0];
+  EXPECT_FALSE(b.tool_pose);
+  EXPECT_EQ(b.kind, MotionKind::Linear);
+  EXPECT_EQ(b.orientation, OrientationMode::Axes);
+  expect_vec(b.start_mm, {-1320, -1320, 1000});
+  expect_vec(b.end_mm, {-1100, -1100, 800});
+  EXPECT_TRUE(b.start_rotary.given[0] && !b.start_rotary.given[1] && b.start_rotary.given[2]);
+  EXPECT_NEAR(b.start_rotary.angle_rad[0], 0.0, kTol);
+  EXPECT_NEAR(b.end_rotary.angle_rad[0], 45.330289 * kDeg, kTol);
+  EXPECT_NEAR(b.end_rotary.angle_rad[2], 0.0, kTol);
+  EXPECT_DOUBLE_EQ(b.feed_mm_per_min, 1000.0);
+  EXPECT_EQ(b.source.line, 5);
+  EXPECT_EQ(p.where(b.source), "test.mpf:5");
+  const Block& c = p.blocks[1];
+  EXPECT_NEAR(c.start_rotary.angle_rad[0], 45.330289 * kDeg, kTol);
+  EXPECT_NEAR(c.end_rotary.angle_rad[0], 60.562182 * kDeg, kTol);
+  EXPECT_NEAR(c.end_rotary.angle_rad[2], -33.005382 * kDeg, kTol);
+  // Siemens' reset values: G1 (no motion code needed), G60 exact stop.
+  EXPECT_TRUE(c.exact_stop);
+  EXPECT_LT(c.blend_tolerance_mm, 0.0);
+}
+
+// The same block under TRAORI: X Y Z are the tip, A C rotary positions -> a tool pose with
+// end_rotary (the pose engine solves the tool axis through the machine).
+TEST(SinumerikReader, TraoriDirectAxes) {
+  const Program p = read(
+      "N5 TRAORI\n"
+      "N6 G1 F1000 X0 Y0 Z0\n"
+      "N7 X -1320 Y -1320 Z 1000 A 0 C 0\n"
+      "N8 X 10 A30 C=-45\n"
+      "N9 Y 5\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  const Block& a = p.blocks[0];
+  EXPECT_TRUE(a.tool_pose);
+  EXPECT_TRUE(a.end_rotary.any());
+  expect_vec(a.end_mm, {-1320, -1320, 1000});
+  EXPECT_FALSE(a.start_rotary.any());  // not known before N7: the engine keeps the machine's
+  const Block& b = p.blocks[1];
+  EXPECT_TRUE(b.tool_pose);
+  expect_vec(b.end_mm, {10, -1320, 1000});
+  EXPECT_TRUE(b.end_rotary.given[0] && !b.end_rotary.given[1] && b.end_rotary.given[2]);
+  EXPECT_NEAR(b.end_rotary.angle_rad[0], 30 * kDeg, kTol);
+  EXPECT_NEAR(b.end_rotary.angle_rad[2], -45 * kDeg, kTol);
+  EXPECT_NEAR(b.start_rotary.angle_rad[0], 0.0, kTol);
+  // N9 moves the tip only: the rotary axes hold (start = end rotary words).
+  const Block& c = p.blocks[2];
+  EXPECT_TRUE(c.tool_pose);
+  EXPECT_TRUE(c.end_rotary.any());
+  EXPECT_EQ(c.start_rotary.angle_rad, c.end_rotary.angle_rad);
+  EXPECT_NEAR(c.end_rotary.angle_rad[0], 30 * kDeg, kTol);
+}
+
+// ORIVECT: A3 B3 C3 normalised (3,0,4)/5; components not programmed are 0 (Siemens).
+TEST(SinumerikReader, OrivectVectorsNormalised) {
+  const Program p = read(
+      "TRAORI\nORIWKS\nORIVECT\n"
+      "G0 X0 Y0 Z0\n"
+      "G1 F500 X10 A3=3 B3=0 C3=4\n"
+      "X20 A3 = 2\n"
+      "ORIPLANE\n"
+      "X30 A3=0 B3=-1E-0 C3=1 ; 1E-0 is not a number: see the error test\n",
+      {});
+  (void)p;
+}
+
+TEST(SinumerikReader, OrivectBlocks) {
+  const Program p = read(
+      "TRAORI\nORIWKS\nORIVECT\n"
+      "G0 X0 Y0 Z0\n"
+      "G1 F500 X10 A3=3 B3=0 C3=4\n"
+      "X20 A3 = 2\n"
+      "ORIPLANE\n"
+      "X30 A3=0 B3=-1 C3=1\n"
+      "ORIAXES\n"
+      "X40 A3=0 B3=0 C3=1\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  const Block& a = p.blocks[0];
+  EXPECT_TRUE(a.tool_pose);
+  EXPECT_FALSE(a.end_rotary.any());
+  EXPECT_EQ(a.orientation, OrientationMode::Vector);
+  expect_vec(a.start_axis, {0, 0, 1});  // the reader's start: the spindle axis (+Z)
+  expect_vec(a.end_axis, {0.6, 0, 0.8});
+  expect_vec(p.blocks[1].start_axis, {0.6, 0, 0.8});
+  expect_vec(p.blocks[1].end_axis, {1, 0, 0});
+  EXPECT_EQ(p.blocks[2].orientation, OrientationMode::Vector);  // ORIPLANE = ORIVECT
+  const double h = std::sqrt(0.5);
+  expect_vec(p.blocks[2].end_axis, {0, -h, h});
+  EXPECT_EQ(p.blocks[3].orientation, OrientationMode::Axes);
+  expect_vec(p.blocks[3].end_axis, {0, 0, 1});
+  // A block repeating the vector does not reorient.
+  const Program q = read("TRAORI\nG1 F1 X0 Y0 Z0 A3=0 B3=0 C3=1\nX1 A3=0 B3=0 C3=2\n");
+  ASSERT_EQ(q.blocks.size(), 1u);
+  expect_vec(q.blocks[0].start_axis, q.blocks[0].end_axis);
+}
+
+// ORICONCW: the axis turns on the cone about A6 B6 C6 (normalised); start (1,0,1)/sqrt2 and end
+// (0,1,1)/sqrt2 both make 45 deg with (0,0,1).
+TEST(SinumerikReader, OriconCone) {
+  const Program p = read(
+      "TRAORI\n"
+      "G0 X0 Y0 Z0\n"
+      "G1 F100 A3=1 B3=0 C3=1\n"
+      "ORICONCW\n"
+      "X10 A3=0 B3=1 C3=1 A6=0 B6=0 C6=2\n"
+      "ORICONCCW\n"
+      "X20 A3=-1 B3=0 C3=1\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  const double h = std::sqrt(0.5);
+  const Block& b = p.blocks[1];
+  EXPECT_EQ(b.orientation, OrientationMode::ConeClockwise);
+  expect_vec(b.cone_axis, {0, 0, 1});
+  expect_vec(b.start_axis, {h, 0, h});
+  expect_vec(b.end_axis, {0, h, h});
+  EXPECT_EQ(p.blocks[2].orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(p.blocks[2].cone_axis, {0, 0, 1});  // A6 B6 C6 are kept
+  // The end off the start's cone: 0 deg vs 45 deg from the axis.
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n", 4, 11,
+                   "expected both on one cone");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCCW\nG1 F1 X1 A3=1 C3=1\n", 4, 11, "without a cone axis");
+}
+
+// CR= arcs: chord (0,0)->(10,0); |CR| = 5 is a half circle about (5,0); |CR| = 10 puts the centre
+// sqrt(100 - 25) = 8.660254 off the chord's midpoint: G2 CR>0 and G3 CR<0 to the right of
+// start->end (below), G2 CR<0 to the left (the long arc, more than 180 deg).
+TEST(SinumerikReader, CrArcs) {
+  const Program p = read(
+      "G17 G0 X0 Y0 Z0\n"
+      "G2 X10 Y0 CR=5 F200\n"
+      "G0 X0\n"
+      "G3 X10 CR=-10\n"
+      "G0 X0\n"
+      "G2 X10 CR=-10\n"
+      "G0 X0\n"
+      "G2 X10 CR=10\n");
+  ASSERT_EQ(p.blocks.size(), 7u);
+  const double d = std::sqrt(75.0);
+  const Block& a = p.blocks[0];
+  EXPECT_EQ(a.kind, MotionKind::Arc);
+  expect_vec(a.center_mm, {5, 0, 0});
+  expect_vec(a.normal, {0, 0, -1});  // G2 in G17: right-hand rule about -Z
+  EXPECT_EQ(a.turns, 1);
+  EXPECT_DOUBLE_EQ(a.feed_mm_per_min, 200.0);
+  expect_vec(p.blocks[2].center_mm, {5, -d, 0}, 1e-12);
+  expect_vec(p.blocks[2].normal, {0, 0, 1});
+  expect_vec(p.blocks[4].center_mm, {5, d, 0}, 1e-12);
+  expect_vec(p.blocks[6].center_mm, {5, -d, 0}, 1e-12);
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG2 X10 CR=4 F1\n", 2, 8, "less than half the chord");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG2 X0 CR=4 F1\n", 2, 7, "ends where it starts");
+  EXPECT_MPF_ERROR("G0 X0 Y0\nG2 X10 CR=5 I5 F1\n", 2, 13, "both CR= and I J K");
+}
+
+// I J K: relative to the start; I=AC(..) is the centre in the active frame (G54 offset added).
+TEST(SinumerikReader, IjkArcsAndOffsets) {
+  SinumerikOptions options;
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(100, 0, 0);
+  options.work_offsets_mm["G55"] = Eigen::Vector3d(0, 50, 0);
+  const Program p = read(
+      "G54 G0 X10 Y0 Z0\n"
+      "G3 X0 Y10 I-10 J0 F100\n"
+      "G0 X10 Y0\n"
+      "G3 X0 Y10 I=AC(0) J=AC(0)\n"
+      "G18 G0 X10 Y0 Z0\n"
+      "G2 X0 Z10 I-10\n"
+      "G500 G0 X1\n"
+      "G55 G0 Y1\n",
+      options);
+  ASSERT_EQ(p.blocks.size(), 7u);
+  expect_vec(p.blocks[0].start_mm, {110, 0, 0});
+  expect_vec(p.blocks[0].center_mm, {100, 0, 0});
+  expect_vec(p.blocks[0].end_mm, {100, 10, 0});
+  expect_vec(p.blocks[2].center_mm, {100, 0, 0});
+  // G18: the ZX plane, G2 turns about -Y; K missing is 0 relative to the start.
+  expect_vec(p.blocks[4].center_mm, {100, 0, 0});
+  expect_vec(p.blocks[4].normal, {0, -1, 0});
+  expect_vec(p.blocks[4].end_mm, {100, 0, 10});
+  expect_vec(p.blocks[5].end_mm, {1, 0, 10});   // G500: no offset
+  expect_vec(p.blocks[6].end_mm, {1, 51, 10});  // G55
+  EXPECT_MPF_ERROR("G0 X10 Y0 Z0\nG3 X0 Y11 I-10 F1\n", 2, 1, "not on its circle");
+  EXPECT_MPF_ERROR("G0 X10 Y0 Z0\nG3 X0 Y10 I-10 K1 F1\n", 2, 16, "K in a XY-plane arc");
+  EXPECT_MPF_ERROR("G0 X0\nG3 X1 Y1 I1 F1\n", 2, 1, "unknown Y position");
+}
+
+// AC( and IC( on one coordinate override G90/G91 for that coordinate only.
+TEST(SinumerikReader, AbsoluteAndIncremental) {
+  const Program p = read(
+      "G90 G0 X10 Y0 Z0\n"
+      "G91 G1 X5 Y=AC(20) F100\n"
+      "G90 X=IC(5) Z = 2\n"
+      "G70 X1\n"
+      "G700 X2 F10\n"
+      "G710 X0\n");
+  ASSERT_EQ(p.blocks.size(), 5u);
+  expect_vec(p.blocks[0].end_mm, {15, 20, 0});
+  expect_vec(p.blocks[1].end_mm, {20, 20, 2});
+  // G70: lengths in inches, the feed stays in mm/min; G700: the feed in inches too.
+  expect_vec(p.blocks[2].end_mm, {25.4, 20, 2});
+  EXPECT_DOUBLE_EQ(p.blocks[2].feed_mm_per_min, 100.0);
+  expect_vec(p.blocks[3].end_mm, {50.8, 20, 2});
+  EXPECT_DOUBLE_EQ(p.blocks[3].feed_mm_per_min, 254.0);
+  expect_vec(p.blocks[4].end_mm, {0, 20, 2});
+  EXPECT_MPF_ERROR("G91 G0 X5\n", 1, 8, "incremental X from an unknown X position");
+}
+
+// R parameters: arithmetic in degrees. SIN(30) = 0.5; SQRT(16) + TRUNC(-2.7) + ROUND(2.5) +
+// ABS(-3) = 4 - 2 + 3 + 3 = 8; ACOS(0.5) - ASIN(1) + TAN(45) * COS(60) = 60 - 90 + 0.5;
+// (1+2)*3 - 1.5EX2 / -(50) = 9 + 3; POT(3) - ATAN2(1, 1) / 45 = 9 - 1.
+TEST(SinumerikReader, RParameters) {
+  const Program p = read(
+      "G0 X0 Y0 Z0\n"
+      "R1=10 R2=R1*2+SIN(30)\n"
+      "R3=SQRT(16)+TRUNC(-2.7)+ROUND(2.5)+ABS(-3) R4 = ACOS(0.5)-ASIN(1)+TAN(45)*COS(60)\n"
+      "R5=(1+2)*3-1.5EX2/-(50)\n"
+      "X=R2 Y=R1+5 Z=POT(3)-ATAN2(1,1)/45\n"
+      "X=R3 Y=R4 Z=R5\n"
+      "R999=-R5 X=R999 ; assigned before it is used, left to right\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_vec(p.blocks[0].end_mm, {20.5, 15, 8}, 1e-12);
+  expect_vec(p.blocks[1].end_mm, {8, -29.5, 12}, 1e-12);
+  expect_vec(p.blocks[2].end_mm, {-12, -29.5, 12}, 1e-12);
+  EXPECT_MPF_ERROR("R1=1/0\n", 1, 5, "division by zero");
+  EXPECT_MPF_ERROR("R1=1/(R2-R2)\n", 1, 5, "division by zero");
+  EXPECT_MPF_ERROR("R1000=1\n", 1, 1, "R1000 (expected R0..R999)");
+  EXPECT_MPF_ERROR("G0 X=R1000\n", 1, 6, "R1000 (expected R0..R999)");
+  EXPECT_MPF_ERROR("G0 X=AC(10\n", 1, 11, "AC( without its closing ')'");
+  EXPECT_MPF_ERROR("G0 X=SQRT(-1)\n", 1, 6, "SQRT of -1");
+  EXPECT_MPF_ERROR("G0 X=ASIN(2)\n", 1, 6, "ASIN of 2");
+  EXPECT_MPF_ERROR("G0 X=FOO(2)\n", 1, 6, "unknown function FOO(");
+  EXPECT_MPF_ERROR("G0 X=Q\n", 1, 6, "unknown name Q");
+  EXPECT_MPF_ERROR("G0 X=1+AC(2)\n", 1, 8, "AC( inside an expression");
+  EXPECT_MPF_ERROR("R1=(1+2\n", 1, 8, "'(' without its closing ')'");
+  EXPECT_MPF_ERROR("R1 5\n", 1, 1, "R parameter without '='");
+  EXPECT_MPF_ERROR("R1=" + std::string(100, '(') + "1" + std::string(100, ')') + "\n", 1, 68,
+                   "nested more than 64 deep");
+}
+
+TEST(SinumerikReader, NumbersAndRanges) {
+  EXPECT_MPF_ERROR("G0 X1EX999\n", 1, 5, "out of range");
+  EXPECT_MPF_ERROR("G0 X 2000000 Y0 Z0\n", 1, 4, "out of range (expected within +-1e6 mm)");
+  EXPECT_MPF_ERROR("G0 X=1EX300*1EX300\n", 1, 12, "not a finite number");
+  EXPECT_MPF_ERROR("G0 X Y1\n", 1, 6, "expected a number");
+  EXPECT_MPF_ERROR("G0 X1EX\n", 1, 8, "EX without its exponent");
+  EXPECT_MPF_ERROR("G0 X1 X2\n", 1, 7, "X programmed twice");
+  EXPECT_MPF_ERROR("G0 G1 X1\n", 1, 4, "two motion codes");
+  EXPECT_MPF_ERROR("G1.5 X1\n", 1, 1, "expected a whole G code");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG1 X1 F0\n", 2, 7, "feed F0");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG1 X1\n", 2, 1, "without a feed");
+  EXPECT_MPF_ERROR("G0 X0 # 5\n", 1, 7, "unexpected '#'");
+  EXPECT_MPF_ERROR("G0 X0\nG0 X1\x01\n", 2, 6, "control byte");
+}
+
+// Feed, spindle, tool, modes carried into the blocks.
+TEST(SinumerikReader, TechnologyAndBlending) {
+  const Program p = read(
+      "n10 t1 m6 d1 ; lower case is read\n"
+      "N20 S12000 M3\n"
+      "N30 G0 X0 Y0 Z0\n"
+      "N40 G64 ADIS=0.05 ADISPOS=0.5 G1 X1 F2000\n"
+      "N50 G0 X2\n"
+      "N60 G9 G1 X3\n"
+      "N70 G60 X4\n"
+      "N80 T=\"2\" M6 M5 G93 G1 X5 F2\n"
+      "N90 G4 F3\n"
+      "N100 G94 X6\n"
+      "N110 M30\n"
+      "N120 this is never read\n");
+  ASSERT_EQ(p.blocks.size(), 6u);
+  const Block& a = p.blocks[0];
+  EXPECT_EQ(a.tool, 1);
+  EXPECT_EQ(a.spindle, SpindleState::Clockwise);
+  EXPECT_DOUBLE_EQ(a.spindle_rpm, 12000.0);
+  EXPECT_FALSE(a.exact_stop);
+  EXPECT_DOUBLE_EQ(a.blend_tolerance_mm, 0.05);
+  EXPECT_DOUBLE_EQ(p.blocks[1].blend_tolerance_mm, 0.5);  // G0: ADISPOS
+  EXPECT_EQ(p.blocks[1].kind, MotionKind::Rapid);
+  EXPECT_DOUBLE_EQ(p.blocks[1].feed_mm_per_min, 0.0);
+  EXPECT_TRUE(p.blocks[2].exact_stop);  // G9: this block only
+  EXPECT_DOUBLE_EQ(p.blocks[2].feed_mm_per_min, 2000.0);
+  EXPECT_TRUE(p.blocks[3].exact_stop);  // G60
+  EXPECT_EQ(p.blocks[4].tool, 2);
+  EXPECT_EQ(p.blocks[4].spindle, SpindleState::Off);
+  EXPECT_EQ(p.blocks[4].feed_mode, FeedMode::InverseTime);
+  EXPECT_DOUBLE_EQ(p.blocks[4].feed_mm_per_min, 2.0);
+  // G4 F3 is a dwell of 3 s, not a feed; G94 takes the last mm/min feed again.
+  EXPECT_EQ(p.blocks[5].feed_mode, FeedMode::UnitsPerMinute);
+  EXPECT_DOUBLE_EQ(p.blocks[5].feed_mm_per_min, 2000.0);
+  EXPECT_EQ(p.blocks[5].source.line, 10);
+  EXPECT_MPF_ERROR("T=\"DRILL_10\" M6\n", 1, 1, "tool name T=\"DRILL_10\"");
+  EXPECT_MPF_ERROR("M6\n", 1, 1, "M6 without a tool selected");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG93 G1 X1\n", 2, 5, "G93 (inverse time) motion without F");
+  EXPECT_MPF_ERROR("G4 F1 X2\n", 1, 1, "G4 (dwell) with axis words");
+}
+
+TEST(SinumerikReader, RefusedWords) {
+  EXPECT_MPF_ERROR("N10 ORICONIO\n", 1, 5,
+                   "ORICONIO (cone through an intermediate orientation) is not supported");
+  EXPECT_MPF_ERROR("N10 ORICONTO\n", 1, 5, "ORICONTO (cone with a tangential transition) is not supported");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10, "A7= (the intermediate orientation of ORICONIO)");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10, "NUT= (the cone's opening angle) is not supported");
+  EXPECT_MPF_ERROR("TRAORI\nORIMKS\nG1 F1 X0 Y0 Z0 A3=1 C3=1\n", 3, 16, "under ORIMKS");
+  EXPECT_MPF_ERROR("G1 F1 X0 Y0 Z0 A3=1 C3=1\n", 1, 16, "without TRAORI");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 Y0 Z0 A10\nX1 A3=1 C3=1\n", 3, 4,
+                   "after the orientation was set by rotary axes A B C (line 2)");
+  EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
+  EXPECT_MPF_ERROR("N10 IF R1>0 GOTOF END\n", 1, 5, "IF (program flow");
+  EXPECT_MPF_ERROR("N10 TRANS X10\n", 1, 5, "TRANS is not supported: it changes the frame");
+  EXPECT_MPF_ERROR("N10 G53 X10\n", 1, 5, "G53 is not supported");
+  EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
+  EXPECT_MPF_ERROR("N10 M123\n", 1, 5, "M123 is not supported");
+  EXPECT_MPF_ERROR("N10 CYCLE800(1,\"TC\")\n", 1, 5, "CYCLE800 is not supported");
+  EXPECT_MPF_ERROR("N10 H1=5\n", 1, 5, "H1= is not supported");
+  EXPECT_MPF_ERROR("N10 L100\n", 1, 5, "L is not supported");
+  EXPECT_MPF_ERROR("N10 G1 X=$AA_IM[X]\n", 1, 10, "system variables");
+  // Accepted and ignored: MSG, G40, G601, coolant.
+  EXPECT_NO_THROW(read("N10 MSG(\"roughing; pass 1\") G40 G601 M8 M9 D1\n"));
+}
+
+// With unsupported_as_warning: one warning per distinct word, the rest of the block is read.
+TEST(SinumerikReader, UnsupportedAsWarning) {
+  SinumerikOptions options;
+  options.unsupported_as_warning = true;
+  const Program p = read(
+      "N10 G0 X0 Y0 Z0 SOFT\n"
+      "N20 CYCLE832(0.01,1) G1 X1 F10 SOFT\n"
+      "N30 G95 H1=2 X2\n",
+      options);
+  ASSERT_EQ(p.blocks.size(), 2u);
+  expect_vec(p.blocks[1].end_mm, {2, 0, 0});
+  ASSERT_EQ(p.warnings.size(), 4u);
+  EXPECT_EQ(p.warnings[0].rfind("test.mpf:1:17: SOFT is not supported", 0), 0u) << p.warnings[0];
+  EXPECT_EQ(p.warnings[1].rfind("test.mpf:2:5: CYCLE832 is not supported", 0), 0u) << p.warnings[1];
+  EXPECT_EQ(p.warnings[2].rfind("test.mpf:3:5: G95 is not supported", 0), 0u) << p.warnings[2];
+  EXPECT_EQ(p.warnings[3].rfind("test.mpf:3:9: H1= is not supported", 0), 0u) << p.warnings[3];
+  // The refused words stay errors.
+  EXPECT_THROW(read("ORICONIO\n", options), InputError);
+}
+
+// Unknown start: moves before an axis is programmed hold it and take its first value.
+TEST(SinumerikReader, UnknownStart) {
+  const Program p = read("G1 F100 X10\nY5\nZ3\n");
+  ASSERT_EQ(p.blocks.size(), 2u);
+  expect_vec(p.blocks[0].start_mm, {10, 0, 3});
+  expect_vec(p.blocks[0].end_mm, {10, 5, 3});
+  expect_vec(p.blocks[1].start_mm, {10, 5, 3});
+  expect_vec(p.blocks[1].end_mm, {10, 5, 3});  // Z first set: no motion before it was known
+  EXPECT_EQ(p.blocks.size(), 2u);
+}
+
+TEST(SinumerikReader, ReadProgramDispatch) {
+  const auto dir = std::filesystem::temp_directory_path() / "vcut_sinumerik_test";
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "part.mpf").string();
+  std::ofstream(path) << "%_N_PART_MPF\nN10 G54 G0 X0 Y0 Z0\nN20 G1 X1 F100\nN30 M30\n";
+  ProgramOptions options;
+  options.gcode.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, 5);
+  const LoadedProgram loaded = read_program(path, "auto", options);
+  EXPECT_EQ(loaded.dialect, "sinumerik");
+  ASSERT_EQ(loaded.program.blocks.size(), 1u);
+  expect_vec(loaded.program.blocks[0].end_mm, {1, 0, 5});
+  EXPECT_EQ(loaded.program.where(loaded.program.blocks[0].source), path + ":3");
+  std::filesystem::remove_all(dir);
+}
+
+// R parameters and modes carry from one file to the next (one state).
+TEST(SinumerikReader, StateAcrossFiles) {
+  Program program;
+  SinumerikState state;
+  std::istringstream a("R7=3 G0 X0 Y0 Z0 TRAORI G91\nM30\n"), b("G1 F10 X=R7\n");
+  read_sinumerik(a, "a.mpf", {}, program, state);
+  read_sinumerik(b, "b.spf", {}, program, state);
+  ASSERT_EQ(program.blocks.size(), 1u);
+  expect_vec(program.blocks[0].end_mm, {3, 0, 0});  // M30 reset G91 to G90
+  EXPECT_EQ(program.where(program.blocks[0].source), "b.spf:1");
+}
+
+}  // namespace
+}  // namespace vcut::io
