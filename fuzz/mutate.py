@@ -26,6 +26,7 @@ quotes, commas, CR, BOM, hex floats, ...
 Usage (from the repository root, after building the drivers):
   python3 fuzz/mutate.py build/fuzz/machine_file_fuzz fuzz/corpus/machine --format yaml -n 5000
   python3 fuzz/mutate.py build/fuzz/csv_fuzz fuzz/corpus/csv --format csv -n 5000
+  python3 fuzz/mutate.py build/fuzz/sinumerik_fuzz fuzz/corpus/sinumerik --format sinumerik -n 5000
 The driver and the project's shared libraries it loads are copied first, so that a rebuild
 of the tree during the run does not make mutants fail for no fault of theirs.
 Options: --seed S (default 1), --batch B mutants per driver run (default 200), --timeout T
@@ -88,7 +89,23 @@ NUMBERS = [
     b"inf", b"0x1p3", b"1_0", b"12345678901234567890",
 ]
 
-FORMATS = {"yaml": YAML_TOKENS, "csv": CSV_TOKENS}
+# SINUMERIK part programs (--format sinumerik): words, expressions and their edge cases.
+SINUMERIK_TOKENS = [
+    b"=", b"==", b"(", b")", b"((", b"AC(", b"IC(", b"AC(1", b"=AC(", b"=IC(", b"R1", b"R999",
+    b"R1000", b"R1=", b"R2=R1*2", b"/0", b"*1EX300", b"1EX", b"1EX-400", b"SIN(", b"ATAN2(0,0)",
+    b"SQRT(-1)", b"ASIN(2)", b"POT(1EX200)", b"TRUNC(", b"CR=", b"CR=-", b"CR=0", b"CR=1EX9",
+    b"G0", b"G1", b"G2", b"G3", b"G4", b"G9", b"G17", b"G18", b"G19", b"G54", b"G500", b"G60",
+    b"G64", b"G642", b"G70", b"G700", b"G91", b"G93", b"G94", b"I", b"J0", b"K=AC(0)", b"F0",
+    b"F-1", b"F1EX6", b"S-1", b"T=\"", b"T=\"A\"", b"T99999", b"T100000", b"M6", b"M30", b"M3",
+    b"TRAORI", b"TRAORI(1)", b"TRAORI(", b"TRAFOOF", b"ORIVECT", b"ORIAXES", b"ORIPLANE",
+    b"ORICONCW", b"ORICONCCW", b"ORIMKS", b"ORIWKS", b"A3=", b"B3=0", b"C3=1", b"A3=-1 C3=0",
+    b"A6=0 B6=0 C6=1", b"A6=0", b"NUT=", b"A7=", b"ADIS=", b"ADISPOS=-1", b"MSG(\"", b"\"",
+    b";", b"%", b"$", b"$P_X", b"N", b"N7 X -1320", b" ", b"\t", b"\r", b"\n", b"\r\n",
+    b"\x00", b"\xef\xbb\xbf", b"\xff", b"X", b"Y", b"Z", b"A", b"C", b"-", b"+", b".", b"-.",
+    b"(" * 80, b"-" * 200, b"X=" + b"(" * 70, b"9" * 400, b"1" * 4000,
+]
+
+FORMATS = {"yaml": YAML_TOKENS, "csv": CSV_TOKENS, "sinumerik": SINUMERIK_TOKENS}
 
 
 def read_seeds(folder):

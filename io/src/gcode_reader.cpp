@@ -105,10 +105,12 @@ struct Code {       // one G or M word
 
 struct Line {
   std::array<Word, 26> words;  // by letter; G, M, N and O are not stored here
+  Word radius, angle;          // LinuxCNC's polar words @ (distance) and ^ (angle, deg)
   std::vector<Code> g;
   std::vector<Code> m;
   void clear() {
     words.fill(Word{});
+    radius = angle = Word{};
     g.clear();
     m.clear();
   }
@@ -449,6 +451,7 @@ class Reader : public detail::ValueContext {
   double unit() const { return state_.inches ? kMmPerInch : 1.0; }
   const Word& word(char letter) const { return line_words_.words[letter - 'A']; }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
+  Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
   void straight(MotionKind kind, int column);
   void arc(int column);
   void cycle(int column, bool new_series);
@@ -1076,7 +1079,17 @@ void Reader::lex(const std::string& s, size_t i) {
     }
     if (!is_letter(c)) {
       if (c == '[') fail(column, "expression without its word (expected a letter before '[')");
-      if (c == '@' || c == '^') fail(column, "polar coordinates (@ radius, ^ angle) are not supported");
+      if (c == '@' || c == '^') {
+        ++i;
+        std::string text;
+        const double value = word_value(s, i, c, text);
+        if (std::abs(value) > kMaxMagnitude) fail(column, std::string(1, c) + " value " + text + " is out of range");
+        Word& w = c == '@' ? line_words_.radius : line_words_.angle;
+        if (w.present) fail(column, std::string("second ") + c + " word on the line (expected at most one)");
+        w = Word{true, value, column};
+        first_word = false;
+        continue;
+      }
       if (c == '\r')
         fail(column, "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column, "unexpected " + describe(c) + " (expected a word: a letter and a number)");
@@ -1153,9 +1166,28 @@ void Reader::lex(const std::string& s, size_t i) {
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   Eigen::Vector3d end = state_.position_mm;
   const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
+  const Word& radius = line_words_.radius;
+  const Word& angle = line_words_.angle;
+  if (radius.present || angle.present) {
+    // Polar X Y (LinuxCNC): about the program origin, the distance @ and the angle ^ (deg);
+    // one not given keeps the current point's; in G91 both add to the current point's.
+    const int column = radius.present ? radius.column : angle.column;
+    for (char letter : {'X', 'Y'}) {
+      if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
+    }
+    if (machine_coordinates_) fail(column, "polar @/^ with G53 (expected X Y)");
+    if (!state_.known[0] || !state_.known[1]) {
+      fail(column, "polar @/^ while the X or Y position is unknown is not supported: vcut assumes no start position "
+                   "(expected an X Y move first)");
+    }
+    const Eigen::Vector2d p = polar_point((state_.position_mm - offset).head<2>());
+    end.x() = p.x() + offset.x();
+    end.y() = p.y() + offset.y();
+    programmed[0] = programmed[1] = true;
+  }
   for (int a = 0; a < 3; ++a) {
     const Word& w = word(kAxisLetter[a]);
-    programmed[a] = w.present;
+    if (!(a < 2 && (radius.present || angle.present))) programmed[a] = w.present;
     if (!w.present) continue;
     const double v = w.value * unit();
     if (machine_coordinates_) {
@@ -1177,6 +1209,22 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     }
   }
   return end;
+}
+
+// The point the line's polar words @ ^ name, from `from` (program coordinates, mm): its
+// distance from the program origin and its angle, replaced (G90) or added to (G91).
+Eigen::Vector2d Reader::polar_point(const Eigen::Vector2d& from) const {
+  const Word& radius = line_words_.radius;
+  const Word& angle = line_words_.angle;
+  double r = from.norm() / unit(), t = std::atan2(from.y(), from.x()) * 180.0 / M_PI;
+  if (state_.incremental) {
+    r += radius.present ? radius.value : 0.0;
+    t += angle.present ? angle.value : 0.0;
+  } else {
+    if (radius.present) r = radius.value;
+    if (angle.present) t = angle.value;
+  }
+  return Eigen::Vector2d(std::cos(t * M_PI / 180.0), std::sin(t * M_PI / 180.0)) * (r * unit());
 }
 
 // Appends a block (unless it does not move) and brings the position and the unknown axes up
@@ -1544,9 +1592,12 @@ void Reader::cycle(int column, bool new_series) {
   const double u = unit();
   double r = state_.cycle_r * u, bottom = state_.cycle_z * u;
   Eigen::Vector2d hole = at.head<2>(), step = Eigen::Vector2d::Zero();
+  if (new_series) state_.cycle_initial_z_mm = at.z();
   if (state_.incremental) {
-    r = at.z() + r;        // R from the current height
-    bottom = r + bottom;   // Z from R
+    // As LinuxCNC's rs274 does: R from the height the series started at (not from this
+    // line's), Z from R.
+    r = state_.cycle_initial_z_mm + r;
+    bottom = r + bottom;
     for (int a = 0; a < 2; ++a) {
       if (word(kAxisLetter[a]).present) step[a] = word(kAxisLetter[a]).value * u;
     }
@@ -1570,11 +1621,20 @@ void Reader::cycle(int column, bool new_series) {
     at = Eigen::Vector3d(x, y, z);
   };
   if (new_series && at.z() < r) move(MotionKind::Rapid, at.x(), at.y(), r);
-  const double clear = state_.retract_to_r ? r : at.z();
+  // G98: back to the height the series started at, but never below R.
+  const double clear = state_.retract_to_r ? r : std::max(state_.cycle_initial_z_mm, r);
   const double rapid_delta = 0.254;  // mm: LinuxCNC's 0.010 inch back-off before the next peck
   double height = at.z();
+  const bool polar = line_words_.radius.present || line_words_.angle.present;
+  if (polar && (word('X').present || word('Y').present)) {
+    fail(column, std::string(name) + " with both X/Y and polar @/^ (expected one or the other)");
+  }
   for (int n = 0; n < repeats; ++n) {
-    if (state_.incremental) hole += step;
+    if (polar) {
+      hole = polar_point(hole);  // G91: each repeat turns and stretches from the last hole
+    } else if (state_.incremental) {
+      hole += step;
+    }
     const double x = hole.x(), y = hole.y();
     move(MotionKind::Rapid, x, y, height);
     if (height != r) move(MotionKind::Rapid, x, y, r);
@@ -1866,7 +1926,7 @@ bool Reader::execute() {
 
   // --- Motion.
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
-                        word('B').present || word('C').present;
+                        word('B').present || word('C').present || ln.radius.present || ln.angle.present;
   const Code* motion_code = by_group[kMotion];
   const bool explicit_motion = motion_code != nullptr && motion_code->number <= 30;
   int axis_column = INT_MAX;  // the first axis word

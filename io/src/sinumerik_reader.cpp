@@ -62,7 +62,9 @@ bool is_digit(char c) { return c >= '0' && c <= '9'; }
 bool is_upper(char c) { return (c >= 'A' && c <= 'Z') || c == '_'; }
 char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
 
-int clamp_int(std::size_t v) { return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v); }
+int clamp_int(std::size_t v) {
+  return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v);
+}
 
 std::string num(double v) {
   char buf[40];
@@ -161,7 +163,8 @@ class Reader {
       if (number == INT_MAX) fail_at(number, 0, "too many lines");
       ++number;
       line_ = number;
-      if (r == LineSource::kTooLong) fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
+      if (r == LineSource::kTooLong)
+        fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
       if (!block(text)) break;
     }
     if (in.bad()) fail_at(number + 1, 0, "read error (expected a readable text file)");
@@ -171,13 +174,17 @@ class Reader {
   [[noreturn]] void fail_at(int line, int column, const std::string& message) const {
     throw InputError(name_, line, column, message);
   }
-  [[noreturn]] void fail(int column, const std::string& message) const { fail_at(line_, column, message); }
+  [[noreturn]] void fail(int column, const std::string& message) const {
+    fail_at(line_, column, message);
+  }
   [[noreturn]] void fail_here(const std::string& message) const { fail(column(i_), message); }
   int column(std::size_t i) const { return clamp_int(i + 1); }
   std::string where(int column) const {
     return name_ + ":" + std::to_string(line_) + ":" + std::to_string(column);
   }
-  void warn(int column, const std::string& message) { program_.warnings.push_back(where(column) + ": " + message); }
+  void warn(int column, const std::string& message) {
+    program_.warnings.push_back(where(column) + ": " + message);
+  }
 
   // An unsupported word: an error, or one warning per distinct word (then ignored).
   void unsupported(const std::string& word, int column, const std::string& why = {}) {
@@ -194,7 +201,8 @@ class Reader {
   void skip_argument();
   void code(char letter, int column);
   void keyword(const std::string& name, int column);
-  void set(Value& v, const char* name, double value, int column, Value::Mode mode = Value::Mode::Modal);
+  void set(Value& v, const char* name, double value, int column,
+           Value::Mode mode = Value::Mode::Modal);
   double literal();
   double expression(int depth);
   double term(int depth);
@@ -224,8 +232,9 @@ class Reader {
   double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
   Eigen::Vector3d offset() const {
     const auto it = options_.work_offsets_mm.find(state_.work_offset);
-    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero()
-                                                                                : it->second;
+    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end()
+               ? Eigen::Vector3d::Zero()
+               : it->second;
   }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   bool orient(Block& block);
@@ -258,7 +267,8 @@ bool Reader::block(std::string& text) {
     const auto u = static_cast<unsigned char>(c);
     if (u < 0x20 || u == 0x7F) {
       if (c == '\t' || c == '\f' || c == '\v') continue;
-      if (c == '\r') fail(column(k), "carriage return inside a line (expected \\n or \\r\\n line ends)");
+      if (c == '\r')
+        fail(column(k), "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column(k), "not a text file: control byte " + describe(c) + " (expected an NC program)");
     }
     if (c == '"') quoted = !quoted;
@@ -294,7 +304,8 @@ void Reader::word() {
     unsupported("/", col, "block skip");
     return;
   }
-  if (!is_upper(c)) fail(col, "unexpected " + describe(c) + " (expected a word: an address and its value)");
+  if (!is_upper(c))
+    fail(col, "unexpected " + describe(c) + " (expected a word: an address and its value)");
   const std::string name = letters();
   // An address with a numeric extension (R1, A3, CR...) is always followed by '='; a letter
   // followed by digits and no '=' is the letter and its value (X10, G1, A3 = A at 3 deg).
@@ -325,7 +336,8 @@ void Reader::set(Value& v, const char* name, double value, int column, Value::Mo
   v.mode = mode;
 }
 
-// A number written after an address letter without '=': [sign] digits [. digits] [EX [sign] digits].
+// A number written after an address letter without '=': [sign] digits [. digits] [EX [sign]
+// digits].
 double Reader::literal() {
   skip_blanks();
   const std::size_t start = i_;
@@ -428,19 +440,22 @@ double Reader::primary(int depth) {
   }
   if (at('(')) {
     if (name == "AC" || name == "IC") {
-      fail(col, name + "( inside an expression (expected it as the whole value of one coordinate, X=" +
+      fail(col, name +
+                    "( inside an expression (expected it as the whole value of one coordinate, X=" +
                     name + "(...))");
     }
     ++i_;
     return function(name, col, depth + 1);
   }
-  fail(col, "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
+  fail(col,
+       "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
 }
 
 double Reader::function(const std::string& name, int col, int depth) {
-  static const char* const kKnown[] = {"SIN", "COS",  "TAN", "ASIN", "ACOS",  "ATAN2",
+  static const char* const kKnown[] = {"SIN",  "COS", "TAN", "ASIN",  "ACOS", "ATAN2",
                                        "SQRT", "ABS", "POT", "TRUNC", "ROUND"};
-  if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return name == k; })) {
+  if (std::none_of(std::begin(kKnown), std::end(kKnown),
+                   [&](const char* k) { return name == k; })) {
     fail(col, "unknown function " + name +
                   "( (expected SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT TRUNC ROUND)");
   }
@@ -525,15 +540,20 @@ void Reader::assignment(const std::string& address, int col) {
           const double v = expression(1);
           expect(')', fn + "( without its closing ')'");
           Value* slot = nullptr;
-          if (a >= 'X') slot = &l_.axis[a - 'X'];
-          else if (a >= 'I') slot = &l_.center[a - 'I'];
-          else slot = &l_.rotary[a - 'A'];
+          if (a >= 'X')
+            slot = &l_.axis[a - 'X'];
+          else if (a >= 'I')
+            slot = &l_.center[a - 'I'];
+          else
+            slot = &l_.rotary[a - 'A'];
           set(*slot, address.c_str(), v, col, mode);
           return;
         }
       }
       const double v = expression(0);
-      Value* slot = a >= 'X' ? &l_.axis[a - 'X'] : a >= 'I' ? &l_.center[a - 'I'] : &l_.rotary[a - 'A'];
+      Value* slot = a >= 'X'   ? &l_.axis[a - 'X']
+                    : a >= 'I' ? &l_.center[a - 'I']
+                               : &l_.rotary[a - 'A'];
       set(*slot, address.c_str(), v, col);
       return;
     }
@@ -543,11 +563,13 @@ void Reader::assignment(const std::string& address, int col) {
       if (close == std::string::npos) fail(column(start), "string without its closing '\"'");
       const std::string text = s_.substr(i_, close - i_);
       i_ = close + 1;
-      const bool numeric = !text.empty() && text.size() <= 5 &&
-                           std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
+      const bool numeric =
+          !text.empty() && text.size() <= 5 &&
+          std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
       if (!numeric) {
         fail(col, "tool name T=\"" + text.substr(0, 64) +
-                      "\" (expected a tool number, T1 or T=\"1\": tools are numbered in the tool library)");
+                      "\" (expected a tool number, T1 or T=\"1\": tools are numbered in the tool "
+                      "library)");
       }
       set(l_.t, "T", std::stod(text), col);
       return;
@@ -574,9 +596,10 @@ void Reader::assignment(const std::string& address, int col) {
     if (address == kCone[k]) return set(l_.cone[k], kCone[k], expression(0), col);
   }
   if (address == "A7" || address == "B7" || address == "C7") {
-    fail(col, address +
-                  "= (the intermediate orientation of ORICONIO) is not supported (expected the cone by "
-                  "ORICONCW or ORICONCCW with A6 B6 C6)");
+    fail(col,
+         address +
+             "= (the intermediate orientation of ORICONIO) is not supported (expected the cone by "
+             "ORICONCW or ORICONCCW with A6 B6 C6)");
   }
   if (address == "NUT") {
     fail(col,
@@ -614,7 +637,8 @@ void Reader::code(char letter, int col) {
       fail(col, "R parameter without '=' (expected an assignment such as R1=10)");
     case 'N': {
       const double v = literal();
-      if (v < 0.0 || v != std::floor(v)) fail(col, "block number N" + num(v) + " (expected a whole number)");
+      if (v < 0.0 || v != std::floor(v))
+        fail(col, "block number N" + num(v) + " (expected a whole number)");
       return;
     }
     default:
@@ -741,8 +765,9 @@ void Reader::code(char letter, int col) {
     case 111:
     case 112:
     case 153:
-      fail(col, word + " is not supported: its axis words are not a motion to the programmed point "
-                       "(expected G0 G1 G2 G3 moves in the workpiece frame)");
+      fail(col, word +
+                    " is not supported: its axis words are not a motion to the programmed point "
+                    "(expected G0 G1 G2 G3 moves in the workpiece frame)");
     case 33:
     case 34:
     case 35:
@@ -755,27 +780,29 @@ void Reader::code(char letter, int col) {
 }
 
 void Reader::keyword(const std::string& name, int col) {
-  static const char* const kFlow[] = {"IF",     "ELSE", "ENDIF", "WHILE", "ENDWHILE", "FOR",
-                                      "ENDFOR", "LOOP", "ENDLOOP", "REPEAT", "UNTIL", "GOTO",
-                                      "GOTOF",  "GOTOB", "GOTOC", "CASE",  "PROC",  "RET",
-                                      "DEF",    "CALL", "PCALL", "MCALL", "EXTCALL", "REPEATB"};
+  static const char* const kFlow[] = {
+      "IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",   "ENDFOR",  "LOOP",
+      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB", "GOTOC",   "CASE",
+      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "MCALL", "EXTCALL", "REPEATB"};
   for (const char* w : kFlow) {
     if (name == w) {
-      fail(col, name +
-                    " (program flow, calls and definitions) is not supported: skipping it would change "
-                    "what the program does (expected a program of motion blocks)");
+      fail(col,
+           name +
+               " (program flow, calls and definitions) is not supported: skipping it would change "
+               "what the program does (expected a program of motion blocks)");
     }
   }
   // Frames and motion types whose axis words would otherwise be read as a plain move.
-  static const char* const kNotMoves[] = {"TRANS", "ATRANS", "ROT",    "AROT",    "SCALE",  "ASCALE",
-                                          "MIRROR", "AMIRROR", "ROTS", "AROTS",   "CROTS",  "SUPA",
-                                          "CIP",   "CT",     "ASPLINE", "BSPLINE", "CSPLINE", "POLY",
-                                          "INVCW", "INVCCW", "TRACYL", "TRANSMIT", "TRAANG", "OFFN"};
+  static const char* const kNotMoves[] = {
+      "TRANS",   "ATRANS", "ROT",   "AROT",   "SCALE",  "ASCALE",   "MIRROR",  "AMIRROR",
+      "ROTS",    "AROTS",  "CROTS", "SUPA",   "CIP",    "CT",       "ASPLINE", "BSPLINE",
+      "CSPLINE", "POLY",   "INVCW", "INVCCW", "TRACYL", "TRANSMIT", "TRAANG",  "OFFN"};
   for (const char* w : kNotMoves) {
     if (name == w) {
-      fail(col, name + " is not supported: it changes the frame or the kind of motion, so the "
-                       "block's axis words cannot be read as a plain move (expected G0 G1 G2 G3 "
-                       "in the workpiece frame)");
+      fail(col, name +
+                    " is not supported: it changes the frame or the kind of motion, so the "
+                    "block's axis words cannot be read as a plain move (expected G0 G1 G2 G3 "
+                    "in the workpiece frame)");
     }
   }
   if (name == "TRAORI") {
@@ -784,8 +811,9 @@ void Reader::keyword(const std::string& name, int col) {
       if (!at(')')) {
         const double v = expression(1);
         if (v != 1.0) {
-          fail(col, "TRAORI(" + num(v) +
-                        ") (expected TRAORI or TRAORI(1): the machine file has one transformation)");
+          fail(col,
+               "TRAORI(" + num(v) +
+                   ") (expected TRAORI or TRAORI(1): the machine file has one transformation)");
         }
       }
       expect(')', "TRAORI( without its closing ')'");
@@ -819,8 +847,9 @@ void Reader::keyword(const std::string& name, int col) {
     return;
   }
   if (name == "ORICONIO" || name == "ORICONTO") {
-    fail(col, name + (name == "ORICONIO" ? " (cone through an intermediate orientation)"
-                                         : " (cone with a tangential transition)") +
+    fail(col, name +
+                  (name == "ORICONIO" ? " (cone through an intermediate orientation)"
+                                      : " (cone with a tangential transition)") +
                   " is not supported (expected ORIVECT, ORIPLANE, ORIAXES, ORICONCW or ORICONCCW)");
   }
   if (name == "MSG") {
@@ -846,7 +875,8 @@ void Reader::execute() {
     state_.selected_tool = static_cast<int>(t);
   }
   if (l.m6) {
-    if (state_.selected_tool < 0) fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
+    if (state_.selected_tool < 0)
+      fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
     state_.tool = state_.selected_tool;
   }
   if (l.d.present) {
@@ -862,7 +892,7 @@ void Reader::execute() {
     state_.spindle_rpm = l.s.value;
   }
   if (l.spindle >= 0) {
-    state_.spindle = l.spindle == 3 ? SpindleState::Clockwise
+    state_.spindle = l.spindle == 3   ? SpindleState::Clockwise
                      : l.spindle == 4 ? SpindleState::CounterClockwise
                                       : SpindleState::Off;
   }
@@ -882,10 +912,12 @@ void Reader::execute() {
                                     : Motion::ArcCounterClockwise;
   }
   bool moves = false;
-  for (int k = 0; k < 3; ++k) moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
+  for (int k = 0; k < 3; ++k)
+    moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
   if (l.dwell_column > 0) {
     // G4 F.. (s) or S.. (revolutions): a dwell. Its F and S are not the feed and speed.
-    if (moves) fail(l.dwell_column, "G4 (dwell) with axis words in the same block (expected G4 alone)");
+    if (moves)
+      fail(l.dwell_column, "G4 (dwell) with axis words in the same block (expected G4 alone)");
     return;
   }
   if (l.f.present) {
@@ -898,23 +930,26 @@ void Reader::execute() {
   for (int k = 0; k < 3; ++k) {
     if (l.cone[k].present) {
       if (state_.orimks) {
-        fail(l.cone[k].column, "cone axis A6 B6 C6 under ORIMKS (machine-frame vectors) is not supported "
-                               "(expected ORIWKS)");
+        fail(l.cone[k].column,
+             "cone axis A6 B6 C6 under ORIMKS (machine-frame vectors) is not supported "
+             "(expected ORIWKS)");
       }
       Eigen::Vector3d c(l.cone[0].value, l.cone[1].value, l.cone[2].value);  // missing: 0
       if (!c.allFinite() || c.norm() < kMinVectorNorm || c.cwiseAbs().maxCoeff() > kMaxMagnitude) {
-        fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " + num(c.z()) +
-                                   ") (expected a vector of nonzero length)");
+        fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " +
+                                   num(c.z()) + ") (expected a vector of nonzero length)");
       }
       state_.cone_axis = c.normalized();
       break;
     }
   }
-  const bool arc = state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
+  const bool arc =
+      state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
   if (!arc) {
     for (int k = 0; k < 3; ++k) {
       if (l.center[k].present) {
-        fail(l.center[k].column, std::string(1, kCenterLetter[k]) + " outside an arc (expected G2 or G3)");
+        fail(l.center[k].column,
+             std::string(1, kCenterLetter[k]) + " outside an arc (expected G2 or G3)");
       }
     }
     if (l.cr.present) fail(l.cr.column, "CR= outside an arc (expected G2 or G3)");
@@ -937,12 +972,13 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     if (!w.present) continue;
     programmed[static_cast<std::size_t>(a)] = true;
     const double v = length_mm(w);
-    const bool incremental = w.mode == Value::Mode::Incremental ||
-                             (w.mode == Value::Mode::Modal && state_.incremental);
+    const bool incremental =
+        w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
     if (incremental) {
       if (!state_.known[static_cast<std::size_t>(a)]) {
-        fail(w.column, std::string("incremental ") + kAxisLetter[a] + " from an unknown " + kAxisLetter[a] +
-                           " position (expected an absolute " + kAxisLetter[a] + " first)");
+        fail(w.column, std::string("incremental ") + kAxisLetter[a] + " from an unknown " +
+                           kAxisLetter[a] + " position (expected an absolute " + kAxisLetter[a] +
+                           " first)");
       }
       end[a] = state_.position_mm[a] + v;
     } else {
@@ -961,7 +997,7 @@ bool Reader::orient(Block& block) {
   const Line& l = l_;
   const bool vector = l.vector[0].present || l.vector[1].present || l.vector[2].present;
   const bool axes = l.rotary[0].present || l.rotary[1].present || l.rotary[2].present;
-  const int vector_column = l.vector[0].present ? l.vector[0].column
+  const int vector_column = l.vector[0].present   ? l.vector[0].column
                             : l.vector[1].present ? l.vector[1].column
                                                   : l.vector[2].column;
   // Rotary words: degrees, G90/G91 or AC/IC as the linear axes (G70 does not apply).
@@ -972,10 +1008,11 @@ bool Reader::orient(Block& block) {
     const auto k = static_cast<std::size_t>(r);
     const char letter = static_cast<char>('A' + r);
     if (!(std::abs(w.value) <= kMaxMagnitude)) {
-      fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6)");
+      fail(w.column, std::string(1, letter) + " " + num(w.value) +
+                         " deg is out of range (expected within +-1e6)");
     }
-    const bool incremental = w.mode == Value::Mode::Incremental ||
-                             (w.mode == Value::Mode::Modal && state_.incremental);
+    const bool incremental =
+        w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
     if (incremental && !rotary.given[k]) {
       fail(w.column, std::string("incremental ") + letter + " from an unknown " + letter +
                          " position (expected an absolute " + letter + " first)");
@@ -988,7 +1025,8 @@ bool Reader::orient(Block& block) {
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   if (!state_.traori) {
     if (vector) {
-      fail(vector_column, "tool vector A3 B3 C3 without TRAORI (expected TRAORI before vector orientation)");
+      fail(vector_column,
+           "tool vector A3 B3 C3 without TRAORI (expected TRAORI before vector orientation)");
     }
     if (axes) state_.rotary_program = true;
     state_.rotary = rotary;
@@ -1006,12 +1044,15 @@ bool Reader::orient(Block& block) {
   const bool cone = state_.orientation == OrientationMode::ConeClockwise ||
                     state_.orientation == OrientationMode::ConeCounterClockwise;
   if (vector && axes) {
-    fail(vector_column, "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
+    fail(vector_column,
+         "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
   }
   if (axes) {
     // Direct rotary axis positions under TRAORI: the pose engine solves the tool axis.
     if (cone) {
-      fail(l.rotary[0].present ? l.rotary[0].column : l.rotary[1].present ? l.rotary[1].column : l.rotary[2].column,
+      fail(l.rotary[0].present   ? l.rotary[0].column
+           : l.rotary[1].present ? l.rotary[1].column
+                                 : l.rotary[2].column,
            "rotary axes A B C under ORICONCW/ORICONCCW (expected the end orientation as A3 B3 C3)");
     }
     state_.rotary = rotary;
@@ -1036,15 +1077,16 @@ bool Reader::orient(Block& block) {
     return false;
   }
   if (state_.orimks) {
-    fail(vector_column, "tool vector A3 B3 C3 under ORIMKS (machine-frame vectors) is not supported "
-                        "(expected ORIWKS)");
+    fail(vector_column,
+         "tool vector A3 B3 C3 under ORIMKS (machine-frame vectors) is not supported "
+         "(expected ORIWKS)");
   }
   // Components not programmed are 0 (Siemens: "vector components that have not been programmed
   // are set to zero"); the length does not matter.
   const Eigen::Vector3d v(l.vector[0].value, l.vector[1].value, l.vector[2].value);
   if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxMagnitude || v.norm() < kMinVectorNorm) {
-    fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) +
-                            ") (expected a vector of nonzero length)");
+    fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " +
+                            num(v.z()) + ") (expected a vector of nonzero length)");
   }
   const Eigen::Vector3d axis = v.normalized();
   block.start_axis = state_.tool_axis;
@@ -1057,23 +1099,27 @@ bool Reader::orient(Block& block) {
   }
   if (cone) {
     if (state_.cone_axis.isZero()) {
-      fail(vector_column, "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
+      fail(vector_column,
+           "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
     }
     const Eigen::Vector3d& k = state_.cone_axis;
     const double a0 = std::acos(std::clamp(block.start_axis.dot(k), -1.0, 1.0));
     const double a1 = std::acos(std::clamp(axis.dot(k), -1.0, 1.0));
     if (std::abs(a0 - a1) > kConeAngleToleranceRad) {
-      fail(vector_column, "end vector at " + num(a1 / kDegToRad) + " deg from the cone axis but the start at " +
-                              num(a0 / kDegToRad) +
+      fail(vector_column, "end vector at " + num(a1 / kDegToRad) +
+                              " deg from the cone axis but the start at " + num(a0 / kDegToRad) +
                               " deg (expected both on one cone about A6 B6 C6, within 0.006 deg)");
     }
     if (a0 < kConeAngleToleranceRad || M_PI - a0 < kConeAngleToleranceRad) {
-      fail(vector_column, "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
+      fail(vector_column,
+           "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
     }
     block.cone_axis = k;
-  } else if (state_.orientation == OrientationMode::Vector && block.start_axis.dot(axis) <= kOppositeAxisCosine) {
-    fail(vector_column, "tool vector opposite to the previous one (expected less than 180 deg of turn: "
-                        "no single great circle joins opposite vectors)");
+  } else if (state_.orientation == OrientationMode::Vector &&
+             block.start_axis.dot(axis) <= kOppositeAxisCosine) {
+    fail(vector_column,
+         "tool vector opposite to the previous one (expected less than 180 deg of turn: "
+         "no single great circle joins opposite vectors)");
   }
   state_.tool_axis = axis;
   return true;
@@ -1093,12 +1139,16 @@ void Reader::arc(Block& block, bool clockwise) {
   const Value& cr = l_.cr;
   const bool ijk = l_.center[0].present || l_.center[1].present || l_.center[2].present;
   const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
-  if (!cr.present && !ijk) fail(column, std::string(code) + " arc without I J K or CR= (expected the centre or the radius)");
-  if (cr.present && ijk) fail(cr.column, std::string(code) + " arc with both CR= and I J K (expected one or the other)");
+  if (!cr.present && !ijk)
+    fail(column,
+         std::string(code) + " arc without I J K or CR= (expected the centre or the radius)");
+  if (cr.present && ijk)
+    fail(cr.column, std::string(code) + " arc with both CR= and I J K (expected one or the other)");
   for (int axis : {a, b}) {
     if (!state_.known[static_cast<std::size_t>(axis)]) {
       fail(column, std::string(code) + " arc from an unknown " + kAxisLetter[axis] +
-                       " position (expected a move that sets " + kAxisLetter[axis] + " before the first arc)");
+                       " position (expected a move that sets " + kAxisLetter[axis] +
+                       " before the first arc)");
     }
   }
   const Eigen::Vector3d start = block.start_mm;
@@ -1109,8 +1159,9 @@ void Reader::arc(Block& block, bool clockwise) {
   if (ijk) {
     const Value& normal_word = l_.center[c];
     if (normal_word.present) {
-      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name + "-plane arc (expected " +
-                                   kCenterLetter[a] + " and " + kCenterLetter[b] + ")");
+      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name +
+                                   "-plane arc (expected " + kCenterLetter[a] + " and " +
+                                   kCenterLetter[b] + ")");
     }
     const Eigen::Vector3d off = offset();
     for (int k = 0; k < 2; ++k) {
@@ -1120,19 +1171,22 @@ void Reader::arc(Block& block, bool clockwise) {
       const double v = w.present ? length_mm(w) : 0.0;
       center[k] = w.present && w.mode == Value::Mode::Absolute ? v + off[axis] : start[axis] + v;
       if (!(std::abs(center[k]) <= kMaxMagnitude)) {
-        fail(w.column, std::string(1, kCenterLetter[axis]) + " gives a centre out of range (expected within +-1e6 mm)");
+        fail(w.column, std::string(1, kCenterLetter[axis]) +
+                           " gives a centre out of range (expected within +-1e6 mm)");
       }
     }
     const double r_start = (s - center).norm();
     const double r_end = (e - center).norm();
     if (r_start <= kSamePointMm || r_end <= kSamePointMm) {
-      fail(column, std::string("zero-radius ") + code + " arc (expected the centre away from the start and the end)");
+      fail(column, std::string("zero-radius ") + code +
+                       " arc (expected the centre away from the start and the end)");
     }
-    const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
+    const double allowed =
+        std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
     if (std::abs(r_end - r_start) > allowed) {
       fail(column, std::string(code) + " arc end is not on its circle: radius " + num(r_start) +
-                       " mm at the start, " + num(r_end) + " mm at the end (expected equal within " +
-                       num(allowed) + " mm)");
+                       " mm at the start, " + num(r_end) +
+                       " mm at the end (expected equal within " + num(allowed) + " mm)");
     }
     if ((e - s).norm() <= kSamePointMm) {  // a full circle: start and end coincide exactly
       end[a] = start[a];
@@ -1145,14 +1199,16 @@ void Reader::arc(Block& block, bool clockwise) {
     const Eigen::Vector2d d = e - s;
     const double chord = d.norm();
     if (chord <= kSamePointMm) {
-      fail(cr.column, std::string(code) + " CR= arc that ends where it starts (expected I J K for a full circle)");
+      fail(cr.column, std::string(code) +
+                          " CR= arc that ends where it starts (expected I J K for a full circle)");
     }
     const double abs_r = std::abs(radius);
-    if (!(abs_r <= kMaxMagnitude)) fail(cr.column, "CR=" + num(cr.value) + " (expected |CR| <= 1e6 mm)");
+    if (!(abs_r <= kMaxMagnitude))
+      fail(cr.column, "CR=" + num(cr.value) + " (expected |CR| <= 1e6 mm)");
     double half = chord / 2.0;
     if (half - abs_r > kRadiusRoundingRelative * std::max(1.0, abs_r)) {
-      fail(cr.column, "arc radius |CR| = " + num(abs_r) + " mm is less than half the chord, " + num(half) +
-                          " mm (expected |CR| >= " + num(half) + " mm)");
+      fail(cr.column, "arc radius |CR| = " + num(abs_r) + " mm is less than half the chord, " +
+                          num(half) + " mm (expected |CR| >= " + num(half) + " mm)");
     }
     half = std::min(half, abs_r);
     const double to_center = std::sqrt((abs_r - half) * (abs_r + half));
@@ -1180,19 +1236,23 @@ void Reader::motion() {
     if (!state_.known[static_cast<std::size_t>(a)]) block.start_mm[a] = block.end_mm[a];
   }
   const bool reorients = orient(block);
-  if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise) arc(block, m == Motion::ArcClockwise);
+  if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise)
+    arc(block, m == Motion::ArcClockwise);
   const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
   if (m != Motion::Rapid) {
     if (state_.inverse_time) {
       if (!l_.f.present) {
-        fail(column, "G93 (inverse time) motion without F (expected F, 1 / minutes, in every G1 G2 G3 block)");
+        fail(column,
+             "G93 (inverse time) motion without F (expected F, 1 / minutes, in every G1 G2 G3 "
+             "block)");
       }
       block.feed_mm_per_min = l_.f.value;
       block.feed_mode = kinematics::FeedMode::InverseTime;
     } else {
       if (!(state_.feed_mm_per_min > 0.0)) {
-        fail(column, "feed motion without a feed (expected F in mm/min in this block or before; G1 is "
-                     "active from the start)");
+        fail(column,
+             "feed motion without a feed (expected F in mm/min in this block or before; G1 is "
+             "active from the start)");
       }
       block.feed_mm_per_min = state_.feed_mm_per_min;
     }
@@ -1216,7 +1276,8 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
     block.source = kinematics::SourceRef{file_index_, line_};
     program_.blocks.push_back(block);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (!state_.known[a] && !programmed[a]) state_.pending[a].push_back(program_.blocks.size() - 1);
+      if (!state_.known[a] && !programmed[a])
+        state_.pending[a].push_back(program_.blocks.size() - 1);
     }
   }
   for (std::size_t a = 0; a < 3; ++a) {
@@ -1230,18 +1291,21 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
     for (std::size_t index : pending) {
       if (index >= program_.blocks.size()) continue;  // a different Program was passed in
       Block& b = program_.blocks[index];
-      if (first.empty() && b.source.file >= 0 && static_cast<std::size_t>(b.source.file) < program_.files.size()) {
+      if (first.empty() && b.source.file >= 0 &&
+          static_cast<std::size_t>(b.source.file) < program_.files.size()) {
         first = program_.where(b.source);
       }
       b.start_mm[static_cast<int>(a)] = b.end_mm[static_cast<int>(a)] = value;
-      if (b.kind == MotionKind::Arc) b.center_mm[static_cast<int>(a)] = value;  // only the normal axis
+      if (b.kind == MotionKind::Arc)
+        b.center_mm[static_cast<int>(a)] = value;  // only the normal axis
       ++patched;
     }
     pending.clear();
     if (patched > 0) {
-      warn(l_.axis[a].column, std::to_string(patched) + " earlier move(s) (first at " + first + ") ran while " +
-                                  kAxisLetter[a] + " was unknown; they hold " + kAxisLetter[a] + " at " +
-                                  num(value) + " mm, its first programmed value");
+      warn(l_.axis[a].column, std::to_string(patched) + " earlier move(s) (first at " + first +
+                                  ") ran while " + kAxisLetter[a] + " was unknown; they hold " +
+                                  kAxisLetter[a] + " at " + num(value) +
+                                  " mm, its first programmed value");
     }
   }
   state_.position_mm = block.end_mm;
@@ -1249,12 +1313,15 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
 
 void validate(const std::string& name, const SinumerikOptions& options) {
   if (!std::isfinite(options.arc_tolerance_mm) || options.arc_tolerance_mm < 0.0) {
-    throw InputError(name, 0, 0, "arc tolerance " + num(options.arc_tolerance_mm) +
-                                     " mm in the options (expected a finite value >= 0)");
+    throw InputError(name, 0, 0,
+                     "arc tolerance " + num(options.arc_tolerance_mm) +
+                         " mm in the options (expected a finite value >= 0)");
   }
   for (const auto& [key, offset] : options.work_offsets_mm) {
     if (!offset.allFinite() || offset.cwiseAbs().maxCoeff() > kMaxMagnitude) {
-      throw InputError(name, 0, 0, "work offset " + key + " in the options (expected finite values within +-1e6 mm)");
+      throw InputError(
+          name, 0, 0,
+          "work offset " + key + " in the options (expected finite values within +-1e6 mm)");
     }
   }
 }
@@ -1279,7 +1346,8 @@ void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOp
   }
   for (int a = 0; a < 3; ++a) {
     if (state.pending[static_cast<std::size_t>(a)].empty()) continue;
-    program.warnings.push_back(name + ": " + kAxisLetter[a] + " has not been programmed by the end of this file; " +
+    program.warnings.push_back(name + ": " + kAxisLetter[a] +
+                               " has not been programmed by the end of this file; " +
                                std::to_string(state.pending[static_cast<std::size_t>(a)].size()) +
                                " move(s) hold it at 0 unless a later file sets it");
   }
@@ -1292,7 +1360,8 @@ kinematics::Program read_sinumerik(const std::string& path, const SinumerikOptio
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) {
-    throw InputError(path, 0, 0, std::string("cannot open the SINUMERIK program: ") + std::strerror(errno));
+    throw InputError(path, 0, 0,
+                     std::string("cannot open the SINUMERIK program: ") + std::strerror(errno));
   }
   kinematics::Program program;
   SinumerikState state;

@@ -535,7 +535,7 @@ TEST(GcodeReaderErrors, UnknownGAndMCodes) {
 TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
   EXPECT_INPUT_ERROR("G0 E5\n", 1, 4, "'E'");
   EXPECT_INPUT_ERROR("G0 X1 $\n", 1, 7, "'$'");
-  EXPECT_INPUT_ERROR("G0 X1 @2\n", 1, 7, "polar coordinates");
+  EXPECT_INPUT_ERROR("G0 X1 @2\n", 1, 4, "X word with polar");
   EXPECT_INPUT_ERROR("#1 + 5\n", 1, 4, "expected '='");
   EXPECT_INPUT_ERROR("G0 [1+2]\n", 1, 4, "expected a letter before '['");
   EXPECT_INPUT_ERROR("G0 X0 O100\n", 1, 7, "o-word");

@@ -415,6 +415,29 @@ TEST(Rs274Cycles, BoringG85AndDwellG82G89) {
   expect_path(read("G0 X0 Y0 Z5\nF100\nG82 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
 }
 
+TEST(Rs274Polar, DistanceAndAngle) {
+  // G90: @ and ^ about the program origin; the one not given keeps the current point's.
+  expect_path(read("G0 X10 Y0 Z0\nG0 ^90\nG0 @5\nG0 @2 ^180\n"), {{R, {0, 10, 0}}, {R, {0, 5, 0}}, {R, {-2, 0, 0}}});
+  // G91: both add to the current point's distance and angle.
+  expect_path(read("G0 X10 Y0 Z0\nG91 G0 ^90\nG0 @-4\n"), {{R, {0, 10, 0}}, {R, {0, 6, 0}}});
+  // A bolt circle: G91 G81 turning 120 deg per hole from (15, 0); R from the series' start Z0.
+  const double s = 15 * std::sqrt(3.0) / 2;
+  expect_path(read("G0 X15 Y0 Z0\nG91 G81 R1 Z-5 ^120 L3 F10\n"),
+              {{R, {15, 0, 1}},
+               {R, {-7.5, s, 1}}, {F, {-7.5, s, -4}}, {R, {-7.5, s, 1}},
+               {R, {-7.5, -s, 1}}, {F, {-7.5, -s, -4}}, {R, {-7.5, -s, 1}},
+               {R, {15, 0, 1}}, {F, {15, 0, -4}}, {R, {15, 0, 1}}});
+  EXPECT_NE(error_of("G0 @1\n").find("unknown"), std::string::npos);
+}
+
+TEST(Rs274Cycles, IncrementalRCountsFromTheSeriesStart) {
+  // rs274: a G91 cycle line that continues a series takes R from the height the series began
+  // at (Z0 here), not from where the previous hole left the tool (R = 1).
+  expect_path(read("G0 X0 Y0 Z0\nF10\nG91 G81 X1 R1 Z-5\nX1\n"),
+              {{R, {0, 0, 1}}, {R, {1, 0, 1}}, {F, {1, 0, -4}}, {R, {1, 0, 1}},
+               {R, {2, 0, 1}}, {F, {2, 0, -4}}, {R, {2, 0, 1}}});
+}
+
 TEST(Rs274Cycles, Errors) {
   EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG81 Z-2\n").find("without R"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z5\nF100\nG81 Z2 R1\n").find("above R"), std::string::npos);

@@ -47,17 +47,18 @@ InputError error_of(const std::string& text, const SinumerikOptions& options = {
 }
 
 // The error names test.mpf:line:column first and contains `fragment`.
-#define EXPECT_MPF_ERROR(text, line_, column_, fragment)                                      \
-  do {                                                                                        \
-    const InputError e_ = error_of(text);                                                     \
-    const std::string where_ = std::string("test.mpf:") + std::to_string(line_) + ":" +       \
-                               std::to_string(column_) + ": ";                                \
-    EXPECT_EQ(std::string(e_.what()).rfind(where_, 0), 0u) << e_.what();                      \
-    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();         \
+#define EXPECT_MPF_ERROR(text, line_, column_, fragment)                                         \
+  do {                                                                                           \
+    const InputError e_ = error_of(text);                                                        \
+    const std::string where_ =                                                                   \
+        std::string("test.mpf:") + std::to_string(line_) + ":" + std::to_string(column_) + ": "; \
+    EXPECT_EQ(std::string(e_.what()).rfind(where_, 0), 0u) << e_.what();                         \
+    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();            \
   } while (false)
 
 void expect_vec(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double tol = kTol) {
-  EXPECT_LE((got - want).norm(), tol) << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
+  EXPECT_LE((got - want).norm(), tol)
+      << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
 }
 
 // Seed 000, Fig. 6: the letter-space-number blocks of the gantry program, without TRAORI: axis
@@ -125,19 +126,8 @@ TEST(SinumerikReader, TraoriDirectAxes) {
   EXPECT_NEAR(c.end_rotary.angle_rad[0], 30 * kDeg, kTol);
 }
 
-// ORIVECT: A3 B3 C3 normalised (3,0,4)/5; components not programmed are 0 (Siemens).
-TEST(SinumerikReader, OrivectVectorsNormalised) {
-  const Program p = read(
-      "TRAORI\nORIWKS\nORIVECT\n"
-      "G0 X0 Y0 Z0\n"
-      "G1 F500 X10 A3=3 B3=0 C3=4\n"
-      "X20 A3 = 2\n"
-      "ORIPLANE\n"
-      "X30 A3=0 B3=-1E-0 C3=1 ; 1E-0 is not a number: see the error test\n",
-      {});
-  (void)p;
-}
-
+// ORIVECT: A3 B3 C3 normalised, (3,0,4)/5 = (0.6,0,0.8); components not programmed are 0
+// (Siemens: "vector components that have not been programmed are set to zero").
 TEST(SinumerikReader, OrivectBlocks) {
   const Program p = read(
       "TRAORI\nORIWKS\nORIVECT\n"
@@ -189,9 +179,10 @@ TEST(SinumerikReader, OriconCone) {
   EXPECT_EQ(p.blocks[2].orientation, OrientationMode::ConeCounterClockwise);
   expect_vec(p.blocks[2].cone_axis, {0, 0, 1});  // A6 B6 C6 are kept
   // The end off the start's cone: 0 deg vs 45 deg from the axis.
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n", 4, 11,
-                   "expected both on one cone");
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCCW\nG1 F1 X1 A3=1 C3=1\n", 4, 11, "without a cone axis");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n",
+                   4, 10, "expected both on one cone");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCCW\nG1 F1 X1 A3=1 C3=1\n", 4, 10,
+                   "without a cone axis");
 }
 
 // CR= arcs: chord (0,0)->(10,0); |CR| = 5 is a half circle about (5,0); |CR| = 10 puts the centre
@@ -221,7 +212,7 @@ TEST(SinumerikReader, CrArcs) {
   expect_vec(p.blocks[6].center_mm, {5, -d, 0}, 1e-12);
   EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG2 X10 CR=4 F1\n", 2, 8, "less than half the chord");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG2 X0 CR=4 F1\n", 2, 7, "ends where it starts");
-  EXPECT_MPF_ERROR("G0 X0 Y0\nG2 X10 CR=5 I5 F1\n", 2, 13, "both CR= and I J K");
+  EXPECT_MPF_ERROR("G0 X0 Y0\nG2 X10 CR=5 I5 F1\n", 2, 8, "both CR= and I J K");
 }
 
 // I J K: relative to the start; I=AC(..) is the centre in the active frame (G54 offset added).
@@ -304,7 +295,7 @@ TEST(SinumerikReader, RParameters) {
   EXPECT_MPF_ERROR("G0 X=1+AC(2)\n", 1, 8, "AC( inside an expression");
   EXPECT_MPF_ERROR("R1=(1+2\n", 1, 8, "'(' without its closing ')'");
   EXPECT_MPF_ERROR("R1 5\n", 1, 1, "R parameter without '='");
-  EXPECT_MPF_ERROR("R1=" + std::string(100, '(') + "1" + std::string(100, ')') + "\n", 1, 68,
+  EXPECT_MPF_ERROR("R1=" + std::string(100, '(') + "1" + std::string(100, ')') + "\n", 1, 69,
                    "nested more than 64 deep");
 }
 
@@ -368,9 +359,12 @@ TEST(SinumerikReader, TechnologyAndBlending) {
 TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("N10 ORICONIO\n", 1, 5,
                    "ORICONIO (cone through an intermediate orientation) is not supported");
-  EXPECT_MPF_ERROR("N10 ORICONTO\n", 1, 5, "ORICONTO (cone with a tangential transition) is not supported");
-  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10, "A7= (the intermediate orientation of ORICONIO)");
-  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10, "NUT= (the cone's opening angle) is not supported");
+  EXPECT_MPF_ERROR("N10 ORICONTO\n", 1, 5,
+                   "ORICONTO (cone with a tangential transition) is not supported");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10,
+                   "A7= (the intermediate orientation of ORICONIO)");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10,
+                   "NUT= (the cone's opening angle) is not supported");
   EXPECT_MPF_ERROR("TRAORI\nORIMKS\nG1 F1 X0 Y0 Z0 A3=1 C3=1\n", 3, 16, "under ORIMKS");
   EXPECT_MPF_ERROR("G1 F1 X0 Y0 Z0 A3=1 C3=1\n", 1, 16, "without TRAORI");
   EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 Y0 Z0 A10\nX1 A3=1 C3=1\n", 3, 4,
@@ -409,15 +403,17 @@ TEST(SinumerikReader, UnsupportedAsWarning) {
   EXPECT_THROW(read("ORICONIO\n", options), InputError);
 }
 
-// Unknown start: moves before an axis is programmed hold it and take its first value.
+// Unknown start: the first programmed value of an axis does not move it; moves before Z is
+// programmed hold Z and take its first value (as the G-code reader does).
 TEST(SinumerikReader, UnknownStart) {
-  const Program p = read("G1 F100 X10\nY5\nZ3\n");
-  ASSERT_EQ(p.blocks.size(), 2u);
+  const Program p = read("G1 F100 X10 Y0\nX20\nZ3\n");
+  ASSERT_EQ(p.blocks.size(), 1u);
   expect_vec(p.blocks[0].start_mm, {10, 0, 3});
-  expect_vec(p.blocks[0].end_mm, {10, 5, 3});
-  expect_vec(p.blocks[1].start_mm, {10, 5, 3});
-  expect_vec(p.blocks[1].end_mm, {10, 5, 3});  // Z first set: no motion before it was known
-  EXPECT_EQ(p.blocks.size(), 2u);
+  expect_vec(p.blocks[0].end_mm, {20, 0, 3});
+  ASSERT_EQ(p.warnings.size(), 1u);
+  EXPECT_NE(p.warnings[0].find("test.mpf:3:1: 1 earlier move(s) (first at test.mpf:2) ran while Z"),
+            std::string::npos)
+      << p.warnings[0];
 }
 
 TEST(SinumerikReader, ReadProgramDispatch) {
@@ -439,7 +435,7 @@ TEST(SinumerikReader, ReadProgramDispatch) {
 TEST(SinumerikReader, StateAcrossFiles) {
   Program program;
   SinumerikState state;
-  std::istringstream a("R7=3 G0 X0 Y0 Z0 TRAORI G91\nM30\n"), b("G1 F10 X=R7\n");
+  std::istringstream a("R7=3 G0 X0 Y0 Z0 TRAORI\nG91\nM30\n"), b("G1 F10 X=R7\n");
   read_sinumerik(a, "a.mpf", {}, program, state);
   read_sinumerik(b, "b.spf", {}, program, state);
   ASSERT_EQ(program.blocks.size(), 1u);

@@ -148,6 +148,18 @@ def tool_table_text(program_text):
     return "\n".join(lines) + "\n"
 
 
+# LinuxCNC's table-rotary-tilting demos switch kinematics with M428 (TCP on), M429 (identity)
+# and M430 (user kinematics), remapped in their ini to subroutines that set HAL pins. For rs274
+# they are remapped here to empty subroutines (the interpreter's output is program coordinates
+# either way); vcut is told the same with --tcp-on/--tcp-off.
+KINS_M_CODES = {428: True, 429: False, 430: False}
+
+
+def uses_kins_m_codes(program_text):
+    # Always: the codes may sit in a subroutine file, and no other program uses them.
+    return True
+
+
 def run_rs274(rs274, program, program_text, sub_dirs, timeout):
     """Runs rs274 on `program` in a scratch directory. Returns (rc, stdout, stderr_lines)."""
     with tempfile.TemporaryDirectory(prefix="rs274-oracle-") as tmp:
@@ -160,7 +172,12 @@ def run_rs274(rs274, program, program_text, sub_dirs, timeout):
         with open(ini, "w") as f:
             # o<name> call looks for name.ngc in SUBROUTINE_PATH (':'-separated, relative to the
             # cwd), [DISPLAY]PROGRAM_PREFIX and the cwd; not in the program's own directory.
-            f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % ":".join(sub_dirs))
+            f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % ":".join(sub_dirs + [tmp]))
+            if uses_kins_m_codes(program_text):
+                for m in KINS_M_CODES:
+                    f.write("REMAP = M%d modalgroup=10 ngc=m%dremap\n" % (m, m))
+                    with open(os.path.join(tmp, "m%dremap.ngc" % m), "w") as sub:
+                        sub.write("o<m%dremap> sub\no<m%dremap> endsub\nM2\n" % (m, m))
         cmd = [rs274, "-g", "-b", "-i", ini, "-t", tbl, "-v", var, os.path.abspath(program)]
         try:
             r = subprocess.run(cmd, cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
@@ -197,7 +214,7 @@ def rotate_z(v, deg):
 
 class Rs274Motion:
     __slots__ = ("index", "line", "kind", "end", "abc", "center", "normal", "turns", "feed",
-                 "feed_mode", "feed_units", "tol", "changed", "unseen")
+                 "feed_mode", "feed_units", "tol", "changed", "unseen", "unseen_abc")
 
     def describe(self):
         s = "#%d %s end=%s" % (self.index, self.kind, fmt_vec(self.end))
@@ -228,6 +245,7 @@ def parse_rs274(stdout):
     pos = [0.0] * 6  # machine (vcut frame) position, xyz mm + abc deg
     motions = []
     seen = [False, False, False]  # rs274 X/Y/Z has changed from its initial 0
+    seen_abc = [False, False, False]  # and A/B/C
 
     def to_frame(p6):
         xyz = [p6[i] * units + g92[i] for i in range(3)]
@@ -298,6 +316,10 @@ def parse_rs274(stdout):
             mo.changed = [abs(mo.end[i] - pos[i]) > 1e-9 for i in range(3)] + \
                          [abs(mo.abc[i] - pos[3 + i]) > 1e-9 for i in range(3)]
             mo.unseen = [not s for s in seen]
+            mo.unseen_abc = [not s for s in seen_abc]
+            for i in range(3):
+                if mo.changed[3 + i]:
+                    seen_abc[i] = True
             for i in range(3):
                 # "changed from 0": against the printed program value, whatever the offsets
                 if mo.changed[i]:
@@ -311,10 +333,16 @@ def parse_rs274(stdout):
 # Running vcut
 
 
-def run_vcut(vcut, program, timeout):
+def run_vcut(vcut, program, timeout, kins_m_codes=False, sub_dirs=()):
     import json
+    cmd = [vcut, "program", program, "--dialect", "gcode"]
+    for d in sub_dirs:
+        cmd += ["--subroutine-path", d]
+    if kins_m_codes:
+        for m, on in KINS_M_CODES.items():
+            cmd += ["--tcp-on" if on else "--tcp-off", str(m)]
     try:
-        r = subprocess.run([vcut, "program", program, "--dialect", "gcode"],
+        r = subprocess.run(cmd,
                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, timeout=timeout)
     except subprocess.TimeoutExpired:
@@ -393,6 +421,13 @@ def compare_end(r, v, args, holds):
                 abs(end[i] - holds["XYZ"[i]]) <= tol:
             continue
         return "end %s differs by %.6g mm (tolerance %.3g)" % ("XYZ"[i], d, tol)
+    # Rotary axes (deg): vcut names those the program gave; the others must be 0 in rs274.
+    rotary = v.get("rotary") or {}
+    for i, letter in enumerate("ABC"):
+        want = rotary.get(letter, 0.0)
+        d = abs(want - r.abc[i])
+        if d > HALF_ULP + 1e-9 and not (letter not in rotary and r.unseen_abc[i]):
+            return "end %s differs by %.6g deg" % (letter, d)
     return None
 
 
@@ -546,8 +581,12 @@ def check_program(path, args, rs274):
         text = census.read_text(program)
         sub_dirs = [os.path.dirname(os.path.abspath(path))] + \
                    [os.path.abspath(d) for d in args.subroutine_path]
+        # A sample configuration keeps its subroutines beside its demos (remap_subs/).
+        remap_subs = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(path))), "remap_subs")
+        if os.path.isdir(remap_subs):
+            sub_dirs.append(remap_subs)
         rc, out, rerr = run_rs274(rs274, program, text, sub_dirs, args.timeout)
-        vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout)
+        vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout, uses_kins_m_codes(text), sub_dirs[1:])
     finally:
         if work:
             shutil.rmtree(work, ignore_errors=True)

@@ -92,9 +92,8 @@ struct GcodeState {
   // the named ones: globals (#<_name>) and the main program's locals.
   std::vector<double> parameters;
   std::map<std::string, double> globals, locals;
-  // Canned cycles (G81..G89): the retract height G98 goes back to (mm, programmed Z of the
-  // first cycle of a series) and whether a series is under way.
-  bool cycle_series = false;
+  // Canned cycles (G81..G89): the height (mm, program coordinates) the series of cycles
+  // started at: G98 goes back to it, and in G91 R counts from it.
   double cycle_initial_z_mm = 0.0;
   bool retract_to_r = false;  // G99 (default G98: back to the initial Z)
   // Sticky cycle words as last given (program units; R and Z as written, G91 increments

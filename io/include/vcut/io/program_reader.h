@@ -30,11 +30,12 @@ struct ProgramOptions {
 struct LoadedProgram {
   kinematics::Program program;
   std::map<int, removal::Cutter> cutters;  // cutters the program itself defines (APT CUTTER/)
-  std::string dialect;                     // the reader used: "gcode" or "apt"
+  std::string dialect;                     // the reader used: "gcode", "apt" or "sinumerik"
 };
 
 // `dialect`: auto (detect_dialect per file), gcode, linuxcnc, fanuc (the G-code reader), apt,
-// or sinumerik (not supported yet: an error). A file with a NUL byte in its first 64 KiB is
+// or sinumerik (the SINUMERIK reader, with the G-code options' work offsets, unsupported-word
+// mode and arc tolerance). A file with a NUL byte in its first 64 KiB is
 // "not a text file". Several files run in sequence with one modal state; all must be of one
 // dialect.
 LoadedProgram read_program(const std::string& path, const std::string& dialect,

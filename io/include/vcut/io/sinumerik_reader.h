@@ -52,7 +52,7 @@ struct SinumerikOptions {
   // (the default) is no offset. Other names are not used.
   std::map<std::string, Eigen::Vector3d> work_offsets_mm;
   bool unsupported_as_warning = false;  // an unsupported word: one warning per word, ignored
-  double arc_tolerance_mm = 0.002;  // radius mismatch allowed between start and end of an arc
+  double arc_tolerance_mm = 0.002;      // radius mismatch allowed between start and end of an arc
 };
 
 // The modal state between lines and between files. Start from a default-constructed one
@@ -92,9 +92,9 @@ struct SinumerikState {
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;
-  int tool = 0;            // in the spindle (after M6)
-  int selected_tool = -1;  // last T, -1 if none
-  std::vector<double> r;   // R0..R999 (sized when the first file starts)
+  int tool = 0;                  // in the spindle (after M6)
+  int selected_tool = -1;        // last T, -1 if none
+  std::vector<double> r;         // R0..R999 (sized when the first file starts)
   std::set<std::string> warned;  // unsupported words already warned about
 };
 
