@@ -1,5 +1,6 @@
 # vcut: `make demo` sets up and runs the bundled example; `make test` sets up and runs
-# every test (also under AddressSanitizer/UBSan); `make bench` measures.
+# every test (also under AddressSanitizer/UBSan) and fuzzes the program readers for a minute;
+# `make bench` measures.
 BUILD ?= build
 BUILD_SAN ?= build-sanitize
 # The sanitizer build: -O1 and line tables only (-g1) compile OpenVDB-heavy sources twice as
@@ -8,7 +9,7 @@ SAN_OPT ?= -O1 -g1 -DNDEBUG
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: deps build demo test test-release test-sanitize bench clean
+.PHONY: deps build demo test test-release test-sanitize test-fuzz bench clean
 
 deps:
 	@scripts/install-deps
@@ -30,7 +31,12 @@ test-sanitize: deps
 	cmake --build $(BUILD_SAN) -j $(JOBS)
 	cd $(BUILD_SAN) && ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 ctest --output-on-failure -j $(JOBS)
 
-test: test-release test-sanitize
+# libFuzzer (clang) on the G-code, APT and SINUMERIK readers under ASan+UBSan, 60 s each, side by side.
+test-fuzz: deps
+	@scripts/install-deps --test
+	BUILD_FUZZ=build-fuzz scripts/fuzz-readers 60
+
+test: test-release test-sanitize test-fuzz
 
 bench: build
 	@scripts/install-deps --bench
@@ -40,4 +46,4 @@ bench: build
 	scripts/bench-features $(BUILD)/cli/vcut
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) $(BUILD).configure.log $(BUILD_SAN).configure.log
+	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz $(BUILD).configure.log $(BUILD_SAN).configure.log

@@ -1616,6 +1616,10 @@ void Reader::cycle(int column, bool new_series) {
     block.kind = kind;
     block.start_mm = state_.position_mm;
     block.end_mm = Eigen::Vector3d(x, y, z) + offset;
+    if (!(block.end_mm.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
+      fail(column, std::string(name) + " moves to " + num(block.end_mm.x()) + ", " + num(block.end_mm.y()) + ", " +
+                       num(block.end_mm.z()) + " mm, out of range (expected within +-1e6 mm)");
+    }
     block.feed_mm_per_min = kind == MotionKind::Rapid ? 0.0 : feed;
     append(block, all);
     at = Eigen::Vector3d(x, y, z);
