@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "block_room.h"
+#include "line_source.h"
 
 namespace vcut::io {
 namespace {
@@ -49,7 +50,6 @@ constexpr double kMinAxisNorm = 1e-6;
 // Two tool axes this close to opposite (cosine) have no single great circle between them.
 constexpr double kOppositeAxisCosine = -1.0 + 1e-12;
 // Bounded memory: no line or statement of a CL file comes near this.
-constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
 constexpr std::size_t kMaxStatementBytes = std::size_t{1} << 20;
 constexpr std::size_t kMaxParameters = 64;  // CIRCLE/ has 11 at most, the longest we read
 // CUTTER/ consistency: e and f are printed with the file's few decimals (0.00005 in = 0.0013 mm).
@@ -103,57 +103,6 @@ bool same_cutter(const Cutter& a, const Cutter& b) {
          a.shank_diameter_mm == b.shank_diameter_mm && a.length_mm == b.length_mm &&
          a.gauge_length_mm == b.gauge_length_mm && a.tip_angle_deg == b.tip_angle_deg;
 }
-
-// Lines from a stream in 64 KiB reads, each at most kMaxLineBytes (a binary file with no line
-// breaks cannot take all the memory).
-class LineSource {
- public:
-  explicit LineSource(std::istream& in) : in_(in), buffer_(std::size_t{1} << 16) {}
-  enum Result { kLine, kEnd, kTooLong };
-  // Lines in `bytes` more bytes, estimated from the first read (after the first next()).
-  size_t estimate_lines(double bytes) const {
-    if (first_bytes_ == 0 || !(bytes > 0.0)) return 0;
-    return static_cast<size_t>(std::min(
-        1e9, bytes * static_cast<double>(first_newlines_ + 1) / static_cast<double>(first_bytes_)));
-  }
-  Result next(std::string& line) {
-    line.clear();
-    bool any = false;
-    while (true) {
-      if (pos_ == end_) {
-        if (eof_) return any ? kLine : kEnd;
-        in_.read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-        end_ = static_cast<size_t>(in_.gcount());
-        pos_ = 0;
-        if (reads_++ == 0) {
-          first_bytes_ = end_;
-          first_newlines_ =
-              static_cast<size_t>(std::count(buffer_.data(), buffer_.data() + end_, '\n'));
-        }
-        if (!in_) eof_ = true;
-        if (end_ == 0) return any ? kLine : kEnd;
-      }
-      const char* start = buffer_.data() + pos_;
-      const auto* newline = static_cast<const char*>(std::memchr(start, '\n', end_ - pos_));
-      const size_t n = newline ? static_cast<size_t>(newline - start) : end_ - pos_;
-      if (line.size() + n > kMaxLineBytes) return kTooLong;
-      line.append(start, n);
-      any = true;
-      pos_ += n;
-      if (newline) {
-        ++pos_;
-        return kLine;
-      }
-    }
-  }
-
- private:
-  std::istream& in_;
-  std::vector<char> buffer_;
-  size_t pos_ = 0, end_ = 0;
-  bool eof_ = false;
-  size_t reads_ = 0, first_bytes_ = 0, first_newlines_ = 0;
-};
 
 // One parameter after the '/': a number or a word (upper case).
 struct Arg {
@@ -314,7 +263,7 @@ class Reader {
 };
 
 void Reader::run(std::istream& in) {
-  LineSource source(in);
+  detail::LineSource source(in);
   std::string text;
   int number = 0;
   bool finished = false;
@@ -324,15 +273,15 @@ void Reader::run(std::istream& in) {
   const std::streamsize available = in.rdbuf() ? in.rdbuf()->in_avail() : 0;
   bool reserved = false;
   while (true) {
-    const LineSource::Result r = source.next(text);
-    if (r == LineSource::kEnd) break;
+    const detail::LineSource::Result r = source.next(text);
+    if (r == detail::LineSource::kEnd) break;
     if (!reserved) {
       reserved = true;
       detail::reserve_blocks(out_.program.blocks, source.estimate_lines(static_cast<double>(available)));
     }
     if (number == INT_MAX) fail_at(number, 0, "too many lines");
     ++number;
-    if (r == LineSource::kTooLong) {
+    if (r == detail::LineSource::kTooLong) {
       fail_at(number, 0, "line longer than 1 MiB (expected a text file of CL statements)");
     }
     if (!line(text, number)) {

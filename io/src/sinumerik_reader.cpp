@@ -5,8 +5,12 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/sinumerik_reader.h>
 
+#include "block_room.h"
+#include "line_source.h"
+
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <charconv>
 #include <cerrno>
 #include <climits>
 #include <cmath>
@@ -48,7 +52,6 @@ constexpr double kOppositeAxisCosine = -1.0 + 1e-12;
 // Cone interpolation: start and end vectors must make the same angle with the cone axis within
 // this (rad): 1e-4 rad is a vector printed with 4 decimals.
 constexpr double kConeAngleToleranceRad = 1e-4;
-constexpr std::size_t kMaxLineBytes = std::size_t{1} << 20;
 constexpr int kMaxExpressionDepth = 64;  // nesting of ( ) and unary signs
 constexpr int kRParameters = 1000;       // R0..R999
 constexpr int kMaxToolNumber = 99999;    // as the tool library
@@ -83,45 +86,6 @@ std::string describe(char c) {
   return buf;
 }
 
-// Lines from a stream in 64 KiB reads, each at most kMaxLineBytes (a binary file with no line
-// breaks cannot take all the memory). As in the APT reader.
-class LineSource {
- public:
-  explicit LineSource(std::istream& in) : in_(in), buffer_(std::size_t{1} << 16) {}
-  enum Result { kLine, kEnd, kTooLong };
-  Result next(std::string& line) {
-    line.clear();
-    bool any = false;
-    while (true) {
-      if (pos_ == end_) {
-        if (eof_) return any ? kLine : kEnd;
-        in_.read(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
-        end_ = static_cast<std::size_t>(in_.gcount());
-        pos_ = 0;
-        if (!in_) eof_ = true;
-        if (end_ == 0) return any ? kLine : kEnd;
-      }
-      const char* start = buffer_.data() + pos_;
-      const auto* newline = static_cast<const char*>(std::memchr(start, '\n', end_ - pos_));
-      const std::size_t n = newline ? static_cast<std::size_t>(newline - start) : end_ - pos_;
-      if (line.size() + n > kMaxLineBytes) return kTooLong;
-      line.append(start, n);
-      any = true;
-      pos_ += n;
-      if (newline) {
-        ++pos_;
-        return kLine;
-      }
-    }
-  }
-
- private:
-  std::istream& in_;
-  std::vector<char> buffer_;
-  std::size_t pos_ = 0, end_ = 0;
-  bool eof_ = false;
-};
-
 // One programmed value of a block.
 struct Value {
   bool present = false;
@@ -154,16 +118,23 @@ class Reader {
       : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
 
   void run(std::istream& in) {
-    LineSource source(in);
+    detail::LineSource source(in);
     std::string text;
     int number = 0;
+    // Room for one Block per line, estimated from the first 64 KiB (as in the APT reader).
+    const std::streamsize available = in.rdbuf() ? in.rdbuf()->in_avail() : 0;
+    bool reserved = false;
     while (true) {
-      const LineSource::Result r = source.next(text);
-      if (r == LineSource::kEnd) break;
+      const detail::LineSource::Result r = source.next(text);
+      if (r == detail::LineSource::kEnd) break;
+      if (!reserved) {
+        reserved = true;
+        detail::reserve_blocks(program_.blocks, source.estimate_lines(static_cast<double>(available)));
+      }
       if (number == INT_MAX) fail_at(number, 0, "too many lines");
       ++number;
       line_ = number;
-      if (r == LineSource::kTooLong)
+      if (r == detail::LineSource::kTooLong)
         fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
       if (!block(text)) break;
     }
@@ -363,9 +334,18 @@ double Reader::literal() {
     if (!exponent) fail_here("EX without its exponent (expected digits, as in 1.5EX3)");
   }
   if (text.size() > 400) fail(column(start), "number with more than 400 characters");
-  errno = 0;
-  const double v = std::strtod(text.c_str(), nullptr);
-  if (!std::isfinite(v) || (errno == ERANGE && std::abs(v) > 1.0)) {
+  // from_chars: exact like strtod, without its locale.
+  double v = 0.0;
+  const char* first = text.data() + (text[0] == '+' ? 1 : 0);
+  const auto [end, ec] = std::from_chars(first, text.data() + text.size(), v);
+  if (ec == std::errc::result_out_of_range) {
+    // Underflow (1EX-400) is zero; overflow is an error.
+    const auto e = text.find('e');
+    if (e == std::string::npos || text[e + 1] != '-') {
+      fail(column(start), "number " + text + " is out of range (expected a finite value)");
+    }
+    v = 0.0;
+  } else if (ec != std::errc() || end != text.data() + text.size() || !std::isfinite(v)) {
     fail(column(start), "number " + text + " is out of range (expected a finite value)");
   }
   return v;
