@@ -197,6 +197,9 @@ constexpr GEntry kGCodes[] = {
     // are the machine model's business.
     {430, {kToolLength, true}}, {490, {kToolLength, true}},
     {434, {kToolLength, true}}, {435, {kToolLength, true}},  // tool centre point (Fanuc)
+    // G43.1 / G43.2: tool length offsets from the line's axis words (or H): like G43, no
+    // effect on the tip's path; the axis words are taken, not moved to.
+    {431, {kToolLength, true}}, {432, {kToolLength, true}},
     {540, {kCoordinateSystem, true}}, {550, {kCoordinateSystem, true}},
     {560, {kCoordinateSystem, true}}, {570, {kCoordinateSystem, true}},
     {580, {kCoordinateSystem, true}}, {590, {kCoordinateSystem, true}},
@@ -244,8 +247,6 @@ constexpr GEntry kGCodes[] = {
     {411, {kCutterComp, false, false, false, "cutter radius compensation"}},
     {420, {kCutterComp, false, false, false, "cutter radius compensation"}},
     {421, {kCutterComp, false, false, false, "cutter radius compensation"}},
-    {431, {kToolLength, false, false, false, "dynamic tool length offset"}},
-    {432, {kToolLength, false, false, false, "dynamic tool length offset"}},
     {950, {kFeedMode, false, false, false, "feed per revolution"}},
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
@@ -1720,6 +1721,14 @@ bool Reader::execute() {
                             " both use the axis words (expected them on separate lines)");
   }
   machine_coordinates_ = non_modal != nullptr && non_modal->number == 530;
+  const Code* length_axes = by_group[kToolLength] != nullptr && (by_group[kToolLength]->number == 431 ||
+                                                                 by_group[kToolLength]->number == 432)
+                                ? by_group[kToolLength] : nullptr;
+  if (length_axes != nullptr && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
+    const Code* later = length_axes->column > by_group[kMotion]->column ? length_axes : by_group[kMotion];
+    fail(later->column, length_axes->text + " and " + by_group[kMotion]->text +
+                            " both use the axis words (expected them on separate lines)");
+  }
 
   // --- M codes.
   std::array<const Code*, 11> m_by_group{};  // by M group 0..10
@@ -1944,8 +1953,9 @@ bool Reader::execute() {
   }
   if (axis_user != nullptr) {
     forget_axes(axis_user_all);
-  } else if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
-    // G10 and G92 took the axis words.
+  } else if (sets_offsets || length_axes != nullptr ||
+             (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
+    // G10, G92 and G43.1/G43.2 took the axis words.
   } else if (has_axis || explicit_motion ||
              (state_.tcp == GcodeState::Tcp::Vector && (word('I').present || word('J').present || word('K').present))) {
     switch (state_.motion) {

@@ -302,6 +302,9 @@ TEST(Rs274Offsets, G10G92G53) {
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG91 G53 G0 X3\n").find("G53 in incremental mode"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG53 X3 G2 I1\n").find("G53"), std::string::npos);
   EXPECT_NE(error_of("G92 X0\n").find("unknown"), std::string::npos);
+  // G43.1 / G43.2 take their axis words as tool length offsets: no move, no effect on the tip.
+  expect_path(read("G0 X0 Y0 Z10\nG43.1 Z0.25\nG0 X1\nG43.2 H1\nG49 G0 X2\n"), {{R, {1, 0, 10}}, {R, {2, 0, 10}}});
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG43.1 G1 Z1\n").find("both use the axis words"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG92 G1 X0\n").find("both use the axis words"), std::string::npos);
 }
 
