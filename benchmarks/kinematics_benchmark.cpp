@@ -4,8 +4,12 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 #include <vector>
+
+#include "vcut/io/gcode_reader.h"
+#include "vcut/io/machine_file.h"
 
 #include "vcut/kinematics/compensation.h"
 #include "vcut/kinematics/feed_planner.h"
@@ -179,5 +183,44 @@ void BM_PoseEngine(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
 }
 BENCHMARK(BM_PoseEngine)->Unit(benchmark::kMillisecond);
+
+// The same on LinuxCNC's own five-axis impeller demo (linuxcnc-uspace installs it; 4,510 lines,
+// G93 inverse-time feeds, TCP switched on by M428 with X Y Z the tip and A C the rotary axes),
+// read by vcut's G-code reader, on the bundled table-table AC trunnion: densification (axes
+// linear between the blocks' A C, the linear axes solved for the tip), time stamps with the
+// axis limits. Issue #5's target: >= 200,000 densified poses per second.
+void BM_PoseEngineImpeller(benchmark::State& state) {
+  const std::string path =
+      "/usr/share/doc/linuxcnc/examples/sample-configs/sim/axis/vismach/5axis/table-rotary-tilting/demos/"
+      "impeller-7bl-xyzac.ngc";
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) {
+    state.SkipWithError("LinuxCNC's impeller demo is not installed (apt-get install linuxcnc-uspace)");
+    return;
+  }
+  vcut::io::GcodeOptions options;
+  options.tcp_m_codes = {{428, true}, {429, false}};
+  const Program program = vcut::io::read_gcode(path, options);
+  const Machine m(vcut::io::read_machine_file(vcut::io::resolve_machine("table-table-ac")));
+  DensifySettings settings;
+  settings.step_mm = 0.1;
+  settings.angle_step_rad = 0.5 * M_PI / 180.0;
+  DensifyMachine dm;
+  dm.machine = &m;
+  dm.tool_length_mm = {{0, 50.0}};
+  size_t poses = 0;
+  for (auto _ : state) {
+    const Densified d = densify(program, settings, dm);
+    std::vector<AxisValues> axes;
+    axes.reserve(d.samples.size());
+    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
+    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
+    poses = d.samples.size();
+  }
+  state.counters["blocks"] = static_cast<double>(program.blocks.size());
+  state.counters["poses"] = static_cast<double>(poses);
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
+}
+BENCHMARK(BM_PoseEngineImpeller)->Unit(benchmark::kMillisecond);
 
 }  // namespace

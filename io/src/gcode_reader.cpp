@@ -606,6 +606,7 @@ void Reader::run(std::istream& in, const std::string& name) {
   frames_.emplace_back();
   if (state_.parameters.empty()) {
     state_.parameters.assign(5602, 0.0);
+    if (options_.initial_tool > 0) state_.tool = state_.selected_tool = options_.initial_tool;
     for (const auto& [key, offset] : options_.work_offsets_mm) {
       for (int k = 0; k < 9; ++k) {
         if (key != kSystemNames[k]) continue;

@@ -39,7 +39,7 @@ Job read_job(const std::string& path) {
   if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
   if (!fs::exists(job.machine_file))
     yaml.fail(root["machine"], "machine", "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
-                                          "head-head-ac, gantry-wyxzcat) or a machine file (not found: " + job.machine_file + ")");
+                                          "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " + job.machine_file + ")");
   job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
 
   job.tools_file = resolve(base, yaml.text(yaml.require(root, "tools", ""), "tools"));
@@ -47,7 +47,8 @@ Job read_job(const std::string& path) {
 
   const YAML::Node program = yaml.require(root, "program", "");
   yaml.only_keys(program, "program",
-                 {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes"});
+                 {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes",
+                  "initial_tool"});
   if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
   if (program["file"]) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
@@ -83,6 +84,11 @@ Job read_job(const std::string& path) {
       if (state != "on" && state != "off") yaml.fail(kv.second, key, "on or off");
       job.tcp_m_codes[number] = state == "on";
     }
+  }
+  if (program["initial_tool"]) {
+    const double t = yaml.positive(program["initial_tool"], "program.initial_tool");
+    if (t != std::floor(t) || t > 99999) yaml.fail(program["initial_tool"], "program.initial_tool", "a T number from 1 to 99999");
+    job.initial_tool = static_cast<int>(t);
   }
   if (program["max_lines"]) {
     const double n = yaml.positive(program["max_lines"], "program.max_lines");

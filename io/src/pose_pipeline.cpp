@@ -55,6 +55,7 @@ JobProgram read_job_program(const Job& job) {
   reading.gcode.subroutine_path = job.subroutine_path;
   reading.gcode.max_lines = job.max_lines;
   reading.gcode.tcp_m_codes = job.tcp_m_codes;
+  reading.gcode.initial_tool = job.initial_tool;
   LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
   JobProgram out;
   out.program = std::move(loaded.program);

@@ -52,6 +52,9 @@ constexpr double kOppositeAxisCosine = -1.0 + 1e-12;
 // Cone interpolation: start and end vectors must make the same angle with the cone axis within
 // this (rad): 1e-4 rad is a vector printed with 4 decimals.
 constexpr double kConeAngleToleranceRad = 1e-4;
+// ORICONIO / ORICONTO: orientations closer than this (chord on the unit sphere, about rad) do not
+// fix a circle; 1e-4 is a vector printed with 4 decimals, as above.
+constexpr double kMinConeChord = 1e-4;
 constexpr int kMaxExpressionDepth = 64;  // nesting of ( ) and unary signs
 constexpr int kRParameters = 1000;       // R0..R999
 constexpr int kMaxToolNumber = 99999;    // as the tool library
@@ -101,6 +104,7 @@ struct Line {
   Value center[3];  // I J K
   Value vector[3];  // A3 B3 C3
   Value cone[3];    // A6 B6 C6
+  Value middle[3];  // A7 B7 C7 (ORICONIO's intermediate orientation)
   Value cr, f, s, t, d, adis, adispos;
   int motion = -1, motion_column = 0;  // G0..G3 in this block
   int dwell_column = 0;                // G4
@@ -199,6 +203,11 @@ class Reader {
   }
 
   void execute();
+  static int first_column(const Value (&v)[3]) {
+    for (const Value& w : v)
+      if (w.present) return w.column;
+    return 0;
+  }
   void motion();
   double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
   Eigen::Vector3d offset() const {
@@ -571,20 +580,20 @@ void Reader::assignment(const std::string& address, int col) {
   if (address == "ADISPOS") return set(l_.adispos, "ADISPOS", expression(0), col);
   static const char* const kVector[3] = {"A3", "B3", "C3"};
   static const char* const kCone[3] = {"A6", "B6", "C6"};
+  static const char* const kMiddle[3] = {"A7", "B7", "C7"};
   for (int k = 0; k < 3; ++k) {
     if (address == kVector[k]) return set(l_.vector[k], kVector[k], expression(0), col);
     if (address == kCone[k]) return set(l_.cone[k], kCone[k], expression(0), col);
-  }
-  if (address == "A7" || address == "B7" || address == "C7") {
-    fail(col,
-         address +
-             "= (the intermediate orientation of ORICONIO) is not supported (expected the cone by "
-             "ORICONCW or ORICONCCW with A6 B6 C6)");
+    if (address == kMiddle[k]) return set(l_.middle[k], kMiddle[k], expression(0), col);
   }
   if (address == "NUT") {
+    // The manual gives NUT's range (0..180 deg) but not whether it is the full or the half
+    // opening, nor which of the two cones of that opening through the start and the end it
+    // selects; the reader would have to guess.
     fail(col,
-         "NUT= (the cone's opening angle) is not supported (expected the cone by its axis A6 B6 C6 "
-         "and the end vector A3 B3 C3)");
+         "NUT= (the cone's opening angle) is not supported: the manual does not fix which cone it "
+         "selects (expected the cone by ORICONCW/ORICONCCW with its axis A6 B6 C6, by ORICONIO with "
+         "A7 B7 C7, or by ORICONTO)");
   }
   unsupported(address + "=", col);
   skip_argument();
@@ -815,22 +824,26 @@ void Reader::keyword(const std::string& name, int col) {
   }
   if (name == "ORIVECT" || name == "ORIPLANE") {
     state_.orientation = OrientationMode::Vector;  // ORIPLANE is identical to ORIVECT (Siemens)
+    state_.cone_by = SinumerikState::ConeBy::Axis;
     return;
   }
   if (name == "ORIAXES") {
     state_.orientation = OrientationMode::Axes;
+    state_.cone_by = SinumerikState::ConeBy::Axis;
     return;
   }
   if (name == "ORICONCW" || name == "ORICONCCW") {
     state_.orientation =
         name == "ORICONCW" ? OrientationMode::ConeClockwise : OrientationMode::ConeCounterClockwise;
+    state_.cone_by = SinumerikState::ConeBy::Axis;
     return;
   }
   if (name == "ORICONIO" || name == "ORICONTO") {
-    fail(col, name +
-                  (name == "ORICONIO" ? " (cone through an intermediate orientation)"
-                                      : " (cone with a tangential transition)") +
-                  " is not supported (expected ORIVECT, ORIPLANE, ORIAXES, ORICONCW or ORICONCCW)");
+    // The reader makes these cones counterclockwise about the axis it derives (see orient).
+    state_.orientation = OrientationMode::ConeCounterClockwise;
+    state_.cone_by = name == "ORICONIO" ? SinumerikState::ConeBy::Intermediate
+                                        : SinumerikState::ConeBy::Tangent;
+    return;
   }
   if (name == "MSG") {
     if (at('(')) skip_argument();
@@ -923,6 +936,35 @@ void Reader::execute() {
       break;
     }
   }
+  // The cone modes' words: A6 B6 C6 belong to ORICONCW/CCW, A7 B7 C7 to an ORICONIO block with
+  // its end vector.
+  const bool cone_mode = state_.orientation == OrientationMode::ConeClockwise ||
+                         state_.orientation == OrientationMode::ConeCounterClockwise;
+  const int cone_column = first_column(l.cone);
+  const int middle_column = first_column(l.middle);
+  if (cone_column > 0 && cone_mode && state_.cone_by != SinumerikState::ConeBy::Axis) {
+    fail(cone_column,
+         std::string("cone axis A6 B6 C6 under ") +
+             (state_.cone_by == SinumerikState::ConeBy::Intermediate ? "ORICONIO" : "ORICONTO") +
+             ", whose cone is fixed by the intermediate orientation or the tangent (expected "
+             "ORICONCW or ORICONCCW for a cone by its axis)");
+  }
+  if (middle_column > 0) {
+    if (!cone_mode || state_.cone_by != SinumerikState::ConeBy::Intermediate) {
+      fail(middle_column,
+           "intermediate orientation A7 B7 C7 outside ORICONIO (expected ORICONIO before or in "
+           "this block)");
+    }
+    if (first_column(l.vector) == 0) {
+      fail(middle_column,
+           "intermediate orientation A7 B7 C7 without the end vector A3 B3 C3 (expected both in "
+           "the ORICONIO block)");
+    }
+  }
+  // A6 B6 C6 without an end vector under ORICONCW/CCW: a full turn on the cone (the manual's
+  // example: "the tool orientation goes through a full revolution on the outside of the same
+  // taper").
+  if (cone_column > 0 && cone_mode && state_.traori) moves = true;
   const bool arc =
       state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
   if (!arc) {
@@ -970,6 +1012,13 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     }
   }
   return end;
+}
+
+// A cone block's tool vector at s = 1 moves along angle'(s) k x u (rotation about the unit k):
+// k x end_axis for a counterclockwise turn, its negative for a clockwise one (unit).
+Eigen::Vector3d cone_end_tangent(const Block& block) {
+  const Eigen::Vector3d t = block.cone_axis.normalized().cross(block.end_axis).normalized();
+  return block.orientation == OrientationMode::ConeClockwise ? Eigen::Vector3d(-t) : t;
 }
 
 // The block's orientation. Returns whether it changes the tool axis or the rotary axes.
@@ -1023,6 +1072,16 @@ bool Reader::orient(Block& block) {
   block.orientation = state_.orientation;
   const bool cone = state_.orientation == OrientationMode::ConeClockwise ||
                     state_.orientation == OrientationMode::ConeCounterClockwise;
+  using ConeBy = SinumerikState::ConeBy;
+  // A6 B6 C6 without an end vector under ORICONCW/CCW: a full turn (checked in execute).
+  const bool full_turn = cone && state_.cone_by == ConeBy::Axis && !vector &&
+                         (l.cone[0].present || l.cone[1].present || l.cone[2].present);
+  const int cone_column = l.cone[0].present   ? l.cone[0].column
+                          : l.cone[1].present ? l.cone[1].column
+                                              : l.cone[2].column;
+  // ORICONTO continues the previous motion block's turn; any other block sets it anew below.
+  const Eigen::Vector3d tangent_in = state_.axis_tangent;
+  state_.axis_tangent = Eigen::Vector3d::Zero();
   if (vector && axes) {
     fail(vector_column,
          "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
@@ -1033,16 +1092,18 @@ bool Reader::orient(Block& block) {
       fail(l.rotary[0].present   ? l.rotary[0].column
            : l.rotary[1].present ? l.rotary[1].column
                                  : l.rotary[2].column,
-           "rotary axes A B C under ORICONCW/ORICONCCW (expected the end orientation as A3 B3 C3)");
+           "rotary axes A B C under a cone mode (ORICONxx) (expected the end orientation as "
+           "A3 B3 C3)");
     }
     state_.rotary = rotary;
     state_.axis_set_by_rotary_line = line_;
     return turns;
   }
   if (state_.axis_set_by_rotary_line > 0) {
-    if (vector) {
-      fail(vector_column,
-           "tool vector A3 B3 C3 after the orientation was set by rotary axes A B C (line " +
+    if (vector || full_turn) {
+      fail(vector ? vector_column : cone_column,
+           std::string(vector ? "tool vector A3 B3 C3" : "a full turn on the cone A6 B6 C6") +
+               " after the orientation was set by rotary axes A B C (line " +
                std::to_string(state_.axis_set_by_rotary_line) +
                "): the reader cannot tell the vector those axes give without the machine (expected "
                "the orientation as A3 B3 C3 throughout, or as A B C throughout)");
@@ -1050,6 +1111,21 @@ bool Reader::orient(Block& block) {
     // The rotary axes hold where they were programmed; the tip moves under TCP.
     block.start_rotary = block.end_rotary = state_.rotary;
     return false;
+  }
+  if (full_turn) {
+    const Eigen::Vector3d& k = state_.cone_axis;
+    const double a0 = std::acos(std::clamp(state_.tool_axis.dot(k), -1.0, 1.0));
+    if (a0 < kConeAngleToleranceRad || M_PI - a0 < kConeAngleToleranceRad) {
+      fail(cone_column,
+           "full turn on the cone A6 B6 C6 with the tool vector along its axis (expected a cone "
+           "with an opening)");
+    }
+    // End = start: the pose engine turns a cone block whose end is its start by a full 360 deg.
+    block.start_axis = block.end_axis = state_.tool_axis;
+    block.cone_axis = k;
+    state_.rotary.given = {false, false, false};
+    state_.axis_tangent = cone_end_tangent(block);
+    return true;
   }
   if (!vector) {
     block.start_axis = block.end_axis = state_.tool_axis;
@@ -1072,12 +1148,16 @@ bool Reader::orient(Block& block) {
   block.start_axis = state_.tool_axis;
   block.end_axis = axis;
   state_.rotary.given = {false, false, false};  // the axes that give this vector are not known
-  if (axis == state_.tool_axis) {
+  const bool through_middle = cone && state_.cone_by == ConeBy::Intermediate;
+  const bool middle = l.middle[0].present || l.middle[1].present || l.middle[2].present;
+  if (axis == state_.tool_axis && !middle) {
     // The same vector again (CAM repeats it in every block): no turn, also under a cone mode.
     block.orientation = cone ? OrientationMode::Vector : state_.orientation;
     return false;
   }
-  if (cone) {
+  const Eigen::Vector3d& a = block.start_axis;
+  const Eigen::Vector3d& c = axis;
+  if (cone && state_.cone_by == ConeBy::Axis) {
     if (state_.cone_axis.isZero()) {
       fail(vector_column,
            "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
@@ -1095,11 +1175,72 @@ bool Reader::orient(Block& block) {
            "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
     }
     block.cone_axis = k;
+  } else if (through_middle) {
+    // ORICONIO: the circle through the tips of a, m, c lies in the plane with normal
+    // n = (m - a) x (c - a); the triangle a, m, c runs counterclockwise about n, and so does
+    // the circle through its vertices in the same order: counterclockwise about n from a, m
+    // comes before c. Every point of that circle makes the same angle with n, so it is the
+    // cone about n. Three distinct points of a sphere are never collinear; only nearly
+    // coinciding ones leave the circle undetermined.
+    if (!middle) {
+      fail(vector_column,
+           "ORICONIO end vector without the intermediate orientation A7 B7 C7 (expected A7 B7 C7 "
+           "in the block with A3 B3 C3)");
+    }
+    const int column = l.middle[0].present   ? l.middle[0].column
+                       : l.middle[1].present ? l.middle[1].column
+                                             : l.middle[2].column;
+    const Eigen::Vector3d w(l.middle[0].value, l.middle[1].value, l.middle[2].value);
+    if (!w.allFinite() || w.cwiseAbs().maxCoeff() > kMaxMagnitude || w.norm() < kMinVectorNorm) {
+      fail(column, "intermediate orientation A7 B7 C7 (" + num(w.x()) + ", " + num(w.y()) + ", " +
+                       num(w.z()) + ") (expected a vector of nonzero length)");
+    }
+    const Eigen::Vector3d m = w.normalized();
+    const double am = (m - a).norm(), mc = (c - m).norm(), ac = (c - a).norm();
+    if (std::min({am, mc, ac}) < kMinConeChord) {
+      const char* which = am < kMinConeChord   ? "the intermediate and the start"
+                          : mc < kMinConeChord ? "the intermediate and the end"
+                                               : "the end and the start";
+      fail(column, std::string("ORICONIO orientations that (nearly) coincide: ") + which +
+                       " are " + num(std::min({am, mc, ac})) +
+                       " apart on the unit sphere, so no single circle runs through start, "
+                       "intermediate and end (expected three orientations at least 1e-4 apart)");
+    }
+    block.cone_axis = (m - a).cross(c - a).normalized();
+    block.orientation = OrientationMode::ConeCounterClockwise;
+  } else if (cone) {
+    // ORICONTO: the circle through a with tangent t there, through c, lies in the plane through
+    // a spanned by t and c - a: normal n = t x (c - a). With a, t, b = a x t right-handed and
+    // c - a = alpha a + beta t + gamma b, alpha = (a.c - 1) = -|c - a|^2 / 2 (a, c unit), so
+    // n = -alpha b + gamma a and n x a = -alpha t: the counterclockwise turn about n leaves a
+    // along +t whenever c != a. Hence always counterclockwise about n.
+    const Eigen::Vector3d& t = tangent_in;
+    if (t.isZero()) {
+      fail(vector_column,
+           "ORICONTO without a tangent: the previous motion block did not turn the tool vector "
+           "(expected a block turning it under ORIVECT, ORIPLANE or a cone mode right before, "
+           "with A3 B3 C3)");
+    }
+    const double ac = (c - a).norm();
+    if (ac < kMinConeChord) {
+      fail(vector_column, "ORICONTO end vector " + num(ac) +
+                              " from the start on the unit sphere (expected at least 1e-4: the "
+                              "circle is not fixed by so short a turn)");
+    }
+    block.cone_axis = t.cross(c - a).normalized();
+    block.orientation = OrientationMode::ConeCounterClockwise;
   } else if (state_.orientation == OrientationMode::Vector &&
              block.start_axis.dot(axis) <= kOppositeAxisCosine) {
     fail(vector_column,
          "tool vector opposite to the previous one (expected less than 180 deg of turn: "
          "no single great circle joins opposite vectors)");
+  }
+  if (cone) {
+    state_.axis_tangent = cone_end_tangent(block);
+  } else if (state_.orientation == OrientationMode::Vector) {
+    // Great circle from a to c: at s = 1 the vector moves perpendicular to c, in the plane of
+    // a and c, away from a: along (a x c) x c = -(a - (a.c) c).
+    state_.axis_tangent = a.cross(c).cross(c).normalized();
   }
   state_.tool_axis = axis;
   return true;

@@ -63,7 +63,7 @@ TEST_P(BundledMachine, InverseOfForwardContainsTheAxesAndComesBack) {
 
 INSTANTIATE_TEST_SUITE_P(Examples, BundledMachine,
                          ::testing::Values("3axis", "table-table-ac", "table-table-bc", "head-table-bc", "head-head-ac",
-                                           "gantry-wyxzcat"),
+                                           "gantry-wyxzcat", "xyzac-trt"),
                          [](const auto& info) {
                            std::string n = info.param;
                            for (char& c : n)

@@ -32,6 +32,9 @@ struct GcodeOptions {
   // M codes that switch tool-centre-point kinematics on (true) or off (false), such as
   // LinuxCNC's M428/M429 in its table-rotary-tilting demos: on acts like G43.4.
   std::map<int, bool> tcp_m_codes;
+  // The tool in the spindle when the first file starts (0: none; programs that never change
+  // tools, like LinuxCNC's demos, run with the machine's current tool).
+  int initial_tool = 0;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 // Appends to `program` (so several files can run in sequence; the modal state and the

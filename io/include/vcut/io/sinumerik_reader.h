@@ -24,10 +24,20 @@
 //   tool axis the pose engine solves through the machine). Without TRAORI, A B C are axis words
 //   (Blocks with tool_pose false), as in the G-code reader.
 //   ORIWKS ORIMKS (ORIMKS only while no vector is programmed), ORIVECT ORIPLANE (great circle),
-//   ORIAXES, ORICONCW ORICONCCW (about the cone axis A6= B6= C6=, modal).
+//   ORIAXES, and the cone modes (Job planning, "Orientation programming along the peripheral
+//   surface of a taper"), each exact, as a cone Block:
+//     ORICONCW ORICONCCW about the cone axis A6= B6= C6= (kept until the next A6 B6 C6); A6 B6 C6
+//       without an end vector A3 B3 C3 is a full turn on that cone (the manual's example);
+//     ORICONIO A7= B7= C7= A3= B3= C3=: the circle on the unit sphere through the start, the
+//       intermediate (A7 B7 C7, in the block with the end) and the end orientation, passing the
+//       intermediate one;
+//     ORICONTO A3= B3= C3=: the circle through the start, tangent there to the tool vector's
+//       direction of motion at the end of the previous motion block (which must have turned it
+//       under ORIVECT/ORIPLANE or a cone mode), through the end.
 //   MSG("...") (ignored).
 // Refused always (the reader would otherwise approximate or change the program's flow):
-// ORICONIO, ORICONTO, A7/B7/C7, NUT=, program flow and definitions (IF, GOTOF, WHILE, DEF ...),
+// NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
+// ORICONTO, A7 B7 C7 outside ORICONIO, program flow and definitions (IF, GOTOF, WHILE, DEF ...),
 // T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
@@ -85,6 +95,14 @@ struct SinumerikState {
   Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();  // the last tool vector, unit
   int axis_set_by_rotary_line = 0;  // > 0: the orientation was last set by A B C on that line
   Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();  // A6 B6 C6, unit; zero: none yet
+  // How a cone mode's cone is given: by A6 B6 C6 (ORICONCW/CCW, `orientation` says which way),
+  // through A7 B7 C7 (ORICONIO) or by the tangent (ORICONTO); the last two are made
+  // counterclockwise about the axis they determine.
+  enum class ConeBy { Axis, Intermediate, Tangent };
+  ConeBy cone_by = ConeBy::Axis;
+  // The tool vector's unit direction of motion at the end of the last motion block; zero where
+  // that block did not turn it on a great circle or a cone (ORICONTO starts along it).
+  Eigen::Vector3d axis_tangent = Eigen::Vector3d::Zero();
 
   bool exact_stop = true;        // G60 (default); G64 G641 G642 clear it
   double adis_mm = -1.0;         // ADIS=; < 0: none given
