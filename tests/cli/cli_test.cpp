@@ -350,3 +350,24 @@ TEST_F(Simulate, SPieceFindsItsDeliberateGouge) {
   EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
   EXPECT_EQ(j["settings"]["machine"], "table-table-ac");
 }
+
+// The same part from the same motions written as tool-centre-point G-code (G43.5 X Y Z I J
+// K, program.ngc): the deliberate gouge on program.ngc:1955-1957 (the lines make_s_piece.py
+// marks), of the same depth as from the APT program.
+TEST_F(Simulate, SPieceFromTcpGcodeFindsTheSameGouge) {
+  const std::string job_file = std::string(VCUT_SOURCE_DIR) + "/examples/s-piece/job-gcode.yaml";
+  const CommandResult r =
+      run_vcut("simulate --quiet " + job_file + " --resolution 0.5 --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = report();
+  ASSERT_FALSE(j["gouges"].empty());
+  const nlohmann::json& deepest = j["gouges"][0];
+  EXPECT_GT(deepest["depth_mm"].get<double>(), 0.25);
+  EXPECT_LT(deepest["depth_mm"].get<double>(), 0.35);
+  bool names_it = false;
+  for (const auto& line : deepest["lines"])
+    for (const char* gouge_line : {"program.ngc:1955", "program.ngc:1956", "program.ngc:1957", "program.ngc:1958"})
+      names_it = names_it || line.get<std::string>().rfind(gouge_line, 0) == 0;
+  EXPECT_TRUE(names_it) << deepest.dump();
+  EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
+}
