@@ -590,10 +590,11 @@ void Reader::assignment(const std::string& address, int col) {
     // The manual gives NUT's range (0..180 deg) but not whether it is the full or the half
     // opening, nor which of the two cones of that opening through the start and the end it
     // selects; the reader would have to guess.
-    fail(col,
-         "NUT= (the cone's opening angle) is not supported: the manual does not fix which cone it "
-         "selects (expected the cone by ORICONCW/ORICONCCW with its axis A6 B6 C6, by ORICONIO with "
-         "A7 B7 C7, or by ORICONTO)");
+    fail(
+        col,
+        "NUT= (the cone's opening angle) is not supported: the manual does not fix which cone it "
+        "selects (expected the cone by ORICONCW/ORICONCCW with its axis A6 B6 C6, by ORICONIO with "
+        "A7 B7 C7, or by ORICONTO)");
   }
   unsupported(address + "=", col);
   skip_argument();
@@ -841,8 +842,8 @@ void Reader::keyword(const std::string& name, int col) {
   if (name == "ORICONIO" || name == "ORICONTO") {
     // The reader makes these cones counterclockwise about the axis it derives (see orient).
     state_.orientation = OrientationMode::ConeCounterClockwise;
-    state_.cone_by = name == "ORICONIO" ? SinumerikState::ConeBy::Intermediate
-                                        : SinumerikState::ConeBy::Tangent;
+    state_.cone_by =
+        name == "ORICONIO" ? SinumerikState::ConeBy::Intermediate : SinumerikState::ConeBy::Tangent;
     return;
   }
   if (name == "MSG") {
@@ -1201,8 +1202,8 @@ bool Reader::orient(Block& block) {
       const char* which = am < kMinConeChord   ? "the intermediate and the start"
                           : mc < kMinConeChord ? "the intermediate and the end"
                                                : "the end and the start";
-      fail(column, std::string("ORICONIO orientations that (nearly) coincide: ") + which +
-                       " are " + num(std::min({am, mc, ac})) +
+      fail(column, std::string("ORICONIO orientations that (nearly) coincide: ") + which + " are " +
+                       num(std::min({am, mc, ac})) +
                        " apart on the unit sphere, so no single circle runs through start, "
                        "intermediate and end (expected three orientations at least 1e-4 apart)");
     }

@@ -6,10 +6,14 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
 #include <vcut/io/sinumerik_reader.h>
+#include <vcut/kinematics/densify.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 #include <string>
 
@@ -185,6 +189,195 @@ TEST(SinumerikReader, OriconCone) {
                    "without a cone axis");
 }
 
+// The tool vector of a cone block at fraction s, by the pose engine (densify's block_pose).
+Eigen::Vector3d axis_at(const Block& b, double s) { return kinematics::block_pose(b, s).axis; }
+
+std::string vec3(const char* letters, const Eigen::Vector3d& v) {
+  char buf[160];
+  std::snprintf(buf, sizeof buf, " %c%c=%.17g %c%c=%.17g %c%c=%.17g", letters[0], letters[3], v.x(),
+                letters[1], letters[3], v.y(), letters[2], letters[3], v.z());
+  return buf;
+}
+
+// ORICONIO: the circle through start, intermediate and end. Hand case: start (s,0,c),
+// intermediate (0,s,c), end (-s,0,c) with s = sin 15, c = cos 15 lie on the 15 deg cone about +Z
+// and are met in that order turning counterclockwise about +Z: cone_axis +Z, counterclockwise,
+// 180 deg; half way the pose engine is at the intermediate (90 deg). Back from (-s,0,c) through
+// the same (0,s,c) to (s,0,c) is clockwise about +Z: the plane normal (m - a) x (c - a) =
+// (s,s,0) x (2s,0,0) = (0, 0, -2 s^2), so counterclockwise about -Z.
+TEST(SinumerikReader, OriconIntermediate) {
+  const double s = std::sin(15 * kDeg), c = std::cos(15 * kDeg);
+  const Program p = read(
+      "TRAORI\n"
+      "G0 X0 Y0 Z0 A3=SIN(15) B3=0 C3=COS(15)\n"
+      "ORICONIO\n"
+      "G1 F100 X10 A7=0 B7=SIN(15) C7=COS(15) A3=-SIN(15) B3=0 C3=COS(15)\n"
+      "X20 A7=0 B7=SIN(15) C7=COS(15) A3=SIN(15) B3=0 C3=COS(15)\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  const Block& b = p.blocks[1];
+  EXPECT_EQ(b.orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(b.cone_axis, {0, 0, 1});
+  expect_vec(b.start_axis, {s, 0, c});
+  expect_vec(b.end_axis, {-s, 0, c});
+  expect_vec(axis_at(b, 0.5), {0, s, c});
+  expect_vec(axis_at(b, 1.0), {-s, 0, c});
+  const Block& back = p.blocks[2];
+  EXPECT_EQ(back.orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(back.cone_axis, {0, 0, -1});
+  expect_vec(axis_at(back, 0.5), {0, s, c});
+  expect_vec(axis_at(back, 1.0), {s, 0, c});
+  // ORICONIO is modal; the same end again with no A7 B7 C7 is no turn.
+  EXPECT_EQ(read("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nX1 A3=1 C3=1\n").blocks.size(), 2u);
+
+  // Errors, each naming line:column of the word at fault.
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=1 C7=1 A3=0 B3=1 C3=1\n",
+                   4, 10, "the intermediate and the start are 0 apart");
+  EXPECT_MPF_ERROR(
+      "TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=0 B3=1 C3=1\n", 4, 10,
+      "the intermediate and the end");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=1 C3=1\n",
+                   4, 10, "the end and the start");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A3=0 B3=1 C3=1\n", 4, 10,
+                   "ORICONIO end vector without the intermediate orientation A7 B7 C7");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10, "A7 B7 C7 outside ORICONIO");
+  EXPECT_MPF_ERROR("TRAORI\nORICONIO\nG1 F1 X0 B7=1\n", 3, 10, "without the end vector A3 B3 C3");
+  EXPECT_MPF_ERROR("TRAORI\nORICONIO\nG1 F1 X0 C6=1 A3=1\n", 3, 10,
+                   "cone axis A6 B6 C6 under ORICONIO");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 A3=0 B3=1 C3=1\n", 4, 10,
+                   "intermediate orientation A7 B7 C7 (0, 0, 0)");
+}
+
+// ORICONTO after ORIVECT: the great circle (0,0,1) -> a = (s,0,c) (s = sin 15, c = cos 15) in the
+// XZ plane ends moving along t = (c, 0, -s). The circle through a with tangent t through
+// e = (0,1,0): n = t x (e - a) = (c,0,-s) x (-s,1,-c) = (s, 1, c), |n| = sqrt 2; a.n = e.n = 1, so
+// both lie on the 45 deg cone about (s,1,c)/sqrt2, and n x a = (c,0,-s) = +t: counterclockwise.
+// Continuing the same great circle to (sin 30, 0, cos 30) gives the great circle's own axis +Y.
+// After a cone block the tangent is k x end (counterclockwise) or -(k x end) (clockwise): ORICONTO
+// then stays on that cone.
+TEST(SinumerikReader, OriconTangent) {
+  const double s = std::sin(15 * kDeg), c = std::cos(15 * kDeg), r = std::sqrt(0.5);
+  const Program p = read(
+      "TRAORI\n"
+      "G0 X0 Y0 Z0 A3=0 B3=0 C3=1\n"
+      "G1 F100 X10 A3=SIN(15) B3=0 C3=COS(15)\n"
+      "ORICONTO\n"
+      "X20 A3=0 B3=1 C3=0\n");
+  ASSERT_EQ(p.blocks.size(), 2u);  // the G0 neither moves (start unknown) nor turns
+  const Block& b = p.blocks[1];
+  EXPECT_EQ(b.orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(b.cone_axis, Eigen::Vector3d(s, 1, c) * r);
+  expect_vec(axis_at(b, 1.0), {0, 1, 0});
+  // Leaves a along +t: the engine's first small step (its chord leaves the tangent by about half
+  // the step's angle, ~1e-7 rad).
+  const Eigen::Vector3d step = axis_at(b, 1e-7) - axis_at(b, 0.0);
+  expect_vec(step.normalized(), {c, 0, -s}, 1e-6);
+
+  const Program q = read(
+      "TRAORI\nG0 X0 Y0 Z0 A3=0 B3=0 C3=1\nG1 F100 X10 A3=SIN(15) B3=0 C3=COS(15)\n"
+      "ORICONTO X20 A3=SIN(30) B3=0 C3=COS(30)\n");
+  ASSERT_EQ(q.blocks.size(), 2u);
+  expect_vec(q.blocks[1].cone_axis, {0, 1, 0});
+  expect_vec(axis_at(q.blocks[1], 1.0), {std::sin(30 * kDeg), 0, std::cos(30 * kDeg)});
+
+  // ORICONCCW about +Z to (0,s,c) ends moving along k x (0,s,c) = (-s,0,0); ORICONTO to (-s,0,c)
+  // goes on counterclockwise about +Z. ORICONCW about +Z to (0,s,c) (270 deg) ends moving along
+  // +X; ORICONTO to (0,-s,c) goes on clockwise about +Z, i.e. counterclockwise about -Z.
+  const Program cone = read(
+      "TRAORI\nG0 X0 Y0 Z0 A3=SIN(15) B3=0 C3=COS(15)\n"
+      "ORICONCCW G1 F100 X1 A3=0 B3=SIN(15) C3=COS(15) A6=0 B6=0 C6=1\n"
+      "ORICONTO X2 A3=-SIN(15) B3=0 C3=COS(15)\n"
+      "ORICONCW X3 A3=SIN(15) B3=0 C3=COS(15) A6=0 B6=0 C6=1\n"
+      "X4 A3=0 B3=SIN(15) C3=COS(15)\n"
+      "ORICONTO X5 A3=0 B3=-SIN(15) C3=COS(15)\n");
+  ASSERT_EQ(cone.blocks.size(), 6u);
+  expect_vec(cone.blocks[2].cone_axis, {0, 0, 1});
+  EXPECT_EQ(cone.blocks[2].orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(axis_at(cone.blocks[2], 0.5), {-s * r, s * r, c});  // 135 deg about +Z
+  expect_vec(cone.blocks[5].cone_axis, {0, 0, -1});
+  EXPECT_EQ(cone.blocks[5].orientation, OrientationMode::ConeCounterClockwise);
+  expect_vec(axis_at(cone.blocks[5], 0.5), {s, 0, c});  // from +Y through +X to -Y: 0 deg half way
+
+  // No tangent: at the start, after a block that did not turn the tool, after rotary axes.
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONTO\nG1 F1 X1 A3=1 C3=1\n", 4, 10,
+                   "ORICONTO without a tangent");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nG1 F1 X5\nORICONTO\nX6 A3=0 B3=1 C3=1\n", 5, 4,
+                   "ORICONTO without a tangent");
+  EXPECT_MPF_ERROR("TRAORI\nORIAXES\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONTO\nX6 A3=0 B3=1 C3=1\n", 5, 4,
+                   "ORICONTO without a tangent");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONTO C6=1\n", 3, 10,
+                   "cone axis A6 B6 C6 under ORICONTO");
+}
+
+// Randomized (fixed seed): ORICONIO's densified vectors stay on one cone, pass the intermediate
+// orientation before the end and end at the end; ORICONTO's start along the tangent of the great
+// circle before and end at the end.
+TEST(SinumerikReader, OriconRandomCircles) {
+  constexpr double kPoseTol = 1e-9;  // Rodrigues rotations and normalisation in double
+  std::mt19937 rng(20240611);
+  std::normal_distribution<double> normal;
+  auto unit = [&] { return Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized(); };
+  int cases = 0;
+  while (cases < 200) {
+    const Eigen::Vector3d a = unit(), m = unit(), e = unit(), u0 = unit();
+    if ((a - m).norm() < 0.1 || (m - e).norm() < 0.1 || (a - e).norm() < 0.1 ||
+        (u0 - a).norm() < 0.1 || (u0 + a).norm() < 0.1) {
+      continue;
+    }
+    ++cases;
+    const Program p = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", a) + "\nORICONIO G1 F100 X1" +
+                           vec3("ABC7", m) + vec3("ABC3", e) + "\n");
+    ASSERT_EQ(p.blocks.size(), 2u);
+    const Block& b = p.blocks[1];
+    const Eigen::Vector3d k = b.cone_axis;
+    // The turn (counterclockwise about k) from a to a vector on the cone, in [0, 2 pi).
+    auto turn = [&](const Eigen::Vector3d& v) {
+      const Eigen::Vector3d x = a - a.dot(k) * k, y = v - v.dot(k) * k;
+      const double t = std::atan2(k.dot(x.cross(y)), x.dot(y));
+      return t < 0 ? t + 2 * M_PI : t;
+    };
+    EXPECT_NEAR(m.dot(k), a.dot(k), kPoseTol);
+    EXPECT_NEAR(e.dot(k), a.dot(k), kPoseTol);
+    const double sm = turn(m) / turn(e);
+    EXPECT_GT(sm, 0.0);
+    EXPECT_LT(sm, 1.0);
+    expect_vec(axis_at(b, sm), m, kPoseTol);
+    expect_vec(axis_at(b, 1.0), e, kPoseTol);
+    for (int i = 0; i <= 8; ++i) EXPECT_NEAR(axis_at(b, i / 8.0).dot(k), a.dot(k), kPoseTol);
+
+    const Program q = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", u0) + "\nG1 F100 X1" +
+                           vec3("ABC3", a) + "\nORICONTO X2" + vec3("ABC3", e) + "\n");
+    ASSERT_EQ(q.blocks.size(), 3u);
+    const Block& t = q.blocks[2];
+    // Great circle u0 -> a: at a it moves along the part of a - u0 perpendicular to a.
+    const Eigen::Vector3d tangent = ((a - u0) - (a - u0).dot(a) * a).normalized();
+    EXPECT_GT((axis_at(t, 1e-7) - axis_at(t, 0.0)).normalized().dot(tangent), 1.0 - 1e-6);
+    EXPECT_NEAR(t.cone_axis.dot(tangent), 0.0, kPoseTol);
+    expect_vec(axis_at(t, 1.0), e, kPoseTol);
+    for (int i = 0; i <= 8; ++i)
+      EXPECT_NEAR(axis_at(t, i / 8.0).dot(t.cone_axis), a.dot(t.cone_axis), kPoseTol);
+  }
+}
+
+// A6 B6 C6 without an end vector under ORICONCW/CCW: a full turn on the cone (the manual's
+// example, "goes through a full revolution on the outside of the same taper"). Start (h,0,h),
+// h = sqrt(1/2), clockwise about +Z: a quarter of the way at (0,-h,h), half way at (-h,0,h).
+TEST(SinumerikReader, OriconFullTurn) {
+  const double h = std::sqrt(0.5);
+  const Program p = read("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A6=0 B6=0 C6=1\n");
+  ASSERT_EQ(p.blocks.size(), 2u);
+  const Block& b = p.blocks[1];
+  EXPECT_EQ(b.orientation, OrientationMode::ConeClockwise);
+  expect_vec(b.start_axis, {h, 0, h});
+  expect_vec(b.end_axis, {h, 0, h});
+  expect_vec(axis_at(b, 0.25), {0, -h, h});
+  expect_vec(axis_at(b, 0.5), {-h, 0, h});
+  expect_vec(axis_at(b, 1.0), {h, 0, h});
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCW\nG1 F1 X1 A6=0 B6=0 C6=1\n", 4, 10,
+                   "with the tool vector along its axis");
+  // Without TRAORI A6 B6 C6 only set the axis.
+  EXPECT_EQ(read("G0 X0 Y0 Z0\nORICONCW A6=0 B6=0 C6=1\n").blocks.size(), 0u);
+}
+
 // CR= arcs: chord (0,0)->(10,0); |CR| = 5 is a half circle about (5,0); |CR| = 10 puts the centre
 // sqrt(100 - 25) = 8.660254 off the chord's midpoint: G2 CR>0 and G3 CR<0 to the right of
 // start->end (below), G2 CR<0 to the left (the long arc, more than 180 deg).
@@ -357,12 +550,6 @@ TEST(SinumerikReader, TechnologyAndBlending) {
 }
 
 TEST(SinumerikReader, RefusedWords) {
-  EXPECT_MPF_ERROR("N10 ORICONIO\n", 1, 5,
-                   "ORICONIO (cone through an intermediate orientation) is not supported");
-  EXPECT_MPF_ERROR("N10 ORICONTO\n", 1, 5,
-                   "ORICONTO (cone with a tangential transition) is not supported");
-  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10,
-                   "A7= (the intermediate orientation of ORICONIO)");
   EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10,
                    "NUT= (the cone's opening angle) is not supported");
   EXPECT_MPF_ERROR("TRAORI\nORIMKS\nG1 F1 X0 Y0 Z0 A3=1 C3=1\n", 3, 16, "under ORIMKS");
@@ -400,7 +587,7 @@ TEST(SinumerikReader, UnsupportedAsWarning) {
   EXPECT_EQ(p.warnings[2].rfind("test.mpf:3:5: G95 is not supported", 0), 0u) << p.warnings[2];
   EXPECT_EQ(p.warnings[3].rfind("test.mpf:3:9: H1= is not supported", 0), 0u) << p.warnings[3];
   // The refused words stay errors.
-  EXPECT_THROW(read("ORICONIO\n", options), InputError);
+  EXPECT_THROW(read("NUT=30\n", options), InputError);
 }
 
 // Unknown start: the first programmed value of an axis does not move it; moves before Z is
