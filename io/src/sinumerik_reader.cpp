@@ -834,8 +834,11 @@ void Reader::keyword(const std::string& name, int col) {
     return;
   }
   if (name == "ORICONCW" || name == "ORICONCCW") {
+    // Siemens' "clockwise" is seen looking along the direction vector A6 B6 C6: a positive
+    // (right-hand) turn about it, i.e. vcut's ConeCounterClockwise. The manual's example:
+    // ORICONCW about (0,0,1) from (0,1,1)/sqrt2 to (1,0,1)/sqrt2 turns 270 deg.
     state_.orientation =
-        name == "ORICONCW" ? OrientationMode::ConeClockwise : OrientationMode::ConeCounterClockwise;
+        name == "ORICONCW" ? OrientationMode::ConeCounterClockwise : OrientationMode::ConeClockwise;
     state_.cone_by = SinumerikState::ConeBy::Axis;
     return;
   }

@@ -163,7 +163,8 @@ TEST(SinumerikReader, OrivectBlocks) {
 }
 
 // ORICONCW: the axis turns on the cone about A6 B6 C6 (normalised); start (1,0,1)/sqrt2 and end
-// (0,1,1)/sqrt2 both make 45 deg with (0,0,1).
+// (0,1,1)/sqrt2 both make 45 deg with (0,0,1). Siemens' clockwise is seen looking along the
+// direction vector: a positive right-hand turn about it (vcut's ConeCounterClockwise).
 TEST(SinumerikReader, OriconCone) {
   const Program p = read(
       "TRAORI\n"
@@ -176,11 +177,11 @@ TEST(SinumerikReader, OriconCone) {
   ASSERT_EQ(p.blocks.size(), 3u);
   const double h = std::sqrt(0.5);
   const Block& b = p.blocks[1];
-  EXPECT_EQ(b.orientation, OrientationMode::ConeClockwise);
+  EXPECT_EQ(b.orientation, OrientationMode::ConeCounterClockwise);
   expect_vec(b.cone_axis, {0, 0, 1});
   expect_vec(b.start_axis, {h, 0, h});
   expect_vec(b.end_axis, {0, h, h});
-  EXPECT_EQ(p.blocks[2].orientation, OrientationMode::ConeCounterClockwise);
+  EXPECT_EQ(p.blocks[2].orientation, OrientationMode::ConeClockwise);
   expect_vec(p.blocks[2].cone_axis, {0, 0, 1});  // A6 B6 C6 are kept
   // The end off the start's cone: 0 deg vs 45 deg from the axis.
   EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n",
@@ -279,14 +280,15 @@ TEST(SinumerikReader, OriconTangent) {
   expect_vec(q.blocks[1].cone_axis, {0, 1, 0});
   expect_vec(axis_at(q.blocks[1], 1.0), {std::sin(30 * kDeg), 0, std::cos(30 * kDeg)});
 
-  // ORICONCCW about +Z to (0,s,c) ends moving along k x (0,s,c) = (-s,0,0); ORICONTO to (-s,0,c)
-  // goes on counterclockwise about +Z. ORICONCW about +Z to (0,s,c) (270 deg) ends moving along
-  // +X; ORICONTO to (0,-s,c) goes on clockwise about +Z, i.e. counterclockwise about -Z.
+  // ORICONCW (a positive turn) about +Z to (0,s,c) ends moving along k x (0,s,c) = (-s,0,0);
+  // ORICONTO to (-s,0,c) goes on counterclockwise about +Z. ORICONCCW (a negative turn) about +Z
+  // to (0,s,c) (270 deg) ends moving along +X; ORICONTO to (0,-s,c) goes on clockwise about +Z,
+  // i.e. counterclockwise about -Z.
   const Program cone = read(
       "TRAORI\nG0 X0 Y0 Z0 A3=SIN(15) B3=0 C3=COS(15)\n"
-      "ORICONCCW G1 F100 X1 A3=0 B3=SIN(15) C3=COS(15) A6=0 B6=0 C6=1\n"
+      "ORICONCW G1 F100 X1 A3=0 B3=SIN(15) C3=COS(15) A6=0 B6=0 C6=1\n"
       "ORICONTO X2 A3=-SIN(15) B3=0 C3=COS(15)\n"
-      "ORICONCW X3 A3=SIN(15) B3=0 C3=COS(15) A6=0 B6=0 C6=1\n"
+      "ORICONCCW X3 A3=SIN(15) B3=0 C3=COS(15) A6=0 B6=0 C6=1\n"
       "X4 A3=0 B3=SIN(15) C3=COS(15)\n"
       "ORICONTO X5 A3=0 B3=-SIN(15) C3=COS(15)\n");
   ASSERT_EQ(cone.blocks.size(), 6u);
@@ -360,10 +362,21 @@ TEST(SinumerikReader, OriconRandomCircles) {
 
 // A6 B6 C6 without an end vector under ORICONCW/CCW: a full turn on the cone (the manual's
 // example, "goes through a full revolution on the outside of the same taper"). Start (h,0,h),
-// h = sqrt(1/2), clockwise about +Z: a quarter of the way at (0,-h,h), half way at (-h,0,h).
+// h = sqrt(1/2), ORICONCCW: a negative turn about +Z, a quarter of the way at (0,-h,h), half
+// way at (-h,0,h).
+// The manual's own example: ORICONCW about (0,0,1) from (0,1,1)/sqrt2 to (1,0,1)/sqrt2 turns
+// 270 deg: a third of the way (90 deg on) the tool axis is at (-1,0,1)/sqrt2.
+TEST(SinumerikReader, OriconcwIsAPositiveTurnAsInTheManual) {
+  const double h = std::sqrt(0.5);
+  const Program p = read("TRAORI\nG0 X0 Y0 Z0 A3=0 B3=1 C3=1\nORICONCW\nG1 F1 X1 A3=1 B3=0 C3=1 A6=0 B6=0 C6=1\n");
+  ASSERT_EQ(p.blocks.size(), 2u);  // the G0 turns the tool from +Z to the start vector
+  expect_vec(axis_at(p.blocks[1], 1.0 / 3.0), {-h, 0, h});
+  expect_vec(axis_at(p.blocks[1], 2.0 / 3.0), {0, -h, h});
+}
+
 TEST(SinumerikReader, OriconFullTurn) {
   const double h = std::sqrt(0.5);
-  const Program p = read("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A6=0 B6=0 C6=1\n");
+  const Program p = read("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCCW\nG1 F1 X1 A6=0 B6=0 C6=1\n");
   ASSERT_EQ(p.blocks.size(), 2u);
   const Block& b = p.blocks[1];
   EXPECT_EQ(b.orientation, OrientationMode::ConeClockwise);

@@ -26,7 +26,9 @@
 //   ORIWKS ORIMKS (ORIMKS only while no vector is programmed), ORIVECT ORIPLANE (great circle),
 //   ORIAXES, and the cone modes (Job planning, "Orientation programming along the peripheral
 //   surface of a taper"), each exact, as a cone Block:
-//     ORICONCW ORICONCCW about the cone axis A6= B6= C6= (kept until the next A6 B6 C6); A6 B6 C6
+//     ORICONCW ORICONCCW about the cone axis A6= B6= C6= (kept until the next A6 B6 C6; CW is a
+//     positive right-hand turn about it, clockwise seen looking along it, as the manual's
+//     example turns 270 deg from (0,1,1) to (1,0,1) about +Z); A6 B6 C6
 //       without an end vector A3 B3 C3 is a full turn on that cone (the manual's example);
 //     ORICONIO A7= B7= C7= A3= B3= C3=: the circle on the unit sphere through the start, the
 //       intermediate (A7 B7 C7, in the block with the end) and the end orientation, passing the
