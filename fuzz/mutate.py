@@ -24,9 +24,9 @@ numbers, error names, deep nesting, ...; for CSV (--format csv): nan, -nan, inf,
 quotes, commas, CR, BOM, hex floats, ...
 
 Usage (from the repository root, after building the drivers):
-  python3 fuzz/mutate.py build/fuzz/machine_file_fuzz fuzz/corpus/machine --format yaml -n 5000
-  python3 fuzz/mutate.py build/fuzz/csv_fuzz fuzz/corpus/csv --format csv -n 5000
-  python3 fuzz/mutate.py build/fuzz/sinumerik_fuzz fuzz/corpus/sinumerik --format sinumerik -n 5000
+  python3 fuzz/mutate.py build/fuzz/machine_file_fuzz tests/fuzz/corpus/machine --format yaml -n 5000
+  python3 fuzz/mutate.py build/fuzz/csv_fuzz tests/fuzz/corpus/csv --format csv -n 5000
+  python3 fuzz/mutate.py build/fuzz/sinumerik_fuzz tests/fuzz/corpus/sinumerik --format sinumerik -n 5000
 The driver and the project's shared libraries it loads are copied first, so that a rebuild
 of the tree during the run does not make mutants fail for no fault of theirs.
 Options: --seed S (default 1), --batch B mutants per driver run (default 200), --timeout T
