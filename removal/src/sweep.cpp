@@ -52,6 +52,87 @@ TranslationSweep::TranslationSweep(const Cutter& cutter, const Move& move)
   }
 }
 
+bool TranslationSweep::start_dominates(const Eigen::AlignedBox3d& box) const {
+  if (core_.core_radius_mm != 0.0 || cutter_.type == CutterType::VBit || delta_length_ == 0.0) return false;
+  // The box in the tool frame, bounded by the box around the rotated box.
+  const Eigen::Vector3d center = to_tool_ * (box.center() - origin_);
+  const Eigen::Vector3d half = to_tool_.cwiseAbs() * (0.5 * box.sizes());
+  // max over the box of delta . (y - c(y)) = dx yx + dy yy + dz g(yz), g(z) = z - clamp(z, lo,
+  // hi) nondecreasing: each term's maximum is at an end of its interval.
+  const Eigen::Vector3d& d = delta_tool_;
+  const double z = d.z() >= 0.0 ? center.z() + half.z() : center.z() - half.z();
+  const double g = z - std::clamp(z, core_.z_low_mm, core_.z_high_mm);
+  const double most = d.x() * center.x() + std::abs(d.x()) * half.x() + d.y() * center.y() +
+                      std::abs(d.y()) * half.y() + d.z() * g;
+  return most <= 0.0;
+}
+
+bool TranslationSweep::start_dominates(const Eigen::Vector3d& x) const {
+  if (core_.core_radius_mm != 0.0 || cutter_.type == CutterType::VBit || delta_length_ == 0.0) return false;
+  const Eigen::Vector3d y = to_tool_ * (x - origin_);
+  const double g = y.z() - std::clamp(y.z(), core_.z_low_mm, core_.z_high_mm);
+  return delta_tool_.x() * y.x() + delta_tool_.y() * y.y() + delta_tool_.z() * g <= 0.0;
+}
+
+// min over t in [0, 1] of f(t) = d_K(y - t delta), K the core cylinder (radius Rc, z in
+// [lo, hi]). f is convex, so its derivative (analytic here: f = extrude(rho - Rc, zeta) with
+// rho and zeta each convex in t) goes from negative to positive once: the minimum is found
+// on a bracket [a, b] with f'(a) < 0 < f'(b) by secant steps on f' (bisection when a step
+// would not shrink the bracket enough). The tangents at a and b meet below the minimum,
+// which gives a lower bound: the search stops when the best value found is within
+// kGeneralSweepTolerance_mm of it (the error bound), or when it is at least `far`.
+double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const {
+  const Eigen::Vector3d& d = delta_tool_;
+  const double mid = 0.5 * (core_.z_low_mm + core_.z_high_mm), half = 0.5 * (core_.z_high_mm - core_.z_low_mm);
+  auto eval = [&](double t, double& f, double& slope) {
+    const Eigen::Vector3d p = y - t * d;
+    const double rho = std::hypot(p.x(), p.y());
+    const double dr = rho - core_.core_radius_mm;
+    const double dr_slope = rho > 0.0 ? -(p.x() * d.x() + p.y() * d.y()) / rho : 0.0;
+    const double q = p.z() - mid;
+    const double dz = std::abs(q) - half;
+    const double dz_slope = q > 0.0 ? -d.z() : q < 0.0 ? d.z() : 0.0;
+    if (dr > 0.0 && dz > 0.0) {
+      f = std::hypot(dr, dz);
+      slope = (dr * dr_slope + dz * dz_slope) / f;
+    } else if (dr > 0.0 || (dz <= 0.0 && dr >= dz)) {
+      f = dr;
+      slope = dr_slope;
+    } else {
+      f = dz;
+      slope = dz_slope;
+    }
+  };
+  double a = 0.0, b = 1.0, fa, ga, fb, gb;
+  eval(a, fa, ga);
+  if (ga >= 0.0) return fa;
+  eval(b, fb, gb);
+  if (gb <= 0.0) return fb;
+  double best = std::min(fa, fb);
+  for (int iteration = 0; iteration < 200; ++iteration) {
+    // The tangents at a and b meet at t_x, below the convex f's minimum.
+    const double tx = (fb - fa - gb * b + ga * a) / (ga - gb);
+    const double lower = fa + ga * (tx - a);
+    if (lower >= far || best - lower <= kGeneralSweepTolerance_mm ||
+        (b - a) * delta_length_ <= kGeneralSweepTolerance_mm) {
+      return lower >= far ? lower : best;
+    }
+    double t = a - ga * (b - a) / (gb - ga);  // the secant root of f'
+    const double width = b - a;
+    if (!(t > a + 0.1 * width && t < b - 0.1 * width)) t = 0.5 * (a + b);
+    double ft, gt;
+    eval(t, ft, gt);
+    best = std::min(best, ft);
+    if (gt == 0.0) return best;
+    if (gt < 0.0) {
+      a = t, fa = ft, ga = gt;
+    } else {
+      b = t, fb = ft, gb = gt;
+    }
+  }
+  return best;
+}
+
 double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
   if (cutter_.type == CutterType::VBit) return cutter_distance(cutter_, y);
   const double d_radial = std::hypot(y.x(), y.y()) - core_.core_radius_mm;
@@ -100,6 +181,7 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
         if (height > 0.0) best = std::min({best, segment(Eigen::Vector3d::Zero(), up), segment(delta_tool_, up)});
         return std::sqrt(best) - core_.rounding_mm;
       }
+      if (cutter_.type != CutterType::VBit) return cylinder_sweep_distance(y, far_mm + core_.rounding_mm) - core_.rounding_mm;
       // f(t) = d_core(y - t*delta) is convex in t (signed distance of a convex set along a
       // line), and |f'| <= |delta|: golden-section search brackets the minimum.
       constexpr double kInvPhi = 0.6180339887498949;

@@ -159,7 +159,10 @@ struct VdbStock::Impl {
     coarse_count[static_cast<std::size_t>(coarse_index(i / kCoarse, j / kCoarse, k / kCoarse))] += on ? 1 : -1;
   }
 
-  void bin(const TranslationSweep& sweep, bool rapid, std::int32_t move, std::vector<Entry>& out) const {
+  // `continues`: the move follows on from the cutter's previous cutting move (same cutter and
+  // axis, starting where it ended), so blocks where its start cutter is nearest change not.
+  void bin(const TranslationSweep& sweep, bool rapid, bool continues, std::int32_t move,
+           std::vector<Entry>& out) const {
     const double half_diag = 3.5 * std::sqrt(3.0) * v;
     const double coarse_half_diag = (kCoarse * kLeafDim * 0.5 - 0.5) * std::sqrt(3.0) * v;
     const Eigen::AlignedBox3d& b = sweep.bounds();
@@ -180,6 +183,10 @@ struct VdbStock::Impl {
                                            Eigen::Vector3d::Constant((kCoarse * kLeafDim * 0.5 - 0.5) * v),
                                            w + coarse_half_diag + v);
           if (sc > w + coarse_half_diag) continue;
+          if (continues && sweep.start_dominates(Eigen::AlignedBox3d(
+                               voxel_position(co), voxel_position(co) + Eigen::Vector3d::Constant((kCoarse * kLeafDim - 1) * v)))) {
+            continue;
+          }
           for (int k = std::max(lo[2], ck * kCoarse); k <= std::min(hi[2], ck * kCoarse + kCoarse - 1); ++k)
             for (int j = std::max(lo[1], cj * kCoarse); j <= std::min(hi[1], cj * kCoarse + kCoarse - 1); ++j)
               for (int i = std::max(lo[0], ci * kCoarse); i <= std::min(hi[0], ci * kCoarse + kCoarse - 1); ++i) {
@@ -188,6 +195,11 @@ struct VdbStock::Impl {
                 const double s = sweep.distance(voxel_position(leaf_origin(i, j, k)) +
                                                 Eigen::Vector3d::Constant(3.5 * v), w + half_diag + v);
                 if (s > w + half_diag) continue;
+                const Eigen::Vector3d corner = voxel_position(leaf_origin(i, j, k));
+                if (continues && !rapid &&
+                    sweep.start_dominates(Eigen::AlignedBox3d(corner, corner + Eigen::Vector3d::Constant(7 * v)))) {
+                  continue;
+                }
                 const EntryKind kind = rapid ? EntryKind::Probe
                                        : s < -(w + half_diag) ? EntryKind::Clear
                                                               : EntryKind::Near;
@@ -205,7 +217,7 @@ struct VdbStock::Impl {
 
   // `id_offset` turns a batch-local move index into the move id stored in the id grid.
   void process(const Entry* begin, const Entry* end, const std::vector<TranslationSweep>& sweeps,
-               int id_offset, BlockResult& r) const {
+               const std::vector<std::uint8_t>& continues, int id_offset, BlockResult& r) const {
     const Coord o = origin_of(begin->leaf);
     const auto& tree = grid->tree();
     const auto& id_tree = ids->tree();
@@ -237,9 +249,11 @@ struct VdbStock::Impl {
             if (r.value[n] < wf) { r.value[n] = wf; r.id[n] = id_offset + e->move; }
           not_outside = 0;
           break;
-        case EntryKind::Near:
+        case EntryKind::Near: {
+          const bool follows = continues[static_cast<std::size_t>(e->move)] != 0;
           for (int n = 0; n < kLeafVoxels; ++n) {
             if (r.value[n] >= wf) continue;
+            if (follows && sweep.start_dominates(position[n])) continue;  // the previous move's end
             const double cut = -sweep.distance(position[n], w);
             if (cut > r.value[n]) {
               r.value[n] = static_cast<float>(std::min(cut, w));
@@ -248,6 +262,7 @@ struct VdbStock::Impl {
             }
           }
           break;
+        }
         case EntryKind::Probe: {
           Collision deepest{e->move, 0.0, Eigen::Vector3d::Zero()};
           for (int n = 0; n < kLeafVoxels; ++n) {
@@ -386,6 +401,19 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
   double removed_voxels = 0.0;
   // Move ids in the id grid count across calls: remember every move with its cutter.
   const int id_base = detail::remember_moves(list, m.moves, m.cutters);
+  // Moves that follow on from the cutter's previous cutting move (rapids and probes cut
+  // nothing in between): where their start cutter is the nearest, the previous move has
+  // already cut exactly that, and they are not evaluated there.
+  std::vector<std::uint8_t> follows(total, 0);
+  for (std::size_t i = 0, last_cut = total; i < total; ++i) {
+    const Move& move = list.moves[i];
+    if (move.rapid) continue;
+    if (last_cut < total) {
+      const Move& before = list.moves[last_cut];
+      follows[i] = before.cutter == move.cutter && before.end_mm == move.start_mm && before.axis == move.axis;
+    }
+    last_cut = i;
+  }
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
     const std::size_t last = std::min(total, first + kBatchMoves);
     std::vector<TranslationSweep> sweeps;
@@ -394,12 +422,14 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
       const Move& move = list.moves[i];
       sweeps.emplace_back(list.cutters.at(static_cast<std::size_t>(move.cutter)), move);
     }
+    const std::vector<std::uint8_t> batch_follows(follows.begin() + static_cast<std::ptrdiff_t>(first),
+                                                  follows.begin() + static_cast<std::ptrdiff_t>(last));
     // 1. Bin every move of the batch to the leaf blocks its sweep can change.
     tbb::enumerable_thread_specific<std::vector<Entry>> binned;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 16), [&](const auto& range) {
       auto& out = binned.local();
       for (std::size_t i = range.begin(); i != range.end(); ++i)
-        m.bin(sweeps[i - first], list.moves[i].rapid, static_cast<std::int32_t>(i - first), out);
+        m.bin(sweeps[i - first], list.moves[i].rapid, follows[i] != 0, static_cast<std::int32_t>(i - first), out);
     });
     std::vector<Entry> entries;
     for (auto& part : binned) entries.insert(entries.end(), part.begin(), part.end());
@@ -420,7 +450,7 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
         for (std::size_t g = range.begin(); g != range.end(); ++g) {
           BlockResult& r = blocks[g - g0];
           r.probes.clear();
-          m.process(entries.data() + group_start[g], entries.data() + group_start[g + 1], sweeps,
+          m.process(entries.data() + group_start[g], entries.data() + group_start[g + 1], sweeps, batch_follows,
                     id_base + static_cast<int>(first), r);
         }
       });

@@ -93,6 +93,38 @@ TEST(TranslationSweep, MatchesBruteForceMinimumOverInstances) {
     }
 }
 
+// Points near the surface of flat and bull-nose sweeps in general directions (the secant
+// search on the derivative), inside and out, and the `far` contract: exact below far, at
+// least far beyond it.
+TEST(TranslationSweep, GeneralCylinderSweepNearItsSurface) {
+  std::mt19937 rng(5);
+  const Cutter cutters[] = {cutter(CutterType::Flat, 10, 0, 15), cutter(CutterType::BullNose, 10, 2, 15),
+                            cutter(CutterType::BullNose, 6, 3, 15)};
+  const Move moves[] = {move({0, 0, 0}, {0.5, 0, -0.2}), move({0, 0, 0}, {3, 4, 2}), move({0, 0, 0}, {0.01, 0, 8})};
+  constexpr int kInstances = 20000;
+  for (const Cutter& c : cutters)
+    for (const Move& m : moves) {
+      const TranslationSweep sweep(c, m);
+      const double length = (m.end_mm - m.start_mm).norm();
+      std::uniform_real_distribution<double> across(-6.5, 6.5), along(-1.5, 17);
+      for (int i = 0; i < 300; ++i) {
+        Eigen::Vector3d x(across(rng), across(rng), along(rng));
+        x += std::uniform_real_distribution<double>(0, 1)(rng) * (m.end_mm - m.start_mm);
+        double brute = std::numeric_limits<double>::max();
+        for (int k = 0; k <= kInstances; ++k) {
+          const double t = static_cast<double>(k) / kInstances;
+          brute = std::min(brute, cutter_distance(c, x - m.start_mm - t * (m.end_mm - m.start_mm)));
+        }
+        const double d = sweep.distance(x);
+        EXPECT_LE(d, brute + kGeneralSweepTolerance_mm) << x.transpose();
+        EXPECT_GE(d, brute - 0.5 * length / kInstances - kGeneralSweepTolerance_mm) << x.transpose();
+        const double far = 0.3, near = sweep.distance(x, far);
+        if (d < far - 1e-9) EXPECT_NEAR(near, d, kGeneralSweepTolerance_mm) << x.transpose();
+        else EXPECT_GE(near, far - kGeneralSweepTolerance_mm) << x.transpose();
+      }
+    }
+}
+
 TEST(TranslationSweep, BoundsContainTheCutterAtBothEnds) {
   const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
   const TranslationSweep sweep(flat, move({0, 0, 0}, {10, 0, -3}));

@@ -16,8 +16,9 @@ namespace vcut::removal {
 // Exactness: the cutter is a core cylinder K grown by a ball of radius r, so the sweep is
 // (K + segment) grown by r. For motion perpendicular or parallel to the tool axis,
 // K + segment is a stadium or a cylinder extruded over an interval and the distance is in
-// closed form. Otherwise d is the minimum of a convex function of t, found by
-// golden-section search to kGeneralSweepTolerance_mm. Outside the sweep the distance is
+// closed form. Otherwise d is the minimum of a convex function of t, found to
+// kGeneralSweepTolerance_mm (secant steps on its analytic derivative for the cylinder core,
+// golden-section search for the V-bit's profile). Outside the sweep the distance is
 // exact to that tolerance; inside, |d| may be underestimated (never the sign), which the
 // level-set narrow band tolerates.
 inline constexpr double kGeneralSweepTolerance_mm = 1e-7;
@@ -32,9 +33,23 @@ class TranslationSweep {
                   double far_mm = std::numeric_limits<double>::infinity()) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
+  // Whether, at every point of `box` (workpiece frame), the nearest cutter instance of the
+  // sweep is the one at the move's start, so that the distance to the sweep is the distance
+  // to that cutter: true only when that is certain. The test: d(t) = d_K(y - t delta) is
+  // convex in t, so t = 0 is its minimum when d'(0) >= 0, i.e. when delta points away from
+  // the outward normal at y's nearest point of K. Ball-end cutters only (K's core is a
+  // segment on the axis, so the normal is y - c(y) with c(y) y's nearest core point); for
+  // other cutters it returns false. A move that continues the cutter's previous move (same
+  // cutter and axis, starting where it ended) changes nothing where this holds.
+  bool start_dominates(const Eigen::AlignedBox3d& box) const;
+  bool start_dominates(const Eigen::Vector3d& x) const;
+
  private:
   enum class Kind { Along, Across, General };
   double core_distance(const Eigen::Vector3d& y) const;  // y in the tool frame at t = 0
+  // The General kind for a cylinder core: the distance to the core's sweep (before the
+  // rounding), exact to kGeneralSweepTolerance_mm, or any value >= far where it is that far.
+  double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
 
   CutterCore core_;
   Cutter cutter_;  // a V-bit's distance comes from its profile, not from a core
