@@ -26,7 +26,6 @@ namespace {
 
 using openvdb::Coord;
 using FloatLeaf = openvdb::FloatTree::LeafNodeType;
-using IdLeaf = openvdb::Int32Tree::LeafNodeType;
 constexpr int kLeafDim = 8;
 constexpr int kLeafVoxels = kLeafDim * kLeafDim * kLeafDim;
 constexpr int kCoarse = 4;  // leaves per side of a coarse culling cell
@@ -52,6 +51,57 @@ struct Entry {
   bool operator<(const Entry& o) const { return leaf != o.leaf ? leaf < o.leaf : move < o.move; }
 };
 
+// The move that last changed each voxel of a leaf block: the block's distinct move ids (a
+// palette) and one byte per voxel into it. A block is shaped by a few moves, so this takes
+// about a quarter of an Int32 grid's memory; a block with more than 255 distinct ids keeps
+// them all.
+class BlockIds {
+ public:
+  void read(std::int32_t* out) const {
+    if (!full_.empty()) {
+      std::copy(full_.begin(), full_.end(), out);
+      return;
+    }
+    for (int n = 0; n < kLeafVoxels; ++n) out[n] = palette_[index_[static_cast<std::size_t>(n)]];
+  }
+  std::int32_t at(int n) const {
+    return full_.empty() ? palette_[index_[static_cast<std::size_t>(n)]] : full_[static_cast<std::size_t>(n)];
+  }
+  void write(const std::int32_t* in) {
+    palette_.clear();
+    full_.clear();
+    index_.resize(kLeafVoxels);
+    for (int n = 0; n < kLeafVoxels; ++n) {
+      const std::int32_t id = in[n];
+      if (n > 0 && id == in[n - 1]) {
+        index_[static_cast<std::size_t>(n)] = index_[static_cast<std::size_t>(n - 1)];
+        continue;
+      }
+      const auto it = std::find(palette_.begin(), palette_.end(), id);
+      if (it == palette_.end() && palette_.size() == 255) {
+        full_.assign(in, in + kLeafVoxels);
+        palette_.clear();
+        index_.clear();
+        index_.shrink_to_fit();
+        return;
+      }
+      const std::size_t k = static_cast<std::size_t>(it - palette_.begin());  // palette_.size() when new
+      if (k == palette_.size()) palette_.push_back(id);
+      index_[static_cast<std::size_t>(n)] = static_cast<std::uint8_t>(k);
+    }
+    palette_.shrink_to_fit();
+  }
+  std::size_t bytes() const {
+    return sizeof(*this) + palette_.capacity() * sizeof(std::int32_t) + index_.capacity() +
+           full_.capacity() * sizeof(std::int32_t);
+  }
+
+ private:
+  std::vector<std::int32_t> palette_;
+  std::vector<std::uint8_t> index_;  // kLeafVoxels, empty when `full_` holds the ids
+  std::vector<std::int32_t> full_;
+};
+
 struct BlockResult {
   float value[kLeafVoxels];
   std::int32_t id[kLeafVoxels];
@@ -66,7 +116,8 @@ struct VdbStock::Impl {
   double v = 0.1;   // voxel size, mm
   double w = 0.3;   // narrow-band half width, mm
   openvdb::FloatGrid::Ptr grid;
-  openvdb::Int32Grid::Ptr ids;
+  // Move ids by leaf block (the occupancy map's index); none: every voxel kNoMove.
+  std::vector<std::unique_ptr<BlockIds>> block_ids;
   Eigen::AlignedBox3d shape_bounds;
   // Occupancy over leaf blocks: 1 where the block may hold material or near-surface values.
   // Only the region of the initial stock (+ band) can ever hold material.
@@ -74,7 +125,7 @@ struct VdbStock::Impl {
   std::vector<std::uint8_t> occupied;
   std::vector<std::int32_t> coarse_count;
   // For placing mesh vertices on the exact surface: the initial stock's signed distance and
-  // every move cut so far (move ids in the id grid index `moves`).
+  // every move cut so far (the move ids in block_ids index `moves`).
   std::function<double(const Eigen::Vector3d&)> initial_distance;
   std::shared_ptr<const DesignDistance> initial_mesh;
   std::vector<Move> moves;
@@ -107,6 +158,8 @@ struct VdbStock::Impl {
     coarse_dims = Coord((leaf_dims.x() + kCoarse - 1) / kCoarse, (leaf_dims.y() + kCoarse - 1) / kCoarse,
                         (leaf_dims.z() + kCoarse - 1) / kCoarse);
     occupied.assign(static_cast<std::size_t>(leaf_dims.x()) * leaf_dims.y() * leaf_dims.z(), 0);
+    block_ids.clear();
+    block_ids.resize(occupied.size());
     coarse_count.assign(static_cast<std::size_t>(coarse_dims.x()) * coarse_dims.y() * coarse_dims.z(), 0);
   }
 
@@ -215,21 +268,20 @@ struct VdbStock::Impl {
     return leaf_origin(static_cast<int>(i), static_cast<int>(j), static_cast<int>(k));
   }
 
-  // `id_offset` turns a batch-local move index into the move id stored in the id grid.
+  // `id_offset` turns a batch-local move index into the move id stored in block_ids.
   void process(const Entry* begin, const Entry* end, const std::vector<TranslationSweep>& sweeps,
                const std::vector<std::uint8_t>& continues, int id_offset, BlockResult& r) const {
     const Coord o = origin_of(begin->leaf);
     const auto& tree = grid->tree();
-    const auto& id_tree = ids->tree();
     if (const FloatLeaf* leaf = tree.probeConstLeaf(o)) {
       for (int n = 0; n < kLeafVoxels; ++n) r.value[n] = leaf->getValue(n);
     } else {
       std::fill(r.value, r.value + kLeafVoxels, tree.getValue(o));
     }
-    if (const IdLeaf* leaf = id_tree.probeConstLeaf(o)) {
-      for (int n = 0; n < kLeafVoxels; ++n) r.id[n] = leaf->getValue(n);
+    if (const BlockIds* ids = block_ids[static_cast<std::size_t>(begin->leaf)].get()) {
+      ids->read(r.id);
     } else {
-      std::fill(r.id, r.id + kLeafVoxels, id_tree.getValue(o));
+      std::fill(r.id, r.id + kLeafVoxels, kNoMove);
     }
     const float wf = static_cast<float>(w);
     double before = 0.0;
@@ -287,11 +339,11 @@ struct VdbStock::Impl {
 
   void write_back(const Coord& o, std::int64_t index, const BlockResult& r) {
     auto& tree = grid->tree();
-    auto& id_tree = ids->tree();
     const float wf = static_cast<float>(w);
+    std::unique_ptr<BlockIds>& ids = block_ids[static_cast<std::size_t>(index)];
     if (r.all_outside) {
       tree.addTile(1, o, wf, false);
-      id_tree.addTile(1, o, kNoMove, false);
+      ids.reset();
       const int i = static_cast<int>(index % leaf_dims.x());
       const int j = static_cast<int>((index / leaf_dims.x()) % leaf_dims.y());
       const int k = static_cast<int>(index / (static_cast<std::int64_t>(leaf_dims.x()) * leaf_dims.y()));
@@ -299,13 +351,28 @@ struct VdbStock::Impl {
       return;
     }
     FloatLeaf* leaf = tree.touchLeaf(o);
-    IdLeaf* id_leaf = id_tree.touchLeaf(o);
     for (int n = 0; n < kLeafVoxels; ++n) {
       const float phi = r.value[n];
       if (std::abs(phi) < wf) leaf->setValueOn(n, phi);
       else leaf->setValueOff(n, phi < 0 ? -wf : wf);
-      id_leaf->setValueOnly(n, r.id[n]);
     }
+    if (std::all_of(r.id, r.id + kLeafVoxels, [](std::int32_t id) { return id == kNoMove; })) {
+      ids.reset();
+    } else {
+      if (!ids) ids = std::make_unique<BlockIds>();
+      ids->write(r.id);
+    }
+  }
+
+  // The move id of a voxel (kNoMove: never cut, or outside the stock's region).
+  std::int32_t id_at(const Coord& c) const {
+    Coord leaf;
+    for (int a = 0; a < 3; ++a) {
+      leaf[a] = floor_div(c[a], kLeafDim) - leaf_min[a];
+      if (leaf[a] < 0 || leaf[a] >= leaf_dims[a]) return kNoMove;
+    }
+    const BlockIds* ids = block_ids[static_cast<std::size_t>(leaf_index(leaf.x(), leaf.y(), leaf.z()))].get();
+    return ids ? ids->at(static_cast<int>(FloatLeaf::coordToOffset(c))) : kNoMove;
   }
 };
 
@@ -345,10 +412,11 @@ double surface_area_mm2(const StockShape& shape) {
 
 std::size_t estimate_vdb_memory_bytes(const StockShape& shape, double voxel_mm) {
   // A surface of area A crosses about 1.5 A / (8v)^2 leaves (the band straddles leaf
-  // boundaries); each holds 512 values and 512 move ids, plus masks and node overhead.
+  // boundaries); each holds 512 values and 512 one-byte move-id indices, plus a palette,
+  // masks and node overhead.
   const double leaf_side = kLeafDim * voxel_mm;
   const double leaves = 1.5 * surface_area_mm2(shape) / (leaf_side * leaf_side);
-  const double per_leaf = kLeafVoxels * (sizeof(float) + sizeof(std::int32_t)) + 256.0;
+  const double per_leaf = kLeafVoxels * (sizeof(float) + sizeof(std::uint8_t)) + 384.0;
   const Eigen::Vector3d extent = bounds_of(shape).sizes();
   const double map_bytes = (extent / leaf_side + Eigen::Vector3d::Constant(4.0)).prod();
   return static_cast<std::size_t>(leaves * per_leaf + map_bytes);
@@ -362,8 +430,6 @@ VdbStock::VdbStock(const StockShape& shape, double voxel_mm) : impl_(std::make_u
   m.v = voxel_mm;
   m.w = kVdbHalfWidthVoxels * voxel_mm;
   const auto transform = openvdb::math::Transform::createLinearTransform(voxel_mm);
-  m.ids = openvdb::Int32Grid::create(kNoMove);
-  m.ids->setTransform(transform);
   m.setup_region(bounds_of(shape));
   if (!std::holds_alternative<TriangleMesh>(shape)) {
     m.grid = openvdb::FloatGrid::create(static_cast<float>(m.w));
@@ -399,7 +465,7 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
   const std::size_t total = list.moves.size();
   std::map<int, Collision> collisions;
   double removed_voxels = 0.0;
-  // Move ids in the id grid count across calls: remember every move with its cutter.
+  // Move ids count across calls: remember every move with its cutter.
   const int id_base = detail::remember_moves(list, m.moves, m.cutters);
   // Moves that follow on from the cutter's previous cutting move (rapids and probes cut
   // nothing in between): where their start cutter is the nearest, the previous move has
@@ -484,7 +550,6 @@ SurfaceMesh VdbStock::surface() const {
   // Each vertex goes onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0,
   // where the moves m are those that shaped the voxels around it, by Newton steps; it
   // takes the id of the move whose sweep is its surface (-1: the initial stock).
-  auto ids = m.ids->getConstAccessor();
   const std::size_t count = points.size();
   mesh.vertex_move.assign(count, kNoMove);
   std::vector<std::vector<int>> nearby(count);
@@ -494,7 +559,7 @@ SurfaceMesh VdbStock::surface() const {
                      static_cast<int>(std::floor(p.z() / m.v)) - 1);
     std::vector<int>& list = nearby[v];
     for (int c = 0; c < 64; ++c) {
-      const int id = ids.getValue(base.offsetBy(c & 3, (c >> 2) & 3, (c >> 4) & 3));
+      const int id = m.id_at(base.offsetBy(c & 3, (c >> 2) & 3, (c >> 4) & 3));
       if (id != kNoMove && std::find(list.begin(), list.end(), id) == list.end()) list.push_back(id);
     }
     std::sort(list.begin(), list.end());
@@ -516,8 +581,10 @@ double VdbStock::volume_mm3() const {
 
 std::size_t VdbStock::memory_bytes() const {
   const Impl& m = *impl_;
-  return m.grid->memUsage() + m.ids->memUsage() + m.occupied.size() +
-         m.coarse_count.size() * sizeof(std::int32_t);
+  std::size_t ids = m.block_ids.size() * sizeof(m.block_ids[0]);
+  for (const auto& b : m.block_ids)
+    if (b) ids += b->bytes();
+  return m.grid->memUsage() + ids + m.occupied.size() + m.coarse_count.size() * sizeof(std::int32_t);
 }
 
 Eigen::AlignedBox3d VdbStock::bounds() const { return impl_->shape_bounds; }
