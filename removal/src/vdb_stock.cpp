@@ -9,6 +9,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <functional>
@@ -106,6 +107,8 @@ struct BlockResult {
   float value[kLeafVoxels];
   std::int32_t id[kLeafVoxels];
   bool all_outside = false;
+  bool all_inside = false;  // every voxel at -w or deeper: never cut (no move ids either)
+  bool changed = false;     // any value or move id differs from what the block held
   double removed_voxels = 0.0;  // in voxel volumes
   std::vector<Collision> probes;
 };
@@ -283,6 +286,10 @@ struct VdbStock::Impl {
     } else {
       std::fill(r.id, r.id + kLeafVoxels, kNoMove);
     }
+    std::array<std::int32_t, kLeafVoxels> ids_before;
+    std::array<float, kLeafVoxels> values_before;
+    std::copy(r.id, r.id + kLeafVoxels, ids_before.begin());
+    std::copy(r.value, r.value + kLeafVoxels, values_before.begin());
     const float wf = static_cast<float>(w);
     double before = 0.0;
     int not_outside = 0;
@@ -335,12 +342,22 @@ struct VdbStock::Impl {
     for (int n = 0; n < kLeafVoxels; ++n) after += inside_fraction(r.value[n], v);
     r.removed_voxels = before - after;
     r.all_outside = not_outside == 0;
+    r.all_inside = std::all_of(r.value, r.value + kLeafVoxels, [&](float phi) { return phi <= -wf; });
+    r.changed = r.all_outside || !std::equal(r.value, r.value + kLeafVoxels, values_before.begin()) ||
+                !std::equal(r.id, r.id + kLeafVoxels, ids_before.begin());
   }
 
   void write_back(const Coord& o, std::int64_t index, const BlockResult& r) {
     auto& tree = grid->tree();
     const float wf = static_cast<float>(w);
     std::unique_ptr<BlockIds>& ids = block_ids[static_cast<std::size_t>(index)];
+    if (!r.changed) return;  // visited, not cut: no leaf made where a tile was
+    if (r.all_inside) {
+      // Solid material at -w and deeper, as the stock's interior tiles hold it.
+      tree.addTile(1, o, -wf, false);
+      ids.reset();
+      return;
+    }
     if (r.all_outside) {
       tree.addTile(1, o, wf, false);
       ids.reset();
