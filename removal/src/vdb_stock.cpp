@@ -2,6 +2,7 @@
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
+#include <openvdb/tools/Prune.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -551,6 +552,8 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
     }
     if (options.progress) options.progress(last, total);
   }
+  // Leaves left uniform (all +w or all -w, clamped values) become tiles: less to keep and to mesh.
+  openvdb::tools::pruneLevelSet(m.grid->tree());
   result.removed_volume_mm3 = removed_voxels * m.v * m.v * m.v;
   for (const auto& [move, c] : collisions)
     if (c.depth_mm > options.collision_tolerance_mm) result.collisions.push_back(c);

@@ -9,7 +9,7 @@
 
 namespace vcut::removal {
 
-inline constexpr double kVdbHalfWidthVoxels = 3.0;
+inline constexpr double kVdbHalfWidthVoxels = 2.0;
 
 // Bytes the stock will need at voxel size v: surface leaves of values and move ids.
 std::size_t estimate_vdb_memory_bytes(const StockShape& shape, double voxel_mm);
