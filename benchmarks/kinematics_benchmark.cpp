@@ -141,6 +141,28 @@ BENCHMARK(BM_PlanFeed)->Unit(benchmark::kMillisecond);
 // feed planning with the axis limits. 4,510 blocks (the size of LinuxCNC's impeller demo) of
 // a smooth five-axis path: the tip on a spiral, the axis tilting 10..40 deg and turning.
 // Items: densified poses per second (target >= 200,000/s).
+// Densify `program` on `m` (lambda 0.1 mm, phi 0.5 deg, tool `tool` 50 mm long) and plan its
+// feed with the axis limits, per iteration; items are densified poses.
+void run_pose_engine(benchmark::State& state, const Program& program, const Machine& m, int tool) {
+  DensifySettings settings;
+  settings.step_mm = 0.1;
+  settings.angle_step_rad = 0.5 * M_PI / 180.0;
+  DensifyMachine dm;
+  dm.machine = &m;
+  dm.tool_length_mm = {{tool, 50.0}};
+  size_t poses = 0;
+  for (auto _ : state) {
+    const Densified d = densify(program, settings, dm);
+    std::vector<AxisValues> axes;
+    axes.reserve(d.samples.size());
+    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
+    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
+    poses = d.samples.size();
+  }
+  state.counters["poses"] = static_cast<double>(poses);
+  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
+}
+
 void BM_PoseEngine(benchmark::State& state) {
   const Machine m = make(false, false);
   Program program;
@@ -164,29 +186,13 @@ void BM_PoseEngine(benchmark::State& state) {
     b.tool = 1;
     program.blocks.push_back(b);
   }
-  DensifySettings settings;
-  settings.step_mm = 0.1;
-  settings.angle_step_rad = 0.5 * M_PI / 180.0;
-  DensifyMachine dm;
-  dm.machine = &m;
-  dm.tool_length_mm = {{1, 50.0}};
-  size_t poses = 0;
-  for (auto _ : state) {
-    const Densified d = densify(program, settings, dm);
-    std::vector<AxisValues> axes;
-    axes.reserve(d.samples.size());
-    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
-    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
-    poses = d.samples.size();
-  }
-  state.counters["poses"] = static_cast<double>(poses);
-  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
+  run_pose_engine(state, program, m, 1);
 }
 BENCHMARK(BM_PoseEngine)->Unit(benchmark::kMillisecond);
 
 // The same on LinuxCNC's own five-axis impeller demo (linuxcnc-uspace installs it; 4,510 lines,
 // G93 inverse-time feeds, TCP switched on by M428 with X Y Z the tip and A C the rotary axes),
-// read by vcut's G-code reader, on the bundled table-table AC trunnion: densification (axes
+// read by vcut's G-code reader, on the bundled xyzac-trt (LinuxCNC's sim): densification (axes
 // linear between the blocks' A C, the linear axes solved for the tip), time stamps with the
 // axis limits. Issue #5's target: >= 200,000 densified poses per second.
 void BM_PoseEngineImpeller(benchmark::State& state) {
@@ -201,25 +207,9 @@ void BM_PoseEngineImpeller(benchmark::State& state) {
   vcut::io::GcodeOptions options;
   options.tcp_m_codes = {{428, true}, {429, false}};
   const Program program = vcut::io::read_gcode(path, options);
-  const Machine m(vcut::io::read_machine_file(vcut::io::resolve_machine("table-table-ac")));
-  DensifySettings settings;
-  settings.step_mm = 0.1;
-  settings.angle_step_rad = 0.5 * M_PI / 180.0;
-  DensifyMachine dm;
-  dm.machine = &m;
-  dm.tool_length_mm = {{0, 50.0}};
-  size_t poses = 0;
-  for (auto _ : state) {
-    const Densified d = densify(program, settings, dm);
-    std::vector<AxisValues> axes;
-    axes.reserve(d.samples.size());
-    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
-    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
-    poses = d.samples.size();
-  }
+  const Machine m(vcut::io::read_machine_file(vcut::io::resolve_machine("xyzac-trt")));
   state.counters["blocks"] = static_cast<double>(program.blocks.size());
-  state.counters["poses"] = static_cast<double>(poses);
-  state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));
+  run_pose_engine(state, program, m, 0);
 }
 BENCHMARK(BM_PoseEngineImpeller)->Unit(benchmark::kMillisecond);
 

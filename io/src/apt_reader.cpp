@@ -25,6 +25,7 @@
 
 #include "block_room.h"
 #include "line_source.h"
+#include "reader_util.h"
 
 namespace vcut::io {
 namespace {
@@ -62,11 +63,13 @@ constexpr double kDefaultHeightPerDiameter = 4.0;
 constexpr int kMaxToolNumber = 99999;  // as the tool library
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
-bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
-bool is_word_char(char c) { return is_letter(c) || is_digit(c) || c == '_' || c == '-'; }
-char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
+using detail::describe;
+using detail::is_digit;
+using detail::is_letter;
+using detail::num;
+using detail::upper;
 
+bool is_word_char(char c) { return is_letter(c) || is_digit(c) || c == '_' || c == '-'; }
 size_t skip_blanks(const std::string& s, size_t i) {
   while (i < s.size() && is_blank(s[i])) ++i;
   return i;
@@ -74,23 +77,6 @@ size_t skip_blanks(const std::string& s, size_t i) {
 
 int clamp_int(size_t v) {
   return v >= static_cast<size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v);
-}
-
-std::string describe(char c) {
-  const auto u = static_cast<unsigned char>(c);
-  char buf[16];
-  if (u > 32 && u < 127) {
-    std::snprintf(buf, sizeof buf, "'%c'", c);
-  } else {
-    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
-  }
-  return buf;
-}
-
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
 }
 
 std::string point(const Eigen::Vector3d& p) {
@@ -1051,14 +1037,7 @@ void read_apt(std::istream& in, const std::string& name, const AptOptions& optio
 }
 
 AptProgram read_apt(const std::string& path, const AptOptions& options) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw InputError(path, 0, 0, "is a directory (expected an APT CL file)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw InputError(path, 0, 0, std::string("cannot open the CL file: ") + std::strerror(errno));
-  }
+  std::ifstream in = detail::open_program_file(path, "an APT CL file", "the CL file");
   AptProgram out;
   AptState state;
   read_apt(in, path, options, out, state);

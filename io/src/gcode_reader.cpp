@@ -6,6 +6,7 @@
 #include <vcut/io/input_error.h>
 
 #include "block_room.h"
+#include "reader_util.h"
 #include "rs274_expression.h"
 
 #include <algorithm>
@@ -58,35 +59,18 @@ constexpr size_t kMaxCodesPerLine = 32;
 constexpr char kAxisLetter[3] = {'X', 'Y', 'Z'};
 constexpr char kCenterLetter[3] = {'I', 'J', 'K'};
 
+using detail::column_at;
+using detail::describe;
+using detail::is_digit;
+using detail::is_letter;
+using detail::num;
+using detail::upper;
+
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
-bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
-char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
 
 size_t skip_blanks(const std::string& s, size_t i) {
   while (i < s.size() && is_blank(s[i])) ++i;
   return i;
-}
-
-int column_of(size_t i) {
-  return i >= static_cast<size_t>(INT_MAX) ? INT_MAX : static_cast<int>(i) + 1;
-}
-
-std::string describe(char c) {
-  const auto u = static_cast<unsigned char>(c);
-  char buf[16];
-  if (u >= 32 && u < 127) {
-    std::snprintf(buf, sizeof buf, "'%c'", c);
-  } else {
-    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
-  }
-  return buf;
-}
-
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
 }
 
 bool is_whole(double v) { return v == std::floor(v); }
@@ -441,6 +425,7 @@ class Reader : public detail::ValueContext {
   void call(const std::string& s, const OLine& o);
   void leave_sub(const std::string& s, const OLine& o);
   const SubDefinition* find_sub(const std::string& name, int column);
+  bool read_to_sub(const std::string& name);
   Frame& frame() { return frames_.back(); }
   std::string call_chain() const;
 
@@ -668,14 +653,14 @@ bool Reader::line(std::string& text) {
     if (!line_words_.g.empty() || !line_words_.m.empty() || o_column_ != 0 || !assignments_.empty() ||
         std::any_of(line_words_.words.begin(), line_words_.words.end(),
                     [](const Word& w) { return w.present; })) {
-      fail(column_of(i), "words after '%' (expected '%' alone on its line)");
+      fail(column_at(i), "words after '%' (expected '%' alone on its line)");
     }
     if (!src.seen_content) {
       src.seen_content = src.opened_with_percent = true;
       return true;
     }
     if (!src.opened_with_percent) {
-      fail(column_of(i), "closing '%' in a program that did not open with '%' on its first line");
+      fail(column_at(i), "closing '%' in a program that did not open with '%' on its first line");
     }
     return false;
   }
@@ -716,7 +701,7 @@ bool Reader::o_line(const std::string& s, OLine& o) {
     i = j;
   }
   if (i >= s.size() || (s[i] != 'O' && s[i] != 'o')) return false;
-  o.column = column_of(i);
+  o.column = column_at(i);
   i = skip_blanks(s, i + 1);
   if (i < s.size() && s[i] == '<') {
     const size_t close = s.find('>', i + 1);
@@ -747,12 +732,12 @@ bool Reader::o_line(const std::string& s, OLine& o) {
 double Reader::condition(const std::string& s, const OLine& o) {
   size_t i = skip_blanks(s, o.rest);
   if (i >= s.size() || s[i] != '[') {
-    fail(column_of(std::min(i, s.size())), "o" + o.label + " " + o.keyword + " without its condition (expected [expression])");
+    fail(column_at(std::min(i, s.size())), "o" + o.label + " " + o.keyword + " without its condition (expected [expression])");
   }
   const double v = detail::read_expression(s, i, *this);
   i = skip_blanks(s, i);
   if (i < s.size() && s[i] == '(') i = skip_blanks(s, skip_comment(s, i));
-  if (i < s.size() && s[i] != ';') fail(column_of(i), "unexpected " + describe(s[i]) + " after the condition");
+  if (i < s.size() && s[i] != ';') fail(column_at(i), "unexpected " + describe(s[i]) + " after the condition");
   return v;
 }
 
@@ -772,22 +757,28 @@ OLine Reader::skip_to(const std::string& label, std::initializer_list<const char
                    "the file ends before " + expected + " (opened at " + opened + ")" + call_chain());
 }
 
+// Reads on in the current file (not executing) to "o<name> sub" and defines it there.
+bool Reader::read_to_sub(const std::string& name) {
+  std::string text;
+  OLine o;
+  while (next_line(text)) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    if (o_line(text, o) && o.label == name && o.keyword == "sub") {
+      subs_[name] = SubDefinition{mark_after(), here()};
+      return true;
+    }
+  }
+  return false;
+}
+
 const SubDefinition* Reader::find_sub(const std::string& name, int column) {
   if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
   // Defined further down the calling file (after M2, say): read ahead for it, as rs274 does.
   if (current_->seekable) {
     const Mark back = mark_after();
-    std::string text;
-    OLine o;
-    while (next_line(text)) {
-      if (!text.empty() && text.back() == '\r') text.pop_back();
-      if (o_line(text, o) && o.label == name && o.keyword == "sub") {
-        subs_[name] = SubDefinition{mark_after(), here()};
-        break;
-      }
-    }
+    const bool found = read_to_sub(name);
     jump(back);
-    if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
+    if (found) return &subs_[name];
   }
   if (name.front() != '<') return nullptr;
   // A subroutine file: <name>.ngc holding "o<name> sub", in the calling program's folder or
@@ -811,18 +802,10 @@ const SubDefinition* Reader::find_sub(const std::string& name, int column) {
     Source* caller = current_;
     current_ = src.get();
     sources_.push_back(std::move(src));
-    std::string text;
-    OLine o;
-    while (next_line(text)) {
-      if (!text.empty() && text.back() == '\r') text.pop_back();
-      if (o_line(text, o) && o.label == name && o.keyword == "sub") {
-        subs_[name] = SubDefinition{mark_after(), here()};
-        current_ = caller;
-        return &subs_[name];
-      }
-    }
+    const bool found = read_to_sub(name);
     const std::string where = current_->name;
     current_ = caller;
+    if (found) return &subs_[name];
     fail(column, where + " does not define o" + name + " sub");
   }
   return nullptr;
@@ -846,8 +829,8 @@ void Reader::call(const std::string& s, const OLine& o) {
   while (i < s.size()) {
     if (s[i] == '(') { i = skip_blanks(s, skip_comment(s, i)); continue; }
     if (s[i] == ';') break;
-    if (s[i] != '[') fail(column_of(i), "unexpected " + describe(s[i]) + " in the call (expected arguments in [ ])");
-    if (args.size() == 30) fail(column_of(i), "more than 30 arguments (expected at most 30)");
+    if (s[i] != '[') fail(column_at(i), "unexpected " + describe(s[i]) + " in the call (expected arguments in [ ])");
+    if (args.size() == 30) fail(column_at(i), "more than 30 arguments (expected at most 30)");
     args.push_back(detail::read_expression(s, i, *this));
     i = skip_blanks(s, i);
   }
@@ -894,7 +877,7 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
   auto only_comment_after = [&](size_t i) {
     i = skip_blanks(s, i);
     while (i < s.size() && s[i] == '(') i = skip_blanks(s, skip_comment(s, i));
-    if (i < s.size() && s[i] != ';') fail(column_of(i), "unexpected " + describe(s[i]) + " after o" + label + " " + k);
+    if (i < s.size() && s[i] != ';') fail(column_at(i), "unexpected " + describe(s[i]) + " after o" + label + " " + k);
   };
   auto find_loop = [&]() -> Loop& {
     for (size_t n = f.loops.size(); n-- > 0;) {
@@ -1025,15 +1008,15 @@ size_t Reader::skip_comment(const std::string& s, size_t i) const {
   for (size_t j = i + 1; j < s.size(); ++j) {
     if (s[j] == ')') return j + 1;
     // rs274ngc rejects nested comments (NCE_NESTED_COMMENT_FOUND).
-    if (s[j] == '(') fail(column_of(j), "'(' inside a comment (expected ')' first)");
+    if (s[j] == '(') fail(column_at(j), "'(' inside a comment (expected ')' first)");
   }
-  fail(column_of(i), "unterminated comment: '(' without ')'");
+  fail(column_at(i), "unterminated comment: '(' without ')'");
 }
 
 // A word's value: a plain number (the fast path) or any rs274ngc real value. Errors about
 // the value's start point at the word's letter.
 double Reader::word_value(const std::string& s, size_t& i, char letter, std::string& text) {
-  const int column = column_of(i - 1);
+  const int column = column_at(i - 1);
   size_t j = skip_blanks(s, i);
   if (j < s.size() && (s[j] == '+' || s[j] == '-')) j = skip_blanks(s, j + 1);
   if (j < s.size() && (is_digit(s[j]) || s[j] == '.')) {
@@ -1056,7 +1039,7 @@ void Reader::lex(const std::string& s, size_t i) {
     i = skip_blanks(s, i);
     if (i >= n) return;
     const char c = s[i];
-    const int column = column_of(i);
+    const int column = column_at(i);
     if (c == '(') {
       i = skip_comment(s, i);
       continue;
@@ -1069,7 +1052,7 @@ void Reader::lex(const std::string& s, size_t i) {
       const detail::ParameterRef ref = detail::read_parameter_ref(s, i, *this);
       i = skip_blanks(s, i);
       if (i >= n || s[i] != '=') {
-        fail(column_of(i), "expected '=' after the parameter, found " +
+        fail(column_at(i), "expected '=' after the parameter, found " +
                                (i >= n ? std::string("end of line") : describe(s[i])) +
                                " (a parameter is set with #n = value, or read as a word's value)");
       }
@@ -2068,25 +2051,11 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
   validate_options(name, options);
   Reader reader(options, program, state);
   reader.run(in, name);
-  for (int a = 0; a < 3; ++a) {
-    if (state.pending[a].empty()) continue;
-    program.warnings.push_back(name + ": " + kAxisLetter[a] +
-                               " has not been programmed by the end of this file; " +
-                               std::to_string(state.pending[a].size()) +
-                               " move(s) hold it at 0 unless a later file sets it");
-  }
+  detail::warn_unprogrammed_axes(state.pending, name, program);
 }
 
 kinematics::Program read_gcode(const std::string& path, const GcodeOptions& options) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw InputError(path, 0, 0, "is a directory (expected a G-code file)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw InputError(path, 0, 0,
-                     std::string("cannot open the G-code file: ") + std::strerror(errno));
-  }
+  std::ifstream in = detail::open_program_file(path, "a G-code file", "the G-code file");
   kinematics::Program program;
   GcodeState state;
   read_gcode(in, path, options, program, state);

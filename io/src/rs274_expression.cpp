@@ -1,5 +1,7 @@
 #include "rs274_expression.h"
 
+#include "reader_util.h"
+
 #include <charconv>
 #include <climits>
 #include <cmath>
@@ -16,29 +18,13 @@ constexpr int kMaxParameter = 5601;  // LinuxCNC 2.9 has #1..#5601
 constexpr int kMaxNesting = 64;                // brackets and functions within one value
 
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
-bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
-char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
 
 std::size_t skip_blanks(const std::string& s, std::size_t i) {
   while (i < s.size() && is_blank(s[i])) ++i;
   return i;
 }
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
-
-std::string found(const std::string& s, std::size_t i) {
-  if (i >= s.size()) return "end of line";
-  const auto u = static_cast<unsigned char>(s[i]);
-  char buf[16];
-  if (u >= 32 && u < 127) std::snprintf(buf, sizeof buf, "'%c'", s[i]);
-  else std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
-  return buf;
-}
+std::string found(const std::string& s, std::size_t i) { return i >= s.size() ? "end of line" : describe(s[i]); }
 
 // Letters starting at s[i] (blanks between them skipped, as LinuxCNC strips blanks), upper case.
 std::string read_letters(const std::string& s, std::size_t& i) {
@@ -328,10 +314,6 @@ class Parser {
 
 }  // namespace
 
-int column_at(std::size_t i) {
-  return i >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(i) + 1;
-}
-
 double read_plain_number(const std::string& s, std::size_t& i, char letter, const ValueContext& context,
                          std::string& text, int at_column) {
   const std::size_t n = s.size();
@@ -401,7 +383,7 @@ std::string canonical_name(const std::string& raw, int column, const ValueContex
     if (is_blank(c)) continue;
     const bool ok = is_letter(c) || is_digit(c) || c == '_' || c == '.' || c == '-';
     if (!ok) {
-      context.fail(column, "character " + found(std::string(1, c), 0) +
+      context.fail(column, "character " + describe(c) +
                                " in a name (expected letters, digits, _ . -)");
     }
     name += (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;

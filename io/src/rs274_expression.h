@@ -29,9 +29,6 @@ class ValueContext {
   [[noreturn]] virtual void fail(int column, const std::string& message) const = 0;
 };
 
-// The 1-based column of index i.
-int column_at(std::size_t i);
-
 // A plain number: [+|-] digits [. [digits]] | [+|-] . digits, blanks allowed anywhere in it
 // (LinuxCNC removes them before parsing), no exponent. `letter` names the word in messages
 // (0 inside an expression). `text` gets the number as written (for messages and codes).

@@ -7,6 +7,7 @@
 
 #include "block_room.h"
 #include "line_source.h"
+#include "reader_util.h"
 
 #include <Eigen/Geometry>
 #include <algorithm>
@@ -64,29 +65,14 @@ constexpr char kAxisLetter[3] = {'X', 'Y', 'Z'};
 constexpr char kCenterLetter[3] = {'I', 'J', 'K'};
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
-bool is_digit(char c) { return c >= '0' && c <= '9'; }
-bool is_upper(char c) { return (c >= 'A' && c <= 'Z') || c == '_'; }
-char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
+using detail::describe;
+using detail::is_digit;
+using detail::num;
+using detail::upper;
 
+bool is_upper(char c) { return (c >= 'A' && c <= 'Z') || c == '_'; }
 int clamp_int(std::size_t v) {
   return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v);
-}
-
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
-
-std::string describe(char c) {
-  const auto u = static_cast<unsigned char>(c);
-  char buf[16];
-  if (u > 32 && u < 127) {
-    std::snprintf(buf, sizeof buf, "'%c'", c);
-  } else {
-    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
-  }
-  return buf;
 }
 
 // One programmed value of a block.
@@ -1469,25 +1455,11 @@ void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOp
   } catch (const std::ios_base::failure&) {
     throw InputError(name, 0, 0, "read error (expected a readable text file)");
   }
-  for (int a = 0; a < 3; ++a) {
-    if (state.pending[static_cast<std::size_t>(a)].empty()) continue;
-    program.warnings.push_back(name + ": " + kAxisLetter[a] +
-                               " has not been programmed by the end of this file; " +
-                               std::to_string(state.pending[static_cast<std::size_t>(a)].size()) +
-                               " move(s) hold it at 0 unless a later file sets it");
-  }
+  detail::warn_unprogrammed_axes(state.pending, name, program);
 }
 
 kinematics::Program read_sinumerik(const std::string& path, const SinumerikOptions& options) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) {
-    throw InputError(path, 0, 0, "is a directory (expected a SINUMERIK program file)");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    throw InputError(path, 0, 0,
-                     std::string("cannot open the SINUMERIK program: ") + std::strerror(errno));
-  }
+  std::ifstream in = detail::open_program_file(path, "a SINUMERIK program file", "the SINUMERIK program");
   kinematics::Program program;
   SinumerikState state;
   read_sinumerik(in, path, options, program, state);

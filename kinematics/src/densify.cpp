@@ -227,10 +227,8 @@ class BlockPath {
  private:
   enum class Mode { Pose, AxesLinear, RotaryLinear };
 
-  AxisValues axis_values(const Eigen::Vector3d& xyz, const RotaryWords& words, BlockReport& report) const {
-    AxisValues q = machine_->zero();
-    if (!solve_linear_axes(*machine_, q, xyz, tool_length_mm_) && report.unreachable.empty())
-      report.unreachable = "the machine's linear axes cannot be solved";
+  // The rotary axes the words give, by letter, into q.
+  void set_rotary(const RotaryWords& words, AxisValues& q, BlockReport& report) const {
     for (int k = 0; k < 3; ++k) {
       if (!words.given[static_cast<size_t>(k)]) continue;
       const char letter = static_cast<char>('A' + k);
@@ -241,6 +239,13 @@ class BlockPath {
       }
       q[i] = words.angle_rad[static_cast<size_t>(k)];
     }
+  }
+
+  AxisValues axis_values(const Eigen::Vector3d& xyz, const RotaryWords& words, BlockReport& report) const {
+    AxisValues q = machine_->zero();
+    if (!solve_linear_axes(*machine_, q, xyz, tool_length_mm_) && report.unreachable.empty())
+      report.unreachable = "the machine's linear axes cannot be solved";
+    set_rotary(words, q, report);
     if (report.unreachable.empty()) report.unreachable = limit_violation(*machine_, q);
     return q;
   }
@@ -250,16 +255,7 @@ class BlockPath {
   AxisValues tcp_axis_values(const Eigen::Vector3d& tip, const RotaryWords& words, const AxisValues* previous,
                              BlockReport& report) const {
     AxisValues q = previous ? *previous : machine_->zero();
-    for (int k = 0; k < 3; ++k) {
-      if (!words.given[static_cast<size_t>(k)]) continue;
-      const char letter = static_cast<char>('A' + k);
-      const int i = machine_->axis_index(letter);
-      if (i < 0) {
-        if (report.unreachable.empty()) report.unreachable = std::string("the machine has no axis ") + letter;
-        continue;
-      }
-      q[i] = words.angle_rad[static_cast<size_t>(k)];
-    }
+    set_rotary(words, q, report);
     if (!solve_linear_axes(*machine_, q, tip, tool_length_mm_) && report.unreachable.empty())
       report.unreachable = "the machine's linear axes cannot be solved";
     if (report.unreachable.empty()) report.unreachable = limit_violation(*machine_, q);

@@ -329,6 +329,20 @@ TEST_F(Simulate, UnwritableOutputFolder) {
 
 }  // namespace
 
+// The S-piece's deepest gouge in report `j`: 0.3 mm deep (make_s_piece.py pushes three poses
+// 0.3 mm into the wall), named on one of `lines`; and the job had rotating moves.
+void expect_deliberate_gouge(const nlohmann::json& j, std::initializer_list<const char*> lines) {
+  ASSERT_FALSE(j["gouges"].empty());
+  const nlohmann::json& deepest = j["gouges"][0];
+  EXPECT_GT(deepest["depth_mm"].get<double>(), 0.25);
+  EXPECT_LT(deepest["depth_mm"].get<double>(), 0.35);
+  bool names_it = false;
+  for (const auto& line : deepest["lines"])
+    for (const char* gouge_line : lines) names_it = names_it || line.get<std::string>().rfind(gouge_line, 0) == 0;
+  EXPECT_TRUE(names_it) << deepest.dump();
+  EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
+}
+
 // The bundled five-axis example end to end at a coarse resolution: the S-piece's deliberate
 // gouge (make_s_piece.py pushes the poses on program.apt:2009-2011 0.3 mm into the wall) is
 // found on those lines, and it is the deepest gouge.
@@ -338,16 +352,7 @@ TEST_F(Simulate, SPieceFindsItsDeliberateGouge) {
       run_vcut("simulate --quiet " + job_file + " --resolution 0.5 --out " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = report();
-  ASSERT_FALSE(j["gouges"].empty());
-  const nlohmann::json& deepest = j["gouges"][0];
-  EXPECT_GT(deepest["depth_mm"].get<double>(), 0.25);
-  EXPECT_LT(deepest["depth_mm"].get<double>(), 0.35);
-  bool names_it = false;
-  for (const auto& line : deepest["lines"])
-    for (const char* gouge_line : {"program.apt:2009", "program.apt:2010", "program.apt:2011", "program.apt:2012"})
-      names_it = names_it || line.get<std::string>().rfind(gouge_line, 0) == 0;
-  EXPECT_TRUE(names_it) << deepest.dump();
-  EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
+  expect_deliberate_gouge(j, {"program.apt:2009", "program.apt:2010", "program.apt:2011", "program.apt:2012"});
   EXPECT_EQ(j["settings"]["machine"], "table-table-ac");
 }
 
@@ -359,15 +364,5 @@ TEST_F(Simulate, SPieceFromTcpGcodeFindsTheSameGouge) {
   const CommandResult r =
       run_vcut("simulate --quiet " + job_file + " --resolution 0.5 --out " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json j = report();
-  ASSERT_FALSE(j["gouges"].empty());
-  const nlohmann::json& deepest = j["gouges"][0];
-  EXPECT_GT(deepest["depth_mm"].get<double>(), 0.25);
-  EXPECT_LT(deepest["depth_mm"].get<double>(), 0.35);
-  bool names_it = false;
-  for (const auto& line : deepest["lines"])
-    for (const char* gouge_line : {"program.ngc:1955", "program.ngc:1956", "program.ngc:1957", "program.ngc:1958"})
-      names_it = names_it || line.get<std::string>().rfind(gouge_line, 0) == 0;
-  EXPECT_TRUE(names_it) << deepest.dump();
-  EXPECT_GT(j["pose_engine"]["rotating_moves"].get<int>(), 0);
+  expect_deliberate_gouge(report(), {"program.ngc:1955", "program.ngc:1956", "program.ngc:1957", "program.ngc:1958"});
 }

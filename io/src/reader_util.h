@@ -1,0 +1,73 @@
+// Small pieces the program readers (G-code, rs274 expressions, APT, SINUMERIK) share: byte
+// classes, numbers and bytes for messages, columns, opening a program file and the warning
+// for axes a file never programmed. Internal to vcut::io.
+#pragma once
+
+#include <vcut/io/input_error.h>
+#include <vcut/kinematics/program.h>
+
+#include <array>
+#include <cerrno>
+#include <climits>
+#include <cstddef>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <system_error>
+#include <vector>
+
+namespace vcut::io::detail {
+
+inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
+inline bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
+inline char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
+
+// A number for a message: up to 10 significant digits.
+inline std::string num(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+// A byte for a message: 'x' when printable, else its hex code.
+inline std::string describe(char c) {
+  const auto u = static_cast<unsigned char>(c);
+  char buf[16];
+  if (u > 32 && u < 127) {
+    std::snprintf(buf, sizeof buf, "'%c'", c);
+  } else {
+    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
+  }
+  return buf;
+}
+
+// An index as a 1-based column (saturated at INT_MAX).
+inline int column_at(std::size_t i) {
+  return i >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(i) + 1;
+}
+
+// Opens a program file, or throws naming it: `a` and `the` name the kind of file in messages
+// ("a G-code file", "the G-code file").
+inline std::ifstream open_program_file(const std::string& path, const std::string& a, const std::string& the) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw InputError(path, 0, 0, "is a directory (expected " + a + ")");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, 0, 0, "cannot open " + the + ": " + std::strerror(errno));
+  return in;
+}
+
+// One warning per axis X Y Z that the file `name` never programmed while moves ran.
+inline void warn_unprogrammed_axes(const std::array<std::vector<std::size_t>, 3>& pending, const std::string& name,
+                                   kinematics::Program& program) {
+  static constexpr char kLetter[3] = {'X', 'Y', 'Z'};
+  for (std::size_t a = 0; a < 3; ++a) {
+    if (pending[a].empty()) continue;
+    program.warnings.push_back(name + ": " + kLetter[a] + " has not been programmed by the end of this file; " +
+                               std::to_string(pending[a].size()) +
+                               " move(s) hold it at 0 unless a later file sets it");
+  }
+}
+
+}  // namespace vcut::io::detail
