@@ -6,6 +6,7 @@
 #include <vcut/io/input_error.h>
 
 #include "block_room.h"
+#include "plane_arc.h"
 #include "reader_util.h"
 #include "rs274_expression.h"
 
@@ -42,16 +43,7 @@ constexpr double kMaxMagnitude = 1e6;
 // Feeds: programs write F99999 or more for "as fast as the machine goes" (LinuxCNC clamps to
 // the machine's limits, and so does the feed planner); beyond this it is garbage.
 constexpr double kMaxFeed_mm_per_min = 1e9;
-// Points closer than this coincide (full circles, zero radius): far below any machine's
-// resolution, far above the rounding of mm values up to kMaxMagnitude (~1e-10).
-constexpr double kSamePointMm = 1e-9;
-// R arcs: |R| may fall short of half the chord by this times max(1, |R|) before it is an
-// error; this only absorbs rounding of the printed values (the brief's 1e-9).
-constexpr double kRadiusRoundingRelative = 1e-9;
-// I J K arcs: a radius mismatch up to this times r is allowed on top of arc_tolerance_mm,
-// so that large radii printed with few decimals are not rejected (LinuxCNC's
-// SPIRAL_RELATIVE_TOLERANCE plays the same role).
-constexpr double kArcRelativeTolerance = 1e-6;
+using detail::kSamePointMm;
 
 // rs274ngc has 15 G and 5 M modal groups: a line with more codes than this is garbage.
 constexpr size_t kMaxCodesPerLine = 32;
@@ -1386,18 +1378,9 @@ void Reader::arc(int column) {
       }
       center[k] = state_.arc_center_absolute ? v + offset[axis] : start[axis] + v;
     }
-    const double r_start = (s - center).norm();
-    const double r_end = (e - center).norm();
-    if (r_start <= kSamePointMm || r_end <= kSamePointMm) {
-      fail(column, std::string("zero-radius ") + code +
-                       " arc (expected the centre away from the start and the end)");
-    }
-    const double allowed =
-        std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
-    if (std::abs(r_end - r_start) > allowed) {
-      fail(column, std::string(code) + " arc end is not on its circle: radius " + num(r_start) +
-                       " mm at the start, " + num(r_end) +
-                       " mm at the end (expected equal within " + num(allowed) + " mm)");
+    if (const std::string error = detail::centre_arc_error(s, e, center, options_.arc_tolerance_mm, code);
+        !error.empty()) {
+      fail(column, error);
     }
     // A full circle: make start and end coincide exactly so that the sweep is 2*pi, not ~0.
     if ((e - s).norm() <= kSamePointMm) {
@@ -1405,26 +1388,12 @@ void Reader::arc(int column) {
       end[b] = start[b];
     }
   } else {
-    // rs274ngc arc_data_r: the centre lies on the chord's perpendicular bisector, to the
-    // right of start->end for G2 with R > 0 or G3 with R < 0 (negative R: the long arc).
-    const double radius = r.value * unit();
-    const Eigen::Vector2d d = e - s;
-    const double chord = d.norm();
-    if (chord <= kSamePointMm) {
-      fail(r.column, std::string(code) +
-                         " R arc that ends where it starts (expected I/J/K for a full circle)");
+    // rs274ngc arc_data_r.
+    if (const std::string error =
+            detail::radius_arc_centre(s, e, r.value * unit(), clockwise, code, "R", "I/J/K", center);
+        !error.empty()) {
+      fail(r.column, error);
     }
-    const double abs_r = std::abs(radius);
-    double half = chord / 2.0;
-    if (half - abs_r > kRadiusRoundingRelative * std::max(1.0, abs_r)) {
-      fail(r.column, "arc radius |R| = " + num(abs_r) + " mm is less than half the chord, " +
-                         num(half) + " mm (expected |R| >= " + num(half) + " mm)");
-    }
-    half = std::min(half, abs_r);
-    const double to_center = std::sqrt((abs_r - half) * (abs_r + half));
-    const Eigen::Vector2d left = Eigen::Vector2d(-d.y(), d.x()) / chord;
-    const bool right = (clockwise && radius > 0.0) || (!clockwise && radius < 0.0);
-    center = (s + e) / 2.0 + (right ? -to_center : to_center) * left;
   }
 
   Block block;

@@ -7,6 +7,7 @@
 
 #include "block_room.h"
 #include "line_source.h"
+#include "plane_arc.h"
 #include "reader_util.h"
 
 #include <Eigen/Geometry>
@@ -40,12 +41,7 @@ constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inc
 // Any length (mm), feed (mm/min), speed (rpm) or angle (deg) beyond this is a typo or garbage:
 // a 1 km stroke or a 1000 m/min feed exists on no milling machine.
 constexpr double kMaxMagnitude = 1e6;
-// Points closer than this coincide (full circles, zero radius); as in the G-code reader.
-constexpr double kSamePointMm = 1e-9;
-// CR arcs: |CR| may fall short of half the chord by this times max(1, |CR|) (print rounding).
-constexpr double kRadiusRoundingRelative = 1e-9;
-// I J K arcs: a radius mismatch up to this times r on top of arc_tolerance_mm (as G-code).
-constexpr double kArcRelativeTolerance = 1e-6;
+using detail::kSamePointMm;
 // A tool or cone vector shorter than this has no direction (CAM prints 4 to 9 decimals).
 constexpr double kMinVectorNorm = 1e-6;
 // Two tool vectors this close to opposite (cosine) have no single great circle between them.
@@ -1286,46 +1282,23 @@ void Reader::arc(Block& block, bool clockwise) {
                            " gives a centre out of range (expected within +-1e6 mm)");
       }
     }
-    const double r_start = (s - center).norm();
-    const double r_end = (e - center).norm();
-    if (r_start <= kSamePointMm || r_end <= kSamePointMm) {
-      fail(column, std::string("zero-radius ") + code +
-                       " arc (expected the centre away from the start and the end)");
-    }
-    const double allowed =
-        std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
-    if (std::abs(r_end - r_start) > allowed) {
-      fail(column, std::string(code) + " arc end is not on its circle: radius " + num(r_start) +
-                       " mm at the start, " + num(r_end) +
-                       " mm at the end (expected equal within " + num(allowed) + " mm)");
+    if (const std::string error = detail::centre_arc_error(s, e, center, options_.arc_tolerance_mm, code);
+        !error.empty()) {
+      fail(column, error);
     }
     if ((e - s).norm() <= kSamePointMm) {  // a full circle: start and end coincide exactly
       end[a] = start[a];
       end[b] = start[b];
     }
   } else {
-    // The centre lies on the chord's perpendicular bisector, to the right of start->end for G2
-    // with CR > 0 or G3 with CR < 0 (negative CR: the arc longer than 180 deg).
     const double radius = length_mm(cr);
-    const Eigen::Vector2d d = e - s;
-    const double chord = d.norm();
-    if (chord <= kSamePointMm) {
-      fail(cr.column, std::string(code) +
-                          " CR= arc that ends where it starts (expected I J K for a full circle)");
-    }
-    const double abs_r = std::abs(radius);
-    if (!(abs_r <= kMaxMagnitude))
+    if (!(std::abs(radius) <= kMaxMagnitude) && (e - s).norm() > kSamePointMm) {
       fail(cr.column, "CR=" + num(cr.value) + " (expected |CR| <= 1e6 mm)");
-    double half = chord / 2.0;
-    if (half - abs_r > kRadiusRoundingRelative * std::max(1.0, abs_r)) {
-      fail(cr.column, "arc radius |CR| = " + num(abs_r) + " mm is less than half the chord, " +
-                          num(half) + " mm (expected |CR| >= " + num(half) + " mm)");
     }
-    half = std::min(half, abs_r);
-    const double to_center = std::sqrt((abs_r - half) * (abs_r + half));
-    const Eigen::Vector2d left = Eigen::Vector2d(-d.y(), d.x()) / chord;
-    const bool right = (clockwise && radius > 0.0) || (!clockwise && radius < 0.0);
-    center = (s + e) / 2.0 + (right ? -to_center : to_center) * left;
+    if (const std::string error = detail::radius_arc_centre(s, e, radius, clockwise, code, "CR=", "I J K", center);
+        !error.empty()) {
+      fail(cr.column, error);
+    }
   }
   block.kind = MotionKind::Arc;
   block.center_mm = start;
