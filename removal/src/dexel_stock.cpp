@@ -177,6 +177,129 @@ bool ray_contains(const SegmentList& ray, double s) {
   return false;
 }
 
+// Coherence between consecutive moves of a ball-end mill. Its sweep is the parallelogram
+// P = {c + u a + t D : u in [0, H], t in [0, 1]} (c the ball centre at the start, a the tool
+// axis, H the core's length, D the motion) grown by the ball radius, so a point whose
+// nearest point of P lies on P's edge t = 0 is inside the cutter at the move's start. When
+// the cutting move before ended there with the same cutter and axis, that instance was cut
+// already. The nearest point lies on that edge exactly when
+//   h(q) = q.D - (D.a) clamp(q.a, 0, H) <= 0,  q = x - c
+// (the edge's normal cone: q.D_perp <= 0 beside it, q.D <= 0 below its lower end,
+// (q - H a).D <= 0 above its upper one). Likewise with c at the end and -D for the edge
+// t = 1, which the next cutting move's start instance covers.
+struct Handover {
+  Vector3d c = Vector3d::Zero(), d = Vector3d::Zero(), a = Vector3d::UnitZ();
+  double height_mm = 0.0;
+  bool on = false;
+
+  // True when every point of the ray of family `axis` at (u, w) with axis coordinate in
+  // [s_lo, s_hi] has h <= 0. h is linear in s between the two heights where q.a is 0 or H.
+  bool covers(int axis, double u, double w, double s_lo, double s_hi) const {
+    const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+    const double k0 = (u - c[a1]) * d[a1] + (w - c[a2]) * d[a2] - c[axis] * d[axis], k1 = d[axis];
+    const double m0 = (u - c[a1]) * a[a1] + (w - c[a2]) * a[a2] - c[axis] * a[axis], m1 = a[axis];
+    const double da = d.dot(a);
+    auto h = [&](double s) { return k0 + k1 * s - da * std::clamp(m0 + m1 * s, 0.0, height_mm); };
+    if (h(s_lo) > 0.0 || h(s_hi) > 0.0) return false;
+    if (m1 != 0.0) {
+      for (double level : {0.0, height_mm}) {
+        const double s = (level - m0) / m1;
+        if (s > s_lo && s < s_hi && h(s) > 0.0) return false;
+      }
+    }
+    return true;
+  }
+};
+
+// Row by row, for an upright tool (axis +Z): along a row of rays of family `axis` at w, h
+// is linear in the rays' coordinate u plus a function of s alone, h = slope u + base(w) +
+// g(s) (g piecewise linear with corners where s - c_z is 0 or H, and only for z rays). Its
+// bounds over a span of s are worked out once per move and family.
+struct RowHandover {
+  bool on = false;
+  double slope = 0.0, g_max = 0.0, g_min = 0.0;
+  double base0 = 0.0, base_w = 0.0;  // base(w) = base0 + base_w w - clamp term
+  double clamp_c = 0.0, clamp_d = 0.0, height_mm = 0.0;  // x, y rays: d clamp(w - c, 0, H)
+
+  double base(double w) const { return base0 + base_w * w - clamp_d * std::clamp(w - clamp_c, 0.0, height_mm); }
+  // Whether every ray of the row at w is covered (h <= 0 for every s), else through `at`
+  // where the covered half-line {u : slope u + base + g <= 0} begins (g = g_max: covered
+  // for sure; g = g_min: perhaps covered).
+  bool all(double w, double g) const { return slope == 0.0 && base(w) + g <= 0.0; }
+  bool none(double w, double g) const { return slope == 0.0 && base(w) + g > 0.0; }
+  double at(double w, double g) const { return -(base(w) + g) / slope; }
+};
+
+RowHandover row_handover(const Handover& h, int axis, double s_lo, double s_hi) {
+  RowHandover out;
+  if (!h.on || h.a.x() != 0.0 || h.a.y() != 0.0 || !(h.a.z() > 0.0) || !(s_lo <= s_hi)) return out;
+  const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+  out.on = true;
+  out.slope = h.d[a1];
+  out.base0 = -h.c[a1] * h.d[a1] - h.c[a2] * h.d[a2];
+  out.base_w = h.d[a2];
+  if (axis != 2) {  // w is z
+    out.clamp_c = h.c.z();
+    out.clamp_d = h.d.z();
+    out.height_mm = h.height_mm;
+  }
+  auto g = [&](double s) {
+    const double along = (s - h.c[axis]) * h.d[axis];
+    return axis != 2 ? along : along - h.d.z() * std::clamp(s - h.c.z(), 0.0, h.height_mm);
+  };
+  out.g_max = std::max(g(s_lo), g(s_hi));
+  out.g_min = std::min(g(s_lo), g(s_hi));
+  if (axis == 2) {
+    for (double s : {h.c.z(), h.c.z() + h.height_mm}) {
+      if (s > s_lo && s < s_hi) {
+        out.g_max = std::max(out.g_max, g(s));
+        out.g_min = std::min(out.g_min, g(s));
+      }
+    }
+  }
+  return out;
+}
+
+struct MoveHandover {
+  Handover from_start;  // on: the cutting move before ended at this move's start
+  Handover to_end;      // on: the cutting move after starts at this move's end
+  Eigen::AlignedBox3d bounds;  // the sweep's box, as the cut loop sees it
+  std::size_t next = 0;        // with to_end: the next cutting move
+};
+
+// For every move of the list: which of its neighbours cover part of its sweep. The
+// neighbours are the cutting moves before and after it: rapids and the shank and holder
+// probes between them remove nothing.
+std::vector<MoveHandover> handovers(const MoveList& list) {
+  const std::size_t count = list.moves.size();
+  std::vector<MoveHandover> out(count);
+  auto ball = [&](const Move& m) {
+    const Cutter& c = list.cutters.at(static_cast<std::size_t>(m.cutter));
+    return !m.rapid && c.type != CutterType::VBit && core_of(c).core_radius_mm == 0.0;
+  };
+  std::vector<std::size_t> next_cut(count + 1, count);
+  for (std::size_t i = count; i-- > 0;) next_cut[i] = list.moves[i].rapid ? next_cut[i + 1] : i;
+  std::size_t before = count;  // the last cutting move so far
+  for (std::size_t i = 0; i < count; before = list.moves[i].rapid ? before : i, ++i) {
+    const Move& m = list.moves[i];
+    if (!ball(m)) continue;
+    const CutterCore core = core_of(list.cutters.at(static_cast<std::size_t>(m.cutter)));
+    const Vector3d a = m.axis.normalized();
+    const Vector3d c0 = m.start_mm + core.z_low_mm * a, c1 = m.end_mm + core.z_low_mm * a;
+    const double height = core.z_high_mm - core.z_low_mm;
+    auto joins = [&](const Move& first, const Move& second) {
+      return ball(first) && ball(second) && first.cutter == second.cutter && first.axis == second.axis &&
+             first.end_mm == second.start_mm;
+    };
+    const std::size_t after = next_cut[i + 1];
+    out[i].from_start = {c0, m.end_mm - m.start_mm, a, height, before < count && joins(list.moves[before], m)};
+    out[i].to_end = {c1, m.start_mm - m.end_mm, a, height, after < count && joins(m, list.moves[after])};
+    out[i].next = after;
+    out[i].bounds = TranslationSweep(list.cutters[static_cast<std::size_t>(m.cutter)], m).bounds();
+  }
+  return out;
+}
+
 struct Probe {
   int move;     // index in the batch
   int axis;
@@ -444,6 +567,75 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   std::vector<int> entries;
   std::vector<TileResult> results(static_cast<std::size_t>(tiles));
   tbb::enumerable_thread_specific<std::vector<DexelSegment>> scratch;
+  const std::vector<MoveHandover> handover = handovers(list);
+  // The same for a whole row of an upright tool at once: narrows [u_lo, u_hi] to the rays
+  // that neither neighbour takes (false: none), from bounds that hold for any material
+  // along the rays within the move's box, so that no ray skipped here would be kept by the
+  // test below. The next move's cover is bounded from the other side (its g_min): a ray it
+  // might take is never left to it.
+  struct RowNeighbours {
+    RowHandover start, end, back;  // back: the next move's from_start
+  };
+  auto row_neighbours = [&](const MoveHandover& h, int axis) {
+    RowNeighbours out;
+    const double s_lo = h.bounds.min()[axis], s_hi = h.bounds.max()[axis];
+    out.start = row_handover(h.from_start, axis, s_lo, s_hi);
+    out.end = row_handover(h.to_end, axis, s_lo, s_hi);
+    if (out.end.on) {
+      const MoveHandover& next = handover[h.next];
+      out.back = row_handover(next.from_start, axis, next.bounds.min()[axis], next.bounds.max()[axis]);
+      if (!out.back.on) out.end.on = false;
+    }
+    return out;
+  };
+  auto kept_by_neighbours = [](const RowNeighbours& r, double w, double& u_lo, double& u_hi) {
+    constexpr double kMargin_mm = 1e-9;  // keeps a ray on the boundary
+    if (r.start.on) {
+      const RowHandover& s = r.start;
+      if (s.all(w, s.g_max)) return false;
+      if (s.slope > 0.0) u_lo = std::max(u_lo, s.at(w, s.g_max) - kMargin_mm);
+      if (s.slope < 0.0) u_hi = std::min(u_hi, s.at(w, s.g_max) + kMargin_mm);
+    }
+    if (!r.end.on) return u_lo <= u_hi;
+    // Skipped: u in T = {end covers for sure} outside N = {back perhaps covers}, when that
+    // is a half-line at one end of the row (or the whole row).
+    const RowHandover &e = r.end, &b = r.back;
+    if (b.all(w, b.g_min)) return u_lo <= u_hi;
+    const bool n_empty = b.none(w, b.g_min);
+    if (e.slope < 0.0 && (n_empty || b.slope > 0.0)) {  // T = u >= t, N = u <= n
+      const double t = e.at(w, e.g_max);
+      u_hi = std::min(u_hi, (n_empty ? t : std::max(t, b.at(w, b.g_min))) + kMargin_mm);
+    } else if (e.slope > 0.0 && (n_empty || b.slope < 0.0)) {  // T = u <= t, N = u >= n
+      const double t = e.at(w, e.g_max);
+      u_lo = std::max(u_lo, (n_empty ? t : std::min(t, b.at(w, b.g_min))) - kMargin_mm);
+    } else if (e.all(w, e.g_max)) {  // skipped: u outside N
+      if (n_empty) return false;
+      if (b.slope > 0.0) u_hi = std::min(u_hi, b.at(w, b.g_min) + kMargin_mm);
+      else u_lo = std::max(u_lo, b.at(w, b.g_min) - kMargin_mm);
+    }
+    return u_lo <= u_hi;
+  };
+  // Skip the ray for move i when its neighbours cut all of it that move i would: the one
+  // before when its end instance holds the ray's part of the sweep (it was cut first), the
+  // one after when its start instance does, unless that one hands the ray back (it is cut
+  // after this move, so one of the two must cut it). Each test spans the ray's material
+  // within that move's box, as the move's own test does.
+  auto handed_over = [&](std::size_t i, int axis, double u, double w, const SegmentList& ray) {
+    const MoveHandover& h = handover[i];
+    if (!h.from_start.on && !h.to_end.on) return false;
+    const double material_lo = ray.data()[0].lo_mm, material_hi = ray.data()[ray.size() - 1].hi_mm;
+    auto span = [&](const MoveHandover& of, double& lo, double& hi) {
+      lo = std::max(material_lo, of.bounds.min()[axis]);
+      hi = std::min(material_hi, of.bounds.max()[axis]);
+    };
+    double lo, hi;
+    span(h, lo, hi);
+    if (h.from_start.on && h.from_start.covers(axis, u, w, lo, hi)) return true;
+    if (!h.to_end.on || !h.to_end.covers(axis, u, w, lo, hi)) return false;
+    const MoveHandover& next = handover[h.next];
+    span(next, lo, hi);
+    return !next.from_start.covers(axis, u, w, lo, hi);
+  };
 
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
     const std::size_t last = std::min(total, first + kBatchMoves);
@@ -503,9 +695,11 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           w1 = std::min(w1, tile_w0 + kTile - 1);
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
           Probe probe{i, a, 0.0, Vector3d::Zero()};
+          const RowNeighbours neighbours = row_neighbours(handover[first + static_cast<std::size_t>(i)], a);
           for (int iw = w0; iw <= w1; ++iw) {
             double row_lo, row_hi;
             sweep.row_range(a, m.position(iw), row_lo, row_hi);
+            if (!kept_by_neighbours(neighbours, m.position(iw), row_lo, row_hi)) continue;
             const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
             const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
             const double section = a == 2 ? std::numeric_limits<double>::infinity() : sweep.row_section(a, m.position(iw));
@@ -534,6 +728,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                   meets = ray.data()[k].lo_mm < win_hi && ray.data()[k].hi_mm > win_lo;
                 if (!meets) continue;
               }
+              if (handed_over(first + static_cast<std::size_t>(i), a, m.position(iu), m.position(iw), ray)) continue;
               double lo, hi;
               if (!sweep.interval_below(a, m.position(iu), m.position(iw), ray.data()[n - 1].hi_mm, lo, hi)) continue;
               if (move.rapid) {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <cstring>
@@ -380,6 +381,64 @@ TEST(DexelStock, SameRaysForOneAndTwoThreads) {
   EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
                         s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)), 0);
   EXPECT_EQ(s1.vertex_move, s2.vertex_move);
+}
+
+// A chain of ball-end moves cut in one call (each ray left to whichever neighbour's
+// instance covers it) against the same moves cut one call each (no move can rely on
+// another): the same material on every ray. The chain climbs, descends, turns back on
+// itself, turns corners and runs diagonally; an upright and a tilted tool, and a shank
+// probe between moves (it removes nothing and must not break the chain).
+TEST(DexelStock, ChainedBallMovesCutWhatTheyCutOneByOne) {
+  for (const Eigen::Vector3d axis : {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.3, -0.2, 1).normalized()}) {
+    MoveList chain;
+    chain.cutters.push_back(make(CutterType::Ball, 3, 1.5, 12));
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-0.25, 0.2);
+    Eigen::Vector3d p(3, 3, 9);
+    for (int i = 0; i < 240; ++i) {
+      Eigen::Vector3d q;
+      if (i % 40 < 20) q = p + Eigen::Vector3d((i / 40) % 2 ? -0.5 : 0.5, 0, dip(rng));    // raster rows
+      else if (i % 40 < 23) q = p + Eigen::Vector3d(0, 0.35, 0);                         // stepover
+      else q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));                       // wandering
+      q.z() = std::clamp(q.z(), 6.0, 11.0);
+      q.x() = std::clamp(q.x(), 1.0, 19.0);
+      q.y() = std::clamp(q.y(), 1.0, 14.0);
+      chain.moves.push_back(line(p, q, axis));
+      if (i == 100) {
+        Move probe = line(q, q, axis);
+        probe.rapid = true;
+        probe.probe = ProbeKind::Shank;
+        chain.moves.push_back(probe);
+      }
+      p = q;
+    }
+    const BoxShape box{{0, 0, 0}, {20, 15, 10}};
+    DexelStock together(box, 0.1), alone(box, 0.1);
+    together.cut(chain, {});
+    for (const Move& m : chain.moves) {
+      MoveList one;
+      one.cutters = chain.cutters;
+      one.moves.push_back(m);
+      alone.cut(one, {});
+    }
+    EXPECT_NEAR(together.volume_mm3(), alone.volume_mm3(), 1e-6);
+    std::size_t rays = 0;
+    for (int family = 0; family < 3; ++family) {
+      for (int iu = -2; iu < 210; ++iu) {
+        for (int iw = -2; iw < 210; ++iw) {
+          const auto a = together.ray(family, iu, iw), b = alone.ray(family, iu, iw);
+          ASSERT_EQ(a.size(), b.size()) << "family " << family << " ray " << iu << ", " << iw;
+          for (std::size_t k = 0; k < a.size(); ++k) {
+            EXPECT_NEAR(a[k].lo_mm, b[k].lo_mm, kEndpointTol_mm);
+            EXPECT_NEAR(a[k].hi_mm, b[k].hi_mm, kEndpointTol_mm);
+          }
+          rays += !a.empty();
+        }
+      }
+    }
+    EXPECT_GT(rays, 40000u);
+    EXPECT_LT(together.volume_mm3(), 0.9 * 3000.0);  // the chain did cut
+  }
 }
 
 TEST(DexelStock, MemoryEstimateCoversTheRealUse) {
