@@ -426,8 +426,14 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   }
   // The primary engine makes the outputs; with engine: both the OpenVDB one checks it.
   std::unique_ptr<removal::Stock> primary, second;
-  if (use_dexel) primary = std::make_unique<removal::DexelStock>(shape, v);
-  else primary = std::make_unique<removal::VdbStock>(shape, v);
+  if (use_dexel) {
+    auto dexel = std::make_unique<removal::DexelStock>(shape, v);
+    // A study compares two runs' meshes to within v/100: every cell keeps its vertex.
+    dexel->set_flat_merging(options.outputs);
+    primary = std::move(dexel);
+  } else {
+    primary = std::make_unique<removal::VdbStock>(shape, v);
+  }
   if (use_dexel && use_vdb && options.outputs) second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();

@@ -1,5 +1,6 @@
 #include "vcut/removal/dexel_stock.h"
 
+#include <Eigen/Eigenvalues>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/SignedFloodFill.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -11,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
@@ -327,6 +329,7 @@ struct DexelStock::Impl {
   std::shared_ptr<const DesignDistance> initial_mesh;
   std::vector<Move> moves;
   std::vector<Cutter> cutters;
+  bool flat_merging = true;
 
   // World coordinate of lattice index i along any axis: rays sit mid-cell, so a box whose
   // faces lie on multiples of v is measured exactly.
@@ -550,6 +553,8 @@ DexelStock::DexelStock(const StockShape& shape, double spacing_mm) : impl_(std::
 DexelStock::~DexelStock() = default;
 
 double DexelStock::spacing_mm() const { return impl_->v; }
+
+void DexelStock::set_flat_merging(bool on) { impl_->flat_merging = on; }
 
 CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   Impl& m = *impl_;
@@ -780,10 +785,364 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   return result;
 }
 
-SurfaceMesh DexelStock::surface() const {
+namespace {
+
+// ---- The surface by dual contouring on the rays' lattice ----
+//
+// Nodes are the lattice points; a node's inside/outside comes from the z ray through it
+// (one family decides, so neighbouring cells always agree). A cell (the cube between eight
+// nodes) whose nodes differ holds the surface: one vertex, the mean of the crossings on
+// its edges where the signs change (each the endpoint of the ray along that edge, exact);
+// every edge where the sign changes gives a quad joining the four cells around it. Where
+// the surface is flat, cells are merged: the lattice is cut into bricks of 16^3 cells, and
+// within a brick an octree block of 2, 4, 8 or 16 cells a side whose cells' points lie
+// within kFlatTolerance of one plane shares a single vertex; a quad whose corners now
+// coincide becomes a triangle or disappears. Merging only renames vertices, so the mesh
+// stays closed across merged and unmerged cells and across bricks. Bricks are meshed in
+// parallel and joined in lattice order: the same mesh for any thread count.
+constexpr int kBrick = 16;
+constexpr int kBrickCells = kBrick * kBrick * kBrick;
+constexpr int kBrickLevels = 4;  // 16 = 2^4
+// A merged block's points lie within this fraction of the spacing of its plane.
+constexpr double kFlatTolerance = 0.05;
+
+int morton(int x, int y, int z) {
+  int code = 0;
+  for (int b = 0; b < kBrickLevels; ++b)
+    code |= (((x >> b) & 1) << (3 * b)) | (((y >> b) & 1) << (3 * b + 1)) | (((z >> b) & 1) << (3 * b + 2));
+  return code;
+}
+
+// Node signs of one brick: bit t of column (x, y) is node (x0 + x, y0 + y, z0 + t).
+struct BrickSigns {
+  std::array<std::uint32_t, (kBrick + 1) * (kBrick + 1)> column{};
+  std::uint32_t at(int x, int y) const { return column[static_cast<std::size_t>(y * (kBrick + 1) + x)]; }
+  bool inside(int x, int y, int z) const { return (at(x, y) >> z) & 1u; }
+};
+
+struct BrickMesh {
+  std::array<int, 3> origin;            // lattice index of the brick's first node
+  std::vector<std::uint16_t> cells;     // active cells, Morton codes ascending
+  std::vector<std::uint32_t> vertex;    // per active cell: index into points
+  std::vector<Vector3d> points;
+  std::uint32_t first_vertex = 0;       // global index of points[0]
+};
+
+class Contour {
+ public:
+  explicit Contour(const DexelStock::Impl& m) : m_(m) {
+    // Node index range per axis: the y rays span x as u, the x rays y and z.
+    lo_ = {m.families[1].lo_u, m.families[0].lo_u, m.families[0].lo_w};
+    count_ = {m.families[1].n_u, m.families[0].n_u, m.families[0].n_w};
+    for (int a = 0; a < 3; ++a) bricks_[static_cast<std::size_t>(a)] = (count_[static_cast<std::size_t>(a)] - 1 + kBrick - 1) / kBrick;
+  }
+
+  SurfaceMesh run() {
+    const int columns = bricks_[0] * bricks_[1];
+    std::vector<std::vector<BrickMesh>> by_column(static_cast<std::size_t>(columns));
+    tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
+      for (int c = range.begin(); c != range.end(); ++c) {
+        for (int bk = 0; bk < bricks_[2]; ++bk) {
+          BrickMesh b;
+          b.origin = {lo_[0] + (c % bricks_[0]) * kBrick, lo_[1] + (c / bricks_[0]) * kBrick, lo_[2] + bk * kBrick};
+          if (vertices(b)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
+        }
+      }
+    });
+    // Bricks in lattice order, numbered; vertices numbered brick after brick.
+    column_first_.assign(static_cast<std::size_t>(columns) + 1, 0);
+    for (int c = 0; c < columns; ++c) {
+      column_first_[static_cast<std::size_t>(c) + 1] = column_first_[static_cast<std::size_t>(c)] + by_column[static_cast<std::size_t>(c)].size();
+      for (BrickMesh& b : by_column[static_cast<std::size_t>(c)]) bricks_list_.push_back(std::move(b));
+    }
+    by_column.clear();
+    std::uint32_t next = 0;
+    for (BrickMesh& b : bricks_list_) {
+      b.first_vertex = next;
+      next += static_cast<std::uint32_t>(b.points.size());
+    }
+    std::vector<std::vector<Triangle>> faces(bricks_list_.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks_list_.size(), 4), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) quads(bricks_list_[i], faces[i]);
+    });
+    SurfaceMesh mesh;
+    mesh.mesh.vertices_mm.reserve(next);
+    for (const BrickMesh& b : bricks_list_) mesh.mesh.vertices_mm.insert(mesh.mesh.vertices_mm.end(), b.points.begin(), b.points.end());
+    std::size_t triangles = 0;
+    for (const auto& f : faces) triangles += f.size();
+    mesh.mesh.triangles.reserve(triangles);
+    for (const auto& f : faces) mesh.mesh.triangles.insert(mesh.mesh.triangles.end(), f.begin(), f.end());
+    return mesh;
+  }
+
+ private:
+  using Triangle = Eigen::Vector3i;
+
+  bool signs(const std::array<int, 3>& origin, BrickSigns& out) const {
+    const Family& z = m_.families[2];
+    bool any_in = false, any_out = false;
+    const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
+    for (int y = 0; y <= kBrick; ++y) {
+      for (int x = 0; x <= kBrick; ++x) {
+        std::uint32_t bits = 0;
+        const int i = origin[0] + x, j = origin[1] + y;
+        if (z.contains(i, j)) {
+          const SegmentList& ray = z.at(i, j);
+          for (std::uint32_t s = 0; s < ray.size(); ++s) {
+            // Nodes k with lo <= position(k) <= hi, as ray_contains has it.
+            int k0 = static_cast<int>(std::ceil(m_.index_of(ray.data()[s].lo_mm)));
+            while (m_.position(k0) < ray.data()[s].lo_mm) ++k0;
+            while (m_.position(k0 - 1) >= ray.data()[s].lo_mm) --k0;
+            int k1 = static_cast<int>(std::floor(m_.index_of(ray.data()[s].hi_mm)));
+            while (m_.position(k1) > ray.data()[s].hi_mm) --k1;
+            while (m_.position(k1 + 1) <= ray.data()[s].hi_mm) ++k1;
+            k0 = std::max(k0, origin[2]);
+            k1 = std::min(k1, origin[2] + kBrick);
+            if (k0 > k1) continue;
+            const int n = k1 - k0 + 1;
+            bits |= (n >= 32 ? ~0u : ((1u << n) - 1u)) << (k0 - origin[2]);
+          }
+        }
+        bits &= full;
+        out.column[static_cast<std::size_t>(y * (kBrick + 1) + x)] = bits;
+        any_in = any_in || bits != 0;
+        any_out = any_out || bits != full;
+      }
+    }
+    return any_in && any_out;
+  }
+
+  // Where the ray of family `axis` at (iu, iw) crosses between nodes n and n + 1: the
+  // ray's endpoint there (the middle when the ray has none: the z rays decided otherwise).
+  double crossing(int axis, int iu, int iw, int n) const {
+    const Family& f = m_.families[static_cast<std::size_t>(axis)];
+    const double a = m_.position(n), b = m_.position(n + 1);
+    if (f.contains(iu, iw)) {
+      const SegmentList& ray = f.at(iu, iw);
+      for (std::uint32_t s = 0; s < ray.size(); ++s) {
+        const DexelSegment& seg = ray.data()[s];
+        if (seg.lo_mm >= a && seg.lo_mm <= b) return seg.lo_mm;
+        if (seg.hi_mm >= a && seg.hi_mm <= b) return seg.hi_mm;
+        if (seg.lo_mm > b) break;
+      }
+    }
+    return 0.5 * (a + b);
+  }
+
+  // The brick's active cells and their (merged) vertices; false when it has none.
+  bool vertices(BrickMesh& b) const {
+    BrickSigns sg;
+    if (!signs(b.origin, sg)) return false;
+    const int limit[3] = {std::min(kBrick, lo_[0] + count_[0] - 1 - b.origin[0]),
+                          std::min(kBrick, lo_[1] + count_[1] - 1 - b.origin[1]),
+                          std::min(kBrick, lo_[2] + count_[2] - 1 - b.origin[2])};
+    // Per active cell: its crossings (a run of `points`) and which way the surface faces
+    // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
+    struct Cell {
+      std::uint16_t code;
+      std::uint8_t facing;
+      std::uint8_t count;
+      std::uint32_t first;
+    };
+    std::vector<Cell> cells;
+    std::vector<Vector3d> points;
+    for (int y = 0; y < limit[1]; ++y) {
+      for (int x = 0; x < limit[0]; ++x) {
+        const std::uint32_t c00 = sg.at(x, y), c10 = sg.at(x + 1, y), c01 = sg.at(x, y + 1), c11 = sg.at(x + 1, y + 1);
+        const std::uint32_t all = c00 & c10 & c01 & c11, any = c00 | c10 | c01 | c11;
+        const std::uint32_t agree = ~(all ^ any);  // the four columns agree at this node
+        const std::uint32_t uniform = agree & (agree >> 1) & ~(all ^ (all >> 1));
+        std::uint32_t active = ~uniform & ((1u << limit[2]) - 1u);
+        while (active != 0) {
+          const int z = __builtin_ctz(active);
+          active &= active - 1;
+          Cell cell{static_cast<std::uint16_t>(morton(x, y, z)), 0, 0, static_cast<std::uint32_t>(points.size())};
+          const int gx = b.origin[0] + x, gy = b.origin[1] + y, gz = b.origin[2] + z;
+          auto edge = [&](int axis, bool lower_inside, bool upper_inside, const Vector3d& at) {
+            if (lower_inside == upper_inside) return;
+            cell.facing |= static_cast<std::uint8_t>(1u << (2 * axis + (lower_inside ? 0 : 1)));
+            points.push_back(at);
+            ++cell.count;
+          };
+          for (int d = 0; d < 4; ++d) {
+            const int e1 = d & 1, e2 = d >> 1;
+            edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1),
+                 Vector3d(m_.position(gx + e1), m_.position(gy + e2), crossing(2, gx + e1, gy + e2, gz)));
+            edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2),
+                 Vector3d(crossing(0, gy + e1, gz + e2, gx), m_.position(gy + e1), m_.position(gz + e2)));
+            edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2),
+                 Vector3d(m_.position(gx + e1), crossing(1, gx + e1, gz + e2, gy), m_.position(gz + e2)));
+          }
+          cells.push_back(cell);
+        }
+      }
+    }
+    if (cells.empty()) return false;
+    std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
+    // Octree merging, level by level: a block's cells are a run of the Morton order.
+    const std::size_t n = cells.size();
+    std::vector<std::uint32_t> group(n);      // the run start of each cell's merged block
+    std::vector<std::uint8_t> merged(n, 1);   // the cell's block so far is one vertex
+    for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
+    const double tolerance = kFlatTolerance * m_.v;
+    for (int level = 1; level <= (m_.flat_merging ? kBrickLevels : 0); ++level) {
+      const int shift = 3 * level;
+      for (std::size_t first = 0; first < n;) {
+        std::size_t last = first;
+        while (last < n && (cells[last].code >> shift) == (cells[first].code >> shift)) ++last;
+        bool candidate = true;
+        for (std::size_t i = first; i < last && candidate; ++i) candidate = merged[i] != 0;
+        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance)) {
+          for (std::size_t i = first; i < last; ++i) group[i] = static_cast<std::uint32_t>(first);
+        } else {
+          for (std::size_t i = first; i < last; ++i) merged[i] = 0;
+        }
+        first = last;
+      }
+    }
+    // Each vertex at the mean of its cells' crossings.
+    b.cells.resize(n);
+    b.vertex.resize(n);
+    std::vector<int> members;
+    for (std::size_t i = 0; i < n; ++i) {
+      b.cells[i] = cells[i].code;
+      if (group[i] == i) {
+        b.points.push_back(Vector3d::Zero());
+        members.push_back(0);
+      }
+      const std::uint32_t vertex = static_cast<std::uint32_t>(b.points.size() - 1);
+      b.vertex[i] = vertex;
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) b.points[vertex] += points[cells[i].first + k];
+      members[vertex] += cells[i].count;
+    }
+    for (std::size_t p = 0; p < b.points.size(); ++p) b.points[p] /= std::max(members[p], 1);
+    return true;
+  }
+
+  // Whether the cells first..last hold one flat sheet: the surface faces one way along each
+  // axis (two sheets of a thin wall face opposite ways) and every crossing lies within
+  // `tolerance` of one plane.
+  template <class Cells>
+  static bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
+                   double tolerance) {
+    std::uint8_t facing = 0;
+    for (std::size_t i = first; i < last; ++i) facing |= cells[i].facing;
+    for (int a = 0; a < 3; ++a)
+      if (((facing >> (2 * a)) & 3u) == 3u) return false;
+    Vector3d lo = points[cells[first].first], hi = lo, mean = Vector3d::Zero();
+    std::size_t count = 0;
+    for (std::size_t i = first; i < last; ++i) {
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) {
+        const Vector3d& p = points[cells[i].first + k];
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+        mean += p;
+        ++count;
+      }
+    }
+    if ((hi - lo).minCoeff() <= 2.0 * tolerance) return true;  // an axis plane
+    mean /= static_cast<double>(count);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t i = first; i < last; ++i) {
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) {
+        const Vector3d d = points[cells[i].first + k] - mean;
+        cov += d * d.transpose();
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    const Vector3d normal = eig.eigenvectors().col(0);
+    for (std::size_t i = first; i < last; ++i)
+      for (std::uint32_t k = 0; k < cells[i].count; ++k)
+        if (std::abs(normal.dot(points[cells[i].first + k] - mean)) > tolerance) return false;
+    return true;
+  }
+
+  // The vertex (global index) of the cell at lattice index g, which must be active.
+  int vertex_of(const std::array<int, 3>& g) const {
+    std::array<int, 3> brick, local;
+    for (int a = 0; a < 3; ++a) {
+      const int rel = g[static_cast<std::size_t>(a)] - lo_[static_cast<std::size_t>(a)];
+      brick[static_cast<std::size_t>(a)] = rel / kBrick;
+      local[static_cast<std::size_t>(a)] = rel % kBrick;
+    }
+    const std::size_t column = static_cast<std::size_t>(brick[1] * bricks_[0] + brick[0]);
+    const auto first = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column]);
+    const auto last = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column + 1]);
+    const int z0 = lo_[2] + brick[2] * kBrick;
+    const auto it = std::lower_bound(first, last, z0, [](const BrickMesh& b, int z) { return b.origin[2] < z; });
+    if (it == last || it->origin[2] != z0) return -1;
+    const std::uint16_t code = static_cast<std::uint16_t>(morton(local[0], local[1], local[2]));
+    const auto c = std::lower_bound(it->cells.begin(), it->cells.end(), code);
+    if (c == it->cells.end() || *c != code) return -1;
+    return static_cast<int>(it->first_vertex + it->vertex[static_cast<std::size_t>(c - it->cells.begin())]);
+  }
+
+  // The faces of every sign-changing edge starting at one of the brick's active cells'
+  // lowest node.
+  void quads(const BrickMesh& b, std::vector<Triangle>& out) const {
+    BrickSigns sg;
+    signs(b.origin, sg);
+    for (std::uint16_t code : b.cells) {
+      int x = 0, y = 0, z = 0;
+      for (int bit = 0; bit < kBrickLevels; ++bit) {
+        x |= ((code >> (3 * bit)) & 1) << bit;
+        y |= ((code >> (3 * bit + 1)) & 1) << bit;
+        z |= ((code >> (3 * bit + 2)) & 1) << bit;
+      }
+      const bool in = sg.inside(x, y, z);
+      const std::array<int, 3> g = {b.origin[0] + x, b.origin[1] + y, b.origin[2] + z};
+      for (int a = 0; a < 3; ++a) {
+        const bool other = a == 0 ? sg.inside(x + 1, y, z) : a == 1 ? sg.inside(x, y + 1, z) : sg.inside(x, y, z + 1);
+        if (other == in) continue;
+        // Cells around the edge, counter-clockwise seen from +a.
+        const int e1 = (a + 1) % 3, e2 = (a + 2) % 3;
+        std::array<int, 4> v;
+        const int offsets[4][2] = {{0, 0}, {-1, 0}, {-1, -1}, {0, -1}};
+        bool ok = true;
+        for (int q = 0; q < 4; ++q) {
+          std::array<int, 3> c = g;
+          c[static_cast<std::size_t>(e1)] += offsets[q][0];
+          c[static_cast<std::size_t>(e2)] += offsets[q][1];
+          v[static_cast<std::size_t>(q)] = vertex_of(c);
+          ok = ok && v[static_cast<std::size_t>(q)] >= 0;
+        }
+        if (!ok) continue;
+        if (!in) std::swap(v[1], v[3]);  // the surface faces -a
+        emit(v, out);
+      }
+    }
+  }
+
+  void emit(const std::array<int, 4>& v, std::vector<Triangle>& out) const {
+    // Merged cells share vertices: drop repeated corners, keeping the cyclic order.
+    std::array<int, 4> u;
+    int n = 0;
+    for (int q = 0; q < 4; ++q) {
+      const int c = v[static_cast<std::size_t>(q)];
+      if (n > 0 && u[static_cast<std::size_t>(n - 1)] == c) continue;
+      u[static_cast<std::size_t>(n++)] = c;
+    }
+    if (n > 1 && u[static_cast<std::size_t>(n - 1)] == u[0]) --n;
+    if (n == 3) {
+      out.emplace_back(u[0], u[1], u[2]);
+    } else if (n == 4) {
+      out.emplace_back(u[0], u[1], u[2]);
+      out.emplace_back(u[0], u[2], u[3]);
+    }
+  }
+
+  const DexelStock::Impl& m_;
+  std::array<int, 3> lo_{}, count_{}, bricks_{};
+  std::vector<BrickMesh> bricks_list_;
+  std::vector<std::size_t> column_first_;
+};
+
+SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
+
+SurfaceMesh level_set_mesh(const DexelStock::Impl& m) {
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
-  const Impl& m = *impl_;
   const double v = m.v;
   // A level set on the rays' lattice: every node next to a ray's crossing of the surface,
   // valued by the distance to the plane through the nearest crossings on the three axes
@@ -886,9 +1245,17 @@ SurfaceMesh DexelStock::surface() const {
   std::vector<openvdb::Vec4I> quads;
   openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, kMeshAdaptivity);
   grid.reset();
-  SurfaceMesh mesh = detail::mesh_from_polygons(points, triangles, quads);
+  return detail::mesh_from_polygons(points, triangles, quads);
+}
+
+}  // namespace
+
+SurfaceMesh DexelStock::surface() const {
+  const Impl& m = *impl_;
+  const double v = m.v;
+  SurfaceMesh mesh = std::getenv("VCUT_LEVEL_SET_MESH") != nullptr ? level_set_mesh(m) : contour_mesh(m);
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
-  const std::size_t count = points.size();
+  const std::size_t count = mesh.mesh.vertices_mm.size();
   std::vector<std::vector<int>> nearby(count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 512), [&](const auto& range) {
     for (std::size_t p = range.begin(); p != range.end(); ++p) {

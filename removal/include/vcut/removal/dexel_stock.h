@@ -47,6 +47,11 @@ class DexelStock final : public Stock {
   std::size_t memory_bytes() const override;
   Eigen::AlignedBox3d bounds() const override;
 
+  // The surface merges flat regions (octree blocks of up to 16 cells whose crossings lie
+  // within v/20 of one plane) into larger triangles; off, every surface cell keeps its own
+  // vertex (for measurements that compare two meshes to within v/100, as studies do).
+  void set_flat_merging(bool on);
+
   double spacing_mm() const;
   // The intervals of the ray of family `axis` through the lattice point whose other two
   // coordinates (increasing axis order) are (u, w) = (iu v, iw v); empty outside the lattice.
@@ -55,8 +60,9 @@ class DexelStock final : public Stock {
   std::vector<DexelEndpoint> endpoints() const;
   std::size_t ray_count() const;
 
+  struct Impl;  // the rays and the moves (dexel_stock.cpp)
+
  private:
-  struct Impl;
   std::unique_ptr<Impl> impl_;
 };
 
