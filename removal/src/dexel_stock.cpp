@@ -30,7 +30,9 @@ namespace {
 using Eigen::Vector3d;
 using openvdb::Coord;
 constexpr int kNoMove = -1;
-constexpr int kTile = 16;                  // rays per side of a tile of one family
+// A tile of one family: kTileU rays along u by kTileW rows (long rows: a move's row-wide
+// work, its range and section, is done once per tile it covers).
+constexpr int kTileU = 64, kTileW = 4;
 constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
 // Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
 constexpr float kMinSegment_mm = 1e-6f;
@@ -351,8 +353,8 @@ struct DexelStock::Impl {
       f.lo_w = lo[static_cast<std::size_t>(a2)];
       f.n_u = count[static_cast<std::size_t>(a1)];
       f.n_w = count[static_cast<std::size_t>(a2)];
-      f.tiles_u = (f.n_u + kTile - 1) / kTile;
-      f.tiles_w = (f.n_w + kTile - 1) / kTile;
+      f.tiles_u = (f.n_u + kTileU - 1) / kTileU;
+      f.tiles_w = (f.n_w + kTileW - 1) / kTileW;
       f.rays = std::vector<SegmentList>(static_cast<std::size_t>(f.n_u) * static_cast<std::size_t>(f.n_w));
     }
   }
@@ -658,8 +660,8 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         const Family& f = m.families[static_cast<std::size_t>(a)];
         int u0, u1, w0, w1;
         if (!m.ray_range(f, sweeps[i - first].bounds(), u0, u1, w0, w1)) continue;
-        for (int tw = (w0 - f.lo_w) / kTile; tw <= (w1 - f.lo_w) / kTile; ++tw)
-          for (int tu = (u0 - f.lo_u) / kTile; tu <= (u1 - f.lo_u) / kTile; ++tu)
+        for (int tw = (w0 - f.lo_w) / kTileW; tw <= (w1 - f.lo_w) / kTileW; ++tw)
+          for (int tu = (u0 - f.lo_u) / kTileU; tu <= (u1 - f.lo_u) / kTileU; ++tu)
             visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu);
       }
     };
@@ -683,7 +685,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         Family& f = m.families[static_cast<std::size_t>(a)];
         const int local = t - tile_base[static_cast<std::size_t>(a)];
         const int tu = local % f.tiles_u, tw = local / f.tiles_u;
-        const int tile_u0 = f.lo_u + tu * kTile, tile_w0 = f.lo_w + tw * kTile;
+        const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
         TileResult& r = results[static_cast<std::size_t>(t)];
         r.removed_mm = 0.0;
         r.probes.clear();
@@ -695,9 +697,9 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           int u0, u1, w0, w1;
           m.ray_range(f, sweep.bounds(), u0, u1, w0, w1);
           u0 = std::max(u0, tile_u0);
-          u1 = std::min(u1, tile_u0 + kTile - 1);
+          u1 = std::min(u1, tile_u0 + kTileU - 1);
           w0 = std::max(w0, tile_w0);
-          w1 = std::min(w1, tile_w0 + kTile - 1);
+          w1 = std::min(w1, tile_w0 + kTileW - 1);
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           const RowNeighbours neighbours = row_neighbours(handover[first + static_cast<std::size_t>(i)], a);
