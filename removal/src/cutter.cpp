@@ -18,8 +18,18 @@ namespace {
 
 // Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
 // (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that.
+// Radius per height of a V-bit's cone (the last angle's, kept: meshing asks millions of times).
+double vbit_slope(double tip_angle_deg) {
+  thread_local double angle_deg = -1.0, slope = 0.0;
+  if (tip_angle_deg != angle_deg) {
+    angle_deg = tip_angle_deg;
+    slope = std::tan(0.5 * tip_angle_deg * M_PI / 180.0);
+  }
+  return slope;
+}
+
 double vbit_profile_distance(const Cutter& c, double rho, double z) {
-  const double slope = std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0);  // radius per height
+  const double slope = vbit_slope(c.tip_angle_deg);
   const double height = c.flute_length_mm;
   const double cone_top = std::min(height, c.radius_mm() / slope);
   const double radius = cone_top * slope;
@@ -42,24 +52,25 @@ double vbit_profile_distance(const Cutter& c, double rho, double z) {
 
 double section_radius(const Cutter& c, double h) {
   if (h < 0.0 || h > c.flute_length_mm) return 0.0;
-  if (c.type == CutterType::VBit) return std::min(c.radius_mm(), h * std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0));
+  if (c.type == CutterType::VBit) return std::min(c.radius_mm(), h * vbit_slope(c.tip_angle_deg));
   const CutterCore k = core_of(c);
   const double off = h < k.z_low_mm ? k.z_low_mm - h : (h > k.z_high_mm ? h - k.z_high_mm : 0.0);
   return k.core_radius_mm + std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
 }
 
 double underside_height(const Cutter& c, double rho) {
-  if (c.type == CutterType::VBit) return rho / std::tan(0.5 * c.tip_angle_deg * M_PI / 180.0);
+  if (c.type == CutterType::VBit) return rho / vbit_slope(c.tip_angle_deg);
   const CutterCore k = core_of(c);
   const double off = rho - k.core_radius_mm;
   return off <= 0.0 ? 0.0 : k.rounding_mm - std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
 }
 
 double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p) {
-  if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, std::hypot(p.x(), p.y()), p.z());
+  const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());  // mm: no overflow to guard against
+  if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, rho, p.z());
   const CutterCore k = core_of(cutter);
   // The core cylinder is a disk extruded over an interval (exact).
-  return detail::extrude(std::hypot(p.x(), p.y()) - k.core_radius_mm,
+  return detail::extrude(rho - k.core_radius_mm,
                          detail::interval_distance(p.z(), k.z_low_mm, k.z_high_mm)) -
          k.rounding_mm;
 }

@@ -808,6 +808,20 @@ constexpr int kBrickLevels = 4;  // 16 = 2^4
 // A merged block's points lie within this fraction of the spacing of its plane.
 constexpr double kFlatTolerance = 0.05;
 
+// Sets bits first..last (inclusive) of a bit array.
+void set_bits(std::uint64_t* words, int first, int last) {
+  const int w0 = first >> 6, w1 = last >> 6;
+  const std::uint64_t head = ~std::uint64_t{0} << (first & 63);
+  const std::uint64_t tail = ~std::uint64_t{0} >> (63 - (last & 63));
+  if (w0 == w1) {
+    words[w0] |= head & tail;
+    return;
+  }
+  words[w0] |= head;
+  for (int w = w0 + 1; w < w1; ++w) words[w] = ~std::uint64_t{0};
+  words[w1] |= tail;
+}
+
 int morton(int x, int y, int z) {
   int code = 0;
   for (int b = 0; b < kBrickLevels; ++b)
@@ -842,12 +856,42 @@ class Contour {
   SurfaceMesh run() {
     const int columns = bricks_[0] * bricks_[1];
     std::vector<std::vector<BrickMesh>> by_column(static_cast<std::size_t>(columns));
+    // Node signs a brick column at a time: each node column's inside nodes as bits over the
+    // whole height, from which each brick takes its 17.
+    const std::size_t words = static_cast<std::size_t>(count_[2] + 64) / 64 + 1;
+    constexpr std::size_t kNodeColumns = (kBrick + 1) * (kBrick + 1);
+    tbb::enumerable_thread_specific<std::vector<std::uint64_t>> column_bits;
     tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
+      std::vector<std::uint64_t>& bits = column_bits.local();
+      bits.assign(kNodeColumns * words, 0);
       for (int c = range.begin(); c != range.end(); ++c) {
+        const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
+        std::fill(bits.begin(), bits.end(), 0);
+        for (std::size_t col = 0; col < kNodeColumns; ++col) {
+          std::uint64_t* row = bits.data() + col * words;
+          column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)),
+                       lo_[2], lo_[2] + count_[2] - 1, [&](int k0, int k1) { set_bits(row, k0 - lo_[2], k1 - lo_[2]); });
+        }
         for (int bk = 0; bk < bricks_[2]; ++bk) {
+          BrickSigns sg;
+          const int shift = bk * kBrick;
+          const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
+          bool any_in = false, any_out = false;
+          for (std::size_t col = 0; col < kNodeColumns; ++col) {
+            const std::uint64_t* row = bits.data() + col * words;
+            const std::size_t w = static_cast<std::size_t>(shift) >> 6;
+            const int offset = shift & 63;
+            std::uint64_t v = row[w] >> offset;
+            if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
+            const std::uint32_t mask = static_cast<std::uint32_t>(v) & full;
+            sg.column[col] = mask;
+            any_in = any_in || mask != 0;
+            any_out = any_out || mask != full;
+          }
+          if (!any_in || !any_out) continue;
           BrickMesh b;
-          b.origin = {lo_[0] + (c % bricks_[0]) * kBrick, lo_[1] + (c / bricks_[0]) * kBrick, lo_[2] + bk * kBrick};
-          if (vertices(b)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
+          b.origin = {x0, y0, lo_[2] + shift};
+          if (vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
         }
       }
     });
@@ -880,38 +924,37 @@ class Contour {
  private:
   using Triangle = Eigen::Vector3i;
 
-  bool signs(const std::array<int, 3>& origin, BrickSigns& out) const {
+  // The runs [k0, k1] of inside nodes (within [k_lo, k_hi]) on the z ray through (i, j):
+  // nodes k with lo <= position(k) <= hi for one of its intervals, as ray_contains has it.
+  template <class Visit>
+  void column_nodes(int i, int j, int k_lo, int k_hi, Visit&& visit) const {
     const Family& z = m_.families[2];
-    bool any_in = false, any_out = false;
-    const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
+    if (!z.contains(i, j)) return;
+    const SegmentList& ray = z.at(i, j);
+    for (std::uint32_t s = 0; s < ray.size(); ++s) {
+      const float lo = ray.data()[s].lo_mm, hi = ray.data()[s].hi_mm;
+      int k0 = static_cast<int>(std::ceil(m_.index_of(lo)));
+      while (m_.position(k0) < lo) ++k0;
+      while (m_.position(k0 - 1) >= lo) --k0;
+      int k1 = static_cast<int>(std::floor(m_.index_of(hi)));
+      while (m_.position(k1) > hi) --k1;
+      while (m_.position(k1 + 1) <= hi) ++k1;
+      k0 = std::max(k0, k_lo);
+      k1 = std::min(k1, k_hi);
+      if (k0 <= k1) visit(k0, k1);
+    }
+  }
+
+  void signs(const std::array<int, 3>& origin, BrickSigns& out) const {
     for (int y = 0; y <= kBrick; ++y) {
       for (int x = 0; x <= kBrick; ++x) {
         std::uint32_t bits = 0;
-        const int i = origin[0] + x, j = origin[1] + y;
-        if (z.contains(i, j)) {
-          const SegmentList& ray = z.at(i, j);
-          for (std::uint32_t s = 0; s < ray.size(); ++s) {
-            // Nodes k with lo <= position(k) <= hi, as ray_contains has it.
-            int k0 = static_cast<int>(std::ceil(m_.index_of(ray.data()[s].lo_mm)));
-            while (m_.position(k0) < ray.data()[s].lo_mm) ++k0;
-            while (m_.position(k0 - 1) >= ray.data()[s].lo_mm) --k0;
-            int k1 = static_cast<int>(std::floor(m_.index_of(ray.data()[s].hi_mm)));
-            while (m_.position(k1) > ray.data()[s].hi_mm) --k1;
-            while (m_.position(k1 + 1) <= ray.data()[s].hi_mm) ++k1;
-            k0 = std::max(k0, origin[2]);
-            k1 = std::min(k1, origin[2] + kBrick);
-            if (k0 > k1) continue;
-            const int n = k1 - k0 + 1;
-            bits |= (n >= 32 ? ~0u : ((1u << n) - 1u)) << (k0 - origin[2]);
-          }
-        }
-        bits &= full;
+        column_nodes(origin[0] + x, origin[1] + y, origin[2], origin[2] + kBrick, [&](int k0, int k1) {
+          bits |= ((1u << (k1 - k0 + 1)) - 1u) << (k0 - origin[2]);
+        });
         out.column[static_cast<std::size_t>(y * (kBrick + 1) + x)] = bits;
-        any_in = any_in || bits != 0;
-        any_out = any_out || bits != full;
       }
     }
-    return any_in && any_out;
   }
 
   // Where the ray of family `axis` at (iu, iw) crosses between nodes n and n + 1: the
@@ -932,9 +975,7 @@ class Contour {
   }
 
   // The brick's active cells and their (merged) vertices; false when it has none.
-  bool vertices(BrickMesh& b) const {
-    BrickSigns sg;
-    if (!signs(b.origin, sg)) return false;
+  bool vertices(BrickMesh& b, const BrickSigns& sg) const {
     const int limit[3] = {std::min(kBrick, lo_[0] + count_[0] - 1 - b.origin[0]),
                           std::min(kBrick, lo_[1] + count_[1] - 1 - b.origin[1]),
                           std::min(kBrick, lo_[2] + count_[2] - 1 - b.origin[2])};
@@ -1085,6 +1126,11 @@ class Contour {
   void quads(const BrickMesh& b, std::vector<Triangle>& out) const {
     BrickSigns sg;
     signs(b.origin, sg);
+    // The brick's own cells by position (most quads stay inside their brick).
+    thread_local std::array<int, kBrickCells> local;
+    local.fill(-1);
+    for (std::size_t i = 0; i < b.cells.size(); ++i)
+      local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
     for (std::uint16_t code : b.cells) {
       int x = 0, y = 0, z = 0;
       for (int bit = 0; bit < kBrickLevels; ++bit) {
@@ -1093,7 +1139,6 @@ class Contour {
         z |= ((code >> (3 * bit + 2)) & 1) << bit;
       }
       const bool in = sg.inside(x, y, z);
-      const std::array<int, 3> g = {b.origin[0] + x, b.origin[1] + y, b.origin[2] + z};
       for (int a = 0; a < 3; ++a) {
         const bool other = a == 0 ? sg.inside(x + 1, y, z) : a == 1 ? sg.inside(x, y + 1, z) : sg.inside(x, y, z + 1);
         if (other == in) continue;
@@ -1103,10 +1148,15 @@ class Contour {
         const int offsets[4][2] = {{0, 0}, {-1, 0}, {-1, -1}, {0, -1}};
         bool ok = true;
         for (int q = 0; q < 4; ++q) {
-          std::array<int, 3> c = g;
+          std::array<int, 3> c = {x, y, z};
           c[static_cast<std::size_t>(e1)] += offsets[q][0];
           c[static_cast<std::size_t>(e2)] += offsets[q][1];
-          v[static_cast<std::size_t>(q)] = vertex_of(c);
+          if (c[0] >= 0 && c[1] >= 0 && c[2] >= 0) {
+            v[static_cast<std::size_t>(q)] = local[static_cast<std::size_t>(morton(c[0], c[1], c[2]))];
+          } else {
+            for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(k)] += b.origin[static_cast<std::size_t>(k)];
+            v[static_cast<std::size_t>(q)] = vertex_of(c);
+          }
           ok = ok && v[static_cast<std::size_t>(q)] >= 0;
         }
         if (!ok) continue;
