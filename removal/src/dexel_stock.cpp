@@ -1,10 +1,6 @@
 #include "vcut/removal/dexel_stock.h"
 
 #include <Eigen/Eigenvalues>
-#include <openvdb/openvdb.h>
-#include <openvdb/tools/SignedFloodFill.h>
-#include <openvdb/tools/VolumeToMesh.h>
-#include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -12,11 +8,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <stdexcept>
 
 #include "vcut/removal/compare.h"
@@ -28,7 +22,6 @@ namespace vcut::removal {
 namespace {
 
 using Eigen::Vector3d;
-using openvdb::Coord;
 constexpr int kNoMove = -1;
 // A tile of one family: kTileU rays along u by kTileW rows (long rows: a move's row-wide
 // work, its range and section, is done once per tile it covers).
@@ -36,9 +29,6 @@ constexpr int kTileU = 64, kTileW = 4;
 constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
 // Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
 constexpr float kMinSegment_mm = 1e-6f;
-// volumeToMesh adaptivity: merges cells on flat regions; vertices go back onto the exact
-// surface afterwards, so only the triangles between them approximate it.
-constexpr double kMeshAdaptivity = 0.05;
 
 // The intervals of one ray: one inline, more on the heap (24 bytes per ray).
 class SegmentList {
@@ -318,10 +308,6 @@ struct TileResult {
 
 }  // namespace
 
-// The surface lattice's level set: leaves of 4^3 nodes (not OpenVDB's usual 8^3), since
-// the band around the dexel crossings is three nodes thick: half the memory of 8^3 leaves.
-using SurfaceTree = openvdb::tree::Tree4<float, 5, 4, 2>::Type;
-using SurfaceGrid = openvdb::Grid<SurfaceTree>;
 
 struct DexelStock::Impl {
   double v = 0.1;  // ray spacing, mm
@@ -500,10 +486,10 @@ std::size_t estimate_dexel_memory_bytes(const StockShape& shape, double spacing_
   const Eigen::AlignedBox3d box = bounds_of(shape);
   const Vector3d n = (box.sizes() / spacing_mm).array() + 4.0;
   const double rays = n.x() * n.y() + n.y() * n.z() + n.x() * n.z();
-  // Rays, plus the meshing at the end, per surface cell: the level set's 4^3 leaves
-  // (measured about 45 bytes) and volumeToMesh's own grids (about 53 bytes) on W1.
+  // Rays, plus the meshing and the outputs at the end, per surface cell: about 40 bytes on
+  // W1 (peak 735 MB, rays 197 MB, 13.5 million surface cells); 48 to be safe.
   const double surface_cells = surface_area_mm2(shape) / (spacing_mm * spacing_mm);
-  return static_cast<std::size_t>(rays * sizeof(SegmentList) + surface_cells * 110.0);
+  return static_cast<std::size_t>(rays * sizeof(SegmentList) + surface_cells * 48.0);
 }
 
 namespace {
@@ -1192,120 +1178,12 @@ class Contour {
 
 SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
 
-SurfaceMesh level_set_mesh(const DexelStock::Impl& m) {
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
-  const double v = m.v;
-  // A level set on the rays' lattice: every node next to a ray's crossing of the surface,
-  // valued by the distance to the plane through the nearest crossings on the three axes
-  // (exact for a plane), signed by the z ray through it.
-  const float background = static_cast<float>(3.0 * v);
-  auto grid = SurfaceGrid::create(background);
-  auto transform = openvdb::math::Transform::createLinearTransform(v);
-  transform->postTranslate(openvdb::Vec3d(0.5 * v));
-  grid->setTransform(transform);
-  {
-    // Rows of rays in parallel, each part into a grid of its own; the union of their
-    // topologies does not depend on how the rows were split.
-    tbb::enumerable_thread_specific<SurfaceGrid::Ptr> parts([&] { return SurfaceGrid::create(background); });
-    for (const Family& f : m.families) {
-      const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
-      tbb::parallel_for(tbb::blocked_range<int>(f.lo_w, f.lo_w + f.n_w, 8), [&](const tbb::blocked_range<int>& rows) {
-        auto acc = parts.local()->getAccessor();
-        for (int iw = rows.begin(); iw != rows.end(); ++iw) {
-          for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
-            const SegmentList& ray = f.at(iu, iw);
-            for (std::uint32_t s = 0; s < ray.size(); ++s) {
-              for (float x : {ray.data()[s].lo_mm, ray.data()[s].hi_mm}) {
-                const int k = static_cast<int>(std::floor(m.index_of(x)));
-                Coord c;
-                c[a1] = iu;
-                c[a2] = iw;
-                // A node on either side and one beyond: volumeToMesh's adaptivity reads
-                // gradients across the band, which a thinner band leaves to the background.
-                for (int step = -1; step <= 1; ++step) {
-                  c[f.axis] = k + step;
-                  acc.setValueOn(c, background);
-                }
-              }
-            }
-          }
-        }
-      });
-    }
-    for (auto& part : parts) grid->tree().topologyUnion(part->tree());
-  }
-  // Distance along `axis` from node c to the nearest crossing of its ray within a few
-  // spacings (a plane's intercept on an axis it nearly parallels lies far out; leaving it
-  // out would overestimate the node's distance and spoil the mesh's adaptivity).
-  constexpr double kReach = 4.0;
-  auto axis_distance = [&](const Coord& c, int axis) {
-    const Family& f = m.families[static_cast<std::size_t>(axis)];
-    const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
-    if (!f.contains(c[a1], c[a2])) return std::numeric_limits<double>::infinity();
-    const SegmentList& ray = f.at(c[a1], c[a2]);
-    const double s = m.position(c[axis]);
-    double best = std::numeric_limits<double>::infinity();
-    for (std::uint32_t i = 0; i < ray.size(); ++i) {
-      best = std::min({best, std::abs(ray.data()[i].lo_mm - s), std::abs(ray.data()[i].hi_mm - s)});
-      if (ray.data()[i].lo_mm > s + kReach * v) break;
-    }
-    return best <= kReach * v ? best : std::numeric_limits<double>::infinity();
-  };
-  auto value_at = [&](const Coord& c) {
-    double inverse = 0.0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double d = std::max(axis_distance(c, axis), 1e-3 * v);
-      if (std::isfinite(d)) inverse += 1.0 / (d * d);
-    }
-    const double magnitude = inverse > 0.0 ? 1.0 / std::sqrt(inverse) : v;
-    return static_cast<float>(m.inside(c.x(), c.y(), c.z()) ? -magnitude : magnitude);
-  };
-  {
-    openvdb::tree::LeafManager<SurfaceTree> leaves(grid->tree());
-    leaves.foreach([&](SurfaceTree::LeafNodeType& leaf, std::size_t) {
-      for (auto it = leaf.beginValueOn(); it; ++it) it.setValue(value_at(it.getCoord()));
-    });
-  }
-  // Where two neighbours differ in sign, both must carry a value (a crossing the rays of
-  // the third family saw at a lattice node may have no partner in the others).
-  {
-    tbb::enumerable_thread_specific<std::vector<Coord>> missing;
-    openvdb::tree::LeafManager<SurfaceTree> leaves(grid->tree());
-    leaves.foreach([&](const SurfaceTree::LeafNodeType& leaf, std::size_t) {
-      auto& out = missing.local();
-      openvdb::tree::ValueAccessor<const SurfaceTree> acc(grid->tree());
-      for (auto it = leaf.cbeginValueOn(); it; ++it) {
-        const Coord c = it.getCoord();
-        const bool in = *it < 0.0f;
-        for (int n = 0; n < 6; ++n) {
-          Coord d = c;
-          d[n / 2] += (n % 2) ? 1 : -1;
-          if (!acc.isValueOn(d) && m.inside(d.x(), d.y(), d.z()) != in) out.push_back(d);
-        }
-      }
-    });
-    auto acc = grid->getAccessor();
-    for (const auto& list : missing)
-      for (const Coord& c : list) acc.setValueOn(c, value_at(c));
-  }
-  openvdb::tools::signedFloodFill(grid->tree());
-  grid->setGridClass(openvdb::GRID_LEVEL_SET);
-
-  std::vector<openvdb::Vec3s> points;
-  std::vector<openvdb::Vec3I> triangles;
-  std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, points, triangles, quads, 0.0, kMeshAdaptivity);
-  grid.reset();
-  return detail::mesh_from_polygons(points, triangles, quads);
-}
-
 }  // namespace
 
 SurfaceMesh DexelStock::surface() const {
   const Impl& m = *impl_;
   const double v = m.v;
-  SurfaceMesh mesh = std::getenv("VCUT_LEVEL_SET_MESH") != nullptr ? level_set_mesh(m) : contour_mesh(m);
+  SurfaceMesh mesh = contour_mesh(m);
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
   const std::size_t count = mesh.mesh.vertices_mm.size();
   std::vector<std::vector<int>> nearby(count);
