@@ -673,8 +673,8 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         const int tu = local % f.tiles_u, tw = local / f.tiles_u;
         const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
         TileResult& r = results[static_cast<std::size_t>(t)];
-        r.removed_mm = 0.0;
         r.probes.clear();
+        double removed = 0.0;  // summed here, stored once: neighbouring tiles' results share cache lines
         for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
           const int i = entries[static_cast<std::size_t>(e)];
           const detail::RaySweep& sweep = sweeps[static_cast<std::size_t>(i)];
@@ -732,12 +732,13 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                   probe.where_mm = m.point(a, iu, iw, middle);
                 }
               } else {
-                r.removed_mm += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
+                removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
               }
             }
           }
           if (probe.overlap_mm > 0.0) r.probes.push_back(probe);
         }
+        r.removed_mm = removed;
       }
     });
     // Gather in tile order: the same sums and the same collisions for any thread count.
