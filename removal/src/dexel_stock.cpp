@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 
 #include "vcut/removal/compare.h"
@@ -273,10 +274,11 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
   };
   std::vector<std::size_t> next_cut(count + 1, count);
   for (std::size_t i = count; i-- > 0;) next_cut[i] = list.moves[i].rapid ? next_cut[i + 1] : i;
-  std::size_t before = count;  // the last cutting move so far
-  for (std::size_t i = 0; i < count; before = list.moves[i].rapid ? before : i, ++i) {
+  std::vector<std::size_t> last_cut(count + 1, count);  // last_cut[i]: the last cutting move before i
+  for (std::size_t i = 0; i < count; ++i) last_cut[i + 1] = list.moves[i].rapid ? last_cut[i] : i;
+  tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
     const Move& m = list.moves[i];
-    if (!ball(m)) continue;
+    if (!ball(m)) return;
     const CutterCore core = core_of(list.cutters.at(static_cast<std::size_t>(m.cutter)));
     const Vector3d a = m.axis.normalized();
     const Vector3d c0 = m.start_mm + core.z_low_mm * a, c1 = m.end_mm + core.z_low_mm * a;
@@ -285,12 +287,12 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
       return ball(first) && ball(second) && first.cutter == second.cutter && first.axis == second.axis &&
              first.end_mm == second.start_mm;
     };
-    const std::size_t after = next_cut[i + 1];
+    const std::size_t before = last_cut[i], after = next_cut[i + 1];
     out[i].from_start = {c0, m.end_mm - m.start_mm, a, height, before < count && joins(list.moves[before], m)};
     out[i].to_end = {c1, m.start_mm - m.end_mm, a, height, after < count && joins(m, list.moves[after])};
     out[i].next = after;
     out[i].bounds = TranslationSweep(list.cutters[static_cast<std::size_t>(m.cutter)], m).bounds();
-  }
+  });
   return out;
 }
 
@@ -632,10 +634,11 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
 
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
     const std::size_t last = std::min(total, first + kBatchMoves);
-    std::vector<detail::RaySweep> sweeps;
-    sweeps.reserve(last - first);
-    for (std::size_t i = first; i < last; ++i)
-      sweeps.emplace_back(list.cutters.at(static_cast<std::size_t>(list.moves[i].cutter)), list.moves[i]);
+    std::vector<std::optional<detail::RaySweep>> sweeps(last - first);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 256), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i)
+        sweeps[i - first].emplace(list.cutters.at(static_cast<std::size_t>(list.moves[i].cutter)), list.moves[i]);
+    });
     // Bin the batch's moves to the tiles of rays their sweep's box covers (counting sort:
     // within a tile the moves stay in program order).
     std::fill(start.begin(), start.end(), 0);
@@ -645,7 +648,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         if (only >= 0 && a != only) continue;
         const Family& f = m.families[static_cast<std::size_t>(a)];
         int u0, u1, w0, w1;
-        if (!m.ray_range(f, sweeps[i - first].bounds(), u0, u1, w0, w1)) continue;
+        if (!m.ray_range(f, sweeps[i - first]->bounds(), u0, u1, w0, w1)) continue;
         for (int tw = (w0 - f.lo_w) / kTileW; tw <= (w1 - f.lo_w) / kTileW; ++tw)
           for (int tu = (u0 - f.lo_u) / kTileU; tu <= (u1 - f.lo_u) / kTileU; ++tu)
             visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu);
@@ -677,7 +680,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         double removed = 0.0;  // summed here, stored once: neighbouring tiles' results share cache lines
         for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
           const int i = entries[static_cast<std::size_t>(e)];
-          const detail::RaySweep& sweep = sweeps[static_cast<std::size_t>(i)];
+          const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
           const Move& move = list.moves[first + static_cast<std::size_t>(i)];
           const int id = id_base + static_cast<int>(first) + i;
           int u0, u1, w0, w1;
