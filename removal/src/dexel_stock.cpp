@@ -643,6 +643,9 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
     // within a tile the moves stay in program order).
     std::fill(start.begin(), start.end(), 0);
     auto for_each_tile = [&](std::size_t i, auto&& visit) {
+      // Material never leaves the initial stock's box: a sweep clear of it (a holder probe
+      // high above the part) meets no ray's material.
+      if (!sweeps[i - first]->bounds().intersects(m.shape_bounds)) return;
       const int only = probe_family(list.moves[i]);
       for (int a = 0; a < 3; ++a) {
         if (only >= 0 && a != only) continue;
