@@ -27,6 +27,7 @@ constexpr int kNoMove = -1;
 // A tile of one family: kTileU rays along u by kTileW rows (long rows: a move's row-wide
 // work, its range and section, is done once per tile it covers).
 constexpr int kTileU = 64, kTileW = 4;
+static_assert(kTileU == 64, "a tile row's occupied rays are one 64-bit word");
 constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
 // Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
 constexpr float kMinSegment_mm = 1e-6f;
@@ -82,6 +83,9 @@ struct Family {
   int n_u = 0, n_w = 0;
   int tiles_u = 0, tiles_w = 0;
   std::vector<SegmentList> rays;
+  // Which rays hold material: one 64-bit word per row and tile column (kTileU rays), so a
+  // cut walks only the rays with material (a tile's words are its own: no sharing).
+  std::vector<std::uint64_t> occupied;
   double length_mm = 0.0;  // material along all rays
 
   bool contains(int iu, int iw) const {
@@ -96,6 +100,10 @@ struct Family {
                 static_cast<std::size_t>(iu - lo_u)];
   }
   int tiles() const { return tiles_u * tiles_w; }
+  std::uint64_t& occupied_word(int iu, int iw) {
+    return occupied[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(tiles_u) +
+                    static_cast<std::size_t>((iu - lo_u) / kTileU)];
+  }
 };
 
 // Removes [a, b] (made by `move`) from the ray; returns the length removed (mm).
@@ -365,6 +373,15 @@ struct DexelStock::Impl {
   }
 
   void fill_mesh(const TriangleMesh& mesh);
+  void find_occupied() {
+    for (Family& f : families) {
+      f.occupied.assign(static_cast<std::size_t>(f.n_w) * static_cast<std::size_t>(f.tiles_u), 0);
+      for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw)
+        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu)
+          if (f.at(iu, iw).size() > 0) f.occupied_word(iu, iw) |= std::uint64_t{1} << ((iu - f.lo_u) % kTileU);
+    }
+  }
+
   void sum_lengths() {
     for (Family& f : families) {
       double total = 0.0;
@@ -538,6 +555,7 @@ DexelStock::DexelStock(const StockShape& shape, double spacing_mm) : impl_(std::
   }
   m.initial_distance = detail::initial_distance(shape, m.initial_mesh);
   m.sum_lengths();
+  m.find_occupied();
 }
 
 DexelStock::~DexelStock() = default;
@@ -713,7 +731,12 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
               }
               if (!above) continue;
             }
-            for (int iu = first_u; iu <= last_u; ++iu) {
+            if (first_u > last_u) continue;
+            std::uint64_t& occupied = f.occupied_word(first_u, iw);
+            const int bit0 = (first_u - f.lo_u) % kTileU, bit1 = (last_u - f.lo_u) % kTileU;
+            std::uint64_t walk = occupied & (~std::uint64_t{0} << bit0) & (~std::uint64_t{0} >> (63 - bit1));
+            for (; walk != 0; walk &= walk - 1) {
+              const int iu = first_u - bit0 + __builtin_ctzll(walk);
               SegmentList& ray = f.at(iu, iw);
               const std::uint32_t n = ray.size();
               // Rays already clear of the sweep's box cost a look only.
@@ -739,6 +762,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                 }
               } else {
                 removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
+                if (ray.size() == 0) occupied &= ~(std::uint64_t{1} << (iu - first_u + bit0));
               }
             }
           }
