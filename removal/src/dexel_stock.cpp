@@ -180,7 +180,7 @@ bool ray_contains(const SegmentList& ray, double s) {
   return false;
 }
 
-// Coherence between consecutive moves of a ball-end mill. Its sweep is the parallelogram
+// Coherence between consecutive moves. For a ball-end mill, any motion: its sweep is the parallelogram
 // P = {c + u a + t D : u in [0, H], t in [0, 1]} (c the ball centre at the start, a the tool
 // axis, H the core's length, D the motion) grown by the ball radius, so a point whose
 // nearest point of P lies on P's edge t = 0 is inside the cutter at the move's start. When
@@ -190,6 +190,10 @@ bool ray_contains(const SegmentList& ray, double s) {
 // (the edge's normal cone: q.D_perp <= 0 beside it, q.D <= 0 below its lower end,
 // (q - H a).D <= 0 above its upper one). Likewise with c at the end and -D for the edge
 // t = 1, which the next cutting move's start instance covers.
+// For any cutter (a solid of revolution) moving square to its axis (D.a = 0), h = q.D: the
+// cutter is symmetric under the reflection that turns D into -D, so the instants t at which
+// a point lies inside it are an interval symmetric about t* = q.D / |D|^2; when t* <= 0 and
+// the point is in the sweep at all, that interval holds t = 0.
 struct Handover {
   Vector3d c = Vector3d::Zero(), d = Vector3d::Zero(), a = Vector3d::UnitZ();
   double height_mm = 0.0;
@@ -276,9 +280,12 @@ struct MoveHandover {
 std::vector<MoveHandover> handovers(const MoveList& list) {
   const std::size_t count = list.moves.size();
   std::vector<MoveHandover> out(count);
-  auto ball = [&](const Move& m) {
+  auto eligible = [&](const Move& m) {
+    if (m.rapid) return false;
     const Cutter& c = list.cutters.at(static_cast<std::size_t>(m.cutter));
-    return !m.rapid && c.type != CutterType::VBit && core_of(c).core_radius_mm == 0.0;
+    if (c.type != CutterType::VBit && core_of(c).core_radius_mm == 0.0) return true;  // ball end
+    const Vector3d d = m.end_mm - m.start_mm;
+    return std::abs(d.dot(m.axis)) <= 1e-12 * d.norm() * m.axis.norm();  // square to the axis
   };
   std::vector<std::size_t> next_cut(count + 1, count);
   for (std::size_t i = count; i-- > 0;) next_cut[i] = list.moves[i].rapid ? next_cut[i + 1] : i;
@@ -286,13 +293,13 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
   for (std::size_t i = 0; i < count; ++i) last_cut[i + 1] = list.moves[i].rapid ? last_cut[i] : i;
   tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
     const Move& m = list.moves[i];
-    if (!ball(m)) return;
+    if (!eligible(m)) return;
     const CutterCore core = core_of(list.cutters.at(static_cast<std::size_t>(m.cutter)));
     const Vector3d a = m.axis.normalized();
     const Vector3d c0 = m.start_mm + core.z_low_mm * a, c1 = m.end_mm + core.z_low_mm * a;
     const double height = core.z_high_mm - core.z_low_mm;
     auto joins = [&](const Move& first, const Move& second) {
-      return ball(first) && ball(second) && first.cutter == second.cutter && first.axis == second.axis &&
+      return eligible(first) && eligible(second) && first.cutter == second.cutter && first.axis == second.axis &&
              first.end_mm == second.start_mm;
     };
     const std::size_t before = last_cut[i], after = next_cut[i + 1];
