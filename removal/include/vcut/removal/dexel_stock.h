@@ -49,7 +49,8 @@ class DexelStock final : public Stock {
 
   // The surface merges flat regions (octree blocks of up to 16 cells whose crossings lie
   // within v/20 of one plane) into larger triangles; off, every surface cell keeps its own
-  // vertex (for measurements that compare two meshes to within v/100, as studies do).
+  // vertex (for measurements that compare two meshes to within v/100, as studies and
+  // machine-error runs do).
   void set_flat_merging(bool on);
 
   double spacing_mm() const;
