@@ -831,6 +831,8 @@ constexpr int kBrickCells = kBrick * kBrick * kBrick;
 constexpr int kBrickLevels = 4;  // 16 = 2^4
 // A merged block's points lie within this fraction of the spacing of its plane.
 constexpr double kFlatTolerance = 0.05;
+// Crossings this close (mm) to one axis plane lie on it (float endpoints of one face agree).
+constexpr double kExactPlane_mm = 1e-6;
 
 // Sets bits first..last (inclusive) of a bit array.
 void set_bits(std::uint64_t* words, int first, int last) {
@@ -1051,15 +1053,20 @@ class Contour {
     std::vector<std::uint32_t> group(n);      // the run start of each cell's merged block
     std::vector<std::uint8_t> merged(n, 1);   // the cell's block so far is one vertex
     for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
-    const double tolerance = kFlatTolerance * m_.v;
-    for (int level = 1; level <= (m_.flat_merging ? kBrickLevels : 0); ++level) {
+    double tolerance = kFlatTolerance * m_.v;
+    // Without flat merging only exact axis planes merge (untouched stock faces, floors of a
+    // level flat end mill): such a block meets a differently inclined one only across
+    // cells that hold both, so none of its triangles crosses a crease.
+    const bool any_plane = m_.flat_merging;
+    if (!any_plane) tolerance = kExactPlane_mm;
+    for (int level = 1; level <= kBrickLevels; ++level) {
       const int shift = 3 * level;
       for (std::size_t first = 0; first < n;) {
         std::size_t last = first;
         while (last < n && (cells[last].code >> shift) == (cells[first].code >> shift)) ++last;
         bool candidate = true;
         for (std::size_t i = first; i < last && candidate; ++i) candidate = merged[i] != 0;
-        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance)) {
+        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance, any_plane)) {
           for (std::size_t i = first; i < last; ++i) group[i] = static_cast<std::uint32_t>(first);
         } else {
           for (std::size_t i = first; i < last; ++i) merged[i] = 0;
@@ -1091,7 +1098,7 @@ class Contour {
   // `tolerance` of one plane.
   template <class Cells>
   static bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
-                   double tolerance) {
+                   double tolerance, bool any_plane) {
     std::uint8_t facing = 0;
     for (std::size_t i = first; i < last; ++i) facing |= cells[i].facing;
     for (int a = 0; a < 3; ++a)
@@ -1108,6 +1115,7 @@ class Contour {
       }
     }
     if ((hi - lo).minCoeff() <= 2.0 * tolerance) return true;  // an axis plane
+    if (!any_plane) return false;
     mean /= static_cast<double>(count);
     Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
     for (std::size_t i = first; i < last; ++i) {
