@@ -429,8 +429,8 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   if (use_dexel) {
     auto dexel = std::make_unique<removal::DexelStock>(shape, v);
     // A study compares two runs' meshes to within v/100, a machine-error run the actual
-    // against the nominal part (a few um): every cell keeps its vertex, as merged blocks'
-    // triangles cut gentle creases differently in two meshes.
+    // against the nominal part (a few um): only exact axis planes merge, as merged blocks'
+    // triangles would cut gentle creases differently in two meshes.
     dexel->set_flat_merging(options.outputs && !cut_actual);
     primary = std::move(dexel);
   } else {

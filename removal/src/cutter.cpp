@@ -16,8 +16,6 @@ CutterCore core_of(const Cutter& cutter) {
 
 namespace {
 
-// Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
-// (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that.
 // Radius per height of a V-bit's cone (the last angle's, kept: meshing asks millions of times).
 double vbit_slope(double tip_angle_deg) {
   thread_local double angle_deg = -1.0, slope = 0.0;
@@ -28,6 +26,8 @@ double vbit_slope(double tip_angle_deg) {
   return slope;
 }
 
+// Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
+// (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that.
 double vbit_profile_distance(const Cutter& c, double rho, double z) {
   const double slope = vbit_slope(c.tip_angle_deg);
   const double height = c.flute_length_mm;
