@@ -50,6 +50,19 @@ removal::TriangleMesh read_mesh(const std::string& path) {
 }
 
 void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
+  if (mesh.triangles.empty()) {
+    // Nothing left (the stock cut away): a binary STL of no triangles, which assimp's
+    // exporter refuses to write.
+    write_atomically(path, [&](const std::string& temporary) {
+      std::ofstream out(temporary, std::ios::binary);
+      const std::string header = "vcut: empty mesh" + std::string(80 - 16, ' ');
+      const char count[4] = {0, 0, 0, 0};
+      out.write(header.data(), 80);
+      out.write(count, 4);
+      if (!out) throw InputError(path, 0, 0, "cannot write STL");
+    });
+    return;
+  }
   aiScene scene;
   scene.mRootNode = new aiNode();
   scene.mMaterials = new aiMaterial*[1]{new aiMaterial()};

@@ -460,6 +460,8 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   removal::SurfaceMesh machined = stock.surface();
   result.machined_vertices = machined.mesh.vertices_mm.size();
   result.machined_triangles = machined.mesh.triangles.size();
+  if (machined.mesh.triangles.empty())
+    result.warnings.push_back("the program cuts the whole stock away: the machined mesh is empty");
   stage_done("mesh");
   if (!options.outputs) {
     result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();

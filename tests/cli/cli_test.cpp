@@ -315,6 +315,25 @@ TEST_F(Simulate, OpenDesignIsAWarningAndStillCompared) {
   EXPECT_TRUE(report()["summary"]["compared"].get<bool>());
 }
 
+// A program that cuts the whole stock away (a 10 mm cutter through a 1 x 1 x 1 mm block):
+// an empty machined mesh is still a result, written as an STL of no triangles, with a
+// warning; no crash and no refusal, with either engine.
+TEST_F(Simulate, StockCutAwayWritesAnEmptyMesh) {
+  for (const char* engine : {"dexel", "vdb"}) {
+    SCOPED_TRACE(engine);
+    job = std::string("job: gone\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\n") +
+          "stock: {box: {min: [0, 19.5, -1.5], max: [1, 20.5, -0.5]}}\nengine: {kind: " + engine +
+          ", resolution: 0.1, threads: 2}\nreport: {out: out}\n";
+    const CommandResult r = simulate();
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("cuts the whole stock away"), std::string::npos) << r.output;
+    const auto j = report();
+    EXPECT_EQ(j["summary"]["machined_triangles"].get<int>(), 0);
+    EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), 1.0, 0.05);
+    EXPECT_EQ(fs::file_size(dir / "out" / "machined.stl"), 84u);  // header and a count of 0
+  }
+}
+
 TEST_F(Simulate, CorruptDesignMesh) {
   write(dir / "part.stl", "solid x\nfacet normal 0 0 0\nouter loop\nvertex 1 2\n");
   job += "design: {file: part.stl}\n";
