@@ -425,17 +425,17 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     throw InputError(msg.str());
   }
   // The primary engine makes the outputs; with engine: both the OpenVDB one checks it.
-  std::unique_ptr<removal::Stock> primary, second;
-  if (use_dexel) {
+  // A study compares two runs' meshes to within v/100, a machine-error run the actual
+  // against the nominal part (a few um): their dexel surfaces merge only exact axis planes,
+  // as merged blocks' triangles would cut gentle creases differently in two meshes.
+  const bool merge_flat = options.outputs && !cut_actual;
+  auto make_stock = [&]() -> std::unique_ptr<removal::Stock> {
+    if (!use_dexel) return std::make_unique<removal::VdbStock>(shape, v);
     auto dexel = std::make_unique<removal::DexelStock>(shape, v);
-    // A study compares two runs' meshes to within v/100, a machine-error run the actual
-    // against the nominal part (a few um): only exact axis planes merge, as merged blocks'
-    // triangles would cut gentle creases differently in two meshes.
-    dexel->set_flat_merging(options.outputs && !cut_actual);
-    primary = std::move(dexel);
-  } else {
-    primary = std::make_unique<removal::VdbStock>(shape, v);
-  }
+    dexel->set_flat_merging(merge_flat);
+    return dexel;
+  };
+  std::unique_ptr<removal::Stock> primary = make_stock(), second;
   if (use_dexel && use_vdb && options.outputs) second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
@@ -488,14 +488,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     // The machine cut with the actual poses; cut the nominal ones too (same engine) and
     // measure how far the real part departs from the programmed one.
     progress("nominal", 0, 1);
-    std::unique_ptr<removal::Stock> nominal;
-    if (use_dexel) {
-      auto dexel = std::make_unique<removal::DexelStock>(shape, v);
-      dexel->set_flat_merging(false);
-      nominal = std::move(dexel);
-    } else {
-      nominal = std::make_unique<removal::VdbStock>(shape, v);
-    }
+    std::unique_ptr<removal::Stock> nominal = make_stock();
     nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const removal::SurfaceMesh nominal_surface = nominal->surface();
     static_cast<SurfaceDifference&>(result.nominal) = surface_difference(machined, nominal_surface, v);

@@ -171,15 +171,6 @@ double overlap(const SegmentList& ray, double a, double b, double& middle) {
   return best;
 }
 
-bool ray_contains(const SegmentList& ray, double s) {
-  const DexelSegment* seg = ray.data();
-  for (std::uint32_t i = 0; i < ray.size(); ++i) {
-    if (s < seg[i].lo_mm) return false;
-    if (s <= seg[i].hi_mm) return true;
-  }
-  return false;
-}
-
 // Coherence between consecutive moves. For a ball-end mill, any motion: its sweep is the parallelogram
 // P = {c + u a + t D : u in [0, H], t in [0, 1]} (c the ball centre at the start, a the tool
 // axis, H the core's length, D the motion) grown by the ball radius, so a point whose
@@ -198,6 +189,7 @@ struct Handover {
   Vector3d c = Vector3d::Zero(), d = Vector3d::Zero(), a = Vector3d::UnitZ();
   double height_mm = 0.0;
   bool on = false;
+  double da = 0.0;  // D.a
 
   // True when every point of the ray of family `axis` at (u, w) with axis coordinate in
   // [s_lo, s_hi] has h <= 0. h is linear in s between the two heights where q.a is 0 or H.
@@ -205,7 +197,6 @@ struct Handover {
     const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
     const double k0 = (u - c[a1]) * d[a1] + (w - c[a2]) * d[a2] - c[axis] * d[axis], k1 = d[axis];
     const double m0 = (u - c[a1]) * a[a1] + (w - c[a2]) * a[a2] - c[axis] * a[axis], m1 = a[axis];
-    const double da = d.dot(a);
     auto h = [&](double s) { return k0 + k1 * s - da * std::clamp(m0 + m1 * s, 0.0, height_mm); };
     if (h(s_lo) > 0.0 || h(s_hi) > 0.0) return false;
     if (m1 != 0.0) {
@@ -303,8 +294,9 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
              first.end_mm == second.start_mm;
     };
     const std::size_t before = last_cut[i], after = next_cut[i + 1];
-    out[i].from_start = {c0, m.end_mm - m.start_mm, a, height, before < count && joins(list.moves[before], m)};
-    out[i].to_end = {c1, m.start_mm - m.end_mm, a, height, after < count && joins(m, list.moves[after])};
+    const Vector3d d = m.end_mm - m.start_mm;
+    out[i].from_start = {c0, d, a, height, before < count && joins(list.moves[before], m), d.dot(a)};
+    out[i].to_end = {c1, -d, a, height, after < count && joins(m, list.moves[after]), -d.dot(a)};
     out[i].next = after;
     out[i].bounds = TranslationSweep(list.cutters[static_cast<std::size_t>(m.cutter)], m).bounds();
   });
@@ -414,12 +406,6 @@ struct DexelStock::Impl {
     w0 = std::max(f.lo_w, static_cast<int>(std::ceil(index_of(box.min()[a2]))));
     w1 = std::min(f.lo_w + f.n_w - 1, static_cast<int>(std::floor(index_of(box.max()[a2]))));
     return u0 <= u1 && w0 <= w1;
-  }
-
-  bool inside(int i, int j, int k) const {
-    const Family& z = families[2];
-    if (!z.contains(i, j)) return false;
-    return ray_contains(z.at(i, j), position(k));
   }
 };
 
@@ -640,8 +626,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   // one after when its start instance does, unless that one hands the ray back (it is cut
   // after this move, so one of the two must cut it). Each test spans the ray's material
   // within that move's box, as the move's own test does.
-  auto handed_over = [&](std::size_t i, int axis, double u, double w, const SegmentList& ray) {
-    const MoveHandover& h = handover[i];
+  auto handed_over = [&](const MoveHandover& h, int axis, double u, double w, const SegmentList& ray) {
     if (!h.from_start.on && !h.to_end.on) return false;
     const double material_lo = ray.data()[0].lo_mm, material_hi = ray.data()[ray.size() - 1].hi_mm;
     auto span = [&](const MoveHandover& of, double& lo, double& hi) {
@@ -719,7 +704,8 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           w1 = std::min(w1, tile_w0 + kTileW - 1);
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
           Probe probe{i, a, 0.0, Vector3d::Zero()};
-          const RowNeighbours neighbours = row_neighbours(handover[first + static_cast<std::size_t>(i)], a);
+          const MoveHandover& hand = handover[first + static_cast<std::size_t>(i)];
+          const RowNeighbours neighbours = row_neighbours(hand, a);
           for (int iw = w0; iw <= w1; ++iw) {
             double row_lo, row_hi;
             sweep.row_range(a, m.position(iw), row_lo, row_hi);
@@ -757,7 +743,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                   meets = ray.data()[k].lo_mm < win_hi && ray.data()[k].hi_mm > win_lo;
                 if (!meets) continue;
               }
-              if (handed_over(first + static_cast<std::size_t>(i), a, m.position(iu), m.position(iw), ray)) continue;
+              if (handed_over(hand, a, m.position(iu), m.position(iw), ray)) continue;
               double lo, hi;
               if (!sweep.interval_below(a, m.position(iu), m.position(iw), ray.data()[n - 1].hi_mm, lo, hi)) continue;
               if (move.rapid) {
@@ -951,7 +937,8 @@ class Contour {
   using Triangle = Eigen::Vector3i;
 
   // The runs [k0, k1] of inside nodes (within [k_lo, k_hi]) on the z ray through (i, j):
-  // nodes k with lo <= position(k) <= hi for one of its intervals, as ray_contains has it.
+  // nodes k with lo <= position(k) <= hi for one of its intervals (a node on an endpoint
+  // is inside).
   template <class Visit>
   void column_nodes(int i, int j, int k_lo, int k_hi, Visit&& visit) const {
     const Family& z = m_.families[2];
@@ -971,14 +958,15 @@ class Contour {
     }
   }
 
+  // One brick's node signs from its rays (the quads' pass: the bricks' column bits of the
+  // first pass are not kept, as they would cost 1.2 KB a brick).
   void signs(const std::array<int, 3>& origin, BrickSigns& out) const {
     for (int y = 0; y <= kBrick; ++y) {
       for (int x = 0; x <= kBrick; ++x) {
-        std::uint32_t bits = 0;
-        column_nodes(origin[0] + x, origin[1] + y, origin[2], origin[2] + kBrick, [&](int k0, int k1) {
-          bits |= ((1u << (k1 - k0 + 1)) - 1u) << (k0 - origin[2]);
-        });
-        out.column[static_cast<std::size_t>(y * (kBrick + 1) + x)] = bits;
+        std::uint64_t bits = 0;
+        column_nodes(origin[0] + x, origin[1] + y, origin[2], origin[2] + kBrick,
+                     [&](int k0, int k1) { set_bits(&bits, k0 - origin[2], k1 - origin[2]); });
+        out.column[static_cast<std::size_t>(y * (kBrick + 1) + x)] = static_cast<std::uint32_t>(bits);
       }
     }
   }
