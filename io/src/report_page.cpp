@@ -130,20 +130,22 @@ std::string fixed(double x, int digits, const char* unit) {
 std::string base64(const void* data, std::size_t bytes) {
   static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   const auto* p = static_cast<const std::uint8_t*>(data);
-  std::string out;
-  out.reserve((bytes + 2) / 3 * 4);
+  std::string out((bytes + 2) / 3 * 4, '=');
+  char* o = out.data();
   std::size_t i = 0;
-  for (; i + 3 <= bytes; i += 3) {
+  for (; i + 3 <= bytes; i += 3, o += 4) {
     const std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
-    for (int k = 18; k >= 0; k -= 6) out += kAlphabet[(v >> k) & 63];
+    o[0] = kAlphabet[(v >> 18) & 63];
+    o[1] = kAlphabet[(v >> 12) & 63];
+    o[2] = kAlphabet[(v >> 6) & 63];
+    o[3] = kAlphabet[v & 63];
   }
-  if (i < bytes) {
+  if (i < bytes) {  // one or two bytes left: two or three characters, then '=' padding
     std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16;
     if (i + 1 < bytes) v |= static_cast<std::uint32_t>(p[i + 1]) << 8;
-    out += kAlphabet[(v >> 18) & 63];
-    out += kAlphabet[(v >> 12) & 63];
-    out += i + 1 < bytes ? kAlphabet[(v >> 6) & 63] : '=';
-    out += '=';
+    o[0] = kAlphabet[(v >> 18) & 63];
+    o[1] = kAlphabet[(v >> 12) & 63];
+    if (i + 1 < bytes) o[2] = kAlphabet[(v >> 6) & 63];
   }
   return out;
 }
@@ -334,16 +336,19 @@ void write_report_page(const std::string& path, const std::string& template_path
 
   // Inside a <script> element neither "</script" nor "<!--" may appear (an NC comment could
   // hold either). '<' occurs only inside JSON strings, where "\u003c" is the same character.
-  std::string data = j.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
-  std::string safe;
-  safe.reserve(data.size() + 64);
-  for (char c : data) {
-    if (c == '<')
-      safe += "\\u003c";
-    else
-      safe += c;
+  const std::string data = j.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
+  std::string filled;
+  filled.reserve(page.size() + data.size() + 64);
+  filled.append(page, 0, slot);
+  for (std::size_t from = 0; from < data.size();) {
+    const std::size_t lt = data.find('<', from);
+    filled.append(data, from, (lt == std::string::npos ? data.size() : lt) - from);
+    if (lt == std::string::npos) break;
+    filled += "\\u003c";
+    from = lt + 1;
   }
-  page.replace(slot, std::strlen(kReportDataMarker), safe);
+  filled.append(page, slot + std::strlen(kReportDataMarker), std::string::npos);
+  page = std::move(filled);
   write_text_atomically(path, page);
 }
 

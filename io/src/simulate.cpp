@@ -35,6 +35,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/task_group.h>
 
 namespace vcut::io {
 namespace fs = std::filesystem;
@@ -616,60 +617,70 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     stage_done("compare");
   }
 
-  // 8. Files.
+  // 8. Files. The mesh, the deviation map, the pictures and the page only read the results:
+  // they are written side by side (the kernel's copying of 100 MB into files is a good part
+  // of this stage) and listed in a fixed order.
   progress("write", 0, 1);
   for (const auto& f : hashed) result.input_hashes.emplace_back(display_name(f, job.file), sha256_file(f));
   const fs::path out(result.out_dir);
-  write_stl((out / "machined.stl").string(), machined.mesh);
-  result.outputs.push_back("machined.stl");
-  if (result.compared) {
-    PlyAttributes a;
-    a.normals = removal::vertex_normals(machined.mesh);
+  const double colour_scale = [&] {
     const double scale = std::max(3.0 * job.gouge_tolerance_mm, job.excess_tolerance_mm);
-    for (double d : deviation) a.colors.push_back(deviation_color(d, scale > 0.0 ? scale : v));
-    a.deviation_mm = deviation;
-    a.move = machined.vertex_move;
-    for (int m : machined.vertex_move) a.line.push_back(m < 0 ? 0 : block_of(m).source.line);
-    write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
-    result.outputs.push_back("deviation.ply");
+    return scale > 0.0 ? scale : v;
+  }();
+  std::vector<std::string> snapshot_files;
+  const std::string page = report_template_path();
+  // The page shows the run's time and memory up to its writing.
+  result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+  result.peak_memory_mb = peak_memory_mb();
+  tbb::task_group writers;
+  writers.run([&] { write_stl((out / "machined.stl").string(), machined.mesh); });
+  if (result.compared) {
+    writers.run([&] {
+      PlyAttributes a;
+      a.normals = removal::vertex_normals(machined.mesh);
+      for (double d : deviation) a.colors.push_back(deviation_color(d, colour_scale));
+      a.deviation_mm = deviation;
+      a.move = machined.vertex_move;
+      for (int m : machined.vertex_move) a.line.push_back(m < 0 ? 0 : block_of(m).source.line);
+      write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
+    });
   }
-  {
+  writers.run([&] {
     // Pictures for reports and CI artefacts: the deviation map (or the bare machined stock
     // when there is no design) from three fixed views.
-    progress("snapshots", 0, 1);
     SnapshotOptions options;
     std::vector<Rgb> colours;
     std::string stem = "machined";
     options.title = job.name.empty() ? std::string("machined stock") : job.name;
     if (result.compared) {
-      const double scale = std::max(3.0 * job.gouge_tolerance_mm, job.excess_tolerance_mm);
-      const double s = scale > 0.0 ? scale : v;
+      const double s = colour_scale;
       for (double d : deviation) colours.push_back(deviation_color(d, s));
       options.legend = ColourScale{"deviation (mm): red gouge, blue excess", -s, s,
                                    [s](double d) { return deviation_color(d, s); }, 5};
       stem = "deviation";
     }
-    for (const auto& f : write_snapshots(out.string(), stem, machined.mesh, colours, options))
-      result.outputs.push_back(f);
+    snapshot_files = write_snapshots(out.string(), stem, machined.mesh, colours, options);
+  });
+  writers.run([&] { write_gouges_csv((out / "gouges.csv").string(), result); });
+  if (!page.empty()) {
+    writers.run([&] {
+      ReportPageInput in;
+      in.machined = &machined;
+      in.moves = &moves;
+      in.deviation_mm = deviation;
+      in.design = design_mesh ? &*design_mesh : nullptr;
+      in.stock_box = stock_box;
+      in.max_triangles = job.page_triangles;
+      write_report_page((out / "report.html").string(), page, job, result, in);
+    });
   }
-  write_gouges_csv((out / "gouges.csv").string(), result);
+  writers.wait();
+  result.outputs.push_back("machined.stl");
+  if (result.compared) result.outputs.push_back("deviation.ply");
+  for (const auto& f : snapshot_files) result.outputs.push_back(f);
   result.outputs.push_back("gouges.csv");
-  if (const std::string page = report_template_path(); !page.empty()) {
-    progress("page", 0, 1);
-    ReportPageInput in;
-    in.machined = &machined;
-    in.moves = &moves;
-    in.deviation_mm = deviation;
-    in.design = design_mesh ? &*design_mesh : nullptr;
-    in.stock_box = stock_box;
-    in.max_triangles = job.page_triangles;
-    result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-    result.peak_memory_mb = peak_memory_mb();
-    write_report_page((out / "report.html").string(), page, job, result, in);
-    result.outputs.push_back("report.html");
-  } else {
-    result.warnings.push_back("report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from web/)");
-  }
+  if (!page.empty()) result.outputs.push_back("report.html");
+  else result.warnings.push_back("report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from web/)");
   stage_done("write");
   result.outputs.push_back("report.json");
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();

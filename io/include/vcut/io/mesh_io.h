@@ -1,5 +1,5 @@
-// Mesh files: any format assimp reads (STL, OBJ, PLY, glTF, ...) in, binary STL out
-// through assimp, and the deviation PLY with vcut's per-vertex attributes.
+// Mesh files: any format assimp reads (STL, OBJ, PLY, glTF, ...) in, binary STL out, and
+// the deviation PLY with vcut's per-vertex attributes.
 #pragma once
 
 #include <Eigen/Core>
@@ -16,7 +16,8 @@ namespace vcut::io {
 // A missing, unreadable or empty file is a vcut::InputError.
 removal::TriangleMesh read_mesh(const std::string& path);
 
-// Binary STL through assimp, written atomically.
+// Binary STL (float32 corners in mm, unit face normals), written atomically; a mesh of no
+// triangles gives the 80-byte header and a count of 0.
 void write_stl(const std::string& path, const removal::TriangleMesh& mesh);
 
 struct PlyAttributes {

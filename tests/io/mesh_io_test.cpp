@@ -1,0 +1,77 @@
+// The binary STL writer against the format's layout (80-byte header, uint32 count, then
+// 50-byte records: normal, three corners, attribute word), read back byte by byte here and
+// through assimp; base64 against RFC 4648's test vectors (section 10).
+#include <gtest/gtest.h>
+#include <vcut/io/mesh_io.h>
+#include <vcut/io/report_page.h>
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+#include <vector>
+
+namespace vcut::io {
+namespace {
+namespace fs = std::filesystem;
+
+std::string read_bytes(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+float float_at(const std::string& bytes, std::size_t offset) {
+  float value;
+  std::memcpy(&value, bytes.data() + offset, 4);
+  return value;
+}
+
+TEST(MeshIo, BinaryStlHoldsEachTriangleWithItsNormal) {
+  // A unit right tetrahedron, outward winding: its faces' normals are -z, -y, -x and
+  // (1, 1, 1)/sqrt(3).
+  removal::TriangleMesh mesh;
+  mesh.vertices_mm = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  mesh.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const fs::path dir = fs::temp_directory_path() / "vcut_mesh_io_test";
+  fs::create_directories(dir);
+  const fs::path path = dir / "tetra.stl";
+  write_stl(path.string(), mesh);
+  const std::string bytes = read_bytes(path);
+  ASSERT_EQ(bytes.size(), 84u + 4u * 50u);
+  EXPECT_NE(bytes.compare(0, 5, "solid"), 0);  // would read as ASCII STL
+  std::uint32_t count;
+  std::memcpy(&count, bytes.data() + 80, 4);
+  EXPECT_EQ(count, 4u);
+  const float s = 1.0f / std::sqrt(3.0f);
+  const float normals[4][3] = {{0, 0, -1}, {0, -1, 0}, {-1, 0, 0}, {s, s, s}};
+  for (std::size_t f = 0; f < 4; ++f) {
+    const std::size_t record = 84 + 50 * f;
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(float_at(bytes, record + 4 * k), normals[f][k], 1e-6) << "face " << f;
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k)
+        EXPECT_EQ(float_at(bytes, record + 12 + 12 * c + 4 * k),
+                  static_cast<float>(mesh.vertices_mm[static_cast<std::size_t>(mesh.triangles[f][c])][k]));
+    EXPECT_EQ(bytes[record + 48], 0);
+    EXPECT_EQ(bytes[record + 49], 0);
+  }
+  // And assimp reads it back as the same solid: four corners, four faces.
+  const removal::TriangleMesh back = read_mesh(path.string());
+  EXPECT_EQ(back.vertices_mm.size(), 4u);
+  EXPECT_EQ(back.triangles.size(), 4u);
+  fs::remove_all(dir);
+}
+
+TEST(MeshIo, Base64MatchesRfc4648) {
+  const std::pair<std::string, std::string> vectors[] = {{"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},
+                                                         {"foo", "Zm9v"}, {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="},
+                                                         {"foobar", "Zm9vYmFy"}};
+  for (const auto& [in, out] : vectors) EXPECT_EQ(base64(in.data(), in.size()), out) << in;
+  const unsigned char high[] = {0xfb, 0xff, 0xbf};  // the alphabet's last two characters
+  EXPECT_EQ(base64(high, 3), "+/+/");
+}
+
+}  // namespace
+}  // namespace vcut::io
