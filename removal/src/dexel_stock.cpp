@@ -69,6 +69,8 @@ class SegmentList {
     if (n > 0) std::memmove(data(), s, n * sizeof(DexelSegment));
     size_ = n;
   }
+  // Keeps the first n intervals (n <= size()).
+  void truncate(std::uint32_t n) { size_ = n; }
 
  private:
   union {
@@ -166,27 +168,38 @@ double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelS
     }
     return before - after;
   }
+  // Several intervals: those from i to j meet [a, b]; they give way to at most two pieces,
+  // the part of i below a and the part of j above b (a sliver thinner than kMinSegment_mm
+  // is dropped), and the intervals after j move up or down to follow them.
+  std::uint32_t i = 0;
+  while (s[i].hi_mm <= a) ++i;
+  if (s[i].lo_mm >= b) return 0.0;
+  std::uint32_t j = i;
+  while (j + 1 < n && s[j + 1].lo_mm < b) ++j;
   double removed = 0.0;
-  scratch.clear();
-  bool changed = false;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    const DexelSegment seg = s[i];
-    if (seg.hi_mm <= a || seg.lo_mm >= b) {
-      scratch.push_back(seg);
-      continue;
-    }
-    changed = true;
-    removed += static_cast<double>(std::min(seg.hi_mm, b)) - std::max(seg.lo_mm, a);
-    if (seg.lo_mm < a) {
-      if (a - seg.lo_mm > kMinSegment_mm) scratch.push_back({seg.lo_mm, a, seg.lo_move, move});
-      else removed += static_cast<double>(a) - seg.lo_mm;
-    }
-    if (seg.hi_mm > b) {
-      if (seg.hi_mm - b > kMinSegment_mm) scratch.push_back({b, seg.hi_mm, move, seg.hi_move});
-      else removed += static_cast<double>(seg.hi_mm) - b;
-    }
+  for (std::uint32_t k = i; k <= j; ++k) removed += static_cast<double>(std::min(s[k].hi_mm, b)) - std::max(s[k].lo_mm, a);
+  DexelSegment pieces[2];
+  std::uint32_t kept = 0;
+  if (s[i].lo_mm < a) {
+    if (a - s[i].lo_mm > kMinSegment_mm) pieces[kept++] = {s[i].lo_mm, a, s[i].lo_move, move};
+    else removed += static_cast<double>(a) - s[i].lo_mm;
   }
-  if (changed) ray.assign(scratch.data(), static_cast<std::uint32_t>(scratch.size()));
+  if (s[j].hi_mm > b) {
+    if (s[j].hi_mm - b > kMinSegment_mm) pieces[kept++] = {b, s[j].hi_mm, move, s[j].hi_move};
+    else removed += static_cast<double>(s[j].hi_mm) - b;
+  }
+  const std::uint32_t gone = j - i + 1, size = n - gone + kept;
+  if (size > n) {
+    // One interval split in two: through the scratch list, the ray may need more room.
+    scratch.assign(s, s + i);
+    scratch.insert(scratch.end(), pieces, pieces + kept);
+    scratch.insert(scratch.end(), s + j + 1, s + n);
+    ray.assign(scratch.data(), size);
+    return removed;
+  }
+  std::memmove(s + i + kept, s + j + 1, (n - j - 1) * sizeof(DexelSegment));
+  std::copy(pieces, pieces + kept, s + i);
+  ray.truncate(size);
   return removed;
 }
 
