@@ -237,21 +237,28 @@ struct Handover {
   bool on = false;
   double da = 0.0;  // D.a
 
-  // True when every point of the ray of family `axis` at (u, w) with axis coordinate in
-  // [s_lo, s_hi] has h <= 0. h is linear in s between the two heights where q.a is 0 or H.
-  bool covers(int axis, double u, double w, double s_lo, double s_hi) const {
-    const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
-    const double k0 = (u - c[a1]) * d[a1] + (w - c[a2]) * d[a2] - c[axis] * d[axis], k1 = d[axis];
-    const double m0 = (u - c[a1]) * a[a1] + (w - c[a2]) * a[a2] - c[axis] * a[axis], m1 = a[axis];
-    auto h = [&](double s) { return k0 + k1 * s - da * std::clamp(m0 + m1 * s, 0.0, height_mm); };
-    if (h(s_lo) > 0.0 || h(s_hi) > 0.0) return false;
-    if (m1 != 0.0) {
-      for (double level : {0.0, height_mm}) {
-        const double s = (level - m0) / m1;
-        if (s > s_lo && s < s_hi && h(s) > 0.0) return false;
+  // The test along the rays of one family, its coordinates picked out once per move.
+  struct OnAxis {
+    double c1, c2, d1, d2, cd, dk, a1, a2, ca, ak, da, height_mm;
+    // True when every point of the ray at (u, w) with axis coordinate in [s_lo, s_hi] has
+    // h <= 0. h is linear in s between the two heights where q.a is 0 or H.
+    bool covers(double u, double w, double s_lo, double s_hi) const {
+      const double k0 = (u - c1) * d1 + (w - c2) * d2 - cd;
+      const double m0 = (u - c1) * a1 + (w - c2) * a2 - ca;
+      auto h = [&](double s) { return k0 + dk * s - da * std::clamp(m0 + ak * s, 0.0, height_mm); };
+      if (h(s_lo) > 0.0 || h(s_hi) > 0.0) return false;
+      if (ak != 0.0) {
+        for (double level : {0.0, height_mm}) {
+          const double s = (level - m0) / ak;
+          if (s > s_lo && s < s_hi && h(s) > 0.0) return false;
+        }
       }
+      return true;
     }
-    return true;
+  };
+  OnAxis on_axis(int axis) const {
+    const auto [i1, i2] = kOther[static_cast<std::size_t>(axis)];
+    return {c[i1], c[i2], d[i1], d[i2], c[axis] * d[axis], d[axis], a[i1], a[i2], c[axis] * a[axis], a[axis], da, height_mm};
   }
 };
 
@@ -673,20 +680,36 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   // one after when its start instance does, unless that one hands the ray back (it is cut
   // after this move, so one of the two must cut it). Each test spans the ray's material
   // within that move's box, as the move's own test does.
-  auto handed_over = [&](const MoveHandover& h, int axis, double u, double w, const SegmentList& ray) {
-    if (!h.from_start.on && !h.to_end.on) return false;
+  struct RayNeighbours {
+    bool start_on = false, end_on = false;
+    Handover::OnAxis start, end, back;  // back: the next move's from_start
+    double lo, hi, next_lo, next_hi;    // the move's and the next one's box along the rays
+  };
+  auto ray_neighbours = [&](const MoveHandover& h, int axis) {
+    RayNeighbours out;
+    out.start_on = h.from_start.on;
+    out.end_on = h.to_end.on;
+    out.lo = h.bounds.min()[axis];
+    out.hi = h.bounds.max()[axis];
+    if (out.start_on) out.start = h.from_start.on_axis(axis);
+    if (out.end_on) {
+      const MoveHandover& next = handover[h.next];
+      out.end = h.to_end.on_axis(axis);
+      out.back = next.from_start.on_axis(axis);
+      out.next_lo = next.bounds.min()[axis];
+      out.next_hi = next.bounds.max()[axis];
+    }
+    return out;
+  };
+  auto handed_over = [](const RayNeighbours& r, double u, double w, const SegmentList& ray) {
+    if (!r.start_on && !r.end_on) return false;
     const double material_lo = ray.data()[0].lo_mm, material_hi = ray.data()[ray.size() - 1].hi_mm;
-    auto span = [&](const MoveHandover& of, double& lo, double& hi) {
-      lo = std::max(material_lo, of.bounds.min()[axis]);
-      hi = std::min(material_hi, of.bounds.max()[axis]);
-    };
-    double lo, hi;
-    span(h, lo, hi);
-    if (h.from_start.on && h.from_start.covers(axis, u, w, lo, hi)) return true;
-    if (!h.to_end.on || !h.to_end.covers(axis, u, w, lo, hi)) return false;
-    const MoveHandover& next = handover[h.next];
-    span(next, lo, hi);
-    return !next.from_start.covers(axis, u, w, lo, hi);
+    double lo = std::max(material_lo, r.lo), hi = std::min(material_hi, r.hi);
+    if (r.start_on && r.start.covers(u, w, lo, hi)) return true;
+    if (!r.end_on || !r.end.covers(u, w, lo, hi)) return false;
+    lo = std::max(material_lo, r.next_lo);
+    hi = std::min(material_hi, r.next_hi);
+    return !r.back.covers(u, w, lo, hi);
   };
 
   for (std::size_t first = 0; first < total; first += kBatchMoves) {
@@ -753,6 +776,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           const MoveHandover& hand = handover[first + static_cast<std::size_t>(i)];
           const RowNeighbours neighbours = row_neighbours(hand, a);
+          const RayNeighbours ray_cover = ray_neighbours(hand, a);
           for (int iw = w0; iw <= w1; ++iw) {
             double row_lo, row_hi;
             sweep.row_range(a, m.position(iw), row_lo, row_hi);
@@ -794,7 +818,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                     meets = ray.data()[k].lo_mm < win_hi && ray.data()[k].hi_mm > win_lo;
                   if (!meets) continue;
                 }
-                if (handed_over(hand, a, m.position(iu), m.position(iw), ray)) continue;
+                if (handed_over(ray_cover, m.position(iu), m.position(iw), ray)) continue;
                 double lo, hi;
                 if (!sweep.interval_below(a, m.position(iu), m.position(iw), ray.data()[n - 1].hi_mm, lo, hi)) continue;
                 if (move.rapid) {
