@@ -773,6 +773,11 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           w0 = std::max(w0, tile_w0);
           w1 = std::min(w1, tile_w0 + kTileW - 1);
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
+          // The section window pays for itself on rays that run along the motion (a move
+          // along x sweeps its disc along the x rays: most of the box is clear of it); across
+          // the motion it is about the box again (W1's y rays: 2 % rejected).
+          const Vector3d motion = move.end_mm - move.start_mm;
+          const bool use_window = std::abs(motion[a]) * 2.0 >= motion.norm();
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           const MoveHandover& hand = handover[first + static_cast<std::size_t>(i)];
           const RowNeighbours neighbours = row_neighbours(hand, a);
@@ -809,7 +814,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                 const std::uint32_t n = ray.size();
                 // Rays already clear of the sweep's box cost a look only.
                 if (n == 0 || ray.data()[0].lo_mm >= box_hi || ray.data()[n - 1].hi_mm <= box_lo) continue;
-                if (section < std::numeric_limits<double>::infinity()) {
+                if (use_window && section < std::numeric_limits<double>::infinity()) {
                   // A tighter window along the ray: the section disc about the tip's path.
                   double win_lo, win_hi;
                   if (!sweep.ray_window(a, m.position(iu), section, win_lo, win_hi)) continue;
