@@ -984,7 +984,7 @@ class Contour {
           if (!any_in || !any_out) continue;
           BrickMesh b;
           b.origin = {x0, y0, lo_[2] + shift};
-          if (vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
+          if (plane(b, sg) || vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
         }
       }
     });
@@ -1067,6 +1067,88 @@ class Contour {
       }
     }
     return 0.5 * (a + b);
+  }
+
+  // A whole brick crossed by one axis plane that no cut touched (a stock face, a level
+  // floor): every node column steps once along one axis at the same place, and every
+  // crossing on that axis is the same number. vertices() would merge all its cells into one
+  // vertex; this gives the same cells and the same vertex (the same sums, in the same
+  // order) without looking at each cell's twelve edges. False: not such a brick.
+  bool plane(BrickMesh& b, const BrickSigns& sg) const {
+    for (int a = 0; a < 3; ++a)
+      if (lo_[static_cast<std::size_t>(a)] + count_[static_cast<std::size_t>(a)] - 1 - b.origin[static_cast<std::size_t>(a)] < kBrick) return false;
+    constexpr std::uint32_t kFull = (1u << (kBrick + 1)) - 1u, kSteps = (1u << kBrick) - 1u;
+    // Bit k of a pattern: node k inside; its steps: bit k when nodes k and k + 1 differ.
+    auto single_step = [](std::uint32_t pattern, int& step) {
+      const std::uint32_t steps = (pattern ^ (pattern >> 1)) & kSteps;
+      if (steps == 0 || (steps & (steps - 1)) != 0) return false;
+      step = __builtin_ctz(steps);
+      return true;
+    };
+    int axis = -1, step = 0;
+    const std::uint32_t first = sg.column[0];
+    if (std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == first; })) {
+      if (!single_step(first, step)) return false;
+      axis = 2;
+    } else {
+      if (!std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == 0 || c == kFull; })) return false;
+      std::uint32_t along_x = 0, along_y = 0;
+      for (int k = 0; k <= kBrick; ++k) {
+        along_x |= (sg.at(k, 0) != 0 ? 1u : 0u) << k;
+        along_y |= (sg.at(0, k) != 0 ? 1u : 0u) << k;
+      }
+      bool by_x = true, by_y = true;
+      for (int y = 0; y <= kBrick; ++y)
+        for (int x = 0; x <= kBrick; ++x) {
+          const bool in = sg.at(x, y) != 0;
+          by_x = by_x && in == (((along_x >> x) & 1u) != 0);
+          by_y = by_y && in == (((along_y >> y) & 1u) != 0);
+        }
+      if (by_x && single_step(along_x, step)) axis = 0;
+      else if (by_y && single_step(along_y, step)) axis = 1;
+      else return false;
+    }
+    // The crossings: the rays along `axis` through the brick's nodes of the other two axes.
+    const auto [o1, o2] = kOther[static_cast<std::size_t>(axis)];
+    const int g = b.origin[static_cast<std::size_t>(axis)] + step;
+    const int g1 = b.origin[static_cast<std::size_t>(o1)], g2 = b.origin[static_cast<std::size_t>(o2)];
+    // crossing() takes (u, w) as its family orders them: z rays (x, y), x rays (y, z), y rays (x, z).
+    const double value = crossing(axis, g1, g2, g);
+    for (int j = 0; j <= kBrick; ++j)
+      for (int i = 0; i <= kBrick; ++i)
+        if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
+    // The cells at `step` along the axis, in Morton order, each adding its four crossings
+    // in the order vertices() visits them.
+    std::array<std::uint16_t, kBrick * kBrick> codes;
+    std::size_t n = 0;
+    for (int j = 0; j < kBrick; ++j)
+      for (int i = 0; i < kBrick; ++i) {
+        std::array<int, 3> cell;
+        cell[static_cast<std::size_t>(axis)] = step;
+        cell[static_cast<std::size_t>(o1)] = i;
+        cell[static_cast<std::size_t>(o2)] = j;
+        codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
+      }
+    std::sort(codes.begin(), codes.end());
+    b.cells.assign(codes.begin(), codes.end());
+    b.vertex.assign(codes.size(), 0);
+    Vector3d sum = Vector3d::Zero();
+    for (std::uint16_t code : codes) {
+      std::array<int, 3> cell = {0, 0, 0};
+      for (int level = 0; level < kBrickLevels; ++level)
+        for (int a = 0; a < 3; ++a) cell[static_cast<std::size_t>(a)] |= ((code >> (3 * level + a)) & 1) << level;
+      const int i = cell[static_cast<std::size_t>(o1)], j = cell[static_cast<std::size_t>(o2)];
+      for (int d = 0; d < 4; ++d) {
+        const int e1 = d & 1, e2 = d >> 1;
+        Vector3d at;
+        at[axis] = value;
+        at[o1] = m_.position(g1 + i + e1);
+        at[o2] = m_.position(g2 + j + e2);
+        sum += at;
+      }
+    }
+    b.points.assign(1, sum / static_cast<double>(4 * static_cast<int>(codes.size())));
+    return true;
   }
 
   // The brick's active cells and their (merged) vertices; false when it has none.
