@@ -636,14 +636,19 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   struct RowNeighbours {
     RowHandover start, end, back;  // back: the next move's from_start
   };
+  // Material never leaves the initial stock's box: the bounds over a move's box along the
+  // rays need only hold within it (W1's z rays: g's top, a tool's length above the
+  // tip, lies far above the stock).
   auto row_neighbours = [&](const MoveHandover& h, int axis) {
     RowNeighbours out;
-    const double s_lo = h.bounds.min()[axis], s_hi = h.bounds.max()[axis];
+    const double stock_lo = m.shape_bounds.min()[axis], stock_hi = m.shape_bounds.max()[axis];
+    const double s_lo = std::max(h.bounds.min()[axis], stock_lo), s_hi = std::min(h.bounds.max()[axis], stock_hi);
     out.start = row_handover(h.from_start, axis, s_lo, s_hi);
     out.end = row_handover(h.to_end, axis, s_lo, s_hi);
     if (out.end.on) {
       const MoveHandover& next = handover[h.next];
-      out.back = row_handover(next.from_start, axis, next.bounds.min()[axis], next.bounds.max()[axis]);
+      out.back = row_handover(next.from_start, axis, std::max(next.bounds.min()[axis], stock_lo),
+                              std::min(next.bounds.max()[axis], stock_hi));
       if (!out.back.on) out.end.on = false;
     }
     return out;
