@@ -62,7 +62,7 @@ void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
   const std::size_t n = mesh.triangles.size();
   if (n > std::numeric_limits<std::uint32_t>::max()) throw InputError(path, 0, 0, "cannot write STL: more than 2^32 triangles");
   std::string out(kHeader + kRecord * n, '\0');
-  const std::string title = n == 0 ? "vcut: empty mesh" : "vcut: machined stock, binary STL, mm";
+  const std::string title = n == 0 ? "vcut: empty mesh" : "vcut: binary STL, mm";
   std::memset(out.data(), ' ', 80);
   std::memcpy(out.data(), title.data(), title.size());
   const auto count = static_cast<std::uint32_t>(n);
