@@ -1320,6 +1320,9 @@ class Contour {
     local.fill(-1);
     for (std::size_t i = 0; i < b.cells.size(); ++i)
       local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
+    // A brick merged into one vertex (a flat sheet, a plane brick) has quads only across its
+    // lower faces: one whose four cells all lie in the brick has four equal corners.
+    const bool one_vertex = b.points.size() == 1;
     for (std::uint16_t code : b.cells) {
       int x = 0, y = 0, z = 0;
       for (int bit = 0; bit < kBrickLevels; ++bit) {
@@ -1327,6 +1330,7 @@ class Contour {
         y |= ((code >> (3 * bit + 1)) & 1) << bit;
         z |= ((code >> (3 * bit + 2)) & 1) << bit;
       }
+      if (one_vertex && x > 0 && y > 0 && z > 0) continue;
       const bool in = sg.inside(x, y, z);
       for (int a = 0; a < 3; ++a) {
         const bool other = a == 0 ? sg.inside(x + 1, y, z) : a == 1 ? sg.inside(x, y + 1, z) : sg.inside(x, y, z + 1);
