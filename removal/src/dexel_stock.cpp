@@ -1184,20 +1184,24 @@ class Contour {
           active &= active - 1;
           Cell cell{static_cast<std::uint16_t>(morton(x, y, z)), 0, 0, static_cast<std::uint32_t>(points.size())};
           const int gx = b.origin[0] + x, gy = b.origin[1] + y, gz = b.origin[2] + z;
-          auto edge = [&](int axis, bool lower_inside, bool upper_inside, const Vector3d& at) {
+          // An edge whose ends differ: its crossing (looked up only then) joins the cell's.
+          auto edge = [&](int axis, bool lower_inside, bool upper_inside, auto&& at) {
             if (lower_inside == upper_inside) return;
             cell.facing |= static_cast<std::uint8_t>(1u << (2 * axis + (lower_inside ? 0 : 1)));
-            points.push_back(at);
+            points.push_back(at());
             ++cell.count;
           };
           for (int d = 0; d < 4; ++d) {
             const int e1 = d & 1, e2 = d >> 1;
-            edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1),
-                 Vector3d(m_.position(gx + e1), m_.position(gy + e2), crossing(2, gx + e1, gy + e2, gz)));
-            edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2),
-                 Vector3d(crossing(0, gy + e1, gz + e2, gx), m_.position(gy + e1), m_.position(gz + e2)));
-            edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2),
-                 Vector3d(m_.position(gx + e1), crossing(1, gx + e1, gz + e2, gy), m_.position(gz + e2)));
+            edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1), [&] {
+              return Vector3d(m_.position(gx + e1), m_.position(gy + e2), crossing(2, gx + e1, gy + e2, gz));
+            });
+            edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2), [&] {
+              return Vector3d(crossing(0, gy + e1, gz + e2, gx), m_.position(gy + e1), m_.position(gz + e2));
+            });
+            edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2), [&] {
+              return Vector3d(m_.position(gx + e1), crossing(1, gx + e1, gz + e2, gy), m_.position(gz + e2));
+            });
           }
           cells.push_back(cell);
         }
