@@ -60,7 +60,7 @@ void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
   // mesh of no triangles (the stock cut away) is the header and a zero count.
   constexpr std::size_t kHeader = 84, kRecord = 50;
   const std::size_t n = mesh.triangles.size();
-  if (n > std::numeric_limits<std::uint32_t>::max()) throw InputError(path, 0, 0, "cannot write STL: more than 2^32 triangles");
+  if (n > std::numeric_limits<std::uint32_t>::max()) throw InputError(path, 0, 0, "cannot write STL: more than 4,294,967,295 triangles");
   std::string out(kHeader + kRecord * n, '\0');
   const std::string title = n == 0 ? "vcut: empty mesh" : "vcut: binary STL, mm";
   std::memset(out.data(), ' ', 80);
