@@ -928,6 +928,14 @@ int morton(int x, int y, int z) {
   return code;
 }
 
+// The cell (x, y, z) within its brick of a Morton code.
+std::array<int, 3> unmorton(int code) {
+  std::array<int, 3> cell = {0, 0, 0};
+  for (int b = 0; b < kBrickLevels; ++b)
+    for (int a = 0; a < 3; ++a) cell[static_cast<std::size_t>(a)] |= ((code >> (3 * b + a)) & 1) << b;
+  return cell;
+}
+
 // Node signs of one brick: bit t of column (x, y) is node (x0 + x, y0 + y, z0 + t).
 struct BrickSigns {
   std::array<std::uint32_t, (kBrick + 1) * (kBrick + 1)> column{};
@@ -1140,9 +1148,7 @@ class Contour {
     b.vertex.assign(codes.size(), 0);
     Vector3d sum = Vector3d::Zero();
     for (std::uint16_t code : codes) {
-      std::array<int, 3> cell = {0, 0, 0};
-      for (int level = 0; level < kBrickLevels; ++level)
-        for (int a = 0; a < 3; ++a) cell[static_cast<std::size_t>(a)] |= ((code >> (3 * level + a)) & 1) << level;
+      const std::array<int, 3> cell = unmorton(code);
       const int i = cell[static_cast<std::size_t>(o1)], j = cell[static_cast<std::size_t>(o2)];
       for (int d = 0; d < 4; ++d) {
         const int e1 = d & 1, e2 = d >> 1;
@@ -1328,12 +1334,7 @@ class Contour {
     // lower faces: one whose four cells all lie in the brick has four equal corners.
     const bool one_vertex = b.points.size() == 1;
     for (std::uint16_t code : b.cells) {
-      int x = 0, y = 0, z = 0;
-      for (int bit = 0; bit < kBrickLevels; ++bit) {
-        x |= ((code >> (3 * bit)) & 1) << bit;
-        y |= ((code >> (3 * bit + 1)) & 1) << bit;
-        z |= ((code >> (3 * bit + 2)) & 1) << bit;
-      }
+      const auto [x, y, z] = unmorton(code);
       if (one_vertex && x > 0 && y > 0 && z > 0) continue;
       const bool in = sg.inside(x, y, z);
       for (int a = 0; a < 3; ++a) {
