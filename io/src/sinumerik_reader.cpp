@@ -1094,8 +1094,10 @@ bool Reader::orient(Block& block) {
                "): the reader cannot tell the vector those axes give without the machine (expected "
                "the orientation as A3 B3 C3 throughout, or as A B C throughout)");
     }
-    // The rotary axes hold where they were programmed; the tip moves under TCP.
+    // The rotary axes hold where they were programmed; the tip moves under TCP. A cone mode
+    // selected meanwhile turns nothing in this block, so the block has no cone (and no cone axis).
     block.start_rotary = block.end_rotary = state_.rotary;
+    if (cone) block.orientation = OrientationMode::Vector;
     return false;
   }
   if (full_turn) {

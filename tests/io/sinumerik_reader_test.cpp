@@ -569,6 +569,13 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("G1 F1 X0 Y0 Z0 A3=1 C3=1\n", 1, 16, "without TRAORI");
   EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 Y0 Z0 A10\nX1 A3=1 C3=1\n", 3, 4,
                    "after the orientation was set by rotary axes A B C (line 2)");
+  // A cone mode selected after rotary axes, with no end vector: the axes hold, and the block
+  // carries no cone (found by the fuzzer: it had a cone mode with a zero cone axis).
+  const Program held = read("TRAORI\nG1 F1 X0 Y0 Z0 A10\nORICONCCW X1\n");
+  ASSERT_EQ(held.blocks.size(), 2u);
+  EXPECT_EQ(held.blocks[1].orientation, OrientationMode::Vector);
+  EXPECT_TRUE(held.blocks[1].start_rotary.angle_rad == held.blocks[1].end_rotary.angle_rad);
+  EXPECT_DOUBLE_EQ(held.blocks[1].end_rotary.angle_rad[0], 10.0 * M_PI / 180.0);
   EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
   EXPECT_MPF_ERROR("N10 IF R1>0 GOTOF END\n", 1, 5, "IF (program flow");
   EXPECT_MPF_ERROR("N10 TRANS X10\n", 1, 5, "TRANS is not supported: it changes the frame");
