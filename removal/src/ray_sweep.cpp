@@ -254,13 +254,15 @@ void RaySweep::prepare_ball_family(int axis) {
   }
 }
 
-bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, double& b) const {
+bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, double& b, bool& lo_side,
+                             bool& hi_side) const {
   const BallFamily& f = ball_[axis];
   const Edge& e = f.edge[i];
   const double x = u - e.p1, y = w - e.p2;
   const double md = x * e.d1 + y * e.d2 + e.e0;
   const double c = e.dd * (x * x + y * y + e.pk2) - md * md;
   double s0 = -kInf, s1 = kInf;
+  lo_side = hi_side = false;
   if (e.parallel) {
     if (c > 0.0) return false;
   } else {
@@ -274,10 +276,14 @@ bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, dou
   if (e.dk != 0.0) {
     double t0 = -md * e.inv_dk, t1 = (e.dd - md) * e.inv_dk;
     if (t0 > t1) std::swap(t0, t1);
+    lo_side = s0 > t0;
+    hi_side = s1 < t1;
     s0 = std::max(s0, t0);
     s1 = std::min(s1, t1);
   } else if (md < 0.0 || md > e.dd) {
     return false;
+  } else {
+    lo_side = hi_side = !e.parallel;
   }
   if (s0 > s1) return false;
   a = s0;
@@ -299,7 +305,8 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, d
     b = f.sphere[i][2] + h;
     return true;
   };
-  auto cylinder = [&](int i, double& a, double& b) { return ball_cylinder(axis, i, u, w, a, b); };
+  bool lo_side, hi_side;
+  auto cylinder = [&](int i, double& a, double& b) { return ball_cylinder(axis, i, u, w, a, b, lo_side, hi_side); };
   double a, b;
   if (axis != 2 && vertical_axis_ && segments_ == 2) {
     // A horizontal line at height w against an upright ball's sweep: below both ball
@@ -313,9 +320,13 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, d
     if (w < c_lo) first = 0;
     else if (w > t_hi) first = 2;
     if (first >= 0) {
+      // The capsule around edge first / 2, whose ends are spheres first and first + 1.
+      if (cylinder(first / 2, a, b)) {
+        widen(lo, hi, a, b);
+        if (lo_side && hi_side) return true;
+      }
       if (sphere(first, a, b)) widen(lo, hi, a, b);
       if (sphere(first + 1, a, b)) widen(lo, hi, a, b);
-      if (cylinder(first / 2, a, b)) widen(lo, hi, a, b);
       return lo <= hi;
     }
     if (w >= c_hi && w <= t_lo) {
@@ -336,9 +347,11 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, d
   if (axis == 2 && vertical_axis_ && segments_ == 2) {
     // A vertical line enters through the sweep of the ball's centre and leaves through the
     // sweep of the top rounding's centre (the rest lies between the two in z).
-    if (sphere(0, a, b)) lo = std::min(lo, a);
-    if (sphere(1, a, b)) lo = std::min(lo, a);
-    if (cylinder(0, a, b)) lo = std::min(lo, a);
+    if (cylinder(0, a, b)) lo = a;
+    if (lo == kInf || !lo_side) {
+      if (sphere(0, a, b)) lo = std::min(lo, a);
+      if (sphere(1, a, b)) lo = std::min(lo, a);
+    }
     if (lo == kInf) return false;
     // The exit is never below the lower top centre: with no material above that, it is
     // not needed.
@@ -347,9 +360,11 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, d
       hi = floor_of_exit;
       return true;
     }
-    if (sphere(2, a, b)) hi = std::max(hi, b);
-    if (sphere(3, a, b)) hi = std::max(hi, b);
-    if (cylinder(1, a, b)) hi = std::max(hi, b);
+    if (cylinder(1, a, b)) hi = b;
+    if (hi == -kInf || !hi_side) {
+      if (sphere(2, a, b)) hi = std::max(hi, b);
+      if (sphere(3, a, b)) hi = std::max(hi, b);
+    }
     return hi >= lo;
   }
   for (int i = 0; i < spheres_; ++i)
@@ -377,7 +392,7 @@ bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, d
   return lo <= hi;
 }
 
-void RaySweep::row_range(int axis, double w, double& u_lo, double& u_hi) const {
+void RaySweep::row_range(int axis, double w, double section, double& u_lo, double& u_hi) const {
   const int a1 = axis == 0 ? 1 : 0;
   u_lo = bounds().min()[a1];
   u_hi = bounds().max()[a1];
@@ -407,7 +422,6 @@ void RaySweep::row_range(int axis, double w, double& u_lo, double& u_hi) const {
   }
   // Rays along x or y in the row at height z = w: the cutter's widest section over the
   // heights above the tip the row takes during the move, around the tip's path.
-  const double section = row_section(axis, w);
   if (section < 0.0) {
     u_lo = 1.0;
     u_hi = 0.0;
@@ -427,18 +441,6 @@ double RaySweep::row_section(int axis, double w) const {
   const double full = cutter_.type == CutterType::VBit ? std::min(height_mm_, underside_height(cutter_, radius_mm_))
                                                       : core_.z_low_mm;
   return section_radius(cutter_, std::clamp(std::clamp(full, h_lo, h_hi), 0.0, height_mm_));
-}
-
-bool RaySweep::ray_window(int axis, double u, double section, double& lo, double& hi) const {
-  const int a1 = axis == 0 ? 1 : 0;
-  const double p1u = p0_[a1] + delta_[a1], p1s = p0_[axis] + delta_[axis];
-  const double du = u < std::min(p0_[a1], p1u) ? std::min(p0_[a1], p1u) - u : (u > std::max(p0_[a1], p1u) ? u - std::max(p0_[a1], p1u) : 0.0);
-  const double reach2 = section * section - du * du;
-  if (reach2 < 0.0) return false;
-  const double reach = std::sqrt(reach2);
-  lo = std::min(p0_[axis], p1s) - reach;
-  hi = std::max(p0_[axis], p1s) + reach;
-  return true;
 }
 
 double RaySweep::row_floor(int axis, double w) const {

@@ -23,6 +23,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "vcut/removal/cutter.h"
@@ -40,7 +42,7 @@ inline constexpr double kRaySearchTolerance_mm = 1e-9;
 bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
                    const Eigen::Vector3d& d, double r, double& lo, double& hi);
 
-class RaySweep {
+class __attribute__((visibility("hidden"))) RaySweep {
  public:
   RaySweep(const Cutter& cutter, const Move& move);
 
@@ -56,7 +58,11 @@ class RaySweep {
 
   // A range [u_lo, u_hi] holding every ray of family `axis` in the row at w that can meet
   // the sweep (tighter than bounds() for an upright tool; the bounds' range otherwise).
-  void row_range(int axis, double w, double& u_lo, double& u_hi) const;
+  void row_range(int axis, double w, double& u_lo, double& u_hi) const {
+    row_range(axis, w, row_section(axis, w), u_lo, u_hi);
+  }
+  // The same given the row's row_section(axis, w), for a caller that needs it too.
+  void row_range(int axis, double w, double section, double& u_lo, double& u_hi) const;
   // For z rays (axis 2): a height below which the sweep does not reach anywhere in the row
   // y = w (-inf when no such bound is known): rays with no material above it are clear.
   double row_floor(int axis, double w) const;
@@ -65,7 +71,18 @@ class RaySweep {
   // a window [lo, hi] along the ray at u holding the ray's meeting with the sweep (false:
   // the ray misses). The section is a disc of at most that radius about the tip's path.
   double row_section(int axis, double w) const;
-  bool ray_window(int axis, double u, double section, double& lo, double& hi) const;
+  bool ray_window(int axis, double u, double section, double& lo, double& hi) const {
+    const int a1 = axis == 0 ? 1 : 0;
+    const double p1u = p0_[a1] + delta_[a1], p1s = p0_[axis] + delta_[axis];
+    const double u_lo = std::min(p0_[a1], p1u), u_hi = std::max(p0_[a1], p1u);
+    const double du = u < u_lo ? u_lo - u : (u > u_hi ? u - u_hi : 0.0);
+    const double reach2 = section * section - du * du;
+    if (reach2 < 0.0) return false;
+    const double reach = std::sqrt(reach2);
+    lo = std::min(p0_[axis], p1s) - reach;
+    hi = std::max(p0_[axis], p1s) + reach;
+    return true;
+  }
 
  private:
   enum class Method { Ball, Upright, General };
@@ -100,7 +117,10 @@ class RaySweep {
   // `top`: as for interval_below.
   bool ball_fast(int axis, double u, double w, double& lo, double& hi,
                  double top = std::numeric_limits<double>::infinity()) const;
-  bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi) const;
+  // `lo_side`/`hi_side`: that end of the interval lies on the cylinder's side, not on an end
+  // plane, so on the boundary of the capsule around the edge: its end spheres cannot move it.
+  bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,
+                     bool& hi_side) const;
 
   TranslationSweep sweep_;
   Cutter cutter_;
