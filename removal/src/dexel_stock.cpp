@@ -364,6 +364,14 @@ struct Probe {
   Vector3d where_mm;
 };
 
+// A row's rays to cut (at most a tile's width): their offsets in the row, positions and
+// material tops, and the intervals found.
+struct RowRays {
+  int k[kTileU];
+  double u[kTileU], top[kTileU], lo[kTileU], hi[kTileU];
+  bool hit[kTileU];
+};
+
 struct TileResult {
   double removed_mm = 0.0;  // length along the family's rays
   std::vector<Probe> probes;
@@ -780,6 +788,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         TileResult& r = results[static_cast<std::size_t>(t)];
         r.probes.clear();
         double removed = 0.0;  // summed here, stored once: neighbouring tiles' results share cache lines
+        RowRays rows;
         for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
           const int i = entries[static_cast<std::size_t>(e)];
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
@@ -830,9 +839,10 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             const int k0 = first_u - f.lo_u, k1 = last_u - f.lo_u;
             SegmentList* const row = &f.at(f.lo_u, iw);
             const bool windowed = use_window && section < std::numeric_limits<double>::infinity();
+            // The row's rays that pass the tests below, then their intervals in one call.
+            int count = 0;
             for (int word = k0 / 64; word <= k1 / 64; ++word) {
-              std::uint64_t& occupied = f.occupied_word(word, iw);
-              std::uint64_t walk = occupied;
+              std::uint64_t walk = f.occupied_word(word, iw);
               if (word == k0 / 64) walk &= ~std::uint64_t{0} << (k0 % 64);
               if (word == k1 / 64) walk &= ~std::uint64_t{0} >> (63 - k1 % 64);
               for (; walk != 0; walk &= walk - 1) {
@@ -855,20 +865,28 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                   if (j == n) continue;
                 }
                 if (handed_over(ray_cover, u_mm, w_mm, seg, n)) continue;
-                double lo, hi;
-                if (!sweep.interval_below(a, u_mm, w_mm, top, lo, hi)) continue;
-                const int iu = f.lo_u + k;
-                if (move.rapid) {
-                  double middle = 0.0;
-                  const double depth = overlap(ray, lo, hi, middle);
-                  if (depth > probe.overlap_mm) {
-                    probe.overlap_mm = depth;
-                    probe.where_mm = m.point(a, iu, iw, middle);
-                  }
-                } else {
-                  removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
-                  if (ray.size() == 0) occupied &= ~(std::uint64_t{1} << bit);
+                rows.k[count] = k;
+                rows.u[count] = u_mm;
+                rows.top[count] = top;
+                ++count;
+              }
+            }
+            sweep.intervals_below(a, w_mm, count, rows.u, rows.top, rows.lo, rows.hi, rows.hit);
+            for (int c = 0; c < count; ++c) {
+              if (!rows.hit[c]) continue;
+              const int k = rows.k[c];
+              SegmentList& ray = row[k];
+              const double lo = rows.lo[c], hi = rows.hi[c];
+              if (move.rapid) {
+                double middle = 0.0;
+                const double depth = overlap(ray, lo, hi, middle);
+                if (depth > probe.overlap_mm) {
+                  probe.overlap_mm = depth;
+                  probe.where_mm = m.point(a, f.lo_u + k, iw, middle);
                 }
+              } else {
+                removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
+                if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
               }
             }
           }

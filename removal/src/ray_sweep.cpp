@@ -254,8 +254,8 @@ void RaySweep::prepare_ball_family(int axis) {
   }
 }
 
-bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, double& b, bool& lo_side,
-                             bool& hi_side) const {
+inline bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, double& b, bool& lo_side,
+                                    bool& hi_side) const {
   const BallFamily& f = ball_[axis];
   const Edge& e = f.edge[i];
   const double x = u - e.p1, y = w - e.p2;
@@ -291,7 +291,7 @@ bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double& a, dou
   return true;
 }
 
-bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, double top) const {
+inline bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, double top) const {
   const BallFamily& f = ball_[axis];
   const double r = core_.rounding_mm, r2 = r * r;
   lo = kInf;
@@ -457,6 +457,20 @@ double RaySweep::row_floor(int axis, double w) const {
 bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
   if (method_ == Method::Ball) return ball_fast(axis, u, w, lo, hi, top);
   return interval(axis, u, w, lo, hi);
+}
+
+__attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo,
+                               double* hi, bool* hit) const {
+  if (method_ != Method::Ball) {
+    for (int k = 0; k < count; ++k) hit[k] = interval(axis, u[k], w, lo[k], hi[k]);
+    return;
+  }
+  for (int k = 0; k < count; ++k) {
+    double a, b;
+    hit[k] = ball_fast(axis, u[k], w, a, b, top[k]);
+    lo[k] = a;
+    hi[k] = b;
+  }
 }
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {

@@ -53,6 +53,10 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // The same where only the interval's part below `top` matters (the ray holds no material
   // above it): hi may then be any value >= min(true hi, top).
   bool interval_below(int axis, double u, double w, double top, double& lo, double& hi) const;
+  // interval_below for `count` rays of one row at w, at u[k] with material up to top[k]:
+  // hit[k], lo[k], hi[k]. One call per row keeps the kernel's constants in registers.
+  void intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo,
+                       double* hi, bool* hit) const;
 
   const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
 
