@@ -282,9 +282,12 @@ struct RowHandover {
   double at(double w, double g) const { return -(base(w) + g) / slope; }
 };
 
+// The row-wise form needs the tool axis along +z.
+bool upright(const Handover& h) { return h.a.x() == 0.0 && h.a.y() == 0.0 && h.a.z() > 0.0; }
+
 RowHandover row_handover(const Handover& h, int axis, double s_lo, double s_hi) {
   RowHandover out;
-  if (!h.on || h.a.x() != 0.0 || h.a.y() != 0.0 || !(h.a.z() > 0.0) || !(s_lo <= s_hi)) return out;
+  if (!h.on || !upright(h) || !(s_lo <= s_hi)) return out;
   const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
   out.on = true;
   out.slope = h.d[a1];
@@ -809,12 +812,12 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           const MoveHandover& hand = handover[first + static_cast<std::size_t>(i)];
           const RowNeighbours neighbours = row_neighbours(hand, a);
-          RayNeighbours ray_cover = ray_neighbours(hand, a);
-          // Rays square to a move's motion (not z rays): the row-wise bounds are exact there (g
-          // is 0 along the rays), so the ray-wise test would only repeat them (W1's y rays: it
-          // skipped 3 % of those it tested).
-          if (a != 2 && motion[a] == 0.0 && neighbours.start.on == ray_cover.start_on && neighbours.end.on == ray_cover.end_on)
-            ray_cover.start_on = ray_cover.end_on = false;
+          // The ray-wise test only for a tilted tool, where the row-wise one cannot run: after
+          // the row-wise bounds it cost more than the cuts it saved (W1 on 40 mm, 1 thread:
+          // cut 1.294 -> 1.223 s without it; on 20 mm 4.13 -> 3.80 G instructions).
+          RayNeighbours ray_cover;
+          if (!upright(hand.from_start)) ray_cover = ray_neighbours(hand, a);
+          const bool ray_wise = ray_cover.start_on || ray_cover.end_on;
           const double v = m.v;
           for (int iw = w0; iw <= w1; ++iw) {
             const double w_mm = m.position(iw);
@@ -864,12 +867,23 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                   while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
                   if (j == n) continue;
                 }
-                if (handed_over(ray_cover, u_mm, w_mm, seg, n)) continue;
                 rows.k[count] = k;
                 rows.u[count] = u_mm;
                 rows.top[count] = top;
                 ++count;
               }
+            }
+            if (ray_wise) {
+              int kept = 0;
+              for (int c = 0; c < count; ++c) {
+                const SegmentList& ray = row[rows.k[c]];
+                if (handed_over(ray_cover, rows.u[c], w_mm, ray.data(), ray.size())) continue;
+                rows.k[kept] = rows.k[c];
+                rows.u[kept] = rows.u[c];
+                rows.top[kept] = rows.top[c];
+                ++kept;
+              }
+              count = kept;
             }
             sweep.intervals_below(a, w_mm, count, rows.u, rows.top, rows.lo, rows.hi, rows.hit);
             for (int c = 0; c < count; ++c) {
