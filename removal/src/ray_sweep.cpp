@@ -197,7 +197,7 @@ void RaySweep::prepare_ball_family(int axis) {
     centres.push_back(c0_ + edge_a_);
     edges.emplace_back(c0_, edge_a_);
   } else if (segments_ == 2) {
-    // Order matters to ball_fast: centres c0, c1, top0, top1; edges along the move first.
+    // Order matters to intervals_below: centres c0, c1, top0, top1; edges along the move first.
     centres = {c0_, c0_ + edge_b_, c0_ + edge_a_, c0_ + edge_a_ + edge_b_};
     edges = {{c0_, edge_b_}, {c0_ + edge_a_, edge_b_}, {c0_, edge_a_}, {c0_ + edge_b_, edge_a_}};
   }
@@ -291,86 +291,23 @@ inline bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double&
   return true;
 }
 
-inline bool RaySweep::ball_fast(int axis, double u, double w, double& lo, double& hi, double top) const {
+// Any ball sweep: the hull of the corner spheres, the edge cylinders and the slab.
+inline bool RaySweep::ball_general(int axis, double u, double w, double& lo, double& hi) const {
   const BallFamily& f = ball_[axis];
   const double r = core_.rounding_mm, r2 = r * r;
   lo = kInf;
   hi = -kInf;
-  auto sphere = [&](int i, double& a, double& b) {
+  double a, b;
+  for (int i = 0; i < spheres_; ++i) {
     const double x = u - f.sphere[i][0], y = w - f.sphere[i][1];
     const double h2 = r2 - x * x - y * y;
-    if (h2 < 0.0) return false;
+    if (h2 < 0.0) continue;
     const double h = std::sqrt(h2);
-    a = f.sphere[i][2] - h;
-    b = f.sphere[i][2] + h;
-    return true;
-  };
+    widen(lo, hi, f.sphere[i][2] - h, f.sphere[i][2] + h);
+  }
   bool lo_side, hi_side;
-  auto cylinder = [&](int i, double& a, double& b) { return ball_cylinder(axis, i, u, w, a, b, lo_side, hi_side); };
-  double a, b;
-  if (axis != 2 && vertical_axis_ && segments_ == 2) {
-    // A horizontal line at height w against an upright ball's sweep: below both ball
-    // centres only the centres' swept capsule counts (the parallelogram's nearest points
-    // are on its lower edge); above both top centres only the top capsule; between the
-    // centres' heights and the top centres' heights the sweep's slice is the disc of
-    // radius r swept along the centres' path in the plane.
-    const double c_lo = std::min(f.sphere[0][1], f.sphere[1][1]), c_hi = std::max(f.sphere[0][1], f.sphere[1][1]);
-    const double t_lo = std::min(f.sphere[2][1], f.sphere[3][1]), t_hi = std::max(f.sphere[2][1], f.sphere[3][1]);
-    int first = -1;
-    if (w < c_lo) first = 0;
-    else if (w > t_hi) first = 2;
-    if (first >= 0) {
-      // The capsule around edge first / 2, whose ends are spheres first and first + 1.
-      if (cylinder(first / 2, a, b)) {
-        widen(lo, hi, a, b);
-        if (lo_side && hi_side) return true;
-      }
-      if (sphere(first, a, b)) widen(lo, hi, a, b);
-      if (sphere(first + 1, a, b)) widen(lo, hi, a, b);
-      return lo <= hi;
-    }
-    if (w >= c_hi && w <= t_lo) {
-      // Discs of radius r about the two centres' positions, and the band between them.
-      for (int i = 0; i < 2; ++i) {
-        const double x = u - f.sphere[i][0];
-        const double h2 = r2 - x * x;
-        if (h2 >= 0.0) widen(lo, hi, f.sphere[i][2] - std::sqrt(h2), f.sphere[i][2] + std::sqrt(h2));
-      }
-      if (f.slab_band) {
-        double s0 = -kInf, s1 = kInf;
-        const double n0 = f.band_n_base + f.band_n_u * u, t0 = f.band_t_base + f.band_t_u * u;
-        if (clip(n0, f.band_n_s, -r, r, s0, s1) && clip(t0, f.band_t_s, 0.0, 1.0, s0, s1)) widen(lo, hi, s0, s1);
-      }
-      return lo <= hi;
-    }
-  }
-  if (axis == 2 && vertical_axis_ && segments_ == 2) {
-    // A vertical line enters through the sweep of the ball's centre and leaves through the
-    // sweep of the top rounding's centre (the rest lies between the two in z).
-    if (cylinder(0, a, b)) lo = a;
-    if (lo == kInf || !lo_side) {
-      if (sphere(0, a, b)) lo = std::min(lo, a);
-      if (sphere(1, a, b)) lo = std::min(lo, a);
-    }
-    if (lo == kInf) return false;
-    // The exit is never below the lower top centre: with no material above that, it is
-    // not needed.
-    const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
-    if (top <= floor_of_exit) {
-      hi = floor_of_exit;
-      return true;
-    }
-    if (cylinder(1, a, b)) hi = b;
-    if (hi == -kInf || !hi_side) {
-      if (sphere(2, a, b)) hi = std::max(hi, b);
-      if (sphere(3, a, b)) hi = std::max(hi, b);
-    }
-    return hi >= lo;
-  }
-  for (int i = 0; i < spheres_; ++i)
-    if (sphere(i, a, b)) widen(lo, hi, a, b);
   for (int i = 0; i < edges_; ++i)
-    if (cylinder(i, a, b)) widen(lo, hi, a, b);
+    if (ball_cylinder(axis, i, u, w, a, b, lo_side, hi_side)) widen(lo, hi, a, b);
   if (segments_ == 2) {
     // The slab of thickness 2r over the parallelogram's inside.
     const Slab& sl = f.slab;
@@ -455,27 +392,128 @@ double RaySweep::row_floor(int axis, double w) const {
 }
 
 bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
-  if (method_ == Method::Ball) return ball_fast(axis, u, w, lo, hi, top);
-  return interval(axis, u, w, lo, hi);
+  bool hit;
+  intervals_below(axis, w, 1, &u, &top, &lo, &hi, &hit);
+  return hit;
 }
 
-__attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo,
-                               double* hi, bool* hit) const {
+// The ball method (see the header). An upright ball's sweep is cut by a row of rays in one
+// of three ways, picked once per row:
+//  - horizontal rays below both ball centres meet only the centres' swept capsule (the
+//    parallelogram's nearest points are on its lower edge), above both top centres only
+//    the top capsule;
+//  - horizontal rays between the centres' heights and the top centres' heights meet the
+//    disc of radius r swept along the centres' path in their plane;
+//  - vertical rays enter through the centres' capsule and leave through the top one (the
+//    rest lies between the two in z).
+// A capsule is its edge's cylinder and two end spheres: an end of the cylinder's interval on
+// its side (not on an end plane) is on the capsule's boundary, so the spheres are needed only
+// for an end that is not. Anything else goes through ball_general.
+__attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int count, const double* u,
+                                                        const double* top, double* lo, double* hi,
+                                                        bool* hit) const {
   if (method_ != Method::Ball) {
     for (int k = 0; k < count; ++k) hit[k] = interval(axis, u[k], w, lo[k], hi[k]);
     return;
   }
-  for (int k = 0; k < count; ++k) {
-    double a, b;
-    hit[k] = ball_fast(axis, u[k], w, a, b, top[k]);
-    lo[k] = a;
-    hi[k] = b;
+  const BallFamily& f = ball_[axis];
+  const double r = core_.rounding_mm, r2 = r * r;
+  // Sphere i widens [l, h] (entry and exit as asked) where the ray meets it.
+  auto sphere = [&](int i, double uk, double& l, double& h, bool entry, bool exit) {
+    const double x = uk - f.sphere[i][0], y = w - f.sphere[i][1];
+    const double h2 = r2 - x * x - y * y;
+    if (h2 < 0.0) return;
+    const double root = std::sqrt(h2);
+    if (entry) l = std::min(l, f.sphere[i][2] - root);
+    if (exit) h = std::max(h, f.sphere[i][2] + root);
+  };
+  const bool upright_ball = vertical_axis_ && segments_ == 2;
+  if (upright_ball && axis != 2) {
+    const double c_lo = std::min(f.sphere[0][1], f.sphere[1][1]), c_hi = std::max(f.sphere[0][1], f.sphere[1][1]);
+    const double t_lo = std::min(f.sphere[2][1], f.sphere[3][1]), t_hi = std::max(f.sphere[2][1], f.sphere[3][1]);
+    if (w < c_lo || w > t_hi) {
+      const int first = w < c_lo ? 0 : 2;
+      for (int k = 0; k < count; ++k) {
+        double l = kInf, h = -kInf, a, b;
+        bool lo_side, hi_side;
+        if (ball_cylinder(axis, first / 2, u[k], w, a, b, lo_side, hi_side)) {
+          widen(l, h, a, b);
+          if (lo_side && hi_side) {
+            hit[k] = true;
+            lo[k] = l;
+            hi[k] = h;
+            continue;
+          }
+        }
+        sphere(first, u[k], l, h, true, true);
+        sphere(first + 1, u[k], l, h, true, true);
+        hit[k] = l <= h;
+        lo[k] = l;
+        hi[k] = h;
+      }
+      return;
+    }
+    if (w >= c_hi && w <= t_lo) {
+      const double x0 = f.sphere[0][0], s0c = f.sphere[0][2], x1 = f.sphere[1][0], s1c = f.sphere[1][2];
+      const bool band = f.slab_band;
+      const double n_base = f.band_n_base, n_u = f.band_n_u, n_s = f.band_n_s;
+      const double t_base = f.band_t_base, t_u = f.band_t_u, t_s = f.band_t_s;
+      for (int k = 0; k < count; ++k) {
+        double l = kInf, h = -kInf;
+        const double xa = u[k] - x0, ha = r2 - xa * xa;
+        if (ha >= 0.0) widen(l, h, s0c - std::sqrt(ha), s0c + std::sqrt(ha));
+        const double xb = u[k] - x1, hb = r2 - xb * xb;
+        if (hb >= 0.0) widen(l, h, s1c - std::sqrt(hb), s1c + std::sqrt(hb));
+        if (band) {
+          double e0 = -kInf, e1 = kInf;
+          const double n0 = n_base + n_u * u[k], t0 = t_base + t_u * u[k];
+          if (clip(n0, n_s, -r, r, e0, e1) && clip(t0, t_s, 0.0, 1.0, e0, e1)) widen(l, h, e0, e1);
+        }
+        hit[k] = l <= h;
+        lo[k] = l;
+        hi[k] = h;
+      }
+      return;
+    }
   }
+  if (upright_ball && axis == 2) {
+    // The exit is never below the lower top centre: with no material above that, it is not
+    // needed.
+    const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
+    for (int k = 0; k < count; ++k) {
+      double l = kInf, h = -kInf, a, b;
+      bool lo_side, hi_side;
+      if (ball_cylinder(axis, 0, u[k], w, a, b, lo_side, hi_side)) l = a;
+      if (l == kInf || !lo_side) {
+        sphere(0, u[k], l, h, true, false);
+        sphere(1, u[k], l, h, true, false);
+      }
+      lo[k] = l;
+      if (l == kInf) {
+        hit[k] = false;
+        continue;
+      }
+      if (top[k] <= floor_of_exit) {
+        hit[k] = true;
+        hi[k] = floor_of_exit;
+        continue;
+      }
+      if (ball_cylinder(axis, 1, u[k], w, a, b, lo_side, hi_side)) h = b;
+      if (h == -kInf || !hi_side) {
+        sphere(2, u[k], l, h, false, true);
+        sphere(3, u[k], l, h, false, true);
+      }
+      hit[k] = h >= l;
+      hi[k] = h;
+    }
+    return;
+  }
+  for (int k = 0; k < count; ++k) hit[k] = ball_general(axis, u[k], w, lo[k], hi[k]);
 }
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
-    case Method::Ball: return ball_fast(axis, u, w, lo, hi);
+    case Method::Ball: return interval_below(axis, u, w, kInf, lo, hi);
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
     case Method::General: {

@@ -118,9 +118,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
     double band_n_base = 0, band_n_u = 0, band_n_s = 0, band_t_base = 0, band_t_u = 0, band_t_s = 0;
   };
   void prepare_ball_family(int axis);
-  // `top`: as for interval_below.
-  bool ball_fast(int axis, double u, double w, double& lo, double& hi,
-                 double top = std::numeric_limits<double>::infinity()) const;
+  bool ball_general(int axis, double u, double w, double& lo, double& hi) const;
   // `lo_side`/`hi_side`: that end of the interval lies on the cylinder's side, not on an end
   // plane, so on the boundary of the capsule around the edge: its end spheres cannot move it.
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,
