@@ -1,6 +1,7 @@
 #include "ray_sweep.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -191,25 +192,30 @@ void RaySweep::prepare_ball_family(int axis) {
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
   const double r = core_.rounding_mm;
   BallFamily& f = ball_[axis];
-  std::vector<Vector3d> centres = {c0_};
-  std::vector<std::pair<Vector3d, Vector3d>> edges;
+  // Fixed room, no allocation: a RaySweep is built per move.
+  std::array<Vector3d, 4> centres = {c0_, c0_, c0_, c0_};
+  std::array<std::pair<Vector3d, Vector3d>, 4> edges;
+  spheres_ = 1;
+  edges_ = 0;
   if (segments_ == 1) {
-    centres.push_back(c0_ + edge_a_);
-    edges.emplace_back(c0_, edge_a_);
+    centres[1] = c0_ + edge_a_;
+    edges[0] = {c0_, edge_a_};
+    spheres_ = 2;
+    edges_ = 1;
   } else if (segments_ == 2) {
     // Order matters to intervals_below: centres c0, c1, top0, top1; edges along the move first.
     centres = {c0_, c0_ + edge_b_, c0_ + edge_a_, c0_ + edge_a_ + edge_b_};
-    edges = {{c0_, edge_b_}, {c0_ + edge_a_, edge_b_}, {c0_, edge_a_}, {c0_ + edge_b_, edge_a_}};
+    edges = {{{c0_, edge_b_}, {c0_ + edge_a_, edge_b_}, {c0_, edge_a_}, {c0_ + edge_b_, edge_a_}}};
+    spheres_ = 4;
+    edges_ = 4;
   }
-  spheres_ = static_cast<int>(centres.size());
-  edges_ = static_cast<int>(edges.size());
-  for (std::size_t i = 0; i < centres.size(); ++i) {
-    f.sphere[i][0] = centres[i][a1];
-    f.sphere[i][1] = centres[i][a2];
-    f.sphere[i][2] = centres[i][axis];
+  for (int i = 0; i < spheres_; ++i) {
+    f.sphere[i][0] = centres[static_cast<std::size_t>(i)][a1];
+    f.sphere[i][1] = centres[static_cast<std::size_t>(i)][a2];
+    f.sphere[i][2] = centres[static_cast<std::size_t>(i)][axis];
   }
-  for (std::size_t i = 0; i < edges.size(); ++i) {
-    const auto& [p, d] = edges[i];
+  for (int i = 0; i < edges_; ++i) {
+    const auto& [p, d] = edges[static_cast<std::size_t>(i)];
     Edge& e = f.edge[i];
     e.p1 = p[a1];
     e.p2 = p[a2];
