@@ -53,9 +53,7 @@ double vbit_profile_distance(const Cutter& c, double rho, double z) {
 double section_radius(const Cutter& c, double h) {
   if (h < 0.0 || h > c.flute_length_mm) return 0.0;
   if (c.type == CutterType::VBit) return std::min(c.radius_mm(), h * vbit_slope(c.tip_angle_deg));
-  const CutterCore k = core_of(c);
-  const double off = h < k.z_low_mm ? k.z_low_mm - h : (h > k.z_high_mm ? h - k.z_high_mm : 0.0);
-  return k.core_radius_mm + std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
+  return core_section_radius(core_of(c), c.flute_length_mm, h);
 }
 
 double underside_height(const Cutter& c, double rho) {

@@ -383,7 +383,8 @@ double RaySweep::row_section(int axis, double w) const {
   // over [h_lo, h_hi] is at the point of that range nearest to `full`.
   const double full = cutter_.type == CutterType::VBit ? std::min(height_mm_, underside_height(cutter_, radius_mm_))
                                                       : core_.z_low_mm;
-  return section_radius(cutter_, std::clamp(std::clamp(full, h_lo, h_hi), 0.0, height_mm_));
+  const double h = std::clamp(std::clamp(full, h_lo, h_hi), 0.0, height_mm_);
+  return cutter_.type == CutterType::VBit ? section_radius(cutter_, h) : core_section_radius(core_, cutter_.flute_length_mm, h);
 }
 
 double RaySweep::row_floor(int axis, double w) const {

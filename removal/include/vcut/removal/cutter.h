@@ -4,6 +4,8 @@
 
 #include <Eigen/Core>
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 
 namespace vcut::removal {
@@ -47,6 +49,14 @@ struct CutterCore {
 // A V-bit is not such a sum: its core is its bounding cylinder (radius R, z in [0, H]), used
 // for bounds only.
 CutterCore core_of(const Cutter& cutter);
+
+// section_radius of a cutter that is not a V-bit, from its core (worked out once): the core's
+// radius plus the rounding's half-chord at height h_mm (0 below the tip or above the flutes).
+inline double core_section_radius(const CutterCore& k, double flute_length_mm, double h_mm) {
+  if (h_mm < 0.0 || h_mm > flute_length_mm) return 0.0;
+  const double off = h_mm < k.z_low_mm ? k.z_low_mm - h_mm : (h_mm > k.z_high_mm ? h_mm - k.z_high_mm : 0.0);
+  return k.core_radius_mm + std::sqrt(std::max(0.0, k.rounding_mm * k.rounding_mm - off * off));
+}
 
 // Signed distance (mm, negative inside) from a tool-frame point to the cutting part.
 double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p_tool_mm);
