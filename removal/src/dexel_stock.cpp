@@ -819,15 +819,29 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           if (!upright(hand.from_start)) ray_cover = ray_neighbours(hand, a);
           const bool ray_wise = ray_cover.start_on || ray_cover.end_on;
           const double v = m.v;
+          // The tile's rows first (at most kTileW, independent of each other, so their chains
+          // of divisions overlap), then their rays.
+          struct RowSpan {
+            int first_u, last_u;
+            double section;
+          };
+          RowSpan spans[kTileW];
           for (int iw = w0; iw <= w1; ++iw) {
+            RowSpan& span = spans[iw - w0];
+            span = {1, 0, -1.0};
             const double w_mm = m.position(iw);
-            const double section = sweep.row_section(a, w_mm);
-            if (section < 0.0) continue;  // the row passes above or below the cutter throughout
+            span.section = sweep.row_section(a, w_mm);
+            if (span.section < 0.0) continue;  // the row passes above or below the cutter throughout
             double row_lo, row_hi;
-            sweep.row_range(a, w_mm, section, row_lo, row_hi);
+            sweep.row_range(a, w_mm, span.section, row_lo, row_hi);
             if (!kept_by_neighbours(neighbours, w_mm, row_lo, row_hi)) continue;
-            const int first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
-            const int last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
+            span.first_u = std::max(u0, static_cast<int>(std::ceil(m.index_of(row_lo))));
+            span.last_u = std::min(u1, static_cast<int>(std::floor(m.index_of(row_hi))));
+          }
+          for (int iw = w0; iw <= w1; ++iw) {
+            const int first_u = spans[iw - w0].first_u, last_u = spans[iw - w0].last_u;
+            if (first_u > last_u) continue;
+            const double w_mm = m.position(iw), section = spans[iw - w0].section;
             if (a == 2 && !move.rapid) {
               // A row whose material all lies below the sweep's floor there is clear.
               const double floor = sweep.row_floor(a, w_mm);
