@@ -140,6 +140,15 @@ bool clip(double v0, double slope, double lo, double hi, double& s0, double& s1)
   return s0 <= s1;
 }
 
+// clip with 1 / slope given (slope != 0): no division per ray.
+bool clip_inv(double v0, double inv_slope, double lo, double hi, double& s0, double& s1) {
+  double e0 = (lo - v0) * inv_slope, e1 = (hi - v0) * inv_slope;
+  if (e0 > e1) std::swap(e0, e1);
+  s0 = std::max(s0, e0);
+  s1 = std::min(s1, e1);
+  return s0 <= s1;
+}
+
 double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
 }  // namespace
@@ -465,6 +474,7 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
       const bool band = f.slab_band;
       const double n_base = f.band_n_base, n_u = f.band_n_u, n_s = f.band_n_s;
       const double t_base = f.band_t_base, t_u = f.band_t_u, t_s = f.band_t_s;
+      const double inv_n_s = n_s != 0.0 ? 1.0 / n_s : 0.0, inv_t_s = t_s != 0.0 ? 1.0 / t_s : 0.0;
       for (int k = 0; k < count; ++k) {
         double l = kInf, h = -kInf;
         const double xa = u[k] - x0, ha = r2 - xa * xa;
@@ -474,7 +484,8 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
         if (band) {
           double e0 = -kInf, e1 = kInf;
           const double n0 = n_base + n_u * u[k], t0 = t_base + t_u * u[k];
-          if (clip(n0, n_s, -r, r, e0, e1) && clip(t0, t_s, 0.0, 1.0, e0, e1)) widen(l, h, e0, e1);
+          const bool in_n = n_s == 0.0 ? n0 >= -r && n0 <= r : clip_inv(n0, inv_n_s, -r, r, e0, e1);
+          if (in_n && (t_s == 0.0 ? t0 >= 0.0 && t0 <= 1.0 : clip_inv(t0, inv_t_s, 0.0, 1.0, e0, e1))) widen(l, h, e0, e1);
         }
         hit[k] = l <= h;
         lo[k] = l;
