@@ -843,9 +843,12 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             const int first_u = spans[iw - w0].first_u, last_u = spans[iw - w0].last_u;
             if (first_u > last_u) continue;
             const double w_mm = m.position(iw), section = spans[iw - w0].section;
+            double clear_below = box_lo;  // a ray whose material ends below this is clear
             if (a == 2 && !move.rapid) {
-              // A row whose material all lies below the sweep's floor there is clear.
+              // A row whose material all lies below the sweep's floor there is clear, and so
+              // is each ray whose material does.
               const double floor = sweep.row_floor(a, w_mm);
+              clear_below = std::max(clear_below, floor);
               bool above = false;
               for (int iu = first_u; iu <= last_u && !above; ++iu) {
                 const SegmentList& ray = f.at(iu, iw);
@@ -872,7 +875,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
                 const DexelSegment* const seg = ray.data();
                 const double top = seg[n - 1].hi_mm;
                 // Rays already clear of the sweep's box cost a look only.
-                if (seg[0].lo_mm >= box_hi || top <= box_lo) continue;
+                if (seg[0].lo_mm >= box_hi || top <= clear_below) continue;
                 const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
                 if (windowed) {
                   // A tighter window along the ray: the section disc about the tip's path.
