@@ -475,7 +475,23 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
       const double n_base = f.band_n_base, n_u = f.band_n_u, n_s = f.band_n_s;
       const double t_base = f.band_t_base, t_u = f.band_t_u, t_s = f.band_t_s;
       const double inv_n_s = n_s != 0.0 ? 1.0 / n_s : 0.0, inv_t_s = t_s != 0.0 ? 1.0 / t_s : 0.0;
+      // Rays square to the path in their plane (W1's y rays): n0 is the row's, so the band's
+      // slice [b0, b1] is too, and where it holds both discs' widest slices (sqrt is monotonic,
+      // so no disc slice is wider than sqrt(r2)) it is the whole answer wherever t0 is in range.
+      double b0 = -kInf, b1 = kInf;
+      const bool band_holds_discs = band && n_u == 0.0 && n_s != 0.0 && t_s == 0.0 &&
+                                    clip_inv(n_base, inv_n_s, -r, r, b0, b1) &&
+                                    b0 <= std::min(s0c, s1c) - std::sqrt(r2) && b1 >= std::max(s0c, s1c) + std::sqrt(r2);
       for (int k = 0; k < count; ++k) {
+        if (band_holds_discs) {
+          const double t0 = t_base + t_u * u[k];
+          if (t0 >= 0.0 && t0 <= 1.0) {
+            hit[k] = true;
+            lo[k] = b0;
+            hi[k] = b1;
+            continue;
+          }
+        }
         double l = kInf, h = -kInf;
         const double xa = u[k] - x0, ha = r2 - xa * xa;
         if (ha >= 0.0) widen(l, h, s0c - std::sqrt(ha), s0c + std::sqrt(ha));

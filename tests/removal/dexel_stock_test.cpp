@@ -82,6 +82,34 @@ TEST(DexelStock, BallRampEndpointsLieOnTheSweptSphere) {
   EXPECT_GT(checked, 5000);
 }
 
+TEST(DexelStock, BallWallsAcrossTheMotionLieOnTheSweptDisc) {
+  // A 6 mm ball ramping down along x: above the higher ball centre the sweep's slice is the
+  // disc of radius 3 swept along the tip's path, so every wall point the move leaves on a y
+  // ray (square to the motion) there lies 3 from the path's segment in the xy plane: on the
+  // flat walls y = 15 +- 3 beside the path, on the end discs beyond it.
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  DexelStock stock(box, 0.1);
+  MoveList list;
+  list.cutters.push_back(make(CutterType::Ball, 6, 3));
+  const Eigen::Vector3d a(5, 15, -8), b(35, 15, -11);
+  list.moves = {line(a, b)};
+  stock.cut(list, {});
+  const double above_centres = a.z() + 3.0;
+  int walls = 0, ends = 0;
+  double worst = 0.0;
+  for (const auto& e : cut_points(stock, 0)) {
+    if (e.axis != 1 || e.x_mm.z() <= above_centres + 1e-6) continue;
+    const Eigen::Vector2d p(e.x_mm.x(), e.x_mm.y());
+    const double t = std::clamp((p.x() - a.x()) / (b.x() - a.x()), 0.0, 1.0);
+    const Eigen::Vector2d nearest(a.x() + t * (b.x() - a.x()), 15.0);
+    worst = std::max(worst, std::abs((p - nearest).norm() - 3.0));
+    ++(t > 0.0 && t < 1.0 ? walls : ends);
+  }
+  EXPECT_LT(worst, kEndpointTol_mm);
+  EXPECT_GT(walls, 2 * 49 * 290);  // two walls over the 30 mm path on every row above the centres
+  EXPECT_GT(ends, 2 * 49 * 50);
+}
+
 TEST(DexelStock, FlatAndBullEndpointsLieOnTheirSweeps) {
   // Horizontal moves (closed form) and ramps (bracketing search) of a flat and a bull-nose
   // end mill. Check: the endpoint is on the boundary of the union of the cutter's poses,
