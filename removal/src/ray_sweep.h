@@ -42,6 +42,7 @@ inline constexpr double kRaySearchTolerance_mm = 1e-9;
 bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
                    const Eigen::Vector3d& d, double r, double& lo, double& hi);
 
+// Hidden: used only inside vcut_removal, so its calls from the cut's loop go direct.
 class __attribute__((visibility("hidden"))) RaySweep {
  public:
   RaySweep(const Cutter& cutter, const Move& move);
