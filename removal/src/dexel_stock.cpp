@@ -721,8 +721,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   };
   // The span [lo, hi] of the ray's material within [box_lo, box_hi] (false: none there):
   // from the first interval ending above box_lo to the last one starting below box_hi, so
-  // that material elsewhere along the ray (W1's x rays: 42 % of the changed ones hold
-  // several intervals) does not widen it.
+  // that material elsewhere along the ray does not widen it.
   auto material_within = [](const DexelSegment* s, std::uint32_t n, double box_lo, double box_hi, double& lo, double& hi) {
     std::uint32_t i = 0, j = n - 1;
     while (i < j && s[i].hi_mm <= box_lo) ++i;
@@ -843,20 +842,9 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             const int first_u = spans[iw - w0].first_u, last_u = spans[iw - w0].last_u;
             if (first_u > last_u) continue;
             const double w_mm = m.position(iw), section = spans[iw - w0].section;
-            double clear_below = box_lo;  // a ray whose material ends below this is clear
-            if (a == 2 && !move.rapid) {
-              // A row whose material all lies below the sweep's floor there is clear, and so
-              // is each ray whose material does.
-              const double floor = sweep.row_floor(a, w_mm);
-              clear_below = std::max(clear_below, floor);
-              bool above = false;
-              for (int iu = first_u; iu <= last_u && !above; ++iu) {
-                const SegmentList& ray = f.at(iu, iw);
-                above = ray.size() > 0 && ray.data()[ray.size() - 1].hi_mm > floor;
-              }
-              if (!above) continue;
-            }
-            if (first_u > last_u) continue;
+            // A ray whose material ends below this is clear: the box, and for z rays of a
+            // cutting move the sweep's floor over the row.
+            const double clear_below = a == 2 && !move.rapid ? std::max(box_lo, sweep.row_floor(a, w_mm)) : box_lo;
             const int k0 = first_u - f.lo_u, k1 = last_u - f.lo_u;
             SegmentList* const row = &f.at(f.lo_u, iw);
             const bool windowed = use_window && section < std::numeric_limits<double>::infinity();
