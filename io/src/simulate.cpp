@@ -35,6 +35,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_group.h>
 
 namespace vcut::io {
@@ -525,9 +526,10 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
       // Every dexel endpoint against the design, exactly: the summary's figures then do not
       // depend on meshing (the mesh's regions still give areas and outlines).
-      std::vector<removal::DexelEndpoint> points = dexel->endpoints();
-      // In Morton order of their lattice cells, so that consecutive points are neighbours
-      // (a ray's two ends can lie a stock's length apart).
+      const std::vector<removal::DexelEndpoint> points = dexel->endpoints();
+      // Measured in Morton order of their lattice cells, so that consecutive points are
+      // neighbours (a ray's two ends can lie a stock's length apart): order[i] is the i-th.
+      std::vector<std::pair<std::uint64_t, std::size_t>> order(points.size());
       {
         auto spread = [](std::uint64_t x) {
           x &= 0x1fffff;
@@ -539,32 +541,30 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
           return x;
         };
         const Eigen::Vector3d origin = stock_box.min();
-        std::vector<std::pair<std::uint64_t, std::size_t>> keys(points.size());
-        for (std::size_t i = 0; i < points.size(); ++i) {
+        tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
           const Eigen::Vector3d c = ((points[i].x_mm - origin) / v).array().max(0.0);
-          keys[i] = {spread(static_cast<std::uint64_t>(c.x())) | spread(static_cast<std::uint64_t>(c.y())) << 1 |
-                         spread(static_cast<std::uint64_t>(c.z())) << 2,
-                     i};
-        }
-        std::sort(keys.begin(), keys.end());
-        std::vector<removal::DexelEndpoint> sorted;
-        sorted.reserve(points.size());
-        for (const auto& k : keys) sorted.push_back(points[k.second]);
-        points = std::move(sorted);
+          order[i] = {spread(static_cast<std::uint64_t>(c.x())) | spread(static_cast<std::uint64_t>(c.y())) << 1 |
+                          spread(static_cast<std::uint64_t>(c.z())) << 2,
+                      i};
+        });
+        // The pairs are distinct: one sorted order for any thread count.
+        tbb::parallel_sort(order.begin(), order.end());
       }
-      std::vector<double> d(points.size());
+      std::vector<double> d(points.size());  // in the order of `points`
       // Fixed chunks of neighbouring points, each query hinted by the one before it.
       constexpr std::size_t kChunk = 1024;
       tbb::parallel_for(std::size_t{0}, (points.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
         removal::DistanceHint hint;
-        for (std::size_t i = chunk * kChunk; i < std::min(points.size(), (chunk + 1) * kChunk); ++i)
-          d[i] = distance.signed_distance(points[i].x_mm, hint);
+        for (std::size_t i = chunk * kChunk; i < std::min(points.size(), (chunk + 1) * kChunk); ++i) {
+          const std::size_t p = order[i].second;
+          d[p] = distance.signed_distance(points[p].x_mm, hint);
+        }
       });
       EndpointCheck& e = result.endpoints;
       e.done = true;
       e.points = points.size();
       std::size_t deepest = points.size();
-      for (std::size_t i = 0; i < points.size(); ++i) {
+      for (const auto& [key, i] : order) {  // the first of equally deep points in Morton order
         if (-d[i] > e.max_gouge_mm) { e.max_gouge_mm = -d[i]; deepest = i; }
         e.max_excess_mm = std::max(e.max_excess_mm, d[i]);
         e.gouge_points += -d[i] > job.gouge_tolerance_mm;

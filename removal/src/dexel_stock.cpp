@@ -1520,19 +1520,35 @@ std::vector<DexelSegment> DexelStock::ray(int axis, int iu, int iw) const {
 
 std::vector<DexelEndpoint> DexelStock::endpoints() const {
   const Impl& m = *impl_;
-  std::vector<DexelEndpoint> out;
-  for (const Family& f : m.families) {
-    for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) {
-      for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
-        const SegmentList& ray = f.at(iu, iw);
-        for (std::uint32_t s = 0; s < ray.size(); ++s) {
-          const DexelSegment& seg = ray.data()[s];
-          out.push_back({m.point(f.axis, iu, iw, seg.lo_mm), seg.lo_move, f.axis});
-          out.push_back({m.point(f.axis, iu, iw, seg.hi_mm), seg.hi_move, f.axis});
-        }
+  // Rows of all three families in order: each row's count, then each row fills its own
+  // part of the list in parallel (the same order as one pass through the rays).
+  std::vector<std::pair<int, int>> rows;  // family, iw
+  for (int a = 0; a < 3; ++a) {
+    const Family& f = m.families[static_cast<std::size_t>(a)];
+    for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) rows.emplace_back(a, iw);
+  }
+  std::vector<std::size_t> start(rows.size() + 1, 0);
+  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
+    const Family& f = m.families[static_cast<std::size_t>(rows[r].first)];
+    std::size_t n = 0;
+    for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) n += 2 * f.at(iu, rows[r].second).size();
+    start[r + 1] = n;
+  });
+  for (std::size_t r = 0; r < rows.size(); ++r) start[r + 1] += start[r];
+  std::vector<DexelEndpoint> out(start.back());
+  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
+    const Family& f = m.families[static_cast<std::size_t>(rows[r].first)];
+    const int iw = rows[r].second;
+    std::size_t next = start[r];
+    for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+      const SegmentList& ray = f.at(iu, iw);
+      for (std::uint32_t s = 0; s < ray.size(); ++s) {
+        const DexelSegment& seg = ray.data()[s];
+        out[next++] = {m.point(f.axis, iu, iw, seg.lo_mm), seg.lo_move, f.axis};
+        out[next++] = {m.point(f.axis, iu, iw, seg.hi_mm), seg.hi_move, f.axis};
       }
     }
-  }
+  });
   return out;
 }
 

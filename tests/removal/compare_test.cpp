@@ -5,7 +5,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <functional>
+#include <limits>
+#include <random>
 
 #include "test_meshes.h"
 #include "vcut/removal/vdb_stock.h"
@@ -24,6 +28,101 @@ TEST(DesignDistance, BoxSignsAndDistances) {
   EXPECT_NEAR(d.signed_distance({13, 14, 5}), 5.0, 1e-12);         // beside an edge: 3-4-5
   EXPECT_NEAR(d.signed_distance({-1, -2, -2}), 3.0, 1e-12);        // beyond a corner
   EXPECT_NEAR(d.signed_distance({0.5, 0.5, 0.5}), -0.5, 1e-12);    // inside near a corner
+}
+
+// Distance from x to triangle abc by a second method: the foot on the plane when it lies
+// inside (same side of all three edges), else the nearest of the three edges.
+double brute_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                               const Eigen::Vector3d& c) {
+  const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
+  const Eigen::Vector3d foot = x - n.dot(x - a) * n;
+  const bool inside = (b - a).cross(foot - a).dot(n) >= 0 && (c - b).cross(foot - b).dot(n) >= 0 &&
+                      (a - c).cross(foot - c).dot(n) >= 0;
+  if (inside) return std::abs(n.dot(x - a));
+  auto segment = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+    const double t = std::clamp((x - p).dot(q - p) / (q - p).squaredNorm(), 0.0, 1.0);
+    return (x - (p + t * (q - p))).norm();
+  };
+  return std::min({segment(a, b), segment(b, c), segment(c, a)});
+}
+
+double brute_distance(const TriangleMesh& mesh, const Eigen::Vector3d& x) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& t : mesh.triangles)
+    best = std::min(best, brute_triangle_distance(x, mesh.vertices_mm[static_cast<std::size_t>(t[0])],
+                                                  mesh.vertices_mm[static_cast<std::size_t>(t[1])],
+                                                  mesh.vertices_mm[static_cast<std::size_t>(t[2])]));
+  return best;
+}
+
+// The grid behind the distance queries (cells listing the triangles that meet them, a
+// search outward from the query's cell) against a brute-force minimum over all triangles
+// and an analytic inside test, on meshes of long slivers beside small triangles (a fan-
+// triangulated 240-gon prism, convex; the slotted block, not convex), for points near and
+// far, queried with and without hints and with hints from far away.
+TEST(DesignDistance, GridSearchMatchesBruteForce) {
+  constexpr int kSides = 240;
+  constexpr double kRadius = 10.0;
+  std::vector<Eigen::Vector2d> polygon;
+  std::vector<Eigen::Vector3i> fan;
+  for (int i = 0; i < kSides; ++i) {
+    const double t = 2.0 * M_PI * i / kSides;
+    polygon.emplace_back(kRadius * std::cos(t), kRadius * std::sin(t));
+    if (i >= 2) fan.emplace_back(0, i - 1, i);
+  }
+  const TriangleMesh prism = test::extrude_yz(polygon, fan, 0.0, 40.0);
+  // Inside the prism: inside every side's half-plane and between the caps.
+  auto inside_prism = [&](const Eigen::Vector3d& x) {
+    if (x.x() <= 0.0 || x.x() >= 40.0) return false;
+    for (int i = 0; i < kSides; ++i) {
+      const Eigen::Vector2d& p = polygon[static_cast<std::size_t>(i)];
+      const Eigen::Vector2d& q = polygon[static_cast<std::size_t>((i + 1) % kSides)];
+      const Eigen::Vector2d e = q - p, r = Eigen::Vector2d(x.y(), x.z()) - p;
+      if (e.x() * r.y() - e.y() * r.x() <= 0.0) return false;
+    }
+    return true;
+  };
+  const TriangleMesh block = test::slotted_block(5.0, 2.0);
+  auto inside_block = [](const Eigen::Vector3d& x) {
+    const bool in_box = x.x() > 0 && x.x() < 60 && x.y() > 0 && x.y() < 40 && x.z() > -20 && x.z() < 0;
+    const bool in_slot = std::abs(x.y() - 20.0) < 5.0 && x.z() > -2.0;
+    return in_box && !in_slot;
+  };
+  struct Case {
+    const TriangleMesh* mesh;
+    std::function<bool(const Eigen::Vector3d&)> inside;
+    Eigen::Vector3d lo, hi;
+  };
+  const std::vector<Case> cases = {{&prism, inside_prism, {-2, -12, -12}, {42, 12, 12}},
+                                   {&block, inside_block, {-2, -2, -22}, {62, 42, 2}}};
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Case& c : cases) {
+    const DesignDistance d(*c.mesh);
+    std::vector<Eigen::Vector3d> points;
+    for (int i = 0; i < 1500; ++i) {
+      const Eigen::Vector3d box_point = c.lo + (c.hi - c.lo).cwiseProduct(Eigen::Vector3d(unit(random), unit(random), unit(random)));
+      points.push_back(box_point);
+      // Near the surface: a vertex moved a little.
+      const Eigen::Vector3d& v = c.mesh->vertices_mm[random() % c.mesh->vertices_mm.size()];
+      points.push_back(v + 0.05 * Eigen::Vector3d(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5));
+    }
+    points.emplace_back(500.0, 300.0, -200.0);  // far outside: beyond the grid's search
+    DistanceHint carried;  // hints from the previous, often far, point
+    int tested = 0;
+    for (const Eigen::Vector3d& x : points) {
+      const double expected = brute_distance(*c.mesh, x);
+      DistanceHint none;
+      for (double got : {d.signed_distance(x), d.signed_distance(x, carried), d.signed_distance(x, none)}) {
+        ASSERT_NEAR(std::abs(got), expected, 1e-9) << x.transpose();
+        if (expected > 1e-6) {
+          ASSERT_EQ(got < 0.0, c.inside(x)) << x.transpose() << " distance " << got;
+          ++tested;
+        }
+      }
+    }
+    EXPECT_GT(tested, 8000);
+  }
 }
 
 SurfaceMesh machined_slot() {
