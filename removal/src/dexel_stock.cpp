@@ -985,19 +985,32 @@ void set_bits(std::uint64_t* words, int first, int last) {
   words[w1] |= tail;
 }
 
+// A cell's Morton code within its brick (bit 3b + a: bit b of its index along axis a),
+// and back, through tables (both sit in the mesher's innermost loops).
+constexpr std::array<int, kBrick> kMortonSpread = [] {
+  std::array<int, kBrick> t{};
+  for (int i = 0; i < kBrick; ++i)
+    for (int b = 0; b < kBrickLevels; ++b) t[static_cast<std::size_t>(i)] |= ((i >> b) & 1) << (3 * b);
+  return t;
+}();
 int morton(int x, int y, int z) {
-  int code = 0;
-  for (int b = 0; b < kBrickLevels; ++b)
-    code |= (((x >> b) & 1) << (3 * b)) | (((y >> b) & 1) << (3 * b + 1)) | (((z >> b) & 1) << (3 * b + 2));
-  return code;
+  return kMortonSpread[static_cast<std::size_t>(x)] | kMortonSpread[static_cast<std::size_t>(y)] << 1 |
+         kMortonSpread[static_cast<std::size_t>(z)] << 2;
 }
-
-// The cell (x, y, z) within its brick of a Morton code.
+struct MortonCell {
+  std::uint8_t index[3];
+};
+const std::array<MortonCell, kBrickCells> kMortonCells = [] {
+  std::array<MortonCell, kBrickCells> t{};
+  for (int code = 0; code < kBrickCells; ++code)
+    for (int b = 0; b < kBrickLevels; ++b)
+      for (int a = 0; a < 3; ++a)
+        t[static_cast<std::size_t>(code)].index[a] = static_cast<std::uint8_t>(t[static_cast<std::size_t>(code)].index[a] | ((code >> (3 * b + a)) & 1) << b);
+  return t;
+}();
 std::array<int, 3> unmorton(int code) {
-  std::array<int, 3> cell = {0, 0, 0};
-  for (int b = 0; b < kBrickLevels; ++b)
-    for (int a = 0; a < 3; ++a) cell[static_cast<std::size_t>(a)] |= ((code >> (3 * b + a)) & 1) << b;
-  return cell;
+  const MortonCell& c = kMortonCells[static_cast<std::size_t>(code)];
+  return {c.index[0], c.index[1], c.index[2]};
 }
 
 // Node signs of one brick: bit t of column (x, y) is node (x0 + x, y0 + y, z0 + t).
@@ -1389,9 +1402,21 @@ class Contour {
   void quads(const BrickMesh& b, std::vector<Triangle>& out) const {
     BrickSigns sg;
     signs(b.origin, sg);
-    // The brick's own cells by position (most quads stay inside their brick).
-    thread_local std::array<int, kBrickCells> local;
-    local.fill(-1);
+    // The brick's own cells by position (most quads stay inside their brick): this
+    // thread's table, -1 where no cell is, as every brick leaves it.
+    thread_local std::array<int, kBrickCells> table = [] {
+      std::array<int, kBrickCells> t;
+      t.fill(-1);
+      return t;
+    }();
+    std::array<int, kBrickCells>& local = table;
+    struct Clear {
+      std::array<int, kBrickCells>& local;
+      const std::vector<std::uint16_t>& cells;
+      ~Clear() {
+        for (std::uint16_t code : cells) local[code] = -1;
+      }
+    } clear{local, b.cells};
     for (std::size_t i = 0; i < b.cells.size(); ++i)
       local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
     // A brick merged into one vertex (a flat sheet, a plane brick) has quads only across its
