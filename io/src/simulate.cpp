@@ -393,6 +393,20 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     }
   }
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
+  // The design is read now, before the cut, so that a design file that cannot be used
+  // stops the run at once.
+  std::optional<removal::TriangleMesh> design_mesh;  // kept for the report page
+  if (job.design) {
+    design_mesh = transformed(read_mesh(job.design->file), *job.design);
+    const auto& t = design_mesh->triangles;
+    const auto& x = design_mesh->vertices_mm;
+    if (std::all_of(t.begin(), t.end(), [&](const Eigen::Vector3i& f) {
+          return removal::degenerate_triangle(x[static_cast<std::size_t>(f[0])], x[static_cast<std::size_t>(f[1])],
+                                              x[static_cast<std::size_t>(f[2])]);
+        }))
+      throw InputError(job.design->file, 0, 0, "design mesh has no triangle of nonzero area");
+    hashed.push_back(job.design->file);
+  }
   bool overlap = false;
   Eigen::AlignedBox3d path_box;
   for (const auto& m : moves.moves) {
@@ -508,12 +522,9 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
 
   // 7. Compare.
   std::vector<double> deviation;
-  std::optional<removal::TriangleMesh> design_mesh;  // kept for the report page
-  if (job.design) {
+  if (design_mesh) {
     progress("compare", 0, 1);
-    design_mesh = transformed(read_mesh(job.design->file), *job.design);
     const removal::TriangleMesh& design = *design_mesh;
-    hashed.push_back(job.design->file);
     const removal::DesignDistance distance(design);
     if (!distance.closed())
       result.warnings.push_back(display_name(job.design->file, job.file) +

@@ -261,6 +261,10 @@ struct DesignDistance::Impl {
   }
 };
 
+bool degenerate_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  return (b - a).cross(c - a).norm() <= 1e-14 * std::max(1.0, (b - a).squaredNorm() + (c - a).squaredNorm());
+}
+
 DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.points = design.vertices_mm;
@@ -269,9 +273,8 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
     const Eigen::Vector3d& a = m.points[static_cast<std::size_t>(t[0])];
     const Eigen::Vector3d& b = m.points[static_cast<std::size_t>(t[1])];
     const Eigen::Vector3d& c = m.points[static_cast<std::size_t>(t[2])];
-    const Eigen::Vector3d n = (b - a).cross(c - a);
-    if (n.norm() <= 1e-14 * std::max(1.0, (b - a).squaredNorm() + (c - a).squaredNorm())) continue;  // degenerate
-    const Eigen::Vector3d unit = n.normalized();
+    if (degenerate_triangle(a, b, c)) continue;
+    const Eigen::Vector3d unit = (b - a).cross(c - a).normalized();
     m.triangles.emplace_back(K::Point_3(a.x(), a.y(), a.z()), K::Point_3(b.x(), b.y(), b.z()),
                              K::Point_3(c.x(), c.y(), c.z()));
     m.corners.push_back(t);
@@ -296,6 +299,7 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
 DesignDistance::~DesignDistance() = default;
 DesignDistance::DesignDistance(DesignDistance&&) noexcept = default;
 bool DesignDistance::closed() const { return impl_->closed; }
+bool DesignDistance::empty() const { return impl_->triangles.empty(); }
 
 double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
   DistanceHint none;
@@ -304,6 +308,7 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
 
 double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& hint) const {
   const Impl& m = *impl_;
+  if (m.triangles.empty()) return std::numeric_limits<double>::infinity();
   // The nearest triangle (of equally near ones, the first): from the grid, starting from
   // the hint's triangle when there is one; from CGAL's tree for a point far from the design.
   std::size_t f = m.triangles.size();

@@ -315,6 +315,18 @@ TEST_F(Simulate, OpenDesignIsAWarningAndStillCompared) {
   EXPECT_TRUE(report()["summary"]["compared"].get<bool>());
 }
 
+// A design whose every triangle is a line (no side to measure against): refused before the
+// cut, naming the file, with no output (it used to crash in the comparison).
+TEST_F(Simulate, DesignWithoutAreaIsRefused) {
+  vcut::removal::TriangleMesh line;
+  line.vertices_mm = {{0, 0, 1}, {1, 1, 1}, {2, 2, 1}};
+  line.triangles = {{0, 1, 2}, {0, 2, 1}};
+  write_ascii_stl(dir / "part.stl", line);
+  job += "design: {file: part.stl}\n";
+  expect_error(simulate(), "part.stl: design mesh has no triangle of nonzero area");
+  EXPECT_TRUE(no_output());
+}
+
 // A program that cuts the whole stock away (a 10 mm cutter through a 1 x 1 x 1 mm block):
 // an empty machined mesh is still a result, written as an STL of no triangles, with a
 // warning; no crash and no refusal, with either engine.

@@ -30,6 +30,17 @@ TEST(DesignDistance, BoxSignsAndDistances) {
   EXPECT_NEAR(d.signed_distance({0.5, 0.5, 0.5}), -0.5, 1e-12);    // inside near a corner
 }
 
+// A mesh of lines only: nothing to measure against, an infinite distance (no crash).
+TEST(DesignDistance, MeshWithoutAreaIsEmpty) {
+  TriangleMesh line;
+  line.vertices_mm = {{0, 0, 1}, {1, 1, 1}, {2, 2, 1}};
+  line.triangles = {{0, 1, 2}};
+  const DesignDistance d(line);
+  EXPECT_TRUE(d.empty());
+  EXPECT_EQ(d.signed_distance({0, 0, 0}), std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(DesignDistance(test::box_mesh({0, 0, 0}, {1, 1, 1})).empty());
+}
+
 // Distance from x to triangle abc by a second method: the foot on the plane when it lies
 // inside (same side of all three edges), else the nearest of the three edges.
 double brute_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, const Eigen::Vector3d& b,

@@ -23,14 +23,20 @@ struct DistanceHint {
   Eigen::Vector3d point_mm = Eigen::Vector3d::Zero();
 };
 
+// Whether a triangle is too thin to have a side (its normal's length within rounding of
+// zero): DesignDistance leaves such triangles out.
+bool degenerate_triangle(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+
 class DesignDistance {
  public:
   explicit DesignDistance(const TriangleMesh& design);
   ~DesignDistance();
   DesignDistance(DesignDistance&&) noexcept;
+  // +infinity for a mesh with no triangle of nonzero area (empty()).
   double signed_distance(const Eigen::Vector3d& x_mm) const;
   double signed_distance(const Eigen::Vector3d& x_mm, DistanceHint& hint) const;
   bool closed() const;
+  bool empty() const;
 
  private:
   struct Impl;
