@@ -83,11 +83,23 @@ class TriangleGrid {
     const double cells = (size / cell_mm_).array().ceil().prod();
     if (cells > kMaxCells) cell_mm_ *= std::cbrt(cells / kMaxCells) * 1.01;
     origin_ = box.min();
-    for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_mm_)));
-    // Two passes over the triangles' cells: count, then fill (a counting sort by cell).
-    std::vector<std::uint32_t> count(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
-    for (std::size_t f = 0; f < corners.size(); ++f)
-      visit_cells(points, corners[f], [&](std::size_t cell) { ++count[cell + 1]; });
+    // Two passes over the triangles' cells: count, then fill (a counting sort by cell). Many
+    // large triangles among small ones would each be listed in many cells: past kMaxItems
+    // per triangle the count starts again with cells twice the size.
+    std::vector<std::uint32_t> count;
+    for (;;) {
+      for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_mm_)));
+      count.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
+      const std::uint64_t limit = kMaxItems * corners.size();
+      std::uint64_t items = 0;
+      for (std::size_t f = 0; f < corners.size() && items <= limit; ++f)
+        visit_cells(points, corners[f], [&](std::size_t cell) {
+          ++count[cell + 1];
+          ++items;
+        });
+      if (items <= limit) break;
+      cell_mm_ *= 2.0;
+    }
     for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
     first_ = count;
     items_.resize(first_.back());
@@ -156,6 +168,7 @@ class TriangleGrid {
 
  private:
   static constexpr double kMaxCells = 4.0e6;
+  static constexpr std::uint64_t kMaxItems = 16;  // cells listing a triangle, on average
   static constexpr int kMaxShells = 6;
 
   // Every cell the triangle meets: columns along the plane's steepest axis within the

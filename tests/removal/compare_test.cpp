@@ -99,13 +99,28 @@ TEST(DesignDistance, GridSearchMatchesBruteForce) {
     const bool in_slot = std::abs(x.y() - 20.0) < 5.0 && x.z() > -2.0;
     return in_box && !in_slot;
   };
+  // Twelve large triangles (a 100 mm cube) and 52 tiny ones (13 tetrahedra of 1 um beside
+  // it): the median triangle is tiny, so the grid's first cells would list each large
+  // triangle thousands of times and it coarsens them.
+  TriangleMesh cube = test::box_mesh({0, 0, 0}, {100, 100, 100});
+  for (int k = 0; k < 13; ++k) {
+    const int base = static_cast<int>(cube.vertices_mm.size());
+    const Eigen::Vector3d o(120.0 + k, 50.0, 50.0);
+    for (const Eigen::Vector3d& e : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1e-3, 0, 0), Eigen::Vector3d(0, 1e-3, 0),
+                                     Eigen::Vector3d(0, 0, 1e-3)})
+      cube.vertices_mm.push_back(o + e);
+    for (const Eigen::Vector3i& t : {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 1, 3), Eigen::Vector3i(0, 3, 2), Eigen::Vector3i(1, 2, 3)})
+      cube.triangles.push_back(t + Eigen::Vector3i::Constant(base));
+  }
+  auto inside_cube = [](const Eigen::Vector3d& x) { return (x.array() > 0.0).all() && (x.array() < 100.0).all(); };
   struct Case {
     const TriangleMesh* mesh;
     std::function<bool(const Eigen::Vector3d&)> inside;
     Eigen::Vector3d lo, hi;
   };
   const std::vector<Case> cases = {{&prism, inside_prism, {-2, -12, -12}, {42, 12, 12}},
-                                   {&block, inside_block, {-2, -2, -22}, {62, 42, 2}}};
+                                   {&block, inside_block, {-2, -2, -22}, {62, 42, 2}},
+                                   {&cube, inside_cube, {-5, -5, -5}, {135, 105, 105}}};
   std::mt19937 random(7);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (const Case& c : cases) {
