@@ -117,11 +117,11 @@ class TriangleGrid {
 
   bool empty() const { return items_.empty(); }
 
-  // Finds the triangle nearest to x, given a candidate (best_f at squared distance best,
-  // or none: infinity): cells in shells about x's cell, nearest shell first, each cell
-  // whose box lies within the best distance so far, until the next shell lies beyond it.
-  // false when that takes more than kMaxShells shells (x far from the design) or x lies
-  // outside the grid with no candidate.
+  // Offers consider(f) every triangle that may lie nearer to x than `best` (the caller's
+  // squared distance so far, infinity for none, which consider() lowers as it goes): the
+  // cells in shells about x's cell, nearest shell first, each cell whose box lies within
+  // the best distance so far, until the next shell lies beyond it. False when that takes
+  // more than kMaxShells shells (x far from the design, or far outside the grid).
   template <class Consider>
   bool nearest(const Eigen::Vector3d& x, const double& best, Consider&& consider) const {
     int at[3];
