@@ -496,7 +496,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     const removal::SurfaceMesh other = second->surface();
     result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
     result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    static_cast<SurfaceDifference&>(result.engines) = surface_difference(machined, other, v);
+    static_cast<SurfaceDifference&>(result.engines) = surface_difference(machined, other, v, kSharpEdgeDeg);
     stage_done("check");
   }
 

@@ -23,7 +23,6 @@ using Clock = std::chrono::steady_clock;
 // edge is where an incident face turns more than this from the vertex's mean normal. A
 // 90 deg edge turns 45; the corners a coarse densification leaves between chords turn half
 // the step.
-constexpr double kSharpEdgeDeg = 20.0;
 
 std::string number(double x) {
   std::ostringstream s;

@@ -85,6 +85,8 @@ struct SurfaceDifference {
 // where an incident face's normal strays more than that from their mean) are left out of
 // max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
 // within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
+// The angle (deg) past which the engine check and `vcut study` call an edge sharp.
+inline constexpr double kSharpEdgeDeg = 20.0;
 SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
                                      double sharp_edge_deg = 0.0);
 
