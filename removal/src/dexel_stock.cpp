@@ -1048,6 +1048,7 @@ class Contour {
     tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
       std::vector<std::uint64_t>& bits = column_bits.local();
       bits.assign(kNodeColumns * words, 0);
+      std::vector<std::uint64_t> in_any(words), in_all(words);
       for (int c = range.begin(); c != range.end(); ++c) {
         const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
         std::fill(bits.begin(), bits.end(), 0);
@@ -1056,23 +1057,30 @@ class Contour {
           column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)),
                        lo_[2], lo_[2] + count_[2] - 1, [&](int k0, int k1) { set_bits(row, k0 - lo_[2], k1 - lo_[2]); });
         }
-        for (int bk = 0; bk < bricks_[2]; ++bk) {
-          BrickSigns sg;
-          const int shift = bk * kBrick;
-          const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
-          bool any_in = false, any_out = false;
-          for (std::size_t col = 0; col < kNodeColumns; ++col) {
-            const std::uint64_t* row = bits.data() + col * words;
-            const std::size_t w = static_cast<std::size_t>(shift) >> 6;
-            const int offset = shift & 63;
-            std::uint64_t v = row[w] >> offset;
-            if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
-            const std::uint32_t mask = static_cast<std::uint32_t>(v) & full;
-            sg.column[col] = mask;
-            any_in = any_in || mask != 0;
-            any_out = any_out || mask != full;
+        // Nodes inside in any and in all of the brick column's node columns: a brick whose
+        // nodes are all out, or all in, holds no surface (most of a stock's bricks).
+        std::fill(in_any.begin(), in_any.end(), 0);
+        std::fill(in_all.begin(), in_all.end(), ~std::uint64_t{0});
+        for (std::size_t col = 0; col < kNodeColumns; ++col) {
+          const std::uint64_t* row = bits.data() + col * words;
+          for (std::size_t w = 0; w < words; ++w) {
+            in_any[w] |= row[w];
+            in_all[w] &= row[w];
           }
-          if (!any_in || !any_out) continue;
+        }
+        const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
+        auto levels = [&](const std::uint64_t* row, int shift) {  // bits shift .. shift + kBrick
+          const std::size_t w = static_cast<std::size_t>(shift) >> 6;
+          const int offset = shift & 63;
+          std::uint64_t v = row[w] >> offset;
+          if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
+          return static_cast<std::uint32_t>(v) & full;
+        };
+        for (int bk = 0; bk < bricks_[2]; ++bk) {
+          const int shift = bk * kBrick;
+          if (levels(in_any.data(), shift) == 0 || levels(in_all.data(), shift) == full) continue;
+          BrickSigns sg;
+          for (std::size_t col = 0; col < kNodeColumns; ++col) sg.column[col] = levels(bits.data() + col * words, shift);
           BrickMesh b;
           b.origin = {x0, y0, lo_[2] + shift};
           if (plane(b, sg) || vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
