@@ -1100,8 +1100,16 @@ class Contour {
       next += static_cast<std::uint32_t>(b.points.size());
     }
     std::vector<std::vector<Triangle>> faces(bricks_list_.size());
+    // Each thread's table of a brick's cells by position, -1 where no cell is, as every
+    // brick leaves it.
+    tbb::enumerable_thread_specific<CellTable> tables([] {
+      CellTable t;
+      t.fill(-1);
+      return t;
+    });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks_list_.size(), 4), [&](const auto& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) quads(bricks_list_[i], faces[i]);
+      CellTable& table = tables.local();
+      for (std::size_t i = range.begin(); i != range.end(); ++i) quads(bricks_list_[i], table, faces[i]);
     });
     SurfaceMesh mesh;
     mesh.mesh.vertices_mm.reserve(next);
@@ -1115,6 +1123,7 @@ class Contour {
 
  private:
   using Triangle = Eigen::Vector3i;
+  using CellTable = std::array<int, kBrickCells>;  // a brick's vertex per cell, -1: none
 
   // The runs [k0, k1] of inside nodes (within [k_lo, k_hi]) on the z ray through (i, j):
   // nodes k with lo <= position(k) <= hi for one of its intervals (a node on an endpoint
@@ -1407,19 +1416,13 @@ class Contour {
 
   // The faces of every sign-changing edge starting at one of the brick's active cells'
   // lowest node.
-  void quads(const BrickMesh& b, std::vector<Triangle>& out) const {
+  void quads(const BrickMesh& b, CellTable& local, std::vector<Triangle>& out) const {
     BrickSigns sg;
     signs(b.origin, sg);
-    // The brick's own cells by position (most quads stay inside their brick): this
-    // thread's table, -1 where no cell is, as every brick leaves it.
-    thread_local std::array<int, kBrickCells> table = [] {
-      std::array<int, kBrickCells> t;
-      t.fill(-1);
-      return t;
-    }();
-    std::array<int, kBrickCells>& local = table;
+    // The brick's own cells by position in `local` (most quads stay inside their brick),
+    // cleared again on the way out.
     struct Clear {
-      std::array<int, kBrickCells>& local;
+      CellTable& local;
       const std::vector<std::uint16_t>& cells;
       ~Clear() {
         for (std::uint16_t code : cells) local[code] = -1;
