@@ -1042,21 +1042,14 @@ class Contour {
     std::vector<std::vector<BrickMesh>> by_column(static_cast<std::size_t>(columns));
     // Node signs a brick column at a time: each node column's inside nodes as bits over the
     // whole height, from which each brick takes its 17.
-    const std::size_t words = static_cast<std::size_t>(count_[2] + 64) / 64 + 1;
-    constexpr std::size_t kNodeColumns = (kBrick + 1) * (kBrick + 1);
+    const std::size_t words = column_words();
     tbb::enumerable_thread_specific<std::vector<std::uint64_t>> column_bits;
     tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
       std::vector<std::uint64_t>& bits = column_bits.local();
-      bits.assign(kNodeColumns * words, 0);
       std::vector<std::uint64_t> in_any(words), in_all(words);
       for (int c = range.begin(); c != range.end(); ++c) {
         const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
-        std::fill(bits.begin(), bits.end(), 0);
-        for (std::size_t col = 0; col < kNodeColumns; ++col) {
-          std::uint64_t* row = bits.data() + col * words;
-          column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)),
-                       lo_[2], lo_[2] + count_[2] - 1, [&](int k0, int k1) { set_bits(row, k0 - lo_[2], k1 - lo_[2]); });
-        }
+        node_bits(c, bits);
         // Nodes inside in any and in all of the brick column's node columns: a brick whose
         // nodes are all out, or all in, holds no surface (most of a stock's bricks).
         std::fill(in_any.begin(), in_any.end(), 0);
@@ -1068,19 +1061,11 @@ class Contour {
             in_all[w] &= row[w];
           }
         }
-        const std::uint32_t full = (1u << (kBrick + 1)) - 1u;
-        auto levels = [&](const std::uint64_t* row, int shift) {  // bits shift .. shift + kBrick
-          const std::size_t w = static_cast<std::size_t>(shift) >> 6;
-          const int offset = shift & 63;
-          std::uint64_t v = row[w] >> offset;
-          if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
-          return static_cast<std::uint32_t>(v) & full;
-        };
         for (int bk = 0; bk < bricks_[2]; ++bk) {
           const int shift = bk * kBrick;
-          if (levels(in_any.data(), shift) == 0 || levels(in_all.data(), shift) == full) continue;
+          if (levels(in_any.data(), shift) == 0 || levels(in_all.data(), shift) == kFullColumn) continue;
           BrickSigns sg;
-          for (std::size_t col = 0; col < kNodeColumns; ++col) sg.column[col] = levels(bits.data() + col * words, shift);
+          brick_signs(bits, shift, sg);
           BrickMesh b;
           b.origin = {x0, y0, lo_[2] + shift};
           if (plane(b, sg) || vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
@@ -1107,9 +1092,20 @@ class Contour {
       t.fill(-1);
       return t;
     });
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks_list_.size(), 4), [&](const auto& range) {
+    // A brick column at a time again, its node bits found once for all its bricks.
+    tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
       CellTable& table = tables.local();
-      for (std::size_t i = range.begin(); i != range.end(); ++i) quads(bricks_list_[i], table, faces[i]);
+      std::vector<std::uint64_t>& bits = column_bits.local();
+      for (int c = range.begin(); c != range.end(); ++c) {
+        const std::size_t first = column_first_[static_cast<std::size_t>(c)], last = column_first_[static_cast<std::size_t>(c) + 1];
+        if (first == last) continue;
+        node_bits(c, bits);
+        for (std::size_t i = first; i < last; ++i) {
+          BrickSigns sg;
+          brick_signs(bits, bricks_list_[i].origin[2] - lo_[2], sg);
+          quads(bricks_list_[i], sg, table, faces[i]);
+        }
+      }
     });
     SurfaceMesh mesh;
     mesh.mesh.vertices_mm.reserve(next);
@@ -1147,17 +1143,40 @@ class Contour {
     }
   }
 
-  // One brick's node signs from its rays (the quads' pass: the bricks' column bits of the
-  // first pass are not kept, as they would cost 1.2 KB a brick).
-  void signs(const std::array<int, 3>& origin, BrickSigns& out) const {
-    for (int y = 0; y <= kBrick; ++y) {
-      for (int x = 0; x <= kBrick; ++x) {
-        std::uint64_t bits = 0;
-        column_nodes(origin[0] + x, origin[1] + y, origin[2], origin[2] + kBrick,
-                     [&](int k0, int k1) { set_bits(&bits, k0 - origin[2], k1 - origin[2]); });
-        out.column[static_cast<std::size_t>(y * (kBrick + 1) + x)] = static_cast<std::uint32_t>(bits);
-      }
+  static constexpr std::size_t kNodeColumns = (kBrick + 1) * (kBrick + 1);
+  static constexpr std::uint32_t kFullColumn = (1u << (kBrick + 1)) - 1u;  // a brick's 17 nodes
+
+  // 64-bit words per node column over the lattice's height, with room for a brick's 17
+  // bits read past the last node.
+  std::size_t column_words() const { return static_cast<std::size_t>(count_[2] + 64) / 64 + 1; }
+
+  // The inside nodes of brick column c's node columns (17 x 17, x fastest), a bit per node
+  // over the lattice's height (the bricks' column bits are not kept between the passes:
+  // 1.2 KB a brick).
+  void node_bits(int c, std::vector<std::uint64_t>& bits) const {
+    const std::size_t words = column_words();
+    bits.assign(kNodeColumns * words, 0);
+    const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
+    for (std::size_t col = 0; col < kNodeColumns; ++col) {
+      std::uint64_t* row = bits.data() + col * words;
+      column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)), lo_[2],
+                   lo_[2] + count_[2] - 1, [&](int k0, int k1) { set_bits(row, k0 - lo_[2], k1 - lo_[2]); });
     }
+  }
+
+  // Bits shift .. shift + kBrick of a node column's bits.
+  static std::uint32_t levels(const std::uint64_t* row, int shift) {
+    const std::size_t w = static_cast<std::size_t>(shift) >> 6;
+    const int offset = shift & 63;
+    std::uint64_t v = row[w] >> offset;
+    if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
+    return static_cast<std::uint32_t>(v) & kFullColumn;
+  }
+
+  // The node signs of the brick `shift` nodes up its column, from the column's node bits.
+  void brick_signs(const std::vector<std::uint64_t>& bits, int shift, BrickSigns& out) const {
+    const std::size_t words = column_words();
+    for (std::size_t col = 0; col < kNodeColumns; ++col) out.column[col] = levels(bits.data() + col * words, shift);
   }
 
   // Where the ray of family `axis` at (iu, iw) crosses between nodes n and n + 1: the
@@ -1416,9 +1435,7 @@ class Contour {
 
   // The faces of every sign-changing edge starting at one of the brick's active cells'
   // lowest node.
-  void quads(const BrickMesh& b, CellTable& local, std::vector<Triangle>& out) const {
-    BrickSigns sg;
-    signs(b.origin, sg);
+  void quads(const BrickMesh& b, const BrickSigns& sg, CellTable& local, std::vector<Triangle>& out) const {
     // The brick's own cells by position in `local` (most quads stay inside their brick),
     // cleared again on the way out.
     struct Clear {
