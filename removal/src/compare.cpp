@@ -322,11 +322,11 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x) const {
 double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& hint) const {
   const Impl& m = *impl_;
   if (m.triangles.empty()) return std::numeric_limits<double>::infinity();
-  // The nearest triangle (of equally near ones, the first): from the grid, starting from
+  // The nearest triangle (of equally near ones, the lowest-numbered): from the grid, starting from
   // the hint's triangle when there is one; from CGAL's tree for a point far from the design.
   std::size_t f = m.triangles.size();
   if (!m.grid.empty()) {
-    // A first bound from the hint's triangle and those listed in x's own cell.
+    // A first bound from the hint's triangle, then the grid's cells outward from x's.
     double best = std::numeric_limits<double>::infinity();
     std::size_t best_f = m.triangles.size();
     auto consider = [&](std::uint32_t g) {
