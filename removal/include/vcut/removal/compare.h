@@ -1,6 +1,7 @@
 // Signed deviation of the machined surface from the design part, exact against the
-// design's triangles (CGAL AABB tree): negative = gouge (inside the design), positive =
-// excess (material left). Workpiece frame, mm.
+// design's triangles (a grid of the cells each triangle meets; CGAL's AABB tree for points
+// far from the design): negative = gouge (inside the design), positive = excess (material
+// left). Workpiece frame, mm.
 #pragma once
 
 #include <Eigen/Core>
