@@ -130,15 +130,11 @@ SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const remova
     std::copy(sa.begin(), sa.end(), skip.begin());
     std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
   }
-  constexpr std::size_t kChunk = 1024;
-  tbb::parallel_for(std::size_t{0}, (d.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
-    removal::DistanceHint hint;
-    for (std::size_t i = chunk * kChunk; i < std::min(d.size(), (chunk + 1) * kChunk); ++i) {
-      const bool in_a = i < na;
-      if (i == na) hint = removal::DistanceHint();
-      where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
-      d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
-    }
+  removal::hinted_queries(d.size(), [&](std::size_t i, removal::DistanceHint& hint) {
+    const bool in_a = i < na;
+    if (i == na) hint = removal::DistanceHint();  // the other mesh's triangles from here
+    where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
+    d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
   });
   SurfaceDifference e;
   e.done = true;
@@ -562,14 +558,9 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
         tbb::parallel_sort(order.begin(), order.end());
       }
       std::vector<double> d(points.size());  // in the order of `points`
-      // Fixed chunks of neighbouring points, each query hinted by the one before it.
-      constexpr std::size_t kChunk = 1024;
-      tbb::parallel_for(std::size_t{0}, (points.size() + kChunk - 1) / kChunk, [&](std::size_t chunk) {
-        removal::DistanceHint hint;
-        for (std::size_t i = chunk * kChunk; i < std::min(points.size(), (chunk + 1) * kChunk); ++i) {
-          const std::size_t p = order[i].second;
-          d[p] = distance.signed_distance(points[p].x_mm, hint);
-        }
+      removal::hinted_queries(points.size(), [&](std::size_t i, removal::DistanceHint& hint) {
+        const std::size_t p = order[i].second;
+        d[p] = distance.signed_distance(points[p].x_mm, hint);
       });
       EndpointCheck& e = result.endpoints;
       e.done = true;

@@ -371,18 +371,22 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& h
   return d.dot(normal) < 0.0 ? -distance : distance;
 }
 
+void hinted_queries(std::size_t count, const std::function<void(std::size_t, DistanceHint&)>& query) {
+  constexpr std::size_t kChunk = 1024;
+  tbb::parallel_for(std::size_t{0}, (count + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    DistanceHint hint;
+    for (std::size_t i = chunk * kChunk; i < std::min(count, (chunk + 1) * kChunk); ++i) query(i, hint);
+  });
+}
+
 Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, const CompareSettings& settings) {
   Comparison result;
   const TriangleMesh& mesh = machined.mesh;
   const std::size_t n = mesh.vertices_mm.size();
   result.deviation_mm.resize(n);
-  // Fixed chunks of consecutive vertices (the mesher's are neighbours), each query hinted
-  // by the one before it: the same values for any thread count.
-  constexpr std::size_t kChunk = 1024;
-  tbb::parallel_for(std::size_t{0}, (n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
-    DistanceHint hint;
-    for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i)
-      result.deviation_mm[i] = design.signed_distance(mesh.vertices_mm[i], hint);
+  // The mesher's consecutive vertices are neighbours.
+  hinted_queries(n, [&](std::size_t i, DistanceHint& hint) {
+    result.deviation_mm[i] = design.signed_distance(mesh.vertices_mm[i], hint);
   });
   for (double d : result.deviation_mm) {
     result.max_gouge_mm = std::max(result.max_gouge_mm, -d);

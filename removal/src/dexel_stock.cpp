@@ -1048,7 +1048,7 @@ class Contour {
       std::vector<std::uint64_t>& bits = column_bits.local();
       std::vector<std::uint64_t> in_any(words), in_all(words);
       for (int c = range.begin(); c != range.end(); ++c) {
-        const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
+        const auto [x0, y0] = column_origin(c);
         node_bits(c, bits);
         // Nodes inside in any and in all of the brick column's node columns: a brick whose
         // nodes are all out, or all in, holds no surface (most of a stock's bricks).
@@ -1146,6 +1146,11 @@ class Contour {
   static constexpr std::size_t kNodeColumns = (kBrick + 1) * (kBrick + 1);
   static constexpr std::uint32_t kFullColumn = (1u << (kBrick + 1)) - 1u;  // a brick's 17 nodes
 
+  // Lattice x and y of brick column c's first node.
+  std::pair<int, int> column_origin(int c) const {
+    return {lo_[0] + (c % bricks_[0]) * kBrick, lo_[1] + (c / bricks_[0]) * kBrick};
+  }
+
   // 64-bit words per node column over the lattice's height, with room for a brick's 17
   // bits read past the last node.
   std::size_t column_words() const { return static_cast<std::size_t>(count_[2] + 64) / 64 + 1; }
@@ -1156,7 +1161,7 @@ class Contour {
   void node_bits(int c, std::vector<std::uint64_t>& bits) const {
     const std::size_t words = column_words();
     bits.assign(kNodeColumns * words, 0);
-    const int x0 = lo_[0] + (c % bricks_[0]) * kBrick, y0 = lo_[1] + (c / bricks_[0]) * kBrick;
+    const auto [x0, y0] = column_origin(c);
     for (std::size_t col = 0; col < kNodeColumns; ++col) {
       std::uint64_t* row = bits.data() + col * words;
       column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)), lo_[2],

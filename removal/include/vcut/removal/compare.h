@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -43,6 +44,12 @@ class DesignDistance {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Runs query(i, hint) for every i in [0, count), in parallel, in fixed chunks of 1,024
+// consecutive indices, each chunk starting with no hint and passing one hint along: give
+// neighbouring points neighbouring indices. The same hints, so the same answers, for any
+// thread count.
+void hinted_queries(std::size_t count, const std::function<void(std::size_t, DistanceHint&)>& query);
 
 struct CompareSettings {
   double gouge_tolerance_mm = 0.01;
