@@ -51,29 +51,34 @@ int run_simulate(const std::string& job_file, const vcut::io::SimulateOptions& b
   return 0;
 }
 
-int run_poses(const std::string& job_file, std::string out, bool quiet) {
+int run_poses(const std::string& job_file, std::string out, bool every_period, bool quiet) {
   const vcut::io::Job job = vcut::io::read_job(job_file);
   if (out.empty()) {
     vcut::io::ensure_writable_folder(job.out_dir);
     out = job.out_dir + "/poses.csv";
   }
-  const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
+  // Beside it: poses.csv -> poses_blocks.csv (per block), poses_periods.csv (every period).
+  const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out;
+  const std::string blocks_out = stem + "_blocks.csv", periods_out = stem + "_periods.csv";
+  const vcut::io::PoseRun run =
+      every_period ? vcut::io::run_pose_engine_with_periods(job, periods_out) : vcut::io::run_pose_engine(job);
   vcut::io::write_poses_csv(out, job, run);
-  // Per-block figures beside it: poses.csv -> poses_blocks.csv.
-  const std::string blocks_out = (out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out) +
-                                 "_blocks.csv";
   vcut::io::write_blocks_csv(blocks_out, job, run);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  for (const auto& w : run.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   if (quiet) return 0;
   std::printf("job %s on %s: %zu blocks, %zu poses (q %d..%d, mean %.2f), cycle time %.3f s\n", job.name.c_str(),
               job.machine.c_str(), run.program.blocks.size(), run.densified.samples.size(), run.q_min, run.q_max,
               run.q_mean, run.feed.cycle_time_s);
   if (run.max_nonlinear_error_mm > 0.0)
     std::printf("max non-linear tip error %.4f mm at %s\n", run.max_nonlinear_error_mm, run.max_nonlinear_line.c_str());
-  if (!run.actual.empty())
-    std::printf("contour error: max %.2f um at %s, RMS %.2f um\n", run.max_contour_error_um, run.max_contour_line.c_str(),
+  if (!run.actual.empty()) {
+    std::printf("contour error: max %.2f um at %s, RMS %.2f um", run.max_contour_error_um, run.max_contour_line.c_str(),
                 run.rms_contour_error_um);
+    if (job.servo) std::printf(" (%zu interpolation periods of %g s)", run.periods, job.servo->period_s);
+    std::printf("\n");
+  }
   size_t shown = 0;
   for (const auto& e : run.events)
     if (shown++ < 10) std::printf("%s at %s: %s\n", e.kind.c_str(), e.line.c_str(), e.detail.c_str());
@@ -191,6 +196,10 @@ int main(int argc, char** argv) {
   poses->add_option("job", poses_job, "Job file (YAML)")->required();
   poses->add_option("--out", poses_out, "Output CSV (default: the job's output folder/poses.csv)");
   poses->add_flag("--quiet,-q", poses_quiet, "Print nothing but errors and warnings");
+  bool poses_every_period = false;
+  poses->add_flag("--every-period", poses_every_period,
+                  "Also write every interpolation period of the servo (commanded and actual axes, tip, contour error) "
+                  "to <out>_periods.csv");
   auto* compensate = app.add_subcommand("compensate", "Error-compensated axis program of the job (machine errors)");
   std::string compensate_job, compensate_out;
   bool compensate_quiet = false;
@@ -247,7 +256,7 @@ int main(int argc, char** argv) {
       options.max_memory_mb = max_memory;
       return run_simulate(job_file, options, quiet);
     }
-    if (*poses) return run_poses(poses_job, poses_out, poses_quiet);
+    if (*poses) return run_poses(poses_job, poses_out, poses_every_period, poses_quiet);
     if (*densification) {
       if (densification->count("--reference-step")) study_options.reference_step_mm = ref_step;
       if (densification->count("--reference-angle")) study_options.reference_angle_deg = ref_angle;

@@ -14,6 +14,56 @@ std::string resolve(const fs::path& base, const std::string& relative) {
   const fs::path p(relative);
   return (p.is_absolute() ? p : base / p).lexically_normal().string();
 }
+
+// One axis's loop keys, over the values it has (`where` prefixes the key in messages).
+void read_servo_axis(const YamlReader& yaml, const YAML::Node& node, const std::string& where,
+                     kinematics::ServoAxis& axis) {
+  if (node["kv"]) axis.kv_per_s = yaml.positive(node["kv"], where + "kv");
+  if (const YAML::Node wn = node["omega_n"]) {
+    // `ideal`: an ideal velocity loop, the position loop of first order (x' = Kv (c - x)).
+    if (wn.IsScalar() && wn.Scalar() == "ideal") {
+      axis.omega_n_per_s = 0.0;
+    } else {
+      if (!wn.IsScalar()) yaml.fail(wn, where + "omega_n", "a positive number (1/s) or ideal");
+      axis.omega_n_per_s = yaml.positive(wn, where + "omega_n");
+    }
+  }
+  if (node["zeta"]) axis.zeta = yaml.non_negative(node["zeta"], where + "zeta");
+  if (node["feed_forward"]) {
+    axis.feed_forward = yaml.non_negative(node["feed_forward"], where + "feed_forward");
+    if (axis.feed_forward > 1.0) yaml.fail(node["feed_forward"], where + "feed_forward", "a fraction from 0 to 1");
+  }
+}
+
+// servo: {kv, omega_n, zeta, feed_forward, period, axes: {X: {kv: 18}, C: {...}}}: the loop
+// of every machine axis (seed 004's parameters by default), overridden per axis letter.
+void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
+  yaml.only_keys(servo, "servo", {"kv", "omega_n", "zeta", "period", "feed_forward", "axes"});
+  kinematics::ServoSettings s;
+  kinematics::ServoAxis all;
+  read_servo_axis(yaml, servo, "servo.", all);
+  if (servo["period"]) {
+    // A period beyond a second is a unit mistake (ms for s), not an interpolator.
+    s.period_s = yaml.positive(servo["period"], "servo.period");
+    if (s.period_s > 1.0) yaml.fail(servo["period"], "servo.period", "the interpolation period in seconds, > 0 and at most 1 (e.g. 0.001)");
+  }
+  const std::vector<kinematics::AxisSpec>& axes = job.machine_spec.axes;
+  s.axes.assign(std::max<std::size_t>(1, axes.size()), all);
+  if (const YAML::Node per_axis = servo["axes"]) {
+    if (!per_axis.IsMap()) yaml.fail(per_axis, "servo.axes", "a map from axis letters to loop settings, e.g. {X: {kv: 18}}");
+    std::string letters;
+    for (const auto& a : axes) letters += a.letter;
+    for (const auto& kv : per_axis) {
+      const std::string key = kv.first.as<std::string>();
+      const std::size_t index = key.size() == 1 ? letters.find(key[0]) : std::string::npos;
+      if (index == std::string::npos)
+        yaml.fail(kv.first, "servo.axes." + key, "an axis of the machine " + job.machine_spec.name + " (one of " + letters + ")");
+      yaml.only_keys(kv.second, "servo.axes." + key, {"kv", "omega_n", "zeta", "feed_forward"});
+      read_servo_axis(yaml, kv.second, "servo.axes." + key + ".", s.axes[index]);
+    }
+  }
+  job.servo = s;
+}
 }  // namespace
 
 std::string display_name(const std::string& path, const std::string& job_file) {
@@ -187,6 +237,7 @@ Job read_job(const std::string& path) {
     if (densify["step"]) job.step_mm = yaml.positive(densify["step"], "densify.step");
     if (densify["angle"]) job.angle_step_deg = yaml.positive(densify["angle"], "densify.angle");
     if (densify["tolerance"]) job.densify_tolerance_mm = yaml.positive(densify["tolerance"], "densify.tolerance");
+    job.densify_given = true;
   }
   if (const YAML::Node feed = root["feed"]) {
     yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
@@ -198,22 +249,7 @@ Job read_job(const std::string& path) {
       if (job.feed.lookahead_blocks < 1) yaml.fail(feed["lookahead"], "feed.lookahead", "a positive number of blocks");
     }
   }
-  if (const YAML::Node servo = root["servo"]) {
-    // Present: every machine axis gets this loop (seed 004's parameters by default).
-    yaml.only_keys(servo, "servo", {"kv", "omega_n", "zeta", "period", "feed_forward"});
-    kinematics::ServoSettings s;
-    kinematics::ServoAxis axis;
-    if (servo["kv"]) axis.kv_per_s = yaml.positive(servo["kv"], "servo.kv");
-    if (servo["omega_n"]) axis.omega_n_per_s = yaml.non_negative(servo["omega_n"], "servo.omega_n");
-    if (servo["zeta"]) axis.zeta = yaml.positive(servo["zeta"], "servo.zeta");
-    if (servo["period"]) s.period_s = yaml.positive(servo["period"], "servo.period");
-    if (servo["feed_forward"]) {
-      axis.feed_forward = yaml.non_negative(servo["feed_forward"], "servo.feed_forward");
-      if (axis.feed_forward > 1.0) yaml.fail(servo["feed_forward"], "servo.feed_forward", "a fraction from 0 to 1");
-    }
-    s.axes = {axis};
-    job.servo = s;
-  }
+  if (const YAML::Node servo = root["servo"]) read_servo(yaml, servo, job);
   if (const YAML::Node errors = root["errors"]) {
     const std::string e = yaml.text(errors, "errors");
     if (e != "machine" && e != "none") yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");

@@ -18,14 +18,6 @@ namespace vcut::io {
 namespace fs = std::filesystem;
 namespace {
 
-// Distance from p to the segment [a, b].
-double segment_distance(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return (p - (a + t * d)).norm();
-}
-
 std::string num(double v, int digits = 10) {
   char buf[48];
   std::snprintf(buf, sizeof buf, "%.*g", digits, v + 0.0);
@@ -66,9 +58,69 @@ JobProgram read_job_program(const Job& job) {
   return out;
 }
 
-PoseRun run_pose_engine(const Job& job) { return run_pose_engine(job, read_job_program(job), job.resolution_mm); }
+double default_densify_tolerance_mm(const Job& job, double resolution_mm) {
+  double eps = resolution_mm / 10.0;
+  if (job.gouge_tolerance_mm > 0.0) eps = std::min(eps, job.gouge_tolerance_mm / 2.0);
+  return eps;
+}
 
-PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) {
+PoseRun run_pose_engine(const Job& job, const PeriodVisitor* every_period) {
+  return run_pose_engine(job, read_job_program(job), job.resolution_mm, every_period);
+}
+
+namespace {
+
+// The servo's actual path thinned for the cut: a period's pose is dropped while every
+// dropped pose since the last one kept lies within the tolerance of the chord from that
+// one to the newest (tip distance plus the flute length times the tool axis's turn from the
+// chord's axis); a block change keeps the pose before it, so that each move has one block.
+class PathThinner {
+ public:
+  PathThinner(std::vector<PoseRun::ActualPose>& out, double tolerance_mm, double reach_mm)
+      : out_(out), tolerance_mm_(tolerance_mm), reach_mm_(reach_mm) {}
+
+  void add(const PoseRun::ActualPose& p) {
+    if (out_.empty()) {
+      out_.push_back(p);
+      return;
+    }
+    if (!pending_.empty() && (p.block != pending_.back().block || pending_.size() >= kMaxPending || !fits(p))) {
+      out_.push_back(pending_.back());
+      pending_.clear();
+    }
+    pending_.push_back(p);
+  }
+  void finish() {
+    if (!pending_.empty()) out_.push_back(pending_.back());
+    pending_.clear();
+  }
+
+ private:
+  // Bounds the work per period; a long straight cruise keeps a pose every this many periods.
+  static constexpr std::size_t kMaxPending = 32;
+
+  bool fits(const PoseRun::ActualPose& p) const {
+    const kinematics::ToolPose& a = out_.back().pose;
+    const Eigen::Vector3d d = p.pose.tip_mm - a.tip_mm;
+    const double len2 = d.squaredNorm();
+    for (const auto& q : pending_) {
+      const double t = len2 > 0.0 ? std::clamp((q.pose.tip_mm - a.tip_mm).dot(d) / len2, 0.0, 1.0) : 0.0;
+      const double tip = (q.pose.tip_mm - (a.tip_mm + t * d)).norm();
+      const Eigen::Vector3d axis = (a.axis + t * (p.pose.axis - a.axis)).normalized();
+      const double turn = std::atan2(axis.cross(q.pose.axis).norm(), axis.dot(q.pose.axis));
+      if (tip + reach_mm_ * turn > tolerance_mm_) return false;
+    }
+    return true;
+  }
+
+  std::vector<PoseRun::ActualPose>& out_;
+  std::vector<PoseRun::ActualPose> pending_;
+  double tolerance_mm_, reach_mm_;
+};
+
+}  // namespace
+
+PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period) {
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
@@ -95,6 +147,13 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
   settings.step_mm = job.step_mm;
   settings.angle_step_rad = job.angle_step_deg * M_PI / 180.0;
   settings.tolerance_mm = job.densify_tolerance_mm;
+  // No `densify:`: every block within the tolerance of the machine's path (a straight
+  // translation stays one move), arcs still by their chord tolerance where it is finer.
+  const bool by_default = !job.densify_given;
+  if (by_default) {
+    settings.tolerance_mm = default_densify_tolerance_mm(job, resolution_mm);
+    settings.arcs_by_chord = true;
+  }
   run.densified = kinematics::densify(program, settings, dm);
   const auto& samples = run.densified.samples;
 
@@ -111,45 +170,92 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
     run.tool_length_mm[i] = it == dm.tool_length_mm.end() ? 0.0 : it->second;
   }
 
-  // Actual poses: servo lag on the axes, then the machine's geometric errors.
-  if (job.servo || job.apply_errors) {
-    std::vector<kinematics::AxisValues> actual_axes = axes;
-    if (job.servo) actual_axes = kinematics::simulate_servo(run.feed.t_s, axes, *job.servo);
-    const auto geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
+  // Actual poses: servo lag on the axes (every interpolation period), then the machine's
+  // geometric errors.
+  const auto geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
+  run.block_contour.assign(program.blocks.size(), {});
+  std::vector<double> block_sum2(program.blocks.size(), 0.0);
+  size_t feed_count = 0;
+  double sum2 = 0.0;
+  // One contour error (mm) of a period (servo) or sample (errors only) into the figures.
+  const auto account = [&](int block, bool feed, double error_mm, const Eigen::Vector3d& at) {
+    if (block < 0 || static_cast<size_t>(block) >= program.blocks.size()) return;
+    const double um = error_mm * 1000.0;
+    PoseRun::BlockContour& c = run.block_contour[static_cast<size_t>(block)];
+    ++c.count;
+    block_sum2[static_cast<size_t>(block)] += um * um;
+    if (um >= c.max_um) c.max_um = um, c.at_mm = at;
+    if (!feed) return;  // the summary covers feed moves: rapids cut corners by design
+    ++feed_count;
+    sum2 += um * um;
+    if (um > run.max_contour_error_um) {
+      run.max_contour_error_um = um;
+      run.max_contour_line = program.where(program.blocks[static_cast<size_t>(block)].source);
+    }
+  };
+  // A peak between instants raises the maxima only.
+  const auto account_peak = [&](int block, bool feed, double error_mm, const Eigen::Vector3d& at) {
+    if (block < 0 || static_cast<size_t>(block) >= program.blocks.size()) return;
+    const double um = error_mm * 1000.0;
+    PoseRun::BlockContour& c = run.block_contour[static_cast<size_t>(block)];
+    if (um >= c.max_um) c.max_um = um, c.at_mm = at;
+    if (feed && um > run.max_contour_error_um) {
+      run.max_contour_error_um = um;
+      run.max_contour_line = program.where(program.blocks[static_cast<size_t>(block)].source);
+    }
+  };
+  if (job.servo && samples.size() > 1) {
+    kinematics::InterpolatorInput in;
+    in.program = &program;
+    in.samples = &samples;
+    in.blocks = &run.densified.blocks;
+    in.feed = &run.feed;
+    in.machine = &machine;
+    in.tool_length_mm = &run.tool_length_mm;
+    in.servo = *job.servo;
+    in.geometry = geometry;
+    in.commanded_pose = every_period != nullptr;
+    run.actual.resize(samples.size());
+    run.contour_error_um.resize(samples.size(), 0.0);
+    run.actual_path_tolerance_mm = default_densify_tolerance_mm(job, resolution_mm);
+    PathThinner thinner(run.actual_path, run.actual_path_tolerance_mm, settings.cutter_length_mm);
+    run.periods = kinematics::for_each_period(in, [&](const kinematics::PeriodSample& p) {
+      if (p.stamp >= 0) {
+        run.actual[static_cast<size_t>(p.stamp)] = p.actual_pose;
+        run.contour_error_um[static_cast<size_t>(p.stamp)] = p.contour_error_mm * 1000.0;
+        return;
+      }
+      if (p.peak) {
+        account_peak(p.block, p.feed, p.contour_error_mm, p.actual_pose.tip_mm);
+        return;
+      }
+      account(p.block, p.feed, p.contour_error_mm, p.actual_pose.tip_mm);
+      thinner.add({p.actual_pose, p.block});
+      if (every_period) (*every_period)(p);
+    });
+    thinner.finish();
+  } else if (job.apply_errors && !samples.empty()) {
+    // Geometric errors alone are static: the actual pose of each sample, the move between
+    // two of them as rigid as the nominal one.
+    const kinematics::CommandedPath path(program, samples, run.densified.blocks, &machine, &run.tool_length_mm);
     run.actual.reserve(samples.size());
     run.contour_error_um.resize(samples.size(), 0.0);
-    for (size_t i = 0; i < samples.size(); ++i)
-      run.actual.push_back(kinematics::forward(machine, actual_axes[i], run.tool_length_mm[i], geometry));
-    // Contour error: the distance of the actual tip from the commanded tip path. The lag
-    // moves forward with the path, so the nearest segment is searched from the previous
-    // one's index onward (and a little back), up to the sample itself and a little beyond.
-    size_t from = 0, feed_samples = 0;
-    double sum2 = 0.0;
+    size_t from = 1;
     for (size_t i = 0; i < samples.size(); ++i) {
-      const Eigen::Vector3d& p = run.actual[i].tip_mm;
-      double best = std::numeric_limits<double>::infinity();
-      size_t best_seg = from;
-      const size_t lo = from > 8 ? from - 8 : 0, hi = std::min(samples.size() - 1, i + 8);
-      for (size_t k = lo; k < hi; ++k) {
-        const double d = segment_distance(p, samples[k].pose.tip_mm, samples[k + 1].pose.tip_mm);
-        if (d < best) best = d, best_seg = k;
-      }
-      if (hi == lo) best = (p - samples[lo].pose.tip_mm).norm();
-      from = best_seg;
-      run.contour_error_um[i] = best * 1000.0;
-      // The summary covers feed moves: rapids cut corners by design.
-      const bool feed_move =
-          samples[i].block >= 0 && program.blocks[static_cast<size_t>(samples[i].block)].kind != kinematics::MotionKind::Rapid;
-      if (!feed_move) continue;
-      ++feed_samples;
-      sum2 += best * best * 1e6;
-      if (run.contour_error_um[i] > run.max_contour_error_um) {
-        run.max_contour_error_um = run.contour_error_um[i];
-        run.max_contour_line = program.where(program.blocks[static_cast<size_t>(samples[i].block)].source);
-      }
+      run.actual.push_back(kinematics::forward(machine, samples[i].axes, run.tool_length_mm[i], geometry));
+      run.actual_path.push_back({run.actual.back(), samples[i].block});
+      if (samples.size() < 2) continue;
+      const size_t hi = std::min(samples.size() - 1, std::max<size_t>(1, i) + 8), lo = std::min(hi, from > 8 ? from - 8 : 1);
+      const double e = path.distance(run.actual[i].tip_mm, lo, hi, &from);
+      run.contour_error_um[i] = e * 1000.0;
+      if (i == 0) continue;
+      const int block = samples[i].block;
+      account(block, program.blocks[static_cast<size_t>(block)].kind != kinematics::MotionKind::Rapid, e, run.actual[i].tip_mm);
     }
-    run.rms_contour_error_um = feed_samples == 0 ? 0.0 : std::sqrt(sum2 / static_cast<double>(feed_samples));
   }
+  for (size_t b = 0; b < run.block_contour.size(); ++b)
+    if (run.block_contour[b].count) run.block_contour[b].rms_um = std::sqrt(block_sum2[b] / static_cast<double>(run.block_contour[b].count));
+  run.rms_contour_error_um = feed_count == 0 ? 0.0 : std::sqrt(sum2 / static_cast<double>(feed_count));
 
   // Per-block findings and q statistics.
   const auto& blocks = run.densified.blocks;
@@ -165,6 +271,16 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
       run.max_nonlinear_line = line;
     }
     if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable});
+    // The user's step or angle leaves the moves off the machine's path by more than a gouge.
+    if (job.densify_given && r.chord_error_mm > job.gouge_tolerance_mm) {
+      char detail[240];
+      std::snprintf(detail, sizeof detail,
+                    "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
+                    "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
+                    r.chord_error_mm, job.gouge_tolerance_mm);
+      run.events.push_back({"densify_error", line, detail});
+      run.warnings.push_back(line + ": " + detail);
+    }
   }
   // Singular poses, one event per run of consecutive blocks (a three-axis program on a
   // five-axis machine sits on the pole throughout: one event, not thousands).
@@ -196,6 +312,43 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm) 
     run.events.push_back({"axis_limited_speed", program.where(program.blocks[static_cast<size_t>(block)].source),
                           "a machine axis limit, not the programmed feed, set the speed"});
   }
+  return run;
+}
+
+PoseRun run_pose_engine_with_periods(const Job& job, const std::string& periods_path) {
+  if (!job.servo)
+    throw InputError(job.file, 0, 0, "--every-period: the job has no 'servo:' (the interpolation periods are the servo's)");
+  JobProgram input = read_job_program(job);
+  const kinematics::Machine machine(job.machine_spec);
+  std::vector<std::string> lines;  // the NC line of each block
+  lines.reserve(input.program.blocks.size());
+  for (const auto& b : input.program.blocks) lines.push_back(input.program.where(b.source));
+  PoseRun run;
+  write_atomically(periods_path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (cannot create the file)");
+    std::string header = "t,block,source";
+    for (const char* side : {"commanded_", "actual_"})
+      for (int a = 0; a < machine.axis_count(); ++a) header += std::string(",") + side + machine.axis(a).letter;
+    header += ",commanded_x,commanded_y,commanded_z,actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um\n";
+    out << header;
+    std::string row;
+    const PeriodVisitor visit = [&](const kinematics::PeriodSample& p) {
+      row = num(p.t_s) + "," + std::to_string(p.block) + "," +
+            (p.block >= 0 && static_cast<size_t>(p.block) < lines.size() ? lines[static_cast<size_t>(p.block)] : "");
+      for (const kinematics::AxisValues* q : {&p.commanded, &p.actual})
+        for (int a = 0; a < machine.axis_count(); ++a)
+          row += "," + num(machine.axis(a).kind == kinematics::AxisKind::Rotary ? (*q)[a] * 180.0 / M_PI : (*q)[a]);
+      for (int k = 0; k < 3; ++k) row += "," + num(p.commanded_pose.tip_mm[k]);
+      for (int k = 0; k < 3; ++k) row += "," + num(p.actual_pose.tip_mm[k]);
+      for (int k = 0; k < 3; ++k) row += "," + num(p.actual_pose.axis[k]);
+      row += "," + num(p.contour_error_mm * 1000.0) + "\n";
+      out << row;
+    };
+    run = run_pose_engine(job, std::move(input), job.resolution_mm, &visit);
+    out.close();
+    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (write failed: disk full?)");
+  });
   return run;
 }
 
@@ -233,21 +386,7 @@ void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run
 void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run) {
   (void)job;
   const bool actual = !run.actual.empty();
-  const auto& samples = run.densified.samples;
   const auto& blocks = run.densified.blocks;
-  // Per block: the contour error over its poses (the motion into each sample belongs to the
-  // sample's block).
-  std::vector<double> max_um(blocks.size(), 0.0), sum2(blocks.size(), 0.0);
-  std::vector<size_t> count(blocks.size(), 0), argmax(blocks.size(), 0);
-  if (actual) {
-    for (size_t i = 1; i < samples.size(); ++i) {
-      const auto b = static_cast<size_t>(samples[i].block);
-      const double e = run.contour_error_um[i];
-      sum2[b] += e * e;
-      ++count[b];
-      if (e >= max_um[b]) max_um[b] = e, argmax[b] = i;
-    }
-  }
   std::string text = "block,source,kind,q,time_s,nonlinear_error_mm,nonlinear_x,nonlinear_y,nonlinear_z,singular,unreachable";
   if (actual) text += ",contour_max_um,contour_rms_um,contour_max_x,contour_max_y,contour_max_z";
   text += "\n";
@@ -266,8 +405,9 @@ void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& ru
     for (int k = 0; k < 3; ++k) text += "," + num(r.nonlinear_at_mm[k]);
     text += std::string(",") + (r.singular ? "1" : "0") + "," + quoted(r.unreachable);
     if (actual) {
-      text += "," + num(max_um[b]) + "," + num(count[b] ? std::sqrt(sum2[b] / static_cast<double>(count[b])) : 0.0);
-      for (int k = 0; k < 3; ++k) text += "," + num(count[b] ? run.actual[argmax[b]].tip_mm[k] : 0.0);
+      const PoseRun::BlockContour c = b < run.block_contour.size() ? run.block_contour[b] : PoseRun::BlockContour{};
+      text += "," + num(c.max_um) + "," + num(c.rms_um);
+      for (int k = 0; k < 3; ++k) text += "," + num(c.at_mm[k]);
     }
     text += "\n";
   }

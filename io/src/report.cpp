@@ -121,6 +121,13 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
     if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
     e["cut_with"] = p.actual.empty() ? "nominal poses" : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
                                                          : job.servo ? "actual poses (servo lag)" : "actual poses (machine errors)";
+    if (job.servo) {
+      // The servo runs every interpolation period; the cut follows its path thinned to a bound.
+      e["servo"] = {{"period_s", job.servo->period_s},
+                    {"periods", p.periods},
+                    {"cut_path_poses", p.actual_path.size()},
+                    {"cut_path_tolerance_mm", um(p.actual_path_tolerance_mm)}};
+    }
     if (!p.actual.empty()) {
       e["max_contour_error_um"] = std::round(p.max_contour_error_um * 1e3) / 1e3;
       e["max_contour_line"] = p.max_contour_line;

@@ -295,6 +295,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   result.warnings.insert(result.warnings.end(), program.warnings.begin(), program.warnings.end());
   for (const PoseEvent& e : run.events)
     if (e.kind == "unreachable") result.warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
+  result.warnings.insert(result.warnings.end(), run.warnings.begin(), run.warnings.end());
   stage_done("read");
 
   // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut
@@ -314,7 +315,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   // The shank and holder of every tool follow each move as probes (collisions).
   const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(moves);
   const auto& samples = run.densified.samples;
-  const bool cut_actual = !run.actual.empty();
+  const bool cut_actual = !run.actual_path.empty();
   const double rotation_bound_mm = v / 10.0;
   result.poses = samples.size();
   // The moves through the actual poses (servo, errors) when there are any, else the nominal.
@@ -322,17 +323,22 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   // the spindle stopped is probed before it cuts (collisions); the nominal cut has none.
   auto append_moves = [&](removal::MoveList& out, bool actual, bool count) {
     const bool probes = count;
-    for (std::size_t i = 1; i < samples.size(); ++i) {
-      const auto& b = program.blocks[static_cast<std::size_t>(samples[i].block)];
+    const std::size_t n = actual ? run.actual_path.size() : samples.size();
+    const auto pose = [&](std::size_t i) -> const kinematics::ToolPose& {
+      return actual ? run.actual_path[i].pose : samples[i].pose;
+    };
+    for (std::size_t i = 1; i < n; ++i) {
+      const int block = actual ? run.actual_path[i].block : samples[i].block;
+      const auto& b = program.blocks[static_cast<std::size_t>(block)];
       if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
-      const kinematics::ToolPose& from = actual ? run.actual[i - 1] : samples[i - 1].pose;
-      const kinematics::ToolPose& to = actual ? run.actual[i] : samples[i].pose;
+      const kinematics::ToolPose& from = pose(i - 1);
+      const kinematics::ToolPose& to = pose(i);
       removal::Move m;
       m.start_mm = from.tip_mm;
       m.end_mm = to.tip_mm;
       m.axis = to.axis;
       m.cutter = cutter_index.at(b.tool);
-      m.block = samples[i].block;
+      m.block = block;
       m.rapid = b.kind == kinematics::MotionKind::Rapid;
       const bool turns = (from.axis - to.axis).norm() > 1e-12;
       if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;

@@ -50,6 +50,7 @@ void require_finer(const std::optional<double>& reference, const std::vector<dou
 double finest_over_4(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()) / 4.0; }
 
 Job with_setting(Job job, const DensifySetting& s) {
+  job.densify_given = true;
   if (s.tolerance_mm > 0.0) {
     job.densify_tolerance_mm = s.tolerance_mm;
   } else {

@@ -298,12 +298,24 @@ double deviation_for(const BlockPath& path, int q, const DensifySettings& settin
   return worst;
 }
 
+int arc_moves(const Block& b, double chord_tolerance_mm) {
+  const Eigen::Vector3d n = b.normal.normalized();
+  const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
+  return arc_chord_count(radius, arc_angle_rad(b), chord_tolerance_mm);
+}
+
 int moves_for(const Block& b, const BlockPath& path, const DensifySettings& settings) {
   if (settings.tolerance_mm > 0.0) {
-    if (deviation_for(path, 1, settings) <= settings.tolerance_mm) return 1;
-    int hi = 2;
-    while (hi < kMaxMovesPerBlock && deviation_for(path, hi, settings) > settings.tolerance_mm) hi *= 2;
-    int lo = hi / 2;  // fails; hi meets the tolerance (or is the cap)
+    const int least = settings.arcs_by_chord && b.kind == MotionKind::Arc && settings.chord_tolerance_mm > 0.0
+                          ? std::min(arc_moves(b, settings.chord_tolerance_mm), kMaxMovesPerBlock)
+                          : 1;
+    if (deviation_for(path, least, settings) <= settings.tolerance_mm) return least;
+    int lo = least, hi = std::min(kMaxMovesPerBlock, 2 * least);  // lo fails
+    while (hi < kMaxMovesPerBlock && deviation_for(path, hi, settings) > settings.tolerance_mm) {
+      lo = hi;
+      hi = std::min(kMaxMovesPerBlock, 2 * hi);
+    }
+    // lo fails; hi meets the tolerance (or is the cap)
     while (hi - lo > 1) {
       const int mid = lo + (hi - lo) / 2;
       (deviation_for(path, mid, settings) <= settings.tolerance_mm ? hi : lo) = mid;
@@ -313,15 +325,32 @@ int moves_for(const Block& b, const BlockPath& path, const DensifySettings& sett
   const double turn = path.turn_rad();
   if (b.kind == MotionKind::Rapid && turn == 0.0 && !path.axes_known()) return 1;
   int q = 1;
-  if (b.kind == MotionKind::Arc) {
-    const Eigen::Vector3d n = b.normal.normalized();
-    const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
-    q = arc_chord_count(radius, arc_angle_rad(b), settings.chord_tolerance_mm);
-  }
+  if (b.kind == MotionKind::Arc) q = arc_moves(b, settings.chord_tolerance_mm);
   if (settings.step_mm > 0.0 && (b.kind != MotionKind::Rapid || path.axes_known()))
     q = std::max(q, static_cast<int>(std::ceil(path.length_mm() / settings.step_mm - 1e-12)));
   if (settings.angle_step_rad > 0.0) q = std::max(q, static_cast<int>(std::ceil(turn / settings.angle_step_rad - 1e-12)));
   return std::clamp(q, 1, kMaxMovesPerBlock);
+}
+
+// The largest distance of the controller's tip path from the chords of the block's q moves
+// (at a quarter, half and three quarters of each: the middle for a circle's chord), where the
+// tip path can bend: arcs, axis blocks, rotary-linear blocks. Lines of tool-pose blocks keep
+// the tip on the chord.
+void chord_error(const Block& b, const BlockPath& path, BlockReport& report) {
+  if (b.tool_pose && b.kind != MotionKind::Arc) return;
+  Eigen::Vector3d prev = path.pose(0.0).tip_mm;
+  for (int k = 1; k <= report.q; ++k) {
+    const double s0 = static_cast<double>(k - 1) / report.q, s1 = static_cast<double>(k) / report.q;
+    const Eigen::Vector3d next = path.pose(s1).tip_mm;
+    for (double t : {0.25, 0.5, 0.75}) {
+      const Eigen::Vector3d p = path.pose(s0 + t * (s1 - s0)).tip_mm;
+      const Eigen::Vector3d d = next - prev;
+      const double u = d.squaredNorm() > 0.0 ? std::clamp((p - prev).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
+      const double e = (p - (prev + u * d)).norm();
+      if (e > report.chord_error_mm) report.chord_error_mm = e, report.chord_error_at_mm = p;
+    }
+    prev = next;
+  }
 }
 
 }  // namespace
@@ -365,6 +394,7 @@ Densified densify(const Program& program, const DensifySettings& settings, const
     const BlockPath path(b, dm, start_axes, report);
     path.nonlinear_error(report);
     report.q = moves_for(b, path, settings);
+    if (settings.tolerance_mm <= 0.0) chord_error(b, path, report);
     for (int k = 1; k <= report.q; ++k) {
       const double s = static_cast<double>(k) / report.q;
       PoseSample sample;

@@ -618,7 +618,9 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   }
 
   // 5. Time stamps: the inverse of each span's s(t) at its samples' arc lengths.
-  double t_span = 0.0;
+  double t_span = 0.0, s_span = 0.0;
+  plan.path_s.assign(n, 0.0);
+  plan.spans.reserve(K);
   plan.speed_mm_per_s[0] = spans.front().unit == Unit::Tip ? speed[0] : 0.0;
   for (size_t k = 0; k < K; ++k) {
     const Span& s = spans[k];
@@ -642,8 +644,20 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
       }
       plan.t_s[i] = t_span + t;
       plan.speed_mm_per_s[i] = s.unit == Unit::Tip ? v : 0.0;
+      plan.path_s[i] = s_span + arc;
     }
+    SpanTiming timing;
+    timing.first_sample = first;
+    timing.last_sample = last;
+    timing.t0_s = t_span;
+    timing.duration_s = p.duration;
+    for (int q = 0; q < p.count; ++q) {
+      const Phase& ph = p.phase[static_cast<size_t>(q)];
+      timing.phases.push_back({t_span + ph.t0, s_span + ph.s0, ph.v0, ph.a0, ph.jerk, ph.duration});
+    }
+    plan.spans.push_back(std::move(timing));
     t_span += p.duration;
+    s_span += arc;
   }
   if (skipped)  // they take no time
     for (size_t i = 1; i < n; ++i)
@@ -658,6 +672,30 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   }
   plan.cycle_time_s = plan.t_s.back();
   return plan;
+}
+
+PathPosition PathCursor::at(double t_s) {
+  const FeedPlan& p = plan_;
+  const std::size_t n = p.t_s.size();
+  if (n < 2 || p.spans.empty()) return {1, 0.0};
+  if (span_ >= p.spans.size() || t_s < p.spans[span_].t0_s) span_ = phase_ = 0, segment_ = 1;
+  while (span_ + 1 < p.spans.size() && t_s >= p.spans[span_ + 1].t0_s) ++span_, phase_ = 0;
+  const SpanTiming& span = p.spans[span_];
+  if (segment_ < span.first_sample) segment_ = span.first_sample;
+  // The path parameter at t_s: within the phase that holds it (the span's end exactly).
+  double s;
+  if (span.phases.empty() || t_s >= span.t0_s + span.duration_s) {
+    s = p.path_s[span.last_sample];
+  } else {
+    while (phase_ + 1 < span.phases.size() && t_s >= span.phases[phase_ + 1].t0_s) ++phase_;
+    const JerkPhase& ph = span.phases[phase_];
+    s = ph.at(std::clamp(t_s - ph.t0_s, 0.0, ph.duration_s));
+  }
+  // The move holding s: the first whose end lies at or beyond it.
+  while (segment_ < span.last_sample && p.path_s[segment_] < s) ++segment_;
+  const double s0 = p.path_s[segment_ - 1], s1 = p.path_s[segment_];
+  const double f = s1 > s0 ? std::clamp((s - s0) / (s1 - s0), 0.0, 1.0) : 1.0;
+  return {segment_, f};
 }
 
 }  // namespace vcut::kinematics

@@ -64,8 +64,12 @@ struct Job {
   double step_mm = 0.0;               // densify.step: lambda; 0 = none
   double angle_step_deg = 0.0;        // densify.angle: phi; 0 = none
   double densify_tolerance_mm = 0.0;  // densify.tolerance: epsilon (tolerance mode); 0 = off
+  // false (no `densify:` key): every block within min(resolution / 10, gouge tolerance / 2)
+  // of the machine's path (io::default_densify_tolerance_mm).
+  bool densify_given = false;
   kinematics::FeedSettings feed;                  // feed: acceleration, jerk, lookahead, rapid
-  std::optional<kinematics::ServoSettings> servo;  // servo: present = simulate servo lag
+  // servo: present = simulate servo lag, one loop per machine axis (in axis order).
+  std::optional<kinematics::ServoSettings> servo;
   bool apply_errors = false;                      // errors: machine
 };
 

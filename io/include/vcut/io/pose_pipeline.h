@@ -5,12 +5,15 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
 #include "vcut/io/job.h"
 #include "vcut/kinematics/densify.h"
 #include "vcut/kinematics/feed_planner.h"
+#include "vcut/kinematics/interpolator.h"
 #include "vcut/kinematics/program.h"
 
 namespace vcut::io {
@@ -42,7 +45,30 @@ struct PoseRun {
   // from the commanded path (um). Empty when neither is on.
   std::vector<kinematics::ToolPose> actual;
   std::vector<double> contour_error_um;
+  // What the machine cuts with servo or errors on: with servo the actual path at every
+  // interpolation period, thinned so that no dropped period's tool (tip, and the tool axis
+  // over the flute length) lies farther than actual_path_tolerance_mm from the chord kept;
+  // with errors only the actual pose of every sample. Each pose's block is the block being
+  // interpolated when the machine was there. Empty when neither is on.
+  struct ActualPose {
+    kinematics::ToolPose pose;
+    int block = -1;
+  };
+  std::vector<ActualPose> actual_path;
+  double actual_path_tolerance_mm = 0.0;
+  std::size_t periods = 0;  // interpolation periods simulated (servo)
+  // Per program block (servo or errors): the contour error over its periods (servo) or its
+  // samples (errors only), feed moves and rapids alike; at_mm where the largest was.
+  struct BlockContour {
+    double max_um = 0.0, rms_um = 0.0;
+    Eigen::Vector3d at_mm = Eigen::Vector3d::Zero();
+    std::size_t count = 0;
+  };
+  std::vector<BlockContour> block_contour;
   std::vector<PoseEvent> events;
+  // Findings a user must see (terminal, report.json warnings, the page's events): a block
+  // whose densification leaves it farther from the machine's path than the gouge tolerance.
+  std::vector<std::string> warnings;
   // Summary.
   double max_nonlinear_error_mm = 0.0;
   std::string max_nonlinear_line;
@@ -53,13 +79,30 @@ struct PoseRun {
   double q_mean = 0.0;
 };
 
-PoseRun run_pose_engine(const Job& job);
-// With the program already read; `resolution_mm` sets the default arc chord tolerance (/20).
-PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm);
+// Every interpolation period of a servo run, as the interpolator gives it (vcut poses
+// --every-period streams them to a file).
+using PeriodVisitor = std::function<void(const kinematics::PeriodSample&)>;
+
+PoseRun run_pose_engine(const Job& job, const PeriodVisitor* every_period = nullptr);
+// With the program already read; `resolution_mm` sets the default densification (the arc
+// chord tolerance resolution / 20, the tolerance mode's min(resolution / 10, gouge / 2)).
+PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm,
+                        const PeriodVisitor* every_period = nullptr);
+
+// The densification tolerance when the job gives no `densify:` (issue #20): min(v / 10,
+// gouge tolerance / 2), v the resolution (mm).
+double default_densify_tolerance_mm(const Job& job, double resolution_mm);
+
+// The pose engine with every interpolation period of the servo streamed into a CSV at
+// `periods_path` (vcut poses --every-period): t, block, source, the commanded and the actual
+// axis values by letter (mm, deg), commanded tip, actual tip and tool axis, contour_error_um.
+// Written atomically (the file appears when the run is done); an InputError when the job has
+// no servo.
+PoseRun run_pose_engine_with_periods(const Job& job, const std::string& periods_path);
 
 // One row per program block: block, source, kind, q, time_s, nonlinear_error_mm (and where),
-// singular, unreachable, and with servo or errors the contour error of its poses (max, RMS,
-// where). Written atomically.
+// singular, unreachable, and with servo or errors the contour error of its interpolation
+// periods (servo) or its poses (errors only): max, RMS, where. Written atomically.
 void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run);
 
 // One row per densified pose: block, source, t, x y z (tip), i j k (axis), the axis values by

@@ -39,6 +39,9 @@ struct DensifySettings {
   double tolerance_mm = 0.0;
   double cutter_length_mm = 0.0;
   double cutter_radius_mm = 0.0;
+  // Tolerance mode: arcs also get at least the chord tolerance's count (vcut's default
+  // densification, where the chord tolerance is the finer of the two).
+  bool arcs_by_chord = false;
 };
 
 // The machine side of densification: needed for axis programs, ORIAXES and axis values.
@@ -54,6 +57,11 @@ struct BlockReport {
   // interpolated axes) from the straight line between the block's end points, and where.
   double nonlinear_error_mm = 0.0;
   Eigen::Vector3d nonlinear_at_mm = Eigen::Vector3d::Zero();
+  // Outside tolerance mode: the largest distance of the controller's tip path from the
+  // densified moves' chords (what a too coarse step or angle leaves), and where. 0 for a
+  // straight tip path.
+  double chord_error_mm = 0.0;
+  Eigen::Vector3d chord_error_at_mm = Eigen::Vector3d::Zero();
   bool singular = false;    // a pose of this block is singular (free angle kept)
   double singular_miss_rad = 0.0;  // the largest tool-axis miss that keeping it caused
   std::string unreachable;  // why a pose of this block cannot be reached ("" = all reached)

@@ -26,6 +26,21 @@ struct FeedSettings {
   double default_blend_tolerance_mm = 0.01;
 };
 
+// One piece of the path parameter's motion at constant jerk: s(tau) = s0 + v0 tau + a0 tau^2/2
+// + jerk tau^3/6 for tau in [0, duration_s], from t0_s. The parameter is the tip's arc length
+// (mm) or, for blocks whose tip stands still, the rotary motion (deg).
+struct JerkPhase {
+  double t0_s = 0.0, s0 = 0.0, v0 = 0.0, a0 = 0.0, jerk = 0.0, duration_s = 0.0;
+  double at(double tau) const { return s0 + tau * (v0 + tau * (0.5 * a0 + jerk * tau / 6.0)); }
+};
+
+// One S-curve of the plan: the moves into samples first_sample .. last_sample, from t0_s.
+struct SpanTiming {
+  std::size_t first_sample = 1, last_sample = 0;
+  double t0_s = 0.0, duration_s = 0.0;
+  std::vector<JerkPhase> phases;  // t0_s and s0 absolute (plan time, FeedPlan::path_s)
+};
+
 struct FeedPlan {
   std::vector<double> t_s;                // per sample of the densified list, ascending
   std::vector<double> speed_mm_per_s;     // path speed of the tip at each sample
@@ -33,6 +48,29 @@ struct FeedPlan {
   double cycle_time_s = 0.0;
   // Where a machine axis limit (not the programmed feed) set the speed: sample indices.
   std::vector<int> axis_limited_samples;
+  // The timing between the samples: the path parameter at each sample (cumulative over the
+  // program, mm or deg) and each span's jerk phases, so that the path can be evaluated at any
+  // instant (the interpolator's periods), not only at the samples.
+  std::vector<double> path_s;
+  std::vector<SpanTiming> spans;
+};
+
+// Where the timed path is at an instant: on the move into sample `segment` (from segment - 1)
+// at `fraction` of that move's path parameter. Before the start: segment 1, fraction 0;
+// after the end: the last sample. Instants are asked for in ascending order (a cursor: O(1)
+// amortised per call); an earlier instant restarts the search.
+struct PathPosition {
+  std::size_t segment = 1;
+  double fraction = 0.0;
+};
+class PathCursor {
+ public:
+  explicit PathCursor(const FeedPlan& plan) : plan_(plan) {}
+  PathPosition at(double t_s);
+
+ private:
+  const FeedPlan& plan_;
+  std::size_t span_ = 0, phase_ = 0, segment_ = 1;
 };
 
 // `samples` from densify(); `axes` (may be null) the machine axis values of each sample (same

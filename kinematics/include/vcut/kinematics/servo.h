@@ -4,6 +4,9 @@
 // period dT on the time-stamped commanded axis trajectory. Out: the actual trajectory.
 #pragma once
 
+#include <Eigen/Core>
+
+#include <array>
 #include <vector>
 
 #include "vcut/kinematics/machine.h"
@@ -21,6 +24,44 @@ struct ServoAxis {
 struct ServoSettings {
   double period_s = 0.005;      // interpolation period dT
   std::vector<ServoAxis> axes;  // one per machine axis, or one for all
+};
+
+// The loops of all axes, one interpolation period at a time (the controller's view: the
+// interpolator hands the position controller a command every dT). Starts at rest on
+// `start`. step(c) runs one period with c, the command at the period's first instant:
+// u = Kv (c - x) + ff (c - c_prev) / dT held over the period, the velocity loop integrated
+// exactly (zero-order hold, Van Loan). Throws std::invalid_argument on settings out of
+// range (programmer errors: the io layer validates user input).
+class ServoLoop {
+ public:
+  ServoLoop(const ServoSettings& settings, const AxisValues& start);
+
+  void step(const AxisValues& command);
+  // Actual axis values at the current instant (after the last step).
+  const AxisValues& position() const { return x_; }
+  // Actual axis values at fraction r in [0, 1] of the last period (0: the instant before the
+  // last step, 1: position()): linear for an ideal velocity loop (exact), else the quintic
+  // Hermite in (x, x', x'') of both ends (error <= max|x^(6)| dT^6 / 46080).
+  AxisValues within_last_period(double r) const;
+  // Largest |velocity| over the axes (mm/s or rad/s): zero at rest.
+  double max_speed() const;
+  double period_s() const { return dt_; }
+  int axis_count() const { return axes_; }
+
+ private:
+  struct Axis {
+    bool second_order = false;
+    double kv = 0.0, ff = 0.0;
+    Eigen::Matrix3d phi = Eigen::Matrix3d::Identity();
+    Eigen::Vector3d gamma = Eigen::Vector3d::Zero();
+  };
+  static Axis discretize(const ServoAxis& axis, double dt);
+  double dt_ = 0.0;
+  int axes_ = 0;
+  std::array<Axis, 5> model_{};
+  std::array<Eigen::Vector3d, 5> s_{}, s_prev_{};  // (x, x', x'') per axis
+  std::array<double, 5> c_prev_{};
+  AxisValues x_;
 };
 
 // `t_s` strictly ascending time stamps, `commanded` the axis values at those times (linear
