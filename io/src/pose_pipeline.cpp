@@ -37,6 +37,25 @@ std::string gcode_num(double v) {
 
 }  // namespace
 
+kinematics::FeedInterpretation axis_feed_of(const Job& job, const std::string& reader) {
+  if (job.machine_spec.feed_interpretation) return *job.machine_spec.feed_interpretation;
+  // By dialect: Fanuc and Haas combine mm and deg (Fanuc's feed for simultaneous linear and
+  // rotary motion); LinuxCNC's interpreter and SINUMERIK without TRAORI put F on the linear
+  // axes when they move; CL data are tool poses (F on the tip).
+  if (job.dialect == "fanuc") return kinematics::FeedInterpretation::Combined;
+  if (reader == "apt") return kinematics::FeedInterpretation::Tip;
+  return kinematics::FeedInterpretation::LinuxCnc;
+}
+
+const char* feed_interpretation_name(kinematics::FeedInterpretation f) {
+  switch (f) {
+    case kinematics::FeedInterpretation::LinuxCnc: return "linuxcnc";
+    case kinematics::FeedInterpretation::Combined: return "combined";
+    case kinematics::FeedInterpretation::Tip: return "tip";
+  }
+  return "linuxcnc";
+}
+
 JobProgram read_job_program(const Job& job) {
   // G-code and APT CL data (read_programs picks the reader from the job's dialect or from
   // each file). An APT program's CUTTER/ shapes fill in the T numbers the tool library lacks:
@@ -161,7 +180,9 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
   std::vector<kinematics::AxisValues> axes;
   axes.reserve(samples.size());
   for (const auto& s : samples) axes.push_back(s.axes);
-  run.feed = kinematics::plan_feed(program, samples, &axes, &machine, job.feed);
+  kinematics::FeedSettings feed = job.feed;
+  feed.axis_feed = axis_feed_of(job, run.dialect);
+  run.feed = kinematics::plan_feed(program, samples, &axes, &machine, feed);
 
   run.tool_length_mm.resize(samples.size(), 0.0);
   for (size_t i = 0; i < samples.size(); ++i) {
@@ -214,6 +235,7 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
     in.tool_length_mm = &run.tool_length_mm;
     in.servo = *job.servo;
     in.geometry = geometry;
+    in.ik = dm.ik;
     in.commanded_pose = every_period != nullptr;
     run.actual.resize(samples.size());
     run.contour_error_um.resize(samples.size(), 0.0);

@@ -121,6 +121,7 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
     if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
     e["cut_with"] = p.actual.empty() ? "nominal poses" : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
                                                          : job.servo ? "actual poses (servo lag)" : "actual poses (machine errors)";
+    e["feed_interpretation"] = feed_interpretation_name(axis_feed_of(job, p.dialect));
     if (job.servo) {
       // The servo runs every interpolation period; the cut follows its path thinned to a bound.
       e["servo"] = {{"period_s", job.servo->period_s},

@@ -369,6 +369,32 @@ double arc_curvature_radius(const Block& b) {
   return (r * r + c * c) / r;
 }
 
+// An axis block's tip speed per unit of F: the tip's length over the length F applies to
+// (FeedSettings::axis_feed); 1 for tool-pose blocks, for rotation-only runs (F in deg/min
+// already) and for the Tip reading.
+double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes,
+                       const Machine* machine, const FeedSettings& settings, size_t first, size_t last, const Run& run) {
+  if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip || !axes || !machine)
+    return 1.0;
+  // The programmed X Y Z path: the line, or the arc (helix) of the words.
+  double xyz = (b.end_mm - b.start_mm).norm();
+  if (b.kind == MotionKind::Arc) {
+    const Eigen::Vector3d n = b.normal.normalized();
+    const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
+    xyz = std::hypot(radius * arc_angle_rad(b), (b.end_mm - b.start_mm).dot(n));
+  }
+  // The rotary axes' motion (deg) over the block.
+  const AxisValues& q0 = (*axes)[first - 1];
+  const AxisValues& q1 = (*axes)[last];
+  double rotary2 = 0.0;
+  for (int k = 0; k < machine->axis_count() && k < q0.size() && k < q1.size(); ++k)
+    if (machine->axis(k).kind == AxisKind::Rotary) rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
+  const double programmed = settings.axis_feed == FeedInterpretation::Combined ? std::sqrt(xyz * xyz + rotary2)
+                            : xyz > kStillTipMm                                ? xyz
+                                                                               : std::sqrt(rotary2);
+  return programmed > 0.0 ? run.length / programmed : 1.0;
+}
+
 Run make_run(const Program& program, const std::vector<PoseSample>& samples,
              const std::vector<AxisValues>* axes, const Machine* machine,
              const FeedSettings& settings, int block, size_t first, size_t last,
@@ -435,7 +461,7 @@ Run make_run(const Program& program, const std::vector<PoseSample>& samples,
       run.g93_time_s = 60.0 / f;
       run.v_prog = run.length / run.g93_time_s;
     } else {
-      run.v_prog = f / 60.0;
+      run.v_prog = f / 60.0 * axis_feed_scale(b, axes, machine, settings, first, last, run);
     }
   }
   // Rapids (and a feed move without a feed) run at the axes' speed, or the settings' rapid.

@@ -171,12 +171,37 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
     p.contour_error_mm = e;
     visit(p);
   };
+  // The interpolator's command at t. Axis blocks, and tool-pose moves whose rotary axes
+  // stand still, run their axes linearly between the densified samples (exact: the axes of
+  // an axis block are linear in its parameter; with the rotary axes fixed the linear ones
+  // are linear in the tip). A tool-pose move that turns the tool is what a TCP controller
+  // interpolates in the part: the tip on the chord, the tool axis on the great circle
+  // between the samples (ORIVECT's own path), its axes from the inverse kinematics every
+  // period (the branch nearest the last command); under ORIAXES or rotary words the rotary
+  // axes run linearly and the linear ones follow the tip.
+  AxisValues last_command = samples[0].axes;
   const auto command_at = [&](double t, std::size_t* segment) {
     const PathPosition at = cursor.at(t);
     *segment = at.segment;
-    const AxisValues& a = samples[at.segment - 1].axes;
-    const AxisValues& b = samples[at.segment].axes;
-    return AxisValues(a + at.fraction * (b - a));
+    const PoseSample& a = samples[at.segment - 1];
+    const PoseSample& b = samples[at.segment];
+    const double f = at.fraction;
+    AxisValues q = a.axes + f * (b.axes - a.axes);
+    const int block = b.block;
+    if (f <= 0.0 || f >= 1.0 || block < 0 || !program.blocks[static_cast<std::size_t>(block)].tool_pose) return last_command = q;
+    bool turns = false;
+    for (int k = 0; k < machine.rotary_count(); ++k)
+      turns = turns || a.axes[machine.rotary_axis(k)] != b.axes[machine.rotary_axis(k)];
+    if (!turns) return last_command = q;
+    const Block& blk = program.blocks[static_cast<std::size_t>(block)];
+    const double length = length_at(at.segment);
+    const Eigen::Vector3d tip = a.pose.tip_mm + f * (b.pose.tip_mm - a.pose.tip_mm);
+    if (blk.end_rotary.any() || blk.orientation == OrientationMode::Axes) {
+      solve_linear_axes(machine, q, tip, length);
+      return last_command = q;
+    }
+    const IkResult r = inverse(machine, ToolPose{tip, great_circle(a.pose.axis, b.pose.axis, f)}, length, &last_command, in.ik);
+    return last_command = r.ok() ? r.q() : q;
   };
 
   // t = 0: at rest on the start.

@@ -18,11 +18,14 @@
 #include <string>
 #include <vector>
 
+#include "csv_table.h"
 #include "run_vcut.h"
 
 namespace {
 namespace fs = std::filesystem;
 using vcut::cli::test::CommandResult;
+using vcut::cli::test::Csv;
+using vcut::cli::test::read_csv;
 using vcut::cli::test::expect_error;
 using vcut::cli::test::run_vcut;
 using vcut::cli::test::write;
@@ -34,43 +37,6 @@ constexpr double kRelativeServo = 0.01;   // the issue's 1 % for the circle shri
 constexpr double kDeg = M_PI / 180.0;
 
 // A CSV file with a header row; cells by column name. poses.csv has no quoted fields.
-struct Csv {
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-
-  bool has(const std::string& name) const {
-    return std::find(header.begin(), header.end(), name) != header.end();
-  }
-  int column(const std::string& name) const {
-    const auto it = std::find(header.begin(), header.end(), name);
-    EXPECT_NE(it, header.end()) << "no column " << name;
-    return it == header.end() ? 0 : static_cast<int>(it - header.begin());
-  }
-  const std::string& text(size_t row, const std::string& name) const {
-    return rows.at(row).at(column(name));
-  }
-  double num(size_t row, const std::string& name) const { return std::stod(text(row, name)); }
-};
-
-std::vector<std::string> split(const std::string& line) {
-  std::vector<std::string> out;
-  std::stringstream s(line);
-  std::string cell;
-  while (std::getline(s, cell, ',')) out.push_back(cell);
-  if (!line.empty() && line.back() == ',') out.emplace_back();
-  return out;
-}
-
-Csv read_csv(const fs::path& path) {
-  Csv csv;
-  std::ifstream in(path);
-  std::string line;
-  if (std::getline(in, line)) csv.header = split(line);
-  while (std::getline(in, line))
-    if (!line.empty()) csv.rows.push_back(split(line));
-  return csv;
-}
-
 // Binary STL: 80-byte header, uint32 triangle count, then 50-byte records (normal, three
 // vertices as little-endian floats, uint16 attribute). Returns every vertex of every triangle.
 std::vector<std::array<double, 3>> read_binary_stl_vertices(const fs::path& path) {
@@ -189,7 +155,7 @@ TEST_F(PoseCli, ThreeAxisRestToRestBlockTime) {
   EXPECT_TRUE(found);
 }
 
-// 2. Servo lag: `servo: {kv: 20, omega_n: 0}` is a first-order position loop x' = Kv (c - x)
+// 2. Servo lag: `servo: {kv: 20, omega_n: ideal}` is a first-order position loop x' = Kv (c - x)
 // on every axis, sampled at 0.1 ms. F = 3000 mm/min, v = 50 mm/s.
 // - Straight line: in cruise the lag e = c - x obeys e' = v - Kv e -> e = v/Kv = 2.5 mm
 //   (the sampled loop gives the same: e[k+1] = e[k] (1 - Kv dT) + v dT has the fixed point
@@ -209,7 +175,7 @@ TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
             "job: circle\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: circle.ngc}\n"
             "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\n"
             "densify: {chord_tolerance: 0.0001, step: 0.5}\n"
-            "servo: {kv: 20, omega_n: 0, period: 0.0001}\n");
+            "servo: {kv: 20, omega_n: ideal, period: 0.0001}\n");
   const double F = 3000.0, v = F / 60.0, kv = 20.0, R = 10.0, w = v / R;
   const double shrink_um = 1000.0 * R * (1.0 - 1.0 / std::sqrt(1.0 + (w / kv) * (w / kv)));
   ASSERT_GT(csv.rows.size(), 100u);
@@ -484,6 +450,14 @@ TEST_F(PoseCli, BadPoseKeys) {
       "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\n";
   const std::pair<std::string, std::string> cases[] = {{"errors: maybe\n", "errors"},
                                                        {"servo: {kv: -1}\n", "servo.kv"},
+                                                       {"servo: {kv: 0}\n", "servo.kv"},
+                                                       {"servo: {period: 0}\n", "servo.period"},
+                                                       {"servo: {period: 5}\n", "servo.period"},
+                                                       {"servo: {omega_n: 0}\n", "servo.omega_n"},
+                                                       {"servo: {zeta: -0.1}\n", "servo.zeta"},
+                                                       {"servo: {axes: {A: {kv: 18}}}\n", "servo.axes.A"},
+                                                       {"servo: {axes: {X: {period: 1}}}\n", "servo.axes.X.period"},
+                                                       {"servo: {axes: {Y: {omega_n: -5}}}\n", "servo.axes.Y.omega_n"},
                                                        {"densify: {angle: 0}\n", "densify.angle"}};
   for (const auto& [line, key] : cases) {
     SCOPED_TRACE(line);

@@ -89,6 +89,12 @@ PoseRun run_pose_engine(const Job& job, const PeriodVisitor* every_period = null
 PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm,
                         const PeriodVisitor* every_period = nullptr);
 
+// How F reads in axis blocks: the machine file's feed_interpretation, else by the job's
+// dialect (fanuc: combined; apt: tip; G-code and SINUMERIK: linuxcnc). `reader` is the
+// reader used (JobProgram::dialect).
+kinematics::FeedInterpretation axis_feed_of(const Job& job, const std::string& reader);
+const char* feed_interpretation_name(kinematics::FeedInterpretation f);
+
 // The densification tolerance when the job gives no `densify:` (issue #20): min(v / 10,
 // gouge tolerance / 2), v the resolution (mm).
 double default_densify_tolerance_mm(const Job& job, double resolution_mm);

@@ -24,6 +24,10 @@ struct FeedSettings {
   // Corner rule where a block gives no G64 P: the blend arc may pass this far (mm) from the
   // programmed corner. 0 stops at every corner.
   double default_blend_tolerance_mm = 0.01;
+  // F in axis blocks (rotary words without TCP): see FeedInterpretation. The path parameter
+  // stays the tip's arc length; the block's cruise is set so that it lasts L / F, L the
+  // length F applies to.
+  FeedInterpretation axis_feed = FeedInterpretation::LinuxCnc;
 };
 
 // One piece of the path parameter's motion at constant jerk: s(tau) = s0 + v0 tau + a0 tau^2/2

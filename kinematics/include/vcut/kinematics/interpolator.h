@@ -29,6 +29,7 @@ struct InterpolatorInput {
   const std::vector<double>* tool_length_mm = nullptr;  // per sample
   ServoSettings servo;                                  // its period is the interpolation period
   Geometry geometry = Geometry::Ideal;
+  IkSettings ik;  // the inverse kinematics of TCP moves between samples (densify's settings)
   bool commanded_pose = false;  // also the commanded tool pose (forward kinematics) per period
   // After the program's end the loops run on until every axis is within this of its last
   // command and at rest (mm or rad; mm/s or rad/s), at most settle_max_s.

@@ -78,6 +78,14 @@ struct ModelSpec {
   Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
 };
 
+// How the control reads F in an axis block (rotary words without TCP; seed 001 §4):
+// LinuxCnc: F is the X Y Z path's speed when a linear axis moves, else the rotary axes'
+//   (deg/min) - LinuxCNC's interpreter, SINUMERIK without TRAORI;
+// Combined: F is the speed of the combined length sqrt(dx^2 + dy^2 + dz^2 + da^2 + db^2 +
+//   dc^2), mm and deg alike - Fanuc, Haas;
+// Tip: F is the tool tip's speed in the workpiece (as under TCP).
+enum class FeedInterpretation { LinuxCnc, Combined, Tip };
+
 struct MachineSpec {
   std::string name;
   std::string topology = "WXYZFT";
@@ -87,6 +95,8 @@ struct MachineSpec {
   Eigen::Vector3d workpiece_origin_mm = Eigen::Vector3d::Zero();  // programming zero at zero
   std::map<char, std::vector<ModelSpec>> models;  // by node letter (an axis, W, T or F)
   double singularity_angle_rad = 0.1 * 3.14159265358979323846 / 180.0;
+  // The machine file's feed_interpretation; none: by the program's dialect.
+  std::optional<FeedInterpretation> feed_interpretation;
 };
 
 // A finding about a MachineSpec: `key` is the path of the offending entry ("topology",
