@@ -15,6 +15,7 @@
 #include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/forward_kinematics.h"
 #include "vcut/kinematics/inverse_kinematics.h"
+#include "vcut/kinematics/servo.h"
 
 namespace {
 
@@ -212,5 +213,29 @@ void BM_PoseEngineImpeller(benchmark::State& state) {
   run_pose_engine(state, program, m, 0);
 }
 BENCHMARK(BM_PoseEngineImpeller)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+
+namespace {
+
+// The servo per interpolation period (issue #20): five axes of seed 004's second-order loop
+// stepped on a moving command. Items: axis-samples (periods x axes); target >= 10 M/s.
+void BM_ServoLoop(benchmark::State& state) {
+  ServoSettings settings;
+  settings.period_s = 0.001;
+  settings.axes = {ServoAxis{}};
+  std::vector<AxisValues> commands(1000, AxisValues::Zero(5));
+  for (int k = 0; k < 1000; ++k) {
+    const double t = k * 1e-3;
+    commands[static_cast<size_t>(k)] << 100.0 * std::sin(t), 80.0 * std::cos(t), 5.0 * t, 0.3 * std::sin(2.0 * t), 0.5 * t;
+  }
+  ServoLoop loop(settings, commands.front());
+  for (auto _ : state) {
+    for (const AxisValues& c : commands) loop.step(c);
+    benchmark::DoNotOptimize(loop.position());
+  }
+  state.SetItemsProcessed(state.iterations() * 1000 * 5);
+}
+BENCHMARK(BM_ServoLoop);
 
 }  // namespace

@@ -704,7 +704,8 @@ PathPosition PathCursor::at(double t_s) {
   const FeedPlan& p = plan_;
   const std::size_t n = p.t_s.size();
   if (n < 2 || p.spans.empty()) return {1, 0.0};
-  if (span_ >= p.spans.size() || t_s < p.spans[span_].t0_s) span_ = phase_ = 0, segment_ = 1;
+  if (span_ >= p.spans.size() || t_s < last_t_s_) span_ = phase_ = 0, segment_ = 1;
+  last_t_s_ = t_s;
   while (span_ + 1 < p.spans.size() && t_s >= p.spans[span_ + 1].t0_s) ++span_, phase_ = 0;
   const SpanTiming& span = p.spans[span_];
   if (segment_ < span.first_sample) segment_ = span.first_sample;

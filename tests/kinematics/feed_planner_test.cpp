@@ -548,3 +548,35 @@ TEST(FeedLookahead, LongerWindowsAreNeverSlower) {
 
 }  // namespace
 }  // namespace vcut::kinematics
+
+namespace vcut::kinematics {
+namespace {
+
+// PathCursor: the path between the samples, at any instant. One 100 mm line from rest at
+// 100 mm/s, a = 1000 mm/s^2, j = 1e5 mm/s^3, cut into 4 samples. The first jerk phase lasts
+// a/j = 0.01 s with s(t) = j t^3 / 6 (closed form); the cruise at v; the samples' own instants
+// map onto the samples; the fraction within a move is (s - s_start) / 25.
+TEST(PathCursor, FollowsTheSCurveBetweenSamples) {
+  const Program p = polyline({{0, 0, 0}, {100, 0, 0}}, 6000.0);
+  const std::vector<PoseSample> s = straight_samples(p, 4);
+  FeedSettings settings;
+  settings.path_acceleration_mm_per_s2 = 1000.0;
+  settings.path_jerk_mm_per_s3 = 1e5;
+  const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, settings);
+  PathCursor cursor(plan);
+  const auto s_at = [&](double t) {
+    const PathPosition at = cursor.at(t);
+    return 25.0 * (static_cast<double>(at.segment) - 1.0 + at.fraction);
+  };
+  for (double t : {0.0, 0.002, 0.005, 0.0099}) EXPECT_NEAR(s_at(t), 1e5 * t * t * t / 6.0, kClosedForm * 100.0);
+  // Acceleration over: v = a^2/(2j) + a (t - a/j) at the end of the constant-acceleration
+  // phase (0.1 - a/j long); cruise from then at 100 mm/s: compare two instants in cruise.
+  const double t0 = plan.cycle_time_s / 2.0 - 0.05;
+  EXPECT_NEAR(s_at(t0 + 0.1) - s_at(t0), 10.0, kClosedForm * 100.0);
+  for (size_t i = 1; i < s.size(); ++i)  // back in time: the cursor restarts
+    EXPECT_NEAR(s_at(plan.t_s[i]), 25.0 * static_cast<double>(i), 1e-9);
+  EXPECT_NEAR(s_at(plan.cycle_time_s + 1.0), 100.0, 1e-12);  // held after the end
+}
+
+}  // namespace
+}  // namespace vcut::kinematics

@@ -75,6 +75,7 @@ class PathCursor {
  private:
   const FeedPlan& plan_;
   std::size_t span_ = 0, phase_ = 0, segment_ = 1;
+  double last_t_s_ = 0.0;
 };
 
 // `samples` from densify(); `axes` (may be null) the machine axis values of each sample (same
