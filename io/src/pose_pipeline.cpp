@@ -247,12 +247,17 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
         run.contour_error_um[static_cast<size_t>(p.stamp)] = p.contour_error_mm * 1000.0;
         return;
       }
+      // The block where the tool is: of the path's move nearest the actual tip, not the one
+      // being commanded (the lag still finishes a cut while the interpolator starts the
+      // retract; that is no rapid into the stock).
+      const int block = samples[p.nearest_segment].block;
+      const bool feed = program.blocks[static_cast<size_t>(block)].kind != kinematics::MotionKind::Rapid;
       if (p.peak) {
-        account_peak(p.block, p.feed, p.contour_error_mm, p.actual_pose.tip_mm);
+        account_peak(block, feed, p.contour_error_mm, p.actual_pose.tip_mm);
         return;
       }
-      account(p.block, p.feed, p.contour_error_mm, p.actual_pose.tip_mm);
-      thinner.add({p.actual_pose, p.block});
+      account(block, feed, p.contour_error_mm, p.actual_pose.tip_mm);
+      thinner.add({p.actual_pose, block});
       if (every_period) (*every_period)(p);
     });
     thinner.finish();

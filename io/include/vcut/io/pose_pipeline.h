@@ -48,8 +48,10 @@ struct PoseRun {
   // What the machine cuts with servo or errors on: with servo the actual path at every
   // interpolation period, thinned so that no dropped period's tool (tip, and the tool axis
   // over the flute length) lies farther than actual_path_tolerance_mm from the chord kept;
-  // with errors only the actual pose of every sample. Each pose's block is the block being
-  // interpolated when the machine was there. Empty when neither is on.
+  // with errors only the actual pose of every sample. Each pose's block is the block of the
+  // commanded path nearest the actual tip: where the tool is, not what is being commanded
+  // (the lag still finishes a cut while the interpolator starts the retract). Empty when
+  // neither is on.
   struct ActualPose {
     kinematics::ToolPose pose;
     int block = -1;
@@ -57,8 +59,9 @@ struct PoseRun {
   std::vector<ActualPose> actual_path;
   double actual_path_tolerance_mm = 0.0;
   std::size_t periods = 0;  // interpolation periods simulated (servo)
-  // Per program block (servo or errors): the contour error over its periods (servo) or its
-  // samples (errors only), feed moves and rapids alike; at_mm where the largest was.
+  // Per program block (servo or errors): the contour error over its periods (servo; a period
+  // counts for the block nearest the actual tip) or its samples (errors only), feed moves and
+  // rapids alike; at_mm where the largest was.
   struct BlockContour {
     double max_um = 0.0, rms_um = 0.0;
     Eigen::Vector3d at_mm = Eigen::Vector3d::Zero();
