@@ -116,7 +116,7 @@ class PathThinner {
 
  private:
   // Bounds the work per period; a long straight cruise keeps a pose every this many periods.
-  static constexpr std::size_t kMaxPending = 32;
+  static constexpr std::size_t kMaxPending = 16;
 
   bool fits(const PoseRun::ActualPose& p) const {
     const kinematics::ToolPose& a = out_.back().pose;
@@ -125,9 +125,11 @@ class PathThinner {
     for (const auto& q : pending_) {
       const double t = len2 > 0.0 ? std::clamp((q.pose.tip_mm - a.tip_mm).dot(d) / len2, 0.0, 1.0) : 0.0;
       const double tip = (q.pose.tip_mm - (a.tip_mm + t * d)).norm();
+      if (tip > tolerance_mm_) return false;
+      if (q.pose.axis == a.axis && p.pose.axis == a.axis) continue;  // the tool does not turn
+      // The turn off the chord's axis: its chord on the unit sphere (the angle to third order).
       const Eigen::Vector3d axis = (a.axis + t * (p.pose.axis - a.axis)).normalized();
-      const double turn = std::atan2(axis.cross(q.pose.axis).norm(), axis.dot(q.pose.axis));
-      if (tip + reach_mm_ * turn > tolerance_mm_) return false;
+      if (tip + reach_mm_ * (axis - q.pose.axis).norm() > tolerance_mm_) return false;
     }
     return true;
   }

@@ -10,9 +10,18 @@ namespace vcut::kinematics {
 namespace {
 
 // The lag runs along the path, so the nearest move is searched from the last one found,
-// this many moves back, to this many beyond the move being commanded.
-constexpr std::size_t kSearchSlack = 8;
+// kBackSlack moves back (should that one have been a near miss), to kAheadSlack beyond the
+// move being commanded (the loops overshoot a stop by a few per cent of their lag, not by
+// whole moves).
+constexpr std::size_t kBackSlack = 4;
+constexpr std::size_t kAheadSlack = 2;
 constexpr int kGoldenIterations = 48;  // the piece's parameter to 0.618^48 ~ 1e-10
+// The peak between two instants exceeds the larger instant by the path's curvature over half
+// a period: a few per cent at seed 004's 40 m/min. Instants below this share of the largest
+// error of their block so far, or below the floor (0.1 um: rounding noise along a straight
+// cruise peaks every other period), cannot set a maximum and are not refined.
+constexpr double kPeakShare = 0.9;
+constexpr double kPeakFloorMm = 1e-4;
 
 // Nearest point of the segment [a, b] to p: the parameter in [0, 1] and the distance.
 std::pair<double, double> segment_nearest(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
@@ -118,8 +127,8 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
   std::size_t from = 1;  // the nearest move found last
   PeriodSample out;
   const auto window = [&](std::size_t segment) {
-    const std::size_t hi = std::min(n - 1, segment + kSearchSlack);
-    return std::make_pair(std::min(hi, from > kSearchSlack ? from - kSearchSlack : 1), hi);
+    const std::size_t hi = std::min(n - 1, segment + kAheadSlack);
+    return std::make_pair(std::min(hi, from > kBackSlack ? from - kBackSlack : 1), hi);
   };
   // Fills `out` for the actual axes given: pose, contour error, the move's block.
   const auto finish = [&](std::size_t segment, std::size_t length_sample) {
@@ -140,13 +149,15 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
   ServoLoop last_loop = loop;
   double e_before = 0.0, e_mid = 0.0;  // contour error at the two instants before the last
   std::size_t near_before = 1;          // the nearest move at the first of them
+  int peak_block = -2;                  // the commanded block of the instants seen last
+  double block_max = 0.0;               // their largest error
   PeriodSample mid;                    // the period sample at the middle instant
   const auto peak = [&](double t_mid) {
     // The error over [t_mid - dT, t_mid + dT] from the two periods' Hermite interpolants.
     // The nearest moves lie between the one nearest at t_mid - dT and the last commanded.
     const double length = length_at(mid.segment);
-    const std::size_t hi = std::min(n - 1, out.segment + kSearchSlack);
-    const std::size_t lo = std::min(hi, near_before > kSearchSlack ? near_before - kSearchSlack : 1);
+    const std::size_t hi = std::min(n - 1, out.segment + kAheadSlack);
+    const std::size_t lo = std::min(hi, near_before > kBackSlack ? near_before - kBackSlack : 1);
     PeriodSample p = mid;
     const auto error = [&](double x) {  // x in [-1, 1] periods from t_mid
       p.actual = x <= 0.0 ? last_loop.within_last_period(1.0 + x) : loop.within_last_period(x);
@@ -238,7 +249,11 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
     finish(segment, segment);
     ++periods;
     // The instant t_k a local maximum of the error: its peak lies within a period of it.
-    if (k >= 1 && e_mid > e_before && e_mid > out.contour_error_mm) peak(t_k);
+    if (mid.block != peak_block) peak_block = mid.block, block_max = 0.0;
+    block_max = std::max(block_max, e_mid);
+    if (k >= 1 && e_mid > e_before && e_mid > out.contour_error_mm && e_mid > kPeakFloorMm &&
+        e_mid >= kPeakShare * block_max)
+      peak(t_k);
     e_before = e_mid;
     near_before = mid.nearest_segment;
     e_mid = out.contour_error_mm;
