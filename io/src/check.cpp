@@ -138,7 +138,9 @@ CheckResult run_check(const Job& job) {
     const std::string first = e.line.substr(0, e.line.find_first_of("- "));
     const auto it = block_of_line.find(first);
     const int block = it == block_of_line.end() ? 0 : it->second;
-    const Severity s = e.kind == "unreachable" ? Severity::Error : e.kind == "singular" ? Severity::Warning : Severity::Note;
+    const Severity s = e.kind == "unreachable"                                ? Severity::Error
+                       : e.kind == "singular" || e.kind == "densify_error" ? Severity::Warning
+                                                                           : Severity::Note;
     log.add_line(s, e.kind, e.line, e.detail, block);
   }
 
