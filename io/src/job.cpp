@@ -1,6 +1,7 @@
 #include "vcut/io/job.h"
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 
 #include "vcut/io/machine_file.h"
@@ -61,6 +62,19 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
       yaml.only_keys(kv.second, "servo.axes." + key, {"kv", "omega_n", "zeta", "feed_forward"});
       read_servo_axis(yaml, kv.second, "servo.axes." + key + ".", s.axes[index]);
     }
+  }
+  // A sampled loop that diverges at this period is a setting no machine runs with.
+  for (std::size_t i = 0; i < s.axes.size(); ++i) {
+    if (kinematics::servo_stable(s.axes[i], s.period_s)) continue;
+    const std::string letter = i < axes.size() ? std::string(1, axes[i].letter) : "";
+    const YAML::Node per_axis = servo["axes"] && !letter.empty() ? servo["axes"][letter] : YAML::Node();
+    const bool own = per_axis.IsDefined() && per_axis["kv"];
+    char what[200];
+    std::snprintf(what, sizeof what,
+                  "a position loop stable at the period %g s (axis %s: Kv %g/s diverges when sampled; "
+                  "an ideal velocity loop needs Kv x period < 2)",
+                  s.period_s, letter.c_str(), s.axes[i].kv_per_s);
+    yaml.fail(own ? per_axis["kv"] : servo["kv"] ? servo["kv"] : servo, own ? "servo.axes." + letter + ".kv" : "servo.kv", what);
   }
   job.servo = s;
 }

@@ -228,6 +228,17 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
     }
   };
   if (job.servo && samples.size() > 1) {
+    // A period far below any controller's (a unit slip) would run for hours: refused.
+    constexpr double kMaxPeriods = 1e8;  // about 40 s of this loop
+    const double periods = (run.feed.cycle_time_s + 5.0) / job.servo->period_s;
+    if (periods > kMaxPeriods) {
+      char what[240];
+      std::snprintf(what, sizeof what,
+                    "'servo.period': %g s makes %.3g interpolation periods of the program's %.1f s; expected a period "
+                    "of at least %.3g s",
+                    job.servo->period_s, periods, run.feed.cycle_time_s, (run.feed.cycle_time_s + 5.0) / kMaxPeriods);
+      throw InputError(job.file, 0, 0, what);
+    }
     kinematics::InterpolatorInput in;
     in.program = &program;
     in.samples = &samples;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace vcut::kinematics {
@@ -51,6 +52,27 @@ ServoLoop::Axis ServoLoop::discretize(const ServoAxis& axis, double dt) {
   d.phi = e.topLeftCorner<3, 3>();
   d.gamma = e.topRightCorner<3, 1>();
   return d;
+}
+
+bool servo_stable(const ServoAxis& axis, double period_s) {
+  if (!std::isfinite(period_s) || period_s <= 0.0) return false;
+  try {
+    ServoSettings one;
+    one.period_s = period_s;
+    one.axes = {axis};
+    ServoLoop loop(one, AxisValues::Zero(1));
+    return loop.spectral_radius(0) < 1.0;
+  } catch (const std::invalid_argument&) {
+    return false;
+  }
+}
+
+double ServoLoop::spectral_radius(int j) const {
+  const Axis& m = model_[j];
+  if (!m.second_order) return std::abs(1.0 - m.kv * dt_);
+  Eigen::Matrix3d closed = m.phi;
+  closed.col(0) -= m.gamma * m.kv;
+  return Eigen::EigenSolver<Eigen::Matrix3d>(closed, false).eigenvalues().cwiseAbs().maxCoeff();
 }
 
 ServoLoop::ServoLoop(const ServoSettings& settings, const AxisValues& start) {

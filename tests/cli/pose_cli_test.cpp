@@ -458,6 +458,11 @@ TEST_F(PoseCli, BadPoseKeys) {
                                                        {"servo: {axes: {A: {kv: 18}}}\n", "servo.axes.A"},
                                                        {"servo: {axes: {X: {period: 1}}}\n", "servo.axes.X.period"},
                                                        {"servo: {axes: {Y: {omega_n: -5}}}\n", "servo.axes.Y.omega_n"},
+                                                       // Sampled loops that diverge (Kv dT = 2.5; Kv 1000/s around
+                                                       // seed 004's velocity loop at 5 ms), a period of hours' work.
+                                                       {"servo: {kv: 500, omega_n: ideal}\n", "servo.kv"},
+                                                       {"servo: {axes: {X: {kv: 1000}}}\n", "servo.axes.X.kv"},
+                                                       {"servo: {period: 1e-9}\n", "servo.period"},
                                                        {"densify: {angle: 0}\n", "densify.angle"}};
   for (const auto& [line, key] : cases) {
     SCOPED_TRACE(line);

@@ -494,3 +494,44 @@ TEST(ServoSeed004, CornerCircleAndSwivelLineBesideThePaper) {
 
 }  // namespace
 }  // namespace vcut::kinematics
+
+namespace vcut::kinematics {
+namespace {
+
+// Stability of the sampled loop. First order: x[k+1] - c = (1 - Kv dT)(x[k] - c), stable
+// iff Kv dT < 2 (closed form). Second order: judged by running the loop on a step and
+// watching the error grow or decay over 2,000 periods (a second method beside the
+// eigenvalues servo_stable reads).
+TEST(ServoStability, MatchesTheClosedFormAndASimulation) {
+  ServoAxis first;
+  first.omega_n_per_s = 0.0;
+  for (double kv_dt : {0.5, 1.5, 1.99}) {
+    first.kv_per_s = kv_dt / 0.005;
+    EXPECT_TRUE(servo_stable(first, 0.005)) << kv_dt;
+  }
+  for (double kv_dt : {2.01, 3.0}) {
+    first.kv_per_s = kv_dt / 0.005;
+    EXPECT_FALSE(servo_stable(first, 0.005)) << kv_dt;
+  }
+  for (double kv : {5.0, 20.0, 60.0, 150.0, 400.0, 1000.0}) {
+    ServoAxis second;  // seed 004's velocity loop
+    second.kv_per_s = kv;
+    ServoSettings s;
+    s.period_s = 0.005;
+    s.axes = {second};
+    ServoLoop loop(s, AxisValues::Zero(1));
+    AxisValues c(1);
+    c << 1.0;
+    double early = 0.0, late = 0.0;
+    for (int k = 0; k < 2000; ++k) {
+      loop.step(c);
+      const double e = std::abs(loop.position()[0] - 1.0);
+      if (k >= 100 && k < 200) early = std::max(early, e);
+      if (k >= 1900) late = std::max(late, e);
+    }
+    EXPECT_EQ(servo_stable(second, 0.005), late < early) << "Kv " << kv << ": early " << early << ", late " << late;
+  }
+}
+
+}  // namespace
+}  // namespace vcut::kinematics

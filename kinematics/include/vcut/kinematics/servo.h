@@ -26,6 +26,11 @@ struct ServoSettings {
   std::vector<ServoAxis> axes;  // one per machine axis, or one for all
 };
 
+// Whether one axis's sampled loop is stable at the period: every eigenvalue of the
+// closed-loop period map (phi - gamma Kv e1^T; feed-forward only adds input) inside the unit
+// circle. An ideal velocity loop needs Kv dT < 2. Settings out of range are unstable.
+bool servo_stable(const ServoAxis& axis, double period_s);
+
 // The loops of all axes, one interpolation period at a time (the controller's view: the
 // interpolator hands the position controller a command every dT). Starts at rest on
 // `start`. step(c) runs one period with c, the command at the period's first instant:
@@ -46,6 +51,8 @@ class ServoLoop {
   // Largest |velocity| over the axes (mm/s or rad/s): zero at rest.
   double max_speed() const;
   double period_s() const { return dt_; }
+  // The largest eigenvalue magnitude of axis j's closed-loop period map (< 1: stable).
+  double spectral_radius(int j) const;
   int axis_count() const { return axes_; }
 
  private:
