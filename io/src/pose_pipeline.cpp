@@ -298,6 +298,8 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
   run.rms_contour_error_um = feed_count == 0 ? 0.0 : std::sqrt(sum2 / static_cast<double>(feed_count));
 
   // Per-block findings and q statistics.
+  constexpr int kDensifyWarnings = 10;
+  int densify_warnings = 0;
   const auto& blocks = run.densified.blocks;
   double q_sum = 0.0;
   for (size_t i = 0; i < blocks.size(); ++i) {
@@ -319,9 +321,13 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
                     "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
                     r.chord_error_mm, job.gouge_tolerance_mm);
       run.events.push_back({"densify_error", line, detail});
-      run.warnings.push_back(line + ": " + detail);
+      // The terminal gets the first few; every block stays in the events (report, page).
+      if (++densify_warnings <= kDensifyWarnings) run.warnings.push_back(line + ": " + detail);
     }
   }
+  if (densify_warnings > kDensifyWarnings)
+    run.warnings.push_back(std::to_string(densify_warnings - kDensifyWarnings) +
+                           " more block(s) densified beyond the gouge tolerance (events densify_error in report.json)");
   // Singular poses, one event per run of consecutive blocks (a three-axis program on a
   // five-axis machine sits on the pole throughout: one event, not thousands).
   for (size_t i = 0; i < blocks.size();) {

@@ -45,6 +45,31 @@ Machine table_table() {
   return Machine(s);
 }
 
+// One program densified, timed and ready for the interpolator (tools 0 mm from the nose).
+struct Timed {
+  Densified densified;
+  FeedPlan plan;
+  std::vector<double> lengths;
+  InterpolatorInput input;
+
+  Timed(const Program& program, const Machine& m, const DensifySettings& settings) {
+    DensifyMachine dm;
+    dm.machine = &m;
+    densified = densify(program, settings, dm);
+    std::vector<AxisValues> axes;
+    for (const PoseSample& s : densified.samples) axes.push_back(s.axes);
+    plan = plan_feed(program, densified.samples, &axes, &m, FeedSettings{});
+    lengths.assign(densified.samples.size(), 0.0);
+    input.program = &program;
+    input.samples = &densified.samples;
+    input.blocks = &densified.blocks;
+    input.feed = &plan;
+    input.machine = &m;
+    input.tool_length_mm = &lengths;
+  }
+  Timed(const Timed&) = delete;
+};
+
 TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
   const Machine m = table_table();
   // Axis program: at X28, C turns 0 -> 90 deg (the tip on a quarter circle of radius 28 in
@@ -63,22 +88,10 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
 
   DensifySettings coarse;
   coarse.angle_step_rad = 30.0 * M_PI / 180.0;  // q = 3: chords 28 (1 - cos 15 deg) = 0.95 mm inside
-  DensifyMachine dm;
-  dm.machine = &m;
-  const Densified d = densify(program, coarse, dm);
+  Timed timed(program, m, coarse);
+  const Densified& d = timed.densified;
   ASSERT_EQ(d.samples.size(), 4u);
-  std::vector<AxisValues> axes;
-  for (const PoseSample& s : d.samples) axes.push_back(s.axes);
-  const FeedPlan plan = plan_feed(program, d.samples, &axes, &m, FeedSettings{});
-  const std::vector<double> lengths(d.samples.size(), 0.0);
-
-  InterpolatorInput in;
-  in.program = &program;
-  in.samples = &d.samples;
-  in.blocks = &d.blocks;
-  in.feed = &plan;
-  in.machine = &m;
-  in.tool_length_mm = &lengths;
+  InterpolatorInput& in = timed.input;
   in.servo.period_s = 0.001;
   ServoAxis delay;
   delay.kv_per_s = 0.0;
@@ -125,20 +138,10 @@ TEST(Interpolator, SettlesOnTheEnd) {
   b.end_mm = {50, 0, 0};
   b.feed_mm_per_min = 3000.0;
   program.blocks.push_back(b);
-  DensifyMachine dm;
-  dm.machine = &m;
-  const Densified d = densify(program, DensifySettings{}, dm);
-  std::vector<AxisValues> axes;
-  for (const PoseSample& s : d.samples) axes.push_back(s.axes);
-  const FeedPlan plan = plan_feed(program, d.samples, &axes, &m, FeedSettings{});
-  const std::vector<double> lengths(d.samples.size(), 0.0);
-  InterpolatorInput in;
-  in.program = &program;
-  in.samples = &d.samples;
-  in.blocks = &d.blocks;
-  in.feed = &plan;
-  in.machine = &m;
-  in.tool_length_mm = &lengths;
+  Timed timed(program, m, DensifySettings{});
+  const Densified& d = timed.densified;
+  const FeedPlan& plan = timed.plan;
+  InterpolatorInput& in = timed.input;
   in.servo.axes = {ServoAxis{}};  // seed 004's loop, 5 ms
   PeriodSample last;
   double t_prev = -1.0;
