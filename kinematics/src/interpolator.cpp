@@ -144,9 +144,6 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
     from = out.nearest_segment;
     visit(out);
   };
-  // The loops before the last step: with `loop`, the actual path over the two periods
-  // around the instant before the last, for the peaks.
-  ServoLoop last_loop = loop;
   double e_before = 0.0, e_mid = 0.0;  // contour error at the two instants before the last
   std::size_t near_before = 1;          // the nearest move at the first of them
   int peak_block = -2;                  // the commanded block of the instants seen last
@@ -160,7 +157,7 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
     const std::size_t lo = std::min(hi, near_before > kBackSlack ? near_before - kBackSlack : 1);
     PeriodSample p = mid;
     const auto error = [&](double x) {  // x in [-1, 1] periods from t_mid
-      p.actual = x <= 0.0 ? last_loop.within_last_period(1.0 + x) : loop.within_last_period(x);
+      p.actual = x <= 0.0 ? loop.within_period_before_last(1.0 + x) : loop.within_last_period(x);
       p.actual_pose = forward(machine, p.actual, length, in.geometry);
       return path.distance(p.actual_pose.tip_mm, lo, hi, nullptr);
     };
@@ -230,7 +227,6 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
   mid = out;
   for (long long k = 0;; ++k) {
     const double t_k = static_cast<double>(k) * dt, t_next = static_cast<double>(k + 1) * dt;
-    last_loop = loop;
     loop.step(command);
     // The densified samples' own instants inside this period.
     while (next_stamp < n && plan.t_s[next_stamp] < t_next) {

@@ -62,6 +62,10 @@ std::string limit_violation(const Machine& m, const AxisValues& q) {
   return "";
 }
 
+// Linear axes closer to dependent than this (|det| over the product of the directions'
+// lengths: the volume they span, 1 for orthogonal axes) cannot place the tip.
+constexpr double kDependentAxes = 1e-9;
+
 bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& tip_mm, double tool_length_mm) {
   using detail::Rigid;
   std::array<int, 3> index{};
@@ -95,9 +99,12 @@ bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& t
   for (int c = 0; c < 3; ++c) J.col(c) = chain_side[static_cast<size_t>(c)] * (Rwt * raw[static_cast<size_t>(c)]);
   const Eigen::Vector3d tip_frame = t.apply(m.spec().gauge_point_mm - tool_length_mm * m.spec().spindle_axis);
   const Eigen::Vector3d b = Rwt * (tip_frame - w.t);
-  Eigen::FullPivLU<Eigen::Matrix3d> lu(J);
-  if (!lu.isInvertible()) return false;
-  const Eigen::Vector3d s = lu.solve(tip_mm - b);
+  // J's columns are the linear axes' directions in the workpiece frame: a closed-form 3x3
+  // inverse (cofactors) is exact enough and a fifth of a pivoting LU's work, which the
+  // interpolator pays every period of a TCP move. Singular: the axes do not span space.
+  const double det = J.determinant();
+  if (!(std::abs(det) > kDependentAxes * J.col(0).norm() * J.col(1).norm() * J.col(2).norm())) return false;
+  const Eigen::Vector3d s = J.inverse() * (tip_mm - b);
   for (int c = 0; c < 3; ++c) q[index[static_cast<size_t>(c)]] = s[c];
   return true;
 }

@@ -85,7 +85,7 @@ ServoLoop::ServoLoop(const ServoSettings& settings, const AxisValues& start) {
     fail("settings.axes must hold one entry or one per axis");
   for (int j = 0; j < axes_; ++j) {
     model_[j] = discretize(settings.axes[settings.axes.size() == 1 ? 0 : j], dt_);
-    s_[j] = s_prev_[j] = Eigen::Vector3d(start[j], 0.0, 0.0);
+    s_[j] = s_prev_[j] = s_prev2_[j] = Eigen::Vector3d(start[j], 0.0, 0.0);
     c_prev_[j] = start[j];
   }
   x_ = start;
@@ -95,6 +95,7 @@ void ServoLoop::step(const AxisValues& c) {
   for (int j = 0; j < axes_; ++j) {
     const Axis& m = model_[j];
     const double u = m.kv * (c[j] - s_[j][0]) + m.ff * (c[j] - c_prev_[j]) / dt_;
+    s_prev2_[j] = s_prev_[j];
     s_prev_[j] = s_[j];
     s_[j] = m.phi * s_prev_[j] + m.gamma * u;
     c_prev_[j] = c[j];
@@ -107,7 +108,8 @@ void ServoLoop::step(const AxisValues& c) {
 // ends, so the quintic Hermite interpolant is used; its error is at most max|x^(6)| dT^6 /
 // 46080 (after a velocity step dv, |x^(6)| <= dv omega_n^5 / sqrt(1 - zeta^2): 1.4e-5 mm for
 // dv = 1 m/s, omega_n = 120/s, zeta = 0.8, dT = 5 ms), and zero at the instants.
-AxisValues ServoLoop::within_last_period(double r) const {
+AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0, const std::array<Eigen::Vector3d, 5>& s1,
+                             double r) const {
   AxisValues o(axes_);
   const double dt = dt_;
   const double r2 = r * r, r3 = r2 * r, r4 = r3 * r, r5 = r4 * r;
@@ -118,8 +120,8 @@ AxisValues ServoLoop::within_last_period(double r) const {
   const double h4 = (-4.0 * r3 + 7.0 * r4 - 3.0 * r5) * dt;
   const double h5 = 10.0 * r3 - 15.0 * r4 + 6.0 * r5;
   for (int j = 0; j < axes_; ++j) {
-    const Eigen::Vector3d& a = s_prev_[j];
-    const Eigen::Vector3d& b = s_[j];
+    const Eigen::Vector3d& a = s0[j];
+    const Eigen::Vector3d& b = s1[j];
     o[j] = model_[j].second_order ? h0 * a[0] + h1 * a[1] + h2 * a[2] + h5 * b[0] + h4 * b[1] + h3 * b[2]
                                   : a[0] + r * (b[0] - a[0]);
   }

@@ -47,7 +47,9 @@ class ServoLoop {
   // Actual axis values at fraction r in [0, 1] of the last period (0: the instant before the
   // last step, 1: position()): linear for an ideal velocity loop (exact), else the quintic
   // Hermite in (x, x', x'') of both ends (error <= max|x^(6)| dT^6 / 46080).
-  AxisValues within_last_period(double r) const;
+  AxisValues within_last_period(double r) const { return within(s_prev_, s_, r); }
+  // The same over the period before the last one (its start two steps back).
+  AxisValues within_period_before_last(double r) const { return within(s_prev2_, s_prev_, r); }
   // Largest |velocity| over the axes (mm/s or rad/s): zero at rest.
   double max_speed() const;
   double period_s() const { return dt_; }
@@ -66,7 +68,9 @@ class ServoLoop {
   double dt_ = 0.0;
   int axes_ = 0;
   std::array<Axis, 5> model_{};
-  std::array<Eigen::Vector3d, 5> s_{}, s_prev_{};  // (x, x', x'') per axis
+  AxisValues within(const std::array<Eigen::Vector3d, 5>& a, const std::array<Eigen::Vector3d, 5>& b, double r) const;
+  // (x, x', x'') per axis: now, one and two steps back.
+  std::array<Eigen::Vector3d, 5> s_{}, s_prev_{}, s_prev2_{};
   std::array<double, 5> c_prev_{};
   AxisValues x_;
 };
