@@ -184,9 +184,10 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
   // an axis block are linear in its parameter; with the rotary axes fixed the linear ones
   // are linear in the tip). A tool-pose move that turns the tool is what a TCP controller
   // interpolates in the part: the tip on the chord, the tool axis on the great circle
-  // between the samples (ORIVECT's own path), its axes from the inverse kinematics every
-  // period (the branch nearest the last command); under ORIAXES or rotary words the rotary
-  // axes run linearly and the linear ones follow the tip.
+  // between the samples (ORIVECT's own path; a cone's within the densification's bound), its
+  // axes from the inverse kinematics every period (the branch nearest the last command);
+  // under ORIAXES or rotary words the rotary axes run linearly and the linear ones follow
+  // the tip.
   AxisValues last_command = samples[0].axes;
   const auto command_at = [&](double t, std::size_t* segment) {
     const PathPosition at = cursor.at(t);

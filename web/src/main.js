@@ -22,6 +22,7 @@ const EVENT_LABELS = {
   singular: 'Singular pose',
   unreachable: 'Unreachable pose',
   axis_limited_speed: 'Axis-limited speed',
+  densify_error: 'Densified off the machine path',
 };
 const SEVERE_EVENTS = new Set(['rapid_into_stock', 'holder_collision', 'shank_collision', 'spindle_off_cut', 'axis_limit', 'unreachable']);
 

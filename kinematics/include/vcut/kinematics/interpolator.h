@@ -40,7 +40,7 @@ struct InterpolatorInput {
 struct PeriodSample {
   double t_s = 0.0;
   std::size_t segment = 1;  // the densified move being interpolated: samples[segment - 1] -> [segment]
-  int block = 0;            // its program block
+  int block = 0;            // its program block (the block being commanded)
   bool feed = true;         // not a rapid
   // A densified sample's own instant (poses.csv's actual columns): its index; -1 for an
   // interpolation period. The loops' state between two periods comes from the quintic
