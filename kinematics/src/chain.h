@@ -25,6 +25,9 @@ Eigen::Matrix3d rotation_vector(const Eigen::Vector3d& v);
 // One node's transform in its parent's frame for axis value q (mm or rad).
 Rigid node_transform(const AxisSpec& axis, double q, Geometry geometry);
 
+// r = r * node_transform(axis, q, geometry), a translation's product done as one.
+void append_node(Rigid& r, const AxisSpec& axis, double q, Geometry geometry);
+
 // The frame -> workpiece-zero and frame -> spindle-nose transforms.
 struct Chains {
   Rigid workpiece;  // x_frame = workpiece.apply(x_w)

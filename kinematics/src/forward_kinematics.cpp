@@ -59,11 +59,22 @@ Rigid node_transform(const AxisSpec& a, double q, Geometry geometry) {
   return to_center * location * ideal * component_error(a.errors, q) * from_center;
 }
 
+void append_node(Rigid& r, const AxisSpec& a, double q, Geometry geometry) {
+  // A linear node without component errors is a pure translation: r * {I, t} = {R, R t + r.t}
+  // bit for bit (R I = R exactly), without the 3x3 product - the interpolator pays a forward
+  // kinematics every period.
+  if (a.kind == AxisKind::Linear && (geometry == Geometry::Ideal || a.errors.empty())) {
+    r.t += r.R * node_transform(a, q, geometry).t;
+    return;
+  }
+  r = r * node_transform(a, q, geometry);
+}
+
 Chains chains(const Machine& m, const AxisValues& q, Geometry geometry) {
   Chains c;
-  for (int i : m.workpiece_chain()) c.workpiece = c.workpiece * node_transform(m.axis(i), q[i], geometry);
+  for (int i : m.workpiece_chain()) append_node(c.workpiece, m.axis(i), q[i], geometry);
   c.workpiece.t = c.workpiece.apply(m.spec().workpiece_origin_mm);
-  for (int i : m.tool_chain()) c.tool = c.tool * node_transform(m.axis(i), q[i], geometry);
+  for (int i : m.tool_chain()) append_node(c.tool, m.axis(i), q[i], geometry);
   return c;
 }
 

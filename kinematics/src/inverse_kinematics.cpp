@@ -82,7 +82,7 @@ bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& t
       chain_side[static_cast<size_t>(n)] = -1;
       index[static_cast<size_t>(n++)] = i;
     }
-    w = w * detail::node_transform(a, q[i], Geometry::Ideal);
+    detail::append_node(w, a, q[i], Geometry::Ideal);
   }
   for (int i : m.tool_chain()) {
     const AxisSpec& a = m.axis(i);
@@ -92,7 +92,7 @@ bool solve_linear_axes(const Machine& m, AxisValues& q, const Eigen::Vector3d& t
       chain_side[static_cast<size_t>(n)] = 1;
       index[static_cast<size_t>(n++)] = i;
     }
-    t = t * detail::node_transform(a, q[i], Geometry::Ideal);
+    detail::append_node(t, a, q[i], Geometry::Ideal);
   }
   w.t = w.apply(m.spec().workpiece_origin_mm);
   const Eigen::Matrix3d Rwt = w.R.transpose();
