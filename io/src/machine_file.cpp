@@ -261,12 +261,16 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
   }
   if (const YAML::Node feed = root["feed_interpretation"]) {
     const std::string f = yaml.text(feed, "feed_interpretation");
-    if (f == "linuxcnc") spec.feed_interpretation = kinematics::FeedInterpretation::LinuxCnc;
-    else if (f == "combined") spec.feed_interpretation = kinematics::FeedInterpretation::Combined;
-    else if (f == "tip") spec.feed_interpretation = kinematics::FeedInterpretation::Tip;
+    if (f == "linuxcnc")
+      spec.feed_interpretation = kinematics::FeedInterpretation::LinuxCnc;
+    else if (f == "combined")
+      spec.feed_interpretation = kinematics::FeedInterpretation::Combined;
+    else if (f == "tip")
+      spec.feed_interpretation = kinematics::FeedInterpretation::Tip;
     else
       yaml.fail(feed, "feed_interpretation",
-                "linuxcnc (F on X Y Z, else on the rotary axes in deg/min), combined (F on sqrt(dx^2 + ... + dc^2), "
+                "linuxcnc (F on X Y Z, else on the rotary axes in deg/min), combined (F on "
+                "sqrt(dx^2 + ... + dc^2), "
                 "Fanuc and Haas) or tip (F on the tool tip's path)");
   }
   if (root["singularity_deg"])

@@ -200,28 +200,20 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
   std::vector<double> block_sum2(program.blocks.size(), 0.0);
   size_t feed_count = 0;
   double sum2 = 0.0;
-  // One contour error (mm) of a period (servo) or sample (errors only) into the figures.
-  const auto account = [&](int block, bool feed, double error_mm, const Eigen::Vector3d& at) {
+  // One contour error (mm) of a period (servo) or sample (errors only) into the figures; a
+  // peak between instants (`counted` false) raises the maxima only, not the RMS.
+  const auto account = [&](int block, double error_mm, const Eigen::Vector3d& at, bool counted) {
     if (block < 0 || static_cast<size_t>(block) >= program.blocks.size()) return;
     const double um = error_mm * 1000.0;
     PoseRun::BlockContour& c = run.block_contour[static_cast<size_t>(block)];
-    ++c.count;
-    block_sum2[static_cast<size_t>(block)] += um * um;
     if (um >= c.max_um) c.max_um = um, c.at_mm = at;
-    if (!feed) return;  // the summary covers feed moves: rapids cut corners by design
-    ++feed_count;
-    sum2 += um * um;
-    if (um > run.max_contour_error_um) {
-      run.max_contour_error_um = um;
-      run.max_contour_line = program.where(program.blocks[static_cast<size_t>(block)].source);
+    const bool feed = program.blocks[static_cast<size_t>(block)].kind != kinematics::MotionKind::Rapid;
+    if (counted) {
+      ++c.count;
+      block_sum2[static_cast<size_t>(block)] += um * um;
+      if (feed) ++feed_count, sum2 += um * um;
     }
-  };
-  // A peak between instants raises the maxima only.
-  const auto account_peak = [&](int block, bool feed, double error_mm, const Eigen::Vector3d& at) {
-    if (block < 0 || static_cast<size_t>(block) >= program.blocks.size()) return;
-    const double um = error_mm * 1000.0;
-    PoseRun::BlockContour& c = run.block_contour[static_cast<size_t>(block)];
-    if (um >= c.max_um) c.max_um = um, c.at_mm = at;
+    // The summary covers feed moves: rapids cut corners by design.
     if (feed && um > run.max_contour_error_um) {
       run.max_contour_error_um = um;
       run.max_contour_line = program.where(program.blocks[static_cast<size_t>(block)].source);
@@ -230,16 +222,17 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
   if (job.servo && samples.size() > 1) {
     // A period far below any controller's (a unit slip) would run for hours: refused.
     constexpr double kMaxPeriods = 1e8;  // about 40 s of this loop
-    const double periods = (run.feed.cycle_time_s + 5.0) / job.servo->period_s;
+    kinematics::InterpolatorInput in;
+    const double span_s = run.feed.cycle_time_s + in.settle_max_s;
+    const double periods = span_s / job.servo->period_s;
     if (periods > kMaxPeriods) {
       char what[240];
       std::snprintf(what, sizeof what,
                     "'servo.period': %g s makes %.3g interpolation periods of the program's %.1f s; expected a period "
                     "of at least %.3g s",
-                    job.servo->period_s, periods, run.feed.cycle_time_s, (run.feed.cycle_time_s + 5.0) / kMaxPeriods);
+                    job.servo->period_s, periods, run.feed.cycle_time_s, span_s / kMaxPeriods);
       throw InputError(job.file, 0, 0, what);
     }
-    kinematics::InterpolatorInput in;
     in.program = &program;
     in.samples = &samples;
     in.blocks = &run.densified.blocks;
@@ -264,12 +257,8 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
       // being commanded (the lag still finishes a cut while the interpolator starts the
       // retract; that is no rapid into the stock).
       const int block = samples[p.nearest_segment].block;
-      const bool feed = program.blocks[static_cast<size_t>(block)].kind != kinematics::MotionKind::Rapid;
-      if (p.peak) {
-        account_peak(block, feed, p.contour_error_mm, p.actual_pose.tip_mm);
-        return;
-      }
-      account(block, feed, p.contour_error_mm, p.actual_pose.tip_mm);
+      account(block, p.contour_error_mm, p.actual_pose.tip_mm, !p.peak);
+      if (p.peak) return;
       thinner.add({p.actual_pose, block});
       if (every_period) (*every_period)(p);
     });
@@ -285,12 +274,10 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
       run.actual.push_back(kinematics::forward(machine, samples[i].axes, run.tool_length_mm[i], geometry));
       run.actual_path.push_back({run.actual.back(), samples[i].block});
       if (samples.size() < 2) continue;
-      const size_t hi = std::min(samples.size() - 1, std::max<size_t>(1, i) + 8), lo = std::min(hi, from > 8 ? from - 8 : 1);
+      const auto [lo, hi] = path.window(from, std::max<size_t>(1, i));
       const double e = path.distance(run.actual[i].tip_mm, lo, hi, &from);
       run.contour_error_um[i] = e * 1000.0;
-      if (i == 0) continue;
-      const int block = samples[i].block;
-      account(block, program.blocks[static_cast<size_t>(block)].kind != kinematics::MotionKind::Rapid, e, run.actual[i].tip_mm);
+      if (i > 0) account(samples[i].block, e, run.actual[i].tip_mm, true);
     }
   }
   for (size_t b = 0; b < run.block_contour.size(); ++b)

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "vcut/kinematics/forward_kinematics.h"
+#include "segment.h"
 
 namespace vcut::kinematics {
 namespace {
@@ -30,6 +31,15 @@ double arc_angle_rad(const Block& b) {
   double angle = std::atan2(u.cross(w).dot(n), u.dot(w));  // (-pi, pi]
   if (angle <= 1e-12) angle += kTwoPi;                       // (0, 2 pi]: start == end is a full turn
   return angle + kTwoPi * std::max(0, b.turns - 1);
+}
+
+double arc_radius_mm(const Block& b) {
+  const Eigen::Vector3d n = b.normal.normalized();
+  return (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
+}
+
+double arc_length_mm(const Block& b) {
+  return std::hypot(arc_radius_mm(b) * arc_angle_rad(b), (b.end_mm - b.start_mm).dot(b.normal.normalized()));
 }
 
 Eigen::Vector3d arc_point(const Block& b, double s) {
@@ -172,10 +182,7 @@ class BlockPath {
       }
       return l;
     }
-    if (b_.kind != MotionKind::Arc) return (b_.end_mm - b_.start_mm).norm();
-    const Eigen::Vector3d n = b_.normal.normalized();
-    const double radius = (b_.start_mm - b_.center_mm - (b_.start_mm - b_.center_mm).dot(n) * n).norm();
-    return std::hypot(radius * arc_angle_rad(b_), (b_.end_mm - b_.start_mm).dot(n));
+    return b_.kind == MotionKind::Arc ? arc_length_mm(b_) : (b_.end_mm - b_.start_mm).norm();
   }
 
   double turn_rad() const {
@@ -196,12 +203,7 @@ class BlockPath {
   void nonlinear_error(BlockReport& report) const {
     if (mode_ != Mode::AxesLinear) return;
     const Eigen::Vector3d a = pose(0.0).tip_mm, c = pose(1.0).tip_mm;
-    const Eigen::Vector3d d = c - a;
-    auto distance = [&](double s) {
-      const Eigen::Vector3d p = pose(s).tip_mm;
-      const double t = d.squaredNorm() > 0 ? std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-      return (p - (a + t * d)).norm();
-    };
+    auto distance = [&](double s) { return detail::segment_nearest(pose(s).tip_mm, a, c).second; };
     constexpr int kScan = 64;
     int best = 0;
     double best_d = 0.0;
@@ -299,9 +301,7 @@ double deviation_for(const BlockPath& path, int q, const DensifySettings& settin
 }
 
 int arc_moves(const Block& b, double chord_tolerance_mm) {
-  const Eigen::Vector3d n = b.normal.normalized();
-  const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
-  return arc_chord_count(radius, arc_angle_rad(b), chord_tolerance_mm);
+  return arc_chord_count(arc_radius_mm(b), arc_angle_rad(b), chord_tolerance_mm);
 }
 
 int moves_for(const Block& b, const BlockPath& path, const DensifySettings& settings) {
@@ -344,9 +344,7 @@ void chord_error(const Block& b, const BlockPath& path, BlockReport& report) {
     const Eigen::Vector3d next = path.pose(s1).tip_mm;
     for (double t : {0.25, 0.5, 0.75}) {
       const Eigen::Vector3d p = path.pose(s0 + t * (s1 - s0)).tip_mm;
-      const Eigen::Vector3d d = next - prev;
-      const double u = d.squaredNorm() > 0.0 ? std::clamp((p - prev).dot(d) / d.squaredNorm(), 0.0, 1.0) : 0.0;
-      const double e = (p - (prev + u * d)).norm();
+      const double e = detail::segment_nearest(p, prev, next).second;
       if (e > report.chord_error_mm) report.chord_error_mm = e, report.chord_error_at_mm = p;
     }
     prev = next;

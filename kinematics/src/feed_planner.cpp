@@ -372,26 +372,24 @@ double arc_curvature_radius(const Block& b) {
 // An axis block's tip speed per unit of F: the tip's length over the length F applies to
 // (FeedSettings::axis_feed); 1 for tool-pose blocks, for rotation-only runs (F in deg/min
 // already) and for the Tip reading.
-double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes,
-                       const Machine* machine, const FeedSettings& settings, size_t first, size_t last, const Run& run) {
-  if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip || !axes || !machine)
+double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes, const Machine* machine,
+                       const FeedSettings& settings, size_t first, size_t last, const Run& run) {
+  if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip ||
+      !axes || !machine)
     return 1.0;
   // The programmed X Y Z path: the line, or the arc (helix) of the words.
-  double xyz = (b.end_mm - b.start_mm).norm();
-  if (b.kind == MotionKind::Arc) {
-    const Eigen::Vector3d n = b.normal.normalized();
-    const double radius = (b.start_mm - b.center_mm - (b.start_mm - b.center_mm).dot(n) * n).norm();
-    xyz = std::hypot(radius * arc_angle_rad(b), (b.end_mm - b.start_mm).dot(n));
-  }
+  const double xyz = b.kind == MotionKind::Arc ? arc_length_mm(b) : (b.end_mm - b.start_mm).norm();
   // The rotary axes' motion (deg) over the block.
   const AxisValues& q0 = (*axes)[first - 1];
   const AxisValues& q1 = (*axes)[last];
   double rotary2 = 0.0;
   for (int k = 0; k < machine->axis_count() && k < q0.size() && k < q1.size(); ++k)
-    if (machine->axis(k).kind == AxisKind::Rotary) rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
-  const double programmed = settings.axis_feed == FeedInterpretation::Combined ? std::sqrt(xyz * xyz + rotary2)
-                            : xyz > kStillTipMm                                ? xyz
-                                                                               : std::sqrt(rotary2);
+    if (machine->axis(k).kind == AxisKind::Rotary)
+      rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
+  const double programmed = settings.axis_feed == FeedInterpretation::Combined
+                                ? std::sqrt(xyz * xyz + rotary2)
+                            : xyz > kStillTipMm ? xyz
+                                                : std::sqrt(rotary2);
   return programmed > 0.0 ? run.length / programmed : 1.0;
 }
 

@@ -1,10 +1,11 @@
 #include "vcut/kinematics/interpolator.h"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
+
+#include "segment.h"
 
 namespace vcut::kinematics {
 namespace {
@@ -23,14 +24,6 @@ constexpr int kGoldenIterations = 48;  // the piece's parameter to 0.618^48 ~ 1e
 constexpr double kPeakShare = 0.9;
 constexpr double kPeakFloorMm = 1e-4;
 
-// Nearest point of the segment [a, b] to p: the parameter in [0, 1] and the distance.
-std::pair<double, double> segment_nearest(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  const Eigen::Vector3d d = b - a;
-  const double len2 = d.squaredNorm();
-  const double t = len2 > 0.0 ? std::clamp((p - a).dot(d) / len2, 0.0, 1.0) : 0.0;
-  return {t, (p - (a + t * d)).norm()};
-}
-
 // Distance from p to an arc (helix) block near its parameter s_guess: the angle of p about
 // the arc's axis, taken in the turn nearest the guess; exact for a planar arc, for a helix
 // the point of the helix at p's angle (off the true nearest by the pitch's second order).
@@ -41,7 +34,8 @@ double arc_distance(const Block& b, const Eigen::Vector3d& p, double s_guess) {
   Eigen::Vector3d w = p - b.center_mm;
   w -= w.dot(n) * n;
   const double total = arc_angle_rad(b);
-  if (u.norm() == 0.0 || w.norm() == 0.0 || !(total > 0.0)) return (p - arc_point(b, s_guess)).norm();
+  if (u.norm() == 0.0 || w.norm() == 0.0 || !(total > 0.0))
+    return (p - arc_point(b, s_guess)).norm();
   double phi = std::atan2(n.dot(u.cross(w)), u.dot(w));  // (-pi, pi] about n from the start
   const double guess = s_guess * total;
   phi += 2.0 * M_PI * std::round((guess - phi) / (2.0 * M_PI));
@@ -61,16 +55,26 @@ CommandedPath::CommandedPath(const Program& program, const std::vector<PoseSampl
   for (std::size_t i = 1; i < samples.size(); ++i) {
     const int b = samples[i].block;
     index = b == samples[i - 1].block ? index + 1 : 1;
-    const int q = b >= 0 && static_cast<std::size_t>(b) < blocks.size() ? std::max(1, blocks[static_cast<std::size_t>(b)].q) : 1;
+    const int q = b >= 0 && static_cast<std::size_t>(b) < blocks.size()
+                      ? std::max(1, blocks[static_cast<std::size_t>(b)].q)
+                      : 1;
     param_[i] = static_cast<double>(index) / q;
   }
 }
 
-double CommandedPath::distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi, std::size_t* nearest) const {
+std::pair<std::size_t, std::size_t> CommandedPath::window(std::size_t nearest_last,
+                                                          std::size_t commanded) const {
+  const std::size_t hi = std::min(samples_.size() - 1, commanded + kAheadSlack);
+  return {std::min(hi, nearest_last > kBackSlack ? nearest_last - kBackSlack : 1), hi};
+}
+
+double CommandedPath::distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi,
+                               std::size_t* nearest) const {
   double best = std::numeric_limits<double>::infinity();
   std::size_t best_k = lo;
   for (std::size_t k = lo; k <= hi; ++k) {
-    const double d = segment_nearest(p, samples_[k - 1].pose.tip_mm, samples_[k].pose.tip_mm).second;
+    const double d =
+        detail::segment_nearest(p, samples_[k - 1].pose.tip_mm, samples_[k].pose.tip_mm).second;
     if (d < best) best = d, best_k = k;
   }
   if (nearest) *nearest = best_k;
@@ -86,13 +90,15 @@ double CommandedPath::refine(const Eigen::Vector3d& p, std::size_t k, double pol
   if (b.tool_pose) {
     if (b.kind != MotionKind::Arc) return polyline;  // the tips lie on the line
     const double s0 = from.block == block ? param_[k - 1] : 0.0, s1 = param_[k];
-    const double t = segment_nearest(p, from.pose.tip_mm, to.pose.tip_mm).first;
+    const double t = detail::segment_nearest(p, from.pose.tip_mm, to.pose.tip_mm).first;
     return arc_distance(b, p, s0 + t * (s1 - s0));
   }
   // An axis block: the axes run linearly, the tip on the machine's curve between the two
   // samples; its distance from p is unimodal over so short a piece (golden section).
-  if (!machine_ || from.axes.size() != machine_->axis_count() || to.axes.size() != from.axes.size()) return polyline;
-  const double length = tool_length_mm_ && k < tool_length_mm_->size() ? (*tool_length_mm_)[k] : 0.0;
+  if (!machine_ || from.axes.size() != machine_->axis_count() || to.axes.size() != from.axes.size())
+    return polyline;
+  const double length =
+      tool_length_mm_ && k < tool_length_mm_->size() ? (*tool_length_mm_)[k] : 0.0;
   const auto d = [&](double t) {
     return (forward(*machine_, from.axes + t * (to.axes - from.axes), length).tip_mm - p).norm();
   };
@@ -109,7 +115,8 @@ double CommandedPath::refine(const Eigen::Vector3d& p, std::size_t k, double pol
   return std::min({d1, d2, d(0.0), d(1.0)});
 }
 
-std::size_t for_each_period(const InterpolatorInput& in, const std::function<void(const PeriodSample&)>& visit) {
+std::size_t for_each_period(const InterpolatorInput& in,
+                            const std::function<void(const PeriodSample&)>& visit) {
   const std::vector<PoseSample>& samples = *in.samples;
   const FeedPlan& plan = *in.feed;
   const Program& program = *in.program;
@@ -126,35 +133,31 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
 
   std::size_t from = 1;  // the nearest move found last
   PeriodSample out;
-  const auto window = [&](std::size_t segment) {
-    const std::size_t hi = std::min(n - 1, segment + kAheadSlack);
-    return std::make_pair(std::min(hi, from > kBackSlack ? from - kBackSlack : 1), hi);
-  };
   // Fills `out` for the actual axes given: pose, contour error, the move's block.
   const auto finish = [&](std::size_t segment, std::size_t length_sample) {
     const int block = samples[segment].block;
     out.segment = segment;
     out.block = block;
-    out.feed = block >= 0 && program.blocks[static_cast<std::size_t>(block)].kind != MotionKind::Rapid;
+    out.feed =
+        block >= 0 && program.blocks[static_cast<std::size_t>(block)].kind != MotionKind::Rapid;
     const double length = length_at(length_sample);
     out.actual_pose = forward(machine, out.actual, length, in.geometry);
     if (in.commanded_pose) out.commanded_pose = forward(machine, out.commanded, length);
-    const auto [lo, hi] = window(segment);
+    const auto [lo, hi] = path.window(from, segment);
     out.contour_error_mm = path.distance(out.actual_pose.tip_mm, lo, hi, &out.nearest_segment);
     from = out.nearest_segment;
     visit(out);
   };
   double e_before = 0.0, e_mid = 0.0;  // contour error at the two instants before the last
-  std::size_t near_before = 1;          // the nearest move at the first of them
-  int peak_block = -2;                  // the commanded block of the instants seen last
-  double block_max = 0.0;               // their largest error
+  std::size_t near_before = 1;         // the nearest move at the first of them
+  int peak_block = -2;                 // the commanded block of the instants seen last
+  double block_max = 0.0;              // their largest error
   PeriodSample mid;                    // the period sample at the middle instant
   const auto peak = [&](double t_mid) {
     // The error over [t_mid - dT, t_mid + dT] from the two periods' Hermite interpolants.
     // The nearest moves lie between the one nearest at t_mid - dT and the last commanded.
     const double length = length_at(mid.segment);
-    const std::size_t hi = std::min(n - 1, out.segment + kAheadSlack);
-    const std::size_t lo = std::min(hi, near_before > kBackSlack ? near_before - kBackSlack : 1);
+    const auto [lo, hi] = path.window(near_before, out.segment);
     PeriodSample p = mid;
     const auto error = [&](double x) {  // x in [-1, 1] periods from t_mid
       p.actual = x <= 0.0 ? loop.within_period_before_last(1.0 + x) : loop.within_last_period(x);
@@ -162,7 +165,8 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
       return path.distance(p.actual_pose.tip_mm, lo, hi, nullptr);
     };
     const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-    double a = -1.0, b = 1.0, x1 = b - g * (b - a), x2 = a + g * (b - a), e1 = error(x1), e2 = error(x2);
+    double a = -1.0, b = 1.0, x1 = b - g * (b - a), x2 = a + g * (b - a), e1 = error(x1),
+           e2 = error(x2);
     for (int it = 0; it < kGoldenIterations / 2; ++it) {
       if (e1 < e2) {
         a = x1, x1 = x2, e1 = e2, x2 = a + g * (b - a), e2 = error(x2);
@@ -197,7 +201,9 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
     const double f = at.fraction;
     AxisValues q = a.axes + f * (b.axes - a.axes);
     const int block = b.block;
-    if (f <= 0.0 || f >= 1.0 || block < 0 || !program.blocks[static_cast<std::size_t>(block)].tool_pose) return last_command = q;
+    if (f <= 0.0 || f >= 1.0 || block < 0 ||
+        !program.blocks[static_cast<std::size_t>(block)].tool_pose)
+      return last_command = q;
     bool turns = false;
     for (int k = 0; k < machine.rotary_count(); ++k)
       turns = turns || a.axes[machine.rotary_axis(k)] != b.axes[machine.rotary_axis(k)];
@@ -209,7 +215,8 @@ std::size_t for_each_period(const InterpolatorInput& in, const std::function<voi
       solve_linear_axes(machine, q, tip, length);
       return last_command = q;
     }
-    const IkResult r = inverse(machine, ToolPose{tip, great_circle(a.pose.axis, b.pose.axis, f)}, length, &last_command, in.ik);
+    const IkResult r = inverse(machine, ToolPose{tip, great_circle(a.pose.axis, b.pose.axis, f)},
+                               length, &last_command, in.ik);
     return last_command = r.ok() ? r.q() : q;
   };
 

@@ -1,11 +1,11 @@
 #include "vcut/kinematics/servo.h"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <stdexcept>
 #include <string>
-#include <Eigen/Eigenvalues>
 #include <unsupported/Eigen/MatrixFunctions>
 
 namespace vcut::kinematics {
@@ -13,9 +13,7 @@ namespace {
 
 constexpr double kMaxPeriods = 1e9;  // a longer run is a units mistake, not a job
 
-[[noreturn]] void fail(const std::string& what) {
-  throw std::invalid_argument("servo: " + what);
-}
+[[noreturn]] void fail(const std::string& what) { throw std::invalid_argument("servo: " + what); }
 
 }  // namespace
 
@@ -108,8 +106,8 @@ void ServoLoop::step(const AxisValues& c) {
 // ends, so the quintic Hermite interpolant is used; its error is at most max|x^(6)| dT^6 /
 // 46080 (after a velocity step dv, |x^(6)| <= dv omega_n^5 / sqrt(1 - zeta^2): 1.4e-5 mm for
 // dv = 1 m/s, omega_n = 120/s, zeta = 0.8, dT = 5 ms), and zero at the instants.
-AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0, const std::array<Eigen::Vector3d, 5>& s1,
-                             double r) const {
+AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0,
+                             const std::array<Eigen::Vector3d, 5>& s1, double r) const {
   AxisValues o(axes_);
   const double dt = dt_;
   const double r2 = r * r, r3 = r2 * r, r4 = r3 * r, r5 = r4 * r;
@@ -122,8 +120,9 @@ AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0, const std
   for (int j = 0; j < axes_; ++j) {
     const Eigen::Vector3d& a = s0[j];
     const Eigen::Vector3d& b = s1[j];
-    o[j] = model_[j].second_order ? h0 * a[0] + h1 * a[1] + h2 * a[2] + h5 * b[0] + h4 * b[1] + h3 * b[2]
-                                  : a[0] + r * (b[0] - a[0]);
+    o[j] = model_[j].second_order
+               ? h0 * a[0] + h1 * a[1] + h2 * a[2] + h5 * b[0] + h4 * b[1] + h3 * b[2]
+               : a[0] + r * (b[0] - a[0]);
   }
   return o;
 }

@@ -568,7 +568,8 @@ TEST(PathCursor, FollowsTheSCurveBetweenSamples) {
     const PathPosition at = cursor.at(t);
     return 25.0 * (static_cast<double>(at.segment) - 1.0 + at.fraction);
   };
-  for (double t : {0.0, 0.002, 0.005, 0.0099}) EXPECT_NEAR(s_at(t), 1e5 * t * t * t / 6.0, kClosedForm * 100.0);
+  for (double t : {0.0, 0.002, 0.005, 0.0099})
+    EXPECT_NEAR(s_at(t), 1e5 * t * t * t / 6.0, kClosedForm * 100.0);
   // Acceleration over: v = a^2/(2j) + a (t - a/j) at the end of the constant-acceleration
   // phase (0.1 - a/j long); cruise from then at 100 mm/s: compare two instants in cruise.
   const double t0 = plan.cycle_time_s / 2.0 - 0.05;

@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "axis_specs.h"
 #include "vcut/kinematics/machine.h"
 
 namespace vcut::kinematics {
@@ -65,22 +66,8 @@ std::string str(const Eigen::Vector3d& v) {
                                        << want << "\nmax error " << err;
 }
 
-AxisSpec linear(char letter, Eigen::Vector3d direction) {
-  AxisSpec a;
-  a.letter = letter;
-  a.kind = AxisKind::Linear;
-  a.direction = direction;
-  return a;
-}
-
-AxisSpec rotary(char letter, Eigen::Vector3d axis, Eigen::Vector3d center) {
-  AxisSpec a;
-  a.letter = letter;
-  a.kind = AxisKind::Rotary;
-  a.direction = axis;
-  a.center_mm = center;
-  return a;
-}
+using test::linear;
+using test::rotary;
 
 // Axis values by letter (mm, rad), in the machine's axis order.
 AxisValues values(const Machine& m, std::initializer_list<std::pair<char, double>> by_letter) {

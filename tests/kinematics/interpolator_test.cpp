@@ -14,26 +14,15 @@
 #include <cmath>
 #include <vector>
 
+#include "axis_specs.h"
+
 namespace vcut::kinematics {
 namespace {
 
 constexpr double kRounding = 1e-9;  // mm: forward kinematics and the golden section's end
 
-AxisSpec linear(char letter, const Eigen::Vector3d& d) {
-  AxisSpec a;
-  a.letter = letter;
-  a.direction = d;
-  return a;
-}
-
-AxisSpec rotary(char letter, const Eigen::Vector3d& k, const Eigen::Vector3d& c) {
-  AxisSpec a;
-  a.letter = letter;
-  a.kind = AxisKind::Rotary;
-  a.direction = k;
-  a.center_mm = c;
-  return a;
-}
+using test::linear;
+using test::rotary;
 
 // A table-table AC, C about the z axis through the origin; the tool 0 mm from the nose.
 Machine table_table() {
@@ -87,7 +76,8 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
   program.blocks.push_back(b);
 
   DensifySettings coarse;
-  coarse.angle_step_rad = 30.0 * M_PI / 180.0;  // q = 3: chords 28 (1 - cos 15 deg) = 0.95 mm inside
+  coarse.angle_step_rad =
+      30.0 * M_PI / 180.0;  // q = 3: chords 28 (1 - cos 15 deg) = 0.95 mm inside
   Timed timed(program, m, coarse);
   const Densified& d = timed.densified;
   ASSERT_EQ(d.samples.size(), 4u);
@@ -109,7 +99,8 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
     double best = 1e9;
     for (std::size_t k = 1; k < d.samples.size(); ++k) {
       const Eigen::Vector3d a = d.samples[k - 1].pose.tip_mm, c = d.samples[k].pose.tip_mm;
-      const double t = std::clamp((p.actual_pose.tip_mm - a).dot(c - a) / (c - a).squaredNorm(), 0.0, 1.0);
+      const double t =
+          std::clamp((p.actual_pose.tip_mm - a).dot(c - a) / (c - a).squaredNorm(), 0.0, 1.0);
       best = std::min(best, (p.actual_pose.tip_mm - (a + t * (c - a))).norm());
     }
     polyline_worst = std::max(polyline_worst, best);
@@ -119,7 +110,9 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
   ASSERT_EQ(periods.size(), count);
   for (std::size_t k = 1; k < periods.size(); ++k) {
     // One period late, and on the circle of radius 28.
-    EXPECT_NEAR((periods[k].actual - periods[k - 1].commanded).cwiseAbs().maxCoeff(), 0.0, kRounding) << k;
+    EXPECT_NEAR((periods[k].actual - periods[k - 1].commanded).cwiseAbs().maxCoeff(), 0.0,
+                kRounding)
+        << k;
     EXPECT_NEAR(periods[k].actual_pose.tip_mm.head<2>().norm(), 28.0, kRounding) << k;
     EXPECT_LT(periods[k].contour_error_mm, kRounding) << k;
     EXPECT_NEAR(periods[k].commanded_pose.tip_mm.head<2>().norm(), 28.0, kRounding) << k;
@@ -152,7 +145,8 @@ TEST(Interpolator, SettlesOnTheEnd) {
     last = p;
   });
   EXPECT_GT(last.t_s, plan.cycle_time_s);
-  EXPECT_NEAR((last.actual - d.samples.back().axes).cwiseAbs().maxCoeff(), 0.0, in.settle_tolerance);
+  EXPECT_NEAR((last.actual - d.samples.back().axes).cwiseAbs().maxCoeff(), 0.0,
+              in.settle_tolerance);
   EXPECT_NEAR(last.actual_pose.tip_mm.x(), 50.0, in.settle_tolerance);
 }
 

@@ -529,7 +529,8 @@ TEST(ServoStability, MatchesTheClosedFormAndASimulation) {
       if (k >= 100 && k < 200) early = std::max(early, e);
       if (k >= 1900) late = std::max(late, e);
     }
-    EXPECT_EQ(servo_stable(second, 0.005), late < early) << "Kv " << kv << ": early " << early << ", late " << late;
+    EXPECT_EQ(servo_stable(second, 0.005), late < early)
+        << "Kv " << kv << ": early " << early << ", late " << late;
   }
 }
 

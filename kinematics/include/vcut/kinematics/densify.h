@@ -80,6 +80,11 @@ int arc_chord_count(double radius_mm, double angle_rad, double tolerance_mm);
 // The swept angle (rad) of an arc block, by the convention of Block.
 double arc_angle_rad(const Block& block);
 
+// An arc block's radius in its plane (the start's distance from the axis) and the length of
+// its tip path (helix included), mm.
+double arc_radius_mm(const Block& block);
+double arc_length_mm(const Block& block);
+
 // The point of an arc block at fraction s in [0, 1] of its angle (helix included).
 Eigen::Vector3d arc_point(const Block& block, double s);
 

@@ -5,7 +5,6 @@
 #pragma once
 
 #include <Eigen/Core>
-
 #include <array>
 #include <vector>
 
@@ -68,7 +67,8 @@ class ServoLoop {
   double dt_ = 0.0;
   int axes_ = 0;
   std::array<Axis, 5> model_{};
-  AxisValues within(const std::array<Eigen::Vector3d, 5>& a, const std::array<Eigen::Vector3d, 5>& b, double r) const;
+  AxisValues within(const std::array<Eigen::Vector3d, 5>& a,
+                    const std::array<Eigen::Vector3d, 5>& b, double r) const;
   // (x, x', x'') per axis: now, one and two steps back.
   std::array<Eigen::Vector3d, 5> s_{}, s_prev_{}, s_prev2_{};
   std::array<double, 5> c_prev_{};
