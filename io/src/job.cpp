@@ -25,8 +25,10 @@ void read_servo_axis(const YamlReader& yaml, const YAML::Node& node, const std::
     if (wn.IsScalar() && wn.Scalar() == "ideal") {
       axis.omega_n_per_s = 0.0;
     } else {
-      if (!wn.IsScalar()) yaml.fail(wn, where + "omega_n", "a positive number (1/s) or ideal");
-      axis.omega_n_per_s = yaml.positive(wn, where + "omega_n");
+      const double value = wn.IsScalar() ? yaml.number(wn, where + "omega_n") : 0.0;
+      if (!(value > 0.0))
+        yaml.fail(wn, where + "omega_n", "a positive number (1/s), or ideal for an ideal velocity loop (first order)");
+      axis.omega_n_per_s = value;
     }
   }
   if (node["zeta"]) axis.zeta = yaml.non_negative(node["zeta"], where + "zeta");
