@@ -49,7 +49,10 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
     v -= n * n.dot(v);
     const double r1 = u.norm(), r2 = v.norm();
     require(r1 > 0.0 && r2 > 0.0);
-    const double allowed = std::max(options.arc_tolerance_mm, 1e-6 * std::max(r1, r2));
+    // The default tolerance: LinuxCNC 2.9's, at its widest in G20 (2 * 0.001 * sqrt(2) in,
+    // or 0.1 % of the radius up to 100 times that).
+    const double absolute_mm = 2.0 * 0.001 * std::sqrt(2.0) * 25.4;
+    const double allowed = std::max(absolute_mm, std::min(100.0 * absolute_mm, 1e-3 * std::max(r1, r2)));
     require(std::abs(r1 - r2) <= allowed + 1e-6);
   }
 }

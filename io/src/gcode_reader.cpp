@@ -272,10 +272,15 @@ bool valid_offset_name(const std::string& name) {
 }
 
 void validate_options(const std::string& name, const GcodeOptions& options) {
-  if (!std::isfinite(options.arc_tolerance_mm) || options.arc_tolerance_mm < 0.0) {
+  if (!(options.arc_tolerance_mm <= kMaxMagnitude)) {  // NaN too; < 0 is the default
     throw InputError(name, 0, 0,
                      "arc tolerance " + num(options.arc_tolerance_mm) +
                          " mm in the options (expected a finite value >= 0)");
+  }
+  if (!(options.arc_tolerance_relative >= 0.0 && options.arc_tolerance_relative <= 1.0)) {
+    throw InputError(name, 0, 0,
+                     "relative arc tolerance " + num(options.arc_tolerance_relative) +
+                         " in the options (expected a value from 0 to 1)");
   }
   for (const auto& [key, offset] : options.work_offsets_mm) {
     if (!valid_offset_name(key)) {
@@ -310,6 +315,10 @@ struct Source {
   bool seekable = false;
   bool seen_content = false;       // a non-blank line has been read (the opening '%' is one)
   bool opened_with_percent = false;
+  // Lone CR line ends (old Macintosh files, some senders): the part of the last physical
+  // line after a CR, still to be read as lines, and whether a '\n' ended that physical line.
+  std::string after_cr;
+  bool after_cr_newline = false;
 };
 
 // A place to read on from: the line after `line`, at byte `offset` of `source`.
@@ -423,10 +432,17 @@ class Reader : public detail::ValueContext {
 
   void lex(const std::string& s, size_t i);
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
-  size_t skip_comment(const std::string& s, size_t i) const;
+  size_t skip_comment(const std::string& s, size_t i);
   bool execute();
 
   double unit() const { return state_.inches ? kMmPerInch : 1.0; }
+  detail::ArcTolerance arc_tolerance() const {
+    // LinuxCNC 2.9: 2 * 0.01 * sqrt(2) mm in G21, 2 * 0.001 * sqrt(2) in in G20.
+    const double absolute_mm = options_.arc_tolerance_mm >= 0.0 ? options_.arc_tolerance_mm
+                               : state_.inches              ? 2.0 * 0.001 * M_SQRT2 * kMmPerInch
+                                                            : 2.0 * 0.01 * M_SQRT2;
+    return {absolute_mm, options_.arc_tolerance_relative, 100.0 * absolute_mm};
+  }
   const Word& word(char letter) const { return line_words_.words[letter - 'A']; }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
@@ -532,7 +548,24 @@ bool Reader::named_parameter_exists(const std::string& name) {
 
 bool Reader::next_line(std::string& text) {
   Source& src = *current_;
-  if (!std::getline(*src.in, text)) return false;
+  bool newline = false;  // a '\n' ends this piece
+  if (!src.after_cr.empty()) {
+    text.swap(src.after_cr);
+    src.after_cr.clear();
+    newline = src.after_cr_newline;
+  } else {
+    if (!std::getline(*src.in, text)) return false;
+    newline = !src.in->eof();
+  }
+  // A CR that is not the last character of the line ends a line of its own (CRLF's CR is
+  // stripped in line()).
+  if (const void* cr = text.size() > 1 ? std::memchr(text.data(), '\r', text.size() - 1) : nullptr) {
+    const size_t at = static_cast<size_t>(static_cast<const char*>(cr) - text.data());
+    src.after_cr.assign(text, at + 1, std::string::npos);
+    src.after_cr_newline = newline;
+    text.resize(at);
+    newline = true;  // the CR, one byte like a '\n'
+  }
   if (++lines_read_ > options_.max_lines) {
     throw InputError(src.name, src.line + 1, 0,
                      "read " + std::to_string(options_.max_lines) +
@@ -542,7 +575,7 @@ bool Reader::next_line(std::string& text) {
   if (src.line == INT_MAX) throw InputError(src.name, src.line, 0, "too many lines");
   ++src.line;
   src.line_start = src.offset;
-  src.offset += static_cast<std::streamoff>(text.size()) + (src.in->eof() ? 0 : 1);
+  src.offset += static_cast<std::streamoff>(text.size()) + (newline ? 1 : 0);
   return true;
 }
 
@@ -555,6 +588,7 @@ void Reader::jump(const Mark& mark) {
   }
   src.in->clear();
   src.in->seekg(mark.offset);
+  src.after_cr.clear();
   if (!*src.in) throw InputError(src.name, src.line, 0, "read error going back in the file");
   src.offset = mark.offset;
   src.line = mark.line;
@@ -657,9 +691,12 @@ bool Reader::line(std::string& text) {
     return false;
   }
   src.seen_content = true;
-  // Block delete: rs274ngc skips a line starting with '/' when the block-delete switch is on;
-  // this reader always has it on.
-  if (text[i] == '/') return true;
+  // Block delete: rs274ngc skips a line starting with '/' when the block-delete switch is on
+  // (GcodeOptions::block_delete); off, the line runs.
+  if (text[i] == '/') {
+    if (options_.block_delete) return true;
+    text[i] = ' ';
+  }
   OLine o;
   if (o_line(text, o) && !o.keyword.empty()) return o_word(text, o);
   line_words_.clear();
@@ -996,11 +1033,14 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
                  "while, endwhile, do, break, continue, repeat or endrepeat)");
 }
 
-size_t Reader::skip_comment(const std::string& s, size_t i) const {
+size_t Reader::skip_comment(const std::string& s, size_t i) {
   for (size_t j = i + 1; j < s.size(); ++j) {
     if (s[j] == ')') return j + 1;
-    // rs274ngc rejects nested comments (NCE_NESTED_COMMENT_FOUND).
-    if (s[j] == '(') fail(column_at(j), "'(' inside a comment (expected ')' first)");
+    // rs274ngc rejects nested comments (NCE_NESTED_COMMENT_FOUND); Fanuc and the senders
+    // read on to the first ')'. LinuxCNC's programs get a warning.
+    if (s[j] == '(' && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
+      program_.warnings.push_back(where(column_at(j)) + ": '(' inside a comment (rs274 refuses it; read to the first ')')");
+    }
   }
   fail(column_at(i), "unterminated comment: '(' without ')'");
 }
@@ -1067,8 +1107,6 @@ void Reader::lex(const std::string& s, size_t i) {
         first_word = false;
         continue;
       }
-      if (c == '\r')
-        fail(column, "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column, "unexpected " + describe(c) + " (expected a word: a letter and a number)");
     }
     const char letter = upper(c);
@@ -1378,7 +1416,7 @@ void Reader::arc(int column) {
       }
       center[k] = state_.arc_center_absolute ? v + offset[axis] : start[axis] + v;
     }
-    if (const std::string error = detail::centre_arc_error(s, e, center, options_.arc_tolerance_mm, code);
+    if (const std::string error = detail::centre_arc_error(s, e, center, arc_tolerance(), code);
         !error.empty()) {
       fail(column, error);
     }
@@ -1635,7 +1673,12 @@ bool Reader::execute() {
   std::array<const Code*, kGroupCount> by_group{};
   const Code* axis_user = nullptr;  // an ignored code that takes the axis words
   bool axis_user_all = false;
+  // Fanuc: G80 is the canned-cycle cancel (group 9), so "G0 G80" is a rapid that ends the
+  // cycle; rs274ngc has G80 in the motion group and refuses the pair.
+  const bool g80_apart = options_.flavor != GcodeOptions::Flavor::LinuxCnc &&
+                         std::count_if(ln.g.begin(), ln.g.end(), [](const Code& g) { return g_info(g.number).group == kMotion; }) > 1;
   for (const Code& g : ln.g) {
+    if (g80_apart && g.number == 800) continue;
     const GInfo info = g_info(g.number);
     if (info.group >= 0) {
       const Code*& slot = by_group[static_cast<size_t>(info.group)];
@@ -1710,8 +1753,23 @@ bool Reader::execute() {
       }
       continue;
     }
-    unsupported(m.column, m.text, (group < 0 ? "unknown M code " : "unsupported M code ") + m.text);
-    lenient_ = true;
+    lenient_ = true;  // the words of an ignored code are not checked
+    const bool flow = m.number == 97 || m.number == 98 || m.number == 99;
+    if (m.number < 0 || flow || options_.unsupported_as_warning) {
+      unsupported(m.column, m.text, (flow ? "unsupported M code " : "unknown M code ") + m.text +
+                                        (flow ? " (subprogram call or return)" : ""));
+      continue;
+    }
+    // A machine's own M code (Haas M31 part counter, M101 ...): the control runs it and the
+    // motion goes on, so it is a warning unless the job asks for an error.
+    if (options_.m_codes_ignored.count(m.number) > 0) continue;
+    if (options_.unknown_m_code_as_error) {
+      fail(m.column, "unknown M code " + m.text +
+                         " (expected one the machine file declares under m_codes, or program.unsupported: warn)");
+    }
+    if (state_.warned.insert(m.text).second) {
+      warn(m.column, "M code " + m.text + " is not one the machine file declares; ignored, the motion goes on");
+    }
   }
 
   // --- Letters this reader does not move.

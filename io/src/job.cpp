@@ -114,7 +114,7 @@ Job read_job(const std::string& path) {
   const YAML::Node program = yaml.require(root, "program", "");
   yaml.only_keys(program, "program",
                  {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes",
-                  "initial_tool"});
+                  "initial_tool", "block_delete", "arc_tolerance"});
   if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
   if (program["file"]) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
@@ -161,10 +161,21 @@ Job read_job(const std::string& path) {
     if (n != std::floor(n) || n > 1e12) yaml.fail(program["max_lines"], "program.max_lines", "a whole number of lines up to 1e12");
     job.max_lines = static_cast<long long>(n);
   }
+  if (program["block_delete"]) {
+    const std::string mode = yaml.text(program["block_delete"], "program.block_delete");
+    if (mode != "on" && mode != "off") yaml.fail(program["block_delete"], "program.block_delete", "on (skip lines starting with '/') or off (run them)");
+    job.block_delete = mode == "on";
+  }
+  if (program["arc_tolerance"]) {
+    const double t = yaml.non_negative(program["arc_tolerance"], "program.arc_tolerance");
+    if (t > 10.0) yaml.fail(program["arc_tolerance"], "program.arc_tolerance", "a radius mismatch in mm up to 10");
+    job.arc_tolerance_mm = t;
+  }
   if (program["unsupported"]) {
     const std::string mode = yaml.text(program["unsupported"], "program.unsupported");
     if (mode != "error" && mode != "warn") yaml.fail(program["unsupported"], "program.unsupported", "error or warn");
     job.unsupported_as_warning = mode == "warn";
+    job.unknown_m_code_as_error = mode == "error";
   }
 
   if (const YAML::Node offsets = root["offsets"]) {

@@ -233,7 +233,7 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
   }
   check_keys(yaml, root, "",
              {"machine", "topology", "axes", "spindle", "workpiece", "singularity_deg", "models",
-              "errors", "feed_interpretation"});
+              "errors", "feed_interpretation", "home", "second_home", "m_codes"});
   MachineSpec spec;
   spec.name = yaml.text(yaml.require(root, "machine", ""), "machine");
   spec.topology = yaml.text(yaml.require(root, "topology", ""), "topology");
@@ -272,6 +272,41 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
                 "linuxcnc (F on X Y Z, else on the rotary axes in deg/min), combined (F on "
                 "sqrt(dx^2 + ... + dc^2), "
                 "Fanuc and Haas) or tip (F on the tool tip's path)");
+  }
+  // home / second_home: {X: mm, ..., A: deg} for axes of this machine.
+  auto read_home = [&](const YAML::Node& node, const std::string& key) {
+    if (!node.IsMap()) yaml.fail(node, key, "a map from axis letter to value, like {X: 0, Y: 0, Z: 0}");
+    std::map<char, double> home;
+    for (const auto& kv : node) {
+      const std::string letter = kv.first.Scalar();
+      const auto axis = std::find_if(spec.axes.begin(), spec.axes.end(), [&](const AxisSpec& a) {
+        return letter.size() == 1 && a.letter == letter[0];
+      });
+      if (axis == spec.axes.end()) yaml.fail(kv.first, key + "." + letter, "an axis of this machine");
+      const double v = yaml.number(kv.second, key + "." + letter);
+      if (std::abs(v) > 1e6) yaml.fail(kv.second, key + "." + letter, "a value within +-1e6 (mm or deg)");
+      home[axis->letter] = axis->kind == AxisKind::Rotary ? v * kRadPerDeg : v;
+    }
+    return home;
+  };
+  if (const YAML::Node home = root["home"]) spec.home = read_home(home, "home");
+  if (const YAML::Node home = root["second_home"]) spec.second_home = read_home(home, "second_home");
+  if (const YAML::Node codes = root["m_codes"]) {
+    // {M31: ignore, ...}: codes the control runs without a path effect.
+    if (!codes.IsMap()) yaml.fail(codes, "m_codes", "a map like {M31: ignore}");
+    for (const auto& kv : codes) {
+      const std::string name = kv.first.Scalar();
+      const std::string key = "m_codes." + name;
+      if (name.size() < 2 || name.size() > 4 || (name[0] != 'M' && name[0] != 'm') ||
+          name.find_first_not_of("0123456789", 1) != std::string::npos) {
+        yaml.fail(kv.first, key, "an M code like M31");
+      }
+      const int number = std::stoi(name.substr(1));
+      if (number == 97 || number == 98 || number == 99 || number == 2 || number == 30 || number == 6)
+        yaml.fail(kv.first, key, "an M code other than M2, M6, M30, M97, M98 and M99 (they change the program's path)");
+      if (yaml.text(kv.second, key) != "ignore") yaml.fail(kv.second, key, "ignore");
+      spec.ignored_m_codes.insert(number);
+    }
   }
   if (root["singularity_deg"])
     spec.singularity_angle_rad =

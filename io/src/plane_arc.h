@@ -20,20 +20,27 @@ inline constexpr double kSamePointMm = 1e-9;
 // Radius arcs: |R| may fall short of half the chord by this times max(1, |R|) before it is an
 // error; this only absorbs rounding of the printed values.
 inline constexpr double kRadiusRoundingRelative = 1e-9;
-// Centre arcs: a radius mismatch up to this times r is allowed on top of the reader's arc
-// tolerance, so that large radii printed with few decimals are not rejected (LinuxCNC's
-// SPIRAL_RELATIVE_TOLERANCE plays the same role).
-inline constexpr double kArcRelativeTolerance = 1e-6;
+// Centre arcs: a radius mismatch is allowed up to the reader's absolute tolerance, or up to
+// `relative` times the larger radius while it stays within `ceiling_mm` (LinuxCNC 2.9: 0.1 %
+// up to 100 x the absolute tolerance; SINUMERIK: $MN_CIRCLE_ERROR_FACTOR 0.1 %, no ceiling).
+struct ArcTolerance {
+  double absolute_mm = 0.0;
+  double relative = 0.0;
+  double ceiling_mm = 0.0;
+  double allowed_mm(double radius_mm) const {
+    return std::max(absolute_mm, std::min(ceiling_mm, relative * radius_mm));
+  }
+};
 
 // A centre arc from s to e about `center`: both ends off the centre and equally far from it
-// within `tolerance_mm` (plus the relative allowance). `code` is "G2" or "G3".
+// within the tolerance. `code` is "G2" or "G3".
 inline std::string centre_arc_error(const Eigen::Vector2d& s, const Eigen::Vector2d& e, const Eigen::Vector2d& center,
-                                    double tolerance_mm, const std::string& code) {
+                                    const ArcTolerance& tolerance, const std::string& code) {
   const double r_start = (s - center).norm(), r_end = (e - center).norm();
   if (r_start <= kSamePointMm || r_end <= kSamePointMm) {
     return "zero-radius " + code + " arc (expected the centre away from the start and the end)";
   }
-  const double allowed = std::max(tolerance_mm, kArcRelativeTolerance * std::max(r_start, r_end));
+  const double allowed = tolerance.allowed_mm(std::max(r_start, r_end));
   if (std::abs(r_end - r_start) > allowed) {
     return code + " arc end is not on its circle: radius " + num(r_start) + " mm at the start, " + num(r_end) +
            " mm at the end (expected equal within " + num(allowed) + " mm)";

@@ -63,6 +63,10 @@ JobProgram read_job_program(const Job& job) {
   ProgramOptions reading;
   reading.gcode.work_offsets_mm = job.offsets_mm;
   reading.gcode.unsupported_as_warning = job.unsupported_as_warning;
+  reading.gcode.unknown_m_code_as_error = job.unknown_m_code_as_error;
+  reading.gcode.m_codes_ignored = job.machine_spec.ignored_m_codes;
+  reading.gcode.block_delete = job.block_delete;
+  if (job.arc_tolerance_mm) reading.gcode.arc_tolerance_mm = *job.arc_tolerance_mm;
   reading.gcode.subroutine_path = job.subroutine_path;
   reading.gcode.max_lines = job.max_lines;
   reading.gcode.tcp_m_codes = job.tcp_m_codes;

@@ -208,10 +208,13 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       SinumerikOptions sinumerik;
       sinumerik.work_offsets_mm = options.gcode.work_offsets_mm;
       sinumerik.unsupported_as_warning = options.gcode.unsupported_as_warning;
-      sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
+      if (options.gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
       read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
     } else if (reader == "gcode") {
-      read_gcode(in, path, options.gcode, out.program, gcode_state);
+      GcodeOptions gcode = options.gcode;
+      if (dialect == "linuxcnc") gcode.flavor = GcodeOptions::Flavor::LinuxCnc;
+      if (dialect == "fanuc") gcode.flavor = GcodeOptions::Flavor::Fanuc;
+      read_gcode(in, path, gcode, out.program, gcode_state);
     } else {
       read_apt(in, path, options.apt, apt, apt_state);
     }

@@ -341,10 +341,7 @@ double read_plain_number(const std::string& s, std::size_t& i, char letter, cons
   }
   const std::string after = letter ? std::string("after '") + letter + "'" : std::string("in the expression");
   if (!any_digit) context.fail(column, "expected a number " + after + ", found " + found(s, j));
-  // "X1e5": an exponent. ("X1 E5" reads as an E word, an unknown letter.)
-  if (j < n && (s[j] == 'e' || s[j] == 'E') && !is_blank(s[j - 1])) {
-    context.fail(column, "exponent in a number " + after + " (rs274 numbers have none; expected digits with an optional '.')");
-  }
+  // rs274 numbers have no exponent: in "m66e0l0" the letter after the digits starts the next word.
   i = j;
   text = (negative ? "-" : "") + (digits.size() > 24 ? digits.substr(0, 24) + "..." : digits);
   double value = 0.0;

@@ -1284,7 +1284,7 @@ void Reader::arc(Block& block, bool clockwise) {
                            " gives a centre out of range (expected within +-1e6 mm)");
       }
     }
-    if (const std::string error = detail::centre_arc_error(s, e, center, options_.arc_tolerance_mm, code);
+    if (const std::string error = detail::centre_arc_error(s, e, center, {options_.arc_tolerance_mm, 0.001, kMaxMagnitude}, code);
         !error.empty()) {
       fail(column, error);
     }

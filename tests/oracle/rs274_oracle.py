@@ -179,8 +179,11 @@ def run_rs274(rs274, program, program_text, sub_dirs, timeout):
                     with open(os.path.join(tmp, "m%dremap.ngc" % m), "w") as sub:
                         sub.write("o<m%dremap> sub\no<m%dremap> endsub\nM2\n" % (m, m))
         cmd = [rs274, "-g", "-b", "-i", ini, "-t", tbl, "-v", var, os.path.abspath(program)]
+        # LinuxCNC 2.9 keeps the tool table in $HOME/.tool.mmap, shared by every rs274 of the
+        # user: a private HOME keeps another rs274 running at the same time out of this one.
+        env = dict(os.environ, HOME=tmp)
         try:
-            r = subprocess.run(cmd, cwd=tmp, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+            r = subprocess.run(cmd, cwd=tmp, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                                stderr=subprocess.PIPE, timeout=timeout)
         except subprocess.TimeoutExpired as e:
             out = (e.stdout or b"").decode("utf-8", "replace")

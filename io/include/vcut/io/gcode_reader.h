@@ -22,7 +22,27 @@ struct GcodeOptions {
   std::map<std::string, Eigen::Vector3d> work_offsets_mm;
   bool unsupported_as_warning =
       false;  // an unsupported word: one warning per distinct word, then ignored
-  double arc_tolerance_mm = 0.002;  // radius mismatch allowed between start and end of an I J K arc
+  // Whose rules the reader follows where controls differ: LinuxCNC (rs274ngc: a nested
+  // comment is a warning, G80 shares group 1 with G0..G3), Fanuc/Haas, or Generic (the
+  // dialect "gcode" and auto-detected files: rs274ngc's semantics, the controls' tolerance).
+  enum class Flavor { Generic, LinuxCnc, Fanuc };
+  Flavor flavor = Flavor::Generic;
+  // I J K arcs whose end lies off the start's circle: accepted (the arc becomes a spiral, as
+  // on the control) when the radii differ by at most arc_tolerance_mm, or by at most 0.1 % of
+  // the radius (arc_tolerance_relative) and 100 x arc_tolerance_mm; beyond, an error naming
+  // both radii. arc_tolerance_mm < 0: LinuxCNC 2.9's, 2 * 0.01 * sqrt(2) = 0.0283 mm in G21
+  // and 2 * 0.001 * sqrt(2) = 0.00283 in in G20.
+  double arc_tolerance_mm = -1.0;
+  double arc_tolerance_relative = 0.001;
+  // Block delete ('/' at the start of a line): the switch on skips those lines (the default,
+  // as rs274 runs), off runs them.
+  bool block_delete = true;
+  // An M code the reader does not know (Haas M31 part counter, a machine's own M101...) is a
+  // warning naming file:line, once per code, and the motion goes on; true makes it an error.
+  // Program-flow codes (M97, M98, M99) are never ignored. m_codes_ignored are known to the
+  // machine (its file's m_codes): no warning.
+  bool unknown_m_code_as_error = false;
+  std::set<int> m_codes_ignored;
   // Folders searched for the file <name>.ngc of a subroutine called but not defined in the
   // program (LinuxCNC's SUBROUTINE_PATH), after the calling program's own folder.
   std::vector<std::string> subroutine_path;

@@ -64,7 +64,10 @@ struct SinumerikOptions {
   // (the default) is no offset. Other names are not used.
   std::map<std::string, Eigen::Vector3d> work_offsets_mm;
   bool unsupported_as_warning = false;  // an unsupported word: one warning per word, ignored
-  double arc_tolerance_mm = 0.002;      // radius mismatch allowed between start and end of an arc
+  // Radius mismatch allowed between the start and the end of a centre arc: the larger of this
+  // and 0.1 % of the radius (the control's $MN_CIRCLE_ERROR_CONST, 0.01 mm, and
+  // $MN_CIRCLE_ERROR_FACTOR, 0.001, as shipped).
+  double arc_tolerance_mm = 0.01;
 };
 
 // The modal state between lines and between files. Start from a default-constructed one

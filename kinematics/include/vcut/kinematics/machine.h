@@ -14,6 +14,7 @@
 
 #include <array>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 #include <utility>
@@ -97,6 +98,13 @@ struct MachineSpec {
   double singularity_angle_rad = 0.1 * 3.14159265358979323846 / 180.0;
   // The machine file's feed_interpretation; none: by the program's dialect.
   std::optional<FeedInterpretation> feed_interpretation;
+  // The reference position (G28, and where a program starts): axis values by letter (mm,
+  // rad), the axes not named at 0. The second reference (G30): none means the first.
+  std::map<char, double> home;
+  std::optional<std::map<char, double>> second_home;
+  // M codes this machine's control runs without a path effect (a part counter, a chip
+  // conveyor): read without a warning.
+  std::set<int> ignored_m_codes;
 };
 
 // A finding about a MachineSpec: `key` is the path of the offending entry ("topology",
