@@ -8,6 +8,7 @@
 #include "vcut/io/input_error.h"
 #include "vcut/io/machine_file.h"
 #include "vcut/io/program_reader.h"
+#include "vcut/io/tool_library.h"
 
 namespace vcut::cli {
 namespace {
@@ -104,6 +105,9 @@ void add_program_command(CLI::App& app, ProgramCommand& c) {
                         "(after the program's own folder; repeatable)");
   c.program->add_option("--max-lines", c.max_lines, "G-code: lines read before a loop is taken to be endless")
       ->check(CLI::PositiveNumber);
+  c.program->add_option("--tools", c.tools,
+                        "Tool library (YAML): the radii cutter compensation G41/G42 D uses and, with --machine, "
+                        "the gauge lengths that put each tool's tip under the spindle");
   c.program->add_option("--tcp-on", c.tcp_on, "G-code: an M code number that switches TCP on, like G43.4 (repeatable)")
       ->check(CLI::Range(10, 999));
   c.program->add_option("--tcp-off", c.tcp_off, "G-code: an M code number that switches TCP off (repeatable)")
@@ -112,13 +116,18 @@ void add_program_command(CLI::App& app, ProgramCommand& c) {
 
 bool run_program_command(const ProgramCommand& c) {
   if (!c.program || !*c.program) return false;
-  if (!c.machine.empty()) {
-    // Checked now so that a bad machine stops here; the motion list does not depend on it yet.
-    std::vector<std::string> warnings;
-    io::read_machine_file(io::resolve_machine(c.machine), &warnings);
-    for (const auto& w : warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
-  }
   io::ProgramOptions options;
+  const io::ToolLibrary tools = c.tools.empty() ? io::ToolLibrary{} : io::read_tool_library(c.tools);
+  // Without a machine the program starts at 0 with G28/G30 references at 0, as LinuxCNC's rs274
+  // runs it; with one, at the machine's home.
+  options.gcode.start_mm = Eigen::Vector3d::Zero();
+  for (const auto& [number, cutter] : tools) options.gcode.tool_radius_mm[number] = cutter.radius_mm();
+  if (!c.machine.empty()) {
+    std::vector<std::string> warnings;
+    const kinematics::MachineSpec spec = io::read_machine_file(io::resolve_machine(c.machine), &warnings);
+    for (const auto& w : warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+    io::set_machine(options.gcode, spec, tools);
+  }
   options.gcode.subroutine_path = c.subroutine_path;
   options.gcode.max_lines = c.max_lines;
   for (int m : c.tcp_on) options.gcode.tcp_m_codes[m] = true;

@@ -16,6 +16,7 @@ struct ProgramCommand {
   std::vector<std::string> subroutine_path;  // G-code: folders for <name>.ngc subroutine files
   long long max_lines = 100'000'000;
   std::vector<int> tcp_on, tcp_off;  // G-code: M codes switching tool-centre-point kinematics
+  std::string tools;                 // tool library (YAML): radii for cutter compensation, gauge lengths
 };
 
 void add_program_command(CLI::App& app, ProgramCommand& command);

@@ -167,7 +167,9 @@ constexpr GEntry kGCodes[] = {
     {90, {kNonModal, true}},  // G9 exact stop at the end of this line's move
     {170, {kPlane, true}}, {180, {kPlane, true}}, {190, {kPlane, true}},
     {200, {kUnits, true}}, {210, {kUnits, true}},
-    {400, {kCutterComp, true}},
+    // G40, G41/G42 D (radius from the tool library), G41.1/G42.1 D (a diameter).
+    {400, {kCutterComp, true}}, {410, {kCutterComp, true}}, {411, {kCutterComp, true}},
+    {420, {kCutterComp, true}}, {421, {kCutterComp, true}},
     // G43/G49: accepted without effect. Blocks are tool-tip positions and the programmed
     // point is taken to be the tip, which is what a CAM post with G43 H means; tool lengths
     // are the machine model's business.
@@ -196,6 +198,8 @@ constexpr GEntry kGCodes[] = {
     {100, {kNonModal, true}},  // G10 L2 / L20 (coordinate systems); L1 L10 L11 (tool table)
     {530, {kNonModal, true}},  // G53: this line's G0/G1 in machine (workpiece-frame) coordinates
     {920, {kNonModal, true}}, {921, {kNonModal, true}}, {922, {kNonModal, true}}, {923, {kNonModal, true}},
+    // G28 / G30: through the line's point to the reference position; G28.1 / G30.1 store it.
+    {280, {kNonModal, true}}, {300, {kNonModal, true}}, {281, {kNonModal, true}}, {301, {kNonModal, true}},
 
     {50, {kMotion, false, true, false, "spline/NURBS"}},
     {51, {kMotion, false, true, false, "spline/NURBS"}},
@@ -211,18 +215,10 @@ constexpr GEntry kGCodes[] = {
     {860, {kMotion, false, true, false, "canned cycle"}},
     {870, {kMotion, false, true, false, "canned cycle"}},
     {880, {kMotion, false, true, false, "canned cycle"}},
-    {280, {kNonModal, false, true, true, "move to a stored position"}},
-    {300, {kNonModal, false, true, true, "move to a stored position"}},
-    {281, {kNonModal, false, false, false, "store a position"}},
-    {301, {kNonModal, false, false, false, "store a position"}},
     {520, {kNonModal, false, true, true, "local coordinate offset"}},
     {171, {kPlane, false, false, false, "UVW plane"}},
     {181, {kPlane, false, false, false, "UVW plane"}},
     {191, {kPlane, false, false, false, "UVW plane"}},
-    {410, {kCutterComp, false, false, false, "cutter radius compensation"}},
-    {411, {kCutterComp, false, false, false, "cutter radius compensation"}},
-    {420, {kCutterComp, false, false, false, "cutter radius compensation"}},
-    {421, {kCutterComp, false, false, false, "cutter radius compensation"}},
     {950, {kFeedMode, false, false, false, "feed per revolution"}},
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
@@ -450,7 +446,32 @@ class Reader : public detail::ValueContext {
   void arc(int column);
   void cycle(int column, bool new_series);
   void set_offsets(const Code& g);
-  void append(Block block, const std::array<bool, 3>& programmed);
+  void home_return(const Code& g);
+  // The tip's offset from the spindle's gauge point with the tool in the spindle (mm).
+  Eigen::Vector3d tip_offset() const {
+    const auto it = options_.tool_length_mm.find(state_.tool);
+    return it == options_.tool_length_mm.end() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(-it->second * options_.spindle_axis);
+  }
+  void append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end = nullptr);
+
+  // Cutter radius compensation (GcodeState::CutterComp).
+  using Comp = GcodeState::CutterComp;
+  bool compensating() const { return state_.comp.side != Comp::Side::Off && state_.comp.radius_mm > 0.0; }
+  // Where end points not named (and G91 increments) count from: the programmed point while
+  // compensation follows a path, else the tool's position.
+  Eigen::Vector3d base_point() const;
+  void plane_axes(int& a, int& b, int& c) const;
+  void comp_on(const Code& g);
+  void comp_off();
+  void comp_stop(bool program_end);
+  void comp_straight(Block& block, const std::array<bool, 3>& programmed, int column);
+  void comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column);
+  void comp_corner(const Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn);
+  void comp_move_end_and_flush(const Eigen::Vector2d& x, int column);
+  void comp_flush();
+  bool hold_ = false;  // append() holds the block for compensation instead of emitting it
+  Eigen::Vector2d hold_direction_ = Eigen::Vector2d::Zero();
+  double hold_sweep_rad_ = 0.0;
   void forget_axes(bool all);
   void select_system(int index);
   double feed_of_line(int column) const;
@@ -493,6 +514,8 @@ class Reader : public detail::ValueContext {
 const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
 constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
 constexpr int kG92Parameter = 5211;  // X of the G92 offset
+constexpr size_t kG28Parameter = 5161;  // X of the G28 reference (mm, gauge point), Y Z A B C (deg) follow
+constexpr size_t kG30Parameter = 5181;  // X of the G30 reference
 constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
 
 double Reader::numbered_parameter(int number, int column) {
@@ -625,6 +648,16 @@ void Reader::run(std::istream& in, const std::string& name) {
       }
     }
     select_system(0);
+    // The machine is at its start position; G28 / G30 references in #5161.. / #5181.. (mm, deg).
+    if (options_.start_mm) {
+      state_.position_mm = *options_.start_mm + tip_offset();
+      state_.known = {true, true, true};
+    }
+    for (int k = 0; k < 2; ++k) {
+      const size_t base = k == 0 ? kG28Parameter : kG30Parameter;
+      for (int a = 0; a < 3; ++a) state_.parameters[base + static_cast<size_t>(a)] = options_.reference_mm[static_cast<size_t>(k)][a];
+      for (int r = 0; r < 3; ++r) state_.parameters[base + 3 + static_cast<size_t>(r)] = options_.reference_rotary_deg[static_cast<size_t>(k)][static_cast<size_t>(r)];
+    }
   }
   std::string text;
   // Most lines of a long program are motions: room for one Block per line, estimated from the
@@ -664,6 +697,9 @@ void Reader::run(std::istream& in, const std::string& name) {
     fail(0, "read error (expected a readable text file)");
   }
   if (current_->in->bad()) fail(0, "read error (expected a readable text file)");
+  // A file that ends (with '%' or without M2) while a compensated move is held: the machine
+  // runs it, ending at its offset point (LinuxCNC's rs274 drops it).
+  comp_stop(false);
 }
 
 bool Reader::line(std::string& text) {
@@ -1179,7 +1215,8 @@ void Reader::lex(const std::string& s, size_t i) {
 // The end point of this line's motion in the workpiece frame; `programmed` says which axes
 // the line names.
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
-  Eigen::Vector3d end = state_.position_mm;
+  const Eigen::Vector3d base = base_point();
+  Eigen::Vector3d end = base;
   const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
   const Word& radius = line_words_.radius;
   const Word& angle = line_words_.angle;
@@ -1195,7 +1232,7 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
       fail(column, "polar @/^ while the X or Y position is unknown is not supported: vcut assumes no start position "
                    "(expected an X Y move first)");
     }
-    const Eigen::Vector2d p = polar_point((state_.position_mm - offset).head<2>());
+    const Eigen::Vector2d p = polar_point((base - offset).head<2>());
     end.x() = p.x() + offset.x();
     end.y() = p.y() + offset.y();
     programmed[0] = programmed[1] = true;
@@ -1214,7 +1251,7 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
                            kAxisLetter[a] + " position is unknown is not supported: vcut assumes no start "
                            "position (expected an absolute " + kAxisLetter[a] + " move first)");
       }
-      end[a] = state_.position_mm[a] + v;
+      end[a] = base[a] + v;
     } else {
       end[a] = v + offset[a];
     }
@@ -1245,10 +1282,10 @@ Eigen::Vector2d Reader::polar_point(const Eigen::Vector2d& from) const {
 // Appends a block (unless it does not move) and brings the position and the unknown axes up
 // to date. Blocks made while an axis is unknown hold that axis still; when the axis is first
 // programmed they take its value, so that the first move only moves the programmed axes.
-void Reader::append(Block block, const std::array<bool, 3>& programmed) {
+void Reader::append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end) {
   // Rotary words (degrees, G90/G91 like the linear axes; G20 does not apply).
-  kinematics::RotaryWords rotary = state_.rotary;
-  for (int r = 0; r < 3; ++r) {
+  kinematics::RotaryWords rotary = rotary_end != nullptr ? *rotary_end : state_.rotary;
+  for (int r = 0; r < 3 && rotary_end == nullptr; ++r) {
     const Word& w = word(static_cast<char>('A' + r));
     if (!w.present) continue;
     const double v = w.value * M_PI / 180.0;
@@ -1282,7 +1319,11 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed) {
     block.spindle = state_.spindle;
     block.spindle_rpm = state_.spindle_rpm;
     block.source = kinematics::SourceRef{current_->file_index, current_->line};
-    program_.blocks.push_back(block);
+    if (hold_) {
+      state_.comp.held.push_back({block, hold_direction_, hold_sweep_rad_});
+    } else {
+      program_.blocks.push_back(block);
+    }
     for (int a = 0; a < 3; ++a) {
       if (!state_.known[a] && !programmed[a]) {
         state_.pending[a].push_back(program_.blocks.size() - 1);
@@ -1343,6 +1384,15 @@ void Reader::straight(MotionKind kind, int column) {
     if (!state_.known[a]) block.start_mm[a] = block.end_mm[a];
   }
   block.feed_mm_per_min = feed;
+  state_.comp.arc_not_allowed = false;
+  if (compensating()) {
+    comp_straight(block, programmed, column);
+    return;
+  }
+  if (state_.comp.machine_mm) {  // the exit move after G40: from where the tool is
+    block.start_mm = *state_.comp.machine_mm;
+    state_.comp.machine_mm.reset();
+  }
   append(block, programmed);
 }
 
@@ -1389,9 +1439,13 @@ void Reader::arc(int column) {
     turns = static_cast<int>(p.value);
   }
 
+  if (state_.comp.arc_not_allowed) {
+    fail(column, std::string(code) + " arc just after G40 (expected a straight move: the exit from cutter compensation)");
+  }
   std::array<bool, 3> programmed{};
   Eigen::Vector3d end = target(programmed);
-  Eigen::Vector3d start = state_.position_mm;
+  // The centre counts from the programmed start (with compensation on, not the tool's).
+  Eigen::Vector3d start = base_point();
   if (!state_.known[c]) start[c] = end[c];
   const Eigen::Vector2d s(start[a], start[b]);
   const Eigen::Vector2d e(end[a], end[b]);
@@ -1445,7 +1499,413 @@ void Reader::arc(int column) {
   block.normal[c] = clockwise ? -1.0 : 1.0;
   block.turns = turns;
   block.feed_mm_per_min = feed;
+  if (compensating()) {
+    comp_arc(block, programmed, clockwise ? -turns : turns, column);
+    return;
+  }
   append(block, programmed);
+}
+
+// --- Cutter radius compensation, as LinuxCNC's rs274ngc interpreter does it.
+//
+// In the plane's coordinates (u, v) = (X, Y) in G17, (Z, X) in G18: O is the last programmed
+// end point, C the tool's (O offset by the radius r to the side), P the new programmed end.
+// The entry move goes straight (or along its arc) to P offset by r, perpendicular to the move.
+// Each later move is held until the next decides its end: at a concave corner the held move
+// ends where the two offset paths meet; at a convex corner (turning more than 0.05 rad) an
+// arc of radius r about the programmed corner joins them (a straight traverse for G0). A
+// held move that would have to run backwards to the meeting point, an arc too small for the
+// tool, and corners the tool cannot fit in are errors, as in LinuxCNC. G40 ends the held
+// move at C, and the next move (straight) goes from there to its programmed end.
+namespace comp_geometry {
+
+constexpr double kCornerRad = 0.05;  // rs274ngc's TOLERANCE_CONCAVE_CORNER
+constexpr double kTwoPi = 2.0 * M_PI;
+
+double angle(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
+  return std::atan2(to.y() - from.y(), to.x() - from.x());
+}
+Eigen::Vector2d direction(double a) { return {std::cos(a), std::sin(a)}; }
+
+// The signed sweep (rad) of an arc from s to e about k with `turn` turns (> 0 counterclockwise):
+// one turn sweeps (0, 2 pi], so equal angles make a full circle.
+double sweep(const Eigen::Vector2d& s, const Eigen::Vector2d& k, int turn, const Eigen::Vector2d& e) {
+  double a = angle(k, s), b = angle(k, e);
+  if (turn > 0) {
+    if (b <= a) b += kTwoPi;
+    return b - a + (turn - 1) * kTwoPi;
+  }
+  if (turn < 0) {
+    if (a <= b) a += kTwoPi;
+    return b - a + (turn + 1) * kTwoPi;
+  }
+  return 0.0;
+}
+
+}  // namespace comp_geometry
+
+void Reader::plane_axes(int& a, int& b, int& c) const {
+  a = 0, b = 1, c = 2;
+  if (state_.plane == Plane::ZX) a = 2, b = 0, c = 1;
+  if (state_.plane == Plane::YZ) a = 1, b = 2, c = 0;
+}
+
+Eigen::Vector3d Reader::base_point() const {
+  Eigen::Vector3d base = state_.position_mm;
+  if (compensating() && !state_.comp.first_move) {
+    int a, b, c;
+    plane_axes(a, b, c);
+    base[a] = state_.comp.program_mm[a];
+    base[b] = state_.comp.program_mm[b];
+  }
+  return base;
+}
+
+// G41 / G42 [D] (the radius of tool D, or of the tool in the spindle) and G41.1 / G42.1 D (a
+// diameter in program units). A negative radius swaps the side.
+void Reader::comp_on(const Code& g) {
+  Comp& comp = state_.comp;
+  if (state_.plane == Plane::YZ) fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
+  if (comp.side != Comp::Side::Off) fail(g.column, g.text + " with compensation already on (expected G40 first)");
+  const Word& d = word('D');
+  used_['D' - 'A'] = true;
+  double radius = 0.0;
+  if (g.number == 411 || g.number == 421) {
+    if (!d.present) fail(g.column, g.text + " without D (expected D, the tool's diameter)");
+    if (word('L').present) {
+      unsupported(word('L').column, g.text + "L", g.text + " L (a lathe tool orientation) is not supported");
+      used_['L' - 'A'] = true;
+    }
+    radius = d.value * unit() / 2.0;
+  } else {
+    int tool = state_.tool;
+    if (d.present) {
+      const double n = std::floor(d.value + 0.5);
+      if (std::abs(d.value - n) > 1e-4 || n < 0.0) fail(d.column, g.text + " D " + num(d.value) + " (expected a whole tool number >= 0)");
+      if (n > 0.0) tool = static_cast<int>(n);
+    }
+    const auto it = options_.tool_radius_mm.find(tool);
+    if (it == options_.tool_radius_mm.end()) {
+      fail(d.present ? d.column : g.column,
+           g.text + ": tool " + std::to_string(tool) + (tool == 0 ? " (none in the spindle)" : "") +
+               " has no radius in the tool library (expected a tool the job's tools file lists, or G41.1/G42.1 D with a diameter)");
+    }
+    radius = it->second;
+  }
+  comp.side = g.number / 10 == 41 ? Comp::Side::Left : Comp::Side::Right;
+  if (radius < 0.0) comp.side = comp.side == Comp::Side::Left ? Comp::Side::Right : Comp::Side::Left;
+  comp.radius_mm = std::abs(radius);
+  comp.first_move = true;
+  comp.held.clear();
+  comp.endpoint_valid = false;
+}
+
+// G40: the held move ends at C; the next move, which must be straight, starts there and ends
+// at its programmed point.
+void Reader::comp_off() {
+  Comp& comp = state_.comp;
+  if (compensating() && !comp.first_move) {
+    int a, b, c;
+    plane_axes(a, b, c);
+    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, 0);
+    comp_flush();
+    comp.machine_mm = state_.position_mm;
+    state_.position_mm = comp.program_mm;
+    comp.arc_not_allowed = true;
+  }
+  comp.side = Comp::Side::Off;
+  comp.first_move = true;
+}
+
+// M0, M1, M60 and the program's end send the held move (ending at C); M2/M30 end compensation.
+void Reader::comp_stop(bool program_end) {
+  Comp& comp = state_.comp;
+  if (!comp.held.empty()) {
+    int a, b, c;
+    plane_axes(a, b, c);
+    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, 0);
+    comp_flush();
+  }
+  if (program_end) {
+    comp.side = Comp::Side::Off;
+    comp.first_move = true;
+  }
+}
+
+// Emits the held moves, each from where the one before ended.
+void Reader::comp_flush() {
+  Comp& comp = state_.comp;
+  for (Comp::Held& h : comp.held) {
+    Block& block = h.block;
+    if (!program_.blocks.empty()) block.start_mm = program_.blocks.back().end_mm;
+    if (block.kind != MotionKind::Arc && block.start_mm == block.end_mm && block.start_rotary.angle_rad == block.end_rotary.angle_rad) continue;
+    program_.blocks.push_back(block);
+  }
+  comp.held.clear();
+  comp.endpoint_valid = false;
+}
+
+// Moves the end of every held move to x (along its circle for an arc), checking that none has
+// to run backwards or further round than programmed (a gouge), then emits them.
+void Reader::comp_move_end_and_flush(const Eigen::Vector2d& x, int column) {
+  using namespace comp_geometry;
+  Comp& comp = state_.comp;
+  if (comp.held.empty()) return;
+  int a, b, c;
+  plane_axes(a, b, c);
+  const double sweep_tolerance = state_.inches ? 0.001 : 0.0254;  // rs274ngc's, in its program units
+  for (Comp::Held& h : comp.held) {
+    Block& block = h.block;
+    const Eigen::Vector2d end(block.end_mm[a], block.end_mm[b]);
+    if (block.kind == MotionKind::Arc) {
+      const Eigen::Vector2d k(block.center_mm[a], block.center_mm[b]);
+      const int turn = block.normal[c] > 0.0 ? block.turns : -block.turns;
+      if (std::abs((end - k).norm() - (x - k).norm()) > 0.01 * unit()) {
+        fail(column, "cutter compensation moved an arc's end off its circle (radius " + num((end - k).norm()) +
+                         " mm, the corner at " + num((x - k).norm()) + " mm from its centre)");
+      }
+      const double l2 = sweep(comp.endpoint, k, turn, x);
+      if (h.sweep_rad != 0.0 && comp.endpoint_valid && std::abs(l2) > std::abs(h.sweep_rad) + sweep_tolerance) {
+        fail(column, "cutter compensation: the arc before this move cannot reach the concave corner without "
+                     "gouging (tool radius " + num(comp.radius_mm) + " mm)");
+      }
+    } else if (comp.endpoint_valid && h.direction.dot(x - comp.endpoint) < 0.0) {
+      fail(column, std::string("cutter compensation: the ") + (block.kind == MotionKind::Rapid ? "rapid" : "straight") +
+                       " move before this one would run backwards to reach the concave corner: a gouge (tool radius " +
+                       num(comp.radius_mm) + " mm too large for the corner)");
+    }
+    block.end_mm[a] = x.x();
+    block.end_mm[b] = x.y();
+  }
+  comp_flush();
+  comp.endpoint = x;
+  comp.endpoint_valid = true;
+}
+
+// Emits the arc (G1, G2, G3) or the traverse (G0) about the programmed corner that joins the
+// offset paths at a convex corner, with no motion along the plane's normal.
+void Reader::comp_corner(const Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn) {
+  int a, b, c;
+  plane_axes(a, b, c);
+  Block block;
+  block.kind = main.kind == MotionKind::Rapid ? MotionKind::Rapid : MotionKind::Arc;
+  block.start_mm = state_.position_mm;
+  block.end_mm = state_.position_mm;
+  block.end_mm[a] = end.x();
+  block.end_mm[b] = end.y();
+  block.feed_mm_per_min = main.feed_mm_per_min;
+  if (block.kind == MotionKind::Arc) {
+    block.center_mm = state_.position_mm;
+    block.center_mm[a] = corner.x();
+    block.center_mm[b] = corner.y();
+    block.normal = Eigen::Vector3d::Zero();
+    block.normal[c] = turn > 0 ? 1.0 : -1.0;
+    block.turns = 1;
+  }
+  append(block, {true, true, true});
+}
+
+void Reader::comp_straight(Block& block, const std::array<bool, 3>& programmed, int column) {
+  using namespace comp_geometry;
+  Comp& comp = state_.comp;
+  const double r = comp.radius_mm;
+  const bool left = comp.side == Comp::Side::Left;
+  int a, b, c;
+  plane_axes(a, b, c);
+  const Eigen::Vector3d programmed_end = block.end_mm;
+  const Eigen::Vector2d p(programmed_end[a], programmed_end[b]);
+  const Eigen::Vector2d cur(state_.position_mm[a], state_.position_mm[b]);
+  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& dir) {
+    block.end_mm[a] = end.x();
+    block.end_mm[b] = end.y();
+    hold_ = true;
+    hold_direction_ = dir;
+    hold_sweep_rad_ = 0.0;
+    append(block, programmed);
+    hold_ = false;
+    comp.program_mm = programmed_end;
+  };
+  if (comp.first_move) {
+    const double length = (p - cur).norm();
+    if (length <= r) {
+      fail(column, "cutter compensation entry move of " + num(length) + " mm in the plane is not longer than the tool radius " +
+                       num(r) + " mm (expected a longer move after G41/G42)");
+    }
+    const double normal = angle(cur, p) + (left ? M_PI_2 : -M_PI_2);
+    comp.endpoint = cur;
+    comp.endpoint_valid = true;
+    comp.first_move = false;
+    hold(p + r * direction(normal), direction(normal));
+    return;
+  }
+  const Eigen::Vector2d o(comp.program_mm[a], comp.program_mm[b]);
+  if (p == o) {  // no motion in the plane: the tool stays at C
+    hold(cur, Eigen::Vector2d::Zero());
+    return;
+  }
+  double theta = angle(o, cur), alpha = angle(o, p), beta, gamma;
+  if (left) {
+    if (theta < alpha) theta += kTwoPi;
+    beta = theta - alpha - M_PI_2;
+    gamma = M_PI_2;
+  } else {
+    if (alpha < theta) alpha += kTwoPi;
+    beta = alpha - theta - M_PI_2;
+    gamma = -M_PI_2;
+  }
+  const Eigen::Vector2d end = p + r * direction(alpha + gamma);
+  const Eigen::Vector2d start = o + r * direction(alpha + gamma);
+  const Comp::Held* front = comp.held.empty() ? nullptr : &comp.held.front();
+  const bool front_arc = front != nullptr && front->block.kind == MotionKind::Arc;
+  const int front_turn = front_arc ? (front->block.normal[c] > 0.0 ? 1 : -1) : 0;
+  const bool front_outside = front_arc && ((!left && front_turn > 0) || (left && front_turn < 0));
+  const bool concave = beta < -kCornerRad || beta > M_PI + kCornerRad || (beta > M_PI - kCornerRad && front_outside);
+  if (concave && !front_arc) {
+    const double half = (beta + M_PI) / 2.0;
+    if (half == 0.0) fail(column, "cutter compensation: a zero-degree inside corner (expected the path not to fold back on itself)");
+    comp_move_end_and_flush(cur + r / std::tan(half) * direction(theta + gamma), column);
+  } else if (concave) {
+    // Arc then straight: where the straight's offset line meets the arc's offset circle.
+    const Eigen::Vector2d arc_end(front->block.end_mm[a], front->block.end_mm[b]);
+    const Eigen::Vector2d arc_center(front->block.center_mm[a], front->block.center_mm[b]);
+    const double rho = (arc_center - arc_end).norm();
+    const double tau = angle(o, p) + (front_turn > 0 ? M_PI_2 : -M_PI_2);
+    const double phi = angle(o, arc_center);
+    const bool inside = (left && front_turn > 0) || (!left && front_turn < 0);
+    const double d = (inside ? rho + r : rho - r) * std::cos(tau - phi);
+    const double l = (inside ? d - r : d + r) / rho;
+    if (!(std::abs(l) <= 1.0)) {
+      fail(column, "cutter compensation: the corner from the arc to this straight move is too tight for the tool "
+                   "(radius " + num(r) + " mm) without gouging");
+    }
+    const double psi = tau + M_PI + (inside == (front_turn > 0) ? -1.0 : 1.0) * std::acos(l);
+    comp_move_end_and_flush(arc_center + rho * direction(psi), column);
+  } else if (beta > kCornerRad) {
+    comp_move_end_and_flush(cur, column);
+    comp_corner(block, o, start, left ? -1 : 1);
+    comp.endpoint = start;
+    comp.endpoint_valid = true;
+  } else {
+    comp_flush();
+    comp.endpoint = cur;
+    comp.endpoint_valid = true;
+  }
+  hold(end, p - o);
+}
+
+void Reader::comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column) {
+  using namespace comp_geometry;
+  Comp& comp = state_.comp;
+  const double r = comp.radius_mm;
+  const bool left = comp.side == Comp::Side::Left;
+  int a, b, c;
+  plane_axes(a, b, c);
+  const Eigen::Vector3d programmed_end = block.end_mm;
+  const Eigen::Vector2d p(programmed_end[a], programmed_end[b]);
+  const Eigen::Vector2d cur(state_.position_mm[a], state_.position_mm[b]);
+  const Eigen::Vector2d k(block.center_mm[a], block.center_mm[b]);
+  const bool inside = (left && turn > 0) || (!left && turn < 0);  // the tool on the arc's concave side
+  const std::string code = turn < 0 ? "G2" : "G3";
+  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& center, double sweep_rad) {
+    block.end_mm[a] = end.x();
+    block.end_mm[b] = end.y();
+    block.center_mm[a] = center.x();
+    block.center_mm[b] = center.y();
+    hold_ = true;
+    hold_direction_ = Eigen::Vector2d::Zero();
+    hold_sweep_rad_ = sweep_rad;
+    append(block, programmed);
+    hold_ = false;
+    comp.program_mm = programmed_end;
+  };
+  auto too_small = [&](double arc_radius) {
+    fail(column, code + " arc of radius " + num(arc_radius) + " mm with the tool (radius " + num(r) +
+                     " mm) on its inside (expected an arc radius larger than the tool's)");
+  };
+  if (comp.first_move) {
+    if ((p - cur).norm() <= r) {
+      fail(column, "cutter compensation entry arc ends " + num((p - cur).norm()) +
+                       " mm from its start, not more than the tool radius " + num(r) + " mm");
+    }
+    if ((k - cur).norm() <= r && inside) too_small((k - cur).norm());
+    const Eigen::Vector2d end = p + r * direction(inside ? angle(p, k) : angle(k, p));
+    // The entry arc's centre: on the line from its end toward the programmed centre, as far
+    // from the start as from the end.
+    const double h = (cur - end).norm() / 2.0, lambda = angle(end, k), cos_a = std::cos(angle(end, cur) - lambda);
+    if (std::abs(cos_a) < 1e-6) too_small((k - cur).norm());
+    const Eigen::Vector2d center = end + (h / cos_a) * direction(lambda);
+    comp.first_move = false;
+    comp.endpoint_valid = false;
+    hold(end, center, sweep(cur, center, turn, end));
+    return;
+  }
+  const Eigen::Vector2d o(comp.program_mm[a], comp.program_mm[b]);
+  const double arc_radius = (k - p).norm();
+  const double theta = angle(o, cur) + (left ? -M_PI_2 : M_PI_2);  // the tool's heading at C
+  double delta = angle(o, k);
+  const double alpha = delta + (turn > 0 ? -M_PI_2 : M_PI_2);  // the arc's heading at O
+  double beta = left ? theta - alpha : alpha - theta;
+  if (beta > 1.5 * M_PI) {
+    beta -= kTwoPi;
+  } else if (beta < -M_PI_2) {
+    beta += kTwoPi;
+  }
+  double gamma;
+  if (inside) {
+    gamma = angle(p, k);
+    if (arc_radius <= r) too_small(arc_radius);
+  } else {
+    gamma = angle(k, p);
+    delta += M_PI;
+  }
+  const Eigen::Vector2d end = p + r * direction(gamma);
+  const double programmed_sweep = sweep(o, k, turn, p);
+  const bool concave = beta < -kCornerRad || beta > M_PI + kCornerRad || (std::abs(beta - M_PI) < kCornerRad && !inside);
+  const Comp::Held* front = comp.held.empty() ? nullptr : &comp.held.front();
+  if (concave && (front == nullptr || front->block.kind != MotionKind::Arc)) {
+    // Straight then arc: where the straight's offset line meets this arc's offset circle.
+    const double y = arc_radius * std::sin(beta - M_PI_2);
+    const double dist = inside ? arc_radius - r : arc_radius + r;
+    const double l = (inside ? y + r : y - r) / dist;
+    if (!(std::abs(l) <= 1.0)) {
+      fail(column, "cutter compensation: this " + code + " arc cannot be reached in the concave corner by the tool (radius " +
+                       num(r) + " mm) without gouging");
+    }
+    const double psi = inside ? (turn > 0 ? theta + std::asin(l) : theta - std::asin(l))
+                              : (turn > 0 ? theta + M_PI - std::asin(l) : theta + M_PI + std::asin(l));
+    comp_move_end_and_flush(k + dist * direction(psi), column);
+  } else if (concave) {
+    // Arc then arc: where the two offset circles meet.
+    const Eigen::Vector2d front_end(front->block.end_mm[a], front->block.end_mm[b]);
+    const Eigen::Vector2d front_center(front->block.center_mm[a], front->block.center_mm[b]);
+    const int front_turn = front->block.normal[c] > 0.0 ? 1 : -1;
+    const double rho = (front_center - front_end).norm();
+    const double rho_new = inside ? arc_radius - r : arc_radius + r;
+    const double centers = (front_center - k).norm();
+    if (rho == 0.0 || centers == 0.0) {
+      fail(column, "cutter compensation: two arcs with the same centre meet in a concave corner (expected them to differ)");
+    }
+    const double cos_p = (rho * rho + centers * centers - rho_new * rho_new) / (2.0 * rho * centers);
+    if (!(std::abs(cos_p) <= 1.0)) {
+      fail(column, "cutter compensation: the corner between two arcs is too tight for the tool (radius " + num(r) +
+                       " mm) without gouging");
+    }
+    const double pa = std::acos(cos_p), kappa = angle(front_center, k);
+    const bool front_inside = (left && front_turn > 0) || (!left && front_turn < 0);
+    const double psi = front_inside ? (turn > 0 ? kappa + pa : kappa - pa) : (turn > 0 ? kappa - pa : kappa + pa);
+    comp_move_end_and_flush(front_center + rho * direction(psi), column);
+  } else if (beta > kCornerRad) {
+    const Eigen::Vector2d start = o + r * direction(delta);
+    comp_flush();
+    comp_corner(block, o, start, left ? -1 : 1);
+    comp.endpoint = start;
+    comp.endpoint_valid = true;
+  } else {
+    comp_flush();
+    comp.endpoint = cur;
+    comp.endpoint_valid = true;
+  }
+  hold(end, k, programmed_sweep);
 }
 
 void Reader::select_system(int index) {
@@ -1533,6 +1993,59 @@ void Reader::set_offsets(const Code& g) {
     for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG92Parameter + a)] = state_.g92_mm[a];
     state_.parameters[5210] = g.number == 920 || g.number == 923 ? 1.0 : 0.0;
   }
+}
+
+// G28 / G30 (LinuxCNC, Fanuc, Haas): a rapid to the point the line's axis words name (in the
+// active coordinate system and distance mode; the current point when none is named), then a
+// rapid of the named axes (every axis when none is named) to the reference position kept in
+// #5161.. / #5181.. (G53 coordinates of the gauge point, so the tip stops a tool length below
+// it). G28.1 / G30.1 store the current position there.
+void Reader::home_return(const Code& g) {
+  const size_t base = g.number == 280 || g.number == 281 ? kG28Parameter : kG30Parameter;
+  if (g.number == 281 || g.number == 301) {
+    const Eigen::Vector3d gauge = state_.position_mm - tip_offset();
+    for (int a = 0; a < 3; ++a) state_.parameters[base + static_cast<size_t>(a)] = gauge[a];
+    for (int r = 0; r < 3; ++r) {
+      state_.parameters[base + 3 + static_cast<size_t>(r)] = state_.rotary.angle_rad[static_cast<size_t>(r)] * 180.0 / M_PI;
+    }
+    return;
+  }
+  std::array<bool, 3> named{};
+  Block via;
+  via.kind = MotionKind::Rapid;
+  via.start_mm = state_.position_mm;
+  via.end_mm = target(named);
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[a] && !named[a]) via.start_mm[a] = via.end_mm[a] = state_.position_mm[a];
+  }
+  append(via, named);
+  std::array<bool, 4> rotary_named{};
+  bool any = false;
+  for (int a = 0; a < 3; ++a) any = any || named[a];
+  for (int r = 0; r < 3; ++r) {
+    rotary_named[static_cast<size_t>(r)] = word(static_cast<char>('A' + r)).present;
+    any = any || rotary_named[static_cast<size_t>(r)];
+  }
+  Block home;
+  home.kind = MotionKind::Rapid;
+  home.start_mm = state_.position_mm;
+  home.end_mm = state_.position_mm;
+  std::array<bool, 3> moved{};
+  const Eigen::Vector3d tip = Eigen::Vector3d(state_.parameters[base], state_.parameters[base + 1], state_.parameters[base + 2]) + tip_offset();
+  for (int a = 0; a < 3; ++a) {
+    if (any && !named[a]) continue;
+    home.end_mm[a] = tip[a];
+    moved[a] = true;
+  }
+  kinematics::RotaryWords rotary = state_.rotary;
+  for (int r = 0; r < 3; ++r) {
+    const auto k = static_cast<size_t>(r);
+    // A machine's rotary axes go home too when no axis is named, as soon as the program uses them.
+    if (any ? !rotary_named[k] : !state_.rotary.given[k]) continue;
+    rotary.angle_rad[k] = state_.parameters[base + 3 + k] * M_PI / 180.0;
+    rotary.given[k] = true;
+  }
+  append(home, moved, &rotary);
 }
 
 // Canned cycles G73 G81 G82 G83 G85 G89 in the XY plane, as LinuxCNC documents them: an
@@ -1710,7 +2223,10 @@ bool Reader::execute() {
                             " both use the axis words (expected them on separate lines)");
   }
   const Code* non_modal = by_group[kNonModal];
-  const bool sets_offsets = non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920);
+  const bool homes = non_modal != nullptr && (non_modal->number == 280 || non_modal->number == 300);
+  const bool stores_home = non_modal != nullptr && (non_modal->number == 281 || non_modal->number == 301);
+  const bool sets_offsets =
+      non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
   if (sets_offsets && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
     const Code* later = non_modal->column > by_group[kMotion]->column ? non_modal : by_group[kMotion];
     fail(later->column, non_modal->text + " and " + by_group[kMotion]->text +
@@ -1825,7 +2341,18 @@ bool Reader::execute() {
   }
   // M6 loads the tool selected by the last T (on this line or before); T alone only
   // selects. Without any T, M6 changes nothing (rs274ngc loads the prepared tool).
-  if (m_code[6] && state_.selected_tool >= 0) state_.tool = state_.selected_tool;
+  if (m_code[6] && state_.selected_tool >= 0) {
+    // The control takes its position from the machine after a tool change (rs274ngc re-reads
+    // it): after G40 that is the last compensated point, not the programmed one.
+    if (state_.comp.machine_mm) {
+      state_.position_mm = *state_.comp.machine_mm;
+      state_.comp.machine_mm.reset();
+    }
+    // The spindle stays where it is: the new tool's tip is its gauge length below it.
+    const Eigen::Vector3d before = tip_offset();
+    state_.tool = state_.selected_tool;
+    state_.position_mm += tip_offset() - before;
+  }
   if (m_code[3]) state_.spindle = SpindleState::Clockwise;
   if (m_code[4]) state_.spindle = SpindleState::CounterClockwise;
   if (m_code[5]) state_.spindle = SpindleState::Off;
@@ -1876,8 +2403,34 @@ bool Reader::execute() {
     if (p.value < 0.0) fail(p.column, "G4 P " + num(p.value) + " (expected seconds >= 0)");
     use_p(g->text);
   }
+  if (state_.comp.side != Comp::Side::Off) {
+    // What LinuxCNC refuses while cutter compensation is on.
+    auto refuse = [&](const Code* g, const char* what) {
+      if (g != nullptr) fail(g->column, g->text + " with cutter compensation on (" + what + "; expected G40 first)");
+    };
+    const Plane plane = state_.plane;
+    if (const Code* g = by_group[kPlane]; g != nullptr && (g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ) != plane) {
+      refuse(g, "a plane change");
+    }
+    refuse(by_group[kCoordinateSystem], "a coordinate system change");
+    refuse(by_group[kToolLength], "a tool length change");
+    if (non_modal != nullptr && (homes || stores_home || (non_modal->number >= 920 && non_modal->number <= 923))) {
+      refuse(non_modal, "a move home or an axis offset");
+    }
+    if (state_.motion == Motion::Cycle || (by_group[kMotion] != nullptr && by_group[kMotion]->number >= 730 && by_group[kMotion]->number != 800)) {
+      refuse(by_group[kMotion] != nullptr ? by_group[kMotion] : &ln.g.front(), "a canned cycle");
+    }
+    if (m_code[6]) refuse(m_by_group[6], "a tool change");
+  }
   if (const Code* g = by_group[kPlane]; g != nullptr && g_info(g->number).supported) {
     state_.plane = g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ;
+  }
+  if (const Code* g = by_group[kCutterComp]) {
+    if (g->number == 400) {
+      comp_off();
+    } else {
+      comp_on(*g);
+    }
   }
   if (const Code* g = by_group[kToolLength]) {
     state_.tcp = g->number == 434 ? GcodeState::Tcp::Angles
@@ -1962,7 +2515,10 @@ bool Reader::execute() {
   if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
     fail(non_modal->column, "G53 without a G0 or G1 move on its line (expected G53 G0/G1 with axis words)");
   }
-  if (axis_user != nullptr) {
+  if (homes || stores_home) {
+    if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");
+    home_return(*non_modal);
+  } else if (axis_user != nullptr) {
     forget_axes(axis_user_all);
   } else if (sets_offsets || length_axes != nullptr ||
              (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
@@ -2058,6 +2614,8 @@ bool Reader::execute() {
     }
   }
 
+  // M0, M1, M60 and the program's end send a held compensated move.
+  if (m_code[0] || m_code[1] || m_code[60] || program_end) comp_stop(program_end);
   if (program_end) {
     // LinuxCNC M2/M30: G54, G17, G90, G94, G40, M5, M9 and motion mode G1; units, tool,
     // feed and position stay. Nothing after this line is read.

@@ -93,7 +93,7 @@ Job read_job(const std::string& path) {
   const YAML::Node root = yaml.load();
   if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
   yaml.only_keys(root, "", {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify",
-                            "feed", "servo", "errors"});
+                            "feed", "servo", "errors", "start"});
   const fs::path base = fs::absolute(fs::path(path)).parent_path();
   Job job;
   job.file = path;
@@ -277,6 +277,20 @@ Job read_job(const std::string& path) {
     }
   }
   if (const YAML::Node servo = root["servo"]) read_servo(yaml, servo, job);
+  if (const YAML::Node start = root["start"]) {
+    // Where the tool's tip is when the program starts, in machine coordinates (G53: the
+    // workpiece frame without work offsets, mm); axes not named are at the machine's home.
+    if (!start.IsMap()) yaml.fail(start, "start", "a map like {X: 0, Y: 0, Z: 100} (mm, G53 coordinates)");
+    yaml.only_keys(start, "start", {"X", "Y", "Z"});
+    std::map<char, double> values;
+    for (const char* letter : {"X", "Y", "Z"}) {
+      if (!start[letter]) continue;
+      const double v = yaml.number(start[letter], std::string("start.") + letter);
+      if (std::abs(v) > 1e6) yaml.fail(start[letter], std::string("start.") + letter, "a position within +-1e6 mm");
+      values[letter[0]] = v;
+    }
+    job.start_mm = values;
+  }
   if (const YAML::Node errors = root["errors"]) {
     const std::string e = yaml.text(errors, "errors");
     if (e != "machine" && e != "none") yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");

@@ -64,14 +64,32 @@ JobProgram read_job_program(const Job& job) {
   reading.gcode.work_offsets_mm = job.offsets_mm;
   reading.gcode.unsupported_as_warning = job.unsupported_as_warning;
   reading.gcode.unknown_m_code_as_error = job.unknown_m_code_as_error;
-  reading.gcode.m_codes_ignored = job.machine_spec.ignored_m_codes;
   reading.gcode.block_delete = job.block_delete;
   if (job.arc_tolerance_mm) reading.gcode.arc_tolerance_mm = *job.arc_tolerance_mm;
   reading.gcode.subroutine_path = job.subroutine_path;
   reading.gcode.max_lines = job.max_lines;
   reading.gcode.tcp_m_codes = job.tcp_m_codes;
   reading.gcode.initial_tool = job.initial_tool;
+  // The machine starts at its home and goes there on G28 (a tool-pose program's tip under the
+  // spindle's gauge point; an axis program's axes at their home values).
+  auto machine_start = [&](bool axis_program) {
+    set_machine(reading.gcode, job.machine_spec, job.tools, axis_program);
+    if (!job.start_mm) return;
+    // The job's start names the tip; the reader's start is the gauge point above it.
+    const auto length = reading.gcode.tool_length_mm.find(job.initial_tool);
+    const double l = length == reading.gcode.tool_length_mm.end() ? 0.0 : length->second;
+    for (const auto& [letter, value] : *job.start_mm) {
+      const int a = letter - 'X';
+      (*reading.gcode.start_mm)[a] = value + l * reading.gcode.spindle_axis[a];
+    }
+  };
+  machine_start(false);
   LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
+  if (loaded.dialect == "gcode" &&
+      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const kinematics::Block& b) { return !b.tool_pose; })) {
+    machine_start(true);
+    loaded = read_programs(job.program_files, job.dialect, reading);
+  }
   JobProgram out;
   out.program = std::move(loaded.program);
   for (auto& f : out.program.files) f = display_name(f, job.file);

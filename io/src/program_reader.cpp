@@ -2,6 +2,7 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
 #include <vcut/io/sinumerik_reader.h>
+#include <vcut/kinematics/forward_kinematics.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -172,6 +173,45 @@ std::string detect_dialect(const std::string& path) {
   if (ext == ".mpf" || ext == ".spf") return "sinumerik";
   if (ext == ".ngc" || ext == ".nc" || ext == ".tap" || ext == ".gcode") return "gcode";
   return detect_from_text(sniff(path));
+}
+
+void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
+                 const std::map<int, removal::Cutter>& tools, bool axis_program) {
+  const kinematics::Machine machine(spec);
+  auto gauge_at = [&](const std::map<char, double>& home, Eigen::Vector3d& point, std::array<double, 3>& rotary_deg) {
+    kinematics::AxisValues q = machine.zero();
+    for (const auto& [letter, value] : home) {
+      const int i = machine.axis_index(letter);
+      if (i >= 0) q[i] = value;
+    }
+    rotary_deg = {0.0, 0.0, 0.0};
+    for (int r = 0; r < 3; ++r) {
+      const int i = machine.axis_index(static_cast<char>('A' + r));
+      if (i >= 0) rotary_deg[static_cast<size_t>(r)] = q[i] * 180.0 / M_PI;
+    }
+    if (axis_program) {  // X Y Z are the linear axes' values
+      for (int a = 0; a < 3; ++a) {
+        const int i = machine.axis_index(static_cast<char>('X' + a));
+        point[a] = i >= 0 ? q[i] : 0.0;
+      }
+      return;
+    }
+    const kinematics::ToolPose pose = kinematics::forward(machine, q, 0.0);
+    point = pose.tip_mm;
+    options.spindle_axis = pose.axis;
+  };
+  Eigen::Vector3d start;
+  gauge_at(spec.home, start, options.reference_rotary_deg[0]);
+  options.start_mm = start;
+  options.reference_mm[0] = start;
+  gauge_at(spec.second_home ? *spec.second_home : spec.home, options.reference_mm[1], options.reference_rotary_deg[1]);
+  options.m_codes_ignored = spec.ignored_m_codes;
+  options.tool_length_mm.clear();
+  options.tool_radius_mm.clear();
+  for (const auto& [number, cutter] : tools) {
+    if (!axis_program) options.tool_length_mm[number] = cutter.gauge_length_mm;
+    options.tool_radius_mm[number] = cutter.radius_mm();
+  }
 }
 
 LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,

@@ -172,10 +172,11 @@ TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
         "G21 G90 G94 G17\nT1 M6\nG0 X10 Y110 Z5\nG1 Y0 F3000\nG2 X10 Y0 I-10 J0 P3\nM2\n");
   const Csv csv =
       poses("circle",
-            "job: circle\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: circle.ngc}\n"
+            "job: circle\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: circle.ngc, initial_tool: 1}\n"
             "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\n"
             "densify: {chord_tolerance: 0.0001, step: 0.5}\n"
-            "servo: {kv: 20, omega_n: ideal, period: 0.0001}\n");
+            "servo: {kv: 20, omega_n: ideal, period: 0.0001}\n"
+            "start: {X: 10, Y: 110, Z: 5}\n");  // T1's tip at rest on the lead-in's start
   const double F = 3000.0, v = F / 60.0, kv = 20.0, R = 10.0, w = v / R;
   const double shrink_um = 1000.0 * R * (1.0 - 1.0 / std::sqrt(1.0 + (w / kv) * (w / kv)));
   ASSERT_GT(csv.rows.size(), 100u);
@@ -227,13 +228,13 @@ TEST_F(PoseCli, CompensateRoundTrip) {
         "G21 G90 G94\nT1 M6\nG0 X50 Y20 Z5\nG1 Z-2 F600\nG1 X90\nG1 Y40\nG1 X50 Y20\nG0 Z5\nM2\n");
   const std::string common =
       "machine: machine.yaml\ntools: tools.yaml\nstock: {box: {min: [0, 0, -20], max: [100, 60, "
-      "0]}}\n";
+      "0]}}\nstart: {X: 50, Y: 20, Z: 5}\n";  // T1 (initial_tool) at rest at the first point
   const std::string nominal_job =
-      "job: nominal\n" + common + "program: {file: square.ngc}\ndensify: {step: 2}\n";
+      "job: nominal\n" + common + "program: {file: square.ngc, initial_tool: 1}\ndensify: {step: 2}\n";
   const Csv nominal = poses("nominal", nominal_job);
   const Csv uncompensated = poses(
       "uncompensated", "job: uncompensated\n" + common +
-                           "program: {file: square.ngc}\ndensify: {step: 2}\nerrors: machine\n");
+                           "program: {file: square.ngc, initial_tool: 1}\ndensify: {step: 2}\nerrors: machine\n");
 
   // Without compensation the errors show (so the comparison below can fail): E_XX alone moves
   // the tip 2.5 + X/24 um along x, 4.6 to 6.3 um at X = 50..90, and E_A0C tilts the table

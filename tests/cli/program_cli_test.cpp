@@ -119,12 +119,16 @@ TEST_F(ProgramCli, GcodeFile) {
   const std::string file = (dir / "part.ngc").string();
   write(file,
         "G21 G90 G17\n"
-        "G0 X0 Y0 Z5\n"      // from an unknown position: no record
+        "G0 X0 Y0 Z5\n"      // from 0, where rs274 starts: rapid (0,0,0) -> (0,0,5)
         "G1 Z0 F100\n"       // linear (0,0,5) -> (0,0,0)
         "G2 X10 Y0 I5 J0\n"  // clockwise half circle about (5,0): normal -Z
         "M2\n");
-  const std::vector<json> r = records("program " + file);
-  ASSERT_EQ(r.size(), 2u);
+  std::vector<json> r = records("program " + file);
+  ASSERT_EQ(r.size(), 3u);
+  EXPECT_EQ(r[0]["kind"], "rapid");
+  expect_array(r[0]["start"], {0, 0, 0});
+  expect_array(r[0]["end"], {0, 0, 5});
+  r.erase(r.begin());
   EXPECT_EQ(r[0]["kind"], "linear");
   expect_array(r[0]["start"], {0, 0, 5});
   expect_array(r[0]["end"], {0, 0, 0});

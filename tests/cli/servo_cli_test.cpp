@@ -162,9 +162,10 @@ class ServoCli : public ::testing::Test {
     }
     return std::stod(m[1]) / 1000.0;
   }
+  // `program_keys`: more keys of the program map, each followed by ", ".
   std::string job(const std::string& machine, const std::string& program,
-                  const std::string& extra = "") {
-    return "job: servo\nmachine: " + machine + "\ntools: tools.yaml\nprogram: {file: " + program +
+                  const std::string& extra = "", const std::string& program_keys = "") {
+    return "job: servo\nmachine: " + machine + "\ntools: tools.yaml\nprogram: {" + program_keys + "file: " + program +
            "}\nstock: {box: {min: [-10, -10, -10], max: [210, 210, 0]}}\nfeed: {acceleration: 1e7, "
            "jerk: 1e9}\n"
            "servo: {kv: 20, omega_n: 120, zeta: 0.8, period: 0.005}\n" +
@@ -239,7 +240,7 @@ TEST_F(ServoCli, Seed004Circle) {
     // The vcut side at a fine chord tolerance: the commanded axes run on the chords between
     // densified poses, 0.1 um off the circle.
     const double got = printed_contour_mm(
-        poses("circle", job("fast.yaml", "circle.ngc", "densify: {chord_tolerance: 0.0001}\n")));
+        poses("circle", job("fast.yaml", "circle.ngc", "densify: {chord_tolerance: 0.0001}\nstart: {X: 100, Y: 0, Z: 0}\n", "initial_tool: 1, ")));
     EXPECT_NEAR(got, expected, kSeed004 * expected);
   }
 }
@@ -404,10 +405,10 @@ TEST_F(ServoCli, FeedInterpretations) {
 TEST_F(ServoCli, EveryPeriodRows) {
   write(dir / "line.ngc", "G21 G90 G94\nT1 M6\nG1 X0 Y0 Z0 F3000\nG1 X100\nM2\n");
   write(dir / "line.yaml",
-        "job: line\nmachine: fast.yaml\ntools: tools.yaml\nprogram: {file: line.ngc}\n"
+        "job: line\nmachine: fast.yaml\ntools: tools.yaml\nprogram: {file: line.ngc, initial_tool: 1}\n"
         "stock: {box: {min: [-10, -10, -10], max: [110, 10, 0]}}\nfeed: {acceleration: 1e7, jerk: "
         "1e9}\n"
-        "servo: {kv: 20, omega_n: ideal, period: 0.001}\n");
+        "servo: {kv: 20, omega_n: ideal, period: 0.001}\nstart: {X: 0, Y: 0, Z: 0}\n");
   const CommandResult r = run_vcut("poses --every-period " + (dir / "line.yaml").string() +
                                    " --out " + (dir / "p.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;

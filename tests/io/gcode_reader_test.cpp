@@ -595,8 +595,8 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   // The ignored G5 spline leaves X unknown: the G0 X2 after it only re-establishes X.
   ASSERT_EQ(p.blocks.size(), 1u);
   expect_vec(p.blocks[0].end_mm, {1, 0, 0});
-  // G28 (go home) leaves its axes unknown: the next Z only re-establishes Z.
-  const Program q = read("G0 X0 Y0 Z0\nG28 Z0\nG0 Z5\n", options);
+  // A probing move (ignored) leaves its axes unknown: the next Z only re-establishes Z.
+  const Program q = read("G0 X0 Y0 Z0\nG38.2 Z-5 F10\nG0 Z5\n", options);
   EXPECT_TRUE(q.blocks.empty());
 }
 
@@ -607,7 +607,7 @@ TEST(GcodeReaderErrors, UnknownGAndMCodes) {
   EXPECT_INPUT_ERROR("G12.7\n", 1, 1, "unknown G code G12.7");
   EXPECT_INPUT_ERROR("G84 X0 Y0 Z-1 R1\n", 1, 1, "G84");
   EXPECT_INPUT_ERROR("G0 G28 Z0\n", 1, 4, "G28");
-  EXPECT_INPUT_ERROR("G41 D1\n", 1, 1, "G41");
+  EXPECT_INPUT_ERROR("G41 D1\n", 1, 5, "tool 1 has no radius");
 }
 
 TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {

@@ -144,7 +144,28 @@ def tool_table_text(program_text):
         n = int(m.group(1))
         if 0 < n <= 99999:
             tools.add(n)
-    lines = ["T%d P%d Z0 D0 ;oracle" % (t, i + 1) for i, t in enumerate(sorted(tools))]
+    lines = ["T%d P%d Z0 D%s ;oracle" % (t, i + 1, tool_diameter_in(t)) for i, t in enumerate(sorted(tools))]
+    return "\n".join(lines) + "\n"
+
+
+def tool_diameter_in(t):
+    """The diameter (in: rs274's machine units) the oracle gives tool t, for cutter compensation:
+    T1 1/16 in (what useful-subroutines.ngc and comp-g1.ngc assume), T2 1/8 in, T3 0.201 in,
+    0.1 in for the others."""
+    return {1: "0.0625", 2: "0.125", 3: "0.201"}.get(t, "0.1")
+
+
+def vcut_tools_text(program_text):
+    """The same tools as a vcut tool library (mm)."""
+    tools = set(range(1, 100))
+    for m in _TOOL_WORD.finditer(program_text):
+        n = int(m.group(1))
+        if 0 < n <= 99999:
+            tools.add(n)
+    lines = ["tools:"]
+    for t in sorted(tools):
+        d = float(tool_diameter_in(t)) * 25.4
+        lines.append("  %d: {type: flat, diameter: %r, flute_length: 10}" % (t, d))
     return "\n".join(lines) + "\n"
 
 
@@ -336,9 +357,14 @@ def parse_rs274(stdout):
 # Running vcut
 
 
-def run_vcut(vcut, program, timeout, kins_m_codes=False, sub_dirs=()):
+def run_vcut(vcut, program, timeout, kins_m_codes=False, sub_dirs=(), tools_text=None):
     import json
     cmd = [vcut, "program", program, "--dialect", "gcode"]
+    if tools_text is not None:
+        tools = tempfile.NamedTemporaryFile("w", suffix=".yaml", prefix="rs274-oracle-tools-", delete=False)
+        tools.write(tools_text)
+        tools.close()
+        cmd += ["--tools", tools.name]
     for d in sub_dirs:
         cmd += ["--subroutine-path", d]
     if kins_m_codes:
@@ -361,6 +387,8 @@ def run_vcut(vcut, program, timeout, kins_m_codes=False, sub_dirs=()):
             except ValueError:
                 records.append({"kind": "?unparsable", "raw": line})
     err = [l for l in r.stderr.decode("utf-8", "replace").splitlines() if l.strip()]
+    if tools_text is not None:
+        os.unlink(tools.name)
     return r.returncode, records, err
 
 
@@ -589,7 +617,8 @@ def check_program(path, args, rs274):
         if os.path.isdir(remap_subs):
             sub_dirs.append(remap_subs)
         rc, out, rerr = run_rs274(rs274, program, text, sub_dirs, args.timeout)
-        vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout, uses_kins_m_codes(text), sub_dirs[1:])
+        vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout, uses_kins_m_codes(text), sub_dirs[1:],
+                                    vcut_tools_text(text))
     finally:
         if work:
             shutil.rmtree(work, ignore_errors=True)

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -52,6 +53,22 @@ struct GcodeOptions {
   // M codes that switch tool-centre-point kinematics on (true) or off (false), such as
   // LinuxCNC's M428/M429 in its table-rotary-tilting demos: on acts like G43.4.
   std::map<int, bool> tcp_m_codes;
+  // Where the machine is when the first file starts, and the reference positions G28 and G30
+  // go to (#5161.. and #5181.., which G28.1 / G30.1 overwrite): G53 coordinates (the
+  // workpiece frame without work offsets, mm) of the spindle's gauge point, so that a tool of
+  // length L (tool_length_mm, by T number) puts its tip L along -spindle_axis from it.
+  // LinuxCNC's standalone rs274 starts at 0 with zero references and no tool lengths; `vcut
+  // program` does the same, a job starts at its machine's home. No start position: each axis
+  // is unknown until programmed, and moves made before hold it at its first programmed value
+  // (with a warning) - a motion no machine makes, for callers that know no machine.
+  std::optional<Eigen::Vector3d> start_mm;
+  std::array<Eigen::Vector3d, 2> reference_mm = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  std::array<std::array<double, 3>, 2> reference_rotary_deg = {};  // A B C at G28 / G30
+  std::map<int, double> tool_length_mm;
+  // Cutter radius compensation (G41/G42 D): the radius of each tool by T number (mm), from
+  // the tool library. A D or a tool in the spindle not listed here is an error.
+  std::map<int, double> tool_radius_mm;
+  Eigen::Vector3d spindle_axis = Eigen::Vector3d::UnitZ();  // tip -> spindle, unit
   // The tool in the spindle when the first file starts (0: none; programs that never change
   // tools, like LinuxCNC's demos, run with the machine's current tool).
   int initial_tool = 0;
@@ -65,8 +82,8 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
                 kinematics::Program& program, GcodeState& state);
 
 // The modal state between lines and between files. Start from a default-constructed one
-// (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool,
-// position unknown) and pass the same one, with the same Program, for each file in sequence.
+// (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool;
+// the position GcodeOptions::start_mm, or unknown) and pass the same one, with the same Program, for each file in sequence.
 struct GcodeState {
   enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
@@ -80,7 +97,9 @@ struct GcodeState {
   std::string work_offset = "G54";  // the active coordinate system
 
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // workpiece frame, where known
-  std::array<bool, 3> known = {false, false, false};      // X Y Z programmed yet?
+  // Known from the start when GcodeOptions::start_mm is given; an axis becomes unknown after
+  // an ignored code that moved it (program.unsupported: warn) until it is programmed again.
+  std::array<bool, 3> known = {false, false, false};
   // Blocks (indices into Program::blocks) emitted while an axis was unknown: they hold that
   // axis still, and take its value when it is first programmed.
   std::array<std::vector<std::size_t>, 3> pending;
@@ -122,6 +141,29 @@ struct GcodeState {
   // Sticky cycle words as last given (program units; R and Z as written, G91 increments
   // included): a later line of the same series may give only X and Y.
   double cycle_r = 0.0, cycle_z = 0.0, cycle_q = 0.0, cycle_p = 0.0;
+
+  // Cutter radius compensation as LinuxCNC's interpreter does it (G41/G42, G41.1/G42.1, G40):
+  // the tool's path is offset by the radius in the plane (G17 XY, G18 ZX); each move is held
+  // until the next one decides its end (a concave corner moves it back to the offset paths'
+  // meeting point; a convex corner gets an arc of the tool radius about the programmed corner).
+  struct CutterComp {
+    enum class Side { Off, Left, Right };
+    Side side = Side::Off;
+    double radius_mm = 0.0;       // > 0 compensates; 0 (a tool of no radius) moves as programmed
+    bool first_move = true;       // the next move is the entry move
+    bool arc_not_allowed = false; // the move after G40 must be straight
+    Eigen::Vector3d program_mm = Eigen::Vector3d::Zero();  // the last programmed (uncompensated) end
+    struct Held {
+      kinematics::Block block;
+      Eigen::Vector2d direction = Eigen::Vector2d::Zero();  // straight: the programmed direction
+      double sweep_rad = 0.0;                               // arc: the programmed sweep
+    };
+    std::vector<Held> held;  // moves whose end the next corner may still move
+    Eigen::Vector2d endpoint = Eigen::Vector2d::Zero();  // where the held move starts (gouge checks)
+    bool endpoint_valid = false;
+    std::optional<Eigen::Vector3d> machine_mm;  // after G40: the last compensated end, where the machine is
+  };
+  CutterComp comp;
 };
 
 }  // namespace vcut::io

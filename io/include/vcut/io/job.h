@@ -48,6 +48,8 @@ struct Job {
   bool unknown_m_code_as_error = false;  // program.unsupported: error (unset: such M codes warn)
   bool block_delete = true;              // program.block_delete: on (skip '/' lines) | off
   std::optional<double> arc_tolerance_mm;  // program.arc_tolerance (mm); none: the reader's default
+  // start: {X, Y, Z}: the tip's G53 position (mm) when the program starts; none: the machine's home.
+  std::optional<std::map<char, double>> start_mm;
   std::vector<std::string> subroutine_path;  // G-code: folders searched for <name>.ngc subroutine files
   long long max_lines = 100'000'000;          // G-code: lines read before a loop is taken to be endless
   std::map<int, bool> tcp_m_codes;            // G-code: M codes switching TCP on (true) / off

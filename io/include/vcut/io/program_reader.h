@@ -5,6 +5,7 @@
 
 #include <vcut/io/apt_reader.h>
 #include <vcut/io/gcode_reader.h>
+#include <vcut/kinematics/machine.h>
 #include <vcut/kinematics/program.h>
 #include <vcut/removal/cutter.h>
 
@@ -21,6 +22,15 @@ namespace vcut::io {
 // written letter-space-number, "N7 X -1320") -> sinumerik; anything else (and a file that
 // cannot be read, which its reader then reports) -> gcode.
 std::string detect_dialect(const std::string& path);
+
+// The machine's part in reading G-code, as its control runs a program: the start position and
+// the G28 / G30 references (its home and second_home: the spindle's gauge point there, by
+// forward kinematics, in the workpiece frame without work offsets), the M codes it declares,
+// and each tool's gauge length and radius (for the tip under the gauge point and for cutter
+// compensation). `axis_program`: the program moves the axes (rotary words without TCP), so its
+// X Y Z are axis values and the start is the home's axis values.
+void set_machine(GcodeOptions& options, const kinematics::MachineSpec& machine,
+                 const std::map<int, removal::Cutter>& tools, bool axis_program = false);
 
 struct ProgramOptions {
   GcodeOptions gcode;
