@@ -514,6 +514,8 @@ class Reader : public detail::ValueContext {
 const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
 constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
 constexpr int kG92Parameter = 5211;  // X of the G92 offset
+// An R arc's |R| may fall short of half its chord by LinuxCNC's RADIUS_TOLERANCE, 0.00005 in.
+constexpr double kRadiusShortMm = 0.00005 * kMmPerInch;
 constexpr size_t kG28Parameter = 5161;  // X of the G28 reference (mm, gauge point), Y Z A B C (deg) follow
 constexpr size_t kG30Parameter = 5181;  // X of the G30 reference
 constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
@@ -705,6 +707,12 @@ void Reader::run(std::istream& in, const std::string& name) {
 bool Reader::line(std::string& text) {
   Source& src = *current_;
   if (!text.empty() && text.back() == '\r') text.pop_back();  // CRLF files
+  // A UTF-8 byte order mark before the first line (Windows editors write one).
+  if (src.line == 1 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.replace(0, 3, 3, ' ');
+  // Fanuc's ':' program number (ISO tapes) is an O number.
+  if (const size_t k = skip_blanks(text, 0); k < text.size() && text[k] == ':' && k + 1 < text.size() && is_digit(text[k + 1])) {
+    text[k] = 'O';
+  }
   const size_t i = skip_blanks(text, 0);
   if (i == text.size()) return true;
   if (text[i] == '%') {
@@ -1070,14 +1078,21 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
 }
 
 size_t Reader::skip_comment(const std::string& s, size_t i) {
+  // rs274ngc rejects nested comments (NCE_NESTED_COMMENT_FOUND); CAM posts write them
+  // ("(DRILL 4.5MM (R))") and Fanuc and the senders read them, so they nest here. LinuxCNC's
+  // programs get a warning. Unbalanced, the comment ends at the first ')' (unnested reading).
+  int depth = 1;
+  size_t first_close = std::string::npos;
   for (size_t j = i + 1; j < s.size(); ++j) {
-    if (s[j] == ')') return j + 1;
-    // rs274ngc rejects nested comments (NCE_NESTED_COMMENT_FOUND); Fanuc and the senders
-    // read on to the first ')'. LinuxCNC's programs get a warning.
-    if (s[j] == '(' && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
-      program_.warnings.push_back(where(column_at(j)) + ": '(' inside a comment (rs274 refuses it; read to the first ')')");
+    if (s[j] == ')' && first_close == std::string::npos) first_close = j;
+    if (s[j] == ')' && --depth == 0) return j + 1;
+    if (s[j] != '(') continue;
+    ++depth;
+    if (options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
+      program_.warnings.push_back(where(column_at(j)) + ": '(' inside a comment (rs274 refuses it; read as a nested comment)");
     }
   }
+  if (first_close != std::string::npos) return first_close + 1;
   fail(column_at(i), "unterminated comment: '(' without ')'");
 }
 
@@ -1452,7 +1467,9 @@ void Reader::arc(int column) {
   Eigen::Vector2d center;
   if (ijk) {
     const Word& normal_word = word(kCenterLetter[c]);
-    if (normal_word.present) {
+    // CAM posts for Fanuc, Haas and the senders write a zero K in G17 arcs; the controls ignore it.
+    const bool zero_ok = options_.flavor != GcodeOptions::Flavor::LinuxCnc && normal_word.value == 0.0;
+    if (normal_word.present && !zero_ok) {
       fail(normal_word.column, std::string(1, kCenterLetter[c]) + " word in a " + plane_name +
                                    "-plane arc (expected " + kCenterLetter[a] + " and " +
                                    kCenterLetter[b] + ")");
@@ -1482,7 +1499,7 @@ void Reader::arc(int column) {
   } else {
     // rs274ngc arc_data_r.
     if (const std::string error =
-            detail::radius_arc_centre(s, e, r.value * unit(), clockwise, code, "R", "I/J/K", center);
+            detail::radius_arc_centre(s, e, r.value * unit(), clockwise, code, "R", "I/J/K", center, kRadiusShortMm);
         !error.empty()) {
       fail(r.column, error);
     }

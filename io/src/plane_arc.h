@@ -51,10 +51,12 @@ inline std::string centre_arc_error(const Eigen::Vector2d& s, const Eigen::Vecto
 // The centre of a radius arc: on the chord's perpendicular bisector, to the right of s -> e
 // for G2 with a positive radius or G3 with a negative one (negative: the arc longer than 180
 // deg). `word` is the radius word as written ("R", "CR=") and `centre_words` the centre's
-// ("I/J/K"), for the messages.
+// ("I/J/K"), for the messages. |R| may fall short of half the chord by short_tolerance_mm
+// (LinuxCNC: 0.00005 in = 0.00127 mm); the arc is then a half circle.
 inline std::string radius_arc_centre(const Eigen::Vector2d& s, const Eigen::Vector2d& e, double radius, bool clockwise,
                                      const std::string& code, const std::string& word,
-                                     const std::string& centre_words, Eigen::Vector2d& center) {
+                                     const std::string& centre_words, Eigen::Vector2d& center,
+                                     double short_tolerance_mm = 0.0) {
   const Eigen::Vector2d d = e - s;
   const double chord = d.norm();
   if (chord <= kSamePointMm) {
@@ -63,7 +65,7 @@ inline std::string radius_arc_centre(const Eigen::Vector2d& s, const Eigen::Vect
   const double abs_r = std::abs(radius);
   const std::string name = word.back() == '=' ? word.substr(0, word.size() - 1) : word;
   double half = chord / 2.0;
-  if (half - abs_r > kRadiusRoundingRelative * std::max(1.0, abs_r)) {
+  if (half - abs_r > std::max(short_tolerance_mm, kRadiusRoundingRelative * std::max(1.0, abs_r))) {
     return "arc radius |" + name + "| = " + num(abs_r) + " mm is less than half the chord, " + num(half) +
            " mm (expected |" + name + "| >= " + num(half) + " mm)";
   }

@@ -638,11 +638,12 @@ def check_program(path, args, rs274):
             vrc, " | ".join(verr[-2:]) or "(no message)"), []
     if vrc != 0:
         vmsg = vcut_error_message(verr)
+        rs_count = "%d/-" % len(parse_rs274(out))  # rs274's motions (before its error, if any)
         if _UNSUPPORTED.search(vmsg):
-            return "SKIPPED", "-", unsupported_feature(vmsg), [
+            return "SKIPPED", rs_count, unsupported_feature(vmsg), [
                 "vcut: " + vmsg] + (["rs274 also fails: " + rs_msg] if not rs_ok else [])
         if not rs_ok:
-            return "REJECTED", "-", "both reject; rs274: %s" % rs_msg, ["vcut: " + vmsg]
+            return "REJECTED", rs_count, "both reject; rs274: %s" % rs_msg, ["vcut: " + vmsg]
         rs = parse_rs274(out)
         return "FAIL", "%d/-" % len(rs), "vcut rejects what rs274 runs: " + vmsg, []
     rs = parse_rs274(out)
@@ -668,6 +669,54 @@ def check_program(path, args, rs274):
     return "FAIL", motions, detail[0], detail[1:] + (["(" + "; ".join(extra) + ")"] if extra else [])
 
 
+def random_comp_programs(n, seed, folder):
+    """n random cutter-compensation programs (deterministic for a seed): G41.1/G42.1 with a
+    random diameter, then lines and arcs (R and I J, both directions, some helical, some Z
+    only) through random points, G40, an exit move, M2. Many corners are concave, convex,
+    tangent or too tight; rs274 and vcut must agree on each (or both refuse it)."""
+    import random
+    rng = random.Random(seed)
+    paths = []
+    for k in range(n):
+        lines = ["G21 G17 G90 G94", "G0 X0 Y0 Z0", "F500",
+                 "G%s D%.3f" % (rng.choice(["41.1", "42.1"]), rng.uniform(0.5, 4.0))]
+        x, y, z = 0.0, 0.0, 0.0
+        for _ in range(rng.randint(2, 9)):
+            kind = rng.random()
+            if kind < 0.1:
+                z = round(z + rng.uniform(-2, 2), 3)
+                lines.append("G1 Z%.3f" % z)
+                continue
+            a = rng.uniform(0, 2 * math.pi)
+            length = rng.uniform(4, 30)
+            nx, ny = round(x + length * math.cos(a), 3), round(y + length * math.sin(a), 3)
+            if kind < 0.55:
+                lines.append("G%d X%.3f Y%.3f" % (rng.choice([0, 1, 1, 1]), nx, ny))
+            elif kind < 0.8:
+                r = round(length / 2 * rng.uniform(1.0, 3.0) * rng.choice([1, 1, -1]), 3)
+                lines.append("G%d X%.3f Y%.3f R%.3f" % (rng.choice([2, 3]), nx, ny, r))
+            else:  # centre on the chord's bisector: end exactly on the circle (to print precision)
+                mx, my = (nx - x) / 2, (ny - y) / 2
+                off = rng.uniform(-2, 2) * length / 2
+                cx, cy = round(mx - off * math.sin(a), 3), round(my + off * math.cos(a), 3)
+                ex, ey = x + cx, y + cy
+                # move the end onto the circle about the rounded centre
+                rr = math.hypot(cx, cy)
+                ang = math.atan2(ny - ey, nx - ex)
+                nx, ny = round(ex + rr * math.cos(ang), 3), round(ey + rr * math.sin(ang), 3)
+                helix = " Z%.3f" % (z + 1) if rng.random() < 0.2 else ""
+                if helix:
+                    z += 1
+                lines.append("G%d X%.3f Y%.3f I%.3f J%.3f%s" % (rng.choice([2, 3]), nx, ny, cx, cy, helix))
+            x, y = nx, ny
+        lines += ["G40", "G1 X%.3f Y%.3f" % (x + rng.uniform(-20, 20), y + rng.uniform(-20, 20)), "M2"]
+        path = os.path.join(folder, "comp-random-%03d.ngc" % k)
+        with open(path, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        paths.append(path)
+    return paths
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(
         description="Compare vcut's G-code reader with LinuxCNC's rs274 interpreter.")
@@ -684,6 +733,9 @@ def main(argv=None):
                     help="more directories for o<name> call files (the program's own directory "
                          "is always searched)")
     ap.add_argument("--no-feed", action="store_true", help="do not compare feeds")
+    ap.add_argument("--random-comp", type=int, default=0, metavar="N",
+                    help="also N random cutter-compensation programs (seed --seed)")
+    ap.add_argument("--seed", type=int, default=1, help="seed of the random programs (1)")
     ap.add_argument("-v", "--verbose", action="store_true",
                     help="print the details of SKIPPED/REJECTED programs too")
     args = ap.parse_args(argv)
@@ -713,6 +765,11 @@ def main(argv=None):
               % census.NCFILES_DIR, file=sys.stderr)
         return SKIP_EXIT
 
+    random_dir = None
+    if args.random_comp > 0:
+        random_dir = tempfile.mkdtemp(prefix="rs274-oracle-comp-")
+        programs = programs + random_comp_programs(args.random_comp, args.seed, random_dir)
+
     results = []
     for p in programs:
         status, motions, detail, more = check_program(p, args, rs274)
@@ -728,14 +785,29 @@ def main(argv=None):
     lines = ["%-*s  %-8s  %-11s  %s" % (name_w, "program", "status", "rs274/vcut", "detail")]
     for name, status, motions, detail, more in rows:
         lines.append("%-*s  %-8s  %-11s  %s" % (name_w, name, status, motions, detail))
+    if random_dir:
+        shutil.rmtree(random_dir, ignore_errors=True)
     counts = {}
     for r in results:
         counts[r[1]] = counts.get(r[1], 0) + 1
+    # Programs that make at least one motion under rs274 (subroutine and remap files make none
+    # standalone: their "identical" is 0 = 0) and how many of those are identical.
+    def rs_motions(m):
+        try:
+            return int(str(m).split("/")[0])
+        except ValueError:
+            return 0
+    moving = [r for r in results if rs_motions(r[2]) > 0]
+    moving_pass = sum(1 for r in moving if r[1] == "PASS")
     lines.append("")
     lines.append("rs274: %s; vcut: %s; %d programs: %s" % (
         rs274, args.vcut, len(results),
         ", ".join("%d %s" % (counts[k], k) for k in ("PASS", "SKIPPED", "REJECTED", "FAIL")
                   if k in counts)))
+    lines.append("programs that make a motion under rs274: %d, identical %d (%s)" % (
+        len(moving), moving_pass,
+        ", ".join("%d %s" % (n, k) for k, n in
+                  ((k, sum(1 for r in moving if r[1] == k)) for k in ("SKIPPED", "REJECTED", "FAIL")) if n)))
     details = []
     for name, status, motions, detail, more in rows:
         if status == "FAIL" or (args.verbose and more):

@@ -1,0 +1,188 @@
+// Cutter radius compensation, home returns and the start position of the G-code reader.
+// Expected paths are the offset geometry worked by hand (a square's offset sides meet at the
+// corners; a convex corner is an arc of the tool radius about the programmed corner); the
+// LinuxCNC oracle (tests/oracle/rs274_oracle.py) checks the same code against rs274 on
+// LinuxCNC's compensation programs and on random ones.
+#include <gtest/gtest.h>
+
+#include <sstream>
+#include <string>
+
+#include "vcut/io/gcode_reader.h"
+#include "vcut/io/input_error.h"
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Block;
+using kinematics::MotionKind;
+using kinematics::Program;
+
+constexpr double kTol = 1e-9;
+
+Program read(const std::string& text, GcodeOptions options = {}) {
+  if (!options.start_mm) options.start_mm = Eigen::Vector3d::Zero();
+  Program program;
+  GcodeState state;
+  std::istringstream in(text);
+  read_gcode(in, "comp.ngc", options, program, state);
+  return program;
+}
+
+std::string error_of(const std::string& text, GcodeOptions options = {}) {
+  try {
+    read(text, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return {};
+}
+
+void expect_point(const Eigen::Vector3d& got, const Eigen::Vector3d& want, const char* what) {
+  EXPECT_LT((got - want).norm(), kTol) << what << ": got " << got.transpose() << ", want " << want.transpose();
+}
+
+void expect_line(const Block& b, const Eigen::Vector3d& start, const Eigen::Vector3d& end) {
+  EXPECT_NE(b.kind, MotionKind::Arc);
+  expect_point(b.start_mm, start, "start");
+  expect_point(b.end_mm, end, "end");
+}
+
+// G41 (tool on the left) around a counterclockwise 10 mm square from its corner: every corner
+// turns toward the tool, so the offset path is the square shrunk by r = 1 mm: its corners are
+// where the offset sides meet. G40, then the exit move from the last offset point.
+TEST(CutterComp, LeftInsideSquareMeetsAtTheCorners) {
+  const Program p = read(
+      "G21 G17 G90 F100\nG41.1 D2\nG1 X10 Y0\nG1 X10 Y10\nG1 X0 Y10\nG40\nG1 X-5 Y10\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  // Entry: from the uncompensated start to the end pushed r to the left of the move, then
+  // pulled back along it to the corner of the next side's offset line.
+  expect_line(p.blocks[0], {0, 0, 0}, {9, 1, 0});
+  expect_line(p.blocks[1], {9, 1, 0}, {9, 9, 0});
+  expect_line(p.blocks[2], {9, 9, 0}, {0, 9, 0});
+  expect_line(p.blocks[3], {0, 9, 0}, {-5, 10, 0});
+  EXPECT_EQ(p.blocks[1].source.line, 4);
+}
+
+// G42 (right) on the same path: the corners turn away from the tool (convex), so each gets a
+// counterclockwise arc of radius r about the programmed corner.
+TEST(CutterComp, RightOutsideCornerGetsAnArc) {
+  const Program p = read("G21 G17 G90 F100\nG42.1 D2\nG1 X10 Y0\nG1 X10 Y10\nG40\nG1 X10 Y20\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  expect_line(p.blocks[0], {0, 0, 0}, {10, -1, 0});
+  const Block& arc = p.blocks[1];
+  ASSERT_EQ(arc.kind, MotionKind::Arc);
+  expect_point(arc.start_mm, {10, -1, 0}, "arc start");
+  expect_point(arc.end_mm, {11, 0, 0}, "arc end");
+  expect_point(arc.center_mm, {10, 0, 0}, "arc centre");
+  EXPECT_EQ(arc.normal, Eigen::Vector3d(0, 0, 1));  // counterclockwise: G42 goes round the left of the corner
+  expect_line(p.blocks[2], {11, 0, 0}, {11, 10, 0});
+  expect_line(p.blocks[3], {11, 10, 0}, {10, 20, 0});
+}
+
+// A line then a tangent counterclockwise arc with the tool inside it: the arc's offset has
+// radius 10 - 1 = 9 about the same centre and starts where the line's offset ends.
+TEST(CutterComp, TangentArcInsideKeepsItsCentre) {
+  const Program p = read("G21 G17 G90 F100\nG41.1 D2\nG1 X10 Y0\nG3 X20 Y10 R10\nG40\nG1 X30 Y10\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_line(p.blocks[0], {0, 0, 0}, {10, 1, 0});
+  const Block& arc = p.blocks[1];
+  ASSERT_EQ(arc.kind, MotionKind::Arc);
+  expect_point(arc.start_mm, {10, 1, 0}, "arc start");
+  expect_point(arc.end_mm, {19, 10, 0}, "arc end");
+  expect_point(arc.center_mm, {10, 10, 0}, "arc centre");
+  expect_line(p.blocks[2], {19, 10, 0}, {30, 10, 0});
+}
+
+// Radii from the tool library: G41 D3 takes tool 3's; G41 alone the tool in the spindle's.
+// A Z move with compensation on keeps the offset point.
+TEST(CutterComp, ToolLibraryRadiusAndZMoves) {
+  GcodeOptions options;
+  options.tool_radius_mm = {{3, 0.5}, {4, 2.0}};
+  const Program p = read("G21 F100\nG41 D3\nG1 X10 Y0\nG1 Z-1\nG40\nG1 X20\nT4 M6\nG41\nG1 X30\nG40\nM2\n", options);
+  ASSERT_GE(p.blocks.size(), 4u);
+  expect_line(p.blocks[0], {0, 0, 0}, {10, 0.5, 0});
+  expect_line(p.blocks[1], {10, 0.5, 0}, {10, 0.5, -1});
+  expect_line(p.blocks[2], {10, 0.5, -1}, {20, 0, -1});
+  expect_line(p.blocks[3], {20, 0, -1}, {30, 2, -1});
+  EXPECT_NE(error_of("G41 D7\nG1 X10\n", options).find("comp.ngc:1:5: G41: tool 7 has no radius"), std::string::npos);
+}
+
+// What cannot be compensated is an error naming the line and the radius.
+TEST(CutterComp, ImpossibleCompensationIsAnError) {
+  // Entry move no longer than the radius.
+  EXPECT_NE(error_of("F100\nG41.1 D4\nG1 X1\n").find("comp.ngc:3:1: cutter compensation entry move of 1 mm"),
+            std::string::npos);
+  // r = 5 in a 3 mm wide notch: the up move's offset would have to run backwards (its end
+  // moves from (5, 5) to (5, -2) against its direction +Y).
+  const std::string gouge = error_of("F100\nG41.1 D10\nG1 X10 Y0\nG1 X10 Y3\nG1 X0 Y3\n");
+  EXPECT_NE(gouge.find("comp.ngc:5:1: cutter compensation: the straight move before this one would run backwards"),
+            std::string::npos) << gouge;
+  EXPECT_NE(gouge.find("tool radius 5 mm"), std::string::npos) << gouge;
+  // An arc smaller than the tool with the tool inside it.
+  EXPECT_NE(error_of("F100\nG41.1 D4\nG1 X10\nG3 X10 Y3 R1.5\n").find("arc of radius 1.5 mm with the tool (radius 2 mm) on its inside"),
+            std::string::npos);
+  // What LinuxCNC refuses while compensation is on.
+  EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG18\n").find("G18 with cutter compensation on"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG81 X0 Z-1 R1\n").find("G81 with cutter compensation on"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG41.1 D2\nG41.1 D2\n").find("already on"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG40\nG2 X20 R5\n").find("arc just after G40"), std::string::npos);
+  EXPECT_NE(error_of("G19\nG41.1 D2\n").find("G41.1 in G19"), std::string::npos);
+}
+
+// G28 / G30: through the named point, then the named axes (all when none is named) to the
+// reference, whose gauge point puts the tip a tool length below it. G28.1 stores the position.
+TEST(HomeReturn, ThroughTheIntermediatePointToTheReference) {
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d(0, 0, 100);
+  options.reference_mm = {Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6)};
+  options.tool_length_mm = {{1, 10.0}};
+  const Program p = read(
+      "T1 M6\nG0 X5 Y5 Z5\nG91 G28 Z0\nG90 G28 X7\nG30\nG28.1\nG0 X0 Y0 Z0\nG28\nM2\n", options);
+  ASSERT_EQ(p.blocks.size(), 7u);
+  // T1 M6: the spindle stays at the start's gauge point (0, 0, 100); the tip is 10 below.
+  expect_line(p.blocks[0], {0, 0, 90}, {5, 5, 5});
+  expect_line(p.blocks[1], {5, 5, 5}, {5, 5, -7});   // Z only: 3 - 10
+  expect_line(p.blocks[2], {5, 5, -7}, {7, 5, -7});  // the intermediate point X7
+  expect_line(p.blocks[3], {7, 5, -7}, {1, 5, -7});  // X only to the reference
+  expect_line(p.blocks[4], {1, 5, -7}, {4, 5, -4});  // G30: every axis, tip 6 - 10
+  expect_line(p.blocks[5], {4, 5, -4}, {0, 0, 0});
+  expect_line(p.blocks[6], {0, 0, 0}, {4, 5, -4});   // G28 to what G28.1 stored
+  for (const Block& b : p.blocks) EXPECT_EQ(b.kind, MotionKind::Rapid);
+  EXPECT_NE(error_of("G28.1 X1\n").find("G28.1 with axis words"), std::string::npos);
+  EXPECT_NE(error_of("G0 G28 X1\n").find("both use the axis words"), std::string::npos);
+}
+
+// A start position: the first moves go from it; G91 and G10 L20 work at once.
+TEST(StartPosition, MovesGoFromTheStart) {
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d(0, 0, 50);
+  const Program p = read("G0 X10\nG91 G0 Y5\nG90 G10 L20 P1 Z0\nG0 Z-5\nM2\n", options);
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_line(p.blocks[0], {0, 0, 50}, {10, 0, 50});
+  expect_line(p.blocks[1], {10, 0, 50}, {10, 5, 50});
+  expect_line(p.blocks[2], {10, 5, 50}, {10, 5, 45});  // G54's Z zero is now at Z 50
+  EXPECT_TRUE(p.warnings.empty());
+}
+
+// Lexing that CAM posts and Fanuc controls produce.
+TEST(GcodeLexing, PostsAndFanucTapes) {
+  // A UTF-8 byte order mark, a ':' program number, nested comments.
+  const Program p = read("\xEF\xBB\xBFG0 X1\n:0097 (FANUC)\nG0 X2 (DRILL 4.5MM (R))\nG0 X3 (A (B C)\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 3u);
+  expect_line(p.blocks[2], {2, 0, 0}, {3, 0, 0});
+  // K0 in a G17 arc (Fanuc and sender posts): ignored; LinuxCNC refuses it.
+  EXPECT_NO_THROW(read("F100\nG2 X10 Y0 I5 J0 K0\n"));
+  GcodeOptions linuxcnc;
+  linuxcnc.flavor = GcodeOptions::Flavor::LinuxCnc;
+  EXPECT_NE(error_of("F100\nG2 X10 Y0 I5 J0 K0\n", linuxcnc).find("K word in a XY-plane arc"), std::string::npos);
+  // An R arc whose |R| falls short of half the chord by up to 0.00005 in (0.00127 mm)
+  // (LinuxCNC's RADIUS_TOLERANCE) is a half circle; by 0.002 mm it is an error.
+  const Program r = read("F100\nG2 X10 Y0 R4.999\n");
+  expect_point(r.blocks[0].center_mm, {5, 0, 0}, "centre");
+  EXPECT_NE(error_of("F100\nG2 X10 Y0 R4.998\n").find("less than half the chord"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace vcut::io
