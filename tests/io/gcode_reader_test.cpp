@@ -665,7 +665,7 @@ TEST(GcodeReaderErrors, BadNumbers) {
 TEST(GcodeReaderErrors, CommentsAndMissingNumbers) {
   EXPECT_INPUT_ERROR("G0 X1 (oops\n", 1, 7, "unterminated comment");
   EXPECT_NO_THROW(read("G0 X1 (a (b))\n"));                  // comments nest (CAM posts write them)
-  EXPECT_INPUT_ERROR("G0 X1 (a))\n", 1, 11, "unexpected ')'");  // one ')' too many
+  EXPECT_INPUT_ERROR("G0 X1 (a))\n", 1, 10, "unexpected ')'");  // one ')' too many
   EXPECT_INPUT_ERROR("G0 X\n", 1, 4, "expected a number after 'X', found end of line");
   EXPECT_INPUT_ERROR("G0 X Y1\n", 1, 4, "found 'Y'");
   EXPECT_INPUT_ERROR("G\n", 1, 1, "expected a number after 'G'");
