@@ -315,6 +315,8 @@ struct Source {
   // line after a CR, still to be read as lines, and whether a '\n' ended that physical line.
   std::string after_cr;
   bool after_cr_newline = false;
+  std::streamoff begin = 0;  // where the file's first line starts (Fanuc GOTO searches from it)
+  bool executed = false;     // a block of this file has run (a later O number ends the program)
 };
 
 // A place to read on from: the line after `line`, at byte `offset` of `source`.
@@ -347,10 +349,17 @@ struct ModalState {
 
 // The main program or one subroutine call.
 struct Frame {
+  // An o-word call (LinuxCNC), a Fanuc macro call G65 (its own locals #1..#33), or a
+  // subprogram M98 / M97 (the caller's locals).
+  enum class Kind { OWord, Macro, Subprogram };
+  Kind kind = Kind::OWord;
   std::string sub;         // canonical o-word name; empty for the main program
   std::string call_where;  // file:line of the call
   Mark return_to;
-  std::array<double, 30> saved_numbered{};   // the caller's #1..#30
+  Mark body;               // Fanuc calls: where the program starts (repeats with L)
+  long long repeats_left = 0;  // Fanuc calls: passes after this one
+  std::vector<std::pair<int, Mark>> do_loops;  // Fanuc WHILE [..] DOm: m, the WHILE line
+  std::array<double, 33> saved_numbered{};   // the caller's #1..#30 (#1..#33 for G65)
   std::map<std::string, double> saved_locals;  // the caller's named locals
   std::vector<Loop> loops;
   std::vector<std::pair<std::string, std::string>> ifs;  // label, file:line of the if
@@ -390,6 +399,7 @@ class Reader : public detail::ValueContext {
   [[noreturn]] void fail(int column, const std::string& message) const override {
     throw InputError(current_->name, current_->line, column, message + call_chain());
   }
+  bool fanuc_macros() const override { return options_.flavor == GcodeOptions::Flavor::Fanuc; }
 
  private:
   std::string where(int column) const {
@@ -427,6 +437,17 @@ class Reader : public detail::ValueContext {
   std::string call_chain() const;
 
   void lex(const std::string& s, size_t i);
+
+  // Fanuc custom macro B: IF / WHILE / END / GOTO statements, G65 / M98 / M97 calls, M99.
+  int macro_statement(std::string& text, size_t i);
+  void go_to_sequence(double number, int column);
+  bool find_sequence(long long number, Mark& found);
+  Mark find_program(long long number, int column, const std::string& caller);
+  void fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
+                  const std::vector<std::pair<int, double>>& arguments = {});
+  bool fanuc_return(int column);
+  double fanuc_system_variable(int number, int column);
+  void set_variable(int number, double value, int column, const std::string& text);
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
   size_t skip_comment(const std::string& s, size_t i);
   bool execute();
@@ -521,7 +542,13 @@ constexpr size_t kG30Parameter = 5181;  // X of the G30 reference
 constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
 
 double Reader::numbered_parameter(int number, int column) {
-  (void)column;
+  if (fanuc_macros()) {
+    if (number == 0) return detail::kVacant;
+    if ((number >= 3000 && number < 5000) || (number >= 5001 && number <= 5106) || number > 5601) {
+      return fanuc_system_variable(number, column);
+    }
+    return state_.parameters[static_cast<size_t>(number)];
+  }
   if (number == 5220) return 1.0 + system_index(static_cast<int>(std::lround(std::stod(state_.work_offset.substr(1)) * 10)));
   if (number == 5400) return state_.tool;
   if (number >= kPositionParameter && number < kPositionParameter + 9) {
@@ -637,6 +664,7 @@ void Reader::run(std::istream& in, const std::string& name) {
   const std::streampos start = in.tellg();
   main->seekable = start != std::streampos(-1);
   main->offset = main->seekable ? static_cast<std::streamoff>(start) : 0;
+  main->begin = main->offset;
   current_ = main.get();
   sources_.push_back(std::move(main));
   frames_.emplace_back();
@@ -650,6 +678,10 @@ void Reader::run(std::istream& in, const std::string& name) {
       }
     }
     select_system(0);
+    if (fanuc_macros()) {  // locals and commons start vacant
+      for (size_t k = 1; k <= 33; ++k) state_.parameters[k] = detail::kVacant;
+      for (size_t k = 100; k <= 999; ++k) state_.parameters[k] = detail::kVacant;
+    }
     // The machine is at its start position; G28 / G30 references in #5161.. / #5181.. (mm, deg).
     if (options_.start_mm) {
       state_.position_mm = *options_.start_mm + tip_offset();
@@ -741,6 +773,10 @@ bool Reader::line(std::string& text) {
     if (options_.block_delete) return true;
     text[i] = ' ';
   }
+  if (options_.flavor != GcodeOptions::Flavor::LinuxCnc) {
+    const int statement = macro_statement(text, skip_blanks(text, 0));
+    if (statement == 1) return true;
+  }
   OLine o;
   if (o_line(text, o) && !o.keyword.empty()) return o_word(text, o);
   line_words_.clear();
@@ -749,11 +785,7 @@ bool Reader::line(std::string& text) {
   // rs274ngc: every value on the line is read before any parameter is set.
   for (const Assignment& a : assignments_) {
     if (a.target.name.empty()) {
-      if (a.target.number >= 5000 && a.target.number != 5220 && (a.target.number == 5400 ||
-          (a.target.number >= kPositionParameter && a.target.number < kPositionParameter + 9))) {
-        fail(a.column, "#" + std::to_string(a.target.number) + " is read-only");
-      }
-      state_.parameters[static_cast<size_t>(a.target.number)] = a.value;
+      set_variable(a.target.number, a.value, a.column, text);
     } else if (a.target.name[0] == '_') {
       state_.globals[a.target.name] = a.value;
     } else {
@@ -1110,6 +1142,9 @@ double Reader::word_value(const std::string& s, size_t& i, char letter, std::str
                      (j < s.size() ? describe(s[j]) : std::string("end of line")));
   }
   const double value = detail::read_real_value(s, i, letter, *this);
+  if (detail::is_vacant(value)) {
+    fail(column, std::string("vacant value in the ") + letter + " word (a variable never set, or #0; expected a value)");
+  }
   text = num(value);
   return value;
 }
@@ -1140,7 +1175,9 @@ void Reader::lex(const std::string& s, size_t i) {
                                " (a parameter is set with #n = value, or read as a word's value)");
       }
       ++i;
-      const double value = detail::read_real_value(s, i, 0, *this);
+      // rs274ngc: one value ([...] for an expression); Fanuc and the others: an expression.
+      const double value = options_.flavor == GcodeOptions::Flavor::LinuxCnc ? detail::read_real_value(s, i, 0, *this)
+                                                                              : detail::read_open_expression(s, i, *this);
       assignments_.push_back({ref, value, column});
       first_word = false;
       continue;
@@ -1523,6 +1560,417 @@ void Reader::arc(int column) {
   append(block, programmed);
 }
 
+// --- Fanuc custom macro B (dialect fanuc, or a file that reads like one).
+//
+// Variables: #0 vacant; #1..#33 local to a G65 call (vacant at the call, then its arguments:
+// A #1, B #2, C #3, I #4, J #5, K #6, D #7, E #8, F #9, H #11, M #13, Q #17, R #18, S #19,
+// T #20, U #21, V #22, W #23, X #24, Y #25, Z #26); #100..#199 and #500..#999 common, vacant at
+// the start; system variables #3000 (alarm: an error with its message), #3006 (stop: a
+// warning), #4001..#4130 (modal codes and words of the last block), #5001..#5106 (positions);
+// the work offsets #5201..#5400 as LinuxCNC keeps them (#5221 = G54 X, 20 per system).
+// Statements: IF [c] GOTO n, IF [c] THEN #i = e, WHILE [c] DOm .. ENDm, GOTO n. GOTO n runs
+// the block N n, searched forward from here, then from the top of the file. Calls: G65 P L
+// (macro, own locals), M98 P L (subprogram, the caller's locals; Fanuc writes the count in P:
+// P30012 runs O0012 three times), M97 P (Haas: the block N P of this program), M99 (return; M99
+// P n returns to the block N n). A program O1234 is found in the calling file, or as
+// O1234.nc, 1234.nc or O1234 (or any file whose first line is O1234) in the program's folder
+// and on program.subroutine_path.
+
+double Reader::fanuc_system_variable(int number, int column) {
+  const GcodeState& g = state_;
+  if (number >= 3000 && number < 4000) return state_.parameters[static_cast<size_t>(number)];
+  if (number >= 4001 && number <= 4022) {
+    switch (number) {
+      case 4001:
+        switch (g.motion) {
+          case Motion::Rapid: return 0;
+          case Motion::Linear: return 1;
+          case Motion::ArcClockwise: return 2;
+          case Motion::ArcCounterClockwise: return 3;
+          case Motion::Cycle: return g.cycle / 10.0;
+          default: return 80;
+        }
+      case 4002: return g.plane == Plane::XY ? 17 : g.plane == Plane::ZX ? 18 : 19;
+      case 4003: return g.incremental ? 91 : 90;
+      case 4005: return g.inverse_time ? 93 : 94;
+      case 4006: return g.inches ? 20 : 21;
+      case 4007: return g.comp.side == GcodeState::CutterComp::Side::Off ? 40 : g.comp.side == GcodeState::CutterComp::Side::Left ? 41 : 42;
+      case 4008: return g.tcp == GcodeState::Tcp::Off ? 49 : 43;
+      case 4009: return g.motion == Motion::Cycle ? g.cycle / 10.0 : 80;
+      case 4010: return g.retract_to_r ? 99 : 98;
+      case 4014: return std::stod(g.work_offset.substr(1));
+      case 4015: return g.exact_stop ? 61 : 64;
+      default: return 0;
+    }
+  }
+  if (number >= 4101 && number <= 4130) {
+    if (number == 4109) return g.feed_mm_per_min / unit();
+    if (number == 4119) return g.spindle_rpm;
+    if (number == 4120) return g.selected_tool >= 0 ? g.selected_tool : 0;
+    return 0;
+  }
+  if (number >= 5001 && number <= 5106) {
+    const int base = (number - 5001) / 20 * 20 + 5001, axis = number - base;
+    if (base > 5041 || axis > 5) return 0;  // skip positions, tool offsets, servo errors: none
+    if (axis >= 3) return state_.rotary.angle_rad[static_cast<size_t>(axis - 3)] * 180.0 / M_PI;
+    // #5001: the last block's end, #5041 the current position (work coordinates); #5021
+    // machine coordinates.
+    const double machine = state_.position_mm[axis];
+    return (base == 5021 ? machine : machine - state_.g5x_mm[axis] - state_.g92_mm[axis]) / unit();
+  }
+  fail(column, "system variable #" + std::to_string(number) +
+                   " is not one vcut knows (expected #1..#33, #100..#999, #3000..#3999, #4001..#4130, #5001..#5106 or "
+                   "#5201..#5601)");
+}
+
+void Reader::set_variable(int number, double value, int column, const std::string& text) {
+  if (!fanuc_macros()) {
+    if (number >= 5000 && number != 5220 &&
+        (number == 5400 || (number >= kPositionParameter && number < kPositionParameter + 9))) {
+      fail(column, "#" + std::to_string(number) + " is read-only");
+    }
+    state_.parameters[static_cast<size_t>(number)] = value;
+    return;
+  }
+  // The line's first comment: the message of an alarm or a stop.
+  std::string message;
+  if (const size_t open = text.find('('); open != std::string::npos) {
+    const size_t close = text.find(')', open);
+    message = text.substr(open + 1, close == std::string::npos ? std::string::npos : close - open - 1);
+  }
+  if (number == 0) fail(column, "#0 is the vacant value and cannot be set");
+  if (number == 3000) {
+    fail(column, "alarm #3000 = " + (detail::is_vacant(value) ? std::string("vacant") : num(value)) +
+                     (message.empty() ? std::string() : ": " + message) + " (the program stops the machine here)");
+  }
+  if (number == 3006) {
+    warn(column, "stop #3006" + (message.empty() ? std::string() : ": " + message) +
+                     " (the control waits for cycle start; the simulation goes on)");
+    return;
+  }
+  if ((number >= 4000 && number < 5000) || (number >= 5001 && number <= 5106) || number > 5601) {
+    fail(column, "#" + std::to_string(number) + " is a system variable the program cannot set");
+  }
+  state_.parameters[static_cast<size_t>(number)] = value;
+  // Fanuc: a work offset written takes effect at once when its system is active.
+  if (number >= kG5xParameter && number < kG5xParameter + 20 * 9) {
+    const int active = static_cast<int>(std::lround(state_.parameters[5220])) - 1;
+    if ((number - kG5xParameter) / 20 == active) select_system(active);
+  }
+}
+
+// A line N n (after blanks and a block delete) in the current file: forward from here, then
+// from the top (Fanuc's search for GOTO and M97). `found` is that line, to be read next.
+bool Reader::find_sequence(long long number, Mark& found) {
+  Source* const src = current_;
+  if (!src->seekable) fail(0, "GOTO and M97 need to read the file again, and this input cannot seek (expected a regular file)");
+  const Mark back = mark_after();
+  const int stop_line = src->line;
+  auto matches = [&](const std::string& s) {
+    size_t i = skip_blanks(s, 0);
+    if (i < s.size() && s[i] == '/') i = skip_blanks(s, i + 1);
+    if (i >= s.size() || (s[i] != 'N' && s[i] != 'n')) return false;
+    i = skip_blanks(s, i + 1);
+    long long n = 0;
+    bool any = false;
+    for (; i < s.size() && (is_digit(s[i]) || is_blank(s[i])); ++i) {
+      if (!is_digit(s[i])) continue;
+      if (n > 1'000'000'000) return false;
+      n = n * 10 + (s[i] - '0');
+      any = true;
+    }
+    return any && n == number && (i >= s.size() || s[i] != '.');
+  };
+  std::string text;
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) jump(Mark{src, src->begin, 0});
+    while (next_line(text)) {
+      if (pass == 1 && src->line > stop_line) break;
+      if (matches(text)) {
+        found = mark_this();
+        jump(back);
+        return true;
+      }
+    }
+  }
+  jump(back);
+  return false;
+}
+
+void Reader::go_to_sequence(double value, int column) {
+  if (detail::is_vacant(value) || value < 0.0 || value != std::floor(value) || value > 99999999.0) {
+    fail(column, "GOTO " + (detail::is_vacant(value) ? std::string("vacant") : num(value)) +
+                     " (expected a sequence number, a whole number >= 0)");
+  }
+  Mark target;
+  if (!find_sequence(static_cast<long long>(value), target)) {
+    fail(column, "GOTO " + num(value) + ": no block N" + num(value) + " in " + current_->name);
+  }
+  jump(target);
+}
+
+// The body of program O<number>: the line after its O line.
+Mark Reader::find_program(long long number, int column, const std::string& caller) {
+  auto header = [&](const std::string& s) {
+    OLine o;
+    std::string t = s;
+    if (!t.empty() && t.back() == '\r') t.pop_back();
+    const size_t k = skip_blanks(t, 0);
+    if (k < t.size() && t[k] == ':') t[k] = 'O';
+    return o_line(t, o) && o.keyword.empty() && o.label == std::to_string(number);
+  };
+  // In the calling file: forward, then from the top.
+  Source* const src = current_;
+  if (src->seekable) {
+    const Mark back = mark_after();
+    const int stop_line = src->line;
+    std::string text;
+    for (int pass = 0; pass < 2; ++pass) {
+      if (pass == 1) jump(Mark{src, src->begin, 0});
+      while (next_line(text)) {
+        if (pass == 1 && src->line > stop_line) break;
+        if (header(text)) {
+          const Mark body = mark_after();
+          jump(back);
+          return body;
+        }
+      }
+    }
+    jump(back);
+  }
+  // A file of its own.
+  std::vector<std::filesystem::path> folders;
+  folders.push_back(std::filesystem::path(sources_.front()->name).parent_path());
+  for (const std::string& p : options_.subroutine_path) folders.emplace_back(p);
+  char digits4[32], digits[32];
+  std::snprintf(digits4, sizeof digits4, "%04lld", number);
+  std::snprintf(digits, sizeof digits, "%lld", number);
+  std::vector<std::string> names;
+  for (const std::string& stem : {std::string("O") + digits4, std::string("O") + digits, std::string(digits4), std::string(digits),
+                                  std::string("o") + digits4, std::string("o") + digits}) {
+    for (const char* ext : {"", ".nc", ".NC", ".ngc", ".tap", ".txt", ".min", ".eia"}) names.push_back(stem + ext);
+  }
+  auto open_source = [&](const std::filesystem::path& path) {
+    auto s = std::make_unique<Source>();
+    s->owned = std::make_unique<std::ifstream>(path, std::ios::binary);
+    if (!*s->owned) fail(column, "cannot open the subprogram file " + path.string());
+    s->in = s->owned.get();
+    s->name = path.string();
+    s->file_index = static_cast<int>(program_.files.size());
+    s->seekable = true;
+    program_.files.push_back(s->name);
+    Source* raw = s.get();
+    sources_.push_back(std::move(s));
+    return raw;
+  };
+  // The file's body: after its O line if it has one among its first lines, else from its start.
+  auto body_of = [&](Source* file) {
+    Source* caller_source = current_;
+    current_ = file;
+    std::string text;
+    Mark body{file, 0, 0};
+    for (int k = 0; k < 8 && next_line(text); ++k) {
+      if (header(text)) {
+        body = mark_after();
+        break;
+      }
+    }
+    current_ = caller_source;
+    return body;
+  };
+  std::error_code ec;
+  for (const auto& folder : folders) {
+    for (const std::string& name : names) {
+      const std::filesystem::path path = folder / name;
+      if (std::filesystem::is_regular_file(path, ec)) return body_of(open_source(path));
+    }
+  }
+  // Any file whose first line (after '%' and blank lines) is O<number>.
+  for (const auto& folder : folders) {
+    std::filesystem::directory_iterator it(folder.empty() ? "." : folder, ec), end;
+    for (int files = 0; !ec && it != end && files < 2000; it.increment(ec), ++files) {
+      if (!it->is_regular_file(ec) || it->file_size(ec) > (64u << 20)) continue;
+      std::ifstream in(it->path(), std::ios::binary);
+      std::string first;
+      for (int k = 0; k < 4 && std::getline(in, first);) {
+        const size_t j = skip_blanks(first, 0);
+        if (j >= first.size() || first[j] == '%' || first[j] == '\r') continue;
+        ++k;
+        if (header(first)) return body_of(open_source(it->path()));
+        break;
+      }
+    }
+  }
+  std::string searched;
+  for (const auto& folder : folders) searched += (searched.empty() ? "" : ", ") + (folder.empty() ? std::string(".") : folder.string());
+  fail(column, caller + ": program O" + digits4 + " found nowhere (searched " + current_->name + " and, in " + searched +
+                   ", the files O" + digits4 + ".nc, " + digits + ".nc, O" + digits4 + " and any whose first line is O" +
+                   digits4 + ")");
+}
+
+void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
+                        const std::vector<std::pair<int, double>>& arguments) {
+  if (frames_.size() > 64) fail(column, what + ": calls nested more than 64 deep (a call that never returns?)");
+  if (repeats <= 0) return;  // L0: no call
+  Mark body;
+  if (kind == Frame::Kind::Subprogram && program < 0) {  // M97: a block of this program
+    if (!find_sequence(-program, body)) fail(column, what + ": no block N" + std::to_string(-program) + " in " + current_->name);
+  } else {
+    body = find_program(program, column, what);
+  }
+  Frame f;
+  f.kind = kind;
+  f.sub = program < 0 ? "N" + std::to_string(-program) : "O" + std::to_string(program);
+  f.call_where = here();
+  f.return_to = mark_after();
+  f.body = body;
+  f.repeats_left = repeats - 1;
+  if (kind == Frame::Kind::Macro) {
+    for (size_t k = 0; k < 33; ++k) {
+      f.saved_numbered[k] = state_.parameters[k + 1];
+      state_.parameters[k + 1] = detail::kVacant;
+    }
+    for (const auto& [number, value] : arguments) state_.parameters[static_cast<size_t>(number)] = value;
+  }
+  frames_.push_back(std::move(f));
+  jump(body);
+}
+
+// M99: the next pass of a repeated call, or back to the caller (and to its block N P).
+bool Reader::fanuc_return(int column) {
+  if (frames_.size() <= 1 || frame().kind == Frame::Kind::OWord) return false;
+  Frame& f = frame();
+  if (f.repeats_left > 0) {
+    --f.repeats_left;
+    f.do_loops.clear();
+    jump(f.body);
+    return true;
+  }
+  if (f.kind == Frame::Kind::Macro) {
+    for (size_t k = 0; k < 33; ++k) state_.parameters[k + 1] = f.saved_numbered[k];
+  }
+  const Mark back = f.return_to;
+  frames_.pop_back();
+  const Word& p = word('P');
+  jump(back);
+  if (p.present) go_to_sequence(p.value, p.column);
+  (void)column;
+  return true;
+}
+
+// 0: not a statement; 1: done; 2: IF [..] THEN: the rest of the line (blanked before) runs.
+int Reader::macro_statement(std::string& s, size_t i) {
+  size_t k = i;
+  if (k < s.size() && (s[k] == 'N' || s[k] == 'n')) {  // a sequence number first
+    size_t j = skip_blanks(s, k + 1);
+    if (j >= s.size() || !is_digit(s[j])) return 0;
+    while (j < s.size() && is_digit(s[j])) ++j;
+    k = skip_blanks(s, j);
+  }
+  std::string key;
+  size_t after = k;
+  while (after < s.size() && is_letter(s[after]) && key.size() < 6) key += upper(s[after++]);
+  const int column = column_at(k);
+  auto condition = [&](size_t& j, const char* statement) {
+    j = skip_blanks(s, j);
+    if (j >= s.size() || s[j] != '[') fail(column_at(j), std::string(statement) + " without its condition (expected " + statement + " [...])");
+    const double c = detail::read_expression(s, j, *this);
+    return !detail::is_vacant(c) && c != 0.0;
+  };
+  auto rest_is_comment = [&](size_t j) {
+    j = skip_blanks(s, j);
+    if (j < s.size() && s[j] == '(') j = skip_blanks(s, skip_comment(s, j));
+    if (j < s.size() && s[j] != ';') fail(column_at(j), "unexpected " + describe(s[j]) + " after the statement");
+  };
+  auto loop_number = [&](size_t& j, const char* word) {
+    j = skip_blanks(s, j);
+    std::string text;
+    const double m = detail::read_plain_number(s, j, 0, *this, text, column_at(j));
+    if (m < 1.0 || m > 99.0 || m != std::floor(m)) fail(column_at(j), std::string(word) + text + " (expected " + word + "1.." + word + "99)");
+    return static_cast<int>(m);
+  };
+  if (key.rfind("IF", 0) == 0 && skip_blanks(s, k + 2) < s.size() && s[skip_blanks(s, k + 2)] == '[') {
+    size_t j = k + 2;
+    const bool yes = condition(j, "IF");
+    j = skip_blanks(s, j);
+    std::string then;
+    const size_t word_at = j;
+    while (j < s.size() && is_letter(s[j]) && then.size() < 5) then += upper(s[j++]);
+    if (then == "GOTO") {
+      const double target = detail::read_real_value(s, j, 0, *this);
+      rest_is_comment(j);
+      if (yes) go_to_sequence(target, column_at(word_at));
+      return 1;
+    }
+    if (then == "THEN") {
+      if (!yes) return 1;
+      for (size_t b = 0; b < j; ++b) s[b] = ' ';
+      return 2;
+    }
+    fail(column_at(word_at), "IF [...] without GOTO or THEN (expected IF [condition] GOTO n or IF [condition] THEN #i = ...)");
+  }
+  if (key == "WHILE") {
+    size_t j = after;
+    const bool yes = condition(j, "WHILE");
+    j = skip_blanks(s, j);
+    if (j + 1 >= s.size() || upper(s[j]) != 'D' || upper(s[j + 1]) != 'O') fail(column_at(j), "WHILE [...] without DO (expected WHILE [condition] DOm)");
+    j += 2;
+    const int m = loop_number(j, "DO");
+    rest_is_comment(j);
+    auto& loops = frame().do_loops;
+    for (size_t l = 0; l < loops.size(); ++l) {
+      if (loops[l].first == m) {
+        loops.resize(l);
+        break;
+      }
+    }
+    if (yes) {
+      loops.emplace_back(m, mark_this());
+      return 1;
+    }
+    // Skip to the line END m (loops of one number do not nest).
+    const std::string opened = here();
+    std::string text;
+    while (next_line(text)) {
+      size_t q = skip_blanks(text, 0);
+      if (q < text.size() && (text[q] == 'N' || text[q] == 'n')) {
+        size_t d = skip_blanks(text, q + 1);
+        if (d < text.size() && is_digit(text[d])) {
+          while (d < text.size() && is_digit(text[d])) ++d;
+          q = skip_blanks(text, d);
+        }
+      }
+      if (q + 3 < text.size() && upper(text[q]) == 'E' && upper(text[q + 1]) == 'N' && upper(text[q + 2]) == 'D' &&
+          is_digit(text[q + 3]) && std::atoi(text.c_str() + q + 3) == m) {
+        return 1;
+      }
+    }
+    fail(0, "the file ends inside WHILE [...] DO" + std::to_string(m) + " opened at " + opened + " (expected END" + std::to_string(m) + ")");
+  }
+  if (key == "END" && after < s.size() && is_digit(s[after])) {
+    size_t j = after;
+    const int m = loop_number(j, "END");
+    rest_is_comment(j);
+    auto& loops = frame().do_loops;
+    for (size_t l = loops.size(); l-- > 0;) {
+      if (loops[l].first != m) continue;
+      const Mark again = loops[l].second;
+      loops.resize(l);  // the WHILE line opens it again
+      jump(again);
+      return 1;
+    }
+    fail(column, "END" + std::to_string(m) + " without WHILE [...] DO" + std::to_string(m));
+  }
+  if (key == "GOTO") {
+    size_t j = k + 4;
+    const double target = detail::read_real_value(s, j, 0, *this);
+    rest_is_comment(j);
+    go_to_sequence(target, column);
+    return 1;
+  }
+  return 0;
+}
+
 // --- Cutter radius compensation, as LinuxCNC's rs274ngc interpreter does it.
 //
 // In the plane's coordinates (u, v) = (X, Y) in G17, (Z, X) in G18: O is the last programmed
@@ -1584,8 +2032,10 @@ void Reader::comp_on(const Code& g) {
   Comp& comp = state_.comp;
   if (state_.plane == Plane::YZ) fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
   if (comp.side != Comp::Side::Off) fail(g.column, g.text + " with compensation already on (expected G40 first)");
-  const Word& d = word('D');
+  // Fanuc 0M and others name the radius register with H when no D is given.
+  const Word& d = !word('D').present && word('H').present && options_.flavor == GcodeOptions::Flavor::Fanuc ? word('H') : word('D');
   used_['D' - 'A'] = true;
+  if (&d == &word('H')) used_['H' - 'A'] = true;
   double radius = 0.0;
   if (g.number == 411 || g.number == 421) {
     if (!d.present) fail(g.column, g.text + " without D (expected D, the tool's diameter)");
@@ -2197,7 +2647,37 @@ bool Reader::execute() {
   used_.fill(false);
   lenient_ = false;
   tcp_m_code_ = -1;
-  if (o_column_ != 0) return true;  // a Fanuc program number alone on its line
+  if (o_column_ != 0) {  // a Fanuc program number alone on its line
+    if (options_.flavor == GcodeOptions::Flavor::LinuxCnc || !current_->executed) return true;
+    // The next program's number after this program's blocks: this one ends (no M30 before it).
+    if (frames_.size() > 1) fail(o_column_, "a program number inside a called program (expected M99 before the next program)");
+    warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
+    return false;
+  }
+  current_->executed = true;
+
+  // Fanuc G65 P<program> L<count> <arguments>: a macro call; the other words are its arguments.
+  for (const Code& g : ln.g) {
+    if (g.number != 650 || options_.flavor == GcodeOptions::Flavor::LinuxCnc) continue;
+    if (ln.g.size() > 1) fail(ln.g[ln.g[0].number == 650 ? 1 : 0].column, "G65 with another G code (expected G65 alone: its words are arguments)");
+    const Word& p = word('P');
+    if (!p.present || p.value < 0.0 || p.value != std::floor(p.value)) fail(p.present ? p.column : g.column, "G65 without P, the macro's program number (expected G65 P<number>)");
+    const Word& l = word('L');
+    if (l.present && (l.value < 0.0 || l.value != std::floor(l.value))) fail(l.column, "G65 L " + num(l.value) + " (expected a whole number of calls)");
+    static const struct { char letter; int number; } kArguments[] = {
+        {'A', 1}, {'B', 2}, {'C', 3}, {'I', 4}, {'J', 5}, {'K', 6}, {'D', 7}, {'E', 8}, {'F', 9}, {'H', 11}, {'Q', 17},
+        {'R', 18}, {'S', 19}, {'T', 20}, {'U', 21}, {'V', 22}, {'W', 23}, {'X', 24}, {'Y', 25}, {'Z', 26}};
+    std::vector<std::pair<int, double>> arguments;
+    for (const auto& a : kArguments) {
+      if (word(a.letter).present) arguments.emplace_back(a.number, word(a.letter).value);
+    }
+    if (ln.radius.present || ln.angle.present) fail(ln.radius.present ? ln.radius.column : ln.angle.column, "polar @/^ on a G65 line (expected letter arguments)");
+    if (ln.m.size() > 1) fail(ln.m[1].column, "two M arguments on a G65 line (expected at most one, #13)");
+    if (ln.m.size() == 1) arguments.emplace_back(13, std::stod(ln.m[0].text.substr(1)));
+    fanuc_call(Frame::Kind::Macro, static_cast<long long>(p.value), l.present ? static_cast<long long>(l.value) : 1,
+               g.column, "G65 P" + num(p.value), arguments);
+    return true;
+  }
 
   // --- G codes: one per modal group, supported or reported.
   std::array<const Code*, kGroupCount> by_group{};
@@ -2263,6 +2743,7 @@ bool Reader::execute() {
   std::array<const Code*, 11> m_by_group{};  // by M group 0..10
   bool m_code[74] = {};  // supported M codes present, by number (M2 and M30 end the program)
   bool program_end = false;
+  const Code* flow_code = nullptr;  // M97, M98 or M99
   for (const Code& m : ln.m) {
     const int group = m.number >= 0 ? m_group(m.number) : -1;
     if (group >= 0) {
@@ -2286,8 +2767,13 @@ bool Reader::execute() {
       }
       continue;
     }
+    if (m.number == 97 || m.number == 98 || m.number == 99) {  // calls and returns, after the motion
+      if (flow_code != nullptr) fail(m.column, "two call or return M codes on one line, " + flow_code->text + " and " + m.text + " (expected one)");
+      flow_code = &m;
+      continue;
+    }
     lenient_ = true;  // the words of an ignored code are not checked
-    const bool flow = m.number == 97 || m.number == 98 || m.number == 99;
+    const bool flow = false;
     if (m.number < 0 || flow || options_.unsupported_as_warning) {
       unsupported(m.column, m.text, (flow ? "unsupported M code " : "unknown M code ") + m.text +
                                         (flow ? " (subprogram call or return)" : ""));
@@ -2305,10 +2791,13 @@ bool Reader::execute() {
     }
   }
 
+  // Fanuc: G4 X (or U) is the dwell time in seconds, not an axis.
+  const bool dwell_axis = options_.flavor != GcodeOptions::Flavor::LinuxCnc && non_modal != nullptr &&
+                          non_modal->number == 40 && !word('P').present && (word('X').present || word('U').present);
   // --- Letters this reader does not move.
   for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
-    if (w.present) {
+    if (w.present && !(dwell_axis && letter == 'U')) {
       unsupported(w.column, std::string(1, letter),
                   std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
     }
@@ -2415,7 +2904,11 @@ bool Reader::execute() {
     p_user = code;
     used_['P' - 'A'] = true;
   };
-  if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40) {  // G4 dwell
+  if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40 && dwell_axis) {
+    // Fanuc: G4 X<seconds> or U<seconds> (P in ms): no motion.
+    const Word& t = word('X').present ? word('X') : word('U');
+    if (t.value < 0.0) fail(t.column, "G4 " + std::string(word('X').present ? "X" : "U") + " " + num(t.value) + " (expected seconds >= 0)");
+  } else if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40) {  // G4 dwell
     if (!p.present) fail(g->column, "G4 dwell without P (expected P seconds)");
     if (p.value < 0.0) fail(p.column, "G4 P " + num(p.value) + " (expected seconds >= 0)");
     use_p(g->text);
@@ -2537,7 +3030,7 @@ bool Reader::execute() {
     home_return(*non_modal);
   } else if (axis_user != nullptr) {
     forget_axes(axis_user_all);
-  } else if (sets_offsets || length_axes != nullptr ||
+  } else if (sets_offsets || length_axes != nullptr || dwell_axis ||
              (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
     // G10, G92 and G43.1/G43.2 took the axis words.
   } else if (has_axis || explicit_motion ||
@@ -2593,6 +3086,34 @@ bool Reader::execute() {
         arc(column);
         break;
     }
+  }
+
+  // --- Subprogram calls and returns, after the line's motion.
+  if (flow_code != nullptr) {
+    const Word& pw = word('P');
+    const Word& lw = word('L');
+    used_['P' - 'A'] = used_['L' - 'A'] = true;
+    if (lw.present && (lw.value < 0.0 || lw.value != std::floor(lw.value))) fail(lw.column, flow_code->text + " L " + num(lw.value) + " (expected a whole number of passes)");
+    if (pw.present && (pw.value < 0.0 || pw.value != std::floor(pw.value) || pw.value > 99999999.0)) {
+      fail(pw.column, flow_code->text + " P " + num(pw.value) + " (expected a whole number)");
+    }
+    if (flow_code->number == 99) {
+      if (!fanuc_return(flow_code->column)) {
+        // M99 in the main program: the control starts it again, endlessly; read once.
+        warn(flow_code->column, "M99 in the main program (the control runs it again from the top, endlessly); read once");
+        return false;
+      }
+      return true;
+    }
+    if (!pw.present) fail(flow_code->column, flow_code->text + " without P (expected " + flow_code->text + " P<number>)");
+    long long program = static_cast<long long>(pw.value), repeats = lw.present ? static_cast<long long>(lw.value) : 1;
+    if (flow_code->number == 98 && !lw.present && options_.flavor == GcodeOptions::Flavor::Fanuc && program > 9999) {
+      repeats = program / 10000;  // Fanuc: M98 P30012 runs O0012 three times
+      program %= 10000;
+    }
+    fanuc_call(Frame::Kind::Subprogram, flow_code->number == 97 ? -program : program, repeats, flow_code->column,
+               flow_code->text + " P" + num(pw.value));
+    return true;
   }
 
   // --- Words no code on the line used (rs274ngc: "X word with no G code that uses it").

@@ -175,6 +175,41 @@ std::string detect_dialect(const std::string& path) {
   return detect_from_text(sniff(path));
 }
 
+// Fanuc custom macro B in a G-code file: IF [..] GOTO/THEN, WHILE [..] DOm, ENDm, GOTO n at
+// the start of a block, G65 P (a macro call) or M98 P (a subprogram call), and no LinuxCNC
+// o-word keywords.
+bool reads_like_fanuc_macro(const std::string& head) {
+  bool fanuc = false;
+  std::size_t start = 0;
+  while (start < head.size()) {
+    std::size_t end = head.find_first_of("\r\n", start);
+    if (end == std::string::npos) end = head.size();
+    const std::string line = upper(head.substr(start, end - start));
+    start = end + 1;
+    std::size_t i = 0;
+    while (i < line.size() && is_blank(line[i])) ++i;
+    if (i < line.size() && line[i] == 'O' && i + 1 < line.size() && (line[i + 1] == '<' || is_digit(line[i + 1]))) {
+      std::size_t j = i + 1;
+      if (line[j] == '<') j = line.find('>', j);
+      else while (j < line.size() && is_digit(line[j])) ++j;
+      while (j != std::string::npos && j < line.size() && is_blank(line[j])) ++j;
+      if (j != std::string::npos && j < line.size() && line[j] >= 'A' && line[j] <= 'Z') return false;  // o<name> sub, o100 if ...
+    }
+    if (i < line.size() && line[i] == 'N') {
+      ++i;
+      while (i < line.size() && (is_digit(line[i]) || is_blank(line[i]))) ++i;
+    }
+    auto starts = [&](const char* word) { return line.compare(i, std::strlen(word), word) == 0; };
+    std::size_t after = i;
+    while (after < line.size() && line[after] >= 'A' && line[after] <= 'Z') ++after;
+    while (after < line.size() && is_blank(line[after])) ++after;
+    if ((starts("IF") || starts("WHILE")) && after < line.size() && line[after] == '[') fanuc = true;
+    if (starts("GOTO") || (starts("END") && i + 3 < line.size() && is_digit(line[i + 3]))) fanuc = true;
+    if (has_word(line, "G65") || has_word(line, "M98")) fanuc = true;
+  }
+  return fanuc;
+}
+
 void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
                  const std::map<int, removal::Cutter>& tools, bool axis_program) {
   const kinematics::Machine machine(spec);
@@ -254,6 +289,9 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       GcodeOptions gcode = options.gcode;
       if (dialect == "linuxcnc") gcode.flavor = GcodeOptions::Flavor::LinuxCnc;
       if (dialect == "fanuc") gcode.flavor = GcodeOptions::Flavor::Fanuc;
+      if ((dialect == "auto" || dialect == "gcode") && reads_like_fanuc_macro(sniff(path))) {
+        gcode.flavor = GcodeOptions::Flavor::Fanuc;
+      }
       read_gcode(in, path, gcode, out.program, gcode_state);
     } else {
       read_apt(in, path, options.apt, apt, apt_state);

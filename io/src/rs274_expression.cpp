@@ -40,7 +40,9 @@ std::string read_letters(const std::string& s, std::size_t& i) {
 
 enum class Op { Power, Times, Divide, Mod, Plus, Minus, Eq, Ne, Gt, Ge, Lt, Le, And, Or, Xor, None };
 
-int precedence(Op op) {
+int precedence(Op op, bool fanuc = false) {
+  if (fanuc && op == Op::And) return 5;                  // Fanuc: with * and /
+  if (fanuc && (op == Op::Or || op == Op::Xor)) return 4;  // with + and -
   switch (op) {
     case Op::Power: return 6;
     case Op::Times: case Op::Divide: case Op::Mod: return 5;
@@ -101,7 +103,7 @@ const char* op_name(Op op) {
 }
 
 const char* const kFunctions[] = {"ABS", "ACOS", "ASIN", "ATAN", "COS", "EXISTS", "EXP", "FIX",
-                                  "FUP", "ROUND", "LN", "SIN", "SQRT", "TAN"};
+                                  "FUP", "ROUND", "LN", "SIN", "SQRT", "TAN", "POW", "BIN", "BCD"};
 bool is_function(const std::string& name) {
   for (const char* f : kFunctions) {
     if (name == f) return true;
@@ -111,7 +113,10 @@ bool is_function(const std::string& name) {
 
 class Parser {
  public:
-  Parser(const std::string& s, ValueContext& context) : s_(s), context_(context) {}
+  Parser(const std::string& s, ValueContext& context) : s_(s), context_(context), fanuc_(context.fanuc_macros()) {}
+
+  // Fanuc: a whole expression without brackets around it.
+  double open(std::size_t& i) { return binary(i, 1); }
 
   double value(std::size_t& i, char letter) {
     if (++depth_ > kMaxNesting) {
@@ -152,11 +157,15 @@ class Parser {
     }
     const std::size_t at = i;
     const double v = value(i, 0);
+    if (is_vacant(v)) context_.fail(column_at(at), "a vacant variable as a variable number (expected a value)");
     const double whole = std::round(v);
     if (std::abs(v - whole) > kWholeTolerance) {
       context_.fail(column_at(at), "parameter number " + num(v) + " (expected a whole number)");
     }
-    if (whole < 1.0 || whole > kMaxParameter) {
+    if (fanuc_ && (whole < 0.0 || whole > 99999.0)) {
+      context_.fail(column_at(at), "variable number " + num(whole) + " (expected #0..#99999)");
+    }
+    if (!fanuc_ && (whole < 1.0 || whole > kMaxParameter)) {
       context_.fail(column_at(at), "parameter number " + num(whole) + " (expected 1..5601)");
     }
     return ParameterRef{static_cast<int>(whole), {}};
@@ -206,6 +215,34 @@ class Parser {
       if (!std::isfinite(v)) context_.fail(column, name + " gives a value that is not a finite number");
       return v;
     };
+    if (fanuc_ && (name == "ATAN" || name == "POW")) {
+      // Fanuc: ATAN[y,x] (and ATAN[y]/[x]), POW[a,b].
+      i = skip_blanks(s_, i);
+      if (i >= s_.size() || s_[i] != '[') {
+        context_.fail(column_at(i), name + " without its arguments (expected " + name + "[a,b], found " + found(s_, i) + ")");
+      }
+      const std::size_t open = i++;
+      const double a = zero_if_vacant(binary(i, 1));
+      i = skip_blanks(s_, i);
+      if (i < s_.size() && s_[i] == ',') {
+        ++i;
+        const double b = zero_if_vacant(binary(i, 1));
+        i = skip_blanks(s_, i);
+        if (i >= s_.size() || s_[i] != ']') context_.fail(column_at(i >= s_.size() ? open : i), "expected ']' after the second argument of " + name);
+        ++i;
+        if (name == "POW") return apply(Op::Power, a, b, column);
+        return std::atan2(a, b) * kDegPerRad;
+      }
+      if (i >= s_.size() || s_[i] != ']') context_.fail(column_at(i >= s_.size() ? open : i), "expected ',' or ']' in " + name + "[...]");
+      ++i;
+      if (name == "POW") context_.fail(column, "POW takes two arguments (expected POW[a,b])");
+      i = skip_blanks(s_, i);
+      if (i >= s_.size() || s_[i] != '/') {
+        context_.fail(column_at(i), "ATAN takes two arguments (expected ATAN[y,x] or ATAN[y]/[x], found " + found(s_, i) + ")");
+      }
+      ++i;
+      return std::atan2(a, zero_if_vacant(argument())) * kDegPerRad;
+    }
     if (name == "ATAN") {
       const double y = argument();
       i = skip_blanks(s_, i);
@@ -228,12 +265,24 @@ class Parser {
       i = k + 1;
       return ref.name.empty() ? 1.0 : (context_.named_parameter_exists(ref.name) ? 1.0 : 0.0);
     }
-    if (!is_function(name)) {
+    if (!is_function(name) || (!fanuc_ && (name == "POW" || name == "BIN" || name == "BCD"))) {
       context_.fail(column, (name.empty() ? "unexpected " + found(s_, start) : "unknown function '" + name + "'") +
                                 " (expected a number, #parameter, [expression] or one of ABS ACOS ASIN ATAN "
                                 "COS EXISTS EXP FIX FUP LN ROUND SIN SQRT TAN)");
     }
-    const double x = argument();
+    const double x = zero_if_vacant(argument());
+    if (name == "BIN" || name == "BCD") {
+      // Fanuc: BCD code to binary, binary to BCD, on whole numbers >= 0.
+      if (x < 0.0 || x != std::floor(x) || x > 99999999.0) context_.fail(column, name + "[" + num(x) + "] (expected a whole number 0..99999999)");
+      long long in = static_cast<long long>(x), out = 0, scale = 1;
+      for (; in > 0; scale *= name == "BIN" ? 10 : 16) {
+        const long long digit = name == "BIN" ? in % 16 : in % 10;
+        if (name == "BIN" && digit > 9) context_.fail(column, "BIN[" + num(x) + "] is not a BCD code (a nibble above 9)");
+        out += digit * scale;
+        in /= name == "BIN" ? 16 : 10;
+      }
+      return static_cast<double>(out);
+    }
     if (name == "ABS") return std::abs(x);
     if (name == "ACOS" || name == "ASIN") {
       if (x < -1.0 || x > 1.0) context_.fail(column, name + "[" + num(x) + "] (expected an argument in -1..1)");
@@ -245,7 +294,7 @@ class Parser {
     if (name == "EXP") return check(std::exp(x));
     if (name == "FIX") return std::floor(x);
     if (name == "FUP") return std::ceil(x);
-    if (name == "ROUND") return std::round(x);
+    if (name == "ROUND") return std::round(x);  // halves away from zero, as Fanuc's ROUND
     if (name == "LN") {
       if (x <= 0.0) context_.fail(column, "LN[" + num(x) + "] (expected an argument > 0)");
       return std::log(x);
@@ -255,7 +304,25 @@ class Parser {
     return std::sqrt(x);
   }
 
+  double zero_if_vacant(double v) const { return is_vacant(v) ? 0.0 : v; }
+
   double apply(Op op, double a, double b, int column) {
+    if (fanuc_ && (op == Op::Eq || op == Op::Ne) && (is_vacant(a) || is_vacant(b))) {
+      // Fanuc: vacant EQ #0 is true, vacant EQ 0 is not.
+      const bool equal = is_vacant(a) && is_vacant(b);
+      return (op == Op::Eq) == equal ? 1.0 : 0.0;
+    }
+    a = zero_if_vacant(a);
+    b = zero_if_vacant(b);
+    if (fanuc_ && (op == Op::And || op == Op::Or || op == Op::Xor)) {
+      // Fanuc: bit by bit on whole numbers (on 0 and 1, the logical operation).
+      if (a != std::floor(a) || b != std::floor(b) || std::abs(a) > 2147483647.0 || std::abs(b) > 2147483647.0) {
+        context_.fail(column, num(a) + " " + op_name(op) + " " + num(b) + " (expected whole numbers: Fanuc's " +
+                                  op_name(op) + " works bit by bit)");
+      }
+      const long long x = static_cast<long long>(a), y = static_cast<long long>(b);
+      return static_cast<double>(op == Op::And ? (x & y) : op == Op::Or ? (x | y) : (x ^ y));
+    }
     double r = 0.0;
     switch (op) {
       case Op::Power:
@@ -299,16 +366,17 @@ class Parser {
     while (true) {
       std::size_t next = i;
       const Op op = peek_operator(s_, i, next);
-      if (op == Op::None || precedence(op) < min_precedence) return left;
+      if (op == Op::None || precedence(op, fanuc_) < min_precedence) return left;
       const int column = column_at(skip_blanks(s_, i));
       i = next;
-      const double right = binary(i, precedence(op) + 1);
+      const double right = binary(i, precedence(op, fanuc_) + 1);
       left = apply(op, left, right, column);
     }
   }
 
   const std::string& s_;
   ValueContext& context_;
+  bool fanuc_ = false;
   int depth_ = 0;
 };
 
@@ -367,6 +435,11 @@ double read_real_value(const std::string& s, std::size_t& i, char letter, ValueC
 double read_expression(const std::string& s, std::size_t& i, ValueContext& context) {
   Parser parser(s, context);
   return parser.bracketed(i);
+}
+
+double read_open_expression(const std::string& s, std::size_t& i, ValueContext& context) {
+  Parser parser(s, context);
+  return parser.open(i);
 }
 
 ParameterRef read_parameter_ref(const std::string& s, std::size_t& i, ValueContext& context) {

@@ -27,7 +27,16 @@ class ValueContext {
   virtual double named_parameter(const std::string& name, int column) = 0;
   virtual bool named_parameter_exists(const std::string& name) = 0;
   [[noreturn]] virtual void fail(int column, const std::string& message) const = 0;
+  // Fanuc custom macro B instead of rs274ngc: variables #0..#99999 (numbered_parameter may
+  // return kVacant, the empty value #0); * / AND MOD bind alike, as do + - OR XOR; AND OR XOR
+  // work bit by bit on whole numbers; POW[a,b], ATAN[y,x], BIN, BCD; a vacant value counts as
+  // 0 in arithmetic and in GT GE LT LE, and EQ / NE tell it from 0.
+  virtual bool fanuc_macros() const { return false; }
 };
+
+// Fanuc's vacant variable (#0, and locals and commons never set): a quiet NaN.
+inline const double kVacant = __builtin_nan("");
+inline bool is_vacant(double v) { return v != v; }
 
 // A plain number: [+|-] digits [. [digits]] | [+|-] . digits, blanks allowed anywhere in it
 // (LinuxCNC removes them before parsing), no exponent. `letter` names the word in messages
@@ -44,8 +53,12 @@ bool function_at(const std::string& s, std::size_t i);
 // `letter` as above. Results are finite or the context fails.
 double read_real_value(const std::string& s, std::size_t& i, char letter, ValueContext& context);
 
-// A bracketed expression starting at the '[' at s[i].
+// A bracketed expression starting at the '[' at s[i]. (Fanuc: may be vacant.)
 double read_expression(const std::string& s, std::size_t& i, ValueContext& context);
+
+// Fanuc: an expression without brackets around it, the right-hand side of "#1 = #2 + 3": it
+// ends where no operator follows a value. May be vacant (#1 = #0).
+double read_open_expression(const std::string& s, std::size_t& i, ValueContext& context);
 
 // After a '#' at s[i - 1]: the parameter reference, as a number (1..5601) or a canonical name.
 struct ParameterRef {

@@ -169,7 +169,7 @@ TEST(StartPosition, MovesGoFromTheStart) {
 // Lexing that CAM posts and Fanuc controls produce.
 TEST(GcodeLexing, PostsAndFanucTapes) {
   // A UTF-8 byte order mark, a ':' program number, nested comments.
-  const Program p = read("\xEF\xBB\xBFG0 X1\n:0097 (FANUC)\nG0 X2 (DRILL 4.5MM (R))\nG0 X3 (A (B C)\nM2\n");
+  const Program p = read("\xEF\xBB\xBF:0097 (FANUC)\nG0 X1\nG0 X2 (DRILL 4.5MM (R))\nG0 X3 (A (B C)\nM2\n");
   ASSERT_EQ(p.blocks.size(), 3u);
   expect_line(p.blocks[2], {2, 0, 0}, {3, 0, 0});
   // K0 in a G17 arc (Fanuc and sender posts): ignored; LinuxCNC refuses it.
