@@ -292,8 +292,10 @@ class Parser {
     if (name == "SIN") return std::sin(x / kDegPerRad);
     if (name == "TAN") return check(std::tan(x / kDegPerRad));
     if (name == "EXP") return check(std::exp(x));
-    if (name == "FIX") return std::floor(x);
-    if (name == "FUP") return std::ceil(x);
+    // Fanuc's FIX and FUP work on the magnitude (FIX[-1.2] = -1, FUP[-1.2] = -2); LinuxCNC's
+    // round down and up.
+    if (name == "FIX") return fanuc_ ? std::trunc(x) : std::floor(x);
+    if (name == "FUP") return fanuc_ ? (x < 0.0 ? -std::ceil(-x) : std::ceil(x)) : std::ceil(x);
     if (name == "ROUND") return std::round(x);  // halves away from zero, as Fanuc's ROUND
     if (name == "LN") {
       if (x <= 0.0) context_.fail(column, "LN[" + num(x) + "] (expected an argument > 0)");

@@ -1,0 +1,156 @@
+// Fanuc custom macro B in the G-code reader. Expected values are worked by hand from the Fanuc
+// Custom Macro B rules (the manual's: vacant #0, locals per G65 call, AND binding like *, FIX
+// toward zero) or are closed forms (the sum 1 + ... + 10).
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "vcut/io/gcode_reader.h"
+#include "vcut/io/input_error.h"
+#include "vcut/io/program_reader.h"
+
+namespace vcut::io {
+namespace {
+
+using kinematics::Program;
+namespace fs = std::filesystem;
+
+Program read(const std::string& text, GcodeOptions options = {}) {
+  options.flavor = GcodeOptions::Flavor::Fanuc;
+  options.start_mm = Eigen::Vector3d::Zero();
+  Program program;
+  GcodeState state;
+  std::istringstream in(text);
+  read_gcode(in, "macro.nc", options, program, state);
+  return program;
+}
+
+std::string error_of(const std::string& text, GcodeOptions options = {}) {
+  try {
+    read(text, options);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError for:\n" << text;
+  return {};
+}
+
+Eigen::Vector3d last_end(const Program& p) { return p.blocks.empty() ? Eigen::Vector3d::Constant(-999) : p.blocks.back().end_mm; }
+
+TEST(FanucMacro, WhileLoopSumsOneToTen) {
+  const Program p = read("#1=0\n#2=1\nWHILE[#2LE10]DO1\n#1=#1+#2\n#2=#2+1\nEND1\nG0 X#1\nM30\n");
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(55, 0, 0));
+}
+
+TEST(FanucMacro, IfGotoCountsDown) {
+  // Three passes through N10 (X 3, 2, 1), then N20.
+  const Program p = read("#1=3\nN10 IF[#1LE0]GOTO20\nG0 X#1\n#1=#1-1\nGOTO10\nN20 G0 Y9\nM30\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  EXPECT_EQ(p.blocks[0].end_mm.x(), 3.0);
+  EXPECT_EQ(p.blocks[2].end_mm.x(), 1.0);
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(1, 9, 0));
+  // GOTO #i, and a target before the GOTO found from the top of the file.
+  EXPECT_EQ(last_end(read("#5=30\nGOTO#5\nN20 G0 X1\nM30\nN30 G0 X2\nGOTO 20\n")), Eigen::Vector3d(1, 0, 0));
+}
+
+TEST(FanucMacro, G65ArgumentsAreLocalsOfTheCall) {
+  // A -> #1, B -> #2, X -> #24; the caller's #1 comes back after M99; the macro's own #3 (no C
+  // given) is vacant.
+  const Program p = read(
+      "#1=7\nG65 P9001 A2 B3 X4\nG0 Y#1\nM30\nO9001\nG0 X[#1*#2+#24]\nIF[#3EQ#0]THEN#100=1\nM99\n");
+  ASSERT_EQ(p.blocks.size(), 2u);
+  EXPECT_EQ(p.blocks[0].end_mm.x(), 10.0);
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(10, 7, 0));
+  // L repeats the call: the common #100 counts the passes.
+  EXPECT_EQ(last_end(read("#100=0\nG65 P9002 L4\nG0 X#100\nM30\nO9002\n#100=#100+1\nM99\n")), Eigen::Vector3d(4, 0, 0));
+}
+
+TEST(FanucMacro, VacantValues) {
+  // #1 never set: EQ #0 is true, EQ 0 is not; in arithmetic it counts as 0.
+  const Program p = read("IF[#1EQ#0]THEN#10=1\nIF[#1EQ0]THEN#11=1\n#12=#1+5\n#13=#0\nG0 X#10 Y#12\nM30\n");
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(1, 5, 0));
+  // A vacant value where a number is needed is an error naming the word.
+  const std::string e = error_of("IF[#1EQ0]THEN#11=1\nG0 Z#11\n");
+  EXPECT_NE(e.find("macro.nc:2:4: vacant value in the Z word"), std::string::npos) << e;
+}
+
+TEST(FanucMacro, OperatorsAndFunctions) {
+  // * before +; AND binds like *, OR like +: 5 OR [2 AND 3] = 5 OR 2 = 7; 6 AND 3 = 2 (bits).
+  EXPECT_EQ(last_end(read("#1=2+3*4\n#2=5 OR 2 AND 3\n#3=6 AND 3\nG0 X#1 Y#2 Z#3\n")), Eigen::Vector3d(14, 7, 2));
+  // POW[2,10] = 1024; ATAN[1,1] = 45 deg; BIN[18] (BCD 0x12) = 12; BCD[12] = 0x12 = 18.
+  EXPECT_EQ(last_end(read("G0 X[POW[2,10]] Y[ATAN[1,1]] Z[BIN[18]]\nG0 A[BCD[12]]\n")).head<3>(),
+            Eigen::Vector3d(1024, 45, 12));
+  // FIX and FUP on the magnitude: FIX[-1.5] = -1, FUP[-1.2] = -2, FUP[1.2] = 2; ROUND[2.5] = 3.
+  EXPECT_EQ(last_end(read("G0 X[FIX[-1.5]] Y[FUP[-1.2]+FUP[1.2]] Z[ROUND[2.5]]\n")), Eigen::Vector3d(-1, 0, 3));
+  EXPECT_NE(error_of("#1=1/0\n").find("division by zero"), std::string::npos);
+}
+
+TEST(FanucMacro, SubprogramsM98M97M99) {
+  // M98 P20003: Fanuc's count in P, O0003 twice; M98 P3 L3 three times more; M97 P50 the block
+  // N50 of this program; M99 P40 returns to N40.
+  const Program p = read(
+      "#100=0\nM98 P20003\nM98 P3 L3\nM97 P50\nG0 X#100\nM30\nN40 G0 Y#100\nM30\nN50 #100=#100+100\nM99\n"
+      "O0003\n#100=#100+1\nM99\n");
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(105, 0, 0));
+  EXPECT_EQ(last_end(read("M98 P7\nG0 X1\nM30\nN40 G0 Y2\nM30\nO0007\nM99 P40\n")), Eigen::Vector3d(0, 2, 0));
+  // M99 in the main program: read once, with a warning.
+  const Program once = read("G0 X1\nM99\n");
+  ASSERT_EQ(once.warnings.size(), 1u);
+  EXPECT_NE(once.warnings[0].find("M99 in the main program"), std::string::npos);
+}
+
+TEST(FanucMacro, ProgramFileOnTheSearchPath) {
+  const fs::path dir = fs::temp_directory_path() / ("vcut_fanuc_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "subs");
+  std::ofstream(dir / "subs" / "O1234.nc") << "%\nO1234 (SUB)\nG0 X#24\nM99\n%\n";
+  std::ofstream(dir / "subs" / "anything.nc") << "O4321\nG0 Y#25\nM99\n";
+  std::ofstream(dir / "main.nc") << "G65 P1234 X8\nG65 P4321 Y9\nM30\n";
+  GcodeOptions options;
+  options.subroutine_path = {(dir / "subs").string()};
+  options.start_mm = Eigen::Vector3d::Zero();
+  options.flavor = GcodeOptions::Flavor::Fanuc;
+  const Program p = read_gcode((dir / "main.nc").string(), options);
+  EXPECT_EQ(last_end(p), Eigen::Vector3d(8, 9, 0));
+  // Not found: the error names what was searched.
+  std::ofstream(dir / "bad.nc") << "M98 P555\n";
+  try {
+    read_gcode((dir / "bad.nc").string(), options);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("bad.nc:1:1: M98 P555: program O0555 found nowhere"), std::string::npos) << m;
+    EXPECT_NE(m.find((dir / "subs").string()), std::string::npos) << m;
+  }
+  // A G-code file that reads like Fanuc macro B is read as one (vacant #1 EQ #0).
+  std::ofstream(dir / "auto.nc") << "IF[#1EQ#0]GOTO10\nG0 X1\nN10 G0 Y1\nM30\n";
+  ProgramOptions from_zero;
+  from_zero.gcode.start_mm = Eigen::Vector3d::Zero();
+  const LoadedProgram loaded = read_program((dir / "auto.nc").string(), "auto", from_zero);
+  ASSERT_EQ(loaded.program.blocks.size(), 1u);
+  EXPECT_EQ(loaded.program.blocks[0].end_mm, Eigen::Vector3d(0, 1, 0));
+  fs::remove_all(dir);
+}
+
+TEST(FanucMacro, AlarmsStopsAndBadFlow) {
+  EXPECT_NE(error_of("G0 X1\n#3000=12 (TOOL BROKEN)\n").find("macro.nc:2:1: alarm #3000 = 12: TOOL BROKEN"), std::string::npos);
+  const Program stop = read("#3006=1 (CHECK PART)\nG0 X1\n");
+  ASSERT_EQ(stop.warnings.size(), 1u);
+  EXPECT_NE(stop.warnings[0].find("stop #3006: CHECK PART"), std::string::npos);
+  EXPECT_NE(error_of("GOTO 99\n").find("macro.nc:1:1: GOTO 99: no block N99"), std::string::npos);
+  EXPECT_NE(error_of("END1\n").find("END1 without WHILE"), std::string::npos);
+  EXPECT_NE(error_of("WHILE[1EQ2]DO1\nG0 X1\n").find("the file ends inside WHILE [...] DO1 opened at macro.nc:1"),
+            std::string::npos);
+  // A loop that never ends stops at max_lines, naming the line.
+  GcodeOptions limited;
+  limited.max_lines = 1000;
+  EXPECT_NE(error_of("N1 G0 X1\nGOTO1\n", limited).find("read 1000 lines without reaching the end"), std::string::npos);
+  EXPECT_NE(error_of("#5001=1\n").find("system variable the program cannot set"), std::string::npos);
+  // System variables: the position and the modes.
+  EXPECT_EQ(last_end(read("G0 X5 Y6\nG91\n#1=#5001+#4003\nG90 G0 X#1\n")), Eigen::Vector3d(96, 6, 0));
+}
+
+}  // namespace
+}  // namespace vcut::io
