@@ -749,6 +749,13 @@ bool Reader::line(std::string& text) {
   if (i == text.size()) return true;
   if (text[i] == '%') {
     // rs274ngc: a '%' on the first line opens the program and the next '%' line ends it.
+    // Senders (bCNC) take "% text" lines as their own directives: outside LinuxCNC's flavour
+    // such a line inside the program is skipped with a warning.
+    if (const size_t k = skip_blanks(text, i + 1);
+        options_.flavor != GcodeOptions::Flavor::LinuxCnc && src.seen_content && k < text.size()) {
+      warn(column_at(i), "'%' line with text inside the program (a sender's directive): skipped");
+      return true;
+    }
     line_words_.clear();
     assignments_.clear();
     lex(text, i + 1);
@@ -2033,7 +2040,7 @@ void Reader::comp_on(const Code& g) {
   if (state_.plane == Plane::YZ) fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
   if (comp.side != Comp::Side::Off) fail(g.column, g.text + " with compensation already on (expected G40 first)");
   // Fanuc 0M and others name the radius register with H when no D is given.
-  const Word& d = !word('D').present && word('H').present && options_.flavor == GcodeOptions::Flavor::Fanuc ? word('H') : word('D');
+  const Word& d = !word('D').present && word('H').present && options_.flavor != GcodeOptions::Flavor::LinuxCnc ? word('H') : word('D');
   used_['D' - 'A'] = true;
   if (&d == &word('H')) used_['H' - 'A'] = true;
   double radius = 0.0;
@@ -2654,7 +2661,10 @@ bool Reader::execute() {
     warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
     return false;
   }
-  current_->executed = true;
+  if (!current_->executed) {  // a block with words (not a comment line) has run
+    current_->executed = !ln.g.empty() || !ln.m.empty() || !assignments_.empty() ||
+                         std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });
+  }
 
   // Fanuc G65 P<program> L<count> <arguments>: a macro call; the other words are its arguments.
   for (const Code& g : ln.g) {
