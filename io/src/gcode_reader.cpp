@@ -483,8 +483,8 @@ class Reader : public detail::ValueContext {
   Eigen::Vector3d base_point() const;
   void plane_axes(int& a, int& b, int& c) const;
   void comp_on(const Code& g);
-  void comp_off();
-  void comp_stop(bool program_end);
+  void comp_off(int column);
+  void comp_stop(bool program_end, int column);
   void comp_straight(Block& block, const std::array<bool, 3>& programmed, int column);
   void comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column);
   void comp_corner(const Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn);
@@ -733,7 +733,7 @@ void Reader::run(std::istream& in, const std::string& name) {
   if (current_->in->bad()) fail(0, "read error (expected a readable text file)");
   // A file that ends (with '%' or without M2) while a compensated move is held: the machine
   // runs it, ending at its offset point (LinuxCNC's rs274 drops it).
-  comp_stop(false);
+  comp_stop(false, 1);
 }
 
 bool Reader::line(std::string& text) {
@@ -1952,7 +1952,7 @@ int Reader::macro_statement(std::string& s, size_t i) {
         return 1;
       }
     }
-    fail(0, "the file ends inside WHILE [...] DO" + std::to_string(m) + " opened at " + opened + " (expected END" + std::to_string(m) + ")");
+    fail(1, "the file ends inside WHILE [...] DO" + std::to_string(m) + " opened at " + opened + " (expected END" + std::to_string(m) + ")");
   }
   if (key == "END" && after < s.size() && is_digit(s[after])) {
     size_t j = after;
@@ -2076,12 +2076,12 @@ void Reader::comp_on(const Code& g) {
 
 // G40: the held move ends at C; the next move, which must be straight, starts there and ends
 // at its programmed point.
-void Reader::comp_off() {
+void Reader::comp_off(int column) {
   Comp& comp = state_.comp;
   if (compensating() && !comp.first_move) {
     int a, b, c;
     plane_axes(a, b, c);
-    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, 0);
+    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, column);
     comp_flush();
     comp.machine_mm = state_.position_mm;
     state_.position_mm = comp.program_mm;
@@ -2092,12 +2092,12 @@ void Reader::comp_off() {
 }
 
 // M0, M1, M60 and the program's end send the held move (ending at C); M2/M30 end compensation.
-void Reader::comp_stop(bool program_end) {
+void Reader::comp_stop(bool program_end, int column) {
   Comp& comp = state_.comp;
   if (!comp.held.empty()) {
     int a, b, c;
     plane_axes(a, b, c);
-    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, 0);
+    comp_move_end_and_flush({state_.position_mm[a], state_.position_mm[b]}, column);
     comp_flush();
   }
   if (program_end) {
@@ -2947,7 +2947,7 @@ bool Reader::execute() {
   }
   if (const Code* g = by_group[kCutterComp]) {
     if (g->number == 400) {
-      comp_off();
+      comp_off(g->column);
     } else {
       comp_on(*g);
     }
@@ -3163,7 +3163,9 @@ bool Reader::execute() {
   }
 
   // M0, M1, M60 and the program's end send a held compensated move.
-  if (m_code[0] || m_code[1] || m_code[60] || program_end) comp_stop(program_end);
+  if (m_code[0] || m_code[1] || m_code[60] || program_end) {
+    comp_stop(program_end, ln.m.empty() ? 1 : ln.m.front().column);
+  }
   if (program_end) {
     // LinuxCNC M2/M30: G54, G17, G90, G94, G40, M5, M9 and motion mode G1; units, tool,
     // feed and position stay. Nothing after this line is read.
