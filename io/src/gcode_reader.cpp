@@ -201,12 +201,12 @@ constexpr GEntry kGCodes[] = {
     // G28 / G30: through the line's point to the reference position; G28.1 / G30.1 store it.
     {280, {kNonModal, true}}, {300, {kNonModal, true}}, {281, {kNonModal, true}}, {301, {kNonModal, true}},
 
-    {50, {kMotion, false, true, false, "spline/NURBS"}},
-    {51, {kMotion, false, true, false, "spline/NURBS"}},
+    // G5 (cubic) and G5.1 (quadratic) splines in G17: straight moves within 1 um of the curve.
+    {50, {kMotion, true}}, {51, {kMotion, true}},
     {52, {kMotion, false, true, false, "spline/NURBS"}},
     {53, {kMotion, false, true, false, "spline/NURBS"}},
-    {330, {kMotion, false, true, false, "spindle-synchronized motion"}},
-    {331, {kMotion, false, true, false, "spindle-synchronized motion"}},
+    // G33 (threading: a straight feed at K per revolution), G33.1 (rigid tapping).
+    {330, {kMotion, true}}, {331, {kMotion, true}},
     {382, {kMotion, false, true, false, "probing"}}, {383, {kMotion, false, true, false, "probing"}},
     {384, {kMotion, false, true, false, "probing"}}, {385, {kMotion, false, true, false, "probing"}},
     {740, {kMotion, false, true, false, "canned cycle"}},
@@ -464,6 +464,8 @@ class Reader : public detail::ValueContext {
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
   void straight(MotionKind kind, int column);
+  void synchronized(int column);
+  void spline(int column);
   void arc(int column);
   void cycle(int column, bool new_series);
   void set_offsets(const Code& g);
@@ -537,6 +539,8 @@ constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V
 constexpr int kG92Parameter = 5211;  // X of the G92 offset
 // An R arc's |R| may fall short of half its chord by LinuxCNC's RADIUS_TOLERANCE, 0.00005 in.
 constexpr double kRadiusShortMm = 0.00005 * kMmPerInch;
+// Splines (G5, G5.1) become straight moves no farther than this from the curve (mm).
+constexpr double kSplineChordMm = 0.001;
 constexpr size_t kG28Parameter = 5161;  // X of the G28 reference (mm, gauge point), Y Z A B C (deg) follow
 constexpr size_t kG30Parameter = 5181;  // X of the G30 reference
 constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
@@ -678,6 +682,8 @@ void Reader::run(std::istream& in, const std::string& name) {
       }
     }
     select_system(0);
+    // Power-on canned-cycle return: rs274ngc's is G99 (the R plane), Fanuc's G98.
+    state_.retract_to_r = options_.flavor != GcodeOptions::Flavor::Fanuc;
     if (fanuc_macros()) {  // locals and commons start vacant
       for (size_t k = 1; k <= 33; ++k) state_.parameters[k] = detail::kVacant;
       for (size_t k = 100; k <= 999; ++k) state_.parameters[k] = detail::kVacant;
@@ -1444,6 +1450,7 @@ void Reader::straight(MotionKind kind, int column) {
   }
   block.feed_mm_per_min = feed;
   state_.comp.arc_not_allowed = false;
+  state_.spline_control_mm.reset();
   if (compensating()) {
     comp_straight(block, programmed, column);
     return;
@@ -1453,6 +1460,107 @@ void Reader::straight(MotionKind kind, int column) {
     state_.comp.machine_mm.reset();
   }
   append(block, programmed);
+}
+
+// G33 X Y Z K: a straight feed at K (length per spindle revolution) times the spindle speed.
+// G33.1 Z K: rigid tapping, a feed down to Z and the same feed back up to where it started
+// (the spindle reverses at the bottom), as LinuxCNC's canon RIGID_TAP runs it.
+void Reader::synchronized(int column) {
+  const bool tap = state_.motion == Motion::RigidTap;
+  const char* code = tap ? "G33.1" : "G33";
+  const Word& k = word('K');
+  if (!k.present || !(k.value > 0.0)) fail(k.present ? k.column : column, std::string(code) + " without K > 0 (expected K, the length per spindle revolution)");
+  if (!(state_.spindle_rpm > 0.0) || state_.spindle == SpindleState::Off) {
+    fail(column, std::string(code) + " with the spindle stopped (expected S and M3 or M4 before it)");
+  }
+  if (compensating()) fail(column, std::string(code) + " with cutter compensation on (expected G40 first)");
+  if (tap && (word('X').present || word('Y').present)) {
+    fail(word('X').present ? word('X').column : word('Y').column, "G33.1 with X or Y (expected Z only: the tap goes down where the tool is)");
+  }
+  std::array<bool, 3> programmed{};
+  Block block;
+  block.kind = MotionKind::Linear;
+  block.start_mm = state_.position_mm;
+  block.end_mm = target(programmed);
+  block.feed_mm_per_min = k.value * unit() * state_.spindle_rpm;
+  if (block.feed_mm_per_min > kMaxFeed_mm_per_min) fail(k.column, std::string(code) + " feed K x S is out of range (expected <= 1e9 mm/min)");
+  const bool inverse = state_.inverse_time;
+  state_.inverse_time = false;  // a synchronized feed is not inverse time
+  const Eigen::Vector3d top = state_.position_mm;
+  append(block, programmed);
+  if (tap) {
+    Block back = block;
+    back.start_mm = state_.position_mm;
+    back.end_mm = top;
+    append(back, {true, true, true});
+  }
+  state_.inverse_time = inverse;
+}
+
+// G5 X Y I J P Q (cubic: I J from the start to the first control point, P Q from the end to the
+// second; without I J after a G5, the mirror of the last second control point) and G5.1 X Y I
+// J (quadratic: I J from the start to the control point), in G17 as LinuxCNC reads them: the
+// curve as straight moves no farther than kSplineChordMm from it (a chord over a parameter
+// step h of a curve with second derivative B'' deviates at most h^2 |B''| / 8).
+void Reader::spline(int column) {
+  const bool cubic = state_.motion == Motion::CubicSpline;
+  const char* code = cubic ? "G5" : "G5.1";
+  if (state_.plane != Plane::XY) fail(column, std::string(code) + " outside G17 (expected the XY plane)");
+  if (compensating()) fail(column, std::string(code) + " with cutter compensation on (expected G40 first)");
+  if (word('Z').present || word('A').present || word('B').present || word('C').present) {
+    const char z = word('Z').present ? 'Z' : word('A').present ? 'A' : word('B').present ? 'B' : 'C';
+    fail(word(z).column, std::string(code) + " with " + z + " (expected X Y only: the spline lies in the XY plane)");
+  }
+  const double feed = feed_of_line(column);
+  std::array<bool, 3> programmed{};
+  const Eigen::Vector3d start3 = state_.position_mm;
+  const Eigen::Vector3d end3 = target(programmed);
+  const Eigen::Vector2d p0 = start3.head<2>(), p3 = end3.head<2>();
+  const bool ij = word('I').present || word('J').present;
+  Eigen::Vector2d p1;
+  if (ij) {
+    p1 = p0 + Eigen::Vector2d(word('I').value, word('J').value) * unit();
+  } else if (cubic && state_.spline_control_mm) {
+    p1 = p0 + (p0 - *state_.spline_control_mm);
+  } else {
+    fail(column, std::string(code) + " without I J (expected I J" + (cubic ? std::string(", or a G5 just before it") : std::string()) + ")");
+  }
+  std::vector<Eigen::Vector2d> control = {p0, p1};
+  if (cubic) {
+    if (!word('P').present || !word('Q').present) fail(column, "G5 without P and Q (expected P Q, from the end to the second control point)");
+    const Eigen::Vector2d p2 = p3 + Eigen::Vector2d(word('P').value, word('Q').value) * unit();
+    control.push_back(p2);
+    state_.spline_control_mm = p2;
+  } else if (word('P').present || word('Q').present) {
+    fail(word('P').present ? word('P').column : word('Q').column, "G5.1 with P or Q (expected X Y I J)");
+  }
+  control.push_back(p3);
+  // De Casteljau.
+  auto at = [&](double t) {
+    std::vector<Eigen::Vector2d> q = control;
+    for (size_t n = q.size(); n > 1; --n) {
+      for (size_t i = 0; i + 1 < n; ++i) q[i] = (1.0 - t) * q[i] + t * q[i + 1];
+    }
+    return q[0];
+  };
+  // The largest |B''| over the curve: at the ends for a cubic (B'' is linear in t).
+  const double degree = static_cast<double>(control.size() - 1);
+  double second = 0.0;
+  for (size_t i = 0; i + 2 < control.size(); ++i) {
+    second = std::max(second, degree * (degree - 1.0) * (control[i] - 2.0 * control[i + 1] + control[i + 2]).norm());
+  }
+  const int steps = static_cast<int>(std::clamp(std::ceil(std::sqrt(second / (8.0 * kSplineChordMm))), 1.0, 100000.0));
+  if (!state_.known[0] || !state_.known[1]) fail(column, std::string(code) + " from an unknown X or Y position (expected a move that sets them first)");
+  for (int s = 1; s <= steps; ++s) {
+    Block block;
+    block.kind = MotionKind::Linear;
+    block.start_mm = state_.position_mm;
+    block.end_mm = end3;
+    if (s < steps) block.end_mm.head<2>() = at(static_cast<double>(s) / steps);
+    block.feed_mm_per_min = feed;
+    append(block, programmed);
+  }
+  if (!cubic) state_.spline_control_mm.reset();
 }
 
 void Reader::arc(int column) {
@@ -3015,6 +3123,18 @@ bool Reader::execute() {
         state_.motion = Motion::Cycle;
         state_.cycle = g->number;
         break;
+      case 330:
+        state_.motion = Motion::SpindleSync;
+        break;
+      case 331:
+        state_.motion = Motion::RigidTap;
+        break;
+      case 50:
+        state_.motion = Motion::CubicSpline;
+        break;
+      case 51:
+        state_.motion = Motion::QuadraticSpline;
+        break;
       default:
         state_.motion = Motion::Unsupported;
         break;
@@ -3056,6 +3176,17 @@ bool Reader::execute() {
       case Motion::Unsupported:
         forget_axes(false);
         lenient_ = true;
+        break;
+      case Motion::SpindleSync:
+      case Motion::RigidTap:
+        used_['K' - 'A'] = true;
+        synchronized(column);
+        break;
+      case Motion::CubicSpline:
+      case Motion::QuadraticSpline:
+        for (char letter : {'I', 'J', 'P', 'Q'}) used_[letter - 'A'] = true;
+        if (p.present) p_user = "G5";
+        spline(column);
         break;
       case Motion::Rapid:
       case Motion::Linear:

@@ -184,5 +184,60 @@ TEST(GcodeLexing, PostsAndFanucTapes) {
   EXPECT_NE(error_of("F100\nG2 X10 Y0 R4.998\n").find("less than half the chord"), std::string::npos);
 }
 
+// G5.1 (quadratic) and G5 (cubic) splines as straight moves: every vertex lies on the Bezier
+// curve B(t) = sum C(n,k) (1-t)^(n-k) t^k P_k (the closed form, evaluated here by the
+// binomial sum, not by de Casteljau), and no chord strays more than 1 um from it.
+TEST(GcodeSplines, VerticesOnTheCurveChordsWithinAMicron) {
+  const Program p = read("G21 G17 F100\nG5.1 X10 Y0 I5 J5\nG5 X20 Y0 I2 J2 P-2 Q2\nX30 Y0 P-2 Q2\nM2\n");
+  auto bezier = [](const std::vector<Eigen::Vector2d>& c, double t) {
+    const int n = static_cast<int>(c.size()) - 1;
+    Eigen::Vector2d b = Eigen::Vector2d::Zero();
+    double binomial = 1.0;
+    for (int k = 0; k <= n; ++k) {
+      b += binomial * std::pow(1.0 - t, n - k) * std::pow(t, k) * c[static_cast<size_t>(k)];
+      binomial = binomial * (n - k) / (k + 1);
+    }
+    return b;
+  };
+  // The curves: quadratic (0,0) (5,5) (10,0); cubic (10,0) (12,2) (18,2) (20,0); the next cubic
+  // without I J starts with the mirror of (18,2) through (20,0): (22,-2), then (28,2), (30,0).
+  const std::vector<std::vector<Eigen::Vector2d>> curves = {
+      {{0, 0}, {5, 5}, {10, 0}}, {{10, 0}, {12, 2}, {18, 2}, {20, 0}}, {{20, 0}, {22, -2}, {28, 2}, {30, 0}}};
+  const int lines[] = {2, 3, 4};
+  for (size_t c = 0; c < curves.size(); ++c) {
+    std::vector<const Block*> run;
+    for (const Block& b : p.blocks) {
+      if (b.source.line == lines[c]) run.push_back(&b);
+    }
+    ASSERT_GE(run.size(), 10u) << "curve " << c;
+    expect_point(run.front()->start_mm, {curves[c].front().x(), curves[c].front().y(), 0}, "start");
+    expect_point(run.back()->end_mm, {curves[c].back().x(), curves[c].back().y(), 0}, "end");
+    // Vertices: at t = i / n (uniform steps).
+    const double n = static_cast<double>(run.size());
+    for (size_t i = 0; i < run.size(); ++i) {
+      const Eigen::Vector2d want = bezier(curves[c], (i + 1) / n);
+      EXPECT_LT((run[i]->end_mm.head<2>() - want).norm(), 1e-9) << "curve " << c << " vertex " << i;
+      // The chord's midpoint against the curve's point half way.
+      const Eigen::Vector2d mid = (run[i]->start_mm.head<2>() + run[i]->end_mm.head<2>()) / 2.0;
+      EXPECT_LT((mid - bezier(curves[c], (i + 0.5) / n)).norm(), 0.001 + 1e-12) << "curve " << c << " chord " << i;
+    }
+  }
+  EXPECT_NE(error_of("F100\nG5 X10 Y0 P1 Q1\n").find("G5 without I J"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG18\nG5.1 X10 I1 J1\n").find("outside G17"), std::string::npos);
+}
+
+// G33: a straight feed at K per revolution times S; G33.1: down and back at that feed.
+TEST(SpindleSynchronized, ThreadingAndRigidTapping) {
+  const Program p = read("G21 S600 M3\nG0 X1 Y2 Z5\nG33 Z-5 K1.25\nG0 Z5\nG33.1 Z-10 K0.7\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 5u);
+  expect_line(p.blocks[1], {1, 2, 5}, {1, 2, -5});
+  EXPECT_DOUBLE_EQ(p.blocks[1].feed_mm_per_min, 1.25 * 600);
+  expect_line(p.blocks[3], {1, 2, 5}, {1, 2, -10});
+  expect_line(p.blocks[4], {1, 2, -10}, {1, 2, 5});
+  EXPECT_DOUBLE_EQ(p.blocks[4].feed_mm_per_min, 0.7 * 600);
+  EXPECT_NE(error_of("G33 Z-5 K1\n").find("spindle stopped"), std::string::npos);
+  EXPECT_NE(error_of("S100 M3\nG33.1 X1 Z-5 K1\n").find("G33.1 with X or Y"), std::string::npos);
+}
+
 }  // namespace
 }  // namespace vcut::io

@@ -405,20 +405,26 @@ TEST(Rs274Cycles, G81G98AndG99) {
 TEST(Rs274Cycles, PeckingG83AndG73) {
   // Q2 from R1 to Z-5: pecks to -1 and -3, then the bottom. G83 retracts to R after each
   // peck and comes back to 0.254 mm (0.010 in) above it; G73 only backs off 0.254 mm.
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG83 Z-5 R1 Q2\n"),
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G83 Z-5 R1 Q2\n"),
               {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, 1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
                {R, {0, 0, 1}}, {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG73 Z-5 R1 Q2\n"),
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G73 Z-5 R1 Q2\n"),
               {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
                {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
 }
 
 TEST(Rs274Cycles, BoringG85AndDwellG82G89) {
   // G85 and G89 feed back out to R, then rapid to the G98 height.
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG85 Z-2 R1\n"),
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G85 Z-2 R1\n"),
               {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}, {R, {0, 0, 5}}});
   expect_path(read("G0 X0 Y0 Z5\nF100\nG99 G89 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}});
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG82 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G82 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
+  // Without G98 or G99 the return is rs274's power-on G99 (LinuxCNC 2.9's rs274 on
+  // "G0 Z5 / G81 Z-1 R1" retracts to R1); Fanuc's power-on mode is G98.
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG81 Z-2 R1\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 1}}});
+  GcodeOptions fanuc;
+  fanuc.flavor = GcodeOptions::Flavor::Fanuc;
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG81 Z-2 R1\n", fanuc), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
 }
 
 TEST(Rs274Polar, DistanceAndAngle) {

@@ -85,7 +85,10 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
 // (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool;
 // the position GcodeOptions::start_mm, or unknown) and pass the same one, with the same Program, for each file in sequence.
 struct GcodeState {
-  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, Unsupported };
+  // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
+  // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC).
+  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, SpindleSync, RigidTap,
+                      CubicSpline, QuadraticSpline, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
@@ -137,10 +140,13 @@ struct GcodeState {
   // Canned cycles (G81..G89): the height (mm, program coordinates) the series of cycles
   // started at: G98 goes back to it, and in G91 R counts from it.
   double cycle_initial_z_mm = 0.0;
-  bool retract_to_r = false;  // G99 (default G98: back to the initial Z)
+  bool retract_to_r = false;  // G99 (set when the first file starts: G99 as rs274ngc, G98 for Fanuc)
   // Sticky cycle words as last given (program units; R and Z as written, G91 increments
   // included): a later line of the same series may give only X and Y.
   double cycle_r = 0.0, cycle_z = 0.0, cycle_q = 0.0, cycle_p = 0.0;
+  // G5: the last spline's second control point (mm, workpiece frame), for the next G5 without
+  // I J (LinuxCNC: the mirror of it through the start continues the curve smoothly).
+  std::optional<Eigen::Vector2d> spline_control_mm;
 
   // Cutter radius compensation as LinuxCNC's interpreter does it (G41/G42, G41.1/G42.1, G40):
   // the tool's path is offset by the radius in the plane (G17 XY, G18 ZX); each move is held
