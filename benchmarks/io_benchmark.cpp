@@ -254,4 +254,35 @@ void BM_ReadGcodeLoops(benchmark::State& state) {
 }
 BENCHMARK(BM_ReadGcodeLoops)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
+// Fanuc custom macro B: a G65 macro called in a WHILE loop, 10^6 lines executed (100,000 passes
+// of 10 lines: WHILE, G65, the macro's 4 lines, #1, IF GOTO, END, and the GOTO target's line),
+// each move computed from expressions with locals and commons.
+void BM_ReadFanucMacroLoops(benchmark::State& state) {
+  const std::string path = (std::filesystem::temp_directory_path() / "vcut_bench_macro.nc").string();
+  {
+    std::ofstream(path, std::ios::binary)
+        << "O1000\nG0 X0 Y0 Z5\nF1000\n#1=0\n#100=0\n"
+           "WHILE [#1 LT 100000] DO1\n"
+           "G65 P9001 A#1 B3\n"
+           "#1=#1+1\n"
+           "IF [[#1 MOD 1000] NE 0] GOTO 10\n"
+           "N10 #100=#100+1\n"
+           "END1\nM30\n"
+           "O9001\n"
+           "#24=#1*0.01\n"
+           "G1 X#24 Y[10*SIN[#1]] Z[-1-0.5*COS[#1*#2]]\n"
+           "#101=#101+1\n"
+           "M99\n";
+  }
+  vcut::io::GcodeOptions options;
+  options.flavor = vcut::io::GcodeOptions::Flavor::Fanuc;
+  for (auto _ : state) {
+    const vcut::kinematics::Program out = vcut::io::read_gcode(path, options);
+    benchmark::DoNotOptimize(out.blocks.data());
+  }
+  std::filesystem::remove(path);
+  state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * 100000 * 10);
+}
+BENCHMARK(BM_ReadFanucMacroLoops)->Unit(benchmark::kMillisecond)->MinTime(2.0);
+
 }  // namespace

@@ -443,6 +443,7 @@ class Reader : public detail::ValueContext {
   void go_to_sequence(double number, int column);
   bool find_sequence(long long number, Mark& found);
   Mark find_program(long long number, int column, const std::string& caller);
+  Mark locate_program(long long number, int column, const std::string& caller);
   void fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
                   const std::vector<std::pair<int, double>>& arguments = {});
   bool fanuc_return(int column);
@@ -506,6 +507,8 @@ class Reader : public detail::ValueContext {
   Source* current_ = nullptr;
   std::vector<Frame> frames_;
   std::map<std::string, SubDefinition> subs_;
+  std::map<long long, Mark> programs_;  // Fanuc O<number>: the line after its O line
+  std::map<std::pair<const Source*, long long>, Mark> sequences_;  // N<number> lines found
   long long lines_read_ = 0;
   Line line_words_;
   std::vector<Assignment> assignments_;
@@ -1778,6 +1781,10 @@ void Reader::set_variable(int number, double value, int column, const std::strin
 // from the top (Fanuc's search for GOTO and M97). `found` is that line, to be read next.
 bool Reader::find_sequence(long long number, Mark& found) {
   Source* const src = current_;
+  if (const auto it = sequences_.find({src, number}); it != sequences_.end()) {
+    found = it->second;
+    return true;
+  }
   if (!src->seekable) fail(0, "GOTO and M97 need to read the file again, and this input cannot seek (expected a regular file)");
   const Mark back = mark_after();
   const int stop_line = src->line;
@@ -1803,6 +1810,7 @@ bool Reader::find_sequence(long long number, Mark& found) {
       if (pass == 1 && src->line > stop_line) break;
       if (matches(text)) {
         found = mark_this();
+        sequences_[{src, number}] = found;
         jump(back);
         return true;
       }
@@ -1826,6 +1834,13 @@ void Reader::go_to_sequence(double value, int column) {
 
 // The body of program O<number>: the line after its O line.
 Mark Reader::find_program(long long number, int column, const std::string& caller) {
+  if (const auto it = programs_.find(number); it != programs_.end()) return it->second;
+  const Mark body = locate_program(number, column, caller);
+  programs_[number] = body;
+  return body;
+}
+
+Mark Reader::locate_program(long long number, int column, const std::string& caller) {
   auto header = [&](const std::string& s) {
     OLine o;
     std::string t = s;
