@@ -71,7 +71,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       options.work_offsets_mm["G54"] = Eigen::Vector3d(100.0, -250.5, 40.0);
       options.work_offsets_mm["G55"] = Eigen::Vector3d(-999999.0, 0.0, 999999.0);
     }
+    // Bits 2-3: the flavour (Fanuc runs custom macro B); bit 4: a start position, G28/G30
+    // references and tool lengths (as a job has them).
+    const int flavor = (data[0] >> 2) & 3;
+    options.flavor = flavor == 1 ? vcut::io::GcodeOptions::Flavor::LinuxCnc
+                     : flavor == 2 ? vcut::io::GcodeOptions::Flavor::Fanuc
+                                   : vcut::io::GcodeOptions::Flavor::Generic;
+    if ((data[0] & 16) != 0) {
+      options.start_mm = Eigen::Vector3d(0.0, 0.0, 400.0);
+      options.reference_mm = {Eigen::Vector3d(0.0, 0.0, 400.0), Eigen::Vector3d(-100.0, 50.0, 300.0)};
+      options.tool_length_mm = {{1, 90.0}, {2, 120.5}};
+    }
   }
+  // Cutter compensation radii (G41 D1, D2, D3; D0 or none: the tool in the spindle).
+  options.tool_radius_mm = {{0, 0.0}, {1, 5.0}, {2, 0.5}, {3, 12.7}};
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   vcut::kinematics::Program program;
   vcut::io::GcodeState state;
