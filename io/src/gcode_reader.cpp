@@ -491,6 +491,20 @@ class Reader : public detail::ValueContext {
   void comp_straight(Block& block, const std::array<bool, 3>& programmed, int column);
   void comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column);
   void comp_corner(const Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn);
+  // A compensated move in the plane's coordinates: the axes, the radius and side, the
+  // programmed end P and the tool's point C.
+  struct CompMove {
+    int a = 0, b = 1, c = 2;
+    double r = 0.0;
+    bool left = true;
+    Eigen::Vector3d programmed_end = Eigen::Vector3d::Zero();
+    Eigen::Vector2d p = Eigen::Vector2d::Zero(), cur = Eigen::Vector2d::Zero();
+  };
+  CompMove comp_move(const Block& block) const;
+  // Holds `block` ending at `end` (an arc: about `center`) until the next move decides its
+  // end; its programmed end becomes the point O the next move starts from.
+  void comp_hold(Block& block, const std::array<bool, 3>& programmed, const CompMove& m, const Eigen::Vector2d& end,
+                 const Eigen::Vector2d* center, const Eigen::Vector2d& direction, double sweep_rad);
   void comp_move_end_and_flush(const Eigen::Vector2d& x, int column);
   void comp_flush();
   bool hold_ = false;  // append() holds the block for compensation instead of emitting it
@@ -2302,26 +2316,42 @@ void Reader::comp_corner(const Block& main, const Eigen::Vector2d& corner, const
   append(block, {true, true, true});
 }
 
+Reader::CompMove Reader::comp_move(const Block& block) const {
+  CompMove m;
+  plane_axes(m.a, m.b, m.c);
+  m.r = state_.comp.radius_mm;
+  m.left = state_.comp.side == Comp::Side::Left;
+  m.programmed_end = block.end_mm;
+  m.p = Eigen::Vector2d(block.end_mm[m.a], block.end_mm[m.b]);
+  m.cur = Eigen::Vector2d(state_.position_mm[m.a], state_.position_mm[m.b]);
+  return m;
+}
+
+void Reader::comp_hold(Block& block, const std::array<bool, 3>& programmed, const CompMove& m, const Eigen::Vector2d& end,
+                       const Eigen::Vector2d* center, const Eigen::Vector2d& direction, double sweep_rad) {
+  block.end_mm[m.a] = end.x();
+  block.end_mm[m.b] = end.y();
+  if (center != nullptr) {
+    block.center_mm[m.a] = center->x();
+    block.center_mm[m.b] = center->y();
+  }
+  hold_ = true;
+  hold_direction_ = direction;
+  hold_sweep_rad_ = sweep_rad;
+  append(block, programmed);
+  hold_ = false;
+  state_.comp.program_mm = m.programmed_end;
+}
+
 void Reader::comp_straight(Block& block, const std::array<bool, 3>& programmed, int column) {
   using namespace comp_geometry;
   Comp& comp = state_.comp;
-  const double r = comp.radius_mm;
-  const bool left = comp.side == Comp::Side::Left;
-  int a, b, c;
-  plane_axes(a, b, c);
-  const Eigen::Vector3d programmed_end = block.end_mm;
-  const Eigen::Vector2d p(programmed_end[a], programmed_end[b]);
-  const Eigen::Vector2d cur(state_.position_mm[a], state_.position_mm[b]);
-  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& dir) {
-    block.end_mm[a] = end.x();
-    block.end_mm[b] = end.y();
-    hold_ = true;
-    hold_direction_ = dir;
-    hold_sweep_rad_ = 0.0;
-    append(block, programmed);
-    hold_ = false;
-    comp.program_mm = programmed_end;
-  };
+  const CompMove m = comp_move(block);
+  const double r = m.r;
+  const bool left = m.left;
+  const int a = m.a, b = m.b, c = m.c;
+  const Eigen::Vector2d p = m.p, cur = m.cur;
+  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& dir) { comp_hold(block, programmed, m, end, nullptr, dir, 0.0); };
   if (comp.first_move) {
     const double length = (p - cur).norm();
     if (length <= r) {
@@ -2393,27 +2423,16 @@ void Reader::comp_straight(Block& block, const std::array<bool, 3>& programmed, 
 void Reader::comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column) {
   using namespace comp_geometry;
   Comp& comp = state_.comp;
-  const double r = comp.radius_mm;
-  const bool left = comp.side == Comp::Side::Left;
-  int a, b, c;
-  plane_axes(a, b, c);
-  const Eigen::Vector3d programmed_end = block.end_mm;
-  const Eigen::Vector2d p(programmed_end[a], programmed_end[b]);
-  const Eigen::Vector2d cur(state_.position_mm[a], state_.position_mm[b]);
+  const CompMove m = comp_move(block);
+  const double r = m.r;
+  const bool left = m.left;
+  const int a = m.a, b = m.b, c = m.c;
+  const Eigen::Vector2d p = m.p, cur = m.cur;
   const Eigen::Vector2d k(block.center_mm[a], block.center_mm[b]);
   const bool inside = (left && turn > 0) || (!left && turn < 0);  // the tool on the arc's concave side
   const std::string code = turn < 0 ? "G2" : "G3";
   auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& center, double sweep_rad) {
-    block.end_mm[a] = end.x();
-    block.end_mm[b] = end.y();
-    block.center_mm[a] = center.x();
-    block.center_mm[b] = center.y();
-    hold_ = true;
-    hold_direction_ = Eigen::Vector2d::Zero();
-    hold_sweep_rad_ = sweep_rad;
-    append(block, programmed);
-    hold_ = false;
-    comp.program_mm = programmed_end;
+    comp_hold(block, programmed, m, end, &center, Eigen::Vector2d::Zero(), sweep_rad);
   };
   auto too_small = [&](double arc_radius) {
     fail(column, code + " arc of radius " + num(arc_radius) + " mm with the tool (radius " + num(r) +

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "gcode_text.h"
 #include "vcut/io/gcode_reader.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/program_reader.h"
@@ -18,24 +19,17 @@ namespace {
 using kinematics::Program;
 namespace fs = std::filesystem;
 
-Program read(const std::string& text, GcodeOptions options = {}) {
+// Fanuc's flavour, from 0.
+GcodeOptions fanuc(GcodeOptions options) {
   options.flavor = GcodeOptions::Flavor::Fanuc;
   options.start_mm = Eigen::Vector3d::Zero();
-  Program program;
-  GcodeState state;
-  std::istringstream in(text);
-  read_gcode(in, "macro.nc", options, program, state);
-  return program;
+  return options;
 }
-
-std::string error_of(const std::string& text, GcodeOptions options = {}) {
-  try {
-    read(text, options);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError for:\n" << text;
-  return {};
+Program read(const std::string& text, const GcodeOptions& options = {}) {
+  return gcode_test::read_text(text, fanuc(options), "macro.nc");
+}
+std::string error_of(const std::string& text, const GcodeOptions& options = {}) {
+  return gcode_test::error_text(text, fanuc(options), "macro.nc");
 }
 
 Eigen::Vector3d last_end(const Program& p) { return p.blocks.empty() ? Eigen::Vector3d::Constant(-999) : p.blocks.back().end_mm; }

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <string>
 
+#include "gcode_text.h"
 #include "vcut/io/gcode_reader.h"
 #include "vcut/io/input_error.h"
 
@@ -20,23 +21,16 @@ using kinematics::Program;
 
 constexpr double kTol = 1e-9;
 
-Program read(const std::string& text, GcodeOptions options = {}) {
+// From 0 unless the options say otherwise.
+GcodeOptions from_zero(GcodeOptions options) {
   if (!options.start_mm) options.start_mm = Eigen::Vector3d::Zero();
-  Program program;
-  GcodeState state;
-  std::istringstream in(text);
-  read_gcode(in, "comp.ngc", options, program, state);
-  return program;
+  return options;
 }
-
-std::string error_of(const std::string& text, GcodeOptions options = {}) {
-  try {
-    read(text, options);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError for:\n" << text;
-  return {};
+Program read(const std::string& text, const GcodeOptions& options = {}) {
+  return gcode_test::read_text(text, from_zero(options), "comp.ngc");
+}
+std::string error_of(const std::string& text, const GcodeOptions& options = {}) {
+  return gcode_test::error_text(text, from_zero(options), "comp.ngc");
 }
 
 void expect_point(const Eigen::Vector3d& got, const Eigen::Vector3d& want, const char* what) {

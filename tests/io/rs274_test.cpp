@@ -4,6 +4,8 @@
 // G92, G53, G73/G81/G82/G83/G85/G89, G98/G99); none is copied from the reader's output.
 #include <gtest/gtest.h>
 #include <vcut/io/gcode_reader.h>
+
+#include "gcode_text.h"
 #include <vcut/io/input_error.h>
 
 #include <filesystem>
@@ -23,21 +25,11 @@ using kinematics::Program;
 constexpr double kTol = 1e-9;
 
 Program read(const std::string& text, const GcodeOptions& options = {}, const std::string& name = "test.ngc") {
-  Program program;
-  GcodeState state;
-  std::istringstream in(text);
-  read_gcode(in, name, options, program, state);
-  return program;
+  return gcode_test::read_text(text, options, name);
 }
 
 std::string error_of(const std::string& text, const GcodeOptions& options = {}) {
-  try {
-    read(text, options);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "no InputError for:\n" << text;
-  return {};
+  return gcode_test::error_text(text, options, "test.ngc");
 }
 
 // The X the reader computes for `value` (a word value: number, parameter, expression).
