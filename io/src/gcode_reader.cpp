@@ -3137,42 +3137,17 @@ bool Reader::execute() {
   const bool was_cycle = state_.motion == Motion::Cycle;
   const int previous_cycle = state_.cycle;
   if (const Code* g = by_group[kMotion]) {
-    switch (g->number) {
-      case 0:
-        state_.motion = Motion::Rapid;
-        break;
-      case 10:
-        state_.motion = Motion::Linear;
-        break;
-      case 20:
-        state_.motion = Motion::ArcClockwise;
-        break;
-      case 30:
-        state_.motion = Motion::ArcCounterClockwise;
-        break;
-      case 800:
-        state_.motion = Motion::None;
-        break;
-      case 730: case 810: case 820: case 830: case 850: case 890:
-        state_.motion = Motion::Cycle;
-        state_.cycle = g->number;
-        break;
-      case 330:
-        state_.motion = Motion::SpindleSync;
-        break;
-      case 331:
-        state_.motion = Motion::RigidTap;
-        break;
-      case 50:
-        state_.motion = Motion::CubicSpline;
-        break;
-      case 51:
-        state_.motion = Motion::QuadraticSpline;
-        break;
-      default:
-        state_.motion = Motion::Unsupported;
-        break;
+    static const std::pair<int, Motion> kMotions[] = {
+        {0, Motion::Rapid},          {10, Motion::Linear},      {20, Motion::ArcClockwise},
+        {30, Motion::ArcCounterClockwise}, {800, Motion::None}, {330, Motion::SpindleSync},
+        {331, Motion::RigidTap},     {50, Motion::CubicSpline}, {51, Motion::QuadraticSpline},
+        {730, Motion::Cycle},        {810, Motion::Cycle},      {820, Motion::Cycle},
+        {830, Motion::Cycle},        {850, Motion::Cycle},      {890, Motion::Cycle}};
+    state_.motion = Motion::Unsupported;
+    for (const auto& [code, motion] : kMotions) {
+      if (code == g->number) state_.motion = motion;
     }
+    if (state_.motion == Motion::Cycle) state_.cycle = g->number;
   }
 
   // --- Motion.
