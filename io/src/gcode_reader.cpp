@@ -446,7 +446,7 @@ class Reader : public detail::ValueContext {
   Mark locate_program(long long number, int column, const std::string& caller);
   void fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
                   const std::vector<std::pair<int, double>>& arguments = {});
-  bool fanuc_return(int column);
+  bool fanuc_return();
   double fanuc_system_variable(int number, int column);
   void set_variable(int number, double value, int column, const std::string& text);
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
@@ -1981,7 +1981,7 @@ void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, 
 }
 
 // M99: the next pass of a repeated call, or back to the caller (and to its block N P).
-bool Reader::fanuc_return(int column) {
+bool Reader::fanuc_return() {
   if (frames_.size() <= 1 || frame().kind == Frame::Kind::OWord) return false;
   Frame& f = frame();
   if (f.repeats_left > 0) {
@@ -1998,7 +1998,6 @@ bool Reader::fanuc_return(int column) {
   const Word& p = word('P');
   jump(back);
   if (p.present) go_to_sequence(p.value, p.column);
-  (void)column;
   return true;
 }
 
@@ -3248,7 +3247,7 @@ bool Reader::execute() {
       fail(pw.column, flow_code->text + " P " + num(pw.value) + " (expected a whole number)");
     }
     if (flow_code->number == 99) {
-      if (!fanuc_return(flow_code->column)) {
+      if (!fanuc_return()) {
         // M99 in the main program: the control starts it again, endlessly; read once.
         warn(flow_code->column, "M99 in the main program (the control runs it again from the top, endlessly); read once");
         return false;
