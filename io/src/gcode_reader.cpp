@@ -5,6 +5,8 @@
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 
+#include <Eigen/Geometry>
+
 #include "block_room.h"
 #include "plane_arc.h"
 #include "reader_util.h"
@@ -108,7 +110,8 @@ enum Group {
   kPathControl = 13,
   kSpindleMode = 14,
   kLatheMode = 15,
-  kGroupCount = 16
+  kRotation = 16,  // Fanuc G68 / G69
+  kGroupCount = 17
 };
 
 const char* group_name(int group) {
@@ -139,6 +142,8 @@ const char* group_name(int group) {
       return "path control (group 13)";
     case kSpindleMode:
       return "spindle speed mode (group 14)";
+    case kRotation:
+      return "coordinate rotation (group 16)";
     case kLatheMode:
       return "lathe diameter mode (group 15)";
     default:
@@ -222,6 +227,8 @@ constexpr GEntry kGCodes[] = {
     {950, {kFeedMode, false, false, false, "feed per revolution"}},
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
+    // Fanuc G68 X Y R (rotation of the programmed XY about a centre) and G69 (cancel).
+    {680, {kRotation, true}}, {690, {kRotation, true}},
     {80, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
     {700, {kMotion, false, true, false, "lathe cycle"}}, {710, {kMotion, false, true, false, "lathe cycle"}},
     {711, {kMotion, false, true, false, "lathe cycle"}}, {712, {kMotion, false, true, false, "lathe cycle"}},
@@ -463,6 +470,10 @@ class Reader : public detail::ValueContext {
   }
   const Word& word(char letter) const { return line_words_.words[letter - 'A']; }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
+  // Workpiece frame <-> program coordinates (mm): the work offsets and a G68 rotation.
+  Eigen::Vector3d to_program(const Eigen::Vector3d& w) const;
+  Eigen::Vector3d to_workpiece(const Eigen::Vector3d& p) const;
+  bool rotated() const { return state_.rotation_rad != 0.0; }
   Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
   void straight(MotionKind kind, int column);
   void synchronized(int column);
@@ -1296,8 +1307,53 @@ void Reader::lex(const std::string& s, size_t i) {
 
 // The end point of this line's motion in the workpiece frame; `programmed` says which axes
 // the line names.
+Eigen::Vector3d Reader::to_program(const Eigen::Vector3d& w) const {
+  Eigen::Vector3d p = w - state_.g5x_mm - state_.g92_mm;
+  if (rotated()) {
+    const Eigen::Vector2d c = state_.rotation_center_mm;
+    p.head<2>() = c + Eigen::Rotation2Dd(-state_.rotation_rad) * (p.head<2>() - c);
+  }
+  return p;
+}
+
+Eigen::Vector3d Reader::to_workpiece(const Eigen::Vector3d& p) const {
+  Eigen::Vector3d w = p;
+  if (rotated()) {
+    const Eigen::Vector2d c = state_.rotation_center_mm;
+    w.head<2>() = c + Eigen::Rotation2Dd(state_.rotation_rad) * (p.head<2>() - c);
+  }
+  return w + state_.g5x_mm + state_.g92_mm;
+}
+
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   const Eigen::Vector3d base = base_point();
+  if (rotated() && !machine_coordinates_) {
+    // G68: the words name a point of the rotated program coordinates (G91: an increment
+    // along them); polar words turn about the program origin there too.
+    Eigen::Vector3d p = to_program(base);
+    if (line_words_.radius.present || line_words_.angle.present) {
+      for (char letter : {'X', 'Y'}) {
+        if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
+      }
+      p.head<2>() = polar_point(p.head<2>());
+      programmed[0] = programmed[1] = true;
+    }
+    for (int a = 0; a < 3; ++a) {
+      const Word& w = word(kAxisLetter[a]);
+      if (!(a < 2 && (line_words_.radius.present || line_words_.angle.present))) programmed[a] = w.present;
+      if (!w.present) continue;
+      const double v = w.value * unit();
+      p[a] = state_.incremental ? p[a] + v : v;
+    }
+    const Eigen::Vector3d end = to_workpiece(p);
+    for (int a = 0; a < 3; ++a) {
+      if (!(std::abs(end[a]) <= kMaxMagnitude)) {
+        fail(word(kAxisLetter[a]).present ? word(kAxisLetter[a]).column : 1,
+             std::string(1, kAxisLetter[a]) + " position " + num(end[a]) + " mm is out of range (expected within +-1e6 mm)");
+      }
+    }
+    return end;
+  }
   Eigen::Vector3d end = base;
   const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
   const Word& radius = line_words_.radius;
@@ -1655,6 +1711,11 @@ void Reader::arc(int column) {
                          " word missing in an absolute-centre (G90.1) arc");
       }
       center[k] = state_.arc_center_absolute ? v + offset[axis] : start[axis] + v;
+    }
+    if (rotated()) {  // G17 only: I J are along the rotated axes
+      const Eigen::Vector2d ij(word('I').value * unit(), word('J').value * unit());
+      center = state_.arc_center_absolute ? Eigen::Vector2d(to_workpiece(Eigen::Vector3d(ij.x(), ij.y(), 0.0)).head<2>())
+                                          : Eigen::Vector2d(Eigen::Vector2d(start[a], start[b]) + Eigen::Rotation2Dd(state_.rotation_rad) * ij);
     }
     if (const std::string error = detail::centre_arc_error(s, e, center, arc_tolerance(), code);
         !error.empty()) {
@@ -2708,7 +2769,7 @@ void Reader::cycle(int column, bool new_series) {
     repeats = static_cast<int>(l_word.value);
   }
   const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
-  Eigen::Vector3d at = state_.position_mm - offset;  // program coordinates, mm
+  Eigen::Vector3d at = to_program(state_.position_mm);  // program coordinates, mm
   const double u = unit();
   double r = state_.cycle_r * u, bottom = state_.cycle_z * u;
   Eigen::Vector2d hole = at.head<2>(), step = Eigen::Vector2d::Zero();
@@ -2735,7 +2796,7 @@ void Reader::cycle(int column, bool new_series) {
     Block block;
     block.kind = kind;
     block.start_mm = state_.position_mm;
-    block.end_mm = Eigen::Vector3d(x, y, z) + offset;
+    block.end_mm = to_workpiece(Eigen::Vector3d(x, y, z));
     if (!(block.end_mm.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
       fail(column, std::string(name) + " moves to " + num(block.end_mm.x()) + ", " + num(block.end_mm.y()) + ", " +
                        num(block.end_mm.z()) + " mm, out of range (expected within +-1e6 mm)");
@@ -2873,8 +2934,18 @@ bool Reader::execute() {
   const Code* non_modal = by_group[kNonModal];
   const bool homes = non_modal != nullptr && (non_modal->number == 280 || non_modal->number == 300);
   const bool stores_home = non_modal != nullptr && (non_modal->number == 281 || non_modal->number == 301);
+  // Fanuc G68 X Y R: X Y are the rotation's centre, not a move.
+  const Code* rotation = by_group[kRotation];
+  if (rotation != nullptr && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
+    fail(rotation->column, "unknown G code " + rotation->text + " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
+  }
+  const bool rotates = rotation != nullptr && rotation->number == 680;
   const bool sets_offsets =
       non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
+  if (rotates && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
+    const Code* later = rotation->column > by_group[kMotion]->column ? rotation : by_group[kMotion];
+    fail(later->column, rotation->text + " and " + by_group[kMotion]->text + " both use the axis words (expected them on separate lines)");
+  }
   if (sets_offsets && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
     const Code* later = non_modal->column > by_group[kMotion]->column ? non_modal : by_group[kMotion];
     fail(later->column, non_modal->text + " and " + by_group[kMotion]->text +
@@ -3086,6 +3157,26 @@ bool Reader::execute() {
   if (const Code* g = by_group[kPlane]; g != nullptr && g_info(g->number).supported) {
     state_.plane = g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ;
   }
+  if (rotation != nullptr) {
+    if (state_.comp.side != Comp::Side::Off) fail(rotation->column, rotation->text + " with cutter compensation on (expected G40 first)");
+    if (rotation->number == 690) {
+      state_.rotation_rad = 0.0;
+    } else {
+      if (state_.plane != Plane::XY) fail(rotation->column, "G68 outside G17 (this reader rotates in the XY plane)");
+      const Word& r = word('R');
+      if (!r.present) fail(rotation->column, "G68 without R (expected R, the rotation in degrees)");
+      used_['R' - 'A'] = true;
+      // The centre: X Y in absolute program coordinates, the current point for those not given.
+      const Eigen::Vector3d here_program = to_program(state_.position_mm);
+      Eigen::Vector2d center = here_program.head<2>();
+      if (word('X').present) center.x() = word('X').value * unit();
+      if (word('Y').present) center.y() = word('Y').value * unit();
+      // Nested G68 (a rotation while one is on): Fanuc composes them; vcut asks for G69 first.
+      if (rotated()) fail(rotation->column, "G68 while a rotation is on (expected G69 first)");
+      state_.rotation_center_mm = center;
+      state_.rotation_rad = r.value * M_PI / 180.0;
+    }
+  }
   if (const Code* g = by_group[kCutterComp]) {
     if (g->number == 400) {
       comp_off(g->column);
@@ -3168,7 +3259,7 @@ bool Reader::execute() {
     home_return(*non_modal);
   } else if (axis_user != nullptr) {
     forget_axes(axis_user_all);
-  } else if (sets_offsets || length_axes != nullptr || dwell_axis ||
+  } else if (sets_offsets || rotates || length_axes != nullptr || dwell_axis ||
              (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
     // G10, G92 and G43.1/G43.2 took the axis words.
   } else if (has_axis || explicit_motion ||

@@ -220,6 +220,30 @@ TEST(GcodeSplines, VerticesOnTheCurveChordsWithinAMicron) {
   EXPECT_NE(error_of("F100\nG18\nG5.1 X10 I1 J1\n").find("outside G17"), std::string::npos);
 }
 
+// Fanuc G68 X Y R: programmed X Y turn by R about the centre (hand-rotated points: (x, y) about
+// (cx, cy) by 90 deg is (cx - (y - cy), cy + (x - cx))); G91 increments and I J turn too;
+// G69 ends it.
+TEST(CoordinateRotation, G68TurnsPointsIncrementsAndCentres) {
+  const Program p = read(
+      "G21 G17 G90 F100\nG68 X10 Y0 R90\nG1 X20 Y0\nG91 G1 X5\nG90 G2 X20 Y0 I-2.5 J0\nG69\nG1 X0 Y0\nM2\n");
+  ASSERT_EQ(p.blocks.size(), 4u);
+  expect_line(p.blocks[0], {0, 0, 0}, {10, 10, 0});    // (20, 0) about (10, 0)
+  expect_line(p.blocks[1], {10, 10, 0}, {10, 15, 0});  // the increment (5, 0) turned to (0, 5)
+  const Block& arc = p.blocks[2];                       // program (25, 0) -> (20, 0) about (22.5, 0)
+  ASSERT_EQ(arc.kind, MotionKind::Arc);
+  expect_point(arc.end_mm, {10, 10, 0}, "arc end");
+  expect_point(arc.center_mm, {10, 12.5, 0}, "arc centre");
+  expect_line(p.blocks[3], {10, 10, 0}, {0, 0, 0});
+  // A drilling cycle's holes turn with it: (10, 0) about the origin by 90 deg is (0, 10).
+  const Program drill = read("G21 G17 G90 G98 F100\nG0 Z5\nG68 X0 Y0 R90\nG81 X10 Y0 Z-1 R1\nG80\nM2\n");
+  ASSERT_GE(drill.blocks.size(), 2u);
+  expect_point(drill.blocks[1].end_mm, {0, 10, 5}, "over the hole");
+  EXPECT_NE(error_of("G68 X0 Y0\n").find("G68 without R"), std::string::npos);
+  GcodeOptions linuxcnc;
+  linuxcnc.flavor = GcodeOptions::Flavor::LinuxCnc;
+  EXPECT_NE(error_of("G68 X0 Y0 R10\n", linuxcnc).find("unknown G code G68"), std::string::npos);
+}
+
 // G33: a straight feed at K per revolution times S; G33.1: down and back at that feed.
 TEST(SpindleSynchronized, ThreadingAndRigidTapping) {
   const Program p = read("G21 S600 M3\nG0 X1 Y2 Z5\nG33 Z-5 K1.25\nG0 Z5\nG33.1 Z-10 K0.7\nM2\n");

@@ -147,6 +147,10 @@ struct GcodeState {
   // G5: the last spline's second control point (mm, workpiece frame), for the next G5 without
   // I J (LinuxCNC: the mirror of it through the start continues the curve smoothly).
   std::optional<Eigen::Vector2d> spline_control_mm;
+  // Fanuc G68 in G17: programmed X Y turn by rotation_rad about rotation_center_mm (program
+  // coordinates, mm) before the work offsets apply; G69 sets it back to 0.
+  double rotation_rad = 0.0;
+  Eigen::Vector2d rotation_center_mm = Eigen::Vector2d::Zero();
 
   // Cutter radius compensation as LinuxCNC's interpreter does it (G41/G42, G41.1/G42.1, G40):
   // the tool's path is offset by the radius in the plane (G17 XY, G18 ZX); each move is held
