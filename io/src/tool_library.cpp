@@ -17,14 +17,14 @@ ToolLibrary read_tool_library(const std::string& path) {
     const std::string where = "tools." + kv.first.Scalar();
     if (number < 1 || number > 99999) yaml.fail(kv.first, where, "a T number from 1 to 99999");
     const YAML::Node& t = kv.second;
-    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "angle", "flute_length", "shank_diameter", "length", "gauge_length", "holder_diameter", "holder_length", "name"});
+    yaml.only_keys(t, where, {"type", "diameter", "corner_radius", "angle", "point_angle", "flute_length", "shank_diameter", "length", "gauge_length", "holder_diameter", "holder_length", "name"});
     removal::Cutter c;
     const std::string type = yaml.text(yaml.require(t, "type", where), where + ".type");
     if (type == "flat") c.type = removal::CutterType::Flat;
     else if (type == "ball") c.type = removal::CutterType::Ball;
     else if (type == "bull" || type == "bullnose") c.type = removal::CutterType::BullNose;
-    else if (type == "vbit") c.type = removal::CutterType::VBit;
-    else yaml.fail(t["type"], where + ".type", "flat, ball, bull or vbit");
+    else if (type == "vbit" || type == "drill") c.type = removal::CutterType::VBit;
+    else yaml.fail(t["type"], where + ".type", "flat, ball, bull, vbit or drill");
     c.diameter_mm = yaml.positive(yaml.require(t, "diameter", where), where + ".diameter");
     const double radius = 0.5 * c.diameter_mm;
     if (c.type == removal::CutterType::Flat) {
@@ -35,8 +35,16 @@ ToolLibrary read_tool_library(const std::string& path) {
       if (std::abs(c.corner_radius_mm - radius) > 1e-9)
         yaml.fail(t["corner_radius"], where + ".corner_radius", "half the diameter for a ball end mill");
       c.corner_radius_mm = radius;
+    } else if (c.type == removal::CutterType::VBit && type == "drill") {
+      // A twist drill: its point (included angle, deg; 118 unless given) then its body, the
+      // geometry of a V-bit; canned cycles' Z is the point's tip.
+      if (t["angle"]) yaml.fail(t["angle"], where + ".angle", "point_angle for a drill");
+      c.tip_angle_deg = t["point_angle"] ? yaml.positive(t["point_angle"], where + ".point_angle") : 118.0;
+      if (c.tip_angle_deg >= 180.0) yaml.fail(t["point_angle"], where + ".point_angle", "an included point angle between 0 and 180 degrees");
+      if (t["corner_radius"]) yaml.fail(t["corner_radius"], where + ".corner_radius", "no corner radius for a drill");
     } else if (c.type == removal::CutterType::VBit) {
       // A pointed chamfer cutter: its included tip angle (deg).
+      if (t["point_angle"]) yaml.fail(t["point_angle"], where + ".point_angle", "angle for a V-bit (point_angle is a drill's)");
       c.tip_angle_deg = yaml.positive(yaml.require(t, "angle", where), where + ".angle");
       if (c.tip_angle_deg >= 180.0) yaml.fail(t["angle"], where + ".angle", "an included tip angle between 0 and 180 degrees");
       if (t["corner_radius"]) yaml.fail(t["corner_radius"], where + ".corner_radius", "no corner radius for a V-bit");

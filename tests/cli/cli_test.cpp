@@ -249,6 +249,23 @@ TEST_F(Simulate, VBitToolAndBadAngle) {
   EXPECT_NE(r.output.find("angle"), std::string::npos) << r.output;
 }
 
+// A drill (point 118 deg) in a G81 cycle leaves a hole with a conical bottom: a cylinder of
+// radius r down to the point's shoulder and a cone of height h = r / tan(59 deg) below it,
+// V = pi r^2 (d - h) + pi r^2 h / 3 for the tip at depth d.
+TEST_F(Simulate, DrillCutsWithItsPoint) {
+  write(dir / "tools.yaml", "tools:\n  1: {type: drill, diameter: 8, point_angle: 118, flute_length: 30}\n");
+  program = "G21 G90 G17\nT1 M6\nS2000 M3\nG0 X30 Y20 Z5\nG98 G81 X30 Y20 Z-10 R2 F100\nG80\nM30\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const double radius = 4.0, h = radius / std::tan(59.0 * M_PI / 180.0), depth = 10.0;
+  const double volume = M_PI * radius * radius * (depth - h) + M_PI * radius * radius * h / 3.0;
+  EXPECT_NEAR(report()["summary"]["removed_volume_mm3"].get<double>(), volume, volume * 0.01);
+  // A flat end mill of the same diameter removes the full cylinder: the point is what differs.
+  EXPECT_GT(M_PI * radius * radius * depth - volume, volume * 0.05);
+  write(dir / "tools.yaml", "tools:\n  1: {type: drill, diameter: 8, angle: 118, flute_length: 30}\n");
+  EXPECT_EQ(simulate().exit_code, 2);
+}
+
 TEST_F(Simulate, FlagsOverrideJobKeys) {
   const CommandResult r = simulate("--resolution 0.2 --threads 1 --out " + (dir / "elsewhere").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
