@@ -84,11 +84,12 @@ struct Code {       // one G or M word
 struct Line {
   std::array<Word, 26> words;  // by letter; G, M, N and O are not stored here
   Word radius, angle;          // LinuxCNC's polar words @ (distance) and ^ (angle, deg)
+  Word round, chamfer;         // Fanuc ,R (corner radius) and ,C (chamfer) to the next line
   std::vector<Code> g;
   std::vector<Code> m;
   void clear() {
     words.fill(Word{});
-    radius = angle = Word{};
+    radius = angle = round = chamfer = Word{};
     g.clear();
     m.clear();
   }
@@ -476,6 +477,15 @@ class Reader : public detail::ValueContext {
   bool rotated() const { return state_.rotation_rad != 0.0; }
   Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
   void straight(MotionKind kind, int column);
+  // Fanuc ,R / ,C: the corner between the line just emitted and the next one.
+  struct PendingCorner {
+    bool round = false;  // ,R (else ,C)
+    double size_mm = 0.0;
+    size_t block = 0;    // the first line, in Program::blocks
+    int column = 0;
+  };
+  std::optional<PendingCorner> corner_;
+  void corner_to(Block& second, int column);
   void synchronized(int column);
   void spline(int column);
   void arc(int column);
@@ -768,6 +778,11 @@ void Reader::run(std::istream& in, const std::string& name) {
   // A file that ends (with '%' or without M2) while a compensated move is held: the machine
   // runs it, ending at its offset point (LinuxCNC's rs274 drops it).
   comp_stop(false, 1);
+  if (corner_) {
+    program_.warnings.push_back(program_.where(program_.blocks[corner_->block].source) + ": " +
+                                (corner_->round ? ",R" : ",C") + " on the last line: no next line, no corner");
+    corner_.reset();
+  }
 }
 
 bool Reader::line(std::string& text) {
@@ -1203,6 +1218,22 @@ void Reader::lex(const std::string& s, size_t i) {
       i = skip_comment(s, i);
       continue;
     }
+    if (c == ',' && options_.flavor != GcodeOptions::Flavor::LinuxCnc) {
+      // Fanuc ,R<radius> / ,C<length>: round or chamfer the corner to the next line.
+      const size_t j = skip_blanks(s, i + 1);
+      if (j < n && (upper(s[j]) == 'R' || upper(s[j]) == 'C')) {
+        const char kind = upper(s[j]);
+        i = j + 1;
+        std::string text;
+        const double value = word_value(s, i, kind, text);
+        Word& w = kind == 'R' ? line_words_.round : line_words_.chamfer;
+        if (w.present) fail(column, std::string("second ,") + kind + " on the line (expected at most one)");
+        if (!(value > 0.0) || value > kMaxMagnitude) fail(column, std::string(",") + kind + " " + text + " (expected a length > 0)");
+        w = Word{true, value, column};
+        first_word = false;
+        continue;
+      }
+    }
     if (c == ';') return;  // LinuxCNC: the rest of the line is a comment
     if (c == '#') {
       // A parameter setting: #n = value or #<name> = value (set once the line is read).
@@ -1532,7 +1563,64 @@ void Reader::straight(MotionKind kind, int column) {
     block.start_mm = *state_.comp.machine_mm;
     state_.comp.machine_mm.reset();
   }
+  if (corner_) corner_to(block, column);
+  const Word& round = line_words_.round;
+  const Word& chamfer = line_words_.chamfer;
+  if (round.present || chamfer.present) {
+    const Word& w = round.present ? round : chamfer;
+    if (round.present && chamfer.present) fail(chamfer.column, ",R and ,C on one line (expected one of them)");
+    if (kind != MotionKind::Linear) fail(w.column, std::string(round.present ? ",R" : ",C") + " on a rapid (expected G1)");
+    if (compensating()) fail(w.column, std::string(round.present ? ",R" : ",C") + " with cutter compensation on (not supported yet)");
+    const size_t before = program_.blocks.size();
+    append(block, programmed);
+    if (program_.blocks.size() == before) fail(w.column, std::string(round.present ? ",R" : ",C") + " on a line that does not move");
+    corner_ = PendingCorner{round.present, w.value * unit(), program_.blocks.size() - 1, w.column};
+    return;
+  }
   append(block, programmed);
+}
+
+// The corner between the held first line and `second` (its start is the corner): the first
+// line ends t before the corner, then an arc of radius R tangent to both (t = R tan(phi / 2),
+// phi the turn) or a straight chamfer to t after it (t = C), and `second` starts there.
+void Reader::corner_to(Block& second, int column) {
+  const PendingCorner c = *corner_;
+  corner_.reset();
+  const char* what = c.round ? ",R" : ",C";
+  Block& first = program_.blocks[c.block];
+  const Eigen::Vector3d corner = first.end_mm;
+  const Eigen::Vector3d in = corner - first.start_mm, out = second.end_mm - corner;
+  const double in_length = in.norm(), out_length = out.norm();
+  if (!(out_length > 0.0)) fail(column, std::string(what) + ": the next line does not move (expected the corner's second line)");
+  const Eigen::Vector3d d1 = in / in_length, d2 = out / out_length;
+  const double turn = std::acos(std::clamp(d1.dot(d2), -1.0, 1.0));
+  if (turn < 1e-9) return;  // straight on: no corner
+  if (turn > M_PI - 1e-9) fail(column, std::string(what) + ": the next line turns back on the first (expected a corner)");
+  const double t = c.round ? c.size_mm * std::tan(turn / 2.0) : c.size_mm;
+  if (t > in_length + 1e-9 || t > out_length + 1e-9) {
+    fail(column, std::string(what) + " " + num(c.size_mm) + " mm needs " + num(t) + " mm of each line, and the lines are " +
+                     num(in_length) + " and " + num(out_length) + " mm long (expected a smaller corner)");
+  }
+  const Eigen::Vector3d t1 = corner - t * d1, t2 = corner + t * d2;
+  first.end_mm = t1;
+  Block join = first;
+  join.start_mm = t1;
+  join.end_mm = t2;
+  join.start_rotary = join.end_rotary = first.end_rotary;
+  if (c.round) {
+    const Eigen::Vector3d normal = d1.cross(d2).normalized();
+    int a, b, n;
+    plane_axes(a, b, n);
+    if (std::abs(std::abs(normal[n]) - 1.0) > 1e-9) fail(column, ",R between lines not in the active plane (expected both lines in it)");
+    const Eigen::Vector3d toward = (d2 - d2.dot(d1) * d1).normalized();
+    join.kind = MotionKind::Arc;
+    join.center_mm = t1 + c.size_mm * toward;
+    join.normal = Eigen::Vector3d::Zero();
+    join.normal[n] = normal[n] > 0.0 ? 1.0 : -1.0;
+    join.turns = 1;
+  }
+  program_.blocks.push_back(join);
+  second.start_mm = t2;
 }
 
 // G33 X Y Z K: a straight feed at K (length per spindle revolution) times the spindle speed.
@@ -3253,6 +3341,11 @@ bool Reader::execute() {
   const int column = explicit_motion ? motion_code->column : axis_column;
   if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
     fail(non_modal->column, "G53 without a G0 or G1 move on its line (expected G53 G0/G1 with axis words)");
+  }
+  if (corner_ && (has_axis || explicit_motion || homes) && (state_.motion != Motion::Linear || homes || sets_offsets)) {
+    fail(explicit_motion ? motion_code->column : axis_column,
+         std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
+             " needs a G1 line next (expected the corner's second line)");
   }
   if (homes || stores_home) {
     if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");

@@ -244,6 +244,27 @@ TEST(CoordinateRotation, G68TurnsPointsIncrementsAndCentres) {
   EXPECT_NE(error_of("G68 X0 Y0 R10\n", linuxcnc).find("unknown G code G68"), std::string::npos);
 }
 
+// Fanuc ,R and ,C between two G1 lines: a left turn of 90 deg at (10, 0). ,R2 needs
+// t = 2 tan(45 deg) = 2 mm of each line: the first ends at (8, 0), a counterclockwise arc about
+// (8, 2) reaches (10, 2); ,C1 cuts from (9, 0) to (10, 1).
+TEST(CornerRounding, RadiusAndChamferBetweenLines) {
+  const Program r = read("G21 G17 F100\nG1 X10 Y0 ,R2\nG1 X10 Y10\nM2\n");
+  ASSERT_EQ(r.blocks.size(), 3u);
+  expect_line(r.blocks[0], {0, 0, 0}, {8, 0, 0});
+  ASSERT_EQ(r.blocks[1].kind, MotionKind::Arc);
+  expect_point(r.blocks[1].end_mm, {10, 2, 0}, "arc end");
+  expect_point(r.blocks[1].center_mm, {8, 2, 0}, "arc centre");
+  EXPECT_EQ(r.blocks[1].normal, Eigen::Vector3d(0, 0, 1));
+  expect_line(r.blocks[2], {10, 2, 0}, {10, 10, 0});
+  const Program c = read("G21 G17 F100\nG1 X10 Y0 ,C1\nG1 X10 Y10\nM2\n");
+  ASSERT_EQ(c.blocks.size(), 3u);
+  expect_line(c.blocks[0], {0, 0, 0}, {9, 0, 0});
+  expect_line(c.blocks[1], {9, 0, 0}, {10, 1, 0});
+  expect_line(c.blocks[2], {10, 1, 0}, {10, 10, 0});
+  EXPECT_NE(error_of("F100\nG1 X10 ,R20\nG1 Y10\n").find("expected a smaller corner"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG1 X10 ,R1\nG0 Y10\n").find("needs a G1 line next"), std::string::npos);
+}
+
 // G33: a straight feed at K per revolution times S; G33.1: down and back at that feed.
 TEST(SpindleSynchronized, ThreadingAndRigidTapping) {
   const Program p = read("G21 S600 M3\nG0 X1 Y2 Z5\nG33 Z-5 K1.25\nG0 Z5\nG33.1 Z-10 K0.7\nM2\n");
