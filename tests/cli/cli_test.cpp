@@ -103,6 +103,7 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 1.95));
   job += "design: {file: part.stl}\n";
   program.replace(program.find("G1 X70"), 6, "G1 X70 (</script><!-- floor)");
+  program.replace(program.find("T1 M6\n"), 6, "T1 M6\nM31\n");  // an M code the machine does not declare
   const std::string open = "<script id=\"vcut-data\" type=\"application/json\">";
   write(dir / "template.html", "<html>" + open + "__VCUT_REPORT_DATA__</script></html>\n");
   ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
@@ -121,11 +122,17 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   const std::string data = html.substr(a + open.size(), b - a - open.size());
   EXPECT_EQ(data.find("<!--"), std::string::npos);
   const auto j = nlohmann::json::parse(data);
+  // The warning reaches the page's data (the page lists data.warnings) and report.json.
+  ASSERT_TRUE(j["warnings"].is_array());
+  bool m31 = false;
+  for (const auto& w : j["warnings"]) m31 = m31 || w.get<std::string>().find("slot.ngc:4:1: M code M31") != std::string::npos;
+  EXPECT_TRUE(m31) << j["warnings"].dump();
+  EXPECT_NE(report()["warnings"].dump().find("M code M31"), std::string::npos);
   ASSERT_FALSE(j["regions"].empty());
   EXPECT_EQ(j["regions"][0]["kind"], "gouge");
   ASSERT_FALSE(j["regions"][0]["nc"].empty());
   EXPECT_EQ(j["regions"][0]["nc"][0]["file"], "slot.ngc");
-  EXPECT_EQ(j["regions"][0]["nc"][0]["line"], 7);
+  EXPECT_EQ(j["regions"][0]["nc"][0]["line"], 8);  // line 7 before the M31 line went in
   EXPECT_EQ(j["regions"][0]["nc"][0]["text"], "G1 X70 (</script><!-- floor)");
 
   for (const char* view : {"iso", "top", "front"}) {

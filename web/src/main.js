@@ -208,8 +208,17 @@ function main() {
   const side = el('aside', { class: 'side' }, ncPanel);
   const work = el('main', { class: 'work' }, viewport, side);
 
+  // Warnings (undeclared M codes, stops, nested comments ...): each names its file:line.
+  const warnings = Array.isArray(data.warnings) ? data.warnings : [];
+  const warningList = warnings.length
+    ? el('section', { class: 'warnings', id: 'warnings' },
+      el('h2', { text: `Warnings (${warnings.length})` }),
+      el('ul', {}, ...warnings.slice(0, 200).map((w) => el('li', { text: String(w) }))),
+      warnings.length > 200 ? el('p', { text: `… and ${warnings.length - 200} more in report.json` }) : null)
+    : null;
+
   const app = document.getElementById('app');
-  app.replaceChildren(header, cards, work);
+  app.replaceChildren(...[header, cards, warningList, work].filter(Boolean));
 
   // NC panel content.
   const showNc = (heading, facts, entries, emptyNote) => {
