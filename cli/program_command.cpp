@@ -1,6 +1,8 @@
 #include "program_command.h"
 
+#include <algorithm>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -122,17 +124,24 @@ bool run_program_command(const ProgramCommand& c) {
   // runs it; with one, at the machine's home.
   options.gcode.start_mm = Eigen::Vector3d::Zero();
   for (const auto& [number, cutter] : tools) options.gcode.tool_radius_mm[number] = cutter.radius_mm();
+  std::optional<kinematics::MachineSpec> spec;
   if (!c.machine.empty()) {
     std::vector<std::string> warnings;
-    const kinematics::MachineSpec spec = io::read_machine_file(io::resolve_machine(c.machine), &warnings);
+    spec = io::read_machine_file(io::resolve_machine(c.machine), &warnings);
     for (const auto& w : warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
-    io::set_machine(options.gcode, spec, tools);
+    io::set_machine(options.gcode, *spec, tools);
   }
   options.gcode.subroutine_path = c.subroutine_path;
   options.gcode.max_lines = c.max_lines;
   for (int m : c.tcp_on) options.gcode.tcp_m_codes[m] = true;
   for (int m : c.tcp_off) options.gcode.tcp_m_codes[m] = false;
-  const io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
+  io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
+  // An axis program (rotary words without TCP) starts at the home's axis values, as a job's.
+  if (spec && loaded.dialect == "gcode" &&
+      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const Block& b) { return !b.tool_pose; })) {
+    io::set_machine(options.gcode, *spec, tools, true);
+    loaded = io::read_program(c.file, c.dialect, options);
+  }
   for (const auto& w : loaded.program.warnings)
     std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   std::string line;
