@@ -290,6 +290,27 @@ TEST_F(Simulate, UnknownGCode) {
   EXPECT_TRUE(no_output());
 }
 
+// The new program keys and start: each bad value names its key; good values take effect.
+TEST_F(Simulate, StartAndProgramKeys) {
+  const std::string base = job;
+  job = base + "start: {X: 1, Q: 2}\n";
+  expect_error(simulate(), "start.Q");
+  job = base + "start: [1, 2]\n";
+  expect_error(simulate(), "start");
+  job = base;
+  job.replace(job.find("program: {file: slot.ngc}"), 25, "program: {file: slot.ngc, block_delete: maybe}");
+  expect_error(simulate(), "program.block_delete");
+  job = base;
+  job.replace(job.find("program: {file: slot.ngc}"), 25, "program: {file: slot.ngc, arc_tolerance: -1}");
+  expect_error(simulate(), "program.arc_tolerance");
+  // An undeclared M code stops the job with program.unsupported: error.
+  job = base;
+  job.replace(job.find("program: {file: slot.ngc}"), 25, "program: {file: slot.ngc, unsupported: error}");
+  program = "G21\nT1 M6\nM31\nG0 X0 Y0 Z5\n";
+  expect_error(simulate(), "slot.ngc:3:1: unknown M code M31");
+  EXPECT_TRUE(no_output());
+}
+
 TEST_F(Simulate, ToolMissingFromLibrary) {
   program = "G21\nT7 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\n";
   expect_error(simulate(), "T7 is not in the tool library");

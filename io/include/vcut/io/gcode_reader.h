@@ -83,7 +83,8 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
 
 // The modal state between lines and between files. Start from a default-constructed one
 // (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool;
-// the position GcodeOptions::start_mm, or unknown) and pass the same one, with the same Program, for each file in sequence.
+// the position GcodeOptions::start_mm, or unknown) and pass the same one, with the same
+// Program, for each file in sequence.
 struct GcodeState {
   // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
   // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC).
