@@ -440,6 +440,7 @@ class Reader : public detail::ValueContext {
   void call(const std::string& s, const OLine& o);
   void leave_sub(const std::string& s, const OLine& o);
   const SubDefinition* find_sub(const std::string& name, int column);
+  Source* open_file(const std::filesystem::path& path, int column, const char* what);
   bool read_to_sub(const std::string& name);
   Frame& frame() { return frames_.back(); }
   std::string call_chain() const;
@@ -932,6 +933,20 @@ bool Reader::read_to_sub(const std::string& name) {
   return false;
 }
 
+// A subroutine or subprogram file, opened as a source of lines (program_.files names it).
+Source* Reader::open_file(const std::filesystem::path& path, int column, const char* what) {
+  auto src = std::make_unique<Source>();
+  src->owned = std::make_unique<std::ifstream>(path, std::ios::binary);
+  if (!*src->owned) fail(column, std::string("cannot open the ") + what + " file " + path.string());
+  src->in = src->owned.get();
+  src->name = path.string();
+  src->file_index = static_cast<int>(program_.files.size());
+  src->seekable = true;
+  program_.files.push_back(src->name);
+  sources_.push_back(std::move(src));
+  return sources_.back().get();
+}
+
 const SubDefinition* Reader::find_sub(const std::string& name, int column) {
   if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
   // Defined further down the calling file (after M2, say): read ahead for it, as rs274 does.
@@ -952,17 +967,8 @@ const SubDefinition* Reader::find_sub(const std::string& name, int column) {
     const std::filesystem::path path = folder / file;
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) continue;
-    auto src = std::make_unique<Source>();
-    src->owned = std::make_unique<std::ifstream>(path, std::ios::binary);
-    if (!*src->owned) fail(column, "cannot open the subroutine file " + path.string());
-    src->in = src->owned.get();
-    src->name = path.string();
-    src->file_index = static_cast<int>(program_.files.size());
-    src->seekable = true;
-    program_.files.push_back(src->name);
     Source* caller = current_;
-    current_ = src.get();
-    sources_.push_back(std::move(src));
+    current_ = open_file(path, column, "subroutine");
     const bool found = read_to_sub(name);
     const std::string where = current_->name;
     current_ = caller;
@@ -2043,19 +2049,7 @@ Mark Reader::locate_program(long long number, int column, const std::string& cal
                                   std::string("o") + digits4, std::string("o") + digits}) {
     for (const char* ext : {"", ".nc", ".NC", ".ngc", ".tap", ".txt", ".min", ".eia"}) names.push_back(stem + ext);
   }
-  auto open_source = [&](const std::filesystem::path& path) {
-    auto s = std::make_unique<Source>();
-    s->owned = std::make_unique<std::ifstream>(path, std::ios::binary);
-    if (!*s->owned) fail(column, "cannot open the subprogram file " + path.string());
-    s->in = s->owned.get();
-    s->name = path.string();
-    s->file_index = static_cast<int>(program_.files.size());
-    s->seekable = true;
-    program_.files.push_back(s->name);
-    Source* raw = s.get();
-    sources_.push_back(std::move(s));
-    return raw;
-  };
+  auto open_source = [&](const std::filesystem::path& path) { return open_file(path, column, "subprogram"); };
   // The file's body: after its O line if it has one among its first lines, else from its start.
   auto body_of = [&](Source* file) {
     Source* caller_source = current_;
