@@ -2777,7 +2777,7 @@ void Reader::home_return(const Code& g) {
     if (!state_.known[a] && !named[a]) via.start_mm[a] = via.end_mm[a] = state_.position_mm[a];
   }
   append(via, named);
-  std::array<bool, 4> rotary_named{};
+  std::array<bool, 3> rotary_named{};
   bool any = false;
   for (int a = 0; a < 3; ++a) any = any || named[a];
   for (int r = 0; r < 3; ++r) {
@@ -2850,7 +2850,6 @@ void Reader::cycle(int column, bool new_series) {
     }
     repeats = static_cast<int>(l_word.value);
   }
-  const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
   Eigen::Vector3d at = to_program(state_.position_mm);  // program coordinates, mm
   const double u = unit();
   double r = state_.cycle_r * u, bottom = state_.cycle_z * u;
@@ -3077,10 +3076,8 @@ bool Reader::execute() {
       continue;
     }
     lenient_ = true;  // the words of an ignored code are not checked
-    const bool flow = false;
-    if (m.number < 0 || flow || options_.unsupported_as_warning) {
-      unsupported(m.column, m.text, (flow ? "unsupported M code " : "unknown M code ") + m.text +
-                                        (flow ? " (subprogram call or return)" : ""));
+    if (m.number < 0 || options_.unsupported_as_warning) {
+      unsupported(m.column, m.text, "unknown M code " + m.text);
       continue;
     }
     // A machine's own M code (Haas M31 part counter, M101 ...): the control runs it and the

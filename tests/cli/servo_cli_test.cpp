@@ -102,27 +102,26 @@ double segment_distance(const std::array<double, 3>& p, const std::array<double,
 
 // ---------------------------------------------------------------- the CLI side
 
+// Fast X Y Z axes, shared by both test machines.
+#define VCUT_FAST_XYZ_AXES \
+    "  X: {kind: linear, direction: [1, 0, 0], limits: [-1000, 1000], max_velocity: 100000, " \
+    "max_acceleration: 1e7, max_jerk: 1e9}\n" \
+    "  Y: {kind: linear, direction: [0, 1, 0], limits: [-1000, 1000], max_velocity: 100000, " \
+    "max_acceleration: 1e7, max_jerk: 1e9}\n" \
+    "  Z: {kind: linear, direction: [0, 0, 1], limits: [-1000, 1000], max_velocity: 100000, " \
+    "max_acceleration: 1e7, max_jerk: 1e9}\n"
+
 // A three-axis machine (and a B-head one) whose axes are fast enough that the feed planner
 // does not slow the corner: the command runs at F through it, as in seed 004.
 const char* kFastXyz =
     "machine: fast-xyz\ntopology: WFXYZT\naxes:\n"
-    "  X: {kind: linear, direction: [1, 0, 0], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
-    "  Y: {kind: linear, direction: [0, 1, 0], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
-    "  Z: {kind: linear, direction: [0, 0, 1], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
+    VCUT_FAST_XYZ_AXES
     "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
 // B turns the head about the line x = 0, z = 580 (parallel to Y): with the tool 320 mm out of
 // the nose at z = 400 the tip is L = 500 mm from the B axis, as in seed 004.
 const char* kSwivel =
     "machine: swivel-b\ntopology: WFXYZBT\naxes:\n"
-    "  X: {kind: linear, direction: [1, 0, 0], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
-    "  Y: {kind: linear, direction: [0, 1, 0], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
-    "  Z: {kind: linear, direction: [0, 0, 1], limits: [-1000, 1000], max_velocity: 100000, "
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
+    VCUT_FAST_XYZ_AXES
     "  B: {kind: rotary, axis: [0, 1, 0], center: [0, 0, 580], limits: [-90, 90], max_velocity: "
     "1e6, max_acceleration: 1e7, max_jerk: 1e9}\n"
     "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
