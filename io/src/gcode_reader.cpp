@@ -228,8 +228,10 @@ constexpr GEntry kGCodes[] = {
     {950, {kFeedMode, false, false, false, "feed per revolution"}},
     {960, {kSpindleMode, false, false, false, "constant surface speed"}},
     {70, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
-    // Fanuc G68 X Y R (rotation of the programmed XY about a centre) and G69 (cancel).
-    {680, {kRotation, true}}, {690, {kRotation, true}},
+    // Fanuc G68 X Y R (rotation of the programmed XY about a centre) and G69 (cancel); G68.2
+    // (tilted work plane) with G53.1 / G53.6 (the rotaries turn the tool to it).
+    {680, {kRotation, true}}, {690, {kRotation, true}}, {682, {kRotation, true}},
+    {531, {kNonModal, true}}, {536, {kNonModal, true}},
     {80, {kLatheMode, false, false, false, "lathe diameter/radius mode"}},
     {700, {kMotion, false, true, false, "lathe cycle"}}, {710, {kMotion, false, true, false, "lathe cycle"}},
     {711, {kMotion, false, true, false, "lathe cycle"}}, {712, {kMotion, false, true, false, "lathe cycle"}},
@@ -493,6 +495,22 @@ class Reader : public detail::ValueContext {
   void cycle(int column, bool new_series);
   void set_offsets(const Code& g);
   void home_return(const Code& g);
+  // G68.2 / G69 / G53.1 / G53.6 (GcodeState::twp). Blocks from twp_first_block_ on are in the
+  // feature frame until twp_emit() moves them to the workpiece frame.
+  void twp_begin(const Code& g);
+  void twp_end();
+  void twp_emit();
+  void twp_turn(const Code& g);
+  // Rotaries standing turned outside G68.2 (GcodeState::twp without twp_feature).
+  bool turns_hold_linear() const {
+    return options_.tip_after_turn && !state_.rotary_program && state_.tcp == GcodeState::Tcp::Off &&
+           (state_.twp_used || state_.length_comp);
+  }
+  void turned_frame(const Eigen::Vector3d& tip_mm);
+  void end_turned_frame();
+  void joint_move(const Block& block, const kinematics::RotaryWords& to, int column);
+  size_t twp_first_block_ = 0;
+  bool in_swing_ = false;  // append() is emitting the steps of a rotary turn
   // The tip's offset from the spindle's gauge point with the tool in the spindle (mm).
   Eigen::Vector3d tip_offset() const {
     const auto it = options_.tool_length_mm.find(state_.tool);
@@ -738,6 +756,7 @@ void Reader::run(std::istream& in, const std::string& name) {
       for (int r = 0; r < 3; ++r) state_.parameters[base + 3 + static_cast<size_t>(r)] = options_.reference_rotary_deg[static_cast<size_t>(k)][static_cast<size_t>(r)];
     }
   }
+  twp_first_block_ = program_.blocks.size();
   std::string text;
   // Most lines of a long program are motions: room for one Block per line, estimated from the
   // first lines' length, saves the vector's regrowth copies and most page faults.
@@ -784,6 +803,7 @@ void Reader::run(std::istream& in, const std::string& name) {
                                 (corner_->round ? ",R" : ",C") + " on the last line: no next line, no corner");
     corner_.reset();
   }
+  if (state_.twp) twp_emit();  // the next file goes on in the tilted plane
 }
 
 bool Reader::line(std::string& text) {
@@ -1460,21 +1480,32 @@ Eigen::Vector2d Reader::polar_point(const Eigen::Vector2d& from) const {
 void Reader::append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end) {
   // Rotary words (degrees, G90/G91 like the linear axes; G20 does not apply).
   kinematics::RotaryWords rotary = rotary_end != nullptr ? *rotary_end : state_.rotary;
+  const bool holds_linear = !in_swing_ && turns_hold_linear();
+  int rotary_column = 1;
   for (int r = 0; r < 3 && rotary_end == nullptr; ++r) {
     const Word& w = word(static_cast<char>('A' + r));
     if (!w.present) continue;
+    if (rotary_column == 1) rotary_column = w.column;
+    if (state_.twp && state_.twp_feature) {
+      fail(w.column, std::string(1, static_cast<char>('A' + r)) +
+                         " word with a tilted work plane on (G53.1 or G53.6 turn the rotaries; expected G69 first)");
+    }
     const double v = w.value * M_PI / 180.0;
     rotary.angle_rad[static_cast<size_t>(r)] = state_.incremental ? rotary.angle_rad[static_cast<size_t>(r)] + v : v;
     rotary.given[static_cast<size_t>(r)] = true;
-    state_.rotary_program = true;
+    if (!holds_linear) state_.rotary_program = true;
+  }
+  if (holds_linear && rotary.angle_rad != state_.rotary.angle_rad) {
+    joint_move(block, rotary, rotary_column);
+    return;
   }
   block.start_rotary = state_.rotary;
   block.end_rotary = rotary;
   // Under TCP the block is a tool pose: the tip, and the tool axis from the rotary words
   // (G43.4: the machine's axes at those values) or from I J K (G43.5).
-  block.tool_pose = state_.tcp != GcodeState::Tcp::Off || !state_.rotary_program;
+  block.tool_pose = state_.tcp != GcodeState::Tcp::Off || !state_.rotary_program || state_.twp;
   bool reorients = false;
-  if (state_.tcp == GcodeState::Tcp::Angles) {
+  if (state_.tcp == GcodeState::Tcp::Angles || state_.twp) {
     block.orientation = kinematics::OrientationMode::Axes;
   } else if (state_.tcp == GcodeState::Tcp::Vector) {
     block.start_axis = state_.tool_axis;
@@ -2753,6 +2784,186 @@ void Reader::set_offsets(const Code& g) {
   }
 }
 
+// --- Tilted work plane, as Fanuc 30i and Haas NGC run it: G68.2 X Y Z (the feature frame's
+// origin, absolute program coordinates) I J K (Euler angles, deg, Z then the new X then the
+// new Z; P1: I J K about the fixed X, Y and Z, in that order); G53.1 turns the rotary axes,
+// the linear axes held, so that the tool lies along the feature frame's +Z (the solution
+// with the least rotary motion); G53.6 does the same keeping the tip where it is (tool centre
+// point retention); G69 ends it. In between, X Y Z (arcs, cycles and compensation included)
+// are in the feature frame and each block is a tool pose with the rotaries' values.
+void Reader::twp_begin(const Code& g) {
+  if (state_.twp && !state_.twp_feature) end_turned_frame();
+  if (state_.twp) fail(g.column, "G68.2 with a tilted work plane on (expected G69 first)");
+  if (rotated()) fail(g.column, "G68.2 with a G68 rotation on (expected G69 first)");
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[a]) {
+      fail(g.column, std::string("G68.2 while the ") + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+    }
+  }
+  const Word& p = word('P');
+  if (p.present && p.value != 0.0 && p.value != 1.0) {
+    fail(p.column, "G68.2 P" + num(p.value) +
+                       " (expected P0, Euler angles, or P1, roll-pitch-yaw; vcut does not read P2 three points, "
+                       "P3 two vectors or P4 projection angles)");
+  }
+  const Word& q = word('Q');
+  if (q.present && !(p.present && p.value == 1.0 && q.value == 123.0)) {
+    fail(q.column, "G68.2 Q" + num(q.value) + " (expected no Q, or Q123 with P1: vcut turns about X, then Y, then Z)");
+  }
+  for (char letter : {'P', 'Q', 'I', 'J', 'K'}) used_[letter - 'A'] = true;
+  auto angle = [&](char letter) { return word(letter).present ? word(letter).value * M_PI / 180.0 : 0.0; };
+  using Turn = Eigen::AngleAxisd;
+  const double i = angle('I'), j = angle('J'), k = angle('K');
+  const Eigen::Matrix3d r =
+      p.present && p.value == 1.0
+          ? Eigen::Matrix3d(Turn(k, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitY()) * Turn(i, Eigen::Vector3d::UnitX()))
+          : Eigen::Matrix3d(Turn(i, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitX()) * Turn(k, Eigen::Vector3d::UnitZ()));
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  for (int a = 0; a < 3; ++a) {
+    if (word(kAxisLetter[a]).present) origin[a] = word(kAxisLetter[a]).value * unit();
+  }
+  // The reader's coordinates q = feature point + offsets; workpiece = offsets + origin +
+  // R * feature point = R * q + (offsets + origin - R * offsets).
+  const Eigen::Vector3d offsets = state_.g5x_mm + state_.g92_mm;
+  state_.twp_rotation = r;
+  state_.twp_translation_mm = offsets + origin - r * offsets;
+  state_.twp = state_.twp_feature = state_.twp_used = true;
+  twp_first_block_ = program_.blocks.size();
+  state_.position_mm = r.transpose() * (state_.position_mm - state_.twp_translation_mm);
+  if (state_.comp.machine_mm) *state_.comp.machine_mm = r.transpose() * (*state_.comp.machine_mm - state_.twp_translation_mm);
+  state_.spline_control_mm.reset();
+}
+
+// The blocks made in the tilted plane, from the feature frame to the workpiece frame.
+void Reader::twp_emit() {
+  const Eigen::Matrix3d& r = state_.twp_rotation;
+  const Eigen::Vector3d& t = state_.twp_translation_mm;
+  for (size_t n = twp_first_block_; n < program_.blocks.size(); ++n) {
+    Block& b = program_.blocks[n];
+    b.start_mm = r * b.start_mm + t;
+    b.end_mm = r * b.end_mm + t;
+    b.center_mm = r * b.center_mm + t;
+    b.normal = r * b.normal;
+  }
+  twp_first_block_ = program_.blocks.size();
+}
+
+void Reader::twp_end() {
+  end_turned_frame();
+  // After G69 the rotaries stay where G53.1 turned them: X Y Z are the machine's again.
+  if (turns_hold_linear()) turned_frame(state_.position_mm);
+}
+
+// Emits the transformed blocks and goes back to workpiece coordinates.
+void Reader::end_turned_frame() {
+  twp_emit();
+  const Eigen::Matrix3d& r = state_.twp_rotation;
+  const Eigen::Vector3d& t = state_.twp_translation_mm;
+  state_.position_mm = r * state_.position_mm + t;
+  if (state_.comp.machine_mm) *state_.comp.machine_mm = r * *state_.comp.machine_mm + t;
+  state_.spline_control_mm.reset();
+  state_.twp = state_.twp_feature = false;
+  state_.twp_rotation.setIdentity();
+  state_.twp_translation_mm.setZero();
+}
+
+// The rotaries stand at state_.rotary (twp off): from here X Y Z are the machine's, the tip's
+// point with the rotaries at zero, taken to the workpiece by the turn (a rigid motion: its
+// rotation and translation from the images of the origin and the unit points).
+void Reader::turned_frame(const Eigen::Vector3d& tip_mm) {
+  state_.position_mm = tip_mm;
+  const auto& angles = state_.rotary.angle_rad;
+  if (!options_.tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0)) return;
+  kinematics::RotaryWords zero = state_.rotary;
+  zero.angle_rad = {0.0, 0.0, 0.0};
+  auto image = [&](const Eigen::Vector3d& p) { return options_.tip_after_turn(state_.tool, p, zero, state_.rotary); };
+  const Eigen::Vector3d t = image(Eigen::Vector3d::Zero());
+  Eigen::Matrix3d r;
+  for (int a = 0; a < 3; ++a) r.col(a) = image(Eigen::Vector3d::Unit(a)) - t;
+  state_.twp = true;
+  state_.twp_feature = false;
+  state_.twp_rotation = r;
+  state_.twp_translation_mm = t;
+  twp_first_block_ = program_.blocks.size();
+  state_.position_mm = r.transpose() * (tip_mm - t);
+  if (state_.comp.machine_mm) *state_.comp.machine_mm = r.transpose() * (*state_.comp.machine_mm - t);
+}
+
+// A move of the rotaries (and X Y Z) without TCP in a G43 / G68.2 program: the axes move
+// together, linearly, from where they are; the tip's path on the part goes out as tool-pose
+// steps of at most 1 deg of rotary motion each.
+void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, int column) {
+  if (block.kind == MotionKind::Arc) fail(column, "rotary words on an arc (expected them on a G0 or G1 line)");
+  if (hold_ || state_.comp.side != Comp::Side::Off) fail(column, "rotary words with cutter compensation on (expected G40 first)");
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[a]) fail(column, std::string("a rotary move while the ") + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+  }
+  const kinematics::RotaryWords from = state_.rotary;
+  kinematics::RotaryWords zero = from;
+  zero.angle_rad = {0.0, 0.0, 0.0};
+  const Eigen::Vector3d q0 = block.start_mm, q1 = block.end_mm;  // the machine's X Y Z
+  if (state_.twp) end_turned_frame();
+  double turn_deg = 0.0;
+  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
+  const int steps = std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+  const bool inverse_time = block.kind != MotionKind::Rapid && state_.inverse_time;
+  state_.position_mm = options_.tip_after_turn(state_.tool, q0, zero, from);
+  in_swing_ = true;
+  for (int n = 1; n <= steps; ++n) {
+    kinematics::RotaryWords step = to;
+    for (size_t a = 0; a < 3; ++a) step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+    Block b = block;
+    b.start_mm = state_.position_mm;
+    b.end_mm = options_.tip_after_turn(state_.tool, q0 + (q1 - q0) * n / steps, zero, step);
+    b.orientation = kinematics::OrientationMode::Axes;
+    if (inverse_time) b.feed_mm_per_min = block.feed_mm_per_min * steps;  // each step 1/steps of the time
+    append(b, {true, true, true}, &step);
+  }
+  in_swing_ = false;
+  turned_frame(state_.position_mm);
+}
+
+// G53.1 / G53.6: the rotaries turn the tool to the feature frame's +Z, in the G0 / G1 mode.
+// G53.1 holds the linear axes, so the tip swings with the table (or the head): its path goes
+// out as straight tool-pose moves of at most 1 deg of rotary motion each (off the swing by at
+// most r (1 - cos 0.5 deg) = 0.004 % of the tip's distance from the rotary axis).
+void Reader::twp_turn(const Code& g) {
+  if (!state_.twp || !state_.twp_feature) fail(g.column, g.text + " without a tilted work plane (expected G68.2 first)");
+  if (!options_.orient || !options_.tip_after_turn) {
+    fail(g.column, g.text + " needs the machine's rotary axes (expected a job, or vcut program --machine)");
+  }
+  if (state_.comp.side != Comp::Side::Off) fail(g.column, g.text + " with cutter compensation on (expected G40 first)");
+  const Eigen::Matrix3d& r = state_.twp_rotation;
+  const Eigen::Vector3d& t = state_.twp_translation_mm;
+  const Eigen::Vector3d tip = r * state_.position_mm + t;
+  const Eigen::Vector3d axis = r.col(2);
+  const kinematics::RotaryWords from = state_.rotary;
+  kinematics::RotaryWords to;
+  if (const std::string why = options_.orient(state_.tool, tip, axis, from, to); !why.empty()) {
+    fail(g.column, g.text + ": the machine cannot turn the tool to the tilted plane's Z (" + num(axis.x()) + ", " +
+                       num(axis.y()) + ", " + num(axis.z()) + "): " + why);
+  }
+  double turn_deg = 0.0;
+  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
+  const bool feed = state_.motion == Motion::Linear && !state_.inverse_time && state_.feed_mm_per_min > 0.0;
+  const int steps = g.number == 536 ? 1 : std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+  in_swing_ = true;
+  for (int n = 1; n <= steps; ++n) {
+    kinematics::RotaryWords step = to;
+    for (size_t a = 0; a < 3; ++a) {
+      step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+    }
+    const Eigen::Vector3d end = g.number == 536 ? tip : options_.tip_after_turn(state_.tool, tip, from, step);
+    Block block;
+    block.kind = feed ? MotionKind::Linear : MotionKind::Rapid;
+    block.feed_mm_per_min = feed ? state_.feed_mm_per_min : 0.0;
+    block.start_mm = state_.position_mm;
+    block.end_mm = r.transpose() * (end - t);
+    append(block, {true, true, true}, &step);
+  }
+  in_swing_ = false;
+}
+
 // G28 / G30 (LinuxCNC, Fanuc, Haas): a rapid to the point the line's axis words name (in the
 // active coordinate system and distance mode; the current point when none is named), then a
 // rapid of the named axes (every axis when none is named) to the reference position kept in
@@ -3017,10 +3228,10 @@ bool Reader::execute() {
   const bool stores_home = non_modal != nullptr && (non_modal->number == 281 || non_modal->number == 301);
   // Fanuc G68 X Y R: X Y are the rotation's centre, not a move.
   const Code* rotation = by_group[kRotation];
-  if (rotation != nullptr && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
+  if (rotation != nullptr && rotation->number == 680 && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
     fail(rotation->column, "unknown G code " + rotation->text + " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
   }
-  const bool rotates = rotation != nullptr && rotation->number == 680;
+  const bool rotates = rotation != nullptr && rotation->number != 690;  // G68 / G68.2 take X Y Z
   const bool sets_offsets =
       non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
   if (rotates && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
@@ -3238,9 +3449,17 @@ bool Reader::execute() {
   }
   if (rotation != nullptr) {
     if (state_.comp.side != Comp::Side::Off) fail(rotation->column, rotation->text + " with cutter compensation on (expected G40 first)");
+    if (corner_) {
+      fail(rotation->column, std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
+                                 " needs a G1 line next (expected the corner's second line before " + rotation->text + ")");
+    }
     if (rotation->number == 690) {
       state_.rotation_rad = 0.0;
+      if (state_.twp && state_.twp_feature) twp_end();
+    } else if (rotation->number == 682) {
+      twp_begin(*rotation);
     } else {
+      if (state_.twp && state_.twp_feature) fail(rotation->column, "G68 with a tilted work plane on (expected G69 first)");
       if (state_.plane != Plane::XY) fail(rotation->column, "G68 outside G17 (this reader rotates in the XY plane)");
       const Word& r = word('R');
       if (!r.present) fail(rotation->column, "G68 without R (expected R, the rotation in degrees)");
@@ -3256,6 +3475,18 @@ bool Reader::execute() {
       state_.rotation_rad = r.value * M_PI / 180.0;
     }
   }
+  if (state_.twp && state_.twp_feature) {
+    // What a control refuses in its tilted-plane mode (or vcut does not follow there).
+    auto refuse = [&](const Code* g, const char* what) {
+      if (g != nullptr) fail(g->column, g->text + " with a tilted work plane on (" + what + "; expected G69 first)");
+    };
+    if (machine_coordinates_) refuse(non_modal, "machine coordinates");
+    if (homes || stores_home) refuse(non_modal, "a reference position");
+    if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) refuse(non_modal, "an offset change");
+    refuse(by_group[kCoordinateSystem], "a coordinate system change");
+    if (by_group[kToolLength] != nullptr && by_group[kToolLength]->number == 435) refuse(by_group[kToolLength], "a tool axis vector");
+    if (m_code[6]) refuse(m_by_group[6], "a tool change");
+  }
   if (const Code* g = by_group[kCutterComp]) {
     if (g->number == 400) {
       comp_off(g->column);
@@ -3266,8 +3497,11 @@ bool Reader::execute() {
   if (const Code* g = by_group[kToolLength]) {
     state_.tcp = g->number == 434 ? GcodeState::Tcp::Angles
                  : g->number == 435 ? GcodeState::Tcp::Vector : GcodeState::Tcp::Off;
+    state_.length_comp = g->number == 430 || g->number == 431 || g->number == 432;
   }
   if (tcp_m_code_ >= 0) state_.tcp = tcp_m_code_ ? GcodeState::Tcp::Angles : GcodeState::Tcp::Off;
+  // TCP takes X Y Z as the tip on the part again.
+  if (state_.tcp != GcodeState::Tcp::Off && state_.twp && !state_.twp_feature) end_turned_frame();
   if (const Code* g = by_group[kToolLength]; g != nullptr && g->number != 490) {
     const Word& h = word('H');
     if (h.present && (h.value < 0.0 || !is_whole(h.value))) {
@@ -3341,6 +3575,9 @@ bool Reader::execute() {
   if (homes || stores_home) {
     if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");
     home_return(*non_modal);
+  } else if (non_modal != nullptr && (non_modal->number == 531 || non_modal->number == 536)) {
+    if (has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
+    twp_turn(*non_modal);
   } else if (axis_user != nullptr) {
     forget_axes(axis_user_all);
   } else if (sets_offsets || rotates || length_axes != nullptr || dwell_axis ||
@@ -3482,7 +3719,9 @@ bool Reader::execute() {
   }
   if (program_end) {
     // LinuxCNC M2/M30: G54, G17, G90, G94, G40, M5, M9 and motion mode G1; units, tool,
-    // feed and position stay. Nothing after this line is read.
+    // feed and position stay. Nothing after this line is read. A control's reset also ends a
+    // tilted work plane (G69).
+    if (state_.twp && state_.twp_feature) twp_end();
     state_.work_offset = "G54";
     state_.plane = Plane::XY;
     state_.incremental = false;

@@ -2,13 +2,17 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
 #include <vcut/io/sinumerik_reader.h>
+
+#include "reader_util.h"
 #include <vcut/kinematics/forward_kinematics.h>
+#include <vcut/kinematics/inverse_kinematics.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <utility>
 
 namespace vcut::io {
@@ -243,10 +247,79 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
   options.m_codes_ignored = spec.ignored_m_codes;
   options.tool_length_mm.clear();
   options.tool_radius_mm.clear();
+  auto lengths = std::make_shared<std::map<int, double>>();
   for (const auto& [number, cutter] : tools) {
     if (!axis_program) options.tool_length_mm[number] = cutter.gauge_length_mm;
     options.tool_radius_mm[number] = cutter.radius_mm();
+    (*lengths)[number] = cutter.gauge_length_mm;
   }
+  // G53.1 / G53.6: the machine's rotaries for a tool axis, and the tip's swing.
+  auto shared = std::make_shared<const kinematics::Machine>(spec);
+  auto axis_values = [shared](const kinematics::RotaryWords& rotary) {
+    kinematics::AxisValues q = shared->zero();
+    for (int r = 0; r < 3; ++r) {
+      const int i = shared->axis_index(static_cast<char>('A' + r));
+      if (i >= 0) q[i] = rotary.angle_rad[static_cast<size_t>(r)];
+    }
+    return q;
+  };
+  auto length_of = [lengths](int tool) {
+    const auto it = lengths->find(tool);
+    return it == lengths->end() ? 0.0 : it->second;
+  };
+  options.orient = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip, const Eigen::Vector3d& axis,
+                                                    const kinematics::RotaryWords& from, kinematics::RotaryWords& to) {
+    if (shared->rotary_count() == 0) return std::string("it has no rotary axis");
+    const kinematics::AxisValues previous = axis_values(from);
+    const kinematics::IkResult ik = kinematics::inverse(*shared, {tip, axis}, length_of(tool), &previous);
+    // The rotaries' limits decide here (the linear axes' travel is the path's business: the
+    // pose engine reports it): of the solutions within them, the least rotary motion.
+    const kinematics::IkSolution* best = nullptr;
+    double best_cost = 0.0;
+    std::string violation;
+    for (const kinematics::IkSolution& solution : ik.solutions) {
+      double cost = 0.0;
+      std::string outside;
+      for (int k = 0; k < shared->rotary_count(); ++k) {
+        const int i = shared->rotary_axis(k);
+        const auto& limits = shared->axis(i).limits;
+        if (limits && (solution.q[i] < limits->first - 1e-9 || solution.q[i] > limits->second + 1e-9) && outside.empty()) {
+          outside = "axis " + std::string(1, shared->axis(i).letter) + " would need " + detail::num(solution.q[i] * 180.0 / M_PI) +
+                    " deg, outside its limits [" + detail::num(limits->first * 180.0 / M_PI) + ", " +
+                    detail::num(limits->second * 180.0 / M_PI) + "]";
+        }
+        cost += std::abs(solution.q[i] - previous[i]);
+      }
+      if (!outside.empty()) {
+        if (violation.empty()) violation = outside;
+        continue;
+      }
+      if (best == nullptr || cost < best_cost - 1e-9) {
+        best = &solution;
+        best_cost = cost;
+      }
+    }
+    if (best == nullptr) return violation.empty() ? (ik.reason.empty() ? std::string("no solution") : ik.reason) : violation;
+    to = kinematics::RotaryWords{};
+    for (int r = 0; r < 3; ++r) {
+      const int i = shared->axis_index(static_cast<char>('A' + r));
+      if (i < 0) continue;
+      to.angle_rad[static_cast<size_t>(r)] = best->q[i];
+      to.given[static_cast<size_t>(r)] = true;
+    }
+    return std::string();
+  };
+  options.tip_after_turn = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip, const kinematics::RotaryWords& from,
+                                                            const kinematics::RotaryWords& to) {
+    kinematics::AxisValues q = axis_values(from);
+    if (!kinematics::solve_linear_axes(*shared, q, tip, length_of(tool))) return tip;
+    const kinematics::AxisValues turned = axis_values(to);
+    for (int r = 0; r < 3; ++r) {
+      const int i = shared->axis_index(static_cast<char>('A' + r));
+      if (i >= 0) q[i] = turned[i];
+    }
+    return kinematics::forward(*shared, q, length_of(tool)).tip_mm;
+  };
 }
 
 LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,

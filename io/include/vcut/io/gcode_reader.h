@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstddef>
+#include <functional>
 #include <iosfwd>
 #include <map>
 #include <optional>
@@ -72,6 +73,19 @@ struct GcodeOptions {
   // The tool in the spindle when the first file starts (0: none; programs that never change
   // tools, like LinuxCNC's demos, run with the machine's current tool).
   int initial_tool = 0;
+  // The machine's rotary axes, for G53.1 / G53.6 under a tilted work plane (G68.2). `orient`
+  // puts into `to` the rotary words (rad; the machine's rotary letters given) that turn the
+  // tool to `axis` (unit, tip -> spindle, workpiece frame) with the tip at `tip_mm`, with the
+  // least rotary motion from `from`, and returns "" - or why the machine cannot (a limit, an
+  // unreachable axis). `tip_after_turn` gives where the tip goes (workpiece frame, mm) when the
+  // rotary axes turn from `from` to `to` with the linear axes held. Unset (no machine): G53.1
+  // and G53.6 are errors.
+  std::function<std::string(int tool, const Eigen::Vector3d& tip_mm, const Eigen::Vector3d& axis,
+                            const kinematics::RotaryWords& from, kinematics::RotaryWords& to)>
+      orient;
+  std::function<Eigen::Vector3d(int tool, const Eigen::Vector3d& tip_mm, const kinematics::RotaryWords& from,
+                                const kinematics::RotaryWords& to)>
+      tip_after_turn;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 // Appends to `program` (so several files can run in sequence; the modal state and the
@@ -152,6 +166,20 @@ struct GcodeState {
   // coordinates, mm) before the work offsets apply; G69 sets it back to 0.
   double rotation_rad = 0.0;
   Eigen::Vector2d rotation_center_mm = Eigen::Vector2d::Zero();
+  // G68.2 tilted work plane (until G69 or the program's end): the reader works on in the
+  // feature frame (programmed coordinates + the offsets, as without it) and its blocks go out
+  // as workpiece = twp_rotation * q + twp_translation_mm, tool poses with the rotary axes'
+  // values (G53.1 / G53.6 turn them), as on a control's tilted-plane mode (twp_feature).
+  // Without TCP, in a program that uses G68.2 or G43, the rotaries may also stand turned
+  // outside it (after G69, or a rotary word): X Y Z are then the machine's (the point the tip
+  // would be at with the rotaries at zero) and the same transform, from the machine, takes
+  // them to the workpiece (twp on, twp_feature off).
+  bool twp = false;
+  bool twp_feature = false;
+  bool twp_used = false;     // G68.2 came in this program
+  bool length_comp = false;  // G43 / G43.1 / G43.2 on (G49, G43.4, G43.5 end it)
+  Eigen::Matrix3d twp_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d twp_translation_mm = Eigen::Vector3d::Zero();
 
   // Cutter radius compensation as LinuxCNC's interpreter does it (G41/G42, G41.1/G42.1, G40):
   // the tool's path is offset by the radius in the plane (G17 XY, G18 ZX); each move is held
