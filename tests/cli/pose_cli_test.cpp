@@ -411,6 +411,25 @@ TEST_F(PoseCli, FiveAxisFlankPlane) {
 // cut as translation pieces within v/10 of the rigid motion, by both engines; the two
 // machined surfaces must agree as two meshings of one solid do (v/4, the engines' own check
 // threshold) plus the pieces' bound v/10.
+// A 3+2 program as Fanuc/Haas posts write it, on the AC trunnion: G68.2 over the part's -Y
+// face (origin at its centre, J90: the feature Z is the face's outward normal), G53.1 (A to
+// -90), two plunges 5 deep 12 mm apart, G69, G91 G28 Z0 (out along the tool), G0 A0 C0 (the
+// table back, the linear axes held), and a plunge 4 deep in the top face. The 10 mm flat end
+// mill removes three cylinders: pi 5^2 (5 + 5 + 4) = 350 pi mm3.
+TEST_F(PoseCli, ThreePlusTwoTiltedPlaneHoles) {
+  write(dir / "holes.nc",
+        "%\nO0001\nG21 G90 G17 G40 G49 G80\nT1 M6\nS8000 M3\nG0 X0 Y0\nG43 H1 Z50.\n"
+        "G68.2 X0 Y-20. Z-15. I0 J90. K0\nG53.1\nG0 X0 Y0 Z10.\nG1 Z-5. F200\nG0 Z10.\nX12.\nG1 Z-5.\nG0 Z10.\n"
+        "G69\nG91 G28 Z0\nG90 G0 A0 C0\nG0 X0 Y0 Z10.\nG1 Z-4. F200\nG0 Z50.\nM30\n%\n");
+  const nlohmann::json j =
+      simulate("holes",
+               "job: holes\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: holes.nc}\n"
+               "stock: {box: {min: [-25, -20, -30], max: [25, 20, 0]}}\n"
+               "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out_holes}\n");
+  const double removed = 350.0 * M_PI;  // 1099.56 mm3
+  EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), removed, 0.005 * removed);
+}
+
 TEST_F(PoseCli, FiveAxisTiltingEnginesAgree) {
   write(dir / "tilt.apt",
         "$$ the axis tilts 0 -> 30 deg about y along the cut\nUNITS/MM\nCUTTER/10\nLOADTL/1\n"

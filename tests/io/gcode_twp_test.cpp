@@ -170,6 +170,35 @@ TEST(TiltedPlane, G531HoldsTheLinearAxesAndG536TheTip) {
   EXPECT_NEAR(held.blocks[0].end_rotary.angle_rad[0], -90 * kDeg, 1e-9);
 }
 
+TEST(TiltedPlane, AfterG69TheRotariesStayAndXyzAreTheMachines) {
+  // table-table-ac, A centre (0, -20, -100). J90 turns A to -90 (C 0); the tip on the feature
+  // zero, the workpiece origin. After G69 the table stays turned: the machine point under the
+  // tip is c + Rx(-90) (0 - c) = (0, 80, -120). G91 G28 Z0 raises the spindle to its
+  // reference (the gauge point at Z 500 at all-zero axes, no tool length here): the machine
+  // point (0, 80, 500), which on the turned part is c + Rx(+90) ((0, 80, 500) - c) =
+  // (0, -620, 0) - along the tool axis, the part's -Y. G0 A0 C0 then turns the table back
+  // with the linear axes held: the tip ends at the machine point itself.
+  GcodeOptions options = machine_options("table-table-ac");
+  const auto program = read_text(
+      "G68.2 I0 J90. K0\n"
+      "G53.1\n"
+      "G0 X0 Y0 Z0\n"
+      "G69\n"
+      "G91 G28 Z0\n"
+      "G90 G0 A0 C0\n"
+      "G0 X10.\n",
+      options, "after.nc");
+  expect_near(last_of_line(program, 3).end_mm, Eigen::Vector3d::Zero(), 1e-9, "feature zero");
+  expect_near(last_of_line(program, 5).end_mm, Eigen::Vector3d(0, -620, 0), 1e-9, "G28 along the tool axis");
+  EXPECT_NEAR(last_of_line(program, 5).end_rotary.angle_rad[0], -90 * kDeg, 1e-9);
+  const Block& back = last_of_line(program, 6);
+  expect_near(back.end_mm, Eigen::Vector3d(0, 80, 500), 1e-9, "A0 C0 with the linear axes held");
+  EXPECT_NEAR(back.end_rotary.angle_rad[0], 0.0, 1e-12);
+  EXPECT_TRUE(back.tool_pose);
+  // Untilted, X Y Z are the part's again.
+  expect_near(last_of_line(program, 7).end_mm, Eigen::Vector3d(10, 80, 500), 1e-9, "X10 after");
+}
+
 TEST(TiltedPlane, RollPitchYawWithP1) {
   // P1: I about X, then J about Y, then K about Z, all fixed axes: R = Rz(K) Ry(J) Rx(I).
   // I90 alone: feature Y goes to +Z, feature Z to -Y.
