@@ -3,6 +3,9 @@
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 
+#include <Eigen/Geometry>
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstddef>
@@ -40,7 +43,7 @@ void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOption
       continue;
     }
     require(b.turns >= 1);
-    require(std::abs(b.normal.norm() - 1.0) == 0.0 && b.normal.cwiseAbs().maxCoeff() == 1.0);
+    require(std::abs(b.normal.norm() - 1.0) <= 1e-12);  // along an axis, or turned by G68.2
     const Eigen::Vector3d n = b.normal;
     // The centre lies in the start's plane; start and end are (nearly) equally far from it.
     require(std::abs(n.dot(b.center_mm - b.start_mm)) <= 1e-9);
@@ -83,6 +86,26 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       options.tool_length_mm = {{1, 90.0}, {2, 120.5}};
     }
   }
+  // G53.1 / G53.6: a table-table A C machine with both axes through the origin (tool axis on
+  // the part (sin A sin C, sin A cos C, cos A); the table turns the part by Rx(A) Rz(C)), A
+  // within [-120, 30] deg.
+  options.orient = [](int, const Eigen::Vector3d&, const Eigen::Vector3d& axis, const vcut::kinematics::RotaryWords&,
+                      vcut::kinematics::RotaryWords& to) {
+    const double a = -std::acos(std::clamp(axis.z(), -1.0, 1.0));
+    if (a < -120.0 * M_PI / 180.0) return std::string("axis A would need more than -120 deg");
+    to = {};
+    to.angle_rad = {a, 0.0, std::atan2(-axis.x(), -axis.y())};
+    to.given = {true, false, true};
+    return std::string();
+  };
+  options.tip_after_turn = [](int, const Eigen::Vector3d& tip, const vcut::kinematics::RotaryWords& from,
+                              const vcut::kinematics::RotaryWords& to) {
+    auto table = [](const vcut::kinematics::RotaryWords& r) {
+      return Eigen::Matrix3d(Eigen::AngleAxisd(r.angle_rad[0], Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(r.angle_rad[2], Eigen::Vector3d::UnitZ()));
+    };
+    return Eigen::Vector3d(table(to).transpose() * (table(from) * tip));
+  };
   // Cutter compensation radii (G41 D1, D2, D3; D0 or none: the tool in the spindle).
   options.tool_radius_mm = {{0, 0.0}, {1, 5.0}, {2, 0.5}, {3, 12.7}};
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));

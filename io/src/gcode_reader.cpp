@@ -1499,6 +1499,16 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
     joint_move(block, rotary, rotary_column);
     return;
   }
+  // A tilted plane's (or turned table's) frame can carry a point in range out of it.
+  if (state_.twp || in_swing_) {
+    const Eigen::Vector3d end = state_.twp ? Eigen::Vector3d(state_.twp_rotation * block.end_mm + state_.twp_translation_mm) : block.end_mm;
+    for (int a = 0; a < 3; ++a) {
+      if (!(std::abs(end[a]) <= kMaxMagnitude)) {
+        fail(1, std::string(1, kAxisLetter[a]) + " position " + num(end[a]) +
+                    " mm on the part is out of range (expected within +-1e6 mm)");
+      }
+    }
+  }
   block.start_rotary = state_.rotary;
   block.end_rotary = rotary;
   // Under TCP the block is a tool pose: the tip, and the tool axis from the rotary words
