@@ -213,8 +213,10 @@ constexpr GEntry kGCodes[] = {
     {53, {kMotion, false, true, false, "spline/NURBS"}},
     // G33 (threading: a straight feed at K per revolution), G33.1 (rigid tapping).
     {330, {kMotion, true}}, {331, {kMotion, true}},
-    {382, {kMotion, false, true, false, "probing"}}, {383, {kMotion, false, true, false, "probing"}},
-    {384, {kMotion, false, true, false, "probing"}}, {385, {kMotion, false, true, false, "probing"}},
+    // G38.2 / G38.3 probe toward the stock, G38.4 / G38.5 away from it (error / no error
+    // without a change of contact); G31 (Fanuc's skip, Mach3's probe) is G38.3 on its line only.
+    {382, {kMotion, true}}, {383, {kMotion, true}}, {384, {kMotion, true}}, {385, {kMotion, true}},
+    {310, {kNonModal, true}},
     {740, {kMotion, false, true, false, "canned cycle"}},
     {760, {kMotion, false, true, false, "canned cycle"}},
     {840, {kMotion, false, true, false, "canned cycle"}},
@@ -459,6 +461,7 @@ class Reader : public detail::ValueContext {
                   const std::vector<std::pair<int, double>>& arguments = {});
   bool fanuc_return();
   double fanuc_system_variable(int number, int column);
+  static bool added_common(int number) { return (number >= 98000 && number <= 98499) || (number >= 100000 && number <= 199999); }
   void set_variable(int number, double value, int column, const std::string& text);
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
   size_t skip_comment(const std::string& s, size_t i);
@@ -495,6 +498,7 @@ class Reader : public detail::ValueContext {
   void cycle(int column, bool new_series);
   void set_offsets(const Code& g);
   void home_return(const Code& g);
+  void probe(int column, int code);
   // G68.2 / G69 / G53.1 / G53.6 (GcodeState::twp). Blocks from twp_first_block_ on are in the
   // feature frame until twp_emit() moves them to the workpiece frame.
   void twp_begin(const Code& g);
@@ -605,6 +609,10 @@ constexpr int kPositionParameter = 5420;  // X of the current position (program 
 double Reader::numbered_parameter(int number, int column) {
   if (fanuc_macros()) {
     if (number == 0) return detail::kVacant;
+    if (added_common(number)) {
+      const auto it = state_.added_commons.find(number);
+      return it == state_.added_commons.end() ? detail::kVacant : it->second;
+    }
     if ((number >= 3000 && number < 5000) || (number >= 5001 && number <= 5106) || number > 5601) {
       return fanuc_system_variable(number, column);
     }
@@ -1939,7 +1947,8 @@ double Reader::fanuc_system_variable(int number, int column) {
   }
   if (number >= 5001 && number <= 5106) {
     const int base = (number - 5001) / 20 * 20 + 5001, axis = number - base;
-    if (base > 5041 || axis > 5) return 0;  // skip positions, tool offsets, servo errors: none
+    if (base == 5061 && axis <= 5) return state_.parameters[static_cast<size_t>(number)];  // skip (probe) position
+    if (base > 5041 || axis > 5) return 0;  // tool offsets, servo errors: none
     if (axis >= 3) return state_.rotary.angle_rad[static_cast<size_t>(axis - 3)] * 180.0 / M_PI;
     // #5001: the last block's end, #5041 the current position (work coordinates); #5021
     // machine coordinates.
@@ -1947,8 +1956,8 @@ double Reader::fanuc_system_variable(int number, int column) {
     return (base == 5021 ? machine : machine - state_.g5x_mm[axis] - state_.g92_mm[axis]) / unit();
   }
   fail(column, "system variable #" + std::to_string(number) +
-                   " is not one vcut knows (expected #1..#33, #100..#999, #3000..#3999, #4001..#4130, #5001..#5106 or "
-                   "#5201..#5601)");
+                   " is not one vcut knows (expected #1..#33, #100..#999, #3000..#3999, #4001..#4130, #5001..#5106, "
+                   "#5201..#5601, #98000..#98499 or #100000..#199999)");
 }
 
 void Reader::set_variable(int number, double value, int column, const std::string& text) {
@@ -1974,6 +1983,10 @@ void Reader::set_variable(int number, double value, int column, const std::strin
   if (number == 3006) {
     warn(column, "stop #3006" + (message.empty() ? std::string() : ": " + message) +
                      " (the control waits for cycle start; the simulation goes on)");
+    return;
+  }
+  if (added_common(number)) {
+    state_.added_commons[number] = value;
     return;
   }
   if ((number >= 4000 && number < 5000) || (number >= 5001 && number <= 5106) || number > 5601) {
@@ -2794,6 +2807,81 @@ void Reader::set_offsets(const Code& g) {
   }
 }
 
+constexpr double kProbeBackoffMm = 0.254;
+
+// G38.2 / G38.3 / G31: a straight feed toward the point that stops where the probe's tip
+// touches the stock (GcodeOptions::probe_contact: the job's stock as it was before the
+// program, the tip a point), with the tip's position then in #5061..#5066 (program
+// coordinates) and #5070 = 1 (0: no contact), as LinuxCNC keeps them (Fanuc: #5061..; Mach3's
+// G31: #2000..#2002 too). G38.2 without contact is an error, as on the control.
+void Reader::probe(int column, int code) {
+  const std::string name = code == 310 ? "G31" : "G38." + std::to_string(code - 380);
+  const bool away = code == 384 || code == 385, needs_change = code == 382 || code == 384;
+  if (state_.twp) fail(column, name + " with a tilted work plane or turned rotaries (expected them upright first)");
+  if (state_.comp.side != Comp::Side::Off) fail(column, name + " with cutter compensation on (expected G40 first)");
+  if (state_.inverse_time) fail(column, name + " in inverse-time mode G93 (expected G94)");
+  for (char letter : {'A', 'B', 'C'}) {
+    if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word on a probe move (expected X Y Z only)");
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!state_.known[a]) fail(column, name + " while the " + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+  }
+  std::array<bool, 3> programmed{};
+  const Eigen::Vector3d end = target(programmed);
+  const Eigen::Vector3d start = state_.position_mm;
+  if (needs_change && (end - start).norm() < 1e-7) {
+    fail(column, name + " to where the probe is (expected a move; the control refuses one of zero length)");
+  }
+  const double feed = feed_of_line(column);
+  double s = 1.0;
+  bool contact = true;
+  if (options_.probe_contact) {
+    const std::optional<double> hit = options_.probe_contact(start, end);
+    const bool touching = hit && *hit <= 0.0;
+    if (!away) {
+      if (touching) fail(column, name + ": the probe touches the stock where it starts (the control: the probe is already tripped)");
+      contact = hit.has_value();
+      if (hit) s = *hit;
+    } else {
+      if (!touching) fail(column, name + ": the probe does not touch the stock where it starts (the control: the probe is not tripped)");
+      // The stock is convex (a box or a cylinder): it lets go where the move, run backwards
+      // from its end, first touches it.
+      const std::optional<double> back = options_.probe_contact(end, start);
+      contact = back && *back > 0.0;
+      if (contact) s = 1.0 - *back;
+    }
+    if (!contact && needs_change) {
+      fail(column, name + " ends without " + (away ? "leaving" : "touching") +
+                       " the stock (the control stops with an error; expected the stock's surface in the probe's way, or G38." +
+                       (away ? "5" : "3") + ")");
+    }
+  } else {
+    // No stock: the probe trips 0.254 mm (0.01 in) before its end, where LinuxCNC's
+    // standalone interpreter puts it (behind the start on a shorter move; no move at all on
+    // one of zero length).
+    const double length_mm = (end - start).norm();
+    s = length_mm > 0.0 ? 1.0 - kProbeBackoffMm / length_mm : 0.0;
+    contact = false;  // #5070 = 0, as there
+    if (state_.warned.insert("probe").second) {
+      warn(column, name + " with no stock to touch (vcut program reads none): the probe trips 0.254 mm before its end "
+                          "point, as LinuxCNC's rs274 has it; a job probes its stock");
+    }
+  }
+  Block block;
+  block.kind = MotionKind::Linear;
+  block.start_mm = start;
+  block.end_mm = start + s * (end - start);
+  block.feed_mm_per_min = feed;
+  append(block, {true, true, true});
+  const Eigen::Vector3d at = to_program(state_.position_mm) / unit();
+  for (int a = 0; a < 3; ++a) {
+    state_.parameters[static_cast<size_t>(5061 + a)] = at[a];
+    state_.parameters[static_cast<size_t>(5064 + a)] = state_.rotary.angle_rad[static_cast<size_t>(a)] * 180.0 / M_PI;
+    if (code == 310 && options_.flavor != GcodeOptions::Flavor::Fanuc) state_.parameters[static_cast<size_t>(2000 + a)] = at[a];
+  }
+  state_.parameters[5070] = contact ? 1.0 : 0.0;
+}
+
 // --- Tilted work plane, as Fanuc 30i and Haas NGC run it: G68.2 X Y Z (the feature frame's
 // origin, absolute program coordinates) I J K (Euler angles, deg, Z then the new X then the
 // new Z; P1: I J K about the fixed X, Y and Z, in that order); G53.1 turns the rotary axes,
@@ -3555,12 +3643,15 @@ bool Reader::execute() {
         {30, Motion::ArcCounterClockwise}, {800, Motion::None}, {330, Motion::SpindleSync},
         {331, Motion::RigidTap},     {50, Motion::CubicSpline}, {51, Motion::QuadraticSpline},
         {730, Motion::Cycle},        {810, Motion::Cycle},      {820, Motion::Cycle},
-        {830, Motion::Cycle},        {850, Motion::Cycle},      {890, Motion::Cycle}};
+        {830, Motion::Cycle},        {850, Motion::Cycle},      {890, Motion::Cycle},
+        {382, Motion::Probe},        {383, Motion::Probe},      {384, Motion::Probe},
+        {385, Motion::Probe}};
     state_.motion = Motion::Unsupported;
     for (const auto& [code, motion] : kMotions) {
       if (code == g->number) state_.motion = motion;
     }
     if (state_.motion == Motion::Cycle) state_.cycle = g->number;
+    if (state_.motion == Motion::Probe) state_.probe = g->number;
   }
 
   // --- Motion.
@@ -3585,6 +3676,9 @@ bool Reader::execute() {
   if (homes || stores_home) {
     if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");
     home_return(*non_modal);
+  } else if (non_modal != nullptr && non_modal->number == 310) {
+    if (!has_axis) fail(non_modal->column, "G31 without axis words (expected the point the probe moves toward)");
+    probe(non_modal->column, 310);
   } else if (non_modal != nullptr && (non_modal->number == 531 || non_modal->number == 536)) {
     if (has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
     twp_turn(*non_modal);
@@ -3611,6 +3705,9 @@ bool Reader::execute() {
       case Motion::RigidTap:
         used_['K' - 'A'] = true;
         synchronized(column);
+        break;
+      case Motion::Probe:
+        probe(motion_code != nullptr ? motion_code->column : column, state_.probe);
         break;
       case Motion::CubicSpline:
       case Motion::QuadraticSpline:
@@ -3692,7 +3789,14 @@ bool Reader::execute() {
     for (char letter : {'I', 'J', 'K', 'R', 'P', 'Q', 'H', 'D', 'L', 'E'}) {
       const Word& w = word(letter);
       if (!w.present || used_[letter - 'A']) continue;
-      std::string users = "a G code that uses it";
+      // Fanuc and Haas keep an H or D (offset number) given without G43 or G41/G42, as in
+      // "G53 G0 H0 Z0" or "G43 H13 D13"; it does not move the tip here, where tool lengths and
+      // radii come from the tool library.
+      if ((letter == 'H' || letter == 'D') && options_.flavor != GcodeOptions::Flavor::LinuxCnc && w.value >= 0.0 &&
+          is_whole(w.value)) {
+        continue;
+      }
+      std::string users = "a G code";
       if (letter == 'E') fail(w.column, "word letter 'E' with no M66, M67 or M68 to use it");
       switch (letter) {
         case 'I':

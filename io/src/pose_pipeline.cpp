@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/program_reader.h"
@@ -56,6 +57,52 @@ const char* feed_interpretation_name(kinematics::FeedInterpretation f) {
   return "linuxcnc";
 }
 
+// Where a probe's tip, moving from `a` to `b`, first touches the stock as it is before the
+// program (a fraction of the move; 0: it starts inside), or none. A box by its slabs; a
+// cylinder by its axial slab and the quadratic of its side. A mesh stock: none (the reader
+// warns that its probes trip at their end).
+static std::optional<double> stock_contact(const StockSpec& stock, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  double lo = 0.0, hi = 1.0;
+  // Clips [lo, hi] to the s where lower <= value0 + s * rate <= upper.
+  auto clip = [&](double value0, double rate, double lower, double upper) {
+    if (rate == 0.0) {
+      if (value0 < lower || value0 > upper) hi = -1.0;
+      return;
+    }
+    double s0 = (lower - value0) / rate, s1 = (upper - value0) / rate;
+    if (s0 > s1) std::swap(s0, s1);
+    lo = std::max(lo, s0);
+    hi = std::min(hi, s1);
+  };
+  const Eigen::Vector3d d = b - a;
+  if (stock.kind == StockSpec::Kind::Box) {
+    for (int k = 0; k < 3; ++k) clip(a[k], d[k], stock.box.min_mm[k], stock.box.max_mm[k]);
+  } else if (stock.kind == StockSpec::Kind::Cylinder) {
+    const removal::CylinderShape& c = stock.cylinder;
+    const Eigen::Vector3d u = c.axis.normalized();
+    clip((a - c.base_center_mm).dot(u), d.dot(u), 0.0, c.height_mm);
+    // Distance from the axis: |w + s e|^2 <= r^2, w and e the parts across it.
+    const Eigen::Vector3d w = (a - c.base_center_mm) - (a - c.base_center_mm).dot(u) * u, e = d - d.dot(u) * u;
+    const double qa = e.squaredNorm(), qb = 2.0 * w.dot(e), qc = w.squaredNorm() - c.radius_mm * c.radius_mm;
+    if (qa == 0.0) {
+      if (qc > 0.0) hi = -1.0;
+    } else {
+      const double disc = qb * qb - 4.0 * qa * qc;
+      if (disc < 0.0) {
+        hi = -1.0;
+      } else {
+        const double root = std::sqrt(disc);
+        lo = std::max(lo, (-qb - root) / (2.0 * qa));
+        hi = std::min(hi, (-qb + root) / (2.0 * qa));
+      }
+    }
+  } else {
+    return std::nullopt;
+  }
+  if (lo > hi) return std::nullopt;
+  return lo;
+}
+
 JobProgram read_job_program(const Job& job) {
   // G-code and APT CL data (read_programs picks the reader from the job's dialect or from
   // each file). An APT program's CUTTER/ shapes fill in the T numbers the tool library lacks:
@@ -84,6 +131,11 @@ JobProgram read_job_program(const Job& job) {
     }
   };
   machine_start(false);
+  if (job.stock.kind != StockSpec::Kind::Mesh) {
+    reading.gcode.probe_contact = [stock = job.stock](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+      return stock_contact(stock, a, b);
+    };
+  }
   LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
   if (loaded.dialect == "gcode" &&
       std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const kinematics::Block& b) { return !b.tool_pose; })) {

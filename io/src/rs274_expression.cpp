@@ -162,8 +162,8 @@ class Parser {
     if (std::abs(v - whole) > kWholeTolerance) {
       context_.fail(column_at(at), "parameter number " + num(v) + " (expected a whole number)");
     }
-    if (fanuc_ && (whole < 0.0 || whole > 99999.0)) {
-      context_.fail(column_at(at), "variable number " + num(whole) + " (expected #0..#99999)");
+    if (fanuc_ && (whole < 0.0 || whole > 199999.0)) {
+      context_.fail(column_at(at), "variable number " + num(whole) + " (expected #0..#199999)");
     }
     if (!fanuc_ && (whole < 1.0 || whole > kMaxParameter)) {
       context_.fail(column_at(at), "parameter number " + num(whole) + " (expected 1..5601)");

@@ -430,6 +430,21 @@ TEST_F(PoseCli, ThreePlusTwoTiltedPlaneHoles) {
   EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), removed, 0.005 * removed);
 }
 
+// A probe finds the stock's top (box z -10..0) from Z10 down to Z-25; G10 L20 makes that Z0
+// and the 10 mm end mill cuts 2 below it: a plunge and a 10 mm slot, pi 5^2 2 + 10 10 2 =
+// 357.08 mm3. A probe that ran to its end would put Z0 at -25 and cut nothing.
+TEST_F(PoseCli, ProbeTouchesTheStock) {
+  write(dir / "probe.ngc",
+        "G21 G90 G17\nT1 M6\nG0 X10 Y10 Z10\nG38.2 Z-25 F100\nG10 L20 P1 Z0\nG0 Z5\nG1 Z-2 F200\nX20\nG0 Z20\nM30\n");
+  const nlohmann::json j =
+      simulate("probe",
+               "job: probe\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: probe.ngc}\n"
+               "stock: {box: {min: [0, 0, -10], max: [40, 40, 0]}}\n"
+               "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out_probe}\n");
+  const double removed = M_PI * 25.0 * 2.0 + 10.0 * 10.0 * 2.0;
+  EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), removed, 0.005 * removed);
+}
+
 TEST_F(PoseCli, FiveAxisTiltingEnginesAgree) {
   write(dir / "tilt.apt",
         "$$ the axis tilts 0 -> 30 deg about y along the cut\nUNITS/MM\nCUTTER/10\nLOADTL/1\n"

@@ -582,21 +582,21 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;
   const Program p = read(
-      "G0 X0 Y0 Z0\nG5.2\nG5.2\nM123\nG1 X1 U10 F10\nG38.2 X9 F10\n"
+      "G0 X0 Y0 Z0\nG5.2\nG5.2\nM123\nG1 X1 U10 F10\nG71 X9 F10\n"
       "G0 X2\n",
       options);
-  // One warning per distinct word (G5.2, M123, U, G38.2), each naming its first place.
+  // One warning per distinct word (G5.2, M123, U, G71), each naming its first place.
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
   EXPECT_NE(p.warnings[0].find("G5.2"), std::string::npos);
   EXPECT_EQ(p.warnings[1].rfind("test.ngc:4:1: ", 0), 0u) << p.warnings[1];
   EXPECT_EQ(p.warnings[2].rfind("test.ngc:5:7: ", 0), 0u) << p.warnings[2];
   EXPECT_EQ(p.warnings[3].rfind("test.ngc:6:1: ", 0), 0u) << p.warnings[3];
-  // The ignored probing move leaves X unknown: the G0 X2 after it only re-establishes X.
+  // The ignored lathe cycle leaves X unknown: the G0 X2 after it only re-establishes X.
   ASSERT_EQ(p.blocks.size(), 1u);
   expect_vec(p.blocks[0].end_mm, {1, 0, 0});
-  // A probing move (ignored) leaves its axes unknown: the next Z only re-establishes Z.
-  const Program q = read("G0 X0 Y0 Z0\nG38.2 Z-5 F10\nG0 Z5\n", options);
+  // A lathe cycle (ignored) leaves its axes unknown: the next Z only re-establishes Z.
+  const Program q = read("G0 X0 Y0 Z0\nG71 Z-5 F10\nG0 Z5\n", options);
   EXPECT_TRUE(q.blocks.empty());
 }
 

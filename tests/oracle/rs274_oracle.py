@@ -321,9 +321,20 @@ def parse_rs274(stdout):
             mo.center = mo.normal = None
             mo.turns = 0
             if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE") and len(nums) >= 6:
+                # STRAIGHT_PROBE: a feed to the point; rs274 standalone trips the probe at its
+                # end, as vcut does with no stock to touch (`vcut program`).
                 mo.kind = {"STRAIGHT_TRAVERSE": "rapid", "STRAIGHT_FEED": "linear",
-                           "STRAIGHT_PROBE": "probe"}[name]
+                           "STRAIGHT_PROBE": "linear"}[name]
                 mo.end, mo.abc = to_frame(nums[:6])
+                if name == "STRAIGHT_PROBE":
+                    # rs274 prints the target; its probe trips 0.254 mm before it (saicanon's
+                    # probe position, where the next move starts), as vcut's probe block ends.
+                    start = motions[-1].end if motions else [0.0, 0.0, 0.0]
+                    d = [mo.end[i] - start[i] for i in range(3)]
+                    length = math.sqrt(sum(x * x for x in d))
+                    if length > 0:
+                        back = min(1.0, 0.254 / length)
+                        mo.end = [mo.end[i] - back * d[i] for i in range(3)]
             elif name == "ARC_FEED" and len(nums) >= 9 and plane in PLANE_AXES:
                 fe, se, fc, sc, turn, ae = nums[:6]
                 a, b, c = PLANE_AXES[plane]

@@ -86,6 +86,11 @@ struct GcodeOptions {
   std::function<Eigen::Vector3d(int tool, const Eigen::Vector3d& tip_mm, const kinematics::RotaryWords& from,
                                 const kinematics::RotaryWords& to)>
       tip_after_turn;
+  // Probing (G38.2 / G38.3; G31, Fanuc's skip and Mach3's probe): where along the move from
+  // `from` to `to` (tips, workpiece frame, mm) the probe's tip first touches the stock, as a
+  // fraction in [0, 1], or none. A job sets it from its stock; unset (`vcut program`), a probe
+  // runs to its end point, with a warning.
+  std::function<std::optional<double>(const Eigen::Vector3d& from, const Eigen::Vector3d& to)> probe_contact;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 // Appends to `program` (so several files can run in sequence; the modal state and the
@@ -103,11 +108,12 @@ struct GcodeState {
   // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
   // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC).
   enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, SpindleSync, RigidTap,
-                      CubicSpline, QuadraticSpline, Unsupported };
+                      CubicSpline, QuadraticSpline, Probe, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
   int cycle = 0;                 // the canned cycle's G code x10 (810 for G81) when Motion::Cycle
+  int probe = 0;                 // 382 (G38.2) or 383 (G38.3) when Motion::Probe
   Plane plane = Plane::XY;
   bool inches = false;               // G20
   bool incremental = false;          // G91
@@ -151,6 +157,8 @@ struct GcodeState {
   // Numbered parameters #1..#5601 (index = number; empty until the first file starts) and
   // the named ones: globals (#<_name>) and the main program's locals.
   std::vector<double> parameters;
+  // Fanuc 30i's added common variables #98000..#98499 and #100000..#199999 (vacant until set).
+  std::map<int, double> added_commons;
   std::map<std::string, double> globals, locals;
   // Canned cycles (G81..G89): the height (mm, program coordinates) the series of cycles
   // started at: G98 goes back to it, and in G91 R counts from it.
