@@ -376,6 +376,7 @@ struct Frame {
   std::vector<Loop> loops;
   std::vector<std::pair<std::string, std::string>> ifs;  // label, file:line of the if
   std::optional<ModalState> autorestore;  // M73: restored when this call returns
+  bool modal = false;  // a Fanuc G66 call: no modal call from inside it
 };
 
 struct SubDefinition {
@@ -458,7 +459,14 @@ class Reader : public detail::ValueContext {
   Mark find_program(long long number, int column, const std::string& caller);
   Mark locate_program(long long number, int column, const std::string& caller);
   void fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
-                  const std::vector<std::pair<int, double>>& arguments = {});
+                  const std::vector<std::pair<int, double>>& arguments = {}, bool modal = false);
+  // Fanuc G66 P L <arguments>: the macro called after each line that moves an axis, until G67.
+  struct ModalCall {
+    long long program = 0, repeats = 1;
+    std::string what;  // "G66 P9010"
+    std::vector<std::pair<int, double>> arguments;
+  };
+  std::optional<ModalCall> modal_call_;
   bool fanuc_return();
   double fanuc_system_variable(int number, int column);
   static bool added_common(int number) { return (number >= 98000 && number <= 98499) || (number >= 100000 && number <= 199999); }
@@ -2150,7 +2158,7 @@ Mark Reader::locate_program(long long number, int column, const std::string& cal
 }
 
 void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
-                        const std::vector<std::pair<int, double>>& arguments) {
+                        const std::vector<std::pair<int, double>>& arguments, bool modal) {
   if (frames_.size() > 64) fail(column, what + ": calls nested more than 64 deep (a call that never returns?)");
   if (repeats <= 0) return;  // L0: no call
   Mark body;
@@ -2166,6 +2174,7 @@ void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, 
   f.return_to = mark_after();
   f.body = body;
   f.repeats_left = repeats - 1;
+  f.modal = modal;
   if (kind == Frame::Kind::Macro) {
     for (size_t k = 0; k < 33; ++k) {
       f.saved_numbered[k] = state_.parameters[k + 1];
@@ -3258,14 +3267,25 @@ bool Reader::execute() {
                          std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });
   }
 
+  // Fanuc G67: the end of a G66 modal call (the line's other codes go on).
+  if (options_.flavor != GcodeOptions::Flavor::LinuxCnc) {
+    const auto g67 = std::find_if(ln.g.begin(), ln.g.end(), [](const Code& g) { return g.number == 670; });
+    if (g67 != ln.g.end()) {
+      if (!modal_call_) warn(g67->column, "G67 without a G66 modal call on; nothing to end");
+      modal_call_.reset();
+      ln.g.erase(g67);
+    }
+  }
   // Fanuc G65 P<program> L<count> <arguments>: a macro call; the other words are its arguments.
+  // G66 takes the same words and calls the macro after each later line that moves an axis.
   for (const Code& g : ln.g) {
-    if (g.number != 650 || options_.flavor == GcodeOptions::Flavor::LinuxCnc) continue;
-    if (ln.g.size() > 1) fail(ln.g[ln.g[0].number == 650 ? 1 : 0].column, "G65 with another G code (expected G65 alone: its words are arguments)");
+    if ((g.number != 650 && g.number != 660) || options_.flavor == GcodeOptions::Flavor::LinuxCnc) continue;
+    const std::string code = g.number == 650 ? "G65" : "G66";
+    if (ln.g.size() > 1) fail(ln.g[&g == &ln.g[0] ? 1 : 0].column, code + " with another G code (expected " + code + " alone: its words are arguments)");
     const Word& p = word('P');
-    if (!p.present || p.value < 0.0 || p.value != std::floor(p.value)) fail(p.present ? p.column : g.column, "G65 without P, the macro's program number (expected G65 P<number>)");
+    if (!p.present || p.value < 0.0 || p.value != std::floor(p.value)) fail(p.present ? p.column : g.column, code + " without P, the macro's program number (expected " + code + " P<number>)");
     const Word& l = word('L');
-    if (l.present && (l.value < 0.0 || l.value != std::floor(l.value))) fail(l.column, "G65 L " + num(l.value) + " (expected a whole number of calls)");
+    if (l.present && (l.value < 0.0 || l.value != std::floor(l.value))) fail(l.column, code + " L " + num(l.value) + " (expected a whole number of calls)");
     static const struct { char letter; int number; } kArguments[] = {
         {'A', 1}, {'B', 2}, {'C', 3}, {'I', 4}, {'J', 5}, {'K', 6}, {'D', 7}, {'E', 8}, {'F', 9}, {'H', 11}, {'Q', 17},
         {'R', 18}, {'S', 19}, {'T', 20}, {'U', 21}, {'V', 22}, {'W', 23}, {'X', 24}, {'Y', 25}, {'Z', 26}};
@@ -3273,11 +3293,18 @@ bool Reader::execute() {
     for (const auto& a : kArguments) {
       if (word(a.letter).present) arguments.emplace_back(a.number, word(a.letter).value);
     }
-    if (ln.radius.present || ln.angle.present) fail(ln.radius.present ? ln.radius.column : ln.angle.column, "polar @/^ on a G65 line (expected letter arguments)");
-    if (ln.m.size() > 1) fail(ln.m[1].column, "two M arguments on a G65 line (expected at most one, #13)");
+    if (ln.radius.present || ln.angle.present) fail(ln.radius.present ? ln.radius.column : ln.angle.column, "polar @/^ on a " + code + " line (expected letter arguments)");
+    if (ln.m.size() > 1) fail(ln.m[1].column, "two M arguments on a " + code + " line (expected at most one, #13)");
     if (ln.m.size() == 1) arguments.emplace_back(13, std::stod(ln.m[0].text.substr(1)));
-    fanuc_call(Frame::Kind::Macro, static_cast<long long>(p.value), l.present ? static_cast<long long>(l.value) : 1,
-               g.column, "G65 P" + num(p.value), arguments);
+    const long long repeats = l.present ? static_cast<long long>(l.value) : 1;
+    if (g.number == 660) {
+      if (modal_call_) fail(g.column, "G66 while a modal call is on (expected G67 first)");
+      // The macro must exist: look for it now, as the control does when the first move calls it.
+      find_program(static_cast<long long>(p.value), p.column, "G66 P" + num(p.value));
+      modal_call_ = ModalCall{static_cast<long long>(p.value), repeats, "G66 P" + num(p.value), arguments};
+      return true;
+    }
+    fanuc_call(Frame::Kind::Macro, static_cast<long long>(p.value), repeats, g.column, "G65 P" + num(p.value), arguments);
     return true;
   }
 
@@ -3655,6 +3682,7 @@ bool Reader::execute() {
   }
 
   // --- Motion.
+  bool line_moves = false;  // an axis move ran (G66 calls its macro after it)
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
                         word('B').present || word('C').present || ln.radius.present || ln.angle.present;
   const Code* motion_code = by_group[kMotion];
@@ -3689,6 +3717,7 @@ bool Reader::execute() {
     // G10, G92 and G43.1/G43.2 took the axis words.
   } else if (has_axis || explicit_motion ||
              (state_.tcp == GcodeState::Tcp::Vector && (word('I').present || word('J').present || word('K').present))) {
+    line_moves = has_axis && state_.motion != Motion::None;
     switch (state_.motion) {
       case Motion::None:
         if (has_axis) {
@@ -3754,6 +3783,13 @@ bool Reader::execute() {
         arc(column);
         break;
     }
+  }
+
+  // Fanuc G66: the modal macro after a line that moves an axis (never from inside one).
+  const bool modal_call = modal_call_ && line_moves &&
+                          std::none_of(frames_.begin(), frames_.end(), [](const Frame& f) { return f.modal; });
+  if (modal_call && flow_code != nullptr) {
+    fail(flow_code->column, flow_code->text + " on a line that calls the G66 macro (expected it on a line of its own)");
   }
 
   // --- Subprogram calls and returns, after the line's motion.
@@ -3836,12 +3872,17 @@ bool Reader::execute() {
     // feed and position stay. Nothing after this line is read. A control's reset also ends a
     // tilted work plane (G69).
     if (state_.twp && state_.twp_feature) twp_end();
+    modal_call_.reset();  // G67
     state_.work_offset = "G54";
     state_.plane = Plane::XY;
     state_.incremental = false;
     state_.spindle = SpindleState::Off;
     state_.motion = Motion::Linear;
     return false;
+  }
+  if (modal_call) {
+    fanuc_call(Frame::Kind::Macro, modal_call_->program, modal_call_->repeats, axis_column, modal_call_->what,
+               modal_call_->arguments, true);
   }
   return true;
 }

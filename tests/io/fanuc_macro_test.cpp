@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "gcode_text.h"
 #include "vcut/io/gcode_reader.h"
@@ -60,6 +61,28 @@ TEST(FanucMacro, G65ArgumentsAreLocalsOfTheCall) {
   EXPECT_EQ(last_end(p), Eigen::Vector3d(10, 7, 0));
   // L repeats the call: the common #100 counts the passes.
   EXPECT_EQ(last_end(read("#100=0\nG65 P9002 L4\nG0 X#100\nM30\nO9002\n#100=#100+1\nM99\n")), Eigen::Vector3d(4, 0, 0));
+}
+
+TEST(FanucMacro, G66CallsTheMacroAfterEachMoveUntilG67) {
+  // G66 P9000 Z-5 R2 F100: Z -> #26, R -> #18, F -> #9. After X10 and after X20 the macro
+  // drills (G1 to Z-5, G0 back to Z2); its own moves call nothing; after G67, X30 is a move.
+  const Program p = read(
+      "G90 G0 X0 Y0 Z10\nG66 P9000 Z-5. R2. F100.\nX10.\nX20.\nG67\nX30.\nM30\n"
+      "O9000\nG1 Z#26 F#9\nG0 Z#18\nM99\n");
+  const std::vector<Eigen::Vector3d> want = {{0, 0, 10}, {10, 0, 10}, {10, 0, -5}, {10, 0, 2},
+                                             {20, 0, 2}, {20, 0, -5}, {20, 0, 2}, {30, 0, 2}};
+  ASSERT_EQ(p.blocks.size(), want.size());
+  for (size_t k = 0; k < want.size(); ++k) EXPECT_EQ(p.blocks[k].end_mm, want[k]) << "block " << k;
+  EXPECT_EQ(p.blocks[2].kind, kinematics::MotionKind::Linear);
+  EXPECT_EQ(p.blocks[2].feed_mm_per_min, 100.0);
+  EXPECT_EQ(p.blocks[2].source.line, 9);  // from the macro's line
+  EXPECT_EQ(p.blocks[4].kind, kinematics::MotionKind::Rapid);  // the G0 the macro left
+  // A second G66, a call on a moving line, and a macro found nowhere are errors.
+  EXPECT_NE(error_of("G66 P9000\nG66 P9000\nM30\nO9000\nM99\n").find("macro.nc:2:1: G66 while a modal call is on"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0\nG66 P9000\nX1 M98 P9000\nM30\nO9000\nM99\n").find("macro.nc:3:4: M98 on a line that calls the G66 macro"),
+            std::string::npos);
+  EXPECT_NE(error_of("G66 P9123\nM30\n").find("macro.nc:1:5: G66 P9123: program O9123 found nowhere"), std::string::npos);
 }
 
 TEST(FanucMacro, VacantValues) {
