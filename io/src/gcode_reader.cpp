@@ -488,7 +488,14 @@ class Reader : public detail::ValueContext {
   // Workpiece frame <-> program coordinates (mm): the work offsets and a G68 rotation.
   Eigen::Vector3d to_program(const Eigen::Vector3d& w) const;
   Eigen::Vector3d to_workpiece(const Eigen::Vector3d& p) const;
-  bool rotated() const { return state_.rotation_rad != 0.0; }
+  // The XY rotation in force: Fanuc's G68 about its centre, or LinuxCNC's coordinate system
+  // rotation (G10 L2 R) about the system's origin before G92, the centre -G92 in program
+  // coordinates (the two are never on together).
+  bool rotated() const { return state_.rotation_rad != 0.0 || state_.system_rotation_rad != 0.0; }
+  double rotation_angle() const { return state_.rotation_rad != 0.0 ? state_.rotation_rad : state_.system_rotation_rad; }
+  Eigen::Vector2d rotation_center() const {
+    return state_.rotation_rad != 0.0 ? state_.rotation_center_mm : Eigen::Vector2d(-state_.g92_mm.head<2>());
+  }
   Eigen::Vector2d polar_point(const Eigen::Vector2d& from) const;
   void straight(MotionKind kind, int column);
   // Fanuc ,R / ,C: the corner between the line just emitted and the next one.
@@ -630,7 +637,7 @@ double Reader::numbered_parameter(int number, int column) {
   if (number == 5400) return state_.tool;
   if (number >= kPositionParameter && number < kPositionParameter + 9) {
     const int a = number - kPositionParameter;
-    if (a < 3) return (state_.position_mm[a] - state_.g5x_mm[a] - state_.g92_mm[a]) / unit();
+    if (a < 3) return to_program(state_.position_mm)[a] / unit();
     if (a < 6) return state_.rotary.angle_rad[static_cast<size_t>(a - 3)] * 180.0 / M_PI;
     return 0.0;
   }
@@ -1383,8 +1390,8 @@ void Reader::lex(const std::string& s, size_t i) {
 Eigen::Vector3d Reader::to_program(const Eigen::Vector3d& w) const {
   Eigen::Vector3d p = w - state_.g5x_mm - state_.g92_mm;
   if (rotated()) {
-    const Eigen::Vector2d c = state_.rotation_center_mm;
-    p.head<2>() = c + Eigen::Rotation2Dd(-state_.rotation_rad) * (p.head<2>() - c);
+    const Eigen::Vector2d c = rotation_center();
+    p.head<2>() = c + Eigen::Rotation2Dd(-rotation_angle()) * (p.head<2>() - c);
   }
   return p;
 }
@@ -1392,8 +1399,8 @@ Eigen::Vector3d Reader::to_program(const Eigen::Vector3d& w) const {
 Eigen::Vector3d Reader::to_workpiece(const Eigen::Vector3d& p) const {
   Eigen::Vector3d w = p;
   if (rotated()) {
-    const Eigen::Vector2d c = state_.rotation_center_mm;
-    w.head<2>() = c + Eigen::Rotation2Dd(state_.rotation_rad) * (p.head<2>() - c);
+    const Eigen::Vector2d c = rotation_center();
+    w.head<2>() = c + Eigen::Rotation2Dd(rotation_angle()) * (p.head<2>() - c);
   }
   return w + state_.g5x_mm + state_.g92_mm;
 }
@@ -1790,6 +1797,9 @@ void Reader::spline(int column) {
 void Reader::arc(int column) {
   const bool clockwise = state_.motion == Motion::ArcClockwise;
   const char* code = clockwise ? "G2" : "G3";
+  if (rotated() && state_.plane != Plane::XY) {
+    fail(column, std::string(code) + " outside G17 with the XY rotation on (G68 or G10 L2 R; expected G17)");
+  }
   // The plane's first and second axes and its normal, as rs274ngc's convert_arc passes them
   // to convert_arc2: G17 (X, Y; Z), G18 (Z, X; Y), G19 (Y, Z; X). rs274ngc's turn is +1 for
   // G3, counterclockwise from the first axis toward the second, i.e. a right-hand rotation
@@ -1866,7 +1876,7 @@ void Reader::arc(int column) {
     if (rotated()) {  // G17 only: I J are along the rotated axes
       const Eigen::Vector2d ij(word('I').value * unit(), word('J').value * unit());
       center = state_.arc_center_absolute ? Eigen::Vector2d(to_workpiece(Eigen::Vector3d(ij.x(), ij.y(), 0.0)).head<2>())
-                                          : Eigen::Vector2d(Eigen::Vector2d(start[a], start[b]) + Eigen::Rotation2Dd(state_.rotation_rad) * ij);
+                                          : Eigen::Vector2d(Eigen::Vector2d(start[a], start[b]) + Eigen::Rotation2Dd(rotation_angle()) * ij);
     }
     if (const std::string error = detail::centre_arc_error(s, e, center, arc_tolerance(), code);
         !error.empty()) {
@@ -1961,7 +1971,7 @@ double Reader::fanuc_system_variable(int number, int column) {
     // #5001: the last block's end, #5041 the current position (work coordinates); #5021
     // machine coordinates.
     const double machine = state_.position_mm[axis];
-    return (base == 5021 ? machine : machine - state_.g5x_mm[axis] - state_.g92_mm[axis]) / unit();
+    return (base == 5021 ? machine : to_program(state_.position_mm)[axis]) / unit();
   }
   fail(column, "system variable #" + std::to_string(number) +
                    " is not one vcut knows (expected #1..#33, #100..#999, #3000..#3999, #4001..#4130, #5001..#5106, "
@@ -2380,6 +2390,7 @@ Eigen::Vector3d Reader::base_point() const {
 void Reader::comp_on(const Code& g) {
   Comp& comp = state_.comp;
   if (state_.plane == Plane::YZ) fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
+  if (state_.plane != Plane::XY && rotated()) fail(g.column, g.text + " in G18 with the XY rotation on (expected G17)");
   if (comp.side != Comp::Side::Off) fail(g.column, g.text + " with compensation already on (expected G40 first)");
   // Fanuc 0M and others name the radius register with H when no D is given.
   const Word& d = !word('D').present && word('H').present && options_.flavor != GcodeOptions::Flavor::LinuxCnc ? word('H') : word('D');
@@ -2733,6 +2744,10 @@ void Reader::select_system(int index) {
   for (int a = 0; a < 3; ++a) {
     state_.g5x_mm[a] = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + a)];
   }
+  const double rotation_deg = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + 9)];
+  if (rotation_deg != 0.0 && state_.rotation_rad != 0.0) fail(1, "a rotated coordinate system with G68 on (expected G69 first)");
+  if (rotation_deg != 0.0 && state_.twp) fail(1, "a rotated coordinate system with a tilted work plane on (expected G69 first)");
+  state_.system_rotation_rad = rotation_deg * M_PI / 180.0;
   state_.parameters[5220] = index + 1;
 }
 
@@ -2774,11 +2789,17 @@ void Reader::set_offsets(const Code& g) {
     if (!p.present || p.value < 0.0 || p.value > 9.0 || !is_whole(p.value)) {
       fail(p.present ? p.column : l.column, "G10 L" + num(l.value) + " needs P0..P9 (the coordinate system, 0 = active)");
     }
-    if (const Word& r = word('R'); r.present && r.value != 0.0) {
-      unsupported(r.column, "G10R", "G10 R (a rotated coordinate system) is not supported");
-    }
     const int active = static_cast<int>(std::lround(state_.parameters[5220])) - 1;
     const int k = p.value == 0.0 ? active : static_cast<int>(p.value) - 1;
+    const size_t rotation_parameter = static_cast<size_t>(kG5xParameter + 20 * k + 9);
+    if (const Word& r = word('R'); r.present) {
+      // LinuxCNC: L2 R turns the system about Z (deg); L20 takes no R.
+      if (l.value == 20.0) fail(r.column, "G10 L20 with R (expected R with G10 L2)");
+      state_.parameters[rotation_parameter] = r.value;
+    }
+    if (l.value == 20.0 && state_.parameters[rotation_parameter] != 0.0) {
+      fail(l.column, "G10 L20 on a rotated coordinate system (vcut sets L20 offsets on unrotated ones; expected G10 L2)");
+    }
     for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
@@ -2795,6 +2816,7 @@ void Reader::set_offsets(const Code& g) {
     if (k == active) select_system(k);
     return;
   }
+  if (g.number == 920 && rotated()) fail(g.column, "G92 with a rotation on (G68 or G10 L2 R; expected G92 before it)");
   if (g.number == 920) {
     for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);

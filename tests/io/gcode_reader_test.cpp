@@ -578,6 +578,35 @@ TEST(GcodeReader, WhatControlsTolerate) {
   EXPECT_TRUE(read("G0 X0 Y0 Z0\nM31\n", declared).warnings.empty());
 }
 
+TEST(GcodeReader, CoordinateSystemRotationG10L2R) {
+  // LinuxCNC: workpiece = Rz(R) (programmed + G92) + G5x (emccanon's rotate_and_offset_pos).
+  // G54 at (10, 5) turned 30 deg; each point by hand: (x cos 30 - y sin 30 + 10, x sin 30 +
+  // y cos 30 + 5).
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d::Zero();
+  const Program p = read(
+      "G21 G90\nG10 L2 P1 X10 Y5 R30\nG54\nG0 X10 Y0 Z1\nG1 X20 Y10 F100\nG2 X30 Y0 I10 J0\nG91 G1 X5\nG90\n"
+      "G10 L2 P1 R0\nG0 X0 Y0\n",
+      options);
+  const double c = std::cos(kPi / 6), s = std::sin(kPi / 6);
+  auto turned = [&](double x, double y) { return Eigen::Vector3d(x * c - y * s + 10, x * s + y * c + 5, 1); };
+  ASSERT_EQ(p.blocks.size(), 5u);
+  expect_vec(p.blocks[0].end_mm, turned(10, 0));
+  expect_vec(p.blocks[1].end_mm, turned(20, 10));
+  expect_vec(p.blocks[2].end_mm, turned(30, 0));
+  expect_vec(p.blocks[2].center_mm, turned(30, 10));  // I J along the turned axes
+  expect_vec(p.blocks[3].end_mm, turned(35, 0));      // G91 X5 along the turned X
+  expect_vec(p.blocks[4].end_mm, {10, 5, 1});          // R0: unturned again
+  // #5420.. read the programmed (turned) coordinates.
+  const Program q = read("G21 G90\nG10 L2 P1 R90\nG0 X3 Y4\nG0 X[#5420 + 1]\n", options);
+  expect_vec(q.blocks.back().end_mm, {-4, 4, 0});
+  EXPECT_NE(std::string(error_of("G10 L2 P1 R30\nG92 X0\n", options).what()).find("test.ngc:2:1: G92 with a rotation on"), std::string::npos);
+  EXPECT_NE(std::string(error_of("G10 L20 P1 X0 R30\n", options).what()).find("test.ngc:1:15: G10 L20 with R"), std::string::npos);
+  EXPECT_NE(std::string(error_of("G10 L2 P1 R30\nG18\nG0 X0 Y0 Z0\nG2 X10 Z0 K5 F10\n", options).what())
+                .find("test.ngc:4:1: G2 outside G17 with the XY rotation on"),
+            std::string::npos);
+}
+
 TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;

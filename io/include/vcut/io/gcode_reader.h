@@ -174,6 +174,9 @@ struct GcodeState {
   // coordinates, mm) before the work offsets apply; G69 sets it back to 0.
   double rotation_rad = 0.0;
   Eigen::Vector2d rotation_center_mm = Eigen::Vector2d::Zero();
+  // LinuxCNC's rotation of the active coordinate system (G10 L2 R, #5230 + 20 k, deg there):
+  // workpiece = Rz(system_rotation_rad) (programmed + G92) + G5x offset.
+  double system_rotation_rad = 0.0;
   // G68.2 tilted work plane (until G69 or the program's end): the reader works on in the
   // feature frame (programmed coordinates + the offsets, as without it) and its blocks go out
   // as workpiece = twp_rotation * q + twp_translation_mm, tool poses with the rotary axes'
