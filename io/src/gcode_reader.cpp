@@ -209,8 +209,8 @@ constexpr GEntry kGCodes[] = {
 
     // G5 (cubic) and G5.1 (quadratic) splines in G17: straight moves within 1 um of the curve.
     {50, {kMotion, true}}, {51, {kMotion, true}},
-    {52, {kMotion, false, true, false, "spline/NURBS"}},
-    {53, {kMotion, false, true, false, "spline/NURBS"}},
+    // G5.2 .. G5.3: a NURBS of the control points on the lines between, in G17.
+    {52, {kMotion, true}}, {53, {kMotion, true}},
     // G33 (threading: a straight feed at K per revolution), G33.1 (rigid tapping).
     {330, {kMotion, true}}, {331, {kMotion, true}},
     // G38.2 / G38.3 probe toward the stock, G38.4 / G38.5 away from it (error / no error
@@ -509,6 +509,8 @@ class Reader : public detail::ValueContext {
   void corner_to(Block& second, int column);
   void synchronized(int column);
   void spline(int column);
+  void nurbs_point(int column, bool first);
+  void nurbs_end(int column);
   void arc(int column);
   void cycle(int column, bool new_series);
   void set_offsets(const Code& g);
@@ -1792,6 +1794,114 @@ void Reader::spline(int column) {
     append(block, programmed);
   }
   if (!cubic) state_.spline_control_mm.reset();
+}
+
+// G5.2 X Y P L starts a NURBS (LinuxCNC): the current point is its first control point
+// (weight 1), each line up to G5.3 gives the next, X and Y both, with its weight P > 0 (P is
+// optional on the G5.2 line, 1); L, the order, on the G5.2 line (default 3, quadratic).
+void Reader::nurbs_point(int column, bool first) {
+  if (first) {
+    if (state_.nurbs) fail(column, "G5.2 inside a G5.2 NURBS block (expected G5.3 first)");
+    if (state_.plane != Plane::XY) fail(column, "G5.2 outside G17 (expected the XY plane)");
+    if (state_.comp.side != Comp::Side::Off) fail(column, "G5.2 with cutter compensation on (expected G40 first)");
+    if (!state_.known[0] || !state_.known[1]) fail(column, "G5.2 from an unknown X or Y position (expected a move that sets them first)");
+    GcodeState::Nurbs n;
+    n.column = column;
+    n.feed_mm_per_min = feed_of_line(column);
+    if (const Word& l = word('L'); l.present) {
+      if (l.value < 2.0 || !is_whole(l.value) || l.value > 20.0) fail(l.column, "G5.2 L" + num(l.value) + " (expected the order, a whole number 2..20)");
+      n.order = static_cast<int>(l.value);
+    }
+    n.points.emplace_back(state_.position_mm.x(), state_.position_mm.y(), 1.0);
+    state_.nurbs = n;
+  } else if (word('L').present) {
+    fail(word('L').column, "L on a NURBS control point (expected the order on the G5.2 line)");
+  }
+  for (char letter : {'Z', 'A', 'B', 'C'}) {
+    if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " in a G5.2 NURBS block (expected X Y P: the curve lies in the XY plane)");
+  }
+  if (!word('X').present || !word('Y').present) fail(column, "a NURBS control point without both X and Y (expected X and Y)");
+  const Word& p = word('P');
+  if (!p.present && !first) fail(column, "a NURBS control point without P (expected its weight P > 0)");
+  if (p.present && !(p.value > 0.0)) fail(p.column, "NURBS weight P " + num(p.value) + " (expected P > 0)");
+  std::array<bool, 3> programmed{};
+  const Eigen::Vector3d at = target(programmed);
+  state_.nurbs->points.emplace_back(at.x(), at.y(), p.present ? p.value : 1.0);
+  if (state_.nurbs->points.size() > 100000) fail(column, "a NURBS of more than 100000 control points (expected G5.3)");
+}
+
+// G5.3: the NURBS as straight moves within kSplineChordMm of it. The knots are LinuxCNC's
+// (knot_vector_creator): clamped and uniform, 0 (order times), 1, 2, .., n - k + 2 (order
+// times), so the curve starts and ends on the first and last control points. Each knot span
+// is halved until the points at its quarters lie within the tolerance of the chord.
+void Reader::nurbs_end(int column) {
+  if (!state_.nurbs) fail(column, "G5.3 without a G5.2 NURBS block (expected G5.2 first)");
+  for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
+    if (word(letter).present) fail(word(letter).column, "G5.3 with axis words (expected G5.3 alone: it ends the NURBS)");
+  }
+  const GcodeState::Nurbs nurbs = *state_.nurbs;
+  state_.nurbs.reset();
+  state_.motion = Motion::None;
+  const int k = nurbs.order;
+  const int n = static_cast<int>(nurbs.points.size()) - 1;
+  if (n + 1 < k) {
+    fail(column, "G5.3: a NURBS of order " + std::to_string(k) + " needs at least " + std::to_string(k) + " control points, it has " +
+                     std::to_string(n + 1));
+  }
+  std::vector<double> knots;
+  for (int i = 0; i <= n + k; ++i) knots.push_back(i < k ? 0.0 : i <= n ? i - k + 1.0 : n - k + 2.0);
+  // De Boor on the homogeneous points (w x, w y, w).
+  auto point = [&](double u) {
+    int span = k - 1;
+    while (span < n && u >= knots[static_cast<size_t>(span + 1)]) ++span;
+    std::vector<Eigen::Vector3d> d;
+    for (int j = 0; j < k; ++j) {
+      const Eigen::Vector3d& c = nurbs.points[static_cast<size_t>(span - k + 1 + j)];
+      d.emplace_back(c.x() * c.z(), c.y() * c.z(), c.z());
+    }
+    for (int r = 1; r < k; ++r) {
+      for (int j = k - 1; j >= r; --j) {
+        const int i = span - k + 1 + j;
+        const double left = knots[static_cast<size_t>(i)], right = knots[static_cast<size_t>(i + k - r)];
+        const double alpha = right > left ? (u - left) / (right - left) : 0.0;
+        d[static_cast<size_t>(j)] = (1.0 - alpha) * d[static_cast<size_t>(j - 1)] + alpha * d[static_cast<size_t>(j)];
+      }
+    }
+    const Eigen::Vector3d& h = d[static_cast<size_t>(k - 1)];
+    return Eigen::Vector2d(h.x() / h.z(), h.y() / h.z());
+  };
+  auto distance_to_segment = [](const Eigen::Vector2d& q, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    const Eigen::Vector2d ab = b - a;
+    const double t = ab.squaredNorm() > 0.0 ? std::clamp((q - a).dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    return (q - a - t * ab).norm();
+  };
+  std::vector<double> breaks;  // the parameters the moves end at
+  std::function<void(double, double, const Eigen::Vector2d&, const Eigen::Vector2d&, int)> flatten =
+      [&](double a, double b, const Eigen::Vector2d& pa, const Eigen::Vector2d& pb, int depth) {
+        double off = 0.0;
+        for (double t : {0.25, 0.5, 0.75}) {
+          off = std::max(off, distance_to_segment(point(a + t * (b - a)), pa, pb));
+        }
+        if (off <= kSplineChordMm || depth >= 24) {
+          breaks.push_back(b);
+          return;
+        }
+        const double m = 0.5 * (a + b);
+        const Eigen::Vector2d pm = point(m);
+        flatten(a, m, pa, pm, depth + 1);
+        flatten(m, b, pm, pb, depth + 1);
+      };
+  const double umax = n - k + 2.0;
+  for (int s = 0; s < n - k + 2; ++s) flatten(s, s + 1.0, point(s), s + 1 == n - k + 2 ? nurbs.points.back().head<2>() : point(s + 1.0), 0);
+  for (double u : breaks) {
+    Block block;
+    block.kind = MotionKind::Linear;
+    block.start_mm = state_.position_mm;
+    block.end_mm = state_.position_mm;
+    block.end_mm.head<2>() = u >= umax ? Eigen::Vector2d(nurbs.points.back().head<2>()) : point(u);
+    block.feed_mm_per_min = nurbs.feed_mm_per_min;
+    append(block, {true, true, false});
+  }
 }
 
 void Reader::arc(int column) {
@@ -3686,7 +3796,12 @@ bool Reader::execute() {
   }
   const bool was_cycle = state_.motion == Motion::Cycle;
   const int previous_cycle = state_.cycle;
-  if (const Code* g = by_group[kMotion]) {
+  if (state_.nurbs && (by_group[kMotion] == nullptr || by_group[kMotion]->number != 53)) {
+    if (const Code* g = by_group[kMotion]) fail(g->column, g->text + " inside a G5.2 NURBS block (expected G5.3 first)");
+  }
+  if (const Code* g = by_group[kMotion]; g != nullptr && g->number == 53) {
+    nurbs_end(g->column);
+  } else if (const Code* g = by_group[kMotion]) {
     static const std::pair<int, Motion> kMotions[] = {
         {0, Motion::Rapid},          {10, Motion::Linear},      {20, Motion::ArcClockwise},
         {30, Motion::ArcCounterClockwise}, {800, Motion::None}, {330, Motion::SpindleSync},
@@ -3694,7 +3809,7 @@ bool Reader::execute() {
         {730, Motion::Cycle},        {810, Motion::Cycle},      {820, Motion::Cycle},
         {830, Motion::Cycle},        {850, Motion::Cycle},      {890, Motion::Cycle},
         {382, Motion::Probe},        {383, Motion::Probe},      {384, Motion::Probe},
-        {385, Motion::Probe}};
+        {385, Motion::Probe},        {52, Motion::Nurbs}};
     state_.motion = Motion::Unsupported;
     for (const auto& [code, motion] : kMotions) {
       if (code == g->number) state_.motion = motion;
@@ -3722,6 +3837,9 @@ bool Reader::execute() {
     fail(explicit_motion ? motion_code->column : axis_column,
          std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
              " needs a G1 line next (expected the corner's second line)");
+  }
+  if (motion_code != nullptr && motion_code->number == 52 && !has_axis) {
+    fail(motion_code->column, "G5.2 without X and Y (expected the first control point on its line)");
   }
   if (homes || stores_home) {
     if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");
@@ -3756,6 +3874,11 @@ bool Reader::execute() {
       case Motion::RigidTap:
         used_['K' - 'A'] = true;
         synchronized(column);
+        break;
+      case Motion::Nurbs:
+        used_['P' - 'A'] = used_['L' - 'A'] = true;
+        if (p.present) p_user = "G5.2";
+        nurbs_point(column, motion_code != nullptr);
         break;
       case Motion::Probe:
         probe(motion_code != nullptr ? motion_code->column : column, state_.probe);

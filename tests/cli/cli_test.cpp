@@ -285,7 +285,7 @@ TEST_F(Simulate, FlagsOverrideJobKeys) {
 // Each bad input: exit code 2, one line naming the place (expect_error), nothing left in the
 // output folder.
 TEST_F(Simulate, UnknownGCode) {
-  program = "G21\nT1 M6\nG1 X1 F100\nG5.2 X3\n";
+  program = "G21\nT1 M6\nG1 X1 F100\nG47 X3\n";
   expect_error(simulate(), "slot.ngc:4:1");
   EXPECT_TRUE(no_output());
 }

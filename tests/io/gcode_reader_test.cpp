@@ -578,6 +578,39 @@ TEST(GcodeReader, WhatControlsTolerate) {
   EXPECT_TRUE(read("G0 X0 Y0 Z0\nM31\n", declared).warnings.empty());
 }
 
+TEST(GcodeReader, NurbsG52G53) {
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d::Zero();
+  // A rational quadratic with the middle weight cos 45 deg is a circular arc: (10, 0), (10, 10)
+  // w 0.7071, (0, 10) is the quarter circle of radius 10 about the origin. Every vertex lies on
+  // it and every chord within 1 um of it (its sagitta R - distance of the chord's middle).
+  const Program p = read("G21 G90 G17 F100\nG0 X10 Y0 Z2\nG5.2 X10 Y10 P0.70710678118654752 L3\nX0 Y10 P1\nG5.3\nG1 X-5\n", options);
+  ASSERT_GT(p.blocks.size(), 50u);  // chords of 1 um sagitta on R 10: at most 0.283 mm long
+  double worst_vertex = 0.0, worst_sagitta = 0.0;
+  for (size_t k = 1; k + 1 < p.blocks.size(); ++k) {
+    const Block& b = p.blocks[k];
+    EXPECT_EQ(b.source.line, 5);
+    EXPECT_EQ(b.end_mm.z(), 2.0);
+    worst_vertex = std::max(worst_vertex, std::abs(b.end_mm.head<2>().norm() - 10.0));
+    worst_sagitta = std::max(worst_sagitta, 10.0 - (0.5 * (b.start_mm + b.end_mm)).head<2>().norm());
+  }
+  EXPECT_LT(worst_vertex, 1e-9);
+  EXPECT_LE(worst_sagitta, 0.001 + 1e-12);
+  expect_vec(p.blocks[p.blocks.size() - 2].end_mm, {0, 10, 2});
+  expect_vec(p.blocks.back().end_mm, {-5, 10, 2});  // G1 after G5.3
+  // Uniform quadratic B-spline (all weights 1), knots 0 0 0 1 2 2 2: at the inner knot the
+  // curve passes through the middle of the second and third control points.
+  const Program q = read("G21 G90 F100\nG0 X0 Y0\nG5.2 X10 Y0 L3\nX10 Y10 P1\nX20 Y10 P1\nG5.3\n", options);
+  bool through = false;
+  for (const Block& b : q.blocks) through = through || (b.end_mm - Eigen::Vector3d(10, 5, 0)).norm() < 1e-12;
+  EXPECT_TRUE(through);
+  expect_vec(q.blocks.back().end_mm, {20, 10, 0});
+  // What LinuxCNC's rs274 refuses, refused.
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1 L4\nX2 Y0 P1\nG5.3\n", options).what()).find("test.ngc:5:1: G5.3: a NURBS of order 4 needs at least 4 control points"), std::string::npos);
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nX2 Y0\n", options).what()).find("test.ngc:4:1: a NURBS control point without P"), std::string::npos);
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nG1 X2\n", options).what()).find("test.ngc:4:1: G1 inside a G5.2 NURBS block"), std::string::npos);
+}
+
 TEST(GcodeReader, CoordinateSystemRotationG10L2R) {
   // LinuxCNC: workpiece = Rz(R) (programmed + G92) + G5x (emccanon's rotate_and_offset_pos).
   // G54 at (10, 5) turned 30 deg; each point by hand: (x cos 30 - y sin 30 + 10, x sin 30 +
@@ -611,13 +644,13 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;
   const Program p = read(
-      "G0 X0 Y0 Z0\nG5.2\nG5.2\nM123\nG1 X1 U10 F10\nG71 X9 F10\n"
+      "G0 X0 Y0 Z0\nG96\nG96\nM123\nG1 X1 U10 F10\nG71 X9 F10\n"
       "G0 X2\n",
       options);
-  // One warning per distinct word (G5.2, M123, U, G71), each naming its first place.
+  // One warning per distinct word (G96, M123, U, G71), each naming its first place.
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
-  EXPECT_NE(p.warnings[0].find("G5.2"), std::string::npos);
+  EXPECT_NE(p.warnings[0].find("G96"), std::string::npos);
   EXPECT_EQ(p.warnings[1].rfind("test.ngc:4:1: ", 0), 0u) << p.warnings[1];
   EXPECT_EQ(p.warnings[2].rfind("test.ngc:5:7: ", 0), 0u) << p.warnings[2];
   EXPECT_EQ(p.warnings[3].rfind("test.ngc:6:1: ", 0), 0u) << p.warnings[3];

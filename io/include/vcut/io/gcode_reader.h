@@ -108,7 +108,7 @@ struct GcodeState {
   // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
   // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC).
   enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, SpindleSync, RigidTap,
-                      CubicSpline, QuadraticSpline, Probe, Unsupported };
+                      CubicSpline, QuadraticSpline, Probe, Nurbs, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
@@ -170,6 +170,15 @@ struct GcodeState {
   // G5: the last spline's second control point (mm, workpiece frame), for the next G5 without
   // I J (LinuxCNC: the mirror of it through the start continues the curve smoothly).
   std::optional<Eigen::Vector2d> spline_control_mm;
+  // G5.2 .. G5.3 (LinuxCNC NURBS, Motion::Nurbs): the control points so far (X Y in mm,
+  // workpiece frame, and the weight P; the first is where G5.2 started), the order L, the feed.
+  struct Nurbs {
+    std::vector<Eigen::Vector3d> points;
+    int order = 3;
+    double feed_mm_per_min = 0.0;
+    int column = 1;  // of the G5.2
+  };
+  std::optional<Nurbs> nurbs;
   // Fanuc G68 in G17: programmed X Y turn by rotation_rad about rotation_center_mm (program
   // coordinates, mm) before the work offsets apply; G69 sets it back to 0.
   double rotation_rad = 0.0;
