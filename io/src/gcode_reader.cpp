@@ -1882,7 +1882,7 @@ void Reader::nurbs_end(int column) {
         for (double t : {0.25, 0.5, 0.75}) {
           off = std::max(off, distance_to_segment(point(a + t * (b - a)), pa, pb));
         }
-        if (off <= kSplineChordMm || depth >= 24) {
+        if (off <= kSplineChordMm || depth >= 17) {  // at most 2^17 moves a span
           breaks.push_back(b);
           return;
         }
