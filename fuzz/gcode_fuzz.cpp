@@ -90,8 +90,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // the part (sin A sin C, sin A cos C, cos A); the table turns the part by Rx(A) Rz(C)), A
   // within [-120, 30] deg.
   options.orient = [](int, const Eigen::Vector3d&, const Eigen::Vector3d& axis, const vcut::kinematics::RotaryWords&,
-                      vcut::kinematics::RotaryWords& to) {
-    const double a = -std::acos(std::clamp(axis.z(), -1.0, 1.0));
+                      int tilt_sign, vcut::kinematics::RotaryWords& to) {
+    const double a = (tilt_sign > 0 ? 1.0 : -1.0) * std::acos(std::clamp(axis.z(), -1.0, 1.0));
     if (a < -120.0 * M_PI / 180.0) return std::string("axis A would need more than -120 deg");
     to = {};
     to.angle_rad = {a, 0.0, std::atan2(-axis.x(), -axis.y())};

@@ -3178,7 +3178,15 @@ void Reader::twp_turn(const Code& g) {
   const Eigen::Vector3d axis = r.col(2);
   const kinematics::RotaryWords from = state_.rotary;
   kinematics::RotaryWords to;
-  if (const std::string why = options_.orient(state_.tool, tip, axis, from, to); !why.empty()) {
+  // P (LinuxCNC's TWP remap): 0 the least rotary motion, 1 the tilting axis positive, 2 negative.
+  int tilt_sign = 0;
+  if (const Word& p = word('P'); p.present) {
+    if (p.value != 0.0 && p.value != 1.0 && p.value != 2.0) {
+      fail(p.column, g.text + " P" + num(p.value) + " (expected P0 the least rotary motion, P1 the tilting axis positive, P2 negative)");
+    }
+    tilt_sign = p.value == 1.0 ? 1 : p.value == 2.0 ? -1 : 0;
+  }
+  if (const std::string why = options_.orient(state_.tool, tip, axis, from, tilt_sign, to); !why.empty()) {
     fail(g.column, g.text + ": the machine cannot turn the tool to the tilted plane's Z (" + num(axis.x()) + ", " +
                        num(axis.y()) + ", " + num(axis.z()) + "): " + why);
   }
@@ -3849,6 +3857,7 @@ bool Reader::execute() {
     probe(non_modal->column, 310);
   } else if (non_modal != nullptr && (non_modal->number == 531 || non_modal->number == 536)) {
     if (has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
+    used_['P' - 'A'] = true;
     twp_turn(*non_modal);
   } else if (axis_user != nullptr) {
     forget_axes(axis_user_all);

@@ -268,8 +268,20 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     return it == lengths->end() ? 0.0 : it->second;
   };
   options.orient = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip, const Eigen::Vector3d& axis,
-                                                    const kinematics::RotaryWords& from, kinematics::RotaryWords& to) {
+                                                    const kinematics::RotaryWords& from, int tilt_sign,
+                                                    kinematics::RotaryWords& to) {
     if (shared->rotary_count() == 0) return std::string("it has no rotary axis");
+    // The tilting axis: the rotary least parallel to the spindle at all-zero axes.
+    int tilt = -1;
+    double least = 2.0;
+    for (int k = 0; k < shared->rotary_count(); ++k) {
+      const int i = shared->rotary_axis(k);
+      const double parallel = std::abs(shared->axis(i).direction.normalized().dot(shared->spec().spindle_axis.normalized()));
+      if (parallel < least - 1e-9) {
+        least = parallel;
+        tilt = i;
+      }
+    }
     const kinematics::AxisValues previous = axis_values(from);
     const kinematics::IkResult ik = kinematics::inverse(*shared, {tip, axis}, length_of(tool), &previous);
     // The rotaries' limits decide here (the linear axes' travel is the path's business: the
@@ -292,6 +304,13 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
       }
       if (!outside.empty()) {
         if (violation.empty()) violation = outside;
+        continue;
+      }
+      if (tilt_sign != 0 && solution.q[tilt] * tilt_sign < -1e-9) {
+        if (violation.empty()) {
+          violation = "no solution with axis " + std::string(1, shared->axis(tilt).letter) + (tilt_sign > 0 ? " >= 0" : " <= 0") +
+                      " within the limits";
+        }
         continue;
       }
       if (best == nullptr || cost < best_cost - 1e-9) {

@@ -143,6 +143,14 @@ TEST(TiltedPlane, G531TurnsTheBcTrunnionWithTheLeastRotaryMotion) {
   EXPECT_NEAR(turned.end_rotary.angle_rad[1], -45 * kDeg, 1e-9);
   EXPECT_NEAR(turned.end_rotary.angle_rad[2], 60 * kDeg, 1e-9);
   EXPECT_FALSE(turned.end_rotary.given[0]);
+  // P1 (LinuxCNC's remap): the tilting axis B positive - the other solution; P2: B negative.
+  const auto p1 = read_text("G68.2 I30. J45. K0\nG53.1 P1\nG69\n", options, "bc1.nc");
+  const Block& positive = last_of_line(p1, 2);
+  EXPECT_NEAR(positive.end_rotary.angle_rad[1], 45 * kDeg, 1e-9);
+  EXPECT_NEAR(positive.end_rotary.angle_rad[2], -120 * kDeg, 1e-9);
+  const auto p2 = read_text("G68.2 I30. J45. K0\nG53.1 P2\nG69\n", options, "bc2.nc");
+  const Block& negative = last_of_line(p2, 2);
+  EXPECT_NEAR(negative.end_rotary.angle_rad[1], -45 * kDeg, 1e-9);
 }
 
 TEST(TiltedPlane, G531HoldsTheLinearAxesAndG536TheTip) {

@@ -76,12 +76,13 @@ struct GcodeOptions {
   // The machine's rotary axes, for G53.1 / G53.6 under a tilted work plane (G68.2). `orient`
   // puts into `to` the rotary words (rad; the machine's rotary letters given) that turn the
   // tool to `axis` (unit, tip -> spindle, workpiece frame) with the tip at `tip_mm`, with the
-  // least rotary motion from `from`, and returns "" - or why the machine cannot (a limit, an
-  // unreachable axis). `tip_after_turn` gives where the tip goes (workpiece frame, mm) when the
+  // least rotary motion from `from` (tilt_sign +1 / -1: among the solutions whose tilting
+  // axis - the rotary least parallel to the spindle - is >= 0 / <= 0), and returns "" - or
+  // why the machine cannot (a limit, an unreachable axis). `tip_after_turn` gives where the tip goes (workpiece frame, mm) when the
   // rotary axes turn from `from` to `to` with the linear axes held. Unset (no machine): G53.1
   // and G53.6 are errors.
   std::function<std::string(int tool, const Eigen::Vector3d& tip_mm, const Eigen::Vector3d& axis,
-                            const kinematics::RotaryWords& from, kinematics::RotaryWords& to)>
+                            const kinematics::RotaryWords& from, int tilt_sign, kinematics::RotaryWords& to)>
       orient;
   std::function<Eigen::Vector3d(int tool, const Eigen::Vector3d& tip_mm, const kinematics::RotaryWords& from,
                                 const kinematics::RotaryWords& to)>
