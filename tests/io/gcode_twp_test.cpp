@@ -28,6 +28,14 @@ GcodeOptions machine_options(const std::string& name) {
   return options;
 }
 
+// Fanuc's flavour, no machine, the tip starting 100 mm above the origin.
+GcodeOptions fanuc_at_z100() {
+  GcodeOptions options;
+  options.flavor = GcodeOptions::Flavor::Fanuc;
+  options.start_mm = Eigen::Vector3d(0, 0, 100);
+  return options;
+}
+
 // Z-X-Z Euler angles (alpha about Z, beta about the new X, gamma about the new Z): the
 // feature frame's axes as the columns of the textbook closed form.
 Eigen::Matrix3d euler_zxz(double alpha_deg, double beta_deg, double gamma_deg) {
@@ -85,9 +93,7 @@ TEST(TiltedPlane, FeaturePointsGoThroughTheEulerFrame) {
 }
 
 TEST(TiltedPlane, ArcsTurnWithThePlane) {
-  GcodeOptions options;
-  options.flavor = GcodeOptions::Flavor::Fanuc;
-  options.start_mm = Eigen::Vector3d(0, 0, 100);
+  const GcodeOptions options = fanuc_at_z100();
   // J90: the feature Z is the workpiece -Y (the part's front face), feature Y is +Z.
   const auto program = read_text(
       "G68.2 X0 Y0 Z0 I0 J90. K0\n"
@@ -220,9 +226,7 @@ TEST(TiltedPlane, RollPitchYawWithP1) {
 }
 
 TEST(TiltedPlane, WhatItRefusesNamesTheLine) {
-  GcodeOptions options;
-  options.flavor = GcodeOptions::Flavor::Fanuc;
-  options.start_mm = Eigen::Vector3d(0, 0, 100);
+  const GcodeOptions options = fanuc_at_z100();
   EXPECT_NE(error_text("G53.1\n", options, "a.nc").find("a.nc:1:1: G53.1 without a tilted work plane (expected G68.2 first)"),
             std::string::npos);
   EXPECT_NE(error_text("G68.2 I0 J45. K0\nG53.1\n", options, "b.nc").find("b.nc:2:1: G53.1 needs the machine's rotary axes"),
@@ -245,9 +249,7 @@ TEST(TiltedPlane, WhatItRefusesNamesTheLine) {
 }
 
 TEST(TiltedPlane, CannedCyclesDrillAlongTheFeatureZ) {
-  GcodeOptions options;
-  options.flavor = GcodeOptions::Flavor::Fanuc;
-  options.start_mm = Eigen::Vector3d(0, 0, 100);
+  const GcodeOptions options = fanuc_at_z100();
   // I0 J90 K0: feature (x, y, z) is workpiece (x, -z, y).
   const auto program = read_text(
       "G68.2 I0 J90. K0\n"
