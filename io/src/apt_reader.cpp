@@ -107,6 +107,7 @@ struct Segment {
 
 enum class Word {
   kUnknown,
+  kCutcom,
   kGoto,
   kFrom,
   kGodlta,
@@ -148,6 +149,7 @@ Word lookup(const std::string& w) {
       if (w == "TLAXIS") return Word::kTlaxis;
       if (w == "CIRCLE") return Word::kCircle;
       if (w == "SPINDL") return Word::kSpindl;
+      if (w == "CUTCOM") return Word::kCutcom;
       break;
     default:
       break;
@@ -225,6 +227,7 @@ class Reader {
   void do_circle();
   void do_spindl();
   void do_units();
+  void do_cutcom();
   void no_circle_pending(const char* what) const;
 
   void motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Vector3d& end_axis);
@@ -528,6 +531,9 @@ bool Reader::statement() {
       break;
     case Word::kUnits:
       do_units();
+      break;
+    case Word::kCutcom:
+      do_cutcom();
       break;
     case Word::kEnd:
       // APT END: the end of a machining section (the machine stops); reading goes on.
@@ -998,6 +1004,20 @@ void Reader::do_spindl() {
   state_.spindle_rpm = rpm;
   state_.spindle_direction = direction;
   state_.spindle = rpm > 0.0 ? direction : SpindleState::Off;
+}
+
+// CUTCOM/OFF: nothing to end. CUTCOM/LEFT or RIGHT asks the control to offset the path
+// (CL data of the part's contour): not read yet, so an error rather than a path off by the
+// tool's radius.
+void Reader::do_cutcom() {
+  if (nargs_ == 0) fail(args_pos_, "CUTCOM without its side (expected CUTCOM/LEFT, RIGHT or OFF)");
+  const Arg& a = args_[0];
+  if (!a.is_number && a.word == "OFF") return;
+  if (!a.is_number && (a.word == "LEFT" || a.word == "RIGHT")) {
+    fail(a.pos, "CUTCOM/" + a.word + ": cutter compensation in CL data is not read yet (expected CL data of the tool "
+                "centre, the CAM's compensation in computer; G-code's G41/G42 is read)");
+  }
+  fail(a.pos, "CUTCOM/ takes LEFT, RIGHT or OFF");
 }
 
 void Reader::do_units() {

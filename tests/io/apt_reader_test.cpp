@@ -520,6 +520,12 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("FEDRAT/0.2,MMPR\n", 1, 12, "feed per revolution");
   EXPECT_APT_ERROR("FEDRAT/10,FAST\n", 1, 11, "expected MMPM or IPM");
   EXPECT_APT_ERROR("UNITS/FEET\n", 1, 7, "INCHES or MM");
+  // Compensation in CL data is refused, not ignored: the path would be off by the radius.
+  EXPECT_APT_ERROR("CUTCOM/LEFT,1\n", 1, 8, "CUTCOM/LEFT: cutter compensation in CL data is not read yet");
+  EXPECT_APT_ERROR("CUTCOM/UP\n", 1, 8, "takes LEFT, RIGHT or OFF");
+  const AptProgram off = read("CUTCOM/OFF\nFROM/0,0,10\nFEDRAT/100\nGOTO/10,0,0\n");
+  EXPECT_TRUE(off.program.warnings.empty());
+  EXPECT_EQ(off.program.blocks.size(), 1u);
   EXPECT_APT_ERROR("LOADTL/0\n", 1, 8, "from 1 to 99999");
   EXPECT_APT_ERROR("LOADTL/2.5\n", 1, 8, "whole number");
   EXPECT_APT_ERROR("MULTAX/MAYBE\n", 1, 8, "ON or OFF");
