@@ -781,6 +781,9 @@ def main(argv=None):
                     help="more directories for o<name> call files (the program's own directory "
                          "is always searched)")
     ap.add_argument("--no-feed", action="store_true", help="do not compare feeds")
+    ap.add_argument("--min-identical", type=int, default=0, metavar="N",
+                    help="fail unless at least N of the programs given (or shipped; not the random "
+                         "ones) that make a motion under rs274 are identical")
     ap.add_argument("--random-comp", type=int, default=0, metavar="N",
                     help="also N random cutter-compensation programs (seed --seed)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the random programs (1)")
@@ -847,6 +850,7 @@ def main(argv=None):
             return 0
     moving = [r for r in results if rs_motions(r[2]) > 0]
     moving_pass = sum(1 for r in moving if r[1] == "PASS")
+    shipped_pass = sum(1 for r in moving if r[1] == "PASS" and not (random_dir and r[0].startswith(random_dir)))
     lines.append("")
     lines.append("rs274: %s; vcut: %s; %d programs: %s" % (
         rs274, args.vcut, len(results),
@@ -861,12 +865,16 @@ def main(argv=None):
         if status == "FAIL" or (args.verbose and more):
             details.append("%s %s: %s" % (status, name, detail))
             details.extend("    " + m for m in more)
+    too_few = shipped_pass < args.min_identical
+    if too_few:
+        details.append("FAIL: %d programs that make a motion are identical, fewer than --min-identical %d"
+                       % (shipped_pass, args.min_identical))
     text = "\n".join(lines) + ("\n\n" + "\n".join(details) if details else "") + "\n"
     sys.stdout.write(text)
     if args.report:
         with open(args.report, "w") as f:
             f.write(text)
-    return 1 if counts.get("FAIL") else 0
+    return 1 if counts.get("FAIL") or too_few else 0
 
 
 if __name__ == "__main__":
