@@ -5,7 +5,8 @@
 // region's deepest point (from the page's own data) and shows the line's text in the NC
 // panel; the WebGL canvas drew an image (not one flat colour).
 // Exit 0: all checks passed. 1: a check failed (each printed) or the report is missing.
-// 2: usage. 77 (skip): no Chromium at $VCUT_CHROMIUM or /usr/bin/chromium.
+// 2: usage. 77 (skip): no Chromium at $VCUT_CHROMIUM or /usr/bin/chromium (1 when
+// VCUT_REQUIRE_PEERS=1, as make test sets it).
 
 import { createRequire } from 'node:module';
 import { existsSync } from 'node:fs';
@@ -25,8 +26,10 @@ if (!reportArg || !lineArg || !shotArg || process.argv.length > 5) {
 }
 const executablePath = process.env.VCUT_CHROMIUM || '/usr/bin/chromium';
 if (!existsSync(executablePath)) {
-  console.log(`SKIP: no Chromium at ${executablePath} (install chromium, or set VCUT_CHROMIUM)`);
-  process.exit(77);
+  // make test installs Chromium and sets VCUT_REQUIRE_PEERS: there a missing one fails.
+  const required = process.env.VCUT_REQUIRE_PEERS === '1';
+  console.log(`${required ? 'FAIL' : 'SKIP'}: no Chromium at ${executablePath} (install chromium, or set VCUT_CHROMIUM)`);
+  process.exit(required ? 1 : 77);
 }
 const lm = /^(.*):(\d+)$/.exec(lineArg);
 if (!lm) {
