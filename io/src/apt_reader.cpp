@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "block_room.h"
+#include "cutter_comp.h"
 #include "line_source.h"
 #include "reader_util.h"
 
@@ -164,7 +165,7 @@ bool free_text(const char* w, size_t n, bool& silent) {
   return silent || is("PARTNO") || is("INSERT") || is("REMARK") || is("TPRINT");
 }
 
-class Reader {
+class Reader : public detail::CompHost {
  public:
   Reader(const std::string& name, const AptOptions& options, AptProgram& out, AptState& state,
          int file_index)
@@ -228,6 +229,26 @@ class Reader {
   void do_spindl();
   void do_units();
   void do_cutcom();
+  bool compensating() const { return state_.comp.side != Comp::Side::Off && state_.comp.radius_mm > 0.0; }
+  void comp_end(size_t pos);  // sends the held moves to where the tool is
+  // CompHost: the compensation's moves are this reader's.
+  using Comp = GcodeState::CutterComp;
+  Eigen::Vector3d& tool_position() override { return state_.position_mm; }
+  void comp_plane(int& a, int& b, int& c) const override { a = 0, b = 1, c = 2; }
+  double comp_unit() const override { return state_.inches ? kMmPerInch : 1.0; }
+  void comp_append(Block block, const std::array<bool, 3>& programmed, bool held, const Eigen::Vector2d& direction,
+                   double sweep_rad) override;
+  std::vector<Block>& comp_blocks() override { return out_.program.blocks; }
+  [[noreturn]] void comp_fail(int column, const std::string& message) const override {
+    fail(static_cast<size_t>(column), message);
+  }
+  // Where the program is (CL points count from it): with compensation on, the last programmed
+  // point in XY, not the tool's.
+  Eigen::Vector3d programmed_point() const {
+    Eigen::Vector3d p = state_.position_mm;
+    if (compensating() && !state_.comp.first_move) p.head<2>() = state_.comp.program_mm.head<2>();
+    return p;
+  }
   void no_circle_pending(const char* what) const;
 
   void motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Vector3d& end_axis);
@@ -285,6 +306,8 @@ void Reader::run(std::istream& in) {
             "'$' continuation at the end of the file (expected the statement to go on in the "
             "next line)");
   }
+  // A file that ends while a compensated move is held: it runs to its offset point.
+  if (!state_.comp.held.empty()) comp_end(0);
   if (!finished && state_.circle_pending) {
     state_.circle_pending = false;
     fail_at(state_.circle_line, state_.circle_column,
@@ -642,7 +665,7 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
     state_.pose_axis = state_.axis = end_axis;
     return;
   }
-  if (kind != MotionKind::Arc && end == state_.position_mm && end_axis == state_.pose_axis) {
+  if (!compensating() && kind != MotionKind::Arc && end == state_.position_mm && end_axis == state_.pose_axis) {
     return;  // no motion: no Block (as the G-code reader)
   }
   if (state_.pose_axis.dot(end_axis) < kOppositeAxisCosine) {
@@ -651,7 +674,7 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
                          " in one motion (expected an intermediate axis: no single great circle "
                          "joins opposite axes)");
   }
-  Block& block = out_.program.blocks.emplace_back();
+  Block block;
   block.kind = kind;
   block.start_mm = state_.position_mm;
   block.end_mm = end;
@@ -671,6 +694,33 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
     block.center_mm = state_.circle_center_mm + n * n.dot(block.start_mm - state_.circle_center_mm);
     block.turns = 1;
   }
+  Comp& comp = state_.comp;
+  if (compensating()) {
+    if (!end_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12) || !state_.pose_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12)) {
+      fail(major_pos_, "a tool axis other than (0,0,1) with CUTCOM on (expected three-axis CL data)");
+    }
+    detail::Compensator compensator(comp, *this);
+    const int column = static_cast<int>(major_pos_);
+    if (kind == MotionKind::Arc) {
+      if (std::abs(std::abs(block.normal.z()) - 1.0) > 1e-12) {
+        fail(major_pos_, "a CIRCLE/ out of the XY plane with CUTCOM on (expected its axis along Z)");
+      }
+      compensator.arc(block, {true, true, true}, block.normal.z() > 0.0 ? 1 : -1, column);
+    } else {
+      compensator.straight(block, {true, true, true}, column);
+    }
+    state_.pose_axis = state_.axis = end_axis;
+    return;
+  }
+  if (comp.arc_not_allowed && kind == MotionKind::Arc) {
+    fail(major_pos_, "a CIRCLE/ just after CUTCOM/OFF (expected a straight move: the exit from cutter compensation)");
+  }
+  comp.arc_not_allowed = false;
+  if (comp.machine_mm) {  // the exit move after CUTCOM/OFF: from where the tool is
+    block.start_mm = *comp.machine_mm;
+    comp.machine_mm.reset();
+  }
+  out_.program.blocks.push_back(block);
   state_.position_mm = end;
   state_.pose_axis = state_.axis = end_axis;
 }
@@ -705,7 +755,7 @@ void Reader::do_goto() {
                          num(allowed) + " mm)");
   }
   // A full circle: the end equals the start, exactly, so that the sweep is 2*pi, not ~0.
-  if ((end - state_.position_mm).norm() <= kSamePointMm) end = state_.position_mm;
+  if ((end - programmed_point()).norm() <= kSamePointMm) end = programmed_point();
   motion(MotionKind::Arc, end, end_axis);
   state_.circle_pending = false;
 }
@@ -730,7 +780,7 @@ void Reader::do_godlta() {
   } else {
     delta = Eigen::Vector3d(length(0, "dx"), length(1, "dy"), length(2, "dz"));
   }
-  const Eigen::Vector3d end = state_.position_mm + delta;
+  const Eigen::Vector3d end = programmed_point() + delta;
   if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
     fail(args_[0].pos, "GODLTA/ ends at " + point(end) +
                            " mm, out of range (expected within "
@@ -943,12 +993,12 @@ void Reader::do_circle() {
   if (!state_.known) {
     fail(major_pos_, "CIRCLE/ from an unknown position (expected FROM/ or GOTO/ before it)");
   }
-  Eigen::Vector3d d = state_.position_mm - c;
+  Eigen::Vector3d d = programmed_point() - c;
   d -= n * n.dot(d);
   const double r_start = d.norm();
   const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * r);
   if (!(std::abs(r_start - r) <= allowed) || r_start <= kSamePointMm) {
-    fail(args_[6].pos, "the arc's start, the current point " + point(state_.position_mm) + ", is " +
+    fail(args_[6].pos, "the arc's start, the current point " + point(programmed_point()) + ", is " +
                            num(r_start) +
                            " mm from the circle's axis (expected a point on the circle: radius " +
                            num(r) + " mm within " + num(allowed) + " mm)");
@@ -1006,18 +1056,64 @@ void Reader::do_spindl() {
   state_.spindle = rpm > 0.0 ? direction : SpindleState::Off;
 }
 
-// CUTCOM/OFF: nothing to end. CUTCOM/LEFT or RIGHT asks the control to offset the path
-// (CL data of the part's contour): not read yet, so an error rather than a path off by the
-// tool's radius.
+// CUTCOM/LEFT | RIGHT [,XYPLAN] [,register]: the CL points that follow are the part's contour
+// and the tool runs the CUTTER/'s radius to the left or right of it, as G41/G42 in G17 (the
+// register is the control's; the radius comes from CUTTER/). CUTCOM/OFF as G40: the held move
+// ends at its offset point, the next (straight) move goes to its programmed point.
 void Reader::do_cutcom() {
   if (nargs_ == 0) fail(args_pos_, "CUTCOM without its side (expected CUTCOM/LEFT, RIGHT or OFF)");
   const Arg& a = args_[0];
-  if (!a.is_number && a.word == "OFF") return;
-  if (!a.is_number && (a.word == "LEFT" || a.word == "RIGHT")) {
-    fail(a.pos, "CUTCOM/" + a.word + ": cutter compensation in CL data is not read yet (expected CL data of the tool "
-                "centre, the CAM's compensation in computer; G-code's G41/G42 is read)");
+  Comp& comp = state_.comp;
+  if (!a.is_number && a.word == "OFF") {
+    if (compensating() && !comp.first_move) {
+      comp_end(a.pos);
+      comp.machine_mm = state_.position_mm;
+      state_.position_mm = comp.program_mm;
+      comp.arc_not_allowed = true;
+    }
+    comp.side = Comp::Side::Off;
+    comp.first_move = true;
+    return;
   }
-  fail(a.pos, "CUTCOM/ takes LEFT, RIGHT or OFF");
+  if (a.is_number || (a.word != "LEFT" && a.word != "RIGHT")) fail(a.pos, "CUTCOM/ takes LEFT, RIGHT or OFF");
+  for (size_t k = 1; k < nargs_; ++k) {
+    const Arg& extra = args_[k];
+    if (!extra.is_number && extra.word != "XYPLAN") {
+      fail(extra.pos, "CUTCOM/" + a.word + " with " + extra.word + " (expected XYPLAN or a register number: compensation works in the XY plane)");
+    }
+  }
+  if (comp.side != Comp::Side::Off) fail(a.pos, "CUTCOM/" + a.word + " with compensation already on (expected CUTCOM/OFF first)");
+  if (state_.multax) fail(a.pos, "CUTCOM/" + a.word + " with MULTAX/ON (expected three-axis CL data: compensation works in the XY plane)");
+  if (!state_.has_cutter) fail(a.pos, "CUTCOM/" + a.word + " before any CUTTER/ (expected the cutter, whose radius the path is offset by)");
+  if (state_.circle_pending) fail(a.pos, "CUTCOM/" + a.word + " between a CIRCLE/ and its GOTO/ (expected it before the CIRCLE/)");
+  comp.side = a.word == "LEFT" ? Comp::Side::Left : Comp::Side::Right;
+  comp.radius_mm = state_.cutter.radius_mm();
+  comp.first_move = true;
+  comp.held.clear();
+  comp.endpoint_valid = false;
+}
+
+void Reader::comp_end(size_t pos) {
+  detail::Compensator compensator(state_.comp, *this);
+  compensator.move_end_and_flush(state_.position_mm.head<2>(), static_cast<int>(pos));
+  compensator.flush();
+}
+
+void Reader::comp_append(Block block, const std::array<bool, 3>&, bool held, const Eigen::Vector2d& direction, double sweep_rad) {
+  block.tool_pose = true;
+  block.start_axis = block.end_axis = Eigen::Vector3d::UnitZ();
+  block.orientation = kinematics::OrientationMode::Vector;
+  block.feed_mode = kinematics::FeedMode::UnitsPerMinute;
+  block.tool = state_.tool;
+  block.spindle = state_.spindle;
+  block.spindle_rpm = state_.spindle_rpm;
+  block.source = kinematics::SourceRef{file_index_, statement_line_};
+  state_.position_mm = block.end_mm;
+  if (held) {
+    state_.comp.held.push_back({block, direction, sweep_rad});
+  } else {
+    out_.program.blocks.push_back(block);
+  }
 }
 
 void Reader::do_units() {

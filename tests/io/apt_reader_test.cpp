@@ -4,6 +4,7 @@
 // copied from the reader's own output.
 #include <gtest/gtest.h>
 #include <vcut/io/apt_reader.h>
+#include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
 
@@ -520,9 +521,15 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("FEDRAT/0.2,MMPR\n", 1, 12, "feed per revolution");
   EXPECT_APT_ERROR("FEDRAT/10,FAST\n", 1, 11, "expected MMPM or IPM");
   EXPECT_APT_ERROR("UNITS/FEET\n", 1, 7, "INCHES or MM");
-  // Compensation in CL data is refused, not ignored: the path would be off by the radius.
-  EXPECT_APT_ERROR("CUTCOM/LEFT,1\n", 1, 8, "CUTCOM/LEFT: cutter compensation in CL data is not read yet");
+  // Cutter compensation: what it needs, named.
   EXPECT_APT_ERROR("CUTCOM/UP\n", 1, 8, "takes LEFT, RIGHT or OFF");
+  EXPECT_APT_ERROR("CUTCOM/LEFT,1\n", 1, 8, "CUTCOM/LEFT before any CUTTER/");
+  EXPECT_APT_ERROR("CUTTER/4\nMULTAX/ON\nCUTCOM/LEFT\n", 3, 8, "with MULTAX/ON");
+  EXPECT_APT_ERROR("CUTTER/4\nCUTCOM/LEFT,YZPLAN\n", 2, 13, "expected XYPLAN or a register number");
+  EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/1,0,0\n", 5, 1,
+                   "entry move of 1 mm in the plane is not longer than the tool radius 2 mm");
+  EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/10,0,0\nCUTCOM/OFF\nCIRCLE/10,5,0,0,0,1,5\nGOTO/10,10,0\n",
+                   8, 1, "a CIRCLE/ just after CUTCOM/OFF");
   const AptProgram off = read("CUTCOM/OFF\nFROM/0,0,10\nFEDRAT/100\nGOTO/10,0,0\n");
   EXPECT_TRUE(off.program.warnings.empty());
   EXPECT_EQ(off.program.blocks.size(), 1u);
@@ -688,6 +695,41 @@ TEST_F(ProgramFiles, ReadProgramErrors) {
       std::string::npos);
   EXPECT_NE(message([&] { read_program(dir_.string(), "auto"); }).find("is a directory"),
             std::string::npos);
+}
+
+// CUTCOM/RIGHT around a square with a half-circle top, run counterclockwise: the tool (radius 2)
+// outside. By hand: the bottom side runs at y = -2 to (20, -2), the convex corner is an arc
+// about (20, 0) to (22, 0), the right side at x = 22, the half circle about (10, 20) with
+// radius 10 + 2 ends at (-2, 20), the left side at x = -2 to (-2, 0). A second method: the same
+// contour as G-code with G42.1 D4 (the G-code compensation that tests/oracle checks against
+// LinuxCNC's rs274) gives the same moves.
+TEST(AptReader, CutcomOffsetsTheContourAsG42) {
+  const AptProgram apt = read(
+      "UNITS/MM\nCUTTER/4\nFROM/-10,-10,5\nFEDRAT/200\nGOTO/-10,-10,-1\nCUTCOM/RIGHT,XYPLAN,1\nGOTO/0,0,-1\n"
+      "GOTO/20,0,-1\nGOTO/20,20,-1\nCIRCLE/10,20,-1,0,0,1,10\nGOTO/0,20,-1\nGOTO/0,0,-1\nCUTCOM/OFF\nGOTO/-10,-10,-1\nFINI\n");
+  const std::vector<Block>& b = apt.program.blocks;
+  ASSERT_EQ(b.size(), 8u);
+  EXPECT_LT((b[2].end_mm - Eigen::Vector3d(20, -2, -1)).norm(), 1e-9);
+  EXPECT_EQ(b[3].kind, kinematics::MotionKind::Arc);
+  EXPECT_LT((b[3].center_mm - Eigen::Vector3d(20, 0, -1)).norm(), 1e-9);
+  EXPECT_LT((b[3].end_mm - Eigen::Vector3d(22, 0, -1)).norm(), 1e-9);
+  EXPECT_LT((b[4].end_mm - Eigen::Vector3d(22, 20, -1)).norm(), 1e-9);
+  EXPECT_LT((b[5].end_mm - Eigen::Vector3d(-2, 20, -1)).norm(), 1e-9);
+  EXPECT_LT((b[6].end_mm - Eigen::Vector3d(-2, 0, -1)).norm(), 1e-9);
+  EXPECT_LT((b[7].end_mm - Eigen::Vector3d(-10, -10, -1)).norm(), 1e-9);
+  EXPECT_EQ(b[5].source.line, 11);  // the CIRCLE/'s GOTO/
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d(-10, -10, 5);
+  kinematics::Program gcode;
+  GcodeState state;
+  std::istringstream in("G21 G90 G17 F200\nG1 Z-1\nG42.1 D4\nG1 X0 Y0\nX20\nY20\nG3 X0 Y20 I-10 J0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n");
+  read_gcode(in, "square.ngc", options, gcode, state);
+  ASSERT_EQ(gcode.blocks.size(), b.size());
+  for (size_t k = 0; k < b.size(); ++k) {
+    EXPECT_EQ(gcode.blocks[k].kind, b[k].kind) << k;
+    EXPECT_LT((gcode.blocks[k].end_mm - b[k].end_mm).norm(), 1e-9) << k;
+    if (b[k].kind == kinematics::MotionKind::Arc) EXPECT_LT((gcode.blocks[k].center_mm - b[k].center_mm).norm(), 1e-9) << k;
+  }
 }
 
 }  // namespace

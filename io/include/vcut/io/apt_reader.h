@@ -11,6 +11,8 @@
 //   MULTAX[/ON|OFF]  TLAXIS/i,j,k
 //   CIRCLE/cx,cy,cz,i,j,k,r[,...] then its GOTO/  SPINDL/[RPM,]n[,CLW|CCLW] | /ON | /OFF
 //   UNITS/INCHES|MM  PPRINT text  END (a section end: reading goes on)
+//   CUTCOM/LEFT|RIGHT[,XYPLAN][,n] ... CUTCOM/OFF (compensation in the XY plane, as G41/G42
+//   and G40 with the CUTTER/'s radius; three-axis CL data only)
 //   FINI (the end: nothing after it is read)
 //   `$` continues a statement on the next line (the rest of the line is a comment);
 //   `$$` starts a comment.
@@ -39,6 +41,7 @@
 //   onto removal::Cutter (flat, ball, bull-nose, V-bit; tapers are an error).
 #pragma once
 
+#include <vcut/io/gcode_reader.h>
 #include <vcut/kinematics/program.h>
 #include <vcut/removal/cutter.h>
 
@@ -90,6 +93,9 @@ struct AptState {
   std::string circle_where;  // "file:line:col"
   int circle_line = 0, circle_column = 0;
   std::set<std::string> warned;  // ignored statement words already warned about
+  // CUTCOM/LEFT | RIGHT (the CL points are the part's contour; the control offsets the tool by
+  // the CUTTER/'s radius) as G41/G42 in the XY plane, LinuxCNC's algorithm; CUTCOM/OFF as G40.
+  GcodeState::CutterComp comp;
 };
 
 // Reads one CL file. Errors are vcut::InputError naming file:line:column.
