@@ -5,6 +5,7 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -13,10 +14,13 @@
 
 namespace {
 
-// A broken invariant is a crash, so that the fuzzer keeps the input.
-void require(bool ok) {
-  if (!ok) std::abort();
+// A broken invariant is a crash, so that the fuzzer keeps the input; the line says which.
+void require_at(bool ok, int line) {
+  if (ok) return;
+  std::fprintf(stderr, "apt_fuzz: broken invariant at apt_fuzz.cpp:%d\n", line);
+  std::abort();
 }
+#define require(ok) require_at((ok), __LINE__)
 
 bool unit(const Eigen::Vector3d& v) { return v.allFinite() && std::abs(v.norm() - 1.0) <= 1e-12; }
 

@@ -231,6 +231,12 @@ class Reader : public detail::CompHost {
   void do_cutcom();
   bool compensating() const { return state_.comp.side != Comp::Side::Off && state_.comp.radius_mm > 0.0; }
   void comp_end(size_t pos);  // sends the held moves to where the tool is
+  // What the G-code reader refuses with G41/G42 on (a new position, a tool change, five axes).
+  void no_cutcom(const char* what) const {
+    if (state_.comp.side != GcodeState::CutterComp::Side::Off) {
+      fail(major_pos_, std::string(what) + " with CUTCOM on (expected CUTCOM/OFF first)");
+    }
+  }
   // CompHost: the compensation's moves are this reader's.
   using Comp = GcodeState::CutterComp;
   Eigen::Vector3d& tool_position() override { return state_.position_mm; }
@@ -762,6 +768,7 @@ void Reader::do_goto() {
 
 void Reader::do_from() {
   no_circle_pending("FROM/");
+  no_cutcom("FROM/");
   count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
   state_.position_mm = Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z"));
   if (nargs_ == 6) state_.pose_axis = state_.axis = unit_vector(3, "tool axis");
@@ -917,6 +924,7 @@ void Reader::do_cutter() {
 // LOADTL/n[,...] (APT) and LOAD/TOOL,n[,...] (NX): tool n goes into the spindle. Further
 // parameters (ADJUST, length registers...) do not change the path: ignored with one warning.
 void Reader::do_loadtl(bool load_tool) {
+  no_cutcom(load_tool ? "LOAD/TOOL" : "LOADTL/");
   const size_t k = load_tool ? 1 : 0;
   if (load_tool) {
     if (nargs_ == 0 || args_[0].is_number || args_[0].word != "TOOL") {
@@ -956,6 +964,7 @@ void Reader::do_loadtl(bool load_tool) {
 }
 
 void Reader::do_multax() {
+  no_cutcom("MULTAX");
   count(0, 1, "nothing, ON or OFF");
   if (nargs_ == 0) {
     state_.multax = true;

@@ -526,6 +526,8 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("CUTCOM/LEFT,1\n", 1, 8, "CUTCOM/LEFT before any CUTTER/");
   EXPECT_APT_ERROR("CUTTER/4\nMULTAX/ON\nCUTCOM/LEFT\n", 3, 8, "with MULTAX/ON");
   EXPECT_APT_ERROR("CUTTER/4\nCUTCOM/LEFT,YZPLAN\n", 2, 13, "expected XYPLAN or a register number");
+  EXPECT_APT_ERROR("CUTTER/4\nCUTCOM/LEFT\nFROM/0,0,0\n", 3, 1, "FROM/ with CUTCOM on (expected CUTCOM/OFF first)");
+  EXPECT_APT_ERROR("CUTTER/4\nCUTCOM/RIGHT\nLOADTL/2\n", 3, 1, "LOADTL/ with CUTCOM on");
   EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/1,0,0\n", 5, 1,
                    "entry move of 1 mm in the plane is not longer than the tool radius 2 mm");
   EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/10,0,0\nCUTCOM/OFF\nCIRCLE/10,5,0,0,0,1,5\nGOTO/10,10,0\n",
