@@ -2,8 +2,6 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/program_reader.h>
 #include <vcut/io/sinumerik_reader.h>
-
-#include "reader_util.h"
 #include <vcut/kinematics/forward_kinematics.h>
 #include <vcut/kinematics/inverse_kinematics.h>
 
@@ -14,6 +12,8 @@
 #include <fstream>
 #include <memory>
 #include <utility>
+
+#include "reader_util.h"
 
 namespace vcut::io {
 namespace {
