@@ -1524,7 +1524,11 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
     const double v = w.value * M_PI / 180.0;
     rotary.angle_rad[static_cast<size_t>(r)] = state_.incremental ? rotary.angle_rad[static_cast<size_t>(r)] + v : v;
     rotary.given[static_cast<size_t>(r)] = true;
-    if (!holds_linear) state_.rotary_program = true;
+    // A rotary word that turns nothing (A0 at A0, as posts write on their first positioning
+    // line) does not make an axis program of a tool-tip one.
+    if (!holds_linear && rotary.angle_rad[static_cast<size_t>(r)] != state_.rotary.angle_rad[static_cast<size_t>(r)]) {
+      state_.rotary_program = true;
+    }
   }
   if (holds_linear && rotary.angle_rad != state_.rotary.angle_rad) {
     joint_move(block, rotary, rotary_column);

@@ -213,6 +213,22 @@ TEST(TiltedPlane, AfterG69TheRotariesStayAndXyzAreTheMachines) {
   expect_near(last_of_line(program, 7).end_mm, Eigen::Vector3d(10, 80, 500), 1e-9, "X10 after");
 }
 
+TEST(TiltedPlane, RotaryWordsThatTurnNothingKeepATipProgram) {
+  // A0 C0 where the rotaries are (posts write them on their first positioning line) leave a
+  // program of tool tips as it is; a rotary word that turns, without G43 or G68.2, makes it an
+  // axis program (LinuxCNC's trivial kinematics: X Y Z are the joints).
+  const GcodeOptions options = machine_options("table-table-ac");
+  const auto tips = read_text("G0 X10 Y0 Z50 A0 C0\nG1 Z0 F100\n", options, "tips.nc");
+  ASSERT_EQ(tips.blocks.size(), 2u);
+  EXPECT_TRUE(tips.blocks[0].tool_pose);
+  EXPECT_TRUE(tips.blocks[1].tool_pose);
+  const auto axes = read_text("G0 X10 Y0 Z50 A0 C0\nG0 A-30\nG1 Z0 F100\n", options, "axes.nc");
+  EXPECT_FALSE(axes.blocks.back().tool_pose);
+  // With G43 the same turn holds the linear axes and the program stays one of tips.
+  const auto g43 = read_text("G43 H1 G0 X10 Y0 Z50 A0 C0\nG0 A-30\nG1 Z0 F100\n", options, "g43.nc");
+  EXPECT_TRUE(g43.blocks.back().tool_pose);
+}
+
 TEST(TiltedPlane, RollPitchYawWithP1) {
   // P1: I about X, then J about Y, then K about Z, all fixed axes: R = Rz(K) Ry(J) Rx(I).
   // I90 alone: feature Y goes to +Z, feature Z to -Y.
