@@ -112,6 +112,21 @@ void Compensator::corner(const Block& main, const Eigen::Vector2d& corner, const
   host_.comp_append(block, {true, true, true}, false, Eigen::Vector2d::Zero(), 0.0);
 }
 
+// A convex corner: the arc (or traverse) about the programmed corner to `start`, where the next
+// move's offset path begins.
+void Compensator::convex_corner(const Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start, int turn) {
+  corner(main, corner_point, start, turn);
+  comp_.endpoint = start;
+  comp_.endpoint_valid = true;
+}
+
+// No corner to make (the paths meet tangentially): the held moves go as they are.
+void Compensator::straight_on(const Eigen::Vector2d& at) {
+  flush();
+  comp_.endpoint = at;
+  comp_.endpoint_valid = true;
+}
+
 Compensator::Move Compensator::move(const Block& block) const {
   Move m;
   host_.comp_plane(m.a, m.b, m.c);
@@ -200,13 +215,9 @@ void Compensator::straight(Block& block, const std::array<bool, 3>& programmed, 
     move_end_and_flush(arc_center + rho * direction(psi), column);
   } else if (beta > kCornerRad) {
     move_end_and_flush(cur, column);
-    corner(block, o, start, left ? -1 : 1);
-    comp.endpoint = start;
-    comp.endpoint_valid = true;
+    convex_corner(block, o, start, left ? -1 : 1);
   } else {
-    flush();
-    comp.endpoint = cur;
-    comp.endpoint_valid = true;
+    straight_on(cur);
   }
   hold(end, p - o);
 }
@@ -301,15 +312,10 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
     const double psi = front_inside ? (turn > 0 ? kappa + pa : kappa - pa) : (turn > 0 ? kappa - pa : kappa + pa);
     move_end_and_flush(front_center + rho * direction(psi), column);
   } else if (beta > kCornerRad) {
-    const Eigen::Vector2d start = o + r * direction(delta);
     flush();
-    corner(block, o, start, left ? -1 : 1);
-    comp.endpoint = start;
-    comp.endpoint_valid = true;
+    convex_corner(block, o, o + r * direction(delta), left ? -1 : 1);
   } else {
-    flush();
-    comp.endpoint = cur;
-    comp.endpoint_valid = true;
+    straight_on(cur);
   }
   hold(end, k, programmed_sweep);
 }

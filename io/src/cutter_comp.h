@@ -57,6 +57,8 @@ class Compensator {
   };
   Move move(const kinematics::Block& block) const;
   void corner(const kinematics::Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn);
+  void convex_corner(const kinematics::Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start, int turn);
+  void straight_on(const Eigen::Vector2d& at);
   // Holds `block` ending at `end` (an arc: about `center`) until the next move decides its
   // end; its programmed end becomes the point O the next move starts from.
   void hold_move(kinematics::Block& block, const std::array<bool, 3>& programmed, const Move& m, const Eigen::Vector2d& end,
