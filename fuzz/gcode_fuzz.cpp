@@ -24,7 +24,7 @@ void require_at(bool ok, int line) {
 }
 #define require(ok) require_at((ok), __LINE__)
 
-void check(const vcut::kinematics::Program& program, const vcut::io::GcodeOptions& options) {
+void check(const vcut::kinematics::Program& program) {
   using vcut::kinematics::MotionKind;
   // Coordinates are bounded by 1e6 mm; a pending axis may hold a value from the offsets.
   constexpr double kBound = 1e6 + 1e-6;
@@ -116,6 +116,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const vcut::InputError&) {
     // Expected for bad input; the blocks read before the error must still be well formed.
   }
-  check(program, options);
+  check(program);
   return 0;
 }

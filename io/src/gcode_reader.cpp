@@ -1816,7 +1816,6 @@ void Reader::nurbs_point(int column, bool first) {
     if (state_.comp.side != Comp::Side::Off) fail(column, "G5.2 with cutter compensation on (expected G40 first)");
     if (!state_.known[0] || !state_.known[1]) fail(column, "G5.2 from an unknown X or Y position (expected a move that sets them first)");
     GcodeState::Nurbs n;
-    n.column = column;
     n.feed_mm_per_min = feed_of_line(column);
     if (const Word& l = word('L'); l.present) {
       if (l.value < 2.0 || !is_whole(l.value) || l.value > 20.0) fail(l.column, "G5.2 L" + num(l.value) + " (expected the order, a whole number 2..20)");

@@ -730,7 +730,9 @@ TEST(AptReader, CutcomOffsetsTheContourAsG42) {
   for (size_t k = 0; k < b.size(); ++k) {
     EXPECT_EQ(gcode.blocks[k].kind, b[k].kind) << k;
     EXPECT_LT((gcode.blocks[k].end_mm - b[k].end_mm).norm(), 1e-9) << k;
-    if (b[k].kind == kinematics::MotionKind::Arc) EXPECT_LT((gcode.blocks[k].center_mm - b[k].center_mm).norm(), 1e-9) << k;
+    if (b[k].kind == kinematics::MotionKind::Arc) {
+      EXPECT_LT((gcode.blocks[k].center_mm - b[k].center_mm).norm(), 1e-9) << k;
+    }
   }
 }
 

@@ -78,19 +78,21 @@ struct GcodeOptions {
   // tool to `axis` (unit, tip -> spindle, workpiece frame) with the tip at `tip_mm`, with the
   // least rotary motion from `from` (tilt_sign +1 / -1: among the solutions whose tilting
   // axis - the rotary least parallel to the spindle - is >= 0 / <= 0), and returns "" - or
-  // why the machine cannot (a limit, an unreachable axis). `tip_after_turn` gives where the tip goes (workpiece frame, mm) when the
-  // rotary axes turn from `from` to `to` with the linear axes held. Unset (no machine): G53.1
-  // and G53.6 are errors.
+  // why the machine cannot (a limit, an unreachable axis). `tip_after_turn` gives where the
+  // tip goes (workpiece frame, mm) when the rotary axes turn from `from` to `to` with the
+  // linear axes held. Unset (no machine): G53.1 and G53.6 are errors, and rotary words
+  // without TCP make an axis program.
   std::function<std::string(int tool, const Eigen::Vector3d& tip_mm, const Eigen::Vector3d& axis,
                             const kinematics::RotaryWords& from, int tilt_sign, kinematics::RotaryWords& to)>
       orient;
   std::function<Eigen::Vector3d(int tool, const Eigen::Vector3d& tip_mm, const kinematics::RotaryWords& from,
                                 const kinematics::RotaryWords& to)>
       tip_after_turn;
-  // Probing (G38.2 / G38.3; G31, Fanuc's skip and Mach3's probe): where along the move from
+  // Probing (G38.2..G38.5; G31, Fanuc's skip and Mach3's probe): where along the move from
   // `from` to `to` (tips, workpiece frame, mm) the probe's tip first touches the stock, as a
-  // fraction in [0, 1], or none. A job sets it from its stock; unset (`vcut program`), a probe
-  // runs to its end point, with a warning.
+  // fraction in [0, 1] (0: it starts inside), or none. A job sets it from its stock; unset
+  // (`vcut program`), a probe trips 0.254 mm before its end, as LinuxCNC's standalone rs274
+  // has it, with a warning.
   std::function<std::optional<double>(const Eigen::Vector3d& from, const Eigen::Vector3d& to)> probe_contact;
 };
 // Reads one program file; errors are vcut::InputError naming file:line:column.
@@ -107,14 +109,15 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
 // Program, for each file in sequence.
 struct GcodeState {
   // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
-  // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC).
+  // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC); Probe:
+  // G38.2..G38.5; Nurbs: between G5.2 and G5.3.
   enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, SpindleSync, RigidTap,
                       CubicSpline, QuadraticSpline, Probe, Nurbs, Unsupported };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
   int cycle = 0;                 // the canned cycle's G code x10 (810 for G81) when Motion::Cycle
-  int probe = 0;                 // 382 (G38.2) or 383 (G38.3) when Motion::Probe
+  int probe = 0;                 // 382..385 (G38.2..G38.5) when Motion::Probe
   Plane plane = Plane::XY;
   bool inches = false;               // G20
   bool incremental = false;          // G91
@@ -177,7 +180,6 @@ struct GcodeState {
     std::vector<Eigen::Vector3d> points;
     int order = 3;
     double feed_mm_per_min = 0.0;
-    int column = 1;  // of the G5.2
   };
   std::optional<Nurbs> nurbs;
   // Fanuc G68 in G17: programmed X Y turn by rotation_rad about rotation_center_mm (program
