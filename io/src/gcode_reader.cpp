@@ -2650,6 +2650,19 @@ void Reader::set_offsets(const Code& g) {
   }
 }
 
+// A turn of the rotaries from `from` to `to` in steps of at most 1 deg (the largest axis
+// turn decides), and the rotary values after step n of them.
+int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
+  double turn_deg = 0.0;
+  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
+  return std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+}
+kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to, int n, int steps) {
+  kinematics::RotaryWords step = to;
+  for (size_t a = 0; a < 3; ++a) step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+  return step;
+}
+
 constexpr double kProbeBackoffMm = 0.254;
 
 // G38.2 / G38.3 / G31: a straight feed toward the point that stops where the probe's tip
@@ -2844,15 +2857,12 @@ void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, i
   zero.angle_rad = {0.0, 0.0, 0.0};
   const Eigen::Vector3d q0 = block.start_mm, q1 = block.end_mm;  // the machine's X Y Z
   if (state_.twp) end_turned_frame();
-  double turn_deg = 0.0;
-  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
-  const int steps = std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+  const int steps = rotary_steps(from, to);
   const bool inverse_time = block.kind != MotionKind::Rapid && state_.inverse_time;
   state_.position_mm = options_.tip_after_turn(state_.tool, q0, zero, from);
   in_swing_ = true;
   for (int n = 1; n <= steps; ++n) {
-    kinematics::RotaryWords step = to;
-    for (size_t a = 0; a < 3; ++a) step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+    const kinematics::RotaryWords step = rotary_step(from, to, n, steps);
     Block b = block;
     b.start_mm = state_.position_mm;
     b.end_mm = options_.tip_after_turn(state_.tool, q0 + (q1 - q0) * n / steps, zero, step);
@@ -2892,16 +2902,11 @@ void Reader::twp_turn(const Code& g) {
     fail(g.column, g.text + ": the machine cannot turn the tool to the tilted plane's Z (" + num(axis.x()) + ", " +
                        num(axis.y()) + ", " + num(axis.z()) + "): " + why);
   }
-  double turn_deg = 0.0;
-  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
   const bool feed = state_.motion == Motion::Linear && !state_.inverse_time && state_.feed_mm_per_min > 0.0;
-  const int steps = g.number == 536 ? 1 : std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+  const int steps = g.number == 536 ? 1 : rotary_steps(from, to);
   in_swing_ = true;
   for (int n = 1; n <= steps; ++n) {
-    kinematics::RotaryWords step = to;
-    for (size_t a = 0; a < 3; ++a) {
-      step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
-    }
+    const kinematics::RotaryWords step = rotary_step(from, to, n, steps);
     const Eigen::Vector3d end = g.number == 536 ? tip : options_.tip_after_turn(state_.tool, tip, from, step);
     Block block;
     block.kind = feed ? MotionKind::Linear : MotionKind::Rapid;
