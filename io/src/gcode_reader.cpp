@@ -528,7 +528,10 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     return options_.tip_after_turn && !state_.rotary_program && state_.tcp == GcodeState::Tcp::Off &&
            (state_.twp_used || state_.length_comp);
   }
-  void turned_frame(const Eigen::Vector3d& tip_mm);
+  // machine_mm: the machine's X Y Z where the tip stands, when known exactly (else from the tip).
+  void turned_frame(const Eigen::Vector3d& tip_mm, const Eigen::Vector3d* machine_mm = nullptr);
+  // A point of the tilted or turned frame on the workpiece (as blocks are emitted).
+  Eigen::Vector3d twp_out(const Eigen::Vector3d& p) const { return state_.twp_rotation * p + state_.twp_translation_mm; }
   void end_turned_frame();
   void joint_move(const Block& block, const kinematics::RotaryWords& to, int column);
   size_t twp_first_block_ = 0;
@@ -553,10 +556,23 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   // The compensation's geometry (cutter_comp.h), on this reader's position and blocks.
   detail::Compensator compensator() { return detail::Compensator(state_.comp, *this); }
   void comp_straight(Block& block, const std::array<bool, 3>& programmed, int column) {
+    require_comp_position(programmed, column);
     compensator().straight(block, programmed, column);
   }
   void comp_arc(Block& block, const std::array<bool, 3>& programmed, int turn, int column) {
+    require_comp_position(programmed, column);
     compensator().arc(block, programmed, turn, column);
+  }
+  // Compensation offsets from where the tool is: the plane's axes must be known before the
+  // move, and the third axis by its end (a held block cannot wait for a later value).
+  void require_comp_position(const std::array<bool, 3>& programmed, int column) const {
+    int a = 0, b = 1, c = 2;
+    plane_axes(a, b, c);
+    for (int axis : {a, b, c}) {
+      if (state_.known[static_cast<size_t>(axis)] || (axis == c && programmed[static_cast<size_t>(axis)])) continue;
+      fail(column, std::string("cutter compensation while the ") + kAxisLetter[axis] +
+                       " position is unknown is not supported: vcut assumes no start position (expected a move that sets it first)");
+    }
   }
   void comp_move_end_and_flush(const Eigen::Vector2d& x, int column) { compensator().move_end_and_flush(x, column); }
   void comp_flush() { compensator().flush(); }
@@ -1562,7 +1578,9 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
   block.blend_tolerance_mm = state_.blend_tolerance_mm;
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   state_.rotary = rotary;
-  const bool moves = block.kind == MotionKind::Arc || block.start_mm != block.end_mm || turns || reorients;
+  // In a tilted or turned frame a move that is a few ulps long there may be none on the part.
+  const bool moves = block.kind == MotionKind::Arc || turns || reorients ||
+                     (state_.twp ? twp_out(block.start_mm) != twp_out(block.end_mm) : block.start_mm != block.end_mm);
   if (moves) {
     block.feed_mode = state_.inverse_time && block.kind != MotionKind::Rapid ? kinematics::FeedMode::InverseTime
                                                                              : kinematics::FeedMode::UnitsPerMinute;
@@ -2791,12 +2809,11 @@ void Reader::twp_begin(const Code& g) {
 // The blocks made in the tilted plane, from the feature frame to the workpiece frame.
 void Reader::twp_emit() {
   const Eigen::Matrix3d& r = state_.twp_rotation;
-  const Eigen::Vector3d& t = state_.twp_translation_mm;
   for (size_t n = twp_first_block_; n < program_.blocks.size(); ++n) {
     Block& b = program_.blocks[n];
-    b.start_mm = r * b.start_mm + t;
-    b.end_mm = r * b.end_mm + t;
-    b.center_mm = r * b.center_mm + t;
+    b.start_mm = twp_out(b.start_mm);
+    b.end_mm = twp_out(b.end_mm);
+    b.center_mm = twp_out(b.center_mm);
     b.normal = r * b.normal;
   }
   twp_first_block_ = program_.blocks.size();
@@ -2824,7 +2841,7 @@ void Reader::end_turned_frame() {
 // The rotaries stand at state_.rotary (twp off): from here X Y Z are the machine's, the tip's
 // point with the rotaries at zero, taken to the workpiece by the turn (a rigid motion: its
 // rotation and translation from the images of the origin and the unit points).
-void Reader::turned_frame(const Eigen::Vector3d& tip_mm) {
+void Reader::turned_frame(const Eigen::Vector3d& tip_mm, const Eigen::Vector3d* machine_mm) {
   state_.position_mm = tip_mm;
   const auto& angles = state_.rotary.angle_rad;
   if (!options_.tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0)) return;
@@ -2839,7 +2856,7 @@ void Reader::turned_frame(const Eigen::Vector3d& tip_mm) {
   state_.twp_rotation = r;
   state_.twp_translation_mm = t;
   twp_first_block_ = program_.blocks.size();
-  state_.position_mm = r.transpose() * (tip_mm - t);
+  state_.position_mm = machine_mm != nullptr ? *machine_mm : Eigen::Vector3d(r.transpose() * (tip_mm - t));
   if (state_.comp.machine_mm) *state_.comp.machine_mm = r.transpose() * (*state_.comp.machine_mm - t);
 }
 
@@ -2871,7 +2888,7 @@ void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, i
     append(b, {true, true, true}, &step);
   }
   in_swing_ = false;
-  turned_frame(state_.position_mm);
+  turned_frame(state_.position_mm, &q1);
 }
 
 // G53.1 / G53.6: the rotaries turn the tool to the feature frame's +Z, in the G0 / G1 mode.

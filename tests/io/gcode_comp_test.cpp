@@ -123,6 +123,18 @@ TEST(CutterComp, ImpossibleCompensationIsAnError) {
   EXPECT_NE(error_of("F100\nG41.1 D2\nG41.1 D2\n").find("already on"), std::string::npos);
   EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG40\nG2 X20 R5\n").find("arc just after G40"), std::string::npos);
   EXPECT_NE(error_of("G19\nG41.1 D2\n").find("G41.1 in G19"), std::string::npos);
+  // From an unknown position (no start position given): the offset needs the plane's axes
+  // before the move, and a held block the third axis by its end.
+  GcodeOptions unknown;
+  EXPECT_NE(gcode_test::error_text("G0 X-5\nG41.1 D4\nG1 X0 Y5 F100\n", unknown, "u.ngc")
+                .find("u.ngc:3:1: cutter compensation while the Y position is unknown"),
+            std::string::npos);
+  EXPECT_NE(gcode_test::error_text("G0 X-5 Y0\nG41.1 D4\nG1 X0 Y5 F100\n", unknown, "u.ngc")
+                .find("u.ngc:3:1: cutter compensation while the Z position is unknown"),
+            std::string::npos);
+  const Program known = gcode_test::read_text("G0 X-5 Y0\nG41.1 D4\nG1 X0 Y5 Z1 F100\nG1 X10\nG40 G0 X20\n", unknown, "u.ngc");
+  ASSERT_FALSE(known.blocks.empty());
+  EXPECT_EQ(known.blocks.back().end_mm, Eigen::Vector3d(20, 5, 1));
 }
 
 // G28 / G30: through the named point, then the named axes (all when none is named) to the

@@ -229,6 +229,29 @@ TEST(TiltedPlane, RotaryWordsThatTurnNothingKeepATipProgram) {
   EXPECT_TRUE(g43.blocks.back().tool_pose);
 }
 
+TEST(TiltedPlane, AMoveToWhereTheMachineStandsMakesNoBlock) {
+  // After a G43 turn the tip's frame is the machine's X Y Z: Z50 where Z already is moves
+  // nothing, whatever rounding the turn's frame has (the fuzzer found a block that was a few
+  // ulps long in the frame and none on the part). Every block that is not an arc moves.
+  const GcodeOptions options = machine_options("table-table-ac");
+  for (int a = -1; a >= -113; a -= 7) {
+    for (int c = -170; c <= 170; c += 37) {
+      const std::string text = "G43 H1 G0 X10.3 Y-7.1 Z50.7 A0 C0\nG0 A" + std::to_string(a) + " C" + std::to_string(c) +
+                               "\nG0 Z50.7\nX10.3 Y-7.1\nG1 X11 F100\n";
+      const auto program = read_text(text, options, "stand.nc");
+      for (const Block& b : program.blocks) {
+        EXPECT_NE(b.source.line, 3) << "A" << a << " C" << c;
+        EXPECT_NE(b.source.line, 4) << "A" << a << " C" << c;
+        if (b.kind != kinematics::MotionKind::Arc) {
+          EXPECT_TRUE(b.start_mm != b.end_mm || b.start_rotary.angle_rad != b.end_rotary.angle_rad)
+              << "A" << a << " C" << c << " line " << b.source.line;
+        }
+      }
+      EXPECT_EQ(program.blocks.back().source.line, 5);
+    }
+  }
+}
+
 TEST(TiltedPlane, RollPitchYawWithP1) {
   // P1: I about X, then J about Y, then K about Z, all fixed axes: R = Rz(K) Ry(J) Rx(I).
   // I90 alone: feature Y goes to +Z, feature Z to -Y.
