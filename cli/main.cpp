@@ -10,21 +10,31 @@
 #include "program_command.h"
 #include "progress.h"
 #include "vcut/io/atomic_file.h"
-#include "vcut/io/check.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
-#include "vcut/io/pose_pipeline.h"
-#include "vcut/io/simulate.h"
-#include "vcut/io/study.h"
+#include "vcut/pipeline/check.h"
+#include "vcut/pipeline/compensate.h"
+#include "vcut/pipeline/poses.h"
+#include "vcut/pipeline/simulate.h"
+#include "vcut/pipeline/study.h"
+#include "vcut/report/check_report.h"
+#include "vcut/report/outputs.h"
+#include "vcut/report/pose_tables.h"
+#include "vcut/report/study_report.h"
 
 namespace {
 
-int run_simulate(const std::string& job_file, const vcut::io::SimulateOptions& base, bool quiet) {
+int run_simulate(const std::string& job_file, const vcut::pipeline::SimulateOptions& base, const std::string& out,
+                 bool quiet) {
   const vcut::io::Job job = vcut::io::read_job(job_file);
-  vcut::io::SimulateOptions options = base;
+  vcut::pipeline::SimulateOptions options = base;
+  const std::string out_dir = out.empty() ? job.out_dir : out;
+  // Fail on an unwritable output folder before hours of cutting, not after.
+  vcut::io::ensure_writable_folder(out_dir);
   vcut::cli::ProgressBar bar(!quiet);
   options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
-  const vcut::io::SimulationResult r = vcut::io::simulate(job, options);
+  vcut::pipeline::SimulationResult r = vcut::pipeline::simulate(job, options);
+  vcut::report::write_simulation(out_dir, job, r, options.progress);
   bar.finish();
   for (const auto& w : r.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   if (!quiet) {
@@ -46,7 +56,7 @@ int run_simulate(const std::string& job_file, const vcut::io::SimulateOptions& b
                     r.gouges[i].deepest_mm.z(), lines.c_str());
       }
     }
-    std::printf("report: %s/report.json\n", r.out_dir.c_str());
+    std::printf("report: %s/report.json\n", out_dir.c_str());
   }
   return 0;
 }
@@ -60,10 +70,10 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
   // Beside it: poses.csv -> poses_blocks.csv (per block), poses_periods.csv (every period).
   const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out;
   const std::string blocks_out = stem + "_blocks.csv", periods_out = stem + "_periods.csv";
-  const vcut::io::PoseRun run =
-      every_period ? vcut::io::run_pose_engine_with_periods(job, periods_out) : vcut::io::run_pose_engine(job);
-  vcut::io::write_poses_csv(out, job, run);
-  vcut::io::write_blocks_csv(blocks_out, job, run);
+  const vcut::pipeline::PoseRun run =
+      every_period ? vcut::report::run_pose_engine_with_periods(job, periods_out) : vcut::pipeline::run_pose_engine(job);
+  vcut::report::write_poses_csv(out, job, run);
+  vcut::report::write_blocks_csv(blocks_out, job, run);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : run.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
@@ -92,9 +102,11 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
   if (out.empty()) {
     vcut::io::ensure_writable_folder(job.out_dir);
   }
-  const vcut::io::PoseRun run = vcut::io::run_pose_engine(job);
+  const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(job);
   if (out.empty()) out = job.out_dir + (run.dialect == "apt" ? "/compensated.apt" : "/compensated.ngc");
-  const vcut::io::CompensationReport r = vcut::io::write_compensated_program(out, job, run);
+  const vcut::pipeline::CompensatedProgram compensated = vcut::pipeline::compensate_program(job, run);
+  vcut::io::write_text_atomically(out, compensated.text);
+  const vcut::pipeline::CompensationReport& r = compensated.report;
   if (quiet) return r.not_converged == 0 ? 0 : 1;
   std::printf("compensated %zu poses on %s: uncompensated tip error up to %.3f um (%s)\n", r.poses, job.machine.c_str(),
               r.max_error_before_um, r.max_error_line.c_str());
@@ -108,10 +120,10 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
 
 int run_check(const std::string& job_file, const std::string& json_out, bool quiet) {
   const vcut::io::Job job = vcut::io::read_job(job_file);
-  const vcut::io::CheckResult r = vcut::io::run_check(job);
+  const vcut::pipeline::CheckResult r = vcut::pipeline::run_check(job);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : r.run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
-  if (!json_out.empty()) vcut::io::write_check_json(json_out, job, r);
+  if (!json_out.empty()) vcut::report::write_check_json(json_out, job, r);
   if (!quiet) {
     const double t = r.run.feed.cycle_time_s;
     std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(), job.machine.c_str(),
@@ -129,18 +141,22 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   return r.errors == 0 ? 0 : 1;
 }
 
-int run_study(const std::string& job_file, vcut::io::StudyOptions options, bool quiet) {
+int run_study(const std::string& job_file, vcut::pipeline::StudyOptions options, const std::string& out, bool quiet) {
   const vcut::io::Job job = vcut::io::read_job(job_file);
+  const std::string out_dir = out.empty() ? job.out_dir : out;
+  // Fail on an unwritable output folder before the runs, not after.
+  vcut::io::ensure_writable_folder(out_dir);
   vcut::cli::ProgressBar bar(!quiet);
   std::string current;
   options.on_run = [&](std::size_t index, std::size_t count, const std::string& label) {
     current = (index + 1 == count ? "reference " : "setting " + std::to_string(index + 1) + "/" + std::to_string(count - 1) + " ") + label;
   };
   options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) { bar.update(current + ": " + stage, done, total); };
-  const vcut::io::StudyResult s = vcut::io::run_densification_study(job, options);
+  vcut::pipeline::StudyResult s = vcut::pipeline::run_densification_study(job, options);
+  vcut::report::write_study(out_dir, s, job);
   bar.finish();
   for (const auto& w : s.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
-  const vcut::io::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
+  const vcut::pipeline::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
   if (!quiet) {
     std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n", s.job_name.c_str(),
                 s.varied.c_str(), s.engine.c_str(), s.resolution_mm, s.threads, s.accuracy_mm);
@@ -178,7 +194,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   bool quiet = false;
   std::string job_file;
-  vcut::io::SimulateOptions options;
+  vcut::pipeline::SimulateOptions options;
   double resolution = 0.0, max_memory = 0.0;
   int threads = -1;
   std::string out;
@@ -220,7 +236,7 @@ int main(int argc, char** argv) {
                        "distance from the reference cut, poses and time; recommends the coarsest within --accuracy");
   std::string study_job;
   bool study_quiet = false;
-  vcut::io::StudyOptions study_options;
+  vcut::pipeline::StudyOptions study_options;
   double study_resolution = 0.0, study_accuracy = 0.0, ref_step = 0.0, ref_angle = 0.0, ref_tolerance = 0.0;
   int study_threads = -1;
   std::string study_out;
@@ -252,9 +268,8 @@ int main(int argc, char** argv) {
     if (*simulate) {
       if (resolution > 0.0) options.resolution_mm = resolution;
       if (threads >= 0) options.threads = threads;
-      if (!out.empty()) options.out_dir = out;
       options.max_memory_mb = max_memory;
-      return run_simulate(job_file, options, quiet);
+      return run_simulate(job_file, options, out, quiet);
     }
     if (*poses) return run_poses(poses_job, poses_out, poses_every_period, poses_quiet);
     if (*densification) {
@@ -264,8 +279,7 @@ int main(int argc, char** argv) {
       if (densification->count("--accuracy")) study_options.accuracy_mm = study_accuracy;
       if (study_resolution > 0.0) study_options.resolution_mm = study_resolution;
       if (study_threads >= 0) study_options.threads = study_threads;
-      if (!study_out.empty()) study_options.out_dir = study_out;
-      return run_study(study_job, study_options, study_quiet);
+      return run_study(study_job, study_options, study_out, study_quiet);
     }
     if (*check) return run_check(check_job, check_json, check_quiet);
     if (*compensate) return run_compensate(compensate_job, compensate_out, compensate_quiet);

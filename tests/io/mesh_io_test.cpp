@@ -3,7 +3,7 @@
 // through assimp; base64 against RFC 4648's test vectors (section 10).
 #include <gtest/gtest.h>
 #include <vcut/io/mesh_io.h>
-#include <vcut/io/report_page.h>
+#include <vcut/report/report_page.h>
 
 #include <cmath>
 #include <cstdint>
@@ -68,9 +68,9 @@ TEST(MeshIo, Base64MatchesRfc4648) {
   const std::pair<std::string, std::string> vectors[] = {{"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},
                                                          {"foo", "Zm9v"}, {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="},
                                                          {"foobar", "Zm9vYmFy"}};
-  for (const auto& [in, out] : vectors) EXPECT_EQ(base64(in.data(), in.size()), out) << in;
+  for (const auto& [in, out] : vectors) EXPECT_EQ(report::base64(in.data(), in.size()), out) << in;
   const unsigned char high[] = {0xfb, 0xff, 0xbf};  // the alphabet's last two characters
-  EXPECT_EQ(base64(high, 3), "+/+/");
+  EXPECT_EQ(report::base64(high, 3), "+/+/");
 }
 
 }  // namespace

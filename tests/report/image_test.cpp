@@ -4,9 +4,9 @@
 // rendered shapes are worked out from the view fit by hand, each in a comment beside it.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
-#include <vcut/io/image.h>
+#include <vcut/report/image.h>
 #include <vcut/io/input_error.h>
-#include <vcut/io/snapshot.h>
+#include <vcut/report/snapshot.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-namespace vcut::io {
+namespace vcut::report {
 namespace {
 namespace fs = std::filesystem;
 using removal::TriangleMesh;
@@ -319,4 +319,4 @@ TEST(Snapshot, WritesThreeViews) {
 }
 
 }  // namespace
-}  // namespace vcut::io
+}  // namespace vcut::report

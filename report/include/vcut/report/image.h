@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-namespace vcut::io {
+namespace vcut::report {
 
 using Rgb = std::array<std::uint8_t, 3>;
 
@@ -59,4 +59,4 @@ double text_width(const std::string& text, double height_px);
 // (0.005, 1e-3, 250, 1.5e6).
 std::string format_label(double value, int significant = 3);
 
-}  // namespace vcut::io
+}  // namespace vcut::report

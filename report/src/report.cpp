@@ -1,4 +1,4 @@
-#include "vcut/io/report.h"
+#include "vcut/report/report.h"
 
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -7,7 +7,14 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/csv.h"
 
-namespace vcut::io {
+namespace vcut::report {
+
+using pipeline::PoseEvent;
+using pipeline::PoseRun;
+using pipeline::RegionRecord;
+using pipeline::SimulationResult;
+using pipeline::axis_feed_of;
+using pipeline::feed_interpretation_name;
 namespace {
 
 using nlohmann::ordered_json;
@@ -35,7 +42,8 @@ ordered_json region(const RegionRecord& r) {
 
 }  // namespace
 
-void write_report_json(const std::string& path, const Job& job, const SimulationResult& r) {
+void write_report_json(const std::string& path, const std::string& out_dir, const io::Job& job,
+                       const pipeline::SimulationResult& r) {
   ordered_json j;
   j["schema_version"] = kReportSchemaVersion;
   j["job"] = r.job_name;
@@ -158,16 +166,16 @@ void write_report_json(const std::string& path, const Job& job, const Simulation
   settings["excess_tolerance_mm"] = job.excess_tolerance_mm;
   settings["collision_tolerance_mm"] = job.collision_tolerance_mm;
   settings["chord_tolerance_mm"] = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : r.resolution_mm / 20.0;
-  settings["out"] = r.out_dir;
+  settings["out"] = out_dir;
   j["settings"] = settings;
   ordered_json inputs = ordered_json::array();
   for (const auto& [file, hash] : r.input_hashes) inputs.push_back({{"file", file}, {"sha256", hash}});
   j["inputs"] = inputs;
   j["outputs"] = r.outputs;
-  write_text_atomically(path, j.dump(2) + "\n");
+  io::write_text_atomically(path, j.dump(2) + "\n");
 }
 
-void write_gouges_csv(const std::string& path, const SimulationResult& r) {
+void write_gouges_csv(const std::string& path, const pipeline::SimulationResult& r) {
   std::ostringstream out;
   out << "kind,rank,depth_mm,area_mm2,centroid_x,centroid_y,centroid_z,deepest_x,deepest_y,deepest_z,tool,lines\n";
   auto rows = [&](const char* kind, const std::vector<RegionRecord>& regions) {
@@ -179,12 +187,12 @@ void write_gouges_csv(const std::string& path, const SimulationResult& r) {
       out << kind << ',' << ++rank << ',' << um(g.depth_mm) << ',' << um(g.area_mm2) << ',' << g.centroid_mm.x() << ','
           << g.centroid_mm.y() << ',' << g.centroid_mm.z() << ',' << g.deepest_mm.x() << ',' << g.deepest_mm.y() << ','
           << g.deepest_mm.z() << ',' << (g.tools.empty() ? std::string() : "T" + std::to_string(g.tools.front())) << ','
-          << csv_field(lines) << '\n';
+          << io::csv_field(lines) << '\n';
     }
   };
   rows("gouge", r.gouges);
   rows("excess", r.excess);
-  write_text_atomically(path, out.str());
+  io::write_text_atomically(path, out.str());
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -1,4 +1,4 @@
-#include "vcut/io/snapshot.h"
+#include "vcut/report/snapshot.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,7 +13,7 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
 
-namespace vcut::io {
+namespace vcut::report {
 namespace {
 
 // Screen positions in fixed point, 1/256 px, so that edge functions are exact integers: the
@@ -288,7 +288,7 @@ std::vector<std::string> write_snapshots(const std::string& folder, const std::s
                                          const removal::TriangleMesh& mesh,
                                          const std::vector<Rgb>& colours,
                                          const SnapshotOptions& options) {
-  ensure_writable_folder(folder);
+  io::ensure_writable_folder(folder);
   std::vector<std::string> names;
   for (const char* view : {"iso", "top", "front"}) {
     SnapshotOptions titled = options;
@@ -300,4 +300,4 @@ std::vector<std::string> write_snapshots(const std::string& folder, const std::s
   return names;
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -1,4 +1,4 @@
-#include "vcut/io/plot.h"
+#include "vcut/report/plot.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "vcut/io/atomic_file.h"
 
-namespace vcut::io {
+namespace vcut::report {
 namespace {
 
 // Layout (px): the title band on top, the footnote band below, and in each panel the room
@@ -516,8 +516,8 @@ Image render_png(const Plot& plot) {
 }
 
 void write_plot(const std::string& svg_path, const std::string& png_path, const Plot& plot) {
-  write_text_atomically(svg_path, render_svg(plot));
+  io::write_text_atomically(svg_path, render_svg(plot));
   write_png(png_path, render_png(plot));
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::report

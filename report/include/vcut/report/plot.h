@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "vcut/io/image.h"
+#include "vcut/report/image.h"
 
-namespace vcut::io {
+namespace vcut::report {
 
 struct PlotSeries {
   std::string name;  // in the panel's legend
@@ -74,4 +74,4 @@ Image render_png(const Plot& plot);
 // the path.
 void write_plot(const std::string& svg_path, const std::string& png_path, const Plot& plot);
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -1,4 +1,4 @@
-#include "vcut/io/image.h"
+#include "vcut/report/image.h"
 
 #include <zlib.h>
 
@@ -10,7 +10,7 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
 
-namespace vcut::io {
+namespace vcut::report {
 namespace {
 
 // ---- PNG (ISO/IEC 15948: signature, IHDR, IDAT, IEND; CRC-32 over type and data) ----------
@@ -291,7 +291,7 @@ std::string encode_png(const Image& image) {
   return png;
 }
 
-void write_png(const std::string& path, const Image& image) { write_text_atomically(path, encode_png(image)); }
+void write_png(const std::string& path, const Image& image) { io::write_text_atomically(path, encode_png(image)); }
 
 void draw_line(Image& image, Point2 from, Point2 to, Rgb colour, double width_px) {
   stroke(image, {{from, to}}, colour, width_px);
@@ -374,4 +374,4 @@ std::string format_label(double value, int significant) {
   return mantissa + "e" + (negative ? "-" : "") + exponent;
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -1,4 +1,4 @@
-#include "vcut/io/report_page.h"
+#include "vcut/report/report_page.h"
 
 #include <nlohmann/json.hpp>
 
@@ -16,7 +16,13 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
 
-namespace vcut::io {
+namespace vcut::report {
+
+using pipeline::PoseEvent;
+using pipeline::PoseRun;
+using pipeline::RegionRecord;
+using pipeline::CollisionRecord;
+using pipeline::SimulationResult;
 namespace {
 
 using nlohmann::ordered_json;
@@ -158,7 +164,7 @@ std::string report_template_path() {
   return "";
 }
 
-void write_report_page(const std::string& path, const std::string& template_path, const Job& job, const SimulationResult& r,
+void write_report_page(const std::string& path, const std::string& template_path, const io::Job& job, const pipeline::SimulationResult& r,
                        const ReportPageInput& input) {
   std::string page;
   {
@@ -352,7 +358,7 @@ void write_report_page(const std::string& path, const std::string& template_path
   }
   filled.append(page, slot + std::strlen(kReportDataMarker), std::string::npos);
   page = std::move(filled);
-  write_text_atomically(path, page);
+  io::write_text_atomically(path, page);
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -15,7 +15,7 @@
 
 #include "vcut/io/job.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 
 // One densification setting (seed 000 §3); 0 = as in the job.
 struct DensifySetting {
@@ -36,7 +36,6 @@ struct StudyOptions {
   std::optional<double> accuracy_mm;    // default: the job's gouge tolerance
   std::optional<double> resolution_mm;  // overrides engine.resolution
   std::optional<int> threads;           // overrides engine.threads
-  std::optional<std::string> out_dir;   // where study.* go; default the job's output folder
   double max_memory_mb = 0.0;           // as for simulate
   // Before each run: its index (the reference is the last, `count - 1`), count, setting.
   std::function<void(std::size_t, std::size_t, const std::string&)> on_run;
@@ -60,7 +59,7 @@ struct StudyRow {
 };
 
 struct StudyResult {
-  std::string job_name, out_dir;
+  std::string job_name;
   std::string varied;  // "step", "angle", "step+angle" or "tolerance"
   double resolution_mm = 0.0, accuracy_mm = 0.0;
   int threads = 0;
@@ -68,14 +67,14 @@ struct StudyResult {
   std::vector<StudyRow> rows;  // in the order given
   StudyRow reference;
   int recommended = -1;  // index in rows of the coarsest (fewest poses) setting that meets the accuracy
-  std::vector<std::string> warnings, outputs;
+  std::vector<std::string> warnings;
+  std::vector<std::string> outputs;  // the files written (report::write_study)
   double wall_time_s = 0.0, peak_memory_mb = 0.0;
 };
 
-// Runs the study and writes study.csv, study.json, study.svg and study.png (atomically) into
-// the output folder. Bad options or input are a vcut::InputError, and so is a study in which
+// Runs the study (report::write_study writes its files). Bad options or input are a vcut::InputError, and so is a study in which
 // no setting could be run; a setting that cannot be run (e.g. a pose out of reach) is a row
 // with its error.
-StudyResult run_densification_study(const Job& job, const StudyOptions& options);
+StudyResult run_densification_study(const io::Job& job, const StudyOptions& options);
 
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

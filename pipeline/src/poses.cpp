@@ -1,4 +1,4 @@
-#include "vcut/io/pose_pipeline.h"
+#include "vcut/pipeline/poses.h"
 
 #include <algorithm>
 #include <cmath>
@@ -8,37 +8,15 @@
 #include <limits>
 #include <optional>
 
-#include "vcut/io/atomic_file.h"
 #include "vcut/io/program_reader.h"
 #include "vcut/io/input_error.h"
-#include "vcut/kinematics/compensation.h"
 #include "vcut/kinematics/forward_kinematics.h"
 #include "vcut/kinematics/servo.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 namespace fs = std::filesystem;
-namespace {
 
-std::string num(double v, int digits = 10) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v + 0.0);
-  return buf;
-}
-
-// A G-code number: fixed point, as rs274 reads it (no exponent: a tiny compensated angle like
-// 2.7e-12 in %g form is a syntax error), 9 decimals (1e-9 mm, 1e-9 deg), trailing zeros cut.
-std::string gcode_num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9f", v);
-  std::string s = buf;
-  s.erase(s.find_last_not_of('0') + 1);
-  if (s.back() == '.') s.pop_back();
-  return s == "-0" ? "0" : s;
-}
-
-}  // namespace
-
-kinematics::FeedInterpretation axis_feed_of(const Job& job, const std::string& reader) {
+kinematics::FeedInterpretation axis_feed_of(const io::Job& job, const std::string& reader) {
   if (job.machine_spec.feed_interpretation) return *job.machine_spec.feed_interpretation;
   // By dialect: Fanuc and Haas combine mm and deg (Fanuc's feed for simultaneous linear and
   // rotary motion); LinuxCNC's interpreter and SINUMERIK without TRAORI put F on the linear
@@ -61,7 +39,7 @@ const char* feed_interpretation_name(kinematics::FeedInterpretation f) {
 // program (a fraction of the move; 0: it starts inside), or none. A box by its slabs; a
 // cylinder by its axial slab and the quadratic of its side. A mesh stock: none (the reader
 // warns that its probes trip at their end).
-static std::optional<double> stock_contact(const StockSpec& stock, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+static std::optional<double> stock_contact(const io::StockSpec& stock, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   double lo = 0.0, hi = 1.0;
   // Clips [lo, hi] to the s where lower <= value0 + s * rate <= upper.
   auto clip = [&](double value0, double rate, double lower, double upper) {
@@ -75,9 +53,9 @@ static std::optional<double> stock_contact(const StockSpec& stock, const Eigen::
     hi = std::min(hi, s1);
   };
   const Eigen::Vector3d d = b - a;
-  if (stock.kind == StockSpec::Kind::Box) {
+  if (stock.kind == io::StockSpec::Kind::Box) {
     for (int k = 0; k < 3; ++k) clip(a[k], d[k], stock.box.min_mm[k], stock.box.max_mm[k]);
-  } else if (stock.kind == StockSpec::Kind::Cylinder) {
+  } else if (stock.kind == io::StockSpec::Kind::Cylinder) {
     const removal::CylinderShape& c = stock.cylinder;
     const Eigen::Vector3d u = c.axis.normalized();
     clip((a - c.base_center_mm).dot(u), d.dot(u), 0.0, c.height_mm);
@@ -103,11 +81,11 @@ static std::optional<double> stock_contact(const StockSpec& stock, const Eigen::
   return lo;
 }
 
-JobProgram read_job_program(const Job& job) {
-  // G-code and APT CL data (read_programs picks the reader from the job's dialect or from
+JobProgram read_job_program(const io::Job& job) {
+  // G-code and APT CL data (io::read_programs picks the reader from the job's dialect or from
   // each file). An APT program's CUTTER/ shapes fill in the T numbers the tool library lacks:
   // the library, written for the machine, wins where it has the number.
-  ProgramOptions reading;
+  io::ProgramOptions reading;
   reading.gcode.work_offsets_mm = job.offsets_mm;
   reading.gcode.unsupported_as_warning = job.unsupported_as_warning;
   reading.gcode.unknown_m_code_as_error = job.unknown_m_code_as_error;
@@ -120,7 +98,7 @@ JobProgram read_job_program(const Job& job) {
   // The machine starts at its home and goes there on G28 (a tool-pose program's tip under the
   // spindle's gauge point; an axis program's axes at their home values).
   auto machine_start = [&](bool axis_program) {
-    set_machine(reading.gcode, job.machine_spec, job.tools, axis_program);
+    io::set_machine(reading.gcode, job.machine_spec, job.tools, axis_program);
     if (!job.start_mm) return;
     // The job's start names the tip; the reader's start is the gauge point above it.
     const auto length = reading.gcode.tool_length_mm.find(job.initial_tool);
@@ -131,33 +109,33 @@ JobProgram read_job_program(const Job& job) {
     }
   };
   machine_start(false);
-  if (job.stock.kind != StockSpec::Kind::Mesh) {
+  if (job.stock.kind != io::StockSpec::Kind::Mesh) {
     reading.gcode.probe_contact = [stock = job.stock](const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
       return stock_contact(stock, a, b);
     };
   }
-  LoadedProgram loaded = read_programs(job.program_files, job.dialect, reading);
+  io::LoadedProgram loaded = io::read_programs(job.program_files, job.dialect, reading);
   if (loaded.dialect == "gcode" &&
       std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const kinematics::Block& b) { return !b.tool_pose; })) {
     machine_start(true);
-    loaded = read_programs(job.program_files, job.dialect, reading);
+    loaded = io::read_programs(job.program_files, job.dialect, reading);
   }
   JobProgram out;
   out.program = std::move(loaded.program);
-  for (auto& f : out.program.files) f = display_name(f, job.file);
+  for (auto& f : out.program.files) f = io::display_name(f, job.file);
   out.tools = job.tools;
   out.tools.insert(loaded.cutters.begin(), loaded.cutters.end());  // insert keeps existing numbers
   out.dialect = loaded.dialect;
   return out;
 }
 
-double default_densify_tolerance_mm(const Job& job, double resolution_mm) {
+double default_densify_tolerance_mm(const io::Job& job, double resolution_mm) {
   double eps = resolution_mm / 10.0;
   if (job.gouge_tolerance_mm > 0.0) eps = std::min(eps, job.gouge_tolerance_mm / 2.0);
   return eps;
 }
 
-PoseRun run_pose_engine(const Job& job, const PeriodVisitor* every_period) {
+PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period) {
   return run_pose_engine(job, read_job_program(job), job.resolution_mm, every_period);
 }
 
@@ -215,7 +193,7 @@ class PathThinner {
 
 }  // namespace
 
-PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period) {
+PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period) {
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
@@ -233,7 +211,7 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
     const auto it = run.tools.find(b.tool);
     if (it == run.tools.end())
       throw InputError(program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library " +
-                       display_name(job.tools_file, job.file));
+                       io::display_name(job.tools_file, job.file));
     dm.tool_length_mm[b.tool] = it->second.gauge_length_mm;
     settings.cutter_length_mm = std::max(settings.cutter_length_mm, it->second.flute_length_mm);
     settings.cutter_radius_mm = std::max(settings.cutter_radius_mm, it->second.radius_mm());
@@ -422,184 +400,4 @@ PoseRun run_pose_engine(const Job& job, JobProgram input, double resolution_mm, 
   return run;
 }
 
-PoseRun run_pose_engine_with_periods(const Job& job, const std::string& periods_path) {
-  if (!job.servo)
-    throw InputError(job.file, 0, 0, "--every-period: the job has no 'servo:' (the interpolation periods are the servo's)");
-  JobProgram input = read_job_program(job);
-  const kinematics::Machine machine(job.machine_spec);
-  std::vector<std::string> lines;  // the NC line of each block
-  lines.reserve(input.program.blocks.size());
-  for (const auto& b : input.program.blocks) lines.push_back(input.program.where(b.source));
-  PoseRun run;
-  write_atomically(periods_path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (cannot create the file)");
-    std::string header = "t,block,source";
-    for (const char* side : {"commanded_", "actual_"})
-      for (int a = 0; a < machine.axis_count(); ++a) header += std::string(",") + side + machine.axis(a).letter;
-    header += ",commanded_x,commanded_y,commanded_z,actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um\n";
-    out << header;
-    std::string row;
-    const PeriodVisitor visit = [&](const kinematics::PeriodSample& p) {
-      row = num(p.t_s) + "," + std::to_string(p.block) + "," +
-            (p.block >= 0 && static_cast<size_t>(p.block) < lines.size() ? lines[static_cast<size_t>(p.block)] : "");
-      for (const kinematics::AxisValues* q : {&p.commanded, &p.actual})
-        for (int a = 0; a < machine.axis_count(); ++a)
-          row += "," + num(machine.axis(a).kind == kinematics::AxisKind::Rotary ? (*q)[a] * 180.0 / M_PI : (*q)[a]);
-      for (int k = 0; k < 3; ++k) row += "," + num(p.commanded_pose.tip_mm[k]);
-      for (int k = 0; k < 3; ++k) row += "," + num(p.actual_pose.tip_mm[k]);
-      for (int k = 0; k < 3; ++k) row += "," + num(p.actual_pose.axis[k]);
-      row += "," + num(p.contour_error_mm * 1000.0) + "\n";
-      out << row;
-    };
-    run = run_pose_engine(job, std::move(input), job.resolution_mm, &visit);
-    out.close();
-    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (write failed: disk full?)");
-  });
-  return run;
-}
-
-void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run) {
-  const kinematics::Machine machine(job.machine_spec);
-  const bool actual = !run.actual.empty();
-  std::string text = "block,source,t,x,y,z,i,j,k";
-  for (int a = 0; a < machine.axis_count(); ++a) text += std::string(",") + machine.axis(a).letter;
-  text += ",feed";
-  if (actual) text += ",actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um";
-  text += "\n";
-  const auto& samples = run.densified.samples;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const auto& s = samples[i];
-    const std::string source =
-        s.block >= 0 ? run.program.where(run.program.blocks[static_cast<size_t>(s.block)].source) : "";
-    text += std::to_string(s.block) + "," + source + "," + num(run.feed.t_s[i]);
-    for (int k = 0; k < 3; ++k) text += "," + num(s.pose.tip_mm[k]);
-    for (int k = 0; k < 3; ++k) text += "," + num(s.pose.axis[k]);
-    for (int a = 0; a < machine.axis_count(); ++a) {
-      const double v = s.axes.size() > a ? s.axes[a] : 0.0;
-      text += "," + num(machine.axis(a).kind == kinematics::AxisKind::Rotary ? v * 180.0 / M_PI : v);
-    }
-    text += "," + num(run.feed.speed_mm_per_s[i] * 60.0);
-    if (actual) {
-      for (int k = 0; k < 3; ++k) text += "," + num(run.actual[i].tip_mm[k]);
-      for (int k = 0; k < 3; ++k) text += "," + num(run.actual[i].axis[k]);
-      text += "," + num(run.contour_error_um[i]);
-    }
-    text += "\n";
-  }
-  write_text_atomically(path, text);
-}
-
-void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run) {
-  (void)job;
-  const bool actual = !run.actual.empty();
-  const auto& blocks = run.densified.blocks;
-  std::string text = "block,source,kind,q,time_s,nonlinear_error_mm,nonlinear_x,nonlinear_y,nonlinear_z,singular,unreachable";
-  if (actual) text += ",contour_max_um,contour_rms_um,contour_max_x,contour_max_y,contour_max_z";
-  text += "\n";
-  auto quoted = [](const std::string& t) {
-    std::string q = "\"";
-    for (char c : t) q += c == '"' ? std::string("\"\"") : std::string(1, c);
-    return q + "\"";
-  };
-  static const char* kKinds[] = {"rapid", "linear", "arc"};
-  for (size_t b = 0; b < blocks.size(); ++b) {
-    const auto& block = run.program.blocks[b];
-    const auto& r = blocks[b];
-    text += std::to_string(b) + "," + run.program.where(block.source) + "," + kKinds[static_cast<int>(block.kind)] + "," +
-            std::to_string(r.q) + "," + num(b < run.feed.block_time_s.size() ? run.feed.block_time_s[b] : 0.0) + "," +
-            num(r.nonlinear_error_mm);
-    for (int k = 0; k < 3; ++k) text += "," + num(r.nonlinear_at_mm[k]);
-    text += std::string(",") + (r.singular ? "1" : "0") + "," + quoted(r.unreachable);
-    if (actual) {
-      const PoseRun::BlockContour c = b < run.block_contour.size() ? run.block_contour[b] : PoseRun::BlockContour{};
-      text += "," + num(c.max_um) + "," + num(c.rms_um);
-      for (int k = 0; k < 3; ++k) text += "," + num(c.at_mm[k]);
-    }
-    text += "\n";
-  }
-  write_text_atomically(path, text);
-}
-
-CompensationReport write_compensated_program(const std::string& path, const Job& job, const PoseRun& run) {
-  const kinematics::Machine machine(job.machine_spec);
-  if (!machine.has_errors())
-    throw InputError(job.machine_file, 0, 0, "geometric errors to compensate (the machine file has no 'errors')");
-  CompensationReport report;
-  const auto& samples = run.densified.samples;
-  const auto& program = run.program;
-  const bool apt = run.dialect == "apt";
-  std::string text = apt ? "$$ vcut compensate: " + job.name + " on " + machine.name() +
-                               ", one GOTO per densified pose\nUNITS/MM\nMULTAX/ON\n"
-                         : "(vcut compensate: " + job.name + " on " + machine.name() +
-                               ", one line per densified pose)\nG21 G90 G94\n";
-  int tool = -1;
-  double feed = -1.0;
-  for (size_t i = 0; i < samples.size(); ++i) {
-    const auto& s = samples[i];
-    const kinematics::Block* block = s.block >= 0 ? &program.blocks[static_cast<size_t>(s.block)] : nullptr;
-    const double length = run.tool_length_mm[i];
-    const kinematics::CompensationResult c = kinematics::compensate(machine, s.pose, length, s.axes);
-    ++report.poses;
-    const double before = kinematics::pose_error(s.pose, kinematics::forward(machine, s.axes, length, kinematics::Geometry::Actual))
-                              .tip_um.norm();
-    const std::string line = block ? program.where(block->source) : "start";
-    if (before > report.max_error_before_um) report.max_error_before_um = before, report.max_error_line = line;
-    report.max_residual_tip_um = std::max(report.max_residual_tip_um, c.residual_tip_um);
-    report.max_residual_axis_urad = std::max(report.max_residual_axis_urad, c.residual_axis_urad);
-    if (!c.converged) {
-      ++report.not_converged;
-      if (report.first_failure.empty()) report.first_failure = line + ": " + c.note;
-    }
-    // The start pose was computed with the first block's tool (run.tool_length_mm), so its
-    // tool change comes before the start line: read back, the line then has the same length.
-    const kinematics::Block* holder = block ? block : program.blocks.empty() ? nullptr : &program.blocks.front();
-    if (holder && holder->tool != tool && holder->tool > 0 && apt) {
-      tool = holder->tool;
-      text += "LOADTL/" + std::to_string(tool) + "\n";
-    }
-    if (apt) {
-      // The pose a tool-centre-point controller turns into the compensated commands.
-      const kinematics::ToolPose p = kinematics::forward(machine, c.q, length);
-      const bool rapid = !block || block->kind == kinematics::MotionKind::Rapid;
-      if (!block) {
-        text += "FROM/";
-      } else {
-        if (!rapid && block->feed_mm_per_min != feed) {
-          feed = block->feed_mm_per_min;
-          text += "FEDRAT/" + gcode_num(feed) + ",MMPM\n";
-        }
-        text += rapid ? "RAPID\nGOTO/" : "GOTO/";
-      }
-      text += gcode_num(p.tip_mm.x()) + "," + gcode_num(p.tip_mm.y()) + "," + gcode_num(p.tip_mm.z()) + "," +
-              gcode_num(p.axis.x()) + "," + gcode_num(p.axis.y()) + "," + gcode_num(p.axis.z()) + " $$ " + line + "\n";
-      continue;
-    }
-    if (holder && holder->tool != tool && holder->tool > 0) {
-      tool = holder->tool;
-      text += "T" + std::to_string(tool) + " M6\n";
-      if (holder->spindle_rpm > 0) text += "S" + gcode_num(holder->spindle_rpm) + (holder->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
-    }
-    // X Y Z of an axis program: the tip at all-zero rotary axes for these linear axes.
-    kinematics::AxisValues linear = c.q;
-    for (int k = 0; k < machine.rotary_count(); ++k) linear[machine.rotary_axis(k)] = 0.0;
-    const Eigen::Vector3d xyz = kinematics::forward(machine, linear, length).tip_mm;
-    const bool rapid = !block || block->kind == kinematics::MotionKind::Rapid;
-    std::string g = rapid ? "G0" : "G1";
-    g += " X" + gcode_num(xyz.x()) + " Y" + gcode_num(xyz.y()) + " Z" + gcode_num(xyz.z());
-    for (int k = 0; k < machine.rotary_count(); ++k) {
-      const int a = machine.rotary_axis(k);
-      g += std::string(" ") + machine.axis(a).letter + gcode_num(c.q[a] * 180.0 / M_PI);
-    }
-    if (!rapid && block->feed_mm_per_min != feed) {
-      feed = block->feed_mm_per_min;
-      g += " F" + gcode_num(feed);
-    }
-    text += g + " (" + line + ")\n";
-  }
-  text += apt ? "FINI\n" : "M2\n";
-  write_text_atomically(path, text);
-  return report;
-}
-
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

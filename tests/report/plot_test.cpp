@@ -2,7 +2,7 @@
 // the PNG agreeing on where a marker is, escaping, and atomic writing.
 #include <gtest/gtest.h>
 #include <vcut/io/input_error.h>
-#include <vcut/io/plot.h>
+#include <vcut/report/plot.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-namespace vcut::io {
+namespace vcut::report {
 namespace {
 namespace fs = std::filesystem;
 
@@ -233,4 +233,4 @@ TEST(Plot, PointLabelsDoNotOverlap) {
 }
 
 }  // namespace
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "vcut/io/job.h"
-#include "vcut/io/pose_pipeline.h"
+#include "vcut/pipeline/poses.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 
 enum class Severity { Error, Warning, Note };
 const char* to_string(Severity severity);
@@ -49,7 +49,6 @@ struct CheckResult {
 };
 
 // Bad input (job, program, machine, tools) is a vcut::InputError as for simulate.
-CheckResult run_check(const Job& job);
-void write_check_json(const std::string& path, const Job& job, const CheckResult& result);
+CheckResult run_check(const io::Job& job);
 
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

@@ -1,4 +1,4 @@
-#include "vcut/io/simulate.h"
+#include "vcut/pipeline/simulate.h"
 
 #include <Eigen/Geometry>
 #include <tbb/global_control.h>
@@ -17,16 +17,11 @@
 #include <set>
 #include <sstream>
 
-#include "vcut/io/atomic_file.h"
 #include "vcut/io/gcode_reader.h"
-#include "vcut/io/pose_pipeline.h"
+#include "vcut/pipeline/poses.h"
 #include "vcut/io/program_reader.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
-#include "vcut/io/report.h"
-#include "vcut/io/report_page.h"
-#include "vcut/io/snapshot.h"
-#include "vcut/io/sha256.h"
 #include "vcut/kinematics/densify.h"
 #include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
@@ -36,9 +31,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
-#include <tbb/task_group.h>
 
-namespace vcut::io {
+namespace vcut::pipeline {
 namespace fs = std::filesystem;
 
 double peak_memory_mb() {
@@ -190,7 +184,7 @@ std::vector<std::string> merge_lines(std::vector<std::pair<std::string, int>> re
   return out;
 }
 
-removal::TriangleMesh transformed(removal::TriangleMesh mesh, const DesignSpec& d) {
+removal::TriangleMesh transformed(removal::TriangleMesh mesh, const io::DesignSpec& d) {
   const double k = M_PI / 180.0;
   const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.rotate_deg.z() * k, Eigen::Vector3d::UnitZ()) *
                              Eigen::AngleAxisd(d.rotate_deg.y() * k, Eigen::Vector3d::UnitY()) *
@@ -261,7 +255,7 @@ std::vector<CollisionRecord> collision_records(const std::vector<removal::Collis
 
 }  // namespace
 
-SimulationResult simulate(const Job& job, const SimulateOptions& options) {
+SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const auto t_start = Clock::now();
   auto t_stage = t_start;
   SimulationResult result;
@@ -275,15 +269,11 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   };
   result.job_name = job.name;
   result.resolution_mm = options.resolution_mm.value_or(job.resolution_mm);
-  result.out_dir = options.out_dir.value_or(job.out_dir);
   const int threads = options.threads.value_or(job.threads);
   result.threads = threads > 0 ? threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(result.threads));
   const double v = result.resolution_mm;
   if (!(v > 0.0) || !std::isfinite(v)) throw InputError("--resolution: expected a positive number of mm");
-
-  // Fail on an unwritable output folder before hours of cutting, not after.
-  if (options.outputs) ensure_writable_folder(result.out_dir);
 
   // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
   // with servo or machine errors the actual poses, which are what the machine cuts).
@@ -381,10 +371,10 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   std::vector<std::string> hashed = {job.file, job.machine_file, job.tools_file};
   hashed.insert(hashed.end(), job.program_files.begin(), job.program_files.end());
   switch (job.stock.kind) {
-    case StockSpec::Kind::Box: shape = job.stock.box; break;
-    case StockSpec::Kind::Cylinder: shape = job.stock.cylinder; break;
-    case StockSpec::Kind::Mesh: {
-      removal::TriangleMesh mesh = read_mesh(job.stock.mesh_file);
+    case io::StockSpec::Kind::Box: shape = job.stock.box; break;
+    case io::StockSpec::Kind::Cylinder: shape = job.stock.cylinder; break;
+    case io::StockSpec::Kind::Mesh: {
+      removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
       if (!removal::is_closed(mesh))
         throw InputError(job.stock.mesh_file, 0, 0, "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
       if (removal::signed_volume_mm3(mesh) < 0.0)
@@ -399,7 +389,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   // stops the run at once.
   std::optional<removal::TriangleMesh> design_mesh;  // kept for the report page
   if (job.design) {
-    design_mesh = transformed(read_mesh(job.design->file), *job.design);
+    design_mesh = transformed(io::read_mesh(job.design->file), *job.design);
     const auto& t = design_mesh->triangles;
     const auto& x = design_mesh->vertices_mm;
     if (std::all_of(t.begin(), t.end(), [&](const Eigen::Vector3i& f) {
@@ -446,7 +436,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   // A study compares two runs' meshes to within v/100, a machine-error run the actual
   // against the nominal part (a few um): their dexel surfaces merge only exact axis planes,
   // as merged blocks' triangles would cut gentle creases differently in two meshes.
-  const bool merge_flat = options.outputs && !cut_actual;
+  const bool merge_flat = options.checks && !cut_actual;
   auto make_stock = [&]() -> std::unique_ptr<removal::Stock> {
     if (!use_dexel) return std::make_unique<removal::VdbStock>(shape, v);
     auto dexel = std::make_unique<removal::DexelStock>(shape, v);
@@ -454,7 +444,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     return dexel;
   };
   std::unique_ptr<removal::Stock> primary = make_stock(), second;
-  if (use_dexel && use_vdb && options.outputs) second = std::make_unique<removal::VdbStock>(shape, v);
+  if (use_dexel && use_vdb && options.checks) second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");
@@ -481,10 +471,10 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
   if (machined.mesh.triangles.empty())
     result.warnings.push_back("the program cuts the whole stock away: the machined mesh is empty");
   stage_done("mesh");
-  if (!options.outputs) {
+  if (!options.checks) {
     result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     result.peak_memory_mb = peak_memory_mb();
-    result.surface = std::make_shared<const removal::SurfaceMesh>(std::move(machined));
+    result.machined = std::move(machined);
     return result;
   }
 
@@ -529,7 +519,7 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     const removal::TriangleMesh& design = *design_mesh;
     const removal::DesignDistance distance(design);
     if (!distance.closed())
-      result.warnings.push_back(display_name(job.design->file, job.file) +
+      result.warnings.push_back(io::display_name(job.design->file, job.file) +
                                 ": design mesh is not closed; compared anyway (signs near its holes may be wrong)");
     removal::CompareSettings settings{job.gouge_tolerance_mm, job.excess_tolerance_mm};
     const removal::Comparison cmp = removal::compare(machined, distance, settings);
@@ -625,76 +615,15 @@ SimulationResult simulate(const Job& job, const SimulateOptions& options) {
     stage_done("compare");
   }
 
-  // 8. Files. The mesh, the deviation map, the pictures and the page only read the results:
-  // they are written side by side (the kernel's copying of 100 MB into files is a good part
-  // of this stage) and listed in a fixed order.
-  progress("write", 0, 1);
-  for (const auto& f : hashed) result.input_hashes.emplace_back(display_name(f, job.file), sha256_file(f));
-  const fs::path out(result.out_dir);
-  const double colour_scale = [&] {
-    const double scale = std::max(3.0 * job.gouge_tolerance_mm, job.excess_tolerance_mm);
-    return scale > 0.0 ? scale : v;
-  }();
-  std::vector<std::string> snapshot_files;
-  const std::string page = report_template_path();
-  // The page shows the run's time and memory up to its writing.
+  result.input_files = std::move(hashed);
+  result.machined = std::move(machined);
+  result.deviation_mm = std::move(deviation);
+  result.move_list = std::move(moves);
+  result.design = std::move(design_mesh);
+  result.stock_box = stock_box;
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   result.peak_memory_mb = peak_memory_mb();
-  tbb::task_group writers;
-  writers.run([&] { write_stl((out / "machined.stl").string(), machined.mesh); });
-  if (result.compared) {
-    writers.run([&] {
-      PlyAttributes a;
-      a.normals = removal::vertex_normals(machined.mesh);
-      for (double d : deviation) a.colors.push_back(deviation_color(d, colour_scale));
-      a.deviation_mm = deviation;
-      a.move = machined.vertex_move;
-      for (int m : machined.vertex_move) a.line.push_back(m < 0 ? 0 : block_of(m).source.line);
-      write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
-    });
-  }
-  writers.run([&] {
-    // Pictures for reports and CI artefacts: the deviation map (or the bare machined stock
-    // when there is no design) from three fixed views.
-    SnapshotOptions options;
-    std::vector<Rgb> colours;
-    std::string stem = "machined";
-    options.title = job.name.empty() ? std::string("machined stock") : job.name;
-    if (result.compared) {
-      const double s = colour_scale;
-      for (double d : deviation) colours.push_back(deviation_color(d, s));
-      options.legend = ColourScale{"deviation (mm): red gouge, blue excess", -s, s,
-                                   [s](double d) { return deviation_color(d, s); }, 5};
-      stem = "deviation";
-    }
-    snapshot_files = write_snapshots(out.string(), stem, machined.mesh, colours, options);
-  });
-  writers.run([&] { write_gouges_csv((out / "gouges.csv").string(), result); });
-  if (!page.empty()) {
-    writers.run([&] {
-      ReportPageInput in;
-      in.machined = &machined;
-      in.moves = &moves;
-      in.deviation_mm = deviation;
-      in.design = design_mesh ? &*design_mesh : nullptr;
-      in.stock_box = stock_box;
-      in.max_triangles = job.page_triangles;
-      write_report_page((out / "report.html").string(), page, job, result, in);
-    });
-  }
-  writers.wait();
-  result.outputs.push_back("machined.stl");
-  if (result.compared) result.outputs.push_back("deviation.ply");
-  for (const auto& f : snapshot_files) result.outputs.push_back(f);
-  result.outputs.push_back("gouges.csv");
-  if (!page.empty()) result.outputs.push_back("report.html");
-  else result.warnings.push_back("report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from web/)");
-  stage_done("write");
-  result.outputs.push_back("report.json");
-  result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-  result.peak_memory_mb = peak_memory_mb();
-  write_report_json((out / "report.json").string(), job, result);
   return result;
 }
 
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

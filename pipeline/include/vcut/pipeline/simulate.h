@@ -1,5 +1,5 @@
 // The whole pipeline of `vcut simulate`: job -> program -> poses -> moves -> cut stock ->
-// machined mesh -> deviation from the design -> the output folder.
+// machined mesh -> deviation from the design, as values (vcut::report writes the outputs).
 #pragma once
 
 #include <Eigen/Core>
@@ -13,19 +13,20 @@
 #include <vector>
 
 #include "vcut/io/job.h"
-#include "vcut/io/pose_pipeline.h"
+#include "vcut/pipeline/poses.h"
+#include "vcut/removal/mesh.h"
+#include "vcut/removal/move.h"
 #include "vcut/removal/stock.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 
 struct SimulateOptions {
   std::optional<double> resolution_mm;  // overrides engine.resolution
   std::optional<int> threads;           // overrides engine.threads (0 = all cores)
-  std::optional<std::string> out_dir;   // overrides report.out
   double max_memory_mb = 0.0;           // refuse a stock larger than this; 0 = 75 % of RAM
-  // false (a study's runs): poses, moves, cut and mesh only, no engine cross-check, no
-  // comparison, no files; the machined surface is kept in the result instead.
-  bool outputs = true;
+  // false (a study's runs): poses, moves, cut and mesh only: no engine cross-check, no
+  // nominal cut, no comparison.
+  bool checks = true;
   // Progress: (stage, done, total); from the calling thread.
   std::function<void(const std::string&, std::size_t, std::size_t)> progress;
 };
@@ -102,7 +103,6 @@ struct NominalCheck : SurfaceDifference {
 
 struct SimulationResult {
   std::string job_name;
-  std::string out_dir;
   std::size_t blocks = 0, poses = 0, moves = 0, cutting_moves = 0;
   std::size_t rotating_moves = 0;  // five-axis moves (the tool axis turns), cut in pieces
   PoseRun pose_run;                // the pose engine's output: time, events, contour error
@@ -121,19 +121,24 @@ struct SimulationResult {
   std::vector<std::pair<std::string, double>> stage_seconds;
   double wall_time_s = 0.0;
   double peak_memory_mb = 0.0, stock_memory_mb = 0.0, estimated_memory_mb = 0.0;
-  std::vector<std::pair<std::string, std::string>> input_hashes;  // path, sha256
-  std::vector<std::string> outputs;
+  std::vector<std::pair<std::string, std::string>> input_hashes;  // path, sha256 (by the writer)
+  std::vector<std::string> outputs;                                // files written, by the writer
   EndpointCheck endpoints;
   EngineCheck engines;
   NominalCheck nominal;
-  std::shared_ptr<const removal::SurfaceMesh> surface;  // the machined surface, without outputs
+  // The values the outputs are made of (report::write_simulation).
+  removal::SurfaceMesh machined;
+  std::vector<double> deviation_mm;             // per machined vertex, with a design
+  removal::MoveList move_list;                  // what was cut, probes included
+  std::optional<removal::TriangleMesh> design;  // placed as the job places it
+  Eigen::AlignedBox3d stock_box;
+  std::vector<std::string> input_files;  // every file the run read: job, machine, tools, programs, meshes
 };
 
-// Runs the job and writes machined.stl, deviation.ply (with a design), report.json and
-// gouges.csv into the output folder. Bad input is a vcut::InputError.
-SimulationResult simulate(const Job& job, const SimulateOptions& options);
+// Runs the job. Bad input is a vcut::InputError.
+SimulationResult simulate(const io::Job& job, const SimulateOptions& options);
 
 // Peak resident memory of this process so far (MB), from /proc/self/status.
 double peak_memory_mb();
 
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

@@ -1,6 +1,5 @@
-#include "vcut/io/check.h"
+#include "vcut/pipeline/check.h"
 
-#include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -8,13 +7,12 @@
 #include <limits>
 #include <map>
 
-#include "vcut/io/atomic_file.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/removal/move.h"
 #include "vcut/removal/stock.h"
 #include "vcut/removal/sweep.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 
 const char* to_string(Severity severity) {
   switch (severity) {
@@ -27,13 +25,13 @@ const char* to_string(Severity severity) {
 
 namespace {
 
-Eigen::AlignedBox3d stock_bounds(const Job& job) {
+Eigen::AlignedBox3d stock_bounds(const io::Job& job) {
   switch (job.stock.kind) {
-    case StockSpec::Kind::Box: return removal::bounds_of(job.stock.box);
-    case StockSpec::Kind::Cylinder: return removal::bounds_of(job.stock.cylinder);
-    case StockSpec::Kind::Mesh: break;
+    case io::StockSpec::Kind::Box: return removal::bounds_of(job.stock.box);
+    case io::StockSpec::Kind::Cylinder: return removal::bounds_of(job.stock.cylinder);
+    case io::StockSpec::Kind::Mesh: break;
   }
-  removal::TriangleMesh mesh = read_mesh(job.stock.mesh_file);
+  removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
   return removal::bounds_of(removal::StockShape(std::move(mesh)));
 }
 
@@ -120,7 +118,7 @@ std::string mm(double x) {
 
 }  // namespace
 
-CheckResult run_check(const Job& job) {
+CheckResult run_check(const io::Job& job) {
   const auto t0 = std::chrono::steady_clock::now();
   CheckResult result;
   result.run = run_pose_engine(job);
@@ -229,34 +227,4 @@ CheckResult run_check(const Job& job) {
   return result;
 }
 
-void write_check_json(const std::string& path, const Job& job, const CheckResult& r) {
-  using nlohmann::ordered_json;
-  auto vec = [](const Eigen::Vector3d& v) { return ordered_json::array({v.x(), v.y(), v.z()}); };
-  ordered_json j;
-  j["schema"] = "vcut-check/1";
-  j["job"] = job.name;
-  j["machine"] = job.machine;
-  j["verdict"] = r.errors == 0 ? "go" : "no-go";
-  j["errors"] = r.errors;
-  j["warnings"] = r.warnings;
-  j["blocks"] = r.run.program.blocks.size();
-  j["poses"] = r.run.densified.samples.size();
-  j["cycle_time_s"] = r.run.feed.cycle_time_s;
-  j["stock_box"] = {{"min", vec(r.stock_box.min())}, {"max", vec(r.stock_box.max())}};
-  j["events"] = ordered_json::array();
-  for (const CheckEvent& e : r.events) {
-    ordered_json x{{"severity", to_string(e.severity)}, {"kind", e.kind}, {"line", e.line}, {"detail", e.detail}};
-    x["depth_mm"] = e.has_where ? ordered_json(e.depth_mm) : ordered_json(nullptr);
-    x["where"] = e.has_where ? vec(e.where_mm) : ordered_json(nullptr);
-    j["events"].push_back(x);
-  }
-  j["tools"] = ordered_json::array();
-  for (const ToolClearance& t : r.tools)
-    j["tools"].push_back({{"tool", t.tool}, {"holder", t.has_holder},
-                          {"holder_clearance_mm", t.over_stock ? ordered_json(t.holder_clearance_mm) : ordered_json(nullptr)},
-                          {"line", t.holder_line}});
-  j["wall_time_s"] = r.wall_time_s;
-  write_text_atomically(path, j.dump(1) + "\n");
-}
-
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

@@ -16,7 +16,7 @@
 #include "vcut/kinematics/interpolator.h"
 #include "vcut/kinematics/program.h"
 
-namespace vcut::io {
+namespace vcut::pipeline {
 
 // A block-level finding with its NC line: an axis limit, a singular pose, a limited speed.
 struct PoseEvent {
@@ -29,14 +29,14 @@ struct PoseEvent {
 // tools: the library, plus APT CUTTER/ shapes for T numbers the library lacks.
 struct JobProgram {
   kinematics::Program program;
-  ToolLibrary tools;
+  io::ToolLibrary tools;
   std::string dialect;  // the reader used: "gcode" or "apt"
 };
-JobProgram read_job_program(const Job& job);
+JobProgram read_job_program(const io::Job& job);
 
 struct PoseRun {
   kinematics::Program program;
-  ToolLibrary tools;
+  io::ToolLibrary tools;
   std::string dialect;  // of the program: "gcode" or "apt"
   kinematics::Densified densified;
   kinematics::FeedPlan feed;
@@ -86,57 +86,20 @@ struct PoseRun {
 // --every-period streams them to a file).
 using PeriodVisitor = std::function<void(const kinematics::PeriodSample&)>;
 
-PoseRun run_pose_engine(const Job& job, const PeriodVisitor* every_period = nullptr);
+PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period = nullptr);
 // With the program already read; `resolution_mm` sets the default densification (the arc
 // chord tolerance resolution / 20, the tolerance mode's min(resolution / 10, gouge / 2)).
-PoseRun run_pose_engine(const Job& job, JobProgram program, double resolution_mm,
+PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolution_mm,
                         const PeriodVisitor* every_period = nullptr);
 
 // How F reads in axis blocks: the machine file's feed_interpretation, else by the job's
 // dialect (fanuc: combined; apt: tip; G-code and SINUMERIK: linuxcnc). `reader` is the
 // reader used (JobProgram::dialect).
-kinematics::FeedInterpretation axis_feed_of(const Job& job, const std::string& reader);
+kinematics::FeedInterpretation axis_feed_of(const io::Job& job, const std::string& reader);
 const char* feed_interpretation_name(kinematics::FeedInterpretation f);
 
 // The densification tolerance when the job gives no `densify:` (issue #20): min(v / 10,
 // gouge tolerance / 2), v the resolution (mm).
-double default_densify_tolerance_mm(const Job& job, double resolution_mm);
+double default_densify_tolerance_mm(const io::Job& job, double resolution_mm);
 
-// The pose engine with every interpolation period of the servo streamed into a CSV at
-// `periods_path` (vcut poses --every-period): t, block, source, the commanded and the actual
-// axis values by letter (mm, deg), commanded tip, actual tip and tool axis, contour_error_um.
-// Written atomically (the file appears when the run is done); an InputError when the job has
-// no servo.
-PoseRun run_pose_engine_with_periods(const Job& job, const std::string& periods_path);
-
-// One row per program block: block, source, kind, q, time_s, nonlinear_error_mm (and where),
-// singular, unreachable, and with servo or errors the contour error of its interpolation
-// periods (servo) or its poses (errors only): max, RMS, where. Written atomically.
-void write_blocks_csv(const std::string& path, const Job& job, const PoseRun& run);
-
-// One row per densified pose: block, source, t, x y z (tip), i j k (axis), the axis values by
-// letter (mm, deg), feed (mm/min); with servo or errors also actual_x .. actual_k and
-// contour_error_um. Written atomically.
-void write_poses_csv(const std::string& path, const Job& job, const PoseRun& run);
-
-// `vcut compensate`: for every densified pose, the axis commands whose error-aware forward
-// kinematics put the tool on the nominal pose (kinematics::compensate), written in the
-// program's dialect, one motion per pose with its source line as a comment. G-code: an axis
-// program (X Y Z the linear axes zeroed so that at all-zero rotary axes the tip is at the
-// programmed point, the convention of axis programs; A B C in deg). APT: the tool poses a
-// tool-centre-point controller turns into those commands (the ideal forward kinematics of
-// the compensated axes), as GOTO/x,y,z,i,j,k - provided the controller picks the same
-// branch (near the pole, where both tie on rotary motion, it may not). Throws InputError
-// when the machine has no geometric errors.
-struct CompensationReport {
-  std::size_t poses = 0;
-  std::size_t not_converged = 0;
-  double max_residual_tip_um = 0.0;
-  double max_residual_axis_urad = 0.0;
-  double max_error_before_um = 0.0;  // uncompensated volumetric tip error
-  std::string max_error_line;
-  std::string first_failure;  // "file:line: note" of the first pose that did not converge
-};
-CompensationReport write_compensated_program(const std::string& path, const Job& job, const PoseRun& run);
-
-}  // namespace vcut::io
+}  // namespace vcut::pipeline

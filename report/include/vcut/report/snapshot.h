@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "vcut/io/image.h"
+#include "vcut/report/image.h"
 #include "vcut/removal/mesh.h"
 
-namespace vcut::io {
+namespace vcut::report {
 
 // Unit vector from the scene toward the camera: "iso" (+1, -1, +1), "top" +z, "front" -y,
 // "right" +x. Other names are a vcut::InputError. The screen's up is +z projected on the
@@ -54,4 +54,4 @@ std::vector<std::string> write_snapshots(const std::string& folder, const std::s
                                          const std::vector<Rgb>& colours,
                                          const SnapshotOptions& options);
 
-}  // namespace vcut::io
+}  // namespace vcut::report

@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "vcut/io/job.h"
-#include "vcut/io/simulate.h"
+#include "vcut/pipeline/simulate.h"
 #include "vcut/removal/mesh.h"
 #include "vcut/removal/stock.h"
 
-namespace vcut::io {
+namespace vcut::report {
 
 // The marker the template holds once, inside <script id="vcut-data" type="application/json">.
 inline constexpr const char* kReportDataMarker = "__VCUT_REPORT_DATA__";
@@ -34,10 +34,10 @@ struct ReportPageInput {
 std::string report_template_path();
 
 // Throws vcut::InputError when the template cannot be read or holds no data slot.
-void write_report_page(const std::string& path, const std::string& template_path, const Job& job,
-                       const SimulationResult& result, const ReportPageInput& input);
+void write_report_page(const std::string& path, const std::string& template_path, const io::Job& job,
+                       const pipeline::SimulationResult& result, const ReportPageInput& input);
 
 // Standard base64 (RFC 4648, with padding) of raw bytes.
 std::string base64(const void* data, std::size_t bytes);
 
-}  // namespace vcut::io
+}  // namespace vcut::report
