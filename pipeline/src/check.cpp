@@ -129,13 +129,9 @@ CheckResult run_check(const io::Job& job) {
   const double tolerance_mm = job.collision_tolerance_mm;
   EventLog log(program);
 
-  // The pose engine's findings, by the block of their line.
-  std::map<std::string, int> block_of_line;
-  for (std::size_t i = 0; i < program.blocks.size(); ++i) block_of_line.emplace(program.where(program.blocks[i].source), static_cast<int>(i));
+  // The pose engine's findings, by their first block.
   for (const PoseEvent& e : run.events) {
-    const std::string first = e.line.substr(0, e.line.find_first_of("- "));
-    const auto it = block_of_line.find(first);
-    const int block = it == block_of_line.end() ? 0 : it->second;
+    const int block = std::max(e.first_block, 0);
     const Severity s = e.kind == "unreachable"                                ? Severity::Error
                        : e.kind == "singular" || e.kind == "densify_error" ? Severity::Warning
                                                                            : Severity::Note;

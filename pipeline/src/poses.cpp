@@ -351,7 +351,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
       run.max_nonlinear_error_mm = r.nonlinear_error_mm;
       run.max_nonlinear_line = line;
     }
-    if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable});
+    const int block = static_cast<int>(i);
+    if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable, block, block});
     // The user's step or angle leaves the moves off the machine's path by more than a gouge.
     if (job.densify_given && r.chord_error_mm > job.gouge_tolerance_mm) {
       char detail[240];
@@ -359,7 +360,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
                     "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
                     "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
                     r.chord_error_mm, job.gouge_tolerance_mm);
-      run.events.push_back({"densify_error", line, detail});
+      run.events.push_back({"densify_error", line, detail, block, block});
       // The terminal gets the first few; every block stays in the events (report, page).
       if (++densify_warnings <= kDensifyWarnings) run.warnings.push_back(line + ": " + detail);
     }
@@ -385,7 +386,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     std::snprintf(detail, sizeof detail,
                   "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "
                   "(largest tool-axis miss %.3g urad)", j - i, miss * 1e6);
-    run.events.push_back({"singular", where, detail});
+    run.events.push_back({"singular", where, detail, static_cast<int>(i), static_cast<int>(j - 1)});
     i = j;
   }
   run.q_mean = blocks.empty() ? 0.0 : q_sum / static_cast<double>(blocks.size());
@@ -395,7 +396,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     if (block < 0 || block == last_block) continue;
     last_block = block;
     run.events.push_back({"axis_limited_speed", program.where(program.blocks[static_cast<size_t>(block)].source),
-                          "a machine axis limit, not the programmed feed, set the speed"});
+                          "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   return run;
 }

@@ -168,17 +168,17 @@ double total_ram_mb() {
   return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) / (1024.0 * 1024.0) : 4096.0;
 }
 
-// "file:12", "file:14-19": consecutive lines of one file merge into a range.
-std::vector<std::string> merge_lines(std::vector<std::pair<std::string, int>> refs) {
-  std::sort(refs.begin(), refs.end());
-  refs.erase(std::unique(refs.begin(), refs.end()), refs.end());
-  std::vector<std::string> out;
+// Consecutive lines of one file merge into a span; in the order of file name, then line.
+std::vector<kinematics::SourceSpan> merge_lines(const kinematics::Program& program, std::vector<kinematics::SourceRef> refs) {
+  const auto key = [&](const kinematics::SourceRef& r) { return std::make_pair(std::cref(program.files[static_cast<std::size_t>(r.file)]), r.line); };
+  std::sort(refs.begin(), refs.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
+  refs.erase(std::unique(refs.begin(), refs.end(), [](const auto& a, const auto& b) { return a.file == b.file && a.line == b.line; }),
+             refs.end());
+  std::vector<kinematics::SourceSpan> out;
   for (std::size_t i = 0; i < refs.size();) {
     std::size_t j = i;
-    while (j + 1 < refs.size() && refs[j + 1].first == refs[i].first && refs[j + 1].second == refs[j].second + 1) ++j;
-    std::string s = refs[i].first + ":" + std::to_string(refs[i].second);
-    if (j > i) s += "-" + std::to_string(refs[j].second);
-    out.push_back(s);
+    while (j + 1 < refs.size() && refs[j + 1].file == refs[i].file && refs[j + 1].line == refs[j].line + 1) ++j;
+    out.push_back({refs[i].file, refs[i].line, refs[j].line});
     i = j + 1;
   }
   return out;
@@ -582,15 +582,16 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
       rec.area_mm2 = r.area_mm2;
       rec.centroid_mm = r.centroid_mm;
       rec.deepest_mm = r.deepest_mm;
-      std::vector<std::pair<std::string, int>> refs;
+      std::vector<kinematics::SourceRef> refs;
       std::set<int> tools;
       for (int move : r.moves) {
         if (move < 0) { rec.initial_stock = true; continue; }
         const auto& b = block_of(move);
-        refs.emplace_back(program.files[static_cast<std::size_t>(b.source.file)], b.source.line);
+        refs.push_back(b.source);
         tools.insert(b.tool);
       }
-      rec.lines = merge_lines(std::move(refs));
+      rec.spans = merge_lines(program, std::move(refs));
+      for (const kinematics::SourceSpan& s : rec.spans) rec.lines.push_back(program.where(s));
       rec.tools.assign(tools.begin(), tools.end());
       return rec;
     };

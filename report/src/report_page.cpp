@@ -49,8 +49,8 @@ ordered_json encode_mesh(const removal::TriangleMesh& mesh) {
           {"indices", typed_base64(indices)}};
 }
 
-// The NC lines a report names, with their text: "finish.ngc:10183", "finish.ngc:10180-10185"
-// and "a.ngc:5 to b.ngc:7" (the first file's line only), at most `limit` lines each.
+// The NC lines a report names, with their text: a region's spans, an event's blocks (from the
+// first block's line to the last's in one file, else the first's alone), at most 20 each.
 class SourceTexts {
  public:
   SourceTexts(const kinematics::Program& program, const std::vector<std::string>& paths) : program_(program), paths_(paths) {}
@@ -65,22 +65,10 @@ class SourceTexts {
     refs_.push_back(key);
     return i;
   }
-  // The references in a line string, each registered.
-  std::vector<int> parse(const std::string& where, std::size_t limit = 20) {
+  // The lines of a span, each registered: at most `limit`.
+  std::vector<int> add(const kinematics::SourceSpan& span, std::size_t limit = 20) {
     std::vector<int> out;
-    const std::string first = where.substr(0, where.find(' '));
-    const std::size_t colon = first.rfind(':');
-    if (colon == std::string::npos) return out;
-    const std::string name = first.substr(0, colon);
-    int file = -1;
-    for (std::size_t f = 0; f < program_.files.size(); ++f)
-      if (program_.files[f] == name) file = static_cast<int>(f);
-    if (file < 0) return out;
-    const std::string range = first.substr(colon + 1);
-    const long a = std::strtol(range.c_str(), nullptr, 10);
-    const std::size_t dash = range.find('-');
-    const long b = dash == std::string::npos ? a : std::strtol(range.c_str() + dash + 1, nullptr, 10);
-    for (long l = a; l <= b && out.size() < limit; ++l) out.push_back(index(file, static_cast<int>(l)));
+    for (int l = span.first_line; l <= span.last_line && out.size() < limit; ++l) out.push_back(index(span.file, l));
     return out;
   }
   // Reads every registered line's text (each file once, streaming) and returns the table.
@@ -256,8 +244,8 @@ void write_report_page(const std::string& path, const std::string& template_path
   auto add_regions = [&](const char* kind, const std::vector<RegionRecord>& list) {
     for (const RegionRecord& g : list) {
       std::vector<int> refs;
-      for (const auto& l : g.lines)
-        for (int i : sources.parse(l, 20 - std::min<std::size_t>(20, refs.size()))) refs.push_back(i);
+      for (const kinematics::SourceSpan& span : g.spans)
+        for (int i : sources.add(span, 20 - std::min<std::size_t>(20, refs.size()))) refs.push_back(i);
       regions.push_back({{{"kind", kind},
                           {"depth_mm", g.depth_mm},
                           {"area_mm2", g.area_mm2},
@@ -275,11 +263,11 @@ void write_report_page(const std::string& path, const std::string& template_path
     std::ostringstream detail;
     detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at " << c.deepest_line;
     events.push_back({{{"kind", c.kind}, {"line", c.line}, {"detail", detail.str()}, {"depth_mm", c.depth_mm}, {"where", vec(c.where_mm)}},
-                      sources.parse(c.line)});
+                      sources.add(run.program.span_of_blocks(c.first_block, c.last_block))});
   }
   for (const PoseEvent& e : run.events)
     events.push_back({{{"kind", e.kind}, {"line", e.line}, {"detail", e.detail}, {"depth_mm", nullptr}, {"where", nullptr}},
-                      sources.parse(e.line)});
+                      e.first_block < 0 ? std::vector<int>{} : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
 
   // Feed and contour error over time, at most 4,000 points (each the largest contour error
   // of its stretch, so peaks survive).

@@ -94,6 +94,26 @@ TEST_F(Check, AxisLimitIsAnError) {
   EXPECT_TRUE(found) << j.dump(1);
 }
 
+// Events in program order of their first line, also in a file whose name has a dash (the
+// pose engine's events carry their blocks; a "file:line" string cut at the first '-' sorted
+// them to block 0): the shank at line 6 comes before the axis limit at line 8 (A60 beyond
+// A's 30 deg) and line 9 (its start, at A60).
+TEST_F(Check, EventsInProgramOrderInADashedFileName) {
+  job = std::string("job: check\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: part-01.ngc}\n") +
+        "stock: {box: {min: [0, 0, -30], max: [60, 40, 0]}}\nreport: {out: out}\n";
+  write(dir / "job.yaml", job);
+  write(dir / "part-01.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5 A0 C0\nG1 Z-8 F500\nG1 X30\nG0 Z100\nG1 A60 F500\nG0 A0\nM30\n");
+  const CommandResult r = run_vcut("check " + (dir / "job.yaml").string() + " --json " + (dir / "check.json").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const auto j = json();
+  ASSERT_EQ(j["events"].size(), 3u) << j.dump(1);
+  EXPECT_EQ(j["events"][0]["kind"], "shank_in_stock_box");
+  EXPECT_EQ(j["events"][0]["line"], "part-01.ngc:6");
+  EXPECT_EQ(j["events"][1]["kind"], "unreachable");
+  EXPECT_EQ(j["events"][1]["line"], "part-01.ngc:8");
+  EXPECT_EQ(j["events"][2]["line"], "part-01.ngc:9");
+}
+
 TEST_F(Check, BadJobIsAnInputError) {
   job += "bogus: 1\n";
   expect_error(check("G0 X0\n"), "job.yaml:");

@@ -147,6 +147,34 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   }
 }
 
+// A program whose file name has a space and a dash: the page still carries the gouge's NC text
+// (the references travel typed, not as "file:line" strings cut at the first space).
+TEST_F(Simulate, ReportPageFindsTheTextOfAFileNameWithASpace) {
+  write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 1.95));
+  job.replace(job.find("slot.ngc"), 8, "my slot-01.ngc");
+  job += "design: {file: part.stl}\n";
+  write(dir / "my slot-01.ngc", program);
+  const std::string open = "<script id=\"vcut-data\" type=\"application/json\">";
+  write(dir / "template.html", "<html>" + open + "__VCUT_REPORT_DATA__</script></html>\n");
+  ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
+  const CommandResult r = simulate();
+  ::unsetenv("VCUT_REPORT_TEMPLATE");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream page_in(dir / "out" / "report.html");
+  std::stringstream page;
+  page << page_in.rdbuf();
+  const std::string html = page.str();
+  const std::size_t a = html.find(open), b = html.find("</script>", a);
+  ASSERT_NE(b, std::string::npos);
+  const auto j = nlohmann::json::parse(html.substr(a + open.size(), b - a - open.size()));
+  ASSERT_FALSE(j["regions"].empty());
+  EXPECT_EQ(j["regions"][0]["lines"], nlohmann::json::array({"my slot-01.ngc:7"}));
+  ASSERT_FALSE(j["regions"][0]["nc"].empty());
+  EXPECT_EQ(j["regions"][0]["nc"][0]["file"], "my slot-01.ngc");
+  EXPECT_EQ(j["regions"][0]["nc"][0]["line"], 7);
+  EXPECT_EQ(j["regions"][0]["nc"][0]["text"], "G1 X70");
+}
+
 TEST_F(Simulate, DesignEqualToTheCutHasNoGouge) {
   write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 2.0));
   job += "design: {file: part.stl}\n";

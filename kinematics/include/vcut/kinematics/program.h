@@ -33,6 +33,12 @@ struct SourceRef {
   int line = 0;
 };
 
+// Lines first..last of one program file (a run of blocks, a merged region's lines).
+struct SourceSpan {
+  int file = 0;
+  int first_line = 0, last_line = 0;
+};
+
 struct Block {
   MotionKind kind = MotionKind::Linear;
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();  // tool tip before the motion
@@ -72,6 +78,18 @@ struct Program {
 
   std::string where(const SourceRef& ref) const {
     return files.at(static_cast<size_t>(ref.file)) + ":" + std::to_string(ref.line);
+  }
+  // "file:12", or "file:12-19" for a span of several lines.
+  std::string where(const SourceSpan& span) const {
+    std::string s = files.at(static_cast<size_t>(span.file)) + ":" + std::to_string(span.first_line);
+    if (span.last_line > span.first_line) s += "-" + std::to_string(span.last_line);
+    return s;
+  }
+  // The lines of blocks first..last: from the first's line to the last's in one file, else
+  // the first's line alone.
+  SourceSpan span_of_blocks(int first, int last) const {
+    const SourceRef a = blocks.at(static_cast<size_t>(first)).source, b = blocks.at(static_cast<size_t>(last)).source;
+    return {a.file, a.line, b.file == a.file && b.line > a.line ? b.line : a.line};
   }
 };
 

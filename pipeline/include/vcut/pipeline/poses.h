@@ -20,9 +20,10 @@ namespace vcut::pipeline {
 
 // A block-level finding with its NC line: an axis limit, a singular pose, a limited speed.
 struct PoseEvent {
-  std::string kind;  // "unreachable", "singular", "axis_limited_speed"
-  std::string line;  // "file:line"
+  std::string kind;  // "unreachable", "singular", "axis_limited_speed", "densify_error"
+  std::string line;  // "file:line", "file:first-last" or "a:12 to b:3"
   std::string detail;
+  int first_block = -1, last_block = -1;  // the blocks it names (Program::span_of_blocks)
 };
 
 // The job's program files read into one Program (file names relative to the job), and the

@@ -36,8 +36,9 @@ struct RegionRecord {
   double area_mm2 = 0.0;
   Eigen::Vector3d centroid_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
-  std::vector<std::string> lines;  // "file:line" or "file:first-last"
-  std::vector<int> tools;          // T numbers; empty for untouched stock
+  std::vector<kinematics::SourceSpan> spans;  // the NC lines of the moves that made it
+  std::vector<std::string> lines;             // the spans as text: "file:line" or "file:first-last"
+  std::vector<int> tools;                     // T numbers; empty for untouched stock
   bool initial_stock = false;      // part of the region was never cut
 };
 
