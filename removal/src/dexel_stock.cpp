@@ -1610,10 +1610,4 @@ std::vector<DexelEndpoint> DexelStock::endpoints() const {
   return out;
 }
 
-std::size_t DexelStock::ray_count() const {
-  std::size_t n = 0;
-  for (const Family& f : impl_->families) n += f.rays.size();
-  return n;
-}
-
 }  // namespace vcut::removal

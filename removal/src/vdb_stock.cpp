@@ -609,11 +609,4 @@ std::size_t VdbStock::memory_bytes() const {
 
 Eigen::AlignedBox3d VdbStock::bounds() const { return impl_->shape_bounds; }
 
-double VdbStock::value_at(const Eigen::Vector3d& x) const {
-  const Impl& m = *impl_;
-  const Coord c(static_cast<int>(std::lround(x.x() / m.v)), static_cast<int>(std::lround(x.y() / m.v)),
-                static_cast<int>(std::lround(x.z() / m.v)));
-  return m.grid->tree().getValue(c);
-}
-
 }  // namespace vcut::removal

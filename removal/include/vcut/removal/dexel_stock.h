@@ -60,7 +60,6 @@ class DexelStock final : public Stock {
   std::vector<DexelSegment> ray(int axis, int iu, int iw) const;
   // Every interval endpoint of every ray, family by family in lattice order.
   std::vector<DexelEndpoint> endpoints() const;
-  std::size_t ray_count() const;
 
   struct Impl;  // the rays and the moves (dexel_stock.cpp)
 

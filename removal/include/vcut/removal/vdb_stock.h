@@ -1,4 +1,4 @@
-// The stock as an OpenVDB narrow-band level set (voxel size v, half width 3 voxels, world
+// The stock as an OpenVDB narrow-band level set (voxel size v, half width kVdbHalfWidthVoxels = 2 voxels, world
 // units mm) with a parallel grid holding, per voxel, the move whose sweep shaped it.
 #pragma once
 
@@ -26,8 +26,6 @@ class VdbStock final : public Stock {
   Eigen::AlignedBox3d bounds() const override;
 
   double voxel_mm() const;
-  // Level-set value (mm) at a voxel-centre position, for tests.
-  double value_at(const Eigen::Vector3d& x_mm) const;
 
  private:
   struct Impl;
