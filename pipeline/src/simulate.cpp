@@ -255,6 +255,158 @@ std::vector<CollisionRecord> collision_records(const std::vector<removal::Collis
 
 }  // namespace
 
+std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run) {
+  std::vector<std::string> warnings = job.warnings;
+  warnings.insert(warnings.end(), run.program.warnings.begin(), run.program.warnings.end());
+  for (const PoseEvent& e : run.events)
+    if (e.kind == "unreachable") warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
+  warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
+  return warnings;
+}
+
+removal::StockShape stock_shape(const io::Job& job) {
+  switch (job.stock.kind) {
+    case io::StockSpec::Kind::Box: return job.stock.box;
+    case io::StockSpec::Kind::Cylinder: return job.stock.cylinder;
+    case io::StockSpec::Kind::Mesh: break;
+  }
+  removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
+  if (!removal::is_closed(mesh))
+    throw InputError(job.stock.mesh_file, 0, 0, "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
+  if (removal::signed_volume_mm3(mesh) < 0.0)
+    for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
+  return mesh;
+}
+
+std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
+  if (!job.design) return std::nullopt;
+  removal::TriangleMesh design = transformed(io::read_mesh(job.design->file), *job.design);
+  const auto& t = design.triangles;
+  const auto& x = design.vertices_mm;
+  if (std::all_of(t.begin(), t.end(), [&](const Eigen::Vector3i& f) {
+        return removal::degenerate_triangle(x[static_cast<std::size_t>(f[0])], x[static_cast<std::size_t>(f[1])],
+                                            x[static_cast<std::size_t>(f[2])]);
+      }))
+    throw InputError(job.design->file, 0, 0, "design mesh has no triangle of nonzero area");
+  return design;
+}
+
+// 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut as
+// translation pieces within v/10 of the rigid motion (removal::five_axis_pieces). With
+// `probes`, the tool's shank and holder follow every move and a feed move made with the
+// spindle stopped is probed before it cuts (collisions).
+CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolution_mm) {
+  const kinematics::Program& program = run.program;
+  CutMoves out;
+  std::map<int, int> cutter_index;
+  for (const auto& b : program.blocks) {
+    if (b.tool == 0) {
+      if (b.kind != kinematics::MotionKind::Rapid)
+        throw InputError(program.where(b.source) + ": feed move with no tool in the spindle (expected T<n> M6 before it)");
+      continue;
+    }
+    if (cutter_index.count(b.tool)) continue;
+    cutter_index[b.tool] = static_cast<int>(out.moves.cutters.size());
+    out.moves.cutters.push_back(run.tools.at(b.tool));
+  }
+  // The shank and holder of every tool (their cutters follow the tools' in the list).
+  const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(out.moves);
+  const auto& samples = run.densified.samples;
+  const double rotation_bound_mm = resolution_mm / 10.0;
+  const std::size_t n = actual ? run.actual_path.size() : samples.size();
+  const auto pose = [&](std::size_t i) -> const kinematics::ToolPose& {
+    return actual ? run.actual_path[i].pose : samples[i].pose;
+  };
+  std::vector<removal::Move>& list = out.moves.moves;
+  for (std::size_t i = 1; i < n; ++i) {
+    const int block = actual ? run.actual_path[i].block : samples[i].block;
+    const auto& b = program.blocks[static_cast<std::size_t>(block)];
+    if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
+    const kinematics::ToolPose& from = pose(i - 1);
+    const kinematics::ToolPose& to = pose(i);
+    removal::Move m;
+    m.start_mm = from.tip_mm;
+    m.end_mm = to.tip_mm;
+    m.axis = to.axis;
+    m.cutter = cutter_index.at(b.tool);
+    m.block = block;
+    m.rapid = b.kind == kinematics::MotionKind::Rapid;
+    const bool turns = (from.axis - to.axis).norm() > 1e-12;
+    if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
+    out.cutting_moves += !m.rapid;
+    const std::size_t first_piece = list.size();
+    if (turns) {
+      const int pieces = removal::five_axis_pieces(out.moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
+                                                   rotation_bound_mm);
+      removal::append_five_axis_move(list, m, from.axis, to.axis, pieces);
+      out.rotating_moves += 1;
+    } else {
+      list.push_back(m);
+    }
+    if (!probes) continue;
+    const std::vector<removal::Move> pieces(list.begin() + static_cast<std::ptrdiff_t>(first_piece), list.end());
+    list.resize(first_piece);
+    for (const removal::Move& piece : pieces) {
+      if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
+        removal::Move stopped = piece;
+        stopped.rapid = true;
+        stopped.probe = removal::ProbeKind::SpindleStopped;
+        list.push_back(stopped);
+      }
+      list.push_back(piece);
+      removal::append_body_probes(list, piece, bodies[static_cast<std::size_t>(piece.cutter)]);
+    }
+  }
+  for (const auto& m : list) out.count += !m.rapid || m.probe == removal::ProbeKind::Rapid;
+  return out;
+}
+
+double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::StockShape& shape, double resolution_mm,
+                        double max_memory_mb) {
+  const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
+  bool overlap = false;
+  Eigen::AlignedBox3d path_box;
+  for (const auto& m : cut.moves.moves) {
+    if (m.rapid) continue;
+    path_box.extend(m.start_mm);
+    path_box.extend(m.end_mm);
+    const removal::TranslationSweep sweep(cut.moves.cutters[static_cast<std::size_t>(m.cutter)], m);
+    overlap = overlap || sweep.bounds().intersects(stock_box);
+  }
+  if (!overlap && cut.cutting_moves > 0) {
+    std::ostringstream msg;
+    msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
+        << stock_box.max().transpose() << "] mm";
+    if (!path_box.isEmpty()) msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
+    msg << "): check the work offsets and the stock";
+    throw InputError(job.file, 0, 0, msg.str());
+  }
+  const bool use_dexel = job.engine != "vdb", use_vdb = job.engine != "dexel";
+  std::size_t estimate_bytes = 0;
+  if (use_dexel) estimate_bytes += removal::estimate_dexel_memory_bytes(shape, resolution_mm);
+  if (use_vdb) estimate_bytes += removal::estimate_vdb_memory_bytes(shape, resolution_mm);
+  const double estimate_mb = static_cast<double>(estimate_bytes) / (1024.0 * 1024.0);
+  const double limit_mb = max_memory_mb > 0.0 ? max_memory_mb : 0.75 * total_ram_mb();
+  if (estimate_mb > limit_mb) {
+    std::ostringstream msg;
+    msg << "resolution " << resolution_mm;
+    msg.precision(0);
+    msg << std::fixed << " mm needs about " << estimate_mb << " MB for this stock, more than the "
+        << limit_mb << " MB allowed (--max-memory): choose a coarser resolution";
+    msg.precision(3);
+    throw InputError(msg.str());
+  }
+  return estimate_mb;
+}
+
+std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::StockShape& shape, double resolution_mm,
+                                           bool merge_flat) {
+  if (job.engine == "vdb") return std::make_unique<removal::VdbStock>(shape, resolution_mm);
+  auto dexel = std::make_unique<removal::DexelStock>(shape, resolution_mm);
+  dexel->set_flat_merging(merge_flat);
+  return dexel;
+}
+
 SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const auto t_start = Clock::now();
   auto t_stage = t_start;
@@ -281,170 +433,37 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const PoseRun& run = result.pose_run;
   const kinematics::Program& program = run.program;
   result.blocks = program.blocks.size();
-  result.warnings = job.warnings;
-  result.warnings.insert(result.warnings.end(), program.warnings.begin(), program.warnings.end());
-  for (const PoseEvent& e : run.events)
-    if (e.kind == "unreachable") result.warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
-  result.warnings.insert(result.warnings.end(), run.warnings.begin(), run.warnings.end());
+  result.warnings = warnings_of(job, run);
   stage_done("read");
 
-  // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut
-  // as translation pieces within v/10 of the rigid motion (removal::five_axis_pieces).
-  std::map<int, int> cutter_index;
-  removal::MoveList moves;
-  for (const auto& b : program.blocks) {
-    if (b.tool == 0) {
-      if (b.kind != kinematics::MotionKind::Rapid)
-        throw InputError(program.where(b.source) + ": feed move with no tool in the spindle (expected T<n> M6 before it)");
-      continue;
-    }
-    if (cutter_index.count(b.tool)) continue;
-    cutter_index[b.tool] = static_cast<int>(moves.cutters.size());
-    moves.cutters.push_back(run.tools.at(b.tool));
-  }
-  // The shank and holder of every tool follow each move as probes (collisions).
-  const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(moves);
-  const auto& samples = run.densified.samples;
+  // 3. Moves: the actual poses (servo, errors) when there are any, else the nominal; with
+  // the nominal ones as well for the nominal cut.
   const bool cut_actual = !run.actual_path.empty();
-  const double rotation_bound_mm = v / 10.0;
-  result.poses = samples.size();
-  // The moves through the actual poses (servo, errors) when there are any, else the nominal.
-  // With `probes`, the tool's shank and holder follow every move and a feed move made with
-  // the spindle stopped is probed before it cuts (collisions); the nominal cut has none.
-  auto append_moves = [&](removal::MoveList& out, bool actual, bool count) {
-    const bool probes = count;
-    const std::size_t n = actual ? run.actual_path.size() : samples.size();
-    const auto pose = [&](std::size_t i) -> const kinematics::ToolPose& {
-      return actual ? run.actual_path[i].pose : samples[i].pose;
-    };
-    for (std::size_t i = 1; i < n; ++i) {
-      const int block = actual ? run.actual_path[i].block : samples[i].block;
-      const auto& b = program.blocks[static_cast<std::size_t>(block)];
-      if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
-      const kinematics::ToolPose& from = pose(i - 1);
-      const kinematics::ToolPose& to = pose(i);
-      removal::Move m;
-      m.start_mm = from.tip_mm;
-      m.end_mm = to.tip_mm;
-      m.axis = to.axis;
-      m.cutter = cutter_index.at(b.tool);
-      m.block = block;
-      m.rapid = b.kind == kinematics::MotionKind::Rapid;
-      const bool turns = (from.axis - to.axis).norm() > 1e-12;
-      if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
-      if (count) result.cutting_moves += !m.rapid;
-      const std::size_t first_piece = out.moves.size();
-      if (turns) {
-        const int pieces = removal::five_axis_pieces(out.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
-                                                     rotation_bound_mm);
-        removal::append_five_axis_move(out.moves, m, from.axis, to.axis, pieces);
-        if (count) result.rotating_moves += 1;
-      } else {
-        out.moves.push_back(m);
-      }
-      if (!probes) continue;
-      const std::vector<removal::Move> pieces(out.moves.begin() + static_cast<std::ptrdiff_t>(first_piece), out.moves.end());
-      out.moves.resize(first_piece);
-      for (const removal::Move& piece : pieces) {
-        if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
-          removal::Move stopped = piece;
-          stopped.rapid = true;
-          stopped.probe = removal::ProbeKind::SpindleStopped;
-          out.moves.push_back(stopped);
-        }
-        out.moves.push_back(piece);
-        removal::append_body_probes(out.moves, piece, bodies[static_cast<std::size_t>(piece.cutter)]);
-      }
-    }
-  };
-  append_moves(moves, cut_actual, true);
+  CutMoves cut_moves = moves_of(run, cut_actual, true, v);
+  removal::MoveList& moves = cut_moves.moves;
+  result.poses = run.densified.samples.size();
+  result.cutting_moves = cut_moves.cutting_moves;
+  result.rotating_moves = cut_moves.rotating_moves;
   removal::MoveList nominal_moves;
-  if (cut_actual) {
-    nominal_moves.cutters = moves.cutters;
-    append_moves(nominal_moves, false, false);
-  }
-  for (const auto& m : moves.moves) result.moves += !m.rapid || m.probe == removal::ProbeKind::Rapid;
+  if (cut_actual) nominal_moves = moves_of(run, false, false, v).moves;
+  result.moves = cut_moves.count;
   stage_done("densify");
 
-  // 4. Stock.
-  removal::StockShape shape;
+  // 4. Stock, and the design, read now, before the cut, so that a file that cannot be used
+  // stops the run at once.
   std::vector<std::string> hashed = {job.file, job.machine_file, job.tools_file};
   hashed.insert(hashed.end(), job.program_files.begin(), job.program_files.end());
-  switch (job.stock.kind) {
-    case io::StockSpec::Kind::Box: shape = job.stock.box; break;
-    case io::StockSpec::Kind::Cylinder: shape = job.stock.cylinder; break;
-    case io::StockSpec::Kind::Mesh: {
-      removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
-      if (!removal::is_closed(mesh))
-        throw InputError(job.stock.mesh_file, 0, 0, "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
-      if (removal::signed_volume_mm3(mesh) < 0.0)
-        for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
-      shape = std::move(mesh);
-      hashed.push_back(job.stock.mesh_file);
-      break;
-    }
-  }
+  const removal::StockShape shape = stock_shape(job);
+  if (job.stock.kind == io::StockSpec::Kind::Mesh) hashed.push_back(job.stock.mesh_file);
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
-  // The design is read now, before the cut, so that a design file that cannot be used
-  // stops the run at once.
-  std::optional<removal::TriangleMesh> design_mesh;  // kept for the report page
-  if (job.design) {
-    design_mesh = transformed(io::read_mesh(job.design->file), *job.design);
-    const auto& t = design_mesh->triangles;
-    const auto& x = design_mesh->vertices_mm;
-    if (std::all_of(t.begin(), t.end(), [&](const Eigen::Vector3i& f) {
-          return removal::degenerate_triangle(x[static_cast<std::size_t>(f[0])], x[static_cast<std::size_t>(f[1])],
-                                              x[static_cast<std::size_t>(f[2])]);
-        }))
-      throw InputError(job.design->file, 0, 0, "design mesh has no triangle of nonzero area");
-    hashed.push_back(job.design->file);
-  }
-  bool overlap = false;
-  Eigen::AlignedBox3d path_box;
-  for (const auto& m : moves.moves) {
-    if (m.rapid) continue;
-    path_box.extend(m.start_mm);
-    path_box.extend(m.end_mm);
-    const removal::TranslationSweep sweep(moves.cutters[static_cast<std::size_t>(m.cutter)], m);
-    overlap = overlap || sweep.bounds().intersects(stock_box);
-  }
-  if (!overlap && result.cutting_moves > 0) {
-    std::ostringstream msg;
-    msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
-        << stock_box.max().transpose() << "] mm";
-    if (!path_box.isEmpty()) msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
-    msg << "): check the work offsets and the stock";
-    throw InputError(job.file, 0, 0, msg.str());
-  }
-  const bool use_dexel = job.engine != "vdb", use_vdb = job.engine != "dexel";
-  std::size_t estimate_bytes = 0;
-  if (use_dexel) estimate_bytes += removal::estimate_dexel_memory_bytes(shape, v);
-  if (use_vdb) estimate_bytes += removal::estimate_vdb_memory_bytes(shape, v);
-  const double estimate_mb = static_cast<double>(estimate_bytes) / (1024.0 * 1024.0);
-  result.estimated_memory_mb = estimate_mb;
-  const double limit_mb = options.max_memory_mb > 0.0 ? options.max_memory_mb : 0.75 * total_ram_mb();
-  if (estimate_mb > limit_mb) {
-    std::ostringstream msg;
-    msg << "resolution " << v;
-    msg.precision(0);
-    msg << std::fixed << " mm needs about " << estimate_mb << " MB for this stock, more than the "
-        << limit_mb << " MB allowed (--max-memory): choose a coarser resolution";
-    msg.precision(3);
-    throw InputError(msg.str());
-  }
-  // The primary engine makes the outputs; with engine: both the OpenVDB one checks it.
-  // A study compares two runs' meshes to within v/100, a machine-error run the actual
-  // against the nominal part (a few um): their dexel surfaces merge only exact axis planes,
-  // as merged blocks' triangles would cut gentle creases differently in two meshes.
-  const bool merge_flat = options.checks && !cut_actual;
-  auto make_stock = [&]() -> std::unique_ptr<removal::Stock> {
-    if (!use_dexel) return std::make_unique<removal::VdbStock>(shape, v);
-    auto dexel = std::make_unique<removal::DexelStock>(shape, v);
-    dexel->set_flat_merging(merge_flat);
-    return dexel;
-  };
-  std::unique_ptr<removal::Stock> primary = make_stock(), second;
-  if (use_dexel && use_vdb && options.checks) second = std::make_unique<removal::VdbStock>(shape, v);
+  std::optional<removal::TriangleMesh> design_mesh = design_of(job);  // kept for the report page
+  if (design_mesh) hashed.push_back(job.design->file);
+  result.estimated_memory_mb = require_cuttable(job, cut_moves, shape, v, options.max_memory_mb);
+  // The primary engine makes the outputs; with engine: both the OpenVDB one checks it. A
+  // machine-error run compares the actual with the nominal part (a few um): no flat merging.
+  const bool merge_flat = !cut_actual;
+  std::unique_ptr<removal::Stock> primary = make_stock(job, shape, v, merge_flat), second;
+  if (job.engine == "both") second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");
@@ -471,12 +490,6 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   if (machined.mesh.triangles.empty())
     result.warnings.push_back("the program cuts the whole stock away: the machined mesh is empty");
   stage_done("mesh");
-  if (!options.checks) {
-    result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-    result.peak_memory_mb = peak_memory_mb();
-    result.machined = std::move(machined);
-    return result;
-  }
 
   if (second) {
     // engine: both — cut again with the OpenVDB engine; the distance between the two
@@ -496,7 +509,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     // The machine cut with the actual poses; cut the nominal ones too (same engine) and
     // measure how far the real part departs from the programmed one.
     progress("nominal", 0, 1);
-    std::unique_ptr<removal::Stock> nominal = make_stock();
+    std::unique_ptr<removal::Stock> nominal = make_stock(job, shape, v, merge_flat);
     nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const removal::SurfaceMesh nominal_surface = nominal->surface();
     static_cast<SurfaceDifference&>(result.nominal) = surface_difference(machined, nominal_surface, v);

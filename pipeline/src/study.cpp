@@ -1,5 +1,8 @@
 #include "vcut/pipeline/study.h"
 
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -9,6 +12,7 @@
 
 #include "vcut/io/input_error.h"
 #include "vcut/pipeline/simulate.h"
+#include "vcut/removal/stock.h"
 
 namespace vcut::pipeline {
 namespace {
@@ -118,28 +122,43 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     s.warnings.push_back("accuracy " + number(s.accuracy_mm) + " mm is below what meshes at " + number(resolution_mm) +
                          " mm resolve (about 1/100 of it): figures near it are meshing noise; choose a finer --resolution");
 
-  SimulateOptions run_options;
-  run_options.resolution_mm = options.resolution_mm;
-  run_options.threads = options.threads;
-  run_options.max_memory_mb = options.max_memory_mb;
-  run_options.checks = false;
-  run_options.progress = options.progress;
+  if (!(resolution_mm > 0.0) || !std::isfinite(resolution_mm)) throw InputError("--resolution: expected a positive number of mm");
+  s.resolution_mm = resolution_mm;
+  const int threads = options.threads.value_or(job.threads);
+  s.threads = threads > 0 ? threads : tbb::info::default_concurrency();
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(s.threads));
   io::Job base = job;
   if (base.engine == "both") base.engine = "dexel";  // the cross-check has nothing to add here
   const std::size_t runs = settings.size() + 1;
+  auto progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+    if (options.progress) options.progress(stage, done, total);
+  };
+  // One setting: poses, moves, cut and mesh (the stages of simulate that make the surface).
   auto run = [&](const DensifySetting& setting, std::size_t index, StudyRow& row) -> removal::SurfaceMesh {
     row.setting = setting;
     row.label = describe(setting);
     if (options.on_run) options.on_run(index, runs, row.label);
-    SimulationResult r = simulate(with_setting(base, setting), run_options);
-    row.poses = r.poses;
-    row.moves = r.moves;
-    row.wall_time_s = r.wall_time_s;
-    s.resolution_mm = r.resolution_mm;
-    s.threads = r.threads;
-    for (const auto& w : r.warnings)
+    const auto t0 = Clock::now();
+    const io::Job j = with_setting(base, setting);
+    const PoseRun poses = run_pose_engine(j, read_job_program(j), resolution_mm);
+    // What the machine cuts: the actual path with servo or errors.
+    const CutMoves cut = moves_of(poses, !poses.actual_path.empty(), false, resolution_mm);
+    const removal::StockShape shape = stock_shape(j);
+    require_cuttable(j, cut, shape, resolution_mm, options.max_memory_mb);
+    // Two settings' meshes are compared to resolution / 100: no flat merging (make_stock).
+    const std::unique_ptr<removal::Stock> stock = make_stock(j, shape, resolution_mm, false);
+    removal::CutOptions cut_options;
+    cut_options.collision_tolerance_mm = j.collision_tolerance_mm;
+    cut_options.progress = [&](std::size_t done, std::size_t total) { progress("cut", done, total); };
+    stock->cut(cut.moves, cut_options);
+    progress("mesh", 0, 1);
+    removal::SurfaceMesh surface = stock->surface();
+    row.poses = poses.densified.samples.size();
+    row.moves = cut.count;
+    row.wall_time_s = std::chrono::duration<double>(Clock::now() - t0).count();
+    for (const auto& w : warnings_of(j, poses))
       if (std::find(s.warnings.begin(), s.warnings.end(), w) == s.warnings.end()) s.warnings.push_back(w);
-    return std::move(r.machined);
+    return surface;
   };
 
   // The settings first (the cheap runs: a job that cannot run at all fails fast), then the

@@ -24,9 +24,6 @@ struct SimulateOptions {
   std::optional<double> resolution_mm;  // overrides engine.resolution
   std::optional<int> threads;           // overrides engine.threads (0 = all cores)
   double max_memory_mb = 0.0;           // refuse a stock larger than this; 0 = 75 % of RAM
-  // false (a study's runs): poses, moves, cut and mesh only: no engine cross-check, no
-  // nominal cut, no comparison.
-  bool checks = true;
   // Progress: (stage, done, total); from the calling thread.
   std::function<void(const std::string&, std::size_t, std::size_t)> progress;
 };
@@ -135,6 +132,42 @@ struct SimulationResult {
   Eigen::AlignedBox3d stock_box;
   std::vector<std::string> input_files;  // every file the run read: job, machine, tools, programs, meshes
 };
+
+// The stages simulate runs, each testable alone (tests/pipeline/).
+
+// What a run tells the user: the job's warnings, the program's, poses out of reach, the
+// pose engine's.
+std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run);
+
+// 3. Moves: the pose run's densified poses (actual = false) or its actual path (servo,
+// errors: PoseRun::actual_path) as the cut's moves; a move that turns the tool axis is cut
+// in translation pieces within resolution / 10 of the rigid motion. With `probes` the
+// shank and holder of each tool follow every move, and a feed move with the spindle
+// stopped is probed first (collisions). A feed move with no tool is an InputError.
+struct CutMoves {
+  removal::MoveList moves;
+  std::size_t count = 0;           // the moves that cut or are a rapid's probe (report.json's "moves")
+  std::size_t cutting_moves = 0;   // feed moves of the program path
+  std::size_t rotating_moves = 0;  // of those, moves that turn the tool axis
+};
+CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolution_mm);
+
+// 4. The job's stock: its box or cylinder, or its mesh read (closed, turned outward).
+removal::StockShape stock_shape(const io::Job& job);
+// The job's design mesh placed as the job says (rotate, then translate), or none.
+std::optional<removal::TriangleMesh> design_of(const io::Job& job);
+
+// Refuses, as an InputError, a cut that cannot be what was meant: cutting moves that never
+// come near the stock (work offsets), or a stock whose estimated memory at this resolution
+// (both engines' with engine: both) exceeds max_memory_mb (0: 75 % of RAM). Returns the
+// estimate (MB).
+double require_cuttable(const io::Job& job, const CutMoves& moves, const removal::StockShape& shape, double resolution_mm,
+                        double max_memory_mb);
+// 5. The stock the cut goes into: tri-dexel, or OpenVDB with engine: vdb. merge_flat: the
+// dexel mesher merges flat regions into large triangles (off where two cuts' meshes are
+// compared to a few um: merged blocks cut gentle creases differently in two meshes).
+std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::StockShape& shape, double resolution_mm,
+                                           bool merge_flat);
 
 // Runs the job. Bad input is a vcut::InputError.
 SimulationResult simulate(const io::Job& job, const SimulateOptions& options);
