@@ -1,0 +1,123 @@
+// The simulate stages in-process (the CLI tests are the end-to-end layer). Expected values are
+// worked by hand from the geometry in the comments.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "vcut/io/input_error.h"
+#include "vcut/io/job.h"
+#include "vcut/io/mesh_io.h"
+#include "vcut/pipeline/poses.h"
+#include "vcut/pipeline/simulate.h"
+#include "vcut/removal/vdb_stock.h"
+#include "../removal/test_meshes.h"
+
+namespace vcut::pipeline {
+namespace {
+namespace fs = std::filesystem;
+
+class Stages : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("vcut_pipeline_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    write("tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 25, shank_diameter: 10, length: 40}\n");
+    // Line 7 slots the 60 mm box along X, 10 mm wide, the tip at z = -2.
+    write("slot.ngc", "%\nG17 G21 G90 G94 G54\nT1 M6\nS10000 M3\nG0 X-10 Y20 Z5\nG1 Z-2 F500\nG1 X70\nG0 Z5\nM30\n%\n");
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  void write(const std::string& name, const std::string& text) { std::ofstream(dir / name) << text; }
+  io::Job job(const std::string& extra, const std::string& machine = "3axis", const std::string& engine = "dexel") {
+    write("job.yaml", "job: slot\nmachine: " + machine + "\ntools: tools.yaml\nprogram: {file: slot.ngc}\n" +
+                          "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\nengine: {kind: " + engine +
+                          ", resolution: 0.1, threads: 2}\n" + extra);
+    return io::read_job((dir / "job.yaml").string());
+  }
+  fs::path dir;
+};
+
+// The nominal-against-actual cut: the bundled three-axis machine with a constant Z positioning
+// error E_ZZ of 30 um puts every tip 30 um off in z, so the slot's floor (line 7) lies 0.030 mm
+// from the programmed one, its walls unchanged.
+// - Against the design (the programmed slot) the dexel endpoints, exact, find the floor 0.030
+//   mm off and nothing else.
+// - The removed volume is the mean of the three ray families' (DexelStock::volume_mm3): the
+//   z-rays see the floor's 60 x 10 mm2 move 0.03 mm, 18 mm3; the x- and y-rays, at cell centres
+//   z = -1.95 and -2.05, cross no moved floor: the mean differs by 6 mm3 from the run without
+//   errors.
+// - The two machined surfaces differ by 0.030 mm over the floor; at its edges meshing places
+//   the two surfaces' vertices up to v/2 apart (surface_difference), so the largest lies in
+//   [0.030, 0.030 + 0.05] mm, on line 7.
+TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
+  std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/3axis.yaml");
+  std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+  ASSERT_EQ(machine.find("\nerrors:"), std::string::npos);
+  write("machine.yaml", machine + "\nerrors: {E_ZZ: 30}\n");
+  io::write_stl((dir / "part.stl").string(), removal::test::slotted_block(5.0, 2.0));
+  const std::string design = "design: {file: part.stl}\nreport: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n";
+  const std::string path = (dir / "machine.yaml").string();
+  const SimulationResult nominal = simulate(job(design, path), {});
+  EXPECT_FALSE(nominal.nominal.done);  // no errors asked: nothing to compare
+  ASSERT_TRUE(nominal.endpoints.done);
+  EXPECT_LT(std::max(nominal.endpoints.max_gouge_mm, nominal.endpoints.max_excess_mm), 1e-6);
+  const SimulationResult actual = simulate(job(design + "errors: machine\n", path), {});
+  ASSERT_TRUE(actual.endpoints.done);
+  const double off = std::max(actual.endpoints.max_gouge_mm, actual.endpoints.max_excess_mm);
+  EXPECT_NEAR(off, 0.030, 1e-6);
+  EXPECT_LT(std::min(actual.endpoints.max_gouge_mm, actual.endpoints.max_excess_mm), 1e-6);
+  EXPECT_NEAR(std::abs(actual.removed_volume_mm3 - nominal.removed_volume_mm3), 6.0, 0.01);
+  ASSERT_TRUE(actual.nominal.done);
+  EXPECT_GE(actual.nominal.max_mm, 0.030 - 1e-6);
+  EXPECT_LE(actual.nominal.max_mm, 0.030 + 0.05);
+  EXPECT_EQ(actual.nominal.max_line, "slot.ngc:7");
+}
+
+// moves_of: a feed move with no tool is refused with its line; the stages compose as
+// simulate does (a 60 x 10 x 2 slot: 1200 mm3).
+TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
+  write("slot.ngc", "G21 G90\nG0 X-10 Y20 Z5\nG1 Z-2 F500\n");
+  const io::Job no_tool = job("");
+  const PoseRun bare = run_pose_engine(no_tool, read_job_program(no_tool), 0.1);
+  try {
+    moves_of(bare, false, false, 0.1);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("slot.ngc:3: feed move with no tool"), std::string::npos) << e.what();
+  }
+  SetUp();
+  const io::Job j = job("");
+  const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+  const CutMoves cut = moves_of(run, false, true, 0.1);
+  EXPECT_EQ(cut.cutting_moves, 2u);  // the plunge and the slot, one pose each (lines need no densifying)
+  EXPECT_EQ(cut.rotating_moves, 0u);
+  const removal::StockShape shape = stock_shape(j);
+  EXPECT_FALSE(design_of(j).has_value());
+  EXPECT_GT(require_cuttable(j, cut, shape, 0.1, 0.0), 0.0);
+  const auto stock = make_stock(j, shape, 0.1, true);
+  const double removed = stock->cut(cut.moves, {}).removed_volume_mm3;
+  EXPECT_NEAR(removed, 1200.0, 6.0);
+  EXPECT_NEAR(simulate(j, {}).removed_volume_mm3, removed, 1e-9);
+  // engine: vdb makes the OpenVDB stock.
+  EXPECT_NE(dynamic_cast<removal::VdbStock*>(make_stock(job("", "3axis", "vdb"), shape, 0.1, true).get()), nullptr);
+}
+
+// Cutting moves that never come near the stock are refused before any cut (work offsets).
+TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
+  write("slot.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X500 Y500 Z5\nG1 Z-2 F500\nG1 X600\nM30\n");
+  const io::Job j = job("");
+  const CutMoves cut = moves_of(run_pose_engine(j, read_job_program(j), 0.1), false, false, 0.1);
+  try {
+    require_cuttable(j, cut, stock_shape(j), 0.1, 0.0);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("never reach the stock"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace vcut::pipeline
