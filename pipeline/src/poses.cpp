@@ -129,6 +129,10 @@ JobProgram read_job_program(const io::Job& job) {
   return out;
 }
 
+double chord_tolerance_mm(const io::Job& job, double resolution_mm) {
+  return job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : resolution_mm / 20.0;
+}
+
 double default_densify_tolerance_mm(const io::Job& job, double resolution_mm) {
   double eps = resolution_mm / 10.0;
   if (job.gouge_tolerance_mm > 0.0) eps = std::min(eps, job.gouge_tolerance_mm / 2.0);
@@ -216,7 +220,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     settings.cutter_length_mm = std::max(settings.cutter_length_mm, it->second.flute_length_mm);
     settings.cutter_radius_mm = std::max(settings.cutter_radius_mm, it->second.radius_mm());
   }
-  settings.chord_tolerance_mm = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : resolution_mm / 20.0;
+  settings.chord_tolerance_mm = chord_tolerance_mm(job, resolution_mm);
   settings.step_mm = job.step_mm;
   settings.angle_step_rad = job.angle_step_deg * M_PI / 180.0;
   settings.tolerance_mm = job.densify_tolerance_mm;

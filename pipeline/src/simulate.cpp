@@ -6,34 +6,26 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <fstream>
 #include <limits>
-#include <memory>
 #include <map>
+#include <memory>
 #include <set>
 #include <sstream>
 
-#include "vcut/io/gcode_reader.h"
-#include "vcut/pipeline/poses.h"
-#include "vcut/io/program_reader.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
-#include "vcut/kinematics/densify.h"
+#include "vcut/io/program_reader.h"
+#include "vcut/pipeline/poses.h"
 #include "vcut/removal/compare.h"
-#include "vcut/removal/sweep.h"
 #include "vcut/removal/dexel_stock.h"
+#include "vcut/removal/endpoint_check.h"
+#include "vcut/removal/sweep.h"
 #include "vcut/removal/vdb_stock.h"
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
 
 namespace vcut::pipeline {
-namespace fs = std::filesystem;
 
 double peak_memory_mb() {
   std::ifstream status("/proc/self/status");
@@ -41,122 +33,6 @@ double peak_memory_mb() {
   while (std::getline(status, line))
     if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
   return 0.0;
-}
-
-namespace {
-
-// How far from a sharp edge (in voxels) two meshings of nearly one solid may differ by the
-// edge's chamfer.
-constexpr double kEdgeReach = 2.0;
-
-// Per vertex: does an incident face's normal stray more than `limit_deg` from the mean of
-// the incident faces' normals (area weighted)?
-std::vector<bool> sharp_vertices(const removal::TriangleMesh& mesh, double limit_deg) {
-  const std::size_t n = mesh.vertices_mm.size();
-  std::vector<Eigen::Vector3d> mean(n, Eigen::Vector3d::Zero());
-  std::vector<Eigen::Vector3d> face(mesh.triangles.size());
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const auto& t = mesh.triangles[f];
-    const Eigen::Vector3d& p0 = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
-    face[f] = (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - p0).cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - p0);
-    for (int c = 0; c < 3; ++c) mean[static_cast<std::size_t>(t[c])] += face[f];
-  }
-  const double cos_limit = std::cos(limit_deg * M_PI / 180.0);
-  std::vector<bool> sharp(n, false);
-  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
-    const double area2 = face[f].norm();
-    if (area2 <= 0.0) continue;
-    for (int c = 0; c < 3; ++c) {
-      const std::size_t i = static_cast<std::size_t>(mesh.triangles[f][c]);
-      const double m = mean[i].norm();
-      if (m <= 0.0 || face[f].dot(mean[i]) < cos_limit * area2 * m) sharp[i] = true;
-    }
-  }
-  return sharp;
-}
-
-// Vertices of `mesh` within `radius_mm` of any of `points` (a hash grid of that cell size).
-std::vector<char> near_points(const removal::TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& points, double radius_mm) {
-  auto cell = [&](const Eigen::Vector3d& p) {
-    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)), static_cast<long>(std::floor(p.y() / radius_mm)),
-                               static_cast<long>(std::floor(p.z() / radius_mm))};
-  };
-  std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> grid;
-  for (const auto& p : points) grid[cell(p)].push_back(p);
-  std::vector<char> near(mesh.vertices_mm.size(), 0);  // char: written from several threads
-  tbb::parallel_for(std::size_t{0}, mesh.vertices_mm.size(), [&](std::size_t i) {
-    const Eigen::Vector3d& v = mesh.vertices_mm[i];
-    const auto c = cell(v);
-    for (long dx = -1; dx <= 1 && !near[i]; ++dx)
-      for (long dy = -1; dy <= 1 && !near[i]; ++dy)
-        for (long dz = -1; dz <= 1 && !near[i]; ++dz) {
-          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
-          if (it == grid.end()) continue;
-          for (const auto& p : it->second)
-            if ((p - v).squaredNorm() <= radius_mm * radius_mm) {
-              near[i] = 1;
-              break;
-            }
-        }
-  });
-  return near;
-}
-
-}  // namespace
-
-SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
-                                     double sharp_edge_deg) {
-  const removal::DesignDistance to_b(b.mesh), to_a(a.mesh);
-  const std::size_t na = a.mesh.vertices_mm.size();
-  std::vector<double> d(na + b.mesh.vertices_mm.size());
-  std::vector<Eigen::Vector3d> where(d.size());
-  std::vector<bool> skip(d.size(), false);
-  if (sharp_edge_deg > 0.0) {
-    // Near a sharp edge of either surface: the other meshing may cut that edge's corner
-    // anywhere within a cell or two of it.
-    std::vector<Eigen::Vector3d> edge_points;
-    for (const removal::SurfaceMesh* m : {&a, &b}) {
-      const std::vector<bool> sharp = sharp_vertices(m->mesh, sharp_edge_deg);
-      for (std::size_t i = 0; i < sharp.size(); ++i)
-        if (sharp[i]) edge_points.push_back(m->mesh.vertices_mm[i]);
-    }
-    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v), sb = near_points(b.mesh, edge_points, kEdgeReach * v);
-    std::copy(sa.begin(), sa.end(), skip.begin());
-    std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
-  }
-  removal::hinted_queries(d.size(), [&](std::size_t i, removal::DistanceHint& hint) {
-    const bool in_a = i < na;
-    if (i == na) hint = removal::DistanceHint();  // the other mesh's triangles from here
-    where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
-    d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
-  });
-  SurfaceDifference e;
-  e.done = true;
-  double squares = 0.0;
-  std::vector<double> counted;
-  counted.reserve(d.size());
-  for (std::size_t i = 0; i < d.size(); ++i) {
-    if (skip[i]) {
-      ++e.edge_vertices;
-      e.edge_max_mm = std::max(e.edge_max_mm, d[i]);
-      continue;
-    }
-    counted.push_back(d[i]);
-    squares += d[i] * d[i];
-    e.beyond_quarter += d[i] > 0.25 * v;
-    if (d[i] > e.max_mm) {
-      e.max_mm = d[i];
-      e.max_where_mm = where[i];
-    }
-  }
-  e.vertices = counted.size();
-  e.rms_mm = counted.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(counted.size()));
-  if (!counted.empty()) {
-    const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(counted.size() - 1));
-    std::nth_element(counted.begin(), counted.begin() + static_cast<std::ptrdiff_t>(k), counted.end());
-    e.p99_mm = counted[k];
-  }
-  return e;
 }
 
 namespace {
@@ -501,7 +377,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     const removal::SurfaceMesh other = second->surface();
     result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
     result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    static_cast<SurfaceDifference&>(result.engines) = surface_difference(machined, other, v, kSharpEdgeDeg);
+    static_cast<removal::SurfaceDifference&>(result.engines) = removal::surface_difference(machined, other, v, removal::kSharpEdgeDeg);
     stage_done("check");
   }
 
@@ -512,7 +388,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     std::unique_ptr<removal::Stock> nominal = make_stock(job, shape, v, merge_flat);
     nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const removal::SurfaceMesh nominal_surface = nominal->surface();
-    static_cast<SurfaceDifference&>(result.nominal) = surface_difference(machined, nominal_surface, v);
+    static_cast<removal::SurfaceDifference&>(result.nominal) = removal::surface_difference(machined, nominal_surface, v);
     // The NC line: the machined vertex nearest the largest difference.
     double best = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < machined.mesh.vertices_mm.size(); ++i) {
@@ -542,48 +418,17 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
       // Every dexel endpoint against the design, exactly: the summary's figures then do not
       // depend on meshing (the mesh's regions still give areas and outlines).
-      const std::vector<removal::DexelEndpoint> points = dexel->endpoints();
-      // Measured in Morton order of their lattice cells, so that consecutive points are
-      // neighbours (a ray's two ends can lie a stock's length apart): order[i] is the i-th.
-      std::vector<std::pair<std::uint64_t, std::size_t>> order(points.size());
-      {
-        auto spread = [](std::uint64_t x) {
-          x &= 0x1fffff;
-          x = (x | x << 32) & 0x1f00000000ffffULL;
-          x = (x | x << 16) & 0x1f0000ff0000ffULL;
-          x = (x | x << 8) & 0x100f00f00f00f00fULL;
-          x = (x | x << 4) & 0x10c30c30c30c30c3ULL;
-          x = (x | x << 2) & 0x1249249249249249ULL;
-          return x;
-        };
-        const Eigen::Vector3d origin = stock_box.min();
-        tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
-          const Eigen::Vector3d c = ((points[i].x_mm - origin) / v).array().max(0.0);
-          order[i] = {spread(static_cast<std::uint64_t>(c.x())) | spread(static_cast<std::uint64_t>(c.y())) << 1 |
-                          spread(static_cast<std::uint64_t>(c.z())) << 2,
-                      i};
-        });
-        // The pairs are distinct: one sorted order for any thread count.
-        tbb::parallel_sort(order.begin(), order.end());
-      }
-      std::vector<double> d(points.size());  // in the order of `points`
-      removal::hinted_queries(points.size(), [&](std::size_t i, removal::DistanceHint& hint) {
-        const std::size_t p = order[i].second;
-        d[p] = distance.signed_distance(points[p].x_mm, hint);
-      });
+      const removal::EndpointDeviation found = removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
       EndpointCheck& e = result.endpoints;
       e.done = true;
-      e.points = points.size();
-      std::size_t deepest = points.size();
-      for (const auto& [key, i] : order) {  // the first of equally deep points in Morton order
-        if (-d[i] > e.max_gouge_mm) { e.max_gouge_mm = -d[i]; deepest = i; }
-        e.max_excess_mm = std::max(e.max_excess_mm, d[i]);
-        e.gouge_points += -d[i] > job.gouge_tolerance_mm;
-        e.excess_points += d[i] > job.excess_tolerance_mm;
-      }
-      if (deepest < points.size()) {
-        e.deepest_mm = points[deepest].x_mm;
-        if (points[deepest].move >= 0) e.deepest_line = program.where(block_of(points[deepest].move).source);
+      e.points = found.points;
+      e.max_gouge_mm = found.max_gouge_mm;
+      e.max_excess_mm = found.max_excess_mm;
+      e.gouge_points = found.gouge_points;
+      e.excess_points = found.excess_points;
+      if (found.max_gouge_mm > 0.0) {
+        e.deepest_mm = found.deepest_mm;
+        if (found.deepest_move >= 0) e.deepest_line = program.where(block_of(found.deepest_move).source);
       }
       result.max_gouge_mm = e.max_gouge_mm;
       result.max_excess_mm = e.max_excess_mm;

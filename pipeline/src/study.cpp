@@ -184,7 +184,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   for (std::size_t i = 0; i < settings.size(); ++i) {
     StudyRow& row = s.rows[i];
     if (!surfaces[i]) continue;
-    const SurfaceDifference d = surface_difference(*surfaces[i], reference_surface, s.resolution_mm, kSharpEdgeDeg);
+    const removal::SurfaceDifference d = removal::surface_difference(*surfaces[i], reference_surface, s.resolution_mm, removal::kSharpEdgeDeg);
     row.max_mm = d.max_mm;
     row.rms_mm = d.rms_mm;
     row.p99_mm = d.p99_mm;

@@ -18,6 +18,7 @@
 #include <sys/mman.h>
 
 #include "vcut/removal/compare.h"
+#include "vcut/removal/morton.h"
 #include "initial_stock.h"
 #include "ray_sweep.h"
 #include "surface_projection.h"
@@ -989,8 +990,7 @@ void set_bits(std::uint64_t* words, int first, int last) {
 // and back, through tables (both sit in the mesher's innermost loops).
 constexpr std::array<int, kBrick> kMortonSpread = [] {
   std::array<int, kBrick> t{};
-  for (int i = 0; i < kBrick; ++i)
-    for (int b = 0; b < kBrickLevels; ++b) t[static_cast<std::size_t>(i)] |= ((i >> b) & 1) << (3 * b);
+  for (int i = 0; i < kBrick; ++i) t[static_cast<std::size_t>(i)] = static_cast<int>(morton_spread(static_cast<std::uint64_t>(i)));
   return t;
 }();
 int morton(int x, int y, int z) {

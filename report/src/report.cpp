@@ -165,7 +165,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   settings["gouge_tolerance_mm"] = job.gouge_tolerance_mm;
   settings["excess_tolerance_mm"] = job.excess_tolerance_mm;
   settings["collision_tolerance_mm"] = job.collision_tolerance_mm;
-  settings["chord_tolerance_mm"] = job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : r.resolution_mm / 20.0;
+  settings["chord_tolerance_mm"] = pipeline::chord_tolerance_mm(job, r.resolution_mm);
   settings["out"] = out_dir;
   j["settings"] = settings;
   ordered_json inputs = ordered_json::array();

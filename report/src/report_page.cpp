@@ -184,7 +184,7 @@ void write_report_page(const std::string& path, const std::string& template_path
   if (job.step_mm > 0.0) row("densify step", fixed(job.step_mm, 3, "mm"));
   if (job.angle_step_deg > 0.0) row("densify angle", fixed(job.angle_step_deg, 3, "deg"));
   if (job.densify_tolerance_mm > 0.0) row("densify tolerance", fixed(job.densify_tolerance_mm, 4, "mm"));
-  row("chord tolerance", fixed(job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : r.resolution_mm / 20.0, 4, "mm"));
+  row("chord tolerance", fixed(pipeline::chord_tolerance_mm(job, r.resolution_mm), 4, "mm"));
   row("servo", job.servo ? "on" : "off");
   row("machine errors", job.apply_errors ? "on" : "off");
   row("tolerances", "gouge " + fixed(job.gouge_tolerance_mm, 3, "mm") + ", excess " + fixed(job.excess_tolerance_mm, 3, "mm") +

@@ -99,6 +99,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolutio
 kinematics::FeedInterpretation axis_feed_of(const io::Job& job, const std::string& reader);
 const char* feed_interpretation_name(kinematics::FeedInterpretation f);
 
+// The arc chord tolerance: the job's, else resolution / 20 (mm).
+double chord_tolerance_mm(const io::Job& job, double resolution_mm);
 // The densification tolerance when the job gives no `densify:` (issue #20): min(v / 10,
 // gouge tolerance / 2), v the resolution (mm).
 double default_densify_tolerance_mm(const io::Job& job, double resolution_mm);

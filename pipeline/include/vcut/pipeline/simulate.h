@@ -17,6 +17,7 @@
 #include "vcut/removal/mesh.h"
 #include "vcut/removal/move.h"
 #include "vcut/removal/stock.h"
+#include "vcut/removal/surface_difference.h"
 
 namespace vcut::pipeline {
 
@@ -65,37 +66,13 @@ struct EndpointCheck {
   std::size_t gouge_points = 0, excess_points = 0;  // beyond the tolerances
 };
 
-// engine: both — the two engines' machined surfaces against each other.
-// The distance between two machined surfaces, every vertex of each against the other's
-// triangles.
-struct SurfaceDifference {
-  bool done = false;
-  double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
-  Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
-  std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
-  // With sharp edges left out: how many vertices were, and the largest distance among them.
-  std::size_t edge_vertices = 0;
-  double edge_max_mm = 0.0;
-};
-
-// Every vertex of each surface against the other's triangles (exact point-to-triangle);
-// beyond_quarter counts those farther than v/4 (v: the voxel size, mm). With
-// sharp_edge_deg > 0 the vertices within 2 v of a sharp edge of either surface (a vertex
-// where an incident face's normal strays more than that from their mean) are left out of
-// max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
-// within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
-// The angle (deg) past which the engine check and `vcut study` call an edge sharp.
-inline constexpr double kSharpEdgeDeg = 20.0;
-SurfaceDifference surface_difference(const removal::SurfaceMesh& a, const removal::SurfaceMesh& b, double v,
-                                     double sharp_edge_deg = 0.0);
-
-struct EngineCheck : SurfaceDifference {
+struct EngineCheck : removal::SurfaceDifference {
   double vdb_cut_s = 0.0, vdb_mesh_s = 0.0;
 };
 
 // With servo or machine errors the machine cuts with the actual poses; the nominal cut is
 // made too, and this is how far the real part departs from the programmed one.
-struct NominalCheck : SurfaceDifference {
+struct NominalCheck : removal::SurfaceDifference {
   std::string max_line;  // NC line of the actual surface's point farthest from the nominal one
 };
 

@@ -1,0 +1,37 @@
+// The distance between two machined surfaces: engine: both's self-check, the nominal
+// against the actual part, a densification study's settings against their reference.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+
+#include "vcut/removal/stock.h"
+
+namespace vcut::removal {
+
+// The distance between two machined surfaces, every vertex of each against the other's
+// triangles.
+struct SurfaceDifference {
+  bool done = false;
+  double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
+  Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
+  std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
+  // With sharp edges left out: how many vertices were, and the largest distance among them.
+  std::size_t edge_vertices = 0;
+  double edge_max_mm = 0.0;
+};
+
+// The angle (deg) past which the engine check and `vcut study` call an edge sharp.
+inline constexpr double kSharpEdgeDeg = 20.0;
+
+// Every vertex of each surface against the other's triangles (exact point-to-triangle);
+// beyond_quarter counts those farther than v/4 (v: the voxel size, mm). With
+// sharp_edge_deg > 0 the vertices within 2 v of a sharp edge of either surface (a vertex
+// where an incident face's normal strays more than that from their mean) are left out of
+// max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
+// within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
+SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v,
+                                     double sharp_edge_deg = 0.0);
+
+}  // namespace vcut::removal

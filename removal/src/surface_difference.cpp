@@ -1,0 +1,133 @@
+#include "vcut/removal/surface_difference.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include "vcut/removal/compare.h"
+
+namespace vcut::removal {
+
+namespace {
+
+// How far from a sharp edge (in voxels) two meshings of nearly one solid may differ by the
+// edge's chamfer.
+constexpr double kEdgeReach = 2.0;
+
+// Per vertex: does an incident face's normal stray more than `limit_deg` from the mean of
+// the incident faces' normals (area weighted)?
+std::vector<bool> sharp_vertices(const TriangleMesh& mesh, double limit_deg) {
+  const std::size_t n = mesh.vertices_mm.size();
+  std::vector<Eigen::Vector3d> mean(n, Eigen::Vector3d::Zero());
+  std::vector<Eigen::Vector3d> face(mesh.triangles.size());
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const auto& t = mesh.triangles[f];
+    const Eigen::Vector3d& p0 = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
+    face[f] = (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - p0).cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - p0);
+    for (int c = 0; c < 3; ++c) mean[static_cast<std::size_t>(t[c])] += face[f];
+  }
+  const double cos_limit = std::cos(limit_deg * M_PI / 180.0);
+  std::vector<bool> sharp(n, false);
+  for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
+    const double area2 = face[f].norm();
+    if (area2 <= 0.0) continue;
+    for (int c = 0; c < 3; ++c) {
+      const std::size_t i = static_cast<std::size_t>(mesh.triangles[f][c]);
+      const double m = mean[i].norm();
+      if (m <= 0.0 || face[f].dot(mean[i]) < cos_limit * area2 * m) sharp[i] = true;
+    }
+  }
+  return sharp;
+}
+
+// Vertices of `mesh` within `radius_mm` of any of `points` (a hash grid of that cell size).
+std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& points, double radius_mm) {
+  auto cell = [&](const Eigen::Vector3d& p) {
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)), static_cast<long>(std::floor(p.y() / radius_mm)),
+                               static_cast<long>(std::floor(p.z() / radius_mm))};
+  };
+  std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> grid;
+  for (const auto& p : points) grid[cell(p)].push_back(p);
+  std::vector<char> near(mesh.vertices_mm.size(), 0);  // char: written from several threads
+  tbb::parallel_for(std::size_t{0}, mesh.vertices_mm.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& v = mesh.vertices_mm[i];
+    const auto c = cell(v);
+    for (long dx = -1; dx <= 1 && !near[i]; ++dx)
+      for (long dy = -1; dy <= 1 && !near[i]; ++dy)
+        for (long dz = -1; dz <= 1 && !near[i]; ++dz) {
+          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
+          if (it == grid.end()) continue;
+          for (const auto& p : it->second)
+            if ((p - v).squaredNorm() <= radius_mm * radius_mm) {
+              near[i] = 1;
+              break;
+            }
+        }
+  });
+  return near;
+}
+
+}  // namespace
+
+SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v,
+                                     double sharp_edge_deg) {
+  const DesignDistance to_b(b.mesh), to_a(a.mesh);
+  const std::size_t na = a.mesh.vertices_mm.size();
+  std::vector<double> d(na + b.mesh.vertices_mm.size());
+  std::vector<Eigen::Vector3d> where(d.size());
+  std::vector<bool> skip(d.size(), false);
+  if (sharp_edge_deg > 0.0) {
+    // Near a sharp edge of either surface: the other meshing may cut that edge's corner
+    // anywhere within a cell or two of it.
+    std::vector<Eigen::Vector3d> edge_points;
+    for (const SurfaceMesh* m : {&a, &b}) {
+      const std::vector<bool> sharp = sharp_vertices(m->mesh, sharp_edge_deg);
+      for (std::size_t i = 0; i < sharp.size(); ++i)
+        if (sharp[i]) edge_points.push_back(m->mesh.vertices_mm[i]);
+    }
+    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v), sb = near_points(b.mesh, edge_points, kEdgeReach * v);
+    std::copy(sa.begin(), sa.end(), skip.begin());
+    std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
+  }
+  hinted_queries(d.size(), [&](std::size_t i, DistanceHint& hint) {
+    const bool in_a = i < na;
+    if (i == na) hint = DistanceHint();  // the other mesh's triangles from here
+    where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
+    d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
+  });
+  SurfaceDifference e;
+  e.done = true;
+  double squares = 0.0;
+  std::vector<double> counted;
+  counted.reserve(d.size());
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (skip[i]) {
+      ++e.edge_vertices;
+      e.edge_max_mm = std::max(e.edge_max_mm, d[i]);
+      continue;
+    }
+    counted.push_back(d[i]);
+    squares += d[i] * d[i];
+    e.beyond_quarter += d[i] > 0.25 * v;
+    if (d[i] > e.max_mm) {
+      e.max_mm = d[i];
+      e.max_where_mm = where[i];
+    }
+  }
+  e.vertices = counted.size();
+  e.rms_mm = counted.empty() ? 0.0 : std::sqrt(squares / static_cast<double>(counted.size()));
+  if (!counted.empty()) {
+    const std::size_t k = static_cast<std::size_t>(0.99 * static_cast<double>(counted.size() - 1));
+    std::nth_element(counted.begin(), counted.begin() + static_cast<std::ptrdiff_t>(k), counted.end());
+    e.p99_mm = counted[k];
+  }
+  return e;
+}
+
+}  // namespace vcut::removal
