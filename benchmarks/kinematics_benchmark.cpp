@@ -14,6 +14,7 @@
 #include "vcut/kinematics/compensation.h"
 #include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/forward_kinematics.h"
+#include "vcut/kinematics/pose_chain.h"
 #include "vcut/kinematics/inverse_kinematics.h"
 #include "vcut/kinematics/servo.h"
 
@@ -145,20 +146,14 @@ BENCHMARK(BM_PlanFeed)->Unit(benchmark::kMillisecond);
 // Densify `program` on `m` (lambda 0.1 mm, phi 0.5 deg, tool `tool` 50 mm long) and plan its
 // feed with the axis limits, per iteration; items are densified poses.
 void run_pose_engine(benchmark::State& state, const Program& program, const Machine& m, int tool) {
-  DensifySettings settings;
-  settings.step_mm = 0.1;
-  settings.angle_step_rad = 0.5 * M_PI / 180.0;
-  DensifyMachine dm;
-  dm.machine = &m;
-  dm.tool_length_mm = {{tool, 50.0}};
+  PoseChainSettings settings;
+  settings.densify.step_mm = 0.1;
+  settings.densify.angle_step_rad = 0.5 * M_PI / 180.0;
   size_t poses = 0;
   for (auto _ : state) {
-    const Densified d = densify(program, settings, dm);
-    std::vector<AxisValues> axes;
-    axes.reserve(d.samples.size());
-    for (const PoseSample& s : d.samples) axes.push_back(s.axes);
-    benchmark::DoNotOptimize(plan_feed(program, d.samples, &axes, &m, FeedSettings{}).cycle_time_s);
-    poses = d.samples.size();
+    const PoseChain chain = run_pose_chain(program, m, {{tool, 50.0}}, settings);
+    benchmark::DoNotOptimize(chain.feed.cycle_time_s);
+    poses = chain.densified.samples.size();
   }
   state.counters["poses"] = static_cast<double>(poses);
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(poses));

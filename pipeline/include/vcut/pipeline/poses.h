@@ -14,6 +14,7 @@
 #include "vcut/kinematics/densify.h"
 #include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/interpolator.h"
+#include "vcut/kinematics/pose_chain.h"
 #include "vcut/kinematics/program.h"
 
 namespace vcut::pipeline {
@@ -35,40 +36,12 @@ struct JobProgram {
 };
 JobProgram read_job_program(const io::Job& job);
 
-struct PoseRun {
+// The pose chain (kinematics::run_pose_chain) on a job's program, with what the job adds:
+// its tools, findings with their NC lines, and the summary.
+struct PoseRun : kinematics::PoseChain {
   kinematics::Program program;
   io::ToolLibrary tools;
   std::string dialect;  // of the program: "gcode" or "apt"
-  kinematics::Densified densified;
-  kinematics::FeedPlan feed;
-  std::vector<double> tool_length_mm;  // per sample (0 before the first tool)
-  // Servo and/or geometric errors: the actual pose per sample and the distance of its tip
-  // from the commanded path (um). Empty when neither is on.
-  std::vector<kinematics::ToolPose> actual;
-  std::vector<double> contour_error_um;
-  // What the machine cuts with servo or errors on: with servo the actual path at every
-  // interpolation period, thinned so that no dropped period's tool (tip, and the tool axis
-  // over the flute length) lies farther than actual_path_tolerance_mm from the chord kept;
-  // with errors only the actual pose of every sample. Each pose's block is the block of the
-  // commanded path nearest the actual tip: where the tool is, not what is being commanded
-  // (the lag still finishes a cut while the interpolator starts the retract). Empty when
-  // neither is on.
-  struct ActualPose {
-    kinematics::ToolPose pose;
-    int block = -1;
-  };
-  std::vector<ActualPose> actual_path;
-  double actual_path_tolerance_mm = 0.0;
-  std::size_t periods = 0;  // interpolation periods simulated (servo)
-  // Per program block (servo or errors): the contour error over its periods (servo; a period
-  // counts for the block nearest the actual tip) or its samples (errors only), feed moves and
-  // rapids alike; at_mm where the largest was.
-  struct BlockContour {
-    double max_um = 0.0, rms_um = 0.0;
-    Eigen::Vector3d at_mm = Eigen::Vector3d::Zero();
-    std::size_t count = 0;
-  };
-  std::vector<BlockContour> block_contour;
   std::vector<PoseEvent> events;
   // Findings a user must see (terminal, report.json warnings, the page's events): a block
   // whose densification leaves it farther from the machine's path than the gouge tolerance.
@@ -76,16 +49,13 @@ struct PoseRun {
   // Summary.
   double max_nonlinear_error_mm = 0.0;
   std::string max_nonlinear_line;
-  double max_contour_error_um = 0.0;
-  std::string max_contour_line;
-  double rms_contour_error_um = 0.0;
+  std::string max_contour_line;  // of PoseChain::max_contour_block
   int q_min = 0, q_max = 0;
   double q_mean = 0.0;
 };
 
-// Every interpolation period of a servo run, as the interpolator gives it (vcut poses
-// --every-period streams them to a file).
-using PeriodVisitor = std::function<void(const kinematics::PeriodSample&)>;
+// Every interpolation period of a servo run (vcut poses --every-period streams them to a file).
+using PeriodVisitor = kinematics::PeriodVisitor;
 
 PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period = nullptr);
 // With the program already read; `resolution_mm` sets the default densification (the arc
