@@ -91,7 +91,7 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
   }
   size_t shown = 0;
   for (const auto& e : run.events)
-    if (shown++ < 10) std::printf("%s at %s: %s\n", e.kind.c_str(), e.line.c_str(), e.detail.c_str());
+    if (shown++ < 10) std::printf("%s at %s: %s\n", vcut::pipeline::to_string(e.kind), e.line.c_str(), e.detail.c_str());
   if (run.events.size() > 10) std::printf("... %zu events in all\n", run.events.size());
   std::printf("poses: %s\nper block: %s\n", out.c_str(), blocks_out.c_str());
   return 0;
@@ -103,7 +103,7 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
     vcut::io::ensure_writable_folder(job.out_dir);
   }
   const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(job);
-  if (out.empty()) out = job.out_dir + (run.dialect == "apt" ? "/compensated.apt" : "/compensated.ngc");
+  if (out.empty()) out = job.out_dir + (run.reader == vcut::io::ProgramReader::Apt ? "/compensated.apt" : "/compensated.ngc");
   const vcut::pipeline::CompensatedProgram compensated = vcut::pipeline::compensate_program(job, run);
   vcut::io::write_text_atomically(out, compensated.text);
   const vcut::pipeline::CompensationReport& r = compensated.report;
@@ -159,7 +159,7 @@ int run_study(const std::string& job_file, vcut::pipeline::StudyOptions options,
   const vcut::pipeline::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
   if (!quiet) {
     std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n", s.job_name.c_str(),
-                s.varied.c_str(), s.engine.c_str(), s.resolution_mm, s.threads, s.accuracy_mm);
+                s.varied.c_str(), vcut::io::engine_name(s.engine), s.resolution_mm, s.threads, s.accuracy_mm);
     std::printf("  %-28s %10s %12s %12s %10s\n", "setting", "poses", "max mm", "RMS mm", "time s");
     for (const auto& r : s.rows) {
       if (!r.error.empty()) {

@@ -137,7 +137,7 @@ bool run_program_command(const ProgramCommand& c) {
   for (int m : c.tcp_off) options.gcode.tcp_m_codes[m] = false;
   io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
   // An axis program (rotary words without TCP) starts at the home's axis values, as a job's.
-  if (spec && loaded.dialect == "gcode" &&
+  if (spec && loaded.reader == io::ProgramReader::Gcode &&
       std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const Block& b) { return !b.tool_pose; })) {
     io::set_machine(options.gcode, *spec, tools, true);
     loaded = io::read_program(c.file, c.dialect, options);

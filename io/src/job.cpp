@@ -8,6 +8,15 @@
 #include "yaml_util.h"
 
 namespace vcut::io {
+
+const char* engine_name(Engine engine) {
+  switch (engine) {
+    case Engine::Dexel: return "dexel";
+    case Engine::Vdb: return "vdb";
+    case Engine::Both: return "both";
+  }
+  return "dexel";
+}
 namespace fs = std::filesystem;
 
 namespace {
@@ -230,9 +239,11 @@ Job read_job(const std::string& path) {
   if (const YAML::Node engine = root["engine"]) {
     yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
     if (engine["kind"]) {
-      job.engine = yaml.text(engine["kind"], "engine.kind");
-      if (job.engine != "dexel" && job.engine != "vdb" && job.engine != "both")
-        yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
+      const std::string kind = yaml.text(engine["kind"], "engine.kind");
+      if (kind == "dexel") job.engine = Engine::Dexel;
+      else if (kind == "vdb") job.engine = Engine::Vdb;
+      else if (kind == "both") job.engine = Engine::Both;
+      else yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
     }
     if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
     if (const YAML::Node threads = engine["threads"]) {

@@ -147,15 +147,16 @@ std::string detect_from_text(const std::string& head) {
   return semicolon && letter_space && !gcode_sign ? "sinumerik" : "gcode";
 }
 
-std::string reader_of(const std::string& dialect) {
-  if (dialect == "gcode" || dialect == "linuxcnc" || dialect == "fanuc") return "gcode";
-  if (dialect == "apt" || dialect == "sinumerik") return dialect;
+ProgramReader reader_of(const std::string& dialect) {
+  if (dialect == "gcode" || dialect == "linuxcnc" || dialect == "fanuc") return ProgramReader::Gcode;
+  if (dialect == "apt") return ProgramReader::Apt;
+  if (dialect == "sinumerik") return ProgramReader::Sinumerik;
   throw InputError("unknown program dialect '" + dialect +
                    "' (expected auto, gcode, linuxcnc, fanuc, apt or sinumerik)");
 }
 
-const char* describe_dialect(const std::string& reader) {
-  return reader == "apt" ? "APT CL data" : reader == "sinumerik" ? "SINUMERIK" : "G-code";
+const char* describe_dialect(ProgramReader reader) {
+  return reader == ProgramReader::Apt ? "APT CL data" : reader == ProgramReader::Sinumerik ? "SINUMERIK" : "G-code";
 }
 
 // A NUL byte does not occur in any NC program in text; it does in every binary file.
@@ -341,6 +342,15 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
   };
 }
 
+const char* reader_name(ProgramReader reader) {
+  switch (reader) {
+    case ProgramReader::Gcode: return "gcode";
+    case ProgramReader::Apt: return "apt";
+    case ProgramReader::Sinumerik: return "sinumerik";
+  }
+  return "gcode";
+}
+
 LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
                             const ProgramOptions& options) {
   if (dialect != "auto") reader_of(dialect);  // an unknown dialect fails before any file
@@ -360,16 +370,16 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
           path, 0, 0, std::string("cannot open program file for reading: ") + std::strerror(errno));
     }
     check_text(path, sniff(path));
-    const std::string reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
-    if (out.dialect.empty()) {
-      out.dialect = reader;
-    } else if (reader != out.dialect) {
+    const ProgramReader reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
+    if (&path == &paths.front()) {
+      out.reader = reader;
+    } else if (reader != out.reader) {
       throw InputError(path, 0, 0,
                        std::string("is ") + describe_dialect(reader) + " but " + paths.front() +
-                           " is " + describe_dialect(out.dialect) +
+                           " is " + describe_dialect(out.reader) +
                            " (expected one dialect for all program files)");
     }
-    if (reader == "sinumerik") {
+    if (reader == ProgramReader::Sinumerik) {
       // The SINUMERIK reader takes the G-code options that apply to it: the job's work offsets
       // (G54..G57), unsupported words as warnings and the arc tolerance.
       SinumerikOptions sinumerik;
@@ -377,7 +387,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       sinumerik.unsupported_as_warning = options.gcode.unsupported_as_warning;
       if (options.gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
       read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
-    } else if (reader == "gcode") {
+    } else if (reader == ProgramReader::Gcode) {
       GcodeOptions gcode = options.gcode;
       if (dialect == "linuxcnc") gcode.flavor = GcodeOptions::Flavor::LinuxCnc;
       if (dialect == "fanuc") gcode.flavor = GcodeOptions::Flavor::Fanuc;
@@ -389,7 +399,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       read_apt(in, path, options.apt, apt, apt_state);
     }
   }
-  if (out.dialect == "apt") {
+  if (out.reader == ProgramReader::Apt) {
     out.program = std::move(apt.program);
     out.cutters = std::move(apt.cutters);
   }

@@ -132,10 +132,10 @@ CheckResult run_check(const io::Job& job) {
   // The pose engine's findings, by their first block.
   for (const PoseEvent& e : run.events) {
     const int block = std::max(e.first_block, 0);
-    const Severity s = e.kind == "unreachable"                                ? Severity::Error
-                       : e.kind == "singular" || e.kind == "densify_error" ? Severity::Warning
-                                                                           : Severity::Note;
-    log.add_line(s, e.kind, e.line, e.detail, block);
+    const Severity s = e.kind == PoseEventKind::Unreachable                                              ? Severity::Error
+                       : e.kind == PoseEventKind::Singular || e.kind == PoseEventKind::DensifyError ? Severity::Warning
+                                                                                                      : Severity::Note;
+    log.add_line(s, to_string(e.kind), e.line, e.detail, block);
   }
 
   // The tools' cutting parts, shanks and holders against the stock's box, move by move.

@@ -34,7 +34,7 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
   std::string& text = out.text;
   const auto& samples = run.densified.samples;
   const auto& program = run.program;
-  const bool apt = run.dialect == "apt";
+  const bool apt = run.reader == io::ProgramReader::Apt;
   text = apt ? "$$ vcut compensate: " + job.name + " on " + machine.name() +
                                ", one GOTO per densified pose\nUNITS/MM\nMULTAX/ON\n"
                          : "(vcut compensate: " + job.name + " on " + machine.name() +

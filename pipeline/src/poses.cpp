@@ -17,13 +17,13 @@
 namespace vcut::pipeline {
 namespace fs = std::filesystem;
 
-kinematics::FeedInterpretation axis_feed_of(const io::Job& job, const std::string& reader) {
+kinematics::FeedInterpretation axis_feed_of(const io::Job& job, io::ProgramReader reader) {
   if (job.machine_spec.feed_interpretation) return *job.machine_spec.feed_interpretation;
   // By dialect: Fanuc and Haas combine mm and deg (Fanuc's feed for simultaneous linear and
   // rotary motion); LinuxCNC's interpreter and SINUMERIK without TRAORI put F on the linear
   // axes when they move; CL data are tool poses (F on the tip).
   if (job.dialect == "fanuc") return kinematics::FeedInterpretation::Combined;
-  if (reader == "apt") return kinematics::FeedInterpretation::Tip;
+  if (reader == io::ProgramReader::Apt) return kinematics::FeedInterpretation::Tip;
   return kinematics::FeedInterpretation::LinuxCnc;
 }
 
@@ -116,7 +116,7 @@ JobProgram read_job_program(const io::Job& job) {
     };
   }
   io::LoadedProgram loaded = io::read_programs(job.program_files, job.dialect, reading);
-  if (loaded.dialect == "gcode" &&
+  if (loaded.reader == io::ProgramReader::Gcode &&
       std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const kinematics::Block& b) { return !b.tool_pose; })) {
     machine_start(true);
     loaded = io::read_programs(job.program_files, job.dialect, reading);
@@ -126,8 +126,18 @@ JobProgram read_job_program(const io::Job& job) {
   for (auto& f : out.program.files) f = io::display_name(f, job.file);
   out.tools = job.tools;
   out.tools.insert(loaded.cutters.begin(), loaded.cutters.end());  // insert keeps existing numbers
-  out.dialect = loaded.dialect;
+  out.reader = loaded.reader;
   return out;
+}
+
+const char* to_string(PoseEventKind kind) {
+  switch (kind) {
+    case PoseEventKind::Unreachable: return "unreachable";
+    case PoseEventKind::Singular: return "singular";
+    case PoseEventKind::AxisLimitedSpeed: return "axis_limited_speed";
+    case PoseEventKind::DensifyError: return "densify_error";
+  }
+  return "unreachable";
 }
 
 double chord_tolerance_mm(const io::Job& job, double resolution_mm) {
@@ -152,7 +162,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
-  run.dialect = input.dialect;
+  run.reader = input.reader;
   const kinematics::Program& program = run.program;
   const kinematics::Machine machine(job.machine_spec);
 
@@ -184,7 +194,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   kinematics::PoseChainSettings chain;
   chain.densify = settings;
   chain.feed = job.feed;
-  chain.feed.axis_feed = axis_feed_of(job, run.dialect);
+  chain.feed.axis_feed = axis_feed_of(job, run.reader);
   chain.servo = job.servo;
   chain.geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
   chain.actual_path_tolerance_mm = default_densify_tolerance_mm(job, resolution_mm);
@@ -222,7 +232,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
       run.max_nonlinear_line = line;
     }
     const int block = static_cast<int>(i);
-    if (!r.unreachable.empty()) run.events.push_back({"unreachable", line, r.unreachable, block, block});
+    if (!r.unreachable.empty()) run.events.push_back({PoseEventKind::Unreachable, line, r.unreachable, block, block});
     // The user's step or angle leaves the moves off the machine's path by more than a gouge.
     if (job.densify_given && r.chord_error_mm > job.gouge_tolerance_mm) {
       char detail[240];
@@ -230,7 +240,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
                     "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
                     "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
                     r.chord_error_mm, job.gouge_tolerance_mm);
-      run.events.push_back({"densify_error", line, detail, block, block});
+      run.events.push_back({PoseEventKind::DensifyError, line, detail, block, block});
       // The terminal gets the first few; every block stays in the events (report, page).
       if (++densify_warnings <= kDensifyWarnings) run.warnings.push_back(line + ": " + detail);
     }
@@ -256,7 +266,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     std::snprintf(detail, sizeof detail,
                   "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "
                   "(largest tool-axis miss %.3g urad)", j - i, miss * 1e6);
-    run.events.push_back({"singular", where, detail, static_cast<int>(i), static_cast<int>(j - 1)});
+    run.events.push_back({PoseEventKind::Singular, where, detail, static_cast<int>(i), static_cast<int>(j - 1)});
     i = j;
   }
   run.q_mean = blocks.empty() ? 0.0 : q_sum / static_cast<double>(blocks.size());
@@ -265,7 +275,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     const int block = samples[static_cast<size_t>(s)].block;
     if (block < 0 || block == last_block) continue;
     last_block = block;
-    run.events.push_back({"axis_limited_speed", program.where(program.blocks[static_cast<size_t>(block)].source),
+    run.events.push_back({PoseEventKind::AxisLimitedSpeed, program.where(program.blocks[static_cast<size_t>(block)].source),
                           "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   return run;

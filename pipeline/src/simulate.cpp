@@ -135,7 +135,7 @@ std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run) {
   std::vector<std::string> warnings = job.warnings;
   warnings.insert(warnings.end(), run.program.warnings.begin(), run.program.warnings.end());
   for (const PoseEvent& e : run.events)
-    if (e.kind == "unreachable") warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
+    if (e.kind == PoseEventKind::Unreachable) warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
   return warnings;
 }
@@ -257,7 +257,7 @@ double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::
     msg << "): check the work offsets and the stock";
     throw InputError(job.file, 0, 0, msg.str());
   }
-  const bool use_dexel = job.engine != "vdb", use_vdb = job.engine != "dexel";
+  const bool use_dexel = job.engine != io::Engine::Vdb, use_vdb = job.engine != io::Engine::Dexel;
   std::size_t estimate_bytes = 0;
   if (use_dexel) estimate_bytes += removal::estimate_dexel_memory_bytes(shape, resolution_mm);
   if (use_vdb) estimate_bytes += removal::estimate_vdb_memory_bytes(shape, resolution_mm);
@@ -277,7 +277,7 @@ double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::
 
 std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::StockShape& shape, double resolution_mm,
                                            bool merge_flat) {
-  if (job.engine == "vdb") return std::make_unique<removal::VdbStock>(shape, resolution_mm);
+  if (job.engine == io::Engine::Vdb) return std::make_unique<removal::VdbStock>(shape, resolution_mm);
   auto dexel = std::make_unique<removal::DexelStock>(shape, resolution_mm);
   dexel->set_flat_merging(merge_flat);
   return dexel;
@@ -339,7 +339,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // machine-error run compares the actual with the nominal part (a few um): no flat merging.
   const bool merge_flat = !cut_actual;
   std::unique_ptr<removal::Stock> primary = make_stock(job, shape, v, merge_flat), second;
-  if (job.engine == "both") second = std::make_unique<removal::VdbStock>(shape, v);
+  if (job.engine == io::Engine::Both) second = std::make_unique<removal::VdbStock>(shape, v);
   removal::Stock& stock = *primary;
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");

@@ -70,7 +70,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   const auto t_start = Clock::now();
   StudyResult s;
   s.job_name = job.name;
-  s.engine = job.engine == "both" ? "dexel" : job.engine;
+  s.engine = job.engine == io::Engine::Both ? io::Engine::Dexel : job.engine;
 
   // The settings and the reference.
   const auto& steps = options.steps_mm;
@@ -128,7 +128,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   s.threads = threads > 0 ? threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(s.threads));
   io::Job base = job;
-  if (base.engine == "both") base.engine = "dexel";  // the cross-check has nothing to add here
+  if (base.engine == io::Engine::Both) base.engine = io::Engine::Dexel;  // the cross-check has nothing to add here
   const std::size_t runs = settings.size() + 1;
   auto progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
     if (options.progress) options.progress(stage, done, total);

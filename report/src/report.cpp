@@ -129,7 +129,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
     e["cut_with"] = p.actual.empty() ? "nominal poses" : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
                                                          : job.servo ? "actual poses (servo lag)" : "actual poses (machine errors)";
-    e["feed_interpretation"] = feed_interpretation_name(axis_feed_of(job, p.dialect));
+    e["feed_interpretation"] = feed_interpretation_name(axis_feed_of(job, p.reader));
     if (job.servo) {
       // The servo runs every interpolation period; the cut follows its path thinned to a bound.
       e["servo"] = {{"period_s", job.servo->period_s},
@@ -143,7 +143,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
       e["rms_contour_error_um"] = std::round(p.rms_contour_error_um * 1e3) / 1e3;
     }
     e["events"] = ordered_json::array();
-    for (const PoseEvent& ev : p.events) e["events"].push_back({{"kind", ev.kind}, {"line", ev.line}, {"detail", ev.detail}});
+    for (const PoseEvent& ev : p.events) e["events"].push_back({{"kind", pipeline::to_string(ev.kind)}, {"line", ev.line}, {"detail", ev.detail}});
     if (r.nominal.done) {
       e["nominal_vs_actual"] = {{"compared", "the part cut with the actual poses against the part cut with the nominal ones"},
                                 {"max_mm", um(r.nominal.max_mm)},
@@ -159,7 +159,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   ordered_json settings;
   settings["job_file"] = job.file;
   settings["machine"] = job.machine;
-  settings["engine"] = job.engine;
+  settings["engine"] = io::engine_name(job.engine);
   settings["resolution_mm"] = r.resolution_mm;
   settings["threads"] = r.threads;
   settings["gouge_tolerance_mm"] = job.gouge_tolerance_mm;

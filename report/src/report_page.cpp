@@ -178,9 +178,9 @@ void write_report_page(const std::string& path, const std::string& template_path
   auto row = [&](const std::string& k, const std::string& v) { settings.push_back({k, v}); };
   std::string files;
   for (const auto& f : program.files) files += (files.empty() ? "" : ", ") + f;
-  row("program", files + " (" + run.dialect + ")");
+  row("program", files + " (" + io::reader_name(run.reader) + ")");
   row("machine", job.machine);
-  row("engine", job.engine + ", " + fixed(r.resolution_mm, 3, "mm") + ", " + std::to_string(r.threads) + " threads");
+  row("engine", std::string(io::engine_name(job.engine)) + ", " + fixed(r.resolution_mm, 3, "mm") + ", " + std::to_string(r.threads) + " threads");
   if (job.step_mm > 0.0) row("densify step", fixed(job.step_mm, 3, "mm"));
   if (job.angle_step_deg > 0.0) row("densify angle", fixed(job.angle_step_deg, 3, "deg"));
   if (job.densify_tolerance_mm > 0.0) row("densify tolerance", fixed(job.densify_tolerance_mm, 4, "mm"));
@@ -196,7 +196,7 @@ void write_report_page(const std::string& path, const std::string& template_path
                                           (tool.holder_diameter_mm > 0.0 ? ", holder D" + fixed(tool.holder_diameter_mm, 1, "") : ""));
   j["job"] = {{"name", job.name},
               {"file", job.file},
-              {"engine", job.engine},
+              {"engine", io::engine_name(job.engine)},
               {"resolution_mm", r.resolution_mm},
               {"threads", r.threads},
               {"machine", job.machine},
@@ -266,7 +266,7 @@ void write_report_page(const std::string& path, const std::string& template_path
                       sources.add(run.program.span_of_blocks(c.first_block, c.last_block))});
   }
   for (const PoseEvent& e : run.events)
-    events.push_back({{{"kind", e.kind}, {"line", e.line}, {"detail", e.detail}, {"depth_mm", nullptr}, {"where", nullptr}},
+    events.push_back({{{"kind", pipeline::to_string(e.kind)}, {"line", e.line}, {"detail", e.detail}, {"depth_mm", nullptr}, {"where", nullptr}},
                       e.first_block < 0 ? std::vector<int>{} : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
 
   // Feed and contour error over time, at most 4,000 points (each the largest contour error

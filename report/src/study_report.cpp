@@ -81,7 +81,7 @@ Plot study_plot(const StudyResult& s) {
   plot.panels = {density, time};
   std::ostringstream foot;
   foot << "reference: " << s.reference.label << " (" << s.reference.poses << " poses, " << std::fixed << std::setprecision(2)
-       << s.reference.wall_time_s << " s); " << s.engine << " engine at " << number(s.resolution_mm) << " mm, " << s.threads
+       << s.reference.wall_time_s << " s); " << io::engine_name(s.engine) << " engine at " << number(s.resolution_mm) << " mm, " << s.threads
        << " threads";
   plot.footnote = foot.str();
   return plot;
@@ -140,7 +140,7 @@ void write_study(const std::string& folder, pipeline::StudyResult& s, const io::
   j["job"] = s.job_name;
   j["job_file"] = job.file;
   j["machine"] = job.machine;
-  j["engine"] = s.engine;
+  j["engine"] = io::engine_name(s.engine);
   j["resolution_mm"] = s.resolution_mm;
   j["threads"] = s.threads;
   j["varied"] = s.varied;

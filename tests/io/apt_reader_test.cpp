@@ -650,13 +650,13 @@ TEST_F(ProgramFiles, DetectDialectByExtensionThenContent) {
 TEST_F(ProgramFiles, ReadProgramDispatches) {
   const std::string apt = write("p.cls", "CUTTER/6\nFROM/0,0,0\nFEDRAT/10\nGOTO/1,0,0\n");
   const LoadedProgram a = read_program(apt, "auto");
-  EXPECT_EQ(a.dialect, "apt");
+  EXPECT_EQ(a.reader, ProgramReader::Apt);
   ASSERT_EQ(a.program.blocks.size(), 1u);
   ASSERT_EQ(a.cutters.size(), 1u);
   EXPECT_EQ(a.cutters.at(1).diameter_mm, 6.0);
   const std::string gcode = write("p.ngc", "G0 X0 Y0 Z0\nG1 X1 F10\n");
   const LoadedProgram g = read_program(gcode, "linuxcnc");
-  EXPECT_EQ(g.dialect, "gcode");
+  EXPECT_EQ(g.reader, ProgramReader::Gcode);
   ASSERT_EQ(g.program.blocks.size(), 1u);
   EXPECT_TRUE(g.cutters.empty());
   // An explicit dialect wins over the extension.

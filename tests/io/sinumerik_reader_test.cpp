@@ -631,7 +631,7 @@ TEST(SinumerikReader, ReadProgramDispatch) {
   ProgramOptions options;
   options.gcode.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, 5);
   const LoadedProgram loaded = read_program(path, "auto", options);
-  EXPECT_EQ(loaded.dialect, "sinumerik");
+  EXPECT_EQ(loaded.reader, ProgramReader::Sinumerik);
   ASSERT_EQ(loaded.program.blocks.size(), 1u);
   expect_vec(loaded.program.blocks[0].end_mm, {1, 0, 5});
   EXPECT_EQ(loaded.program.where(loaded.program.blocks[0].source), path + ":3");

@@ -18,6 +18,10 @@
 
 namespace vcut::io {
 
+// The material-removal engine: tri-dexel, OpenVDB, or both (the two cross-checked).
+enum class Engine { Dexel, Vdb, Both };
+const char* engine_name(Engine engine);  // "dexel", "vdb", "both": as the job file writes it
+
 struct DesignSpec {
   std::string file;
   Eigen::Vector3d translate_mm = Eigen::Vector3d::Zero();
@@ -57,7 +61,7 @@ struct Job {
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
-  std::string engine = "dexel";  // dexel | vdb | both (both: the two engines cross-checked)
+  Engine engine = Engine::Dexel;
   double resolution_mm = 0.1;
   int threads = 0;  // 0 = all cores
   std::string out_dir;

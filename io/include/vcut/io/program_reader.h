@@ -37,10 +37,14 @@ struct ProgramOptions {
   AptOptions apt;
 };
 
+// The reader a program file needs.
+enum class ProgramReader { Gcode, Apt, Sinumerik };
+const char* reader_name(ProgramReader reader);  // "gcode", "apt", "sinumerik"
+
 struct LoadedProgram {
   kinematics::Program program;
   std::map<int, removal::Cutter> cutters;  // cutters the program itself defines (APT CUTTER/)
-  std::string dialect;                     // the reader used: "gcode", "apt" or "sinumerik"
+  ProgramReader reader = ProgramReader::Gcode;
 };
 
 // `dialect`: auto (detect_dialect per file), gcode, linuxcnc, fanuc (the G-code reader), apt,

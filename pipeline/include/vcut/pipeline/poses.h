@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "vcut/io/job.h"
+#include "vcut/io/program_reader.h"
 #include "vcut/kinematics/densify.h"
 #include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/interpolator.h"
@@ -20,8 +21,12 @@
 namespace vcut::pipeline {
 
 // A block-level finding with its NC line: an axis limit, a singular pose, a limited speed.
+enum class PoseEventKind { Unreachable, Singular, AxisLimitedSpeed, DensifyError };
+// "unreachable", "singular", "axis_limited_speed", "densify_error": as the reports write it.
+const char* to_string(PoseEventKind kind);
+
 struct PoseEvent {
-  std::string kind;  // "unreachable", "singular", "axis_limited_speed", "densify_error"
+  PoseEventKind kind = PoseEventKind::Unreachable;
   std::string line;  // "file:line", "file:first-last" or "a:12 to b:3"
   std::string detail;
   int first_block = -1, last_block = -1;  // the blocks it names (Program::span_of_blocks)
@@ -32,7 +37,7 @@ struct PoseEvent {
 struct JobProgram {
   kinematics::Program program;
   io::ToolLibrary tools;
-  std::string dialect;  // the reader used: "gcode" or "apt"
+  io::ProgramReader reader = io::ProgramReader::Gcode;  // the reader used
 };
 JobProgram read_job_program(const io::Job& job);
 
@@ -41,7 +46,7 @@ JobProgram read_job_program(const io::Job& job);
 struct PoseRun : kinematics::PoseChain {
   kinematics::Program program;
   io::ToolLibrary tools;
-  std::string dialect;  // of the program: "gcode" or "apt"
+  io::ProgramReader reader = io::ProgramReader::Gcode;  // of the program
   std::vector<PoseEvent> events;
   // Findings a user must see (terminal, report.json warnings, the page's events): a block
   // whose densification leaves it farther from the machine's path than the gouge tolerance.
@@ -65,8 +70,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolutio
 
 // How F reads in axis blocks: the machine file's feed_interpretation, else by the job's
 // dialect (fanuc: combined; apt: tip; G-code and SINUMERIK: linuxcnc). `reader` is the
-// reader used (JobProgram::dialect).
-kinematics::FeedInterpretation axis_feed_of(const io::Job& job, const std::string& reader);
+// reader used (JobProgram::reader).
+kinematics::FeedInterpretation axis_feed_of(const io::Job& job, io::ProgramReader reader);
 const char* feed_interpretation_name(kinematics::FeedInterpretation f);
 
 // The arc chord tolerance: the job's, else resolution / 20 (mm).

@@ -63,7 +63,7 @@ struct StudyResult {
   std::string varied;  // "step", "angle", "step+angle" or "tolerance"
   double resolution_mm = 0.0, accuracy_mm = 0.0;
   int threads = 0;
-  std::string engine;
+  io::Engine engine = io::Engine::Dexel;
   std::vector<StudyRow> rows;  // in the order given
   StudyRow reference;
   int recommended = -1;  // index in rows of the coarsest (fewest poses) setting that meets the accuracy
