@@ -63,8 +63,14 @@ void cut_moves(benchmark::State& state) {
 }
 void BM_CutMovesVdb(benchmark::State& state) { cut_moves<vcut::removal::VdbStock>(state); }
 void BM_CutMovesDexel(benchmark::State& state) { cut_moves<vcut::removal::DexelStock>(state); }
-BENCHMARK(BM_CutMovesVdb)->ArgsProduct({{0, 1, 2}, {100, 50}, {0}})->ArgNames({"shape", "voxel_um", "ramp"})->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_CutMovesDexel)->ArgsProduct({{0, 1, 2, 3}, {100, 50}, {0, 1}})->ArgNames({"shape", "spacing_um", "ramp"})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CutMovesVdb)
+    ->ArgsProduct({{0, 1, 2}, {100, 50}, {0}})
+    ->ArgNames({"shape", "voxel_um", "ramp"})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_CutMovesDexel)
+    ->ArgsProduct({{0, 1, 2, 3}, {100, 50}, {0, 1}})
+    ->ArgNames({"shape", "spacing_um", "ramp"})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 

@@ -34,8 +34,8 @@ const std::string& gcode_program() {
       const double x = 100.0 * std::sin(t), y = 50.0 * std::cos(t), z = 2.0 * std::sin(13 * t);
       if (i % 1000 == 500) {
         // A half circle of radius 5 from the last point, then back onto the surface.
-        std::snprintf(buf, sizeof buf, "G3 X%.4f Y%.4f I-5 J0 (arc)\nG1 X%.4f Y%.4f Z%.4f\n", last_x - 10.0, last_y,
-                      x, y, z);
+        std::snprintf(buf, sizeof buf, "G3 X%.4f Y%.4f I-5 J0 (arc)\nG1 X%.4f Y%.4f Z%.4f\n", last_x - 10.0, last_y, x,
+                      y, z);
         lines += 2;
       } else if (i % 997 == 0) {
         std::snprintf(buf, sizeof buf, "(next pass)\nG1 X%.4f Y%.4f Z%.4f F%d\n", x, y, z, 1800 + i % 7);
@@ -100,8 +100,7 @@ const std::string& program() {
       if (i % 1000 == 500) {
         // A half circle of radius 5 about +Z, from the current point.
         const double x = 100.0 * std::sin(t), y = 50.0 * std::cos(t);
-        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,0.000000,0.000000,1.000000\n", x, y,
-                      -1.0);
+        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,0.000000,0.000000,1.000000\n", x, y, -1.0);
         s += buf;
         std::snprintf(buf, sizeof buf,
                       "CIRCLE/%.6f,%.6f,%.6f,0.000000,0.000000,1.000000,5.000000,"
@@ -121,12 +120,12 @@ const std::string& program() {
       const double a = 0.3 * std::sin(7 * t), c = 2.0 * t;
       const double x = 100.0 * std::sin(t), y = 50.0 * std::cos(t), z = 2.0 * std::sin(13 * t);
       if (i % 5000 == 7) {
-        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,$\n  %.6f,%.6f,%.6f\n", x, y, z,
-                      std::sin(a) * std::cos(c), std::sin(a) * std::sin(c), std::cos(a));
+        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,$\n  %.6f,%.6f,%.6f\n", x, y, z, std::sin(a) * std::cos(c),
+                      std::sin(a) * std::sin(c), std::cos(a));
         lines += 2;
       } else {
-        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", x, y, z,
-                      std::sin(a) * std::cos(c), std::sin(a) * std::sin(c), std::cos(a));
+        std::snprintf(buf, sizeof buf, "GOTO/%.6f,%.6f,%.6f,%.6f,%.6f,%.6f\n", x, y, z, std::sin(a) * std::cos(c),
+                      std::sin(a) * std::sin(c), std::cos(a));
         lines += 1;
       }
       s += buf;
@@ -164,8 +163,7 @@ void BM_ReadApt(benchmark::State& state) {
 BENCHMARK(BM_ReadApt)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 
 void BM_ReadAptFile(benchmark::State& state) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "vcut_bench_1e6_lines.apt").string();
+  const std::string path = (std::filesystem::temp_directory_path() / "vcut_bench_1e6_lines.apt").string();
   { std::ofstream(path, std::ios::binary) << program(); }
   for (auto _ : state) {
     const vcut::io::AptProgram out = vcut::io::read_apt(path);
@@ -229,19 +227,18 @@ BENCHMARK(BM_ReadSinumerik)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 void BM_ReadGcodeLoops(benchmark::State& state) {
   const std::string path = (std::filesystem::temp_directory_path() / "vcut_bench_loops.ngc").string();
   {
-    std::ofstream(path, std::ios::binary)
-        << "o<step> sub\n"
-           "  #<x> = [#1 * 0.01]\n"
-           "  G1 X#<x> Y[10 * SIN[#1]] Z[-1 - 0.5 * COS[#1 * 3]]\n"
-           "o<step> endsub\n"
-           "G0 X0 Y0 Z5\nF1000\n#1 = 0\n"
-           "o100 while [#1 LT 100000]\n"
-           "  o<step> call [#1]\n"
-           "  #1 = [#1 + 1]\n"
-           "  o101 if [[#1 MOD 1000] EQ 0]\n"
-           "    G0 Z5\n"
-           "  o101 endif\n"
-           "o100 endwhile\nM2\n";
+    std::ofstream(path, std::ios::binary) << "o<step> sub\n"
+                                             "  #<x> = [#1 * 0.01]\n"
+                                             "  G1 X#<x> Y[10 * SIN[#1]] Z[-1 - 0.5 * COS[#1 * 3]]\n"
+                                             "o<step> endsub\n"
+                                             "G0 X0 Y0 Z5\nF1000\n#1 = 0\n"
+                                             "o100 while [#1 LT 100000]\n"
+                                             "  o<step> call [#1]\n"
+                                             "  #1 = [#1 + 1]\n"
+                                             "  o101 if [[#1 MOD 1000] EQ 0]\n"
+                                             "    G0 Z5\n"
+                                             "  o101 endif\n"
+                                             "o100 endwhile\nM2\n";
   }
   for (auto _ : state) {
     const vcut::kinematics::Program out = vcut::io::read_gcode(path, {});
@@ -260,19 +257,18 @@ BENCHMARK(BM_ReadGcodeLoops)->Unit(benchmark::kMillisecond)->MinTime(2.0);
 void BM_ReadFanucMacroLoops(benchmark::State& state) {
   const std::string path = (std::filesystem::temp_directory_path() / "vcut_bench_macro.nc").string();
   {
-    std::ofstream(path, std::ios::binary)
-        << "O1000\nG0 X0 Y0 Z5\nF1000\n#1=0\n#100=0\n"
-           "WHILE [#1 LT 100000] DO1\n"
-           "G65 P9001 A#1 B3\n"
-           "#1=#1+1\n"
-           "IF [[#1 MOD 1000] NE 0] GOTO 10\n"
-           "N10 #100=#100+1\n"
-           "END1\nM30\n"
-           "O9001\n"
-           "#24=#1*0.01\n"
-           "G1 X#24 Y[10*SIN[#1]] Z[-1-0.5*COS[#1*#2]]\n"
-           "#101=#101+1\n"
-           "M99\n";
+    std::ofstream(path, std::ios::binary) << "O1000\nG0 X0 Y0 Z5\nF1000\n#1=0\n#100=0\n"
+                                             "WHILE [#1 LT 100000] DO1\n"
+                                             "G65 P9001 A#1 B3\n"
+                                             "#1=#1+1\n"
+                                             "IF [[#1 MOD 1000] NE 0] GOTO 10\n"
+                                             "N10 #100=#100+1\n"
+                                             "END1\nM30\n"
+                                             "O9001\n"
+                                             "#24=#1*0.01\n"
+                                             "G1 X#24 Y[10*SIN[#1]] Z[-1-0.5*COS[#1*#2]]\n"
+                                             "#101=#101+1\n"
+                                             "M99\n";
   }
   vcut::io::GcodeOptions options;
   options.flavor = vcut::io::GcodeOptions::Flavor::Fanuc;

@@ -36,7 +36,8 @@ Machine make(bool head_head, bool errors) {
   MachineSpec s;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), z = Eigen::Vector3d::UnitZ();
   s.topology = head_head ? "WFXYZCAT" : "WCAFXYZT";
-  s.axes = {axis('X', AxisKind::Linear, x, Eigen::Vector3d::Zero(), -500, 500), axis('Y', AxisKind::Linear, Eigen::Vector3d::UnitY(), Eigen::Vector3d::Zero(), -500, 500),
+  s.axes = {axis('X', AxisKind::Linear, x, Eigen::Vector3d::Zero(), -500, 500),
+            axis('Y', AxisKind::Linear, Eigen::Vector3d::UnitY(), Eigen::Vector3d::Zero(), -500, 500),
             axis('Z', AxisKind::Linear, z, Eigen::Vector3d::Zero(), -500, 500),
             axis('A', AxisKind::Rotary, x, {0, head_head ? 0.0 : 20.0, head_head ? 180.0 : 10.0}, -2.0, 2.0),
             axis('C', AxisKind::Rotary, z, Eigen::Vector3d::Zero(), -2 * M_PI, 2 * M_PI)};
@@ -222,7 +223,8 @@ void BM_ServoLoop(benchmark::State& state) {
   std::vector<AxisValues> commands(1000, AxisValues::Zero(5));
   for (int k = 0; k < 1000; ++k) {
     const double t = k * 1e-3;
-    commands[static_cast<size_t>(k)] << 100.0 * std::sin(t), 80.0 * std::cos(t), 5.0 * t, 0.3 * std::sin(2.0 * t), 0.5 * t;
+    commands[static_cast<size_t>(k)] << 100.0 * std::sin(t), 80.0 * std::cos(t), 5.0 * t, 0.3 * std::sin(2.0 * t),
+        0.5 * t;
   }
   ServoLoop loop(settings, commands.front());
   for (auto _ : state) {

@@ -62,7 +62,8 @@ AxisValues parse_axes(const Machine& m, const std::string& text, const std::stri
     const int i = (eq == 1) ? m.axis_index(item[0]) : -1;
     if (i < 0)
       throw InputError(option + ": expected LETTER=value for the axes " + m.axis_letters() + ", not '" + item + "'");
-    if (seen.find(item[0]) != std::string::npos) throw InputError(option + ": axis " + item.substr(0, 1) + " given twice");
+    if (seen.find(item[0]) != std::string::npos)
+      throw InputError(option + ": axis " + item.substr(0, 1) + " given twice");
     seen += item[0];
     char* end = nullptr;
     const double v = std::strtod(item.c_str() + 2, &end);
@@ -80,7 +81,8 @@ Eigen::Vector3d parse_vec(const std::string& text, const std::string& option) {
   while (std::getline(in, item, ',')) {
     char* end = nullptr;
     const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(x)) throw InputError(option + ": expected x,y,z numbers, not '" + text + "'");
+    if (item.empty() || *end != '\0' || !std::isfinite(x))
+      throw InputError(option + ": expected x,y,z numbers, not '" + text + "'");
     v.push_back(x);
   }
   if (v.size() != 3) throw InputError(option + ": expected three numbers x,y,z, not '" + text + "'");
@@ -116,8 +118,9 @@ std::string axis_words(const Machine& m, int i) {
     if (a.max_jerk_per_s3 > 0) s += ", " + num(a.max_jerk_per_s3) + " mm/s^3";
   } else {
     s += "rotary about " + vec(a.direction) + " through " + vec(a.center_mm);
-    s += a.limits ? ", limits " + num(a.limits->first * kDegPerRad) + " .. " + num(a.limits->second * kDegPerRad) + " deg"
-                  : ", continuous";
+    s += a.limits
+             ? ", limits " + num(a.limits->first * kDegPerRad) + " .. " + num(a.limits->second * kDegPerRad) + " deg"
+             : ", continuous";
     if (a.max_velocity_per_s > 0) s += ", max " + num(a.max_velocity_per_s * kDegPerRad * 60) + " deg/min";
     if (a.max_acceleration_per_s2 > 0) s += ", " + num(a.max_acceleration_per_s2 * kDegPerRad) + " deg/s^2";
     if (a.max_jerk_per_s3 > 0) s += ", " + num(a.max_jerk_per_s3 * kDegPerRad) + " deg/s^3";
@@ -133,8 +136,11 @@ std::string error_words(const Machine& m, int i) {
   auto term = [&](const std::string& name, const ErrorTable& e, double scale, const char* unit) {
     if (e.empty()) return;
     s += "    " + name + ": ";
-    if (e.positions.empty()) s += num(e.values.front() * scale) + " " + unit;
-    else s += "table of " + std::to_string(e.values.size()) + " rows, " + num(e.values.front() * scale) + " .. " + num(e.values.back() * scale) + " " + unit;
+    if (e.positions.empty())
+      s += num(e.values.front() * scale) + " " + unit;
+    else
+      s += "table of " + std::to_string(e.values.size()) + " rows, " + num(e.values.front() * scale) + " .. " +
+           num(e.values.back() * scale) + " " + unit;
     s += "\n";
   };
   for (size_t k = 0; k < 3; ++k) {
@@ -142,8 +148,10 @@ std::string error_words(const Machine& m, int i) {
     term(std::string("E_") + r[k] + a.letter, a.errors.rotation_rad[k], 1e6, "urad");
   }
   for (int k = 0; k < 3; ++k) {
-    if (a.location.offset_mm[k] != 0.0) s += std::string("    E_") + t[k] + "0" + a.letter + ": " + num(a.location.offset_mm[k] * 1000) + " um\n";
-    if (a.location.tilt_rad[k] != 0.0) s += std::string("    E_") + r[k] + "0" + a.letter + ": " + num(a.location.tilt_rad[k] * 1e6) + " urad\n";
+    if (a.location.offset_mm[k] != 0.0)
+      s += std::string("    E_") + t[k] + "0" + a.letter + ": " + num(a.location.offset_mm[k] * 1000) + " um\n";
+    if (a.location.tilt_rad[k] != 0.0)
+      s += std::string("    E_") + r[k] + "0" + a.letter + ": " + num(a.location.tilt_rad[k] * 1e6) + " urad\n";
   }
   return s;
 }
@@ -158,8 +166,10 @@ int run_machine(const std::string& file) {
               vec(s.workpiece_origin_mm).c_str());
   std::string t = "frame";
   for (int i : m.tool_chain()) t += std::string(" -> ") + m.axis(i).letter;
-  std::printf("tool chain: %s -> spindle (gauge point %s, tool axis %s at all-zero axes; tip = gauge point - tool length x axis)\n",
-              t.c_str(), vec(s.gauge_point_mm).c_str(), vec(s.spindle_axis).c_str());
+  std::printf(
+      "tool chain: %s -> spindle (gauge point %s, tool axis %s at all-zero axes; tip = gauge point - tool length x "
+      "axis)\n",
+      t.c_str(), vec(s.gauge_point_mm).c_str(), vec(s.spindle_axis).c_str());
   std::printf("axes:\n");
   for (int i = 0; i < m.axis_count(); ++i) std::printf("  %s\n", axis_words(m, i).c_str());
   if (m.rotary_count() == 0) {
@@ -172,7 +182,8 @@ int run_machine(const std::string& file) {
     std::printf("orientation: %s %s\n", eq.c_str(), vec(s.spindle_axis).c_str());
     if (m.rotary_count() == 2)
       std::printf("singular: tool axis within %s deg of the %s axis (%s keeps its previous angle there)\n",
-                  num(s.singularity_angle_rad * kDegPerRad).c_str(), std::string(1, m.axis(m.rotary_axis(0)).letter).c_str(),
+                  num(s.singularity_angle_rad * kDegPerRad).c_str(),
+                  std::string(1, m.axis(m.rotary_axis(0)).letter).c_str(),
                   std::string(1, m.axis(m.rotary_axis(0)).letter).c_str());
   }
   std::string errors;
@@ -206,7 +217,8 @@ json fk_json(const Machine& m, const AxisValues& q, double length, bool errors) 
     node["node"] = std::string(1, n.node);
     node["origin"] = array(n.pose.translation());
     json rot = json::array();
-    for (int r = 0; r < 3; ++r) rot.push_back(json::array({n.pose.linear()(r, 0), n.pose.linear()(r, 1), n.pose.linear()(r, 2)}));
+    for (int r = 0; r < 3; ++r)
+      rot.push_back(json::array({n.pose.linear()(r, 0), n.pose.linear()(r, 1), n.pose.linear()(r, 2)}));
     node["rotation"] = rot;
     j["nodes"].push_back(node);
   }
@@ -235,8 +247,8 @@ struct IkOutcome {
   std::optional<CompensationResult> compensated;
 };
 
-IkOutcome solve(const Machine& m, const ToolPose& pose, double length, const AxisValues* previous, const IkSettings& settings,
-                bool errors) {
+IkOutcome solve(const Machine& m, const ToolPose& pose, double length, const AxisValues* previous,
+                const IkSettings& settings, bool errors) {
   IkOutcome o;
   o.result = inverse(m, pose, length, previous, settings);
   if (errors && o.result.ok()) {
@@ -303,12 +315,14 @@ void run_fk_csv(const Machine& m, const std::string& in, const std::string& out,
   for (int i = 0; i < m.axis_count(); ++i) {
     col[static_cast<size_t>(i)] = t.column(std::string(1, m.axis(i).letter));
     if (col[static_cast<size_t>(i)] < 0)
-      throw InputError(in, 1, 1, std::string("a column '") + m.axis(i).letter + "' for every axis (" + m.axis_letters() + ")");
+      throw InputError(in, 1, 1,
+                       std::string("a column '") + m.axis(i).letter + "' for every axis (" + m.axis_letters() + ")");
   }
   std::vector<std::string> header = t.header;
   for (const char* c : {"tip_x", "tip_y", "tip_z", "axis_i", "axis_j", "axis_k"}) header.push_back(c);
   if (errors)
-    for (const char* c : {"actual_x", "actual_y", "actual_z", "actual_i", "actual_j", "actual_k", "error_um", "tilt_urad"})
+    for (const char* c :
+         {"actual_x", "actual_y", "actual_z", "actual_i", "actual_j", "actual_k", "error_um", "tilt_urad"})
       header.push_back(c);
   header.push_back("status");
   std::string text = join(header);
@@ -316,7 +330,8 @@ void run_fk_csv(const Machine& m, const std::string& in, const std::string& out,
     std::vector<std::string> f;
     for (double v : row) f.push_back(num(v));
     AxisValues q = m.zero();
-    for (int i = 0; i < m.axis_count(); ++i) q[i] = from_file(m, i, row[static_cast<size_t>(col[static_cast<size_t>(i)])]);
+    for (int i = 0; i < m.axis_count(); ++i)
+      q[i] = from_file(m, i, row[static_cast<size_t>(col[static_cast<size_t>(i)])]);
     const ToolPose p = forward(m, q, length);
     for (int k = 0; k < 3; ++k) f.push_back(num(p.tip_mm[k]));
     for (int k = 0; k < 3; ++k) f.push_back(num(p.axis[k]));
@@ -354,7 +369,8 @@ void run_ik_csv(const Machine& m, const std::string& in, const std::string& out,
   for (int i = 0; i < m.axis_count(); ++i) header.push_back(std::string(1, m.axis(i).letter));
   header.push_back("status");
   if (errors) {
-    for (const char* c : {"actual_x", "actual_y", "actual_z", "actual_i", "actual_j", "actual_k", "error_um", "tilt_urad"})
+    for (const char* c :
+         {"actual_x", "actual_y", "actual_z", "actual_i", "actual_j", "actual_k", "error_um", "tilt_urad"})
       header.push_back(c);
     for (int i = 0; i < m.axis_count(); ++i) header.push_back(std::string("comp_") + m.axis(i).letter);
     header.push_back("residual_um");
@@ -367,21 +383,24 @@ void run_ik_csv(const Machine& m, const std::string& in, const std::string& out,
   for (size_t r = 0; r < t.rows.size(); ++r) {
     const auto& row = t.rows[r];
     ToolPose pose;
-    pose.tip_mm = {row[static_cast<size_t>(col[0])], row[static_cast<size_t>(col[1])], row[static_cast<size_t>(col[2])]};
+    pose.tip_mm = {row[static_cast<size_t>(col[0])], row[static_cast<size_t>(col[1])],
+                   row[static_cast<size_t>(col[2])]};
     pose.axis = {row[static_cast<size_t>(col[3])], row[static_cast<size_t>(col[4])], row[static_cast<size_t>(col[5])]};
     if (pose.axis.norm() < 1e-9) throw InputError(in, t.lines[r], 1, "a non-zero tool axis axis_i, axis_j, axis_k");
     pose.axis.normalize();
     if (any_prev) {
       AxisValues p = previous ? *previous : m.zero();
       for (int i = 0; i < m.axis_count(); ++i)
-        if (prev_col[static_cast<size_t>(i)] >= 0) p[i] = from_file(m, i, row[static_cast<size_t>(prev_col[static_cast<size_t>(i)])]);
+        if (prev_col[static_cast<size_t>(i)] >= 0)
+          p[i] = from_file(m, i, row[static_cast<size_t>(prev_col[static_cast<size_t>(i)])]);
       previous = p;
     }
     const IkOutcome o = solve(m, pose, length, previous ? &*previous : nullptr, settings, errors);
     std::vector<std::string> f;
     for (double v : row) f.push_back(num(v));
     for (int i = 0; i < m.axis_count(); ++i) f.push_back(o.result.ok() ? num(to_file(m, i, o.result.q()[i])) : "");
-    f.push_back(o.result.status == IkStatus::Ok ? "ok" : std::string(status_name(o.result.status)) + ": " + o.result.reason);
+    f.push_back(o.result.status == IkStatus::Ok ? "ok"
+                                                : std::string(status_name(o.result.status)) + ": " + o.result.reason);
     if (errors) {
       if (o.actual) {
         const PoseError e = pose_error(pose, *o.actual);
@@ -392,7 +411,9 @@ void run_ik_csv(const Machine& m, const std::string& in, const std::string& out,
         for (int i = 0; i < m.axis_count(); ++i) f.push_back(num(to_file(m, i, o.compensated->q[i])));
         f.push_back(num(o.compensated->residual_tip_um));
         f.push_back(num(o.compensated->residual_axis_urad));
-        if (!o.compensated->converged) f[header.size() - 1 - 8 - static_cast<size_t>(m.axis_count()) - 2] += "; compensation: " + o.compensated->note;
+        if (!o.compensated->converged)
+          f[header.size() - 1 - 8 - static_cast<size_t>(m.axis_count()) - 2] +=
+              "; compensation: " + o.compensated->note;
       } else {
         for (size_t k = 0; k < 8 + static_cast<size_t>(m.axis_count()) + 2; ++k) f.push_back("");
       }
@@ -412,7 +433,8 @@ void add_machine_commands(CLI::App& app, MachineCommands& c) {
   c.fk = app.add_subcommand("fk", "Forward kinematics: axis values -> tool pose (JSON, or a CSV batch)");
   c.fk->add_option("file", c.file, "Machine file (YAML) or bundled machine name")->required();
   c.fk->add_option("--axes", c.axes, "Axis values, e.g. X=10,Y=0,Z=-5,A=30,C=90 (mm, deg)");
-  c.fk->add_option("--tool-length", c.tool_length_mm, "Tool length out of the spindle nose, mm")->check(CLI::NonNegativeNumber);
+  c.fk->add_option("--tool-length", c.tool_length_mm, "Tool length out of the spindle nose, mm")
+      ->check(CLI::NonNegativeNumber);
   c.fk->add_flag("--errors", c.errors, "Also the actual pose with the machine's geometric errors");
   c.fk->add_option("--csv", c.csv_in, "Batch input: columns named by axis letters");
   c.fk->add_option("--out", c.csv_out, "Batch output CSV");
@@ -425,7 +447,8 @@ void add_machine_commands(CLI::App& app, MachineCommands& c) {
   c.ik->add_option("--prefer", c.prefer, "Preferred sign of one rotary axis, e.g. A+ or B-");
   c.ik->add_option("--singular-deg", c.singular_deg, "Singular cone half-angle, deg (default: the machine's)")
       ->check(CLI::NonNegativeNumber);
-  c.ik->add_option("--tool-length", c.tool_length_mm, "Tool length out of the spindle nose, mm")->check(CLI::NonNegativeNumber);
+  c.ik->add_option("--tool-length", c.tool_length_mm, "Tool length out of the spindle nose, mm")
+      ->check(CLI::NonNegativeNumber);
   c.ik->add_flag("--errors", c.errors, "Also the actual pose at the solution and error-compensated axis commands");
   c.ik->add_option("--csv", c.csv_in, "Batch input: tip_x tip_y tip_z axis_i axis_j axis_k [prev_<letter>]");
   c.ik->add_option("--out", c.csv_out, "Batch output CSV");
@@ -463,13 +486,15 @@ bool run_machine_commands(const MachineCommands& c) {
     run_ik_csv(m, c.csv_in, c.csv_out, c.tool_length_mm, c.errors, settings, previous ? &*previous : nullptr);
     return true;
   }
-  if (c.tip.empty() || c.axis.empty()) throw InputError("ik: give --tip x,y,z and --axis i,j,k (or --csv IN --out OUT)");
+  if (c.tip.empty() || c.axis.empty())
+    throw InputError("ik: give --tip x,y,z and --axis i,j,k (or --csv IN --out OUT)");
   ToolPose pose;
   pose.tip_mm = parse_vec(c.tip, "--tip");
   pose.axis = parse_vec(c.axis, "--axis");
   if (pose.axis.norm() < 1e-9) throw InputError("--axis: expected a non-zero vector");
   pose.axis.normalize();
-  print_json(ik_json(m, pose, c.tool_length_mm, solve(m, pose, c.tool_length_mm, previous ? &*previous : nullptr, settings, c.errors)));
+  print_json(ik_json(m, pose, c.tool_length_mm,
+                     solve(m, pose, c.tool_length_mm, previous ? &*previous : nullptr, settings, c.errors)));
   return true;
 }
 

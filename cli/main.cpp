@@ -32,7 +32,9 @@ int run_simulate(const std::string& job_file, const vcut::pipeline::SimulateOpti
   // Fail on an unwritable output folder before hours of cutting, not after.
   vcut::io::ensure_writable_folder(out_dir);
   vcut::cli::ProgressBar bar(!quiet);
-  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) { bar.update(stage, done, total); };
+  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+    bar.update(stage, done, total);
+  };
   vcut::pipeline::SimulationResult r = vcut::pipeline::simulate(job, options);
   vcut::report::write_simulation(out_dir, job, r, options.progress);
   bar.finish();
@@ -68,10 +70,11 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
     out = job.out_dir + "/poses.csv";
   }
   // Beside it: poses.csv -> poses_blocks.csv (per block), poses_periods.csv (every period).
-  const std::string stem = out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out;
+  const std::string stem =
+      out.size() > 4 && out.compare(out.size() - 4, 4, ".csv") == 0 ? out.substr(0, out.size() - 4) : out;
   const std::string blocks_out = stem + "_blocks.csv", periods_out = stem + "_periods.csv";
-  const vcut::pipeline::PoseRun run =
-      every_period ? vcut::report::run_pose_engine_with_periods(job, periods_out) : vcut::pipeline::run_pose_engine(job);
+  const vcut::pipeline::PoseRun run = every_period ? vcut::report::run_pose_engine_with_periods(job, periods_out)
+                                                   : vcut::pipeline::run_pose_engine(job);
   vcut::report::write_poses_csv(out, job, run);
   vcut::report::write_blocks_csv(blocks_out, job, run);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
@@ -91,7 +94,8 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
   }
   size_t shown = 0;
   for (const auto& e : run.events)
-    if (shown++ < 10) std::printf("%s at %s: %s\n", vcut::pipeline::to_string(e.kind), e.line.c_str(), e.detail.c_str());
+    if (shown++ < 10)
+      std::printf("%s at %s: %s\n", vcut::pipeline::to_string(e.kind), e.line.c_str(), e.detail.c_str());
   if (run.events.size() > 10) std::printf("... %zu events in all\n", run.events.size());
   std::printf("poses: %s\nper block: %s\n", out.c_str(), blocks_out.c_str());
   return 0;
@@ -103,15 +107,16 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
     vcut::io::ensure_writable_folder(job.out_dir);
   }
   const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(job);
-  if (out.empty()) out = job.out_dir + (run.reader == vcut::io::ProgramReader::Apt ? "/compensated.apt" : "/compensated.ngc");
+  if (out.empty())
+    out = job.out_dir + (run.reader == vcut::io::ProgramReader::Apt ? "/compensated.apt" : "/compensated.ngc");
   const vcut::pipeline::CompensatedProgram compensated = vcut::pipeline::compensate_program(job, run);
   vcut::io::write_text_atomically(out, compensated.text);
   const vcut::pipeline::CompensationReport& r = compensated.report;
   if (quiet) return r.not_converged == 0 ? 0 : 1;
   std::printf("compensated %zu poses on %s: uncompensated tip error up to %.3f um (%s)\n", r.poses, job.machine.c_str(),
               r.max_error_before_um, r.max_error_line.c_str());
-  std::printf("residual after compensation: tip %.2e um, axis %.2e urad (bounds 0.01 um, 0.01 urad)\n", r.max_residual_tip_um,
-              r.max_residual_axis_urad);
+  std::printf("residual after compensation: tip %.2e um, axis %.2e urad (bounds 0.01 um, 0.01 urad)\n",
+              r.max_residual_tip_um, r.max_residual_axis_urad);
   if (r.not_converged > 0)
     std::printf("%zu poses did not converge; first: %s\n", r.not_converged, r.first_failure.c_str());
   std::printf("program: %s\n", out.c_str());
@@ -126,17 +131,24 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   if (!json_out.empty()) vcut::report::write_check_json(json_out, job, r);
   if (!quiet) {
     const double t = r.run.feed.cycle_time_s;
-    std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(), job.machine.c_str(),
-                r.run.program.blocks.size(), r.run.densified.samples.size(), t, static_cast<int>(t / 3600),
-                static_cast<int>(std::fmod(t, 3600.0) / 60), static_cast<int>(std::fmod(t, 60.0)));
-    for (const auto& e : r.events) std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), e.line.c_str(), e.detail.c_str());
+    std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(),
+                job.machine.c_str(), r.run.program.blocks.size(), r.run.densified.samples.size(), t,
+                static_cast<int>(t / 3600), static_cast<int>(std::fmod(t, 3600.0) / 60),
+                static_cast<int>(std::fmod(t, 60.0)));
+    for (const auto& e : r.events)
+      std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), e.line.c_str(), e.detail.c_str());
     for (const auto& c : r.tools) {
-      if (!c.has_holder) std::printf("T%d: no holder in the tool library (not checked)\n", c.tool);
-      else if (!c.over_stock) std::printf("T%d: its holder never comes over the stock\n", c.tool);
-      else std::printf("T%d: holder %.3f mm %s the stock's top at its lowest over the stock (%s)\n", c.tool, std::abs(c.holder_clearance_mm),
-                       c.holder_clearance_mm >= 0.0 ? "above" : "below", c.holder_line.c_str());
+      if (!c.has_holder)
+        std::printf("T%d: no holder in the tool library (not checked)\n", c.tool);
+      else if (!c.over_stock)
+        std::printf("T%d: its holder never comes over the stock\n", c.tool);
+      else
+        std::printf("T%d: holder %.3f mm %s the stock's top at its lowest over the stock (%s)\n", c.tool,
+                    std::abs(c.holder_clearance_mm), c.holder_clearance_mm >= 0.0 ? "above" : "below",
+                    c.holder_line.c_str());
     }
-    std::printf("%s: %zu error(s), %zu warning(s) in %.2f s\n", r.errors == 0 ? "go" : "no-go", r.errors, r.warnings, r.wall_time_s);
+    std::printf("%s: %zu error(s), %zu warning(s) in %.2f s\n", r.errors == 0 ? "go" : "no-go", r.errors, r.warnings,
+                r.wall_time_s);
   }
   return r.errors == 0 ? 0 : 1;
 }
@@ -149,17 +161,23 @@ int run_study(const std::string& job_file, vcut::pipeline::StudyOptions options,
   vcut::cli::ProgressBar bar(!quiet);
   std::string current;
   options.on_run = [&](std::size_t index, std::size_t count, const std::string& label) {
-    current = (index + 1 == count ? "reference " : "setting " + std::to_string(index + 1) + "/" + std::to_string(count - 1) + " ") + label;
+    current = (index + 1 == count ? "reference "
+                                  : "setting " + std::to_string(index + 1) + "/" + std::to_string(count - 1) + " ") +
+              label;
   };
-  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) { bar.update(current + ": " + stage, done, total); };
+  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+    bar.update(current + ": " + stage, done, total);
+  };
   vcut::pipeline::StudyResult s = vcut::pipeline::run_densification_study(job, options);
   vcut::report::write_study(out_dir, s, job);
   bar.finish();
   for (const auto& w : s.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
-  const vcut::pipeline::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
+  const vcut::pipeline::StudyRow* best =
+      s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
   if (!quiet) {
-    std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n", s.job_name.c_str(),
-                s.varied.c_str(), vcut::io::engine_name(s.engine), s.resolution_mm, s.threads, s.accuracy_mm);
+    std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n",
+                s.job_name.c_str(), s.varied.c_str(), vcut::io::engine_name(s.engine), s.resolution_mm, s.threads,
+                s.accuracy_mm);
     std::printf("  %-28s %10s %12s %12s %10s\n", "setting", "poses", "max mm", "RMS mm", "time s");
     for (const auto& r : s.rows) {
       if (!r.error.empty()) {
@@ -167,20 +185,23 @@ int run_study(const std::string& job_file, vcut::pipeline::StudyOptions options,
         continue;
       }
       std::printf("  %-28s %10zu %12.6f %12.6f %10.2f%s\n", r.label.c_str(), r.poses, r.max_mm, r.rms_mm, r.wall_time_s,
-                  &r == best ? "  <- recommended" : r.meets ? "  meets" : "");
+                  &r == best ? "  <- recommended"
+                  : r.meets  ? "  meets"
+                             : "");
     }
     std::printf("  %-28s %10zu %12s %12s %10.2f  (reference)\n", s.reference.label.c_str(), s.reference.poses, "-", "-",
                 s.reference.wall_time_s);
     if (best)
-      std::printf("recommended: %s, the coarsest setting within %.4g mm of the reference (%.4g mm)\n", best->label.c_str(),
-                  s.accuracy_mm, best->max_mm);
+      std::printf("recommended: %s, the coarsest setting within %.4g mm of the reference (%.4g mm)\n",
+                  best->label.c_str(), s.accuracy_mm, best->max_mm);
     for (const auto& f : s.outputs) std::printf("%s\n", f.c_str());
   }
   if (!best) {
     double finest = -1.0;
     for (const auto& r : s.rows)
       if (r.error.empty() && (finest < 0.0 || r.max_mm < finest)) finest = r.max_mm;
-    std::fprintf(stderr, "vcut: no setting is within %.4g mm of the reference (the closest: %.4g mm); try finer settings\n",
+    std::fprintf(stderr,
+                 "vcut: no setting is within %.4g mm of the reference (the closest: %.4g mm); try finer settings\n",
                  s.accuracy_mm, finest);
     return 1;
   }
@@ -200,8 +221,10 @@ int main(int argc, char** argv) {
   std::string out;
   auto* simulate = app.add_subcommand("simulate", "Cut the job's program into its stock and compare with the design");
   simulate->add_option("job", job_file, "Job file (YAML)")->required();
-  simulate->add_option("--resolution", resolution, "Voxel size in mm (overrides engine.resolution)")->check(CLI::PositiveNumber);
-  simulate->add_option("--threads", threads, "Worker threads, 0 = all cores (overrides engine.threads)")->check(CLI::NonNegativeNumber);
+  simulate->add_option("--resolution", resolution, "Voxel size in mm (overrides engine.resolution)")
+      ->check(CLI::PositiveNumber);
+  simulate->add_option("--threads", threads, "Worker threads, 0 = all cores (overrides engine.threads)")
+      ->check(CLI::NonNegativeNumber);
   simulate->add_option("--out", out, "Output folder (overrides report.out)");
   simulate->add_option("--max-memory", max_memory, "Refuse a stock needing more than this many MB (default 75% of RAM)")
       ->check(CLI::PositiveNumber);
@@ -220,10 +243,12 @@ int main(int argc, char** argv) {
   std::string compensate_job, compensate_out;
   bool compensate_quiet = false;
   compensate->add_option("job", compensate_job, "Job file (YAML)")->required();
-  compensate->add_option("--out", compensate_out, "Output program (default: the job's output folder/compensated.ngc or .apt)");
+  compensate->add_option("--out", compensate_out,
+                         "Output program (default: the job's output folder/compensated.ngc or .apt)");
   compensate->add_flag("--quiet,-q", compensate_quiet, "Print nothing but errors and warnings");
-  auto* check = app.add_subcommand("check", "Everything but the cut: parse, densify, time, reach, limits, singularities, "
-                                            "tool clearance against the stock's box; exit 1 on errors");
+  auto* check = app.add_subcommand("check",
+                                   "Everything but the cut: parse, densify, time, reach, limits, singularities, "
+                                   "tool clearance against the stock's box; exit 1 on errors");
   std::string check_job, check_json;
   bool check_quiet = false;
   check->add_option("job", check_job, "Job file (YAML)")->required();
@@ -232,8 +257,9 @@ int main(int argc, char** argv) {
   auto* study = app.add_subcommand("study", "Studies of the job: how a setting trades accuracy for time");
   study->require_subcommand(1);
   auto* densification = study->add_subcommand(
-      "densification", "Cut the job at a series of densification settings and a much finer reference; per setting the "
-                       "distance from the reference cut, poses and time; recommends the coarsest within --accuracy");
+      "densification",
+      "Cut the job at a series of densification settings and a much finer reference; per setting the "
+      "distance from the reference cut, poses and time; recommends the coarsest within --accuracy");
   std::string study_job;
   bool study_quiet = false;
   vcut::pipeline::StudyOptions study_options;
@@ -241,19 +267,26 @@ int main(int argc, char** argv) {
   int study_threads = -1;
   std::string study_out;
   densification->add_option("job", study_job, "Job file (YAML)")->required();
-  densification->add_option("--steps", study_options.steps_mm, "Tip steps lambda to try, mm (comma-separated)")->delimiter(',');
-  densification->add_option("--angles", study_options.angles_deg, "Orientation steps phi to try, deg (comma-separated; "
-                                                                  "paired with --steps by position when both are given)")
+  densification->add_option("--steps", study_options.steps_mm, "Tip steps lambda to try, mm (comma-separated)")
       ->delimiter(',');
-  densification->add_option("--tolerances", study_options.tolerances_mm, "Tolerance-mode epsilons to try, mm (comma-separated)")
+  densification
+      ->add_option("--angles", study_options.angles_deg,
+                   "Orientation steps phi to try, deg (comma-separated; "
+                   "paired with --steps by position when both are given)")
+      ->delimiter(',');
+  densification
+      ->add_option("--tolerances", study_options.tolerances_mm, "Tolerance-mode epsilons to try, mm (comma-separated)")
       ->delimiter(',');
   densification->add_option("--reference-step", ref_step, "Reference lambda, mm (default: the finest step / 4)");
   densification->add_option("--reference-angle", ref_angle, "Reference phi, deg (default: the finest angle / 4)");
-  densification->add_option("--reference-tolerance", ref_tolerance, "Reference epsilon, mm (default: the finest tolerance / 4)");
+  densification->add_option("--reference-tolerance", ref_tolerance,
+                            "Reference epsilon, mm (default: the finest tolerance / 4)");
   densification->add_option("--accuracy", study_accuracy, "Required accuracy, mm (default: the job's gouge tolerance)");
-  densification->add_option("--resolution", study_resolution, "Voxel size in mm (overrides engine.resolution)")->check(CLI::PositiveNumber);
+  densification->add_option("--resolution", study_resolution, "Voxel size in mm (overrides engine.resolution)")
+      ->check(CLI::PositiveNumber);
   densification->add_option("--threads", study_threads, "Worker threads, 0 = all cores")->check(CLI::NonNegativeNumber);
-  densification->add_option("--out", study_out, "Folder for study.csv, .json, .svg and .png (default: the job's output folder)");
+  densification->add_option("--out", study_out,
+                            "Folder for study.csv, .json, .svg and .png (default: the job's output folder)");
   densification->add_flag("--quiet,-q", study_quiet, "Print nothing but errors and warnings");
   vcut::cli::MachineCommands machine_commands;
   vcut::cli::add_machine_commands(app, machine_commands);

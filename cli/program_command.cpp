@@ -21,16 +21,13 @@ using namespace vcut::kinematics;
 constexpr double kDegPerRad = 180.0 / M_PI;
 
 double clean(double v) { return v + 0.0; }  // no -0 in the output
-json array(const Eigen::Vector3d& v) {
-  return json::array({clean(v.x()), clean(v.y()), clean(v.z())});
-}
+json array(const Eigen::Vector3d& v) { return json::array({clean(v.x()), clean(v.y()), clean(v.z())}); }
 
 json rotary(const RotaryWords& words) {
   json j = json::object();
   for (int k = 0; k < 3; ++k) {
     if (words.given[static_cast<size_t>(k)]) {
-      j[std::string(1, static_cast<char>('A' + k))] =
-          clean(words.angle_rad[static_cast<size_t>(k)] * kDegPerRad);
+      j[std::string(1, static_cast<char>('A' + k))] = clean(words.angle_rad[static_cast<size_t>(k)] * kDegPerRad);
     }
   }
   return j;
@@ -84,8 +81,7 @@ json record(const Program& program, const Block& b) {
     j["end_axis"] = array(b.end_axis);
   }
   j["orientation_mode"] = orientation_name(b.orientation);
-  if (b.orientation == OrientationMode::ConeClockwise ||
-      b.orientation == OrientationMode::ConeCounterClockwise) {
+  if (b.orientation == OrientationMode::ConeClockwise || b.orientation == OrientationMode::ConeCounterClockwise) {
     j["cone_axis"] = array(b.cone_axis);
   }
   j["source"] = program.where(b.source);
@@ -95,8 +91,8 @@ json record(const Program& program, const Block& b) {
 }  // namespace
 
 void add_program_command(CLI::App& app, ProgramCommand& c) {
-  c.program = app.add_subcommand(
-      "program", "Print a program's canonical motion list as JSON lines, one record per motion");
+  c.program =
+      app.add_subcommand("program", "Print a program's canonical motion list as JSON lines, one record per motion");
   c.program->add_option("file", c.file, "NC program: G-code or APT CL data")->required();
   c.program->add_option("--dialect", c.dialect,
                         "auto (default: from the extension, then the content), gcode, linuxcnc, "
@@ -138,12 +134,12 @@ bool run_program_command(const ProgramCommand& c) {
   io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
   // An axis program (rotary words without TCP) starts at the home's axis values, as a job's.
   if (spec && loaded.reader == io::ProgramReader::Gcode &&
-      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const Block& b) { return !b.tool_pose; })) {
+      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(),
+                  [](const Block& b) { return !b.tool_pose; })) {
     io::set_machine(options.gcode, *spec, tools, true);
     loaded = io::read_program(c.file, c.dialect, options);
   }
-  for (const auto& w : loaded.program.warnings)
-    std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  for (const auto& w : loaded.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   std::string line;
   for (const Block& b : loaded.program.blocks) {
     line = record(loaded.program, b).dump();

@@ -1,5 +1,5 @@
-// `vcut program FILE [--dialect D] [--machine M] [--subroutine-path DIR]... [--max-lines N]`: the canonical motion list of an NC program
-// as JSON lines, one record per Block (the contract later stages and outside checks use).
+// `vcut program FILE [--dialect D] [--machine M] [--subroutine-path DIR]... [--max-lines N]`: the canonical motion list
+// of an NC program as JSON lines, one record per Block (the contract later stages and outside checks use).
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -12,7 +12,7 @@ struct ProgramCommand {
   CLI::App* program = nullptr;
   std::string file;
   std::string dialect = "auto";
-  std::string machine;  // validated, recorded for the stages that will need it
+  std::string machine;                       // validated, recorded for the stages that will need it
   std::vector<std::string> subroutine_path;  // G-code: folders for <name>.ngc subroutine files
   long long max_lines = 100'000'000;
   std::vector<int> tcp_on, tcp_off;  // G-code: M codes switching tool-centre-point kinematics

@@ -27,8 +27,10 @@ void ProgressBar::update(const std::string& stage, std::size_t done, std::size_t
   bar[kWidth] = '\0';
   const double elapsed = std::chrono::duration<double>(now - stage_start_).count();
   std::fprintf(stderr, "\r%-8s [%s] %5.1f%% %zu/%zu", stage.c_str(), bar, 100.0 * fraction, done, total);
-  if (fraction > 0.0 && fraction < 1.0) std::fprintf(stderr, "  ETA %.0f s   ", elapsed * (1.0 - fraction) / fraction);
-  else std::fprintf(stderr, "              ");
+  if (fraction > 0.0 && fraction < 1.0)
+    std::fprintf(stderr, "  ETA %.0f s   ", elapsed * (1.0 - fraction) / fraction);
+  else
+    std::fprintf(stderr, "              ");
   std::fflush(stderr);
   drawn_ = true;
 }

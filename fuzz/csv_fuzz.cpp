@@ -31,15 +31,13 @@ bool verbose() {
 }
 
 const std::string& temp_path() {
-  static const std::string path =
-      (std::filesystem::temp_directory_path() /
-       ("vcut_csv_fuzz_" + std::to_string(static_cast<long>(::getpid())) + ".csv"))
-          .string();
+  static const std::string path = (std::filesystem::temp_directory_path() /
+                                   ("vcut_csv_fuzz_" + std::to_string(static_cast<long>(::getpid())) + ".csv"))
+                                      .string();
   return path;
 }
 
-void check(const vcut::io::CsvTable& table, const std::string& path, const uint8_t* data,
-           size_t size) {
+void check(const vcut::io::CsvTable& table, const std::string& path, const uint8_t* data, size_t size) {
   require(table.file == path, "the table names its file");
   require(!table.header.empty(), "a header");
   for (size_t i = 0; i < table.header.size(); ++i) {
@@ -77,9 +75,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     const vcut::io::CsvTable table = vcut::io::read_csv(path);
     check(table, path, data, size);
-    if (verbose())
-      std::fprintf(stderr, "read %zu column(s), %zu row(s)\n", table.header.size(),
-                   table.rows.size());
+    if (verbose()) std::fprintf(stderr, "read %zu column(s), %zu row(s)\n", table.header.size(), table.rows.size());
   } catch (const vcut::InputError& e) {
     // Expected for bad input; it names this file and a position in it.
     if (verbose()) std::fprintf(stderr, "InputError: %s\n", e.what());

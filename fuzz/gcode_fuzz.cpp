@@ -77,7 +77,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     // Bits 2-3: the flavour (Fanuc runs custom macro B); bit 4: a start position, G28/G30
     // references and tool lengths (as a job has them).
     const int flavor = (data[0] >> 2) & 3;
-    options.flavor = flavor == 1 ? vcut::io::GcodeOptions::Flavor::LinuxCnc
+    options.flavor = flavor == 1   ? vcut::io::GcodeOptions::Flavor::LinuxCnc
                      : flavor == 2 ? vcut::io::GcodeOptions::Flavor::Fanuc
                                    : vcut::io::GcodeOptions::Flavor::Generic;
     if ((data[0] & 16) != 0) {

@@ -39,10 +39,9 @@ bool verbose() {
 }
 
 const std::string& temp_path() {
-  static const std::string path =
-      (std::filesystem::temp_directory_path() /
-       ("vcut_machine_fuzz_" + std::to_string(static_cast<long>(::getpid())) + ".yaml"))
-          .string();
+  static const std::string path = (std::filesystem::temp_directory_path() /
+                                   ("vcut_machine_fuzz_" + std::to_string(static_cast<long>(::getpid())) + ".yaml"))
+                                      .string();
   return path;
 }
 
@@ -59,36 +58,29 @@ bool zero_winding_inside(double lo, double hi, double margin) {
 void check_spec(const kin::MachineSpec& spec) {
   require(spec.axes.size() >= 3 && spec.axes.size() <= 5, "three to five axes");
   for (const kin::AxisSpec& a : spec.axes) {
-    require(a.direction.allFinite() && std::abs(a.direction.norm() - 1.0) <= 1e-12,
-            "axis direction is a unit vector");
+    require(a.direction.allFinite() && std::abs(a.direction.norm() - 1.0) <= 1e-12, "axis direction is a unit vector");
     require(a.center_mm.allFinite(), "finite axis center");
     if (a.limits) require(a.limits->first < a.limits->second, "limits min < max");
     require(std::isfinite(a.max_velocity_per_s) && a.max_velocity_per_s >= 0.0, "velocity >= 0");
-    require(std::isfinite(a.max_acceleration_per_s2) && a.max_acceleration_per_s2 >= 0.0,
-            "acceleration >= 0");
+    require(std::isfinite(a.max_acceleration_per_s2) && a.max_acceleration_per_s2 >= 0.0, "acceleration >= 0");
     require(std::isfinite(a.max_jerk_per_s3) && a.max_jerk_per_s3 >= 0.0, "jerk >= 0");
     for (int i = 0; i < 3; ++i)
-      for (const kin::ErrorTable* t : {&a.errors.translation_mm[static_cast<size_t>(i)],
-                                       &a.errors.rotation_rad[static_cast<size_t>(i)]}) {
-        require(t->positions.empty()
-                    ? t->values.size() <= 1
-                    : t->positions.size() == t->values.size() && t->positions.size() >= 2,
+      for (const kin::ErrorTable* t :
+           {&a.errors.translation_mm[static_cast<size_t>(i)], &a.errors.rotation_rad[static_cast<size_t>(i)]}) {
+        require(t->positions.empty() ? t->values.size() <= 1
+                                     : t->positions.size() == t->values.size() && t->positions.size() >= 2,
                 "error table shape");
-        require(
-            std::is_sorted(t->positions.begin(), t->positions.end()) &&
-                std::adjacent_find(t->positions.begin(), t->positions.end()) == t->positions.end(),
-            "error table positions strictly ascending");
+        require(std::is_sorted(t->positions.begin(), t->positions.end()) &&
+                    std::adjacent_find(t->positions.begin(), t->positions.end()) == t->positions.end(),
+                "error table positions strictly ascending");
         for (double v : t->values) require(std::isfinite(v), "finite error value");
         for (double p : t->positions) require(std::isfinite(p), "finite error position");
       }
-    require(a.location.offset_mm.allFinite() && a.location.tilt_rad.allFinite(),
-            "finite location errors");
+    require(a.location.offset_mm.allFinite() && a.location.tilt_rad.allFinite(), "finite location errors");
   }
-  require(spec.gauge_point_mm.allFinite() && spec.workpiece_origin_mm.allFinite(),
-          "finite gauge point and origin");
+  require(spec.gauge_point_mm.allFinite() && spec.workpiece_origin_mm.allFinite(), "finite gauge point and origin");
   require(std::abs(spec.spindle_axis.norm() - 1.0) <= 1e-12, "unit spindle axis");
-  require(spec.singularity_angle_rad >= 0.0 && spec.singularity_angle_rad < 0.5,
-          "singularity angle in range");
+  require(spec.singularity_angle_rad >= 0.0 && spec.singularity_angle_rad < 0.5, "singularity angle in range");
 }
 
 // Forward kinematics at zero, inverse kinematics of that pose, forward of every solution.
@@ -109,8 +101,7 @@ void check_kinematics(const kin::Machine& machine, double tool_length_mm) {
   double scale = 1.0 + std::abs(tool_length_mm);
   scale = std::max(scale, spec.gauge_point_mm.cwiseAbs().maxCoeff());
   scale = std::max(scale, spec.workpiece_origin_mm.cwiseAbs().maxCoeff());
-  for (const kin::AxisSpec& a : spec.axes)
-    scale = std::max(scale, a.center_mm.cwiseAbs().maxCoeff());
+  for (const kin::AxisSpec& a : spec.axes) scale = std::max(scale, a.center_mm.cwiseAbs().maxCoeff());
   const double tip_tolerance = 1e-5 * scale;
 
   const kin::IkResult ik = kin::inverse(machine, pose, tool_length_mm);
@@ -132,9 +123,8 @@ void check_kinematics(const kin::Machine& machine, double tool_length_mm) {
     if (!a.limits) continue;
     const double margin = a.kind == kin::AxisKind::Linear ? 1e-3 * scale : 1e-6;
     const double lo = a.limits->first, hi = a.limits->second;
-    zero_inside =
-        zero_inside && (a.kind == kin::AxisKind::Linear ? lo + margin <= 0.0 && 0.0 <= hi - margin
-                                                        : zero_winding_inside(lo, hi, margin));
+    zero_inside = zero_inside && (a.kind == kin::AxisKind::Linear ? lo + margin <= 0.0 && 0.0 <= hi - margin
+                                                                  : zero_winding_inside(lo, hi, margin));
   }
   if (zero_inside) require(ik.ok(), "inverse of the zero pose within limits is found");
 }
@@ -162,8 +152,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     return 0;
   }
   std::remove(path.c_str());
-  for (const std::string& w : warnings)
-    require(w.rfind(path + ":", 0) == 0, "warning names the file");
+  for (const std::string& w : warnings) require(w.rfind(path + ":", 0) == 0, "warning names the file");
   check_spec(spec);
   // A spec the reader accepted has passed validate(): Machine must not throw.
   const kin::Machine machine(spec);
@@ -171,7 +160,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   check_kinematics(machine, 0.0);
   check_kinematics(machine, 75.0);
   if (verbose())
-    std::fprintf(stderr, "read machine '%s' (%s, %zu warning(s)): FK/IK checked\n",
-                 spec.name.c_str(), machine.axis_letters().c_str(), warnings.size());
+    std::fprintf(stderr, "read machine '%s' (%s, %zu warning(s)): FK/IK checked\n", spec.name.c_str(),
+                 machine.axis_letters().c_str(), warnings.size());
   return 0;
 }

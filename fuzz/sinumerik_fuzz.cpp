@@ -33,23 +33,19 @@ void check(const vcut::kinematics::Program& program, const vcut::io::SinumerikOp
     require(b.start_mm.cwiseAbs().maxCoeff() <= kBound && b.end_mm.cwiseAbs().maxCoeff() <= kBound);
     require(unit(b.start_axis) && unit(b.end_axis));
     for (int k = 0; k < 3; ++k) {
-      require(std::isfinite(b.start_rotary.angle_rad[k]) &&
-              std::isfinite(b.end_rotary.angle_rad[k]));
+      require(std::isfinite(b.start_rotary.angle_rad[k]) && std::isfinite(b.end_rotary.angle_rad[k]));
     }
     if (b.orientation == OrientationMode::Vector && b.tool_pose && !b.end_rotary.any()) {
       require(b.start_axis.dot(b.end_axis) > -1.0);  // never opposite
     }
-    if (b.orientation == OrientationMode::ConeClockwise ||
-        b.orientation == OrientationMode::ConeCounterClockwise) {
+    if (b.orientation == OrientationMode::ConeClockwise || b.orientation == OrientationMode::ConeCounterClockwise) {
       require(unit(b.cone_axis));
     }
     require(b.spindle_rpm >= 0.0 && b.spindle_rpm <= 1e6);
     if (b.kind == MotionKind::Rapid) require(b.feed_mm_per_min == 0.0);
-    if (b.kind != MotionKind::Rapid)
-      require(b.feed_mm_per_min > 0.0 && std::isfinite(b.feed_mm_per_min));
+    if (b.kind != MotionKind::Rapid) require(b.feed_mm_per_min > 0.0 && std::isfinite(b.feed_mm_per_min));
     if (b.feed_mode == FeedMode::UnitsPerMinute) require(b.feed_mm_per_min <= 1e6);
-    require(b.blend_tolerance_mm < 0.0 || (b.blend_tolerance_mm <= 1e6 && !b.exact_stop) ||
-            b.exact_stop);
+    require(b.blend_tolerance_mm < 0.0 || (b.blend_tolerance_mm <= 1e6 && !b.exact_stop) || b.exact_stop);
     if (b.kind != MotionKind::Arc) continue;
     require(b.turns == 1 && unit(b.normal));
     const Eigen::Vector3d n = b.normal;

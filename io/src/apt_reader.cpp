@@ -76,19 +76,14 @@ size_t skip_blanks(const std::string& s, size_t i) {
   return i;
 }
 
-int clamp_int(size_t v) {
-  return v >= static_cast<size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v);
-}
+int clamp_int(size_t v) { return v >= static_cast<size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v); }
 
-std::string point(const Eigen::Vector3d& p) {
-  return "(" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) + ")";
-}
+std::string point(const Eigen::Vector3d& p) { return "(" + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) + ")"; }
 
 bool same_cutter(const Cutter& a, const Cutter& b) {
-  return a.type == b.type && a.diameter_mm == b.diameter_mm &&
-         a.corner_radius_mm == b.corner_radius_mm && a.flute_length_mm == b.flute_length_mm &&
-         a.shank_diameter_mm == b.shank_diameter_mm && a.length_mm == b.length_mm &&
-         a.gauge_length_mm == b.gauge_length_mm && a.tip_angle_deg == b.tip_angle_deg;
+  return a.type == b.type && a.diameter_mm == b.diameter_mm && a.corner_radius_mm == b.corner_radius_mm &&
+         a.flute_length_mm == b.flute_length_mm && a.shank_diameter_mm == b.shank_diameter_mm &&
+         a.length_mm == b.length_mm && a.gauge_length_mm == b.gauge_length_mm && a.tip_angle_deg == b.tip_angle_deg;
 }
 
 // One parameter after the '/': a number or a word (upper case).
@@ -167,8 +162,7 @@ bool free_text(const char* w, size_t n, bool& silent) {
 
 class Reader : public detail::CompHost {
  public:
-  Reader(const std::string& name, const AptOptions& options, AptProgram& out, AptState& state,
-         int file_index)
+  Reader(const std::string& name, const AptOptions& options, AptProgram& out, AptState& state, int file_index)
       : name_(name), options_(options), out_(out), state_(state), file_index_(file_index) {}
 
   void run(std::istream& in);
@@ -184,8 +178,7 @@ class Reader : public detail::CompHost {
   std::pair<int, int> locate(size_t pos) const {
     for (size_t k = segments_.size(); k-- > 0;) {
       if (segments_[k].offset <= pos) {
-        return {segments_[k].line,
-                clamp_int(static_cast<size_t>(segments_[k].column) + (pos - segments_[k].offset))};
+        return {segments_[k].line, clamp_int(static_cast<size_t>(segments_[k].column) + (pos - segments_[k].offset))};
       }
     }
     return {line_, 0};
@@ -333,12 +326,10 @@ bool Reader::line(std::string& text, int number) {
     if (c >= 0x20 && c != 0x7F) continue;
     if (c == '\t' || c == '\f' || c == '\v') continue;
     if (c == '\r') {
-      fail_at(number, clamp_int(k + 1),
-              "carriage return inside a line (expected \\n or \\r\\n line ends)");
+      fail_at(number, clamp_int(k + 1), "carriage return inside a line (expected \\n or \\r\\n line ends)");
     }
     fail_at(number, clamp_int(k + 1),
-            "not a text file: control byte " + describe(text[k]) +
-                " (expected an APT CL file of text statements)");
+            "not a text file: control byte " + describe(text[k]) + " (expected an APT CL file of text statements)");
   }
   if (!continuing_) {
     while (i < n && is_blank(text[i])) ++i;
@@ -353,9 +344,8 @@ bool Reader::line(std::string& text, int number) {
         if (!silent) {
           const std::string w(word, j - i);
           warn_once(w, [&] {
-            return name_ + ":" + std::to_string(number) + ":" + std::to_string(i + 1) +
-                   ": statement " + w + " is not supported; ignored (and so is every later " + w +
-                   ")";
+            return name_ + ":" + std::to_string(number) + ":" + std::to_string(i + 1) + ": statement " + w +
+                   " is not supported; ignored (and so is every later " + w + ")";
           });
         }
         return true;
@@ -466,8 +456,7 @@ void Reader::parse_args(size_t i) {
     i = skip_blanks(s, i);
     if (i >= n) return;
     if (s[i] != ',') {
-      fail(i, "unexpected " + describe(s[i]) + " in " + major_ +
-                  "/ (expected ',' between parameters)");
+      fail(i, "unexpected " + describe(s[i]) + " in " + major_ + "/ (expected ',' between parameters)");
     }
     ++i;
   }
@@ -510,8 +499,8 @@ bool Reader::statement() {
   }
   if (word == Word::kUnknown) {
     warn_once(major_, [&] {
-      return where(major_pos_) + ": statement " + major_ +
-             " is not supported; ignored (and so is every later " + major_ + ")";
+      return where(major_pos_) + ": statement " + major_ + " is not supported; ignored (and so is every later " +
+             major_ + ")";
     });
     return true;
   }
@@ -593,8 +582,7 @@ void Reader::count_of(std::initializer_list<size_t> allowed, const char* form) c
 double Reader::number(size_t k, const char* what) const {
   const Arg& a = args_[k];
   if (!a.is_number) {
-    fail(a.pos, "expected a number for " + std::string(what) + " in " + major_ + "/, found '" +
-                    a.word + "'");
+    fail(a.pos, "expected a number for " + std::string(what) + " in " + major_ + "/, found '" + a.word + "'");
   }
   if (!std::isfinite(a.value)) fail(a.pos, "number out of range");
   return a.value;
@@ -603,8 +591,7 @@ double Reader::number(size_t k, const char* what) const {
 double Reader::length(size_t k, const char* what) const {
   const double v = number(k, what) * unit();
   if (!(std::abs(v) <= kMaxMagnitude)) {
-    fail(args_[k].pos,
-         std::string(what) + " " + num(v) + " mm is out of range (expected within +-1e6 mm)");
+    fail(args_[k].pos, std::string(what) + " " + num(v) + " mm is out of range (expected within +-1e6 mm)");
   }
   return v;
 }
@@ -616,8 +603,8 @@ Eigen::Vector3d Reader::unit_vector(size_t k, const char* what) const {
   }
   const double norm = v.norm();
   if (!(norm >= kMinAxisNorm)) {
-    fail(args_[k].pos, "zero " + std::string(what) + " " + point(v) +
-                           " (expected a direction i,j,k, normally a unit vector)");
+    fail(args_[k].pos,
+         "zero " + std::string(what) + " " + point(v) + " (expected a direction i,j,k, normally a unit vector)");
   }
   return v / norm;
 }
@@ -635,8 +622,7 @@ int Reader::motion_tool() {
     const auto it = cutters.find(state_.tool);
     if (it != cutters.end() && !same_cutter(it->second, state_.cutter)) {
       if (state_.loadtl_seen) {
-        fail(major_pos_, "tool " + std::to_string(state_.tool) +
-                             " has cut with another cutter than the CUTTER/ at " +
+        fail(major_pos_, "tool " + std::to_string(state_.tool) + " has cut with another cutter than the CUTTER/ at " +
                              state_.cutter_where +
                              " (expected LOADTL/ with a new tool number before a different "
                              "CUTTER/)");
@@ -675,8 +661,7 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
     return;  // no motion: no Block (as the G-code reader)
   }
   if (state_.pose_axis.dot(end_axis) < kOppositeAxisCosine) {
-    fail(major_pos_, "the tool axis turns from " + point(state_.pose_axis) + " to its opposite " +
-                         point(end_axis) +
+    fail(major_pos_, "the tool axis turns from " + point(state_.pose_axis) + " to its opposite " + point(end_axis) +
                          " in one motion (expected an intermediate axis: no single great circle "
                          "joins opposite axes)");
   }
@@ -702,7 +687,8 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
   }
   Comp& comp = state_.comp;
   if (compensating()) {
-    if (!end_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12) || !state_.pose_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12)) {
+    if (!end_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12) ||
+        !state_.pose_axis.isApprox(Eigen::Vector3d::UnitZ(), 1e-12)) {
       fail(major_pos_, "a tool axis other than (0,0,1) with CUTCOM on (expected three-axis CL data)");
     }
     detail::Compensator compensator(comp, *this);
@@ -755,9 +741,8 @@ void Reader::do_goto() {
   const double r_end = d.norm();
   const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * r);
   if (!(std::abs(r_end - r) <= allowed) || r_end <= kSamePointMm) {
-    fail(major_pos_, "GOTO/ " + point(end) + " is " + num(r_end) +
-                         " mm from the axis of the CIRCLE/ at " + state_.circle_where +
-                         " (expected a point on that circle: radius " + num(r) + " mm within " +
+    fail(major_pos_, "GOTO/ " + point(end) + " is " + num(r_end) + " mm from the axis of the CIRCLE/ at " +
+                         state_.circle_where + " (expected a point on that circle: radius " + num(r) + " mm within " +
                          num(allowed) + " mm)");
   }
   // A full circle: the end equals the start, exactly, so that the sweep is 2*pi, not ~0.
@@ -854,8 +839,8 @@ void Reader::do_cutter() {
   double r = nargs_ > 1 ? length(1, "corner radius r") : 0.0;
   if (r < 0.0) fail(args_[1].pos, "corner radius " + num(r) + " mm (expected r >= 0)");
   if (r > radius + kCutterMatchMm) {
-    fail(args_[1].pos, "corner radius " + num(r) + " mm is more than half the diameter " + num(d) +
-                           " mm (expected r <= d/2)");
+    fail(args_[1].pos,
+         "corner radius " + num(r) + " mm is more than half the diameter " + num(d) + " mm (expected r <= d/2)");
   }
   if (r <= kCutterMatchMm) r = 0.0;
   if (std::abs(r - radius) <= kCutterMatchMm) r = radius;
@@ -871,8 +856,7 @@ void Reader::do_cutter() {
     fail(args_[4].pos, "alpha " + num(alpha) + " deg (expected 0 <= alpha < 90)");
   }
   if (pointed && r > 0.0) {
-    fail(args_[4].pos, "a cone tip (alpha = " + num(alpha) +
-                           " deg) with a corner radius (r = " + num(r) +
+    fail(args_[4].pos, "a cone tip (alpha = " + num(alpha) + " deg) with a corner radius (r = " + num(r) +
                            " mm) cannot be represented (expected r = 0 for a V-bit, or alpha = "
                            "0 for a flat, ball or bull-nose cutter)");
   }
@@ -881,21 +865,17 @@ void Reader::do_cutter() {
   const double f_plain = pointed ? radius * std::tan(alpha_rad) : r;
   const double e = nargs_ > 2 ? length(2, "e") : e_plain;
   const double f = nargs_ > 3 ? length(3, "f") : f_plain;
-  const bool plain =
-      std::abs(e - e_plain) <= kCutterMatchMm && std::abs(f - f_plain) <= kCutterMatchMm;
-  const bool point_corner =
-      r == 0.0 && std::abs(e) <= kCutterMatchMm && std::abs(f) <= kCutterMatchMm;
+  const bool plain = std::abs(e - e_plain) <= kCutterMatchMm && std::abs(f - f_plain) <= kCutterMatchMm;
+  const bool point_corner = r == 0.0 && std::abs(e) <= kCutterMatchMm && std::abs(f) <= kCutterMatchMm;
   if (!plain && !point_corner) {
-    fail(args_[2].pos, "the corner centre (e, f) = (" + num(e) + ", " + num(f) +
-                           ") mm does not fit d = " + num(d) + " mm, r = " + num(r) +
-                           " mm, alpha = " + num(alpha) + " deg (expected e = " + num(e_plain) +
+    fail(args_[2].pos, "the corner centre (e, f) = (" + num(e) + ", " + num(f) + ") mm does not fit d = " + num(d) +
+                           " mm, r = " + num(r) + " mm, alpha = " + num(alpha) + " deg (expected e = " + num(e_plain) +
                            ", f = " + num(f_plain) + ")");
   }
   const double h = nargs_ > 6 ? length(6, "height h") : kDefaultHeightPerDiameter * d;
   if (!(h > 0.0) || h < r) {
     fail(args_[std::min<size_t>(6, nargs_ - 1)].pos,
-         "cutter height " + num(h) + " mm (expected h > 0 and at least the corner radius " +
-             num(r) + " mm)");
+         "cutter height " + num(h) + " mm (expected h > 0 and at least the corner radius " + num(r) + " mm)");
   }
   Cutter c;
   c.diameter_mm = d;
@@ -943,8 +923,7 @@ void Reader::do_loadtl(bool load_tool) {
   }
   if (nargs_ > k + 1) {
     warn_once(major_ + "/ parameters", [&] {
-      return where(args_[k + 1].pos) + ": " + major_ +
-             "/ parameters after the tool number are ignored";
+      return where(args_[k + 1].pos) + ": " + major_ + "/ parameters after the tool number are ignored";
     });
   }
   const int tool = static_cast<int>(t);
@@ -1007,10 +986,9 @@ void Reader::do_circle() {
   const double r_start = d.norm();
   const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * r);
   if (!(std::abs(r_start - r) <= allowed) || r_start <= kSamePointMm) {
-    fail(args_[6].pos, "the arc's start, the current point " + point(programmed_point()) + ", is " +
-                           num(r_start) +
-                           " mm from the circle's axis (expected a point on the circle: radius " +
-                           num(r) + " mm within " + num(allowed) + " mm)");
+    fail(args_[6].pos, "the arc's start, the current point " + point(programmed_point()) + ", is " + num(r_start) +
+                           " mm from the circle's axis (expected a point on the circle: radius " + num(r) +
+                           " mm within " + num(allowed) + " mm)");
   }
   state_.circle_pending = true;
   state_.circle_center_mm = c;
@@ -1029,12 +1007,10 @@ void Reader::do_spindl() {
   size_t k = 0;
   if (!args_[0].is_number) {
     if (args_[0].word == "SFM" || args_[0].word == "SMM") {
-      fail(args_[0].pos,
-           "constant surface speed (" + args_[0].word + ") is not supported (expected RPM)");
+      fail(args_[0].pos, "constant surface speed (" + args_[0].word + ") is not supported (expected RPM)");
     }
     if (args_[0].word != "RPM") {
-      fail(args_[0].pos,
-           "unexpected '" + args_[0].word + "' in SPINDL/ (expected rpm, RPM,rpm, ON or OFF)");
+      fail(args_[0].pos, "unexpected '" + args_[0].word + "' in SPINDL/ (expected rpm, RPM,rpm, ON or OFF)");
     }
     k = 1;
   }
@@ -1088,13 +1064,19 @@ void Reader::do_cutcom() {
   for (size_t k = 1; k < nargs_; ++k) {
     const Arg& extra = args_[k];
     if (!extra.is_number && extra.word != "XYPLAN") {
-      fail(extra.pos, "CUTCOM/" + a.word + " with " + extra.word + " (expected XYPLAN or a register number: compensation works in the XY plane)");
+      fail(extra.pos, "CUTCOM/" + a.word + " with " + extra.word +
+                          " (expected XYPLAN or a register number: compensation works in the XY plane)");
     }
   }
-  if (comp.side != Comp::Side::Off) fail(a.pos, "CUTCOM/" + a.word + " with compensation already on (expected CUTCOM/OFF first)");
-  if (state_.multax) fail(a.pos, "CUTCOM/" + a.word + " with MULTAX/ON (expected three-axis CL data: compensation works in the XY plane)");
-  if (!state_.has_cutter) fail(a.pos, "CUTCOM/" + a.word + " before any CUTTER/ (expected the cutter, whose radius the path is offset by)");
-  if (state_.circle_pending) fail(a.pos, "CUTCOM/" + a.word + " between a CIRCLE/ and its GOTO/ (expected it before the CIRCLE/)");
+  if (comp.side != Comp::Side::Off)
+    fail(a.pos, "CUTCOM/" + a.word + " with compensation already on (expected CUTCOM/OFF first)");
+  if (state_.multax)
+    fail(a.pos,
+         "CUTCOM/" + a.word + " with MULTAX/ON (expected three-axis CL data: compensation works in the XY plane)");
+  if (!state_.has_cutter)
+    fail(a.pos, "CUTCOM/" + a.word + " before any CUTTER/ (expected the cutter, whose radius the path is offset by)");
+  if (state_.circle_pending)
+    fail(a.pos, "CUTCOM/" + a.word + " between a CIRCLE/ and its GOTO/ (expected it before the CIRCLE/)");
   comp.side = a.word == "LEFT" ? Comp::Side::Left : Comp::Side::Right;
   comp.radius_mm = state_.cutter.radius_mm();
   comp.first_move = true;
@@ -1108,7 +1090,8 @@ void Reader::comp_end(size_t pos) {
   compensator.flush();
 }
 
-void Reader::comp_append(Block block, const std::array<bool, 3>&, bool held, const Eigen::Vector2d& direction, double sweep_rad) {
+void Reader::comp_append(Block block, const std::array<bool, 3>&, bool held, const Eigen::Vector2d& direction,
+                         double sweep_rad) {
   block.tool_pose = true;
   block.start_axis = block.end_axis = Eigen::Vector3d::UnitZ();
   block.orientation = kinematics::OrientationMode::Vector;
@@ -1139,12 +1122,11 @@ void Reader::do_units() {
 
 }  // namespace
 
-void read_apt(std::istream& in, const std::string& name, const AptOptions& options, AptProgram& out,
-              AptState& state) {
+void read_apt(std::istream& in, const std::string& name, const AptOptions& options, AptProgram& out, AptState& state) {
   if (!std::isfinite(options.arc_tolerance_mm) || options.arc_tolerance_mm < 0.0) {
-    throw InputError(name, 0, 0,
-                     "arc tolerance " + num(options.arc_tolerance_mm) +
-                         " mm in the options (expected a finite value >= 0)");
+    throw InputError(
+        name, 0, 0,
+        "arc tolerance " + num(options.arc_tolerance_mm) + " mm in the options (expected a finite value >= 0)");
   }
   const int file_index = static_cast<int>(out.program.files.size());
   out.program.files.push_back(name);

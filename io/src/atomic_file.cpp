@@ -14,9 +14,9 @@ namespace fs = std::filesystem;
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write) {
   const fs::path target(path);
   // Keep the extension last: some writers (assimp) choose the format by it.
-  const std::string temporary =
-      (target.parent_path() / ("." + target.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                               target.extension().string())).string();
+  const std::string temporary = (target.parent_path() / ("." + target.stem().string() + ".tmp" +
+                                                         std::to_string(::getpid()) + target.extension().string()))
+                                    .string();
   try {
     write(temporary);
     std::error_code ec;
@@ -42,7 +42,8 @@ void write_text_atomically(const std::string& path, const std::string& text) {
 void ensure_writable_folder(const std::string& folder) {
   std::error_code ec;
   fs::create_directories(folder, ec);
-  if (ec || !fs::is_directory(folder)) throw InputError(folder, 0, 0, "cannot create the output folder: " + ec.message());
+  if (ec || !fs::is_directory(folder))
+    throw InputError(folder, 0, 0, "cannot create the output folder: " + ec.message());
   if (::access(folder.c_str(), W_OK) != 0) throw InputError(folder, 0, 0, "the output folder is not writable");
 }
 

@@ -60,14 +60,16 @@ CsvTable read_csv(const std::string& path) {
     if (table.header.empty()) {
       for (const auto& [name, col] : fields) {
         if (name.empty()) throw InputError(path, number, col, "a column name in the header (empty name)");
-        if (table.column(name) >= 0) throw InputError(path, number, col, "distinct column names (duplicate '" + name + "')");
+        if (table.column(name) >= 0)
+          throw InputError(path, number, col, "distinct column names (duplicate '" + name + "')");
         table.header.push_back(name);
       }
       continue;
     }
     if (fields.size() != table.header.size())
-      throw InputError(path, number, 1,
-                       std::to_string(table.header.size()) + " fields as in the header (got " + std::to_string(fields.size()) + ")");
+      throw InputError(
+          path, number, 1,
+          std::to_string(table.header.size()) + " fields as in the header (got " + std::to_string(fields.size()) + ")");
     std::vector<double> row;
     for (const auto& [text, col] : fields) {
       char* end = nullptr;

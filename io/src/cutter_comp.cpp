@@ -46,7 +46,9 @@ void Compensator::flush() {
   for (Comp::Held& h : comp.held) {
     Block& block = h.block;
     if (!host_.comp_blocks().empty()) block.start_mm = host_.comp_blocks().back().end_mm;
-    if (block.kind != MotionKind::Arc && block.start_mm == block.end_mm && block.start_rotary.angle_rad == block.end_rotary.angle_rad) continue;
+    if (block.kind != MotionKind::Arc && block.start_mm == block.end_mm &&
+        block.start_rotary.angle_rad == block.end_rotary.angle_rad)
+      continue;
     host_.comp_blocks().push_back(block);
   }
   comp.held.clear();
@@ -68,18 +70,22 @@ void Compensator::move_end_and_flush(const Eigen::Vector2d& x, int column) {
       const Eigen::Vector2d k(block.center_mm[a], block.center_mm[b]);
       const int turn = block.normal[c] > 0.0 ? block.turns : -block.turns;
       if (std::abs((end - k).norm() - (x - k).norm()) > 0.01 * host_.comp_unit()) {
-        host_.comp_fail(column, "cutter compensation moved an arc's end off its circle (radius " + num((end - k).norm()) +
-                         " mm, the corner at " + num((x - k).norm()) + " mm from its centre)");
+        host_.comp_fail(column, "cutter compensation moved an arc's end off its circle (radius " +
+                                    num((end - k).norm()) + " mm, the corner at " + num((x - k).norm()) +
+                                    " mm from its centre)");
       }
       const double l2 = sweep(comp.endpoint, k, turn, x);
       if (h.sweep_rad != 0.0 && comp.endpoint_valid && std::abs(l2) > std::abs(h.sweep_rad) + sweep_tolerance) {
-        host_.comp_fail(column, "cutter compensation: the arc before this move cannot reach the concave corner without "
-                     "gouging (tool radius " + num(comp.radius_mm) + " mm)");
+        host_.comp_fail(column,
+                        "cutter compensation: the arc before this move cannot reach the concave corner without "
+                        "gouging (tool radius " +
+                            num(comp.radius_mm) + " mm)");
       }
     } else if (comp.endpoint_valid && h.direction.dot(x - comp.endpoint) < 0.0) {
-      host_.comp_fail(column, std::string("cutter compensation: the ") + (block.kind == MotionKind::Rapid ? "rapid" : "straight") +
-                       " move before this one would run backwards to reach the concave corner: a gouge (tool radius " +
-                       num(comp.radius_mm) + " mm too large for the corner)");
+      host_.comp_fail(
+          column, std::string("cutter compensation: the ") + (block.kind == MotionKind::Rapid ? "rapid" : "straight") +
+                      " move before this one would run backwards to reach the concave corner: a gouge (tool radius " +
+                      num(comp.radius_mm) + " mm too large for the corner)");
     }
     block.end_mm[a] = x.x();
     block.end_mm[b] = x.y();
@@ -114,7 +120,8 @@ void Compensator::corner(const Block& main, const Eigen::Vector2d& corner, const
 
 // A convex corner: the arc (or traverse) about the programmed corner to `start`, where the next
 // move's offset path begins.
-void Compensator::convex_corner(const Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start, int turn) {
+void Compensator::convex_corner(const Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start,
+                                int turn) {
   corner(main, corner_point, start, turn);
   comp_.endpoint = start;
   comp_.endpoint_valid = true;
@@ -138,8 +145,9 @@ Compensator::Move Compensator::move(const Block& block) const {
   return m;
 }
 
-void Compensator::hold_move(Block& block, const std::array<bool, 3>& programmed, const Move& m, const Eigen::Vector2d& end,
-                       const Eigen::Vector2d* center, const Eigen::Vector2d& direction, double sweep_rad) {
+void Compensator::hold_move(Block& block, const std::array<bool, 3>& programmed, const Move& m,
+                            const Eigen::Vector2d& end, const Eigen::Vector2d* center, const Eigen::Vector2d& direction,
+                            double sweep_rad) {
   block.end_mm[m.a] = end.x();
   block.end_mm[m.b] = end.y();
   if (center != nullptr) {
@@ -157,12 +165,15 @@ void Compensator::straight(Block& block, const std::array<bool, 3>& programmed, 
   const bool left = m.left;
   const int a = m.a, b = m.b, c = m.c;
   const Eigen::Vector2d p = m.p, cur = m.cur;
-  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& dir) { hold_move(block, programmed, m, end, nullptr, dir, 0.0); };
+  auto hold = [&](const Eigen::Vector2d& end, const Eigen::Vector2d& dir) {
+    hold_move(block, programmed, m, end, nullptr, dir, 0.0);
+  };
   if (comp.first_move) {
     const double length = (p - cur).norm();
     if (length <= r) {
-      host_.comp_fail(column, "cutter compensation entry move of " + num(length) + " mm in the plane is not longer than the tool radius " +
-                       num(r) + " mm (expected a longer move after G41/G42)");
+      host_.comp_fail(column, "cutter compensation entry move of " + num(length) +
+                                  " mm in the plane is not longer than the tool radius " + num(r) +
+                                  " mm (expected a longer move after G41/G42)");
     }
     const double normal = angle(cur, p) + (left ? M_PI_2 : -M_PI_2);
     comp.endpoint = cur;
@@ -195,7 +206,9 @@ void Compensator::straight(Block& block, const std::array<bool, 3>& programmed, 
   const bool concave = beta < -kCornerRad || beta > M_PI + kCornerRad || (beta > M_PI - kCornerRad && front_outside);
   if (concave && !front_arc) {
     const double half = (beta + M_PI) / 2.0;
-    if (half == 0.0) host_.comp_fail(column, "cutter compensation: a zero-degree inside corner (expected the path not to fold back on itself)");
+    if (half == 0.0)
+      host_.comp_fail(
+          column, "cutter compensation: a zero-degree inside corner (expected the path not to fold back on itself)");
     move_end_and_flush(cur + r / std::tan(half) * direction(theta + gamma), column);
   } else if (concave) {
     // Arc then straight: where the straight's offset line meets the arc's offset circle.
@@ -208,8 +221,10 @@ void Compensator::straight(Block& block, const std::array<bool, 3>& programmed, 
     const double d = (inside ? rho + r : rho - r) * std::cos(tau - phi);
     const double l = (inside ? d - r : d + r) / rho;
     if (!(std::abs(l) <= 1.0)) {
-      host_.comp_fail(column, "cutter compensation: the corner from the arc to this straight move is too tight for the tool "
-                   "(radius " + num(r) + " mm) without gouging");
+      host_.comp_fail(column,
+                      "cutter compensation: the corner from the arc to this straight move is too tight for the tool "
+                      "(radius " +
+                          num(r) + " mm) without gouging");
     }
     const double psi = tau + M_PI + (inside == (front_turn > 0) ? -1.0 : 1.0) * std::acos(l);
     move_end_and_flush(arc_center + rho * direction(psi), column);
@@ -237,12 +252,12 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
   };
   auto too_small = [&](double arc_radius) {
     host_.comp_fail(column, code + " arc of radius " + num(arc_radius) + " mm with the tool (radius " + num(r) +
-                     " mm) on its inside (expected an arc radius larger than the tool's)");
+                                " mm) on its inside (expected an arc radius larger than the tool's)");
   };
   if (comp.first_move) {
     if ((p - cur).norm() <= r) {
       host_.comp_fail(column, "cutter compensation entry arc ends " + num((p - cur).norm()) +
-                       " mm from its start, not more than the tool radius " + num(r) + " mm");
+                                  " mm from its start, not more than the tool radius " + num(r) + " mm");
     }
     if ((k - cur).norm() <= r && inside) too_small((k - cur).norm());
     const Eigen::Vector2d end = p + r * direction(inside ? angle(p, k) : angle(k, p));
@@ -277,7 +292,8 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
   }
   const Eigen::Vector2d end = p + r * direction(gamma);
   const double programmed_sweep = sweep(o, k, turn, p);
-  const bool concave = beta < -kCornerRad || beta > M_PI + kCornerRad || (std::abs(beta - M_PI) < kCornerRad && !inside);
+  const bool concave =
+      beta < -kCornerRad || beta > M_PI + kCornerRad || (std::abs(beta - M_PI) < kCornerRad && !inside);
   const Comp::Held* front = comp.held.empty() ? nullptr : &comp.held.front();
   if (concave && (front == nullptr || front->block.kind != MotionKind::Arc)) {
     // Straight then arc: where the straight's offset line meets this arc's offset circle.
@@ -285,8 +301,9 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
     const double dist = inside ? arc_radius - r : arc_radius + r;
     const double l = (inside ? y + r : y - r) / dist;
     if (!(std::abs(l) <= 1.0)) {
-      host_.comp_fail(column, "cutter compensation: this " + code + " arc cannot be reached in the concave corner by the tool (radius " +
-                       num(r) + " mm) without gouging");
+      host_.comp_fail(column, "cutter compensation: this " + code +
+                                  " arc cannot be reached in the concave corner by the tool (radius " + num(r) +
+                                  " mm) without gouging");
     }
     const double psi = inside ? (turn > 0 ? theta + std::asin(l) : theta - std::asin(l))
                               : (turn > 0 ? theta + M_PI - std::asin(l) : theta + M_PI + std::asin(l));
@@ -300,12 +317,14 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
     const double rho_new = inside ? arc_radius - r : arc_radius + r;
     const double centers = (front_center - k).norm();
     if (rho == 0.0 || centers == 0.0) {
-      host_.comp_fail(column, "cutter compensation: two arcs with the same centre meet in a concave corner (expected them to differ)");
+      host_.comp_fail(
+          column,
+          "cutter compensation: two arcs with the same centre meet in a concave corner (expected them to differ)");
     }
     const double cos_p = (rho * rho + centers * centers - rho_new * rho_new) / (2.0 * rho * centers);
     if (!(std::abs(cos_p) <= 1.0)) {
-      host_.comp_fail(column, "cutter compensation: the corner between two arcs is too tight for the tool (radius " + num(r) +
-                       " mm) without gouging");
+      host_.comp_fail(column, "cutter compensation: the corner between two arcs is too tight for the tool (radius " +
+                                  num(r) + " mm) without gouging");
     }
     const double pa = std::acos(cos_p), kappa = angle(front_center, k);
     const bool front_inside = (left && front_turn > 0) || (!left && front_turn < 0);

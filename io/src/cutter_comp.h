@@ -20,9 +20,9 @@ namespace vcut::io::detail {
 class CompHost {
  public:
   virtual ~CompHost() = default;
-  virtual Eigen::Vector3d& tool_position() = 0;  // the tip, workpiece frame (mm)
+  virtual Eigen::Vector3d& tool_position() = 0;               // the tip, workpiece frame (mm)
   virtual void comp_plane(int& a, int& b, int& c) const = 0;  // the plane's axes and its normal's
-  virtual double comp_unit() const = 0;  // mm per program unit: rs274ngc's tolerances are in those
+  virtual double comp_unit() const = 0;                       // mm per program unit: rs274ngc's tolerances are in those
   // Appends `block`; held: into CutterComp::held (with the move's direction, or an arc's sweep
   // in rad) for the next move to end, instead of into the program.
   virtual void comp_append(kinematics::Block block, const std::array<bool, 3>& programmed, bool held,
@@ -57,12 +57,14 @@ class Compensator {
   };
   Move move(const kinematics::Block& block) const;
   void corner(const kinematics::Block& main, const Eigen::Vector2d& corner, const Eigen::Vector2d& end, int turn);
-  void convex_corner(const kinematics::Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start, int turn);
+  void convex_corner(const kinematics::Block& main, const Eigen::Vector2d& corner_point, const Eigen::Vector2d& start,
+                     int turn);
   void straight_on(const Eigen::Vector2d& at);
   // Holds `block` ending at `end` (an arc: about `center`) until the next move decides its
   // end; its programmed end becomes the point O the next move starts from.
-  void hold_move(kinematics::Block& block, const std::array<bool, 3>& programmed, const Move& m, const Eigen::Vector2d& end,
-                 const Eigen::Vector2d* center, const Eigen::Vector2d& direction, double sweep_rad);
+  void hold_move(kinematics::Block& block, const std::array<bool, 3>& programmed, const Move& m,
+                 const Eigen::Vector2d& end, const Eigen::Vector2d* center, const Eigen::Vector2d& direction,
+                 double sweep_rad);
 
   GcodeState::CutterComp& comp_;
   CompHost& host_;

@@ -272,8 +272,7 @@ bool m_supported(int m) {
 }
 
 bool valid_offset_name(const std::string& name) {
-  static const char* const kNames[] = {"G54", "G55",   "G56",   "G57",  "G58",
-                                       "G59", "G59.1", "G59.2", "G59.3"};
+  static const char* const kNames[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
   for (const char* n : kNames) {
     if (name == n) return true;
   }
@@ -282,9 +281,9 @@ bool valid_offset_name(const std::string& name) {
 
 void validate_options(const std::string& name, const GcodeOptions& options) {
   if (!(options.arc_tolerance_mm <= kMaxMagnitude)) {  // NaN too; < 0 is the default
-    throw InputError(name, 0, 0,
-                     "arc tolerance " + num(options.arc_tolerance_mm) +
-                         " mm in the options (expected a finite value >= 0)");
+    throw InputError(
+        name, 0, 0,
+        "arc tolerance " + num(options.arc_tolerance_mm) + " mm in the options (expected a finite value >= 0)");
   }
   if (!(options.arc_tolerance_relative >= 0.0 && options.arc_tolerance_relative <= 1.0)) {
     throw InputError(name, 0, 0,
@@ -293,9 +292,7 @@ void validate_options(const std::string& name, const GcodeOptions& options) {
   }
   for (const auto& [key, offset] : options.work_offsets_mm) {
     if (!valid_offset_name(key)) {
-      throw InputError(
-          name, 0, 0,
-          "work offset '" + key + "' in the options (expected one of G54..G59, G59.1..G59.3)");
+      throw InputError(name, 0, 0, "work offset '" + key + "' in the options (expected one of G54..G59, G59.1..G59.3)");
     }
     for (int a = 0; a < 3; ++a) {
       if (!std::isfinite(offset[a]) || std::abs(offset[a]) > kMaxMagnitude) {
@@ -308,9 +305,7 @@ void validate_options(const std::string& name, const GcodeOptions& options) {
 }
 
 // The coordinate system of a G54..G59.3 code (x10): 0..8.
-int system_index(int code) {
-  return code <= 590 ? (code - 540) / 10 : 6 + (code - 591);
-}
+int system_index(int code) { return code <= 590 ? (code - 540) / 10 : 6 + (code - 591); }
 
 // One program file being read: its stream, where the reader is in it, and its '%' state.
 struct Source {
@@ -318,11 +313,11 @@ struct Source {
   std::unique_ptr<std::ifstream> owned;  // a subroutine file the reader opened
   std::string name;
   int file_index = 0;
-  int line = 0;                    // number of the line last read
-  std::streamoff offset = 0;       // where the next line starts
-  std::streamoff line_start = 0;   // where the line last read starts
+  int line = 0;                   // number of the line last read
+  std::streamoff offset = 0;      // where the next line starts
+  std::streamoff line_start = 0;  // where the line last read starts
   bool seekable = false;
-  bool seen_content = false;       // a non-blank line has been read (the opening '%' is one)
+  bool seen_content = false;  // a non-blank line has been read (the opening '%' is one)
   bool opened_with_percent = false;
   // Lone CR line ends (old Macintosh files, some senders): the part of the last physical
   // line after a CR, still to be read as lines, and whether a '\n' ended that physical line.
@@ -342,10 +337,10 @@ struct Mark {
 struct Loop {
   enum class Kind { While, Do, Repeat } kind = Kind::While;
   std::string label;
-  Mark start;             // While: its own line (re-read to test); Do, Repeat: the line after
-  double remaining = 0.0;  // Repeat: passes still to run
+  Mark start;                // While: its own line (re-read to test); Do, Repeat: the line after
+  double remaining = 0.0;    // Repeat: passes still to run
   std::size_t if_depth = 0;  // conditionals open when the loop began
-  std::string where;       // file:line of the opening line
+  std::string where;         // file:line of the opening line
 };
 
 // What M70 saves and M72 restores (LinuxCNC: units, distance modes, feed mode, plane, tool
@@ -369,15 +364,15 @@ struct Frame {
   std::string sub;         // canonical o-word name; empty for the main program
   std::string call_where;  // file:line of the call
   Mark return_to;
-  Mark body;               // Fanuc calls: where the program starts (repeats with L)
-  long long repeats_left = 0;  // Fanuc calls: passes after this one
+  Mark body;                                   // Fanuc calls: where the program starts (repeats with L)
+  long long repeats_left = 0;                  // Fanuc calls: passes after this one
   std::vector<std::pair<int, Mark>> do_loops;  // Fanuc WHILE [..] DOm: m, the WHILE line
-  std::array<double, 33> saved_numbered{};   // the caller's #1..#30 (#1..#33 for G65)
+  std::array<double, 33> saved_numbered{};     // the caller's #1..#30 (#1..#33 for G65)
   std::map<std::string, double> saved_locals;  // the caller's named locals
   std::vector<Loop> loops;
   std::vector<std::pair<std::string, std::string>> ifs;  // label, file:line of the if
-  std::optional<ModalState> autorestore;  // M73: restored when this call returns
-  bool modal = false;  // a Fanuc G66 call: no modal call from inside it
+  std::optional<ModalState> autorestore;                 // M73: restored when this call returns
+  bool modal = false;                                    // a Fanuc G66 call: no modal call from inside it
 };
 
 struct SubDefinition {
@@ -420,9 +415,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     return current_->name + ":" + std::to_string(current_->line) + ":" + std::to_string(column);
   }
   std::string here() const { return current_->name + ":" + std::to_string(current_->line); }
-  void warn(int column, const std::string& message) {
-    program_.warnings.push_back(where(column) + ": " + message);
-  }
+  void warn(int column, const std::string& message) { program_.warnings.push_back(where(column) + ": " + message); }
   // An unsupported word: an error, or (unsupported_as_warning) one warning per distinct key.
   void unsupported(int column, const std::string& key, const std::string& message) {
     if (!options_.unsupported_as_warning) fail(column, message);
@@ -470,7 +463,9 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   std::optional<ModalCall> modal_call_;
   bool fanuc_return();
   double fanuc_system_variable(int number, int column);
-  static bool added_common(int number) { return (number >= 98000 && number <= 98499) || (number >= 100000 && number <= 199999); }
+  static bool added_common(int number) {
+    return (number >= 98000 && number <= 98499) || (number >= 100000 && number <= 199999);
+  }
   void set_variable(int number, double value, int column, const std::string& text);
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
   size_t skip_comment(const std::string& s, size_t i);
@@ -480,8 +475,8 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   detail::ArcTolerance arc_tolerance() const {
     // LinuxCNC 2.9: 2 * 0.01 * sqrt(2) mm in G21, 2 * 0.001 * sqrt(2) in in G20.
     const double absolute_mm = options_.arc_tolerance_mm >= 0.0 ? options_.arc_tolerance_mm
-                               : state_.inches              ? 2.0 * 0.001 * M_SQRT2 * kMmPerInch
-                                                            : 2.0 * 0.01 * M_SQRT2;
+                               : state_.inches                  ? 2.0 * 0.001 * M_SQRT2 * kMmPerInch
+                                                                : 2.0 * 0.01 * M_SQRT2;
     return {absolute_mm, options_.arc_tolerance_relative, 100.0 * absolute_mm};
   }
   const Word& word(char letter) const { return line_words_.words[letter - 'A']; }
@@ -493,7 +488,9 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   // rotation (G10 L2 R) about the system's origin before G92, the centre -G92 in program
   // coordinates (the two are never on together).
   bool rotated() const { return state_.rotation_rad != 0.0 || state_.system_rotation_rad != 0.0; }
-  double rotation_angle() const { return state_.rotation_rad != 0.0 ? state_.rotation_rad : state_.system_rotation_rad; }
+  double rotation_angle() const {
+    return state_.rotation_rad != 0.0 ? state_.rotation_rad : state_.system_rotation_rad;
+  }
   Eigen::Vector2d rotation_center() const {
     return state_.rotation_rad != 0.0 ? state_.rotation_center_mm : Eigen::Vector2d(-state_.g92_mm.head<2>());
   }
@@ -503,7 +500,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   struct PendingCorner {
     bool round = false;  // ,R (else ,C)
     double size_mm = 0.0;
-    size_t block = 0;    // the first line, in Program::blocks
+    size_t block = 0;  // the first line, in Program::blocks
     int column = 0;
   };
   std::optional<PendingCorner> corner_;
@@ -531,7 +528,9 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   // machine_mm: the machine's X Y Z where the tip stands, when known exactly (else from the tip).
   void turned_frame(const Eigen::Vector3d& tip_mm, const Eigen::Vector3d* machine_mm = nullptr);
   // A point of the tilted or turned frame on the workpiece (as blocks are emitted).
-  Eigen::Vector3d twp_out(const Eigen::Vector3d& p) const { return state_.twp_rotation * p + state_.twp_translation_mm; }
+  Eigen::Vector3d twp_out(const Eigen::Vector3d& p) const {
+    return state_.twp_rotation * p + state_.twp_translation_mm;
+  }
   void end_turned_frame();
   void joint_move(const Block& block, const kinematics::RotaryWords& to, int column);
   size_t twp_first_block_ = 0;
@@ -539,7 +538,8 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   // The tip's offset from the spindle's gauge point with the tool in the spindle (mm).
   Eigen::Vector3d tip_offset() const {
     const auto it = options_.tool_length_mm.find(state_.tool);
-    return it == options_.tool_length_mm.end() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(-it->second * options_.spindle_axis);
+    return it == options_.tool_length_mm.end() ? Eigen::Vector3d::Zero()
+                                               : Eigen::Vector3d(-it->second * options_.spindle_axis);
   }
   void append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end = nullptr);
 
@@ -571,7 +571,8 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     for (int axis : {a, b, c}) {
       if (state_.known[static_cast<size_t>(axis)] || (axis == c && programmed[static_cast<size_t>(axis)])) continue;
       fail(column, std::string("cutter compensation while the ") + kAxisLetter[axis] +
-                       " position is unknown is not supported: vcut assumes no start position (expected a move that sets it first)");
+                       " position is unknown is not supported: vcut assumes no start position (expected a move that "
+                       "sets it first)");
     }
   }
   void comp_move_end_and_flush(const Eigen::Vector2d& x, int column) { compensator().move_end_and_flush(x, column); }
@@ -604,23 +605,24 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   Source* current_ = nullptr;
   std::vector<Frame> frames_;
   std::map<std::string, SubDefinition> subs_;
-  std::map<long long, Mark> programs_;  // Fanuc O<number>: the line after its O line
+  std::map<long long, Mark> programs_;                             // Fanuc O<number>: the line after its O line
   std::map<std::pair<const Source*, long long>, Mark> sequences_;  // N<number> lines found
   long long lines_read_ = 0;
   Line line_words_;
   std::vector<Assignment> assignments_;
-  std::array<bool, 26> used_{};  // words consumed by some code on this line
-  bool lenient_ = false;         // an ignored unsupported code may consume any word
-  bool exact_stop_line_ = false;  // G9 on this line
-  bool machine_coordinates_ = false;  // G53 on this line
+  std::array<bool, 26> used_{};                           // words consumed by some code on this line
+  bool lenient_ = false;                                  // an ignored unsupported code may consume any word
+  bool exact_stop_line_ = false;                          // G9 on this line
+  bool machine_coordinates_ = false;                      // G53 on this line
   Eigen::Vector3d line_axis_ = Eigen::Vector3d::UnitZ();  // G43.5: this line's tool axis
-  int tcp_m_code_ = -1;  // a job-mapped TCP M code on this line: 1 on, 0 off
-  std::optional<ModalState> saved_modes_;  // M70
+  int tcp_m_code_ = -1;                                   // a job-mapped TCP M code on this line: 1 on, 0 off
+  std::optional<ModalState> saved_modes_;                 // M70
 
   ModalState save_modes() const {
     const GcodeState& g = state_;
-    return {g.inches, g.incremental, g.arc_center_absolute, g.inverse_time, g.exact_stop, g.retract_to_r,
-            g.plane, g.tcp, g.blend_tolerance_mm, g.feed_mm_per_min, g.spindle_rpm, g.spindle, g.work_offset, g.g5x_mm};
+    return {g.inches,      g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
+            g.plane,       g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
+            g.work_offset, g.g5x_mm};
   }
   void restore_modes(const ModalState& m) {
     GcodeState& g = state_;
@@ -631,7 +633,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     g.work_offset = m.work_offset, g.g5x_mm = m.g5x_mm;
     g.parameters[5220] = 1 + system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10)));
   }
-  int o_column_ = 0;             // column of a Fanuc program number on this line
+  int o_column_ = 0;  // column of a Fanuc program number on this line
 };
 
 const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
@@ -641,8 +643,8 @@ constexpr int kG92Parameter = 5211;  // X of the G92 offset
 constexpr double kRadiusShortMm = 0.00005 * kMmPerInch;
 // Splines (G5, G5.1) become straight moves no farther than this from the curve (mm).
 constexpr double kSplineChordMm = 0.001;
-constexpr size_t kG28Parameter = 5161;  // X of the G28 reference (mm, gauge point), Y Z A B C (deg) follow
-constexpr size_t kG30Parameter = 5181;  // X of the G30 reference
+constexpr size_t kG28Parameter = 5161;    // X of the G28 reference (mm, gauge point), Y Z A B C (deg) follow
+constexpr size_t kG30Parameter = 5181;    // X of the G30 reference
 constexpr int kPositionParameter = 5420;  // X of the current position (program coordinates)
 
 double Reader::numbered_parameter(int number, int column) {
@@ -657,7 +659,8 @@ double Reader::numbered_parameter(int number, int column) {
     }
     return state_.parameters[static_cast<size_t>(number)];
   }
-  if (number == 5220) return 1.0 + system_index(static_cast<int>(std::lround(std::stod(state_.work_offset.substr(1)) * 10)));
+  if (number == 5220)
+    return 1.0 + system_index(static_cast<int>(std::lround(std::stod(state_.work_offset.substr(1)) * 10)));
   if (number == 5400) return state_.tool;
   if (number >= kPositionParameter && number < kPositionParameter + 9) {
     const int a = number - kPositionParameter;
@@ -730,7 +733,8 @@ bool Reader::next_line(std::string& text) {
     throw InputError(src.name, src.line + 1, 0,
                      "read " + std::to_string(options_.max_lines) +
                          " lines without reaching the end (a loop that never ends? the limit is "
-                         "the job's program.max_lines)" + call_chain());
+                         "the job's program.max_lines)" +
+                         call_chain());
   }
   if (src.line == INT_MAX) throw InputError(src.name, src.line, 0, "too many lines");
   ++src.line;
@@ -799,8 +803,11 @@ void Reader::run(std::istream& in, const std::string& name) {
     }
     for (int k = 0; k < 2; ++k) {
       const size_t base = k == 0 ? kG28Parameter : kG30Parameter;
-      for (int a = 0; a < 3; ++a) state_.parameters[base + static_cast<size_t>(a)] = options_.reference_mm[static_cast<size_t>(k)][a];
-      for (int r = 0; r < 3; ++r) state_.parameters[base + 3 + static_cast<size_t>(r)] = options_.reference_rotary_deg[static_cast<size_t>(k)][static_cast<size_t>(r)];
+      for (int a = 0; a < 3; ++a)
+        state_.parameters[base + static_cast<size_t>(a)] = options_.reference_mm[static_cast<size_t>(k)][a];
+      for (int r = 0; r < 3; ++r)
+        state_.parameters[base + 3 + static_cast<size_t>(r)] =
+            options_.reference_rotary_deg[static_cast<size_t>(k)][static_cast<size_t>(r)];
     }
   }
   twp_first_block_ = program_.blocks.size();
@@ -816,7 +823,8 @@ void Reader::run(std::istream& in, const std::string& name) {
       if (!reserved && current_->line == kSampleLines && current_ == sources_.front().get() && available > 0) {
         reserved = true;
         const double per_line = std::max(1.0, static_cast<double>(current_->offset - first_offset) / kSampleLines);
-        detail::reserve_blocks(program_.blocks, static_cast<size_t>(std::min(1e9, static_cast<double>(available) / per_line)));
+        detail::reserve_blocks(program_.blocks,
+                               static_cast<size_t>(std::min(1e9, static_cast<double>(available) / per_line)));
       }
       if (!next_line(text)) {
         if (frames_.size() > 1) {
@@ -827,8 +835,8 @@ void Reader::run(std::istream& in, const std::string& name) {
                       frame().loops.back().where);
         }
         if (!frame().ifs.empty()) {
-          fail(0, "the file ends inside o" + frame().ifs.back().first + " if, opened at " +
-                      frame().ifs.back().second + " (expected endif)");
+          fail(0, "the file ends inside o" + frame().ifs.back().first + " if, opened at " + frame().ifs.back().second +
+                      " (expected endif)");
         }
         break;
       }
@@ -859,7 +867,8 @@ bool Reader::line(std::string& text) {
   // A UTF-8 byte order mark before the first line (Windows editors write one).
   if (src.line == 1 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.replace(0, 3, 3, ' ');
   // Fanuc's ':' program number (ISO tapes) is an O number.
-  if (const size_t k = skip_blanks(text, 0); k < text.size() && text[k] == ':' && k + 1 < text.size() && is_digit(text[k + 1])) {
+  if (const size_t k = skip_blanks(text, 0);
+      k < text.size() && text[k] == ':' && k + 1 < text.size() && is_digit(text[k + 1])) {
     text[k] = 'O';
   }
   const size_t i = skip_blanks(text, 0);
@@ -877,8 +886,7 @@ bool Reader::line(std::string& text) {
     assignments_.clear();
     lex(text, i + 1);
     if (!line_words_.g.empty() || !line_words_.m.empty() || o_column_ != 0 || !assignments_.empty() ||
-        std::any_of(line_words_.words.begin(), line_words_.words.end(),
-                    [](const Word& w) { return w.present; })) {
+        std::any_of(line_words_.words.begin(), line_words_.words.end(), [](const Word& w) { return w.present; })) {
       fail(column_at(i), "words after '%' (expected '%' alone on its line)");
     }
     if (!src.seen_content) {
@@ -953,7 +961,8 @@ bool Reader::o_line(const std::string& s, OLine& o) {
   }
   i = skip_blanks(s, i);
   o.keyword.clear();
-  while (i < s.size() && is_letter(s[i])) o.keyword += static_cast<char>(std::tolower(static_cast<unsigned char>(s[i++])));
+  while (i < s.size() && is_letter(s[i]))
+    o.keyword += static_cast<char>(std::tolower(static_cast<unsigned char>(s[i++])));
   o.rest = i;
   return true;
 }
@@ -961,7 +970,8 @@ bool Reader::o_line(const std::string& s, OLine& o) {
 double Reader::condition(const std::string& s, const OLine& o) {
   size_t i = skip_blanks(s, o.rest);
   if (i >= s.size() || s[i] != '[') {
-    fail(column_at(std::min(i, s.size())), "o" + o.label + " " + o.keyword + " without its condition (expected [expression])");
+    fail(column_at(std::min(i, s.size())),
+         "o" + o.label + " " + o.keyword + " without its condition (expected [expression])");
   }
   const double v = detail::read_expression(s, i, *this);
   i = skip_blanks(s, i);
@@ -1050,18 +1060,21 @@ void Reader::call(const std::string& s, const OLine& o) {
   if (sub == nullptr) {
     std::string folders = std::filesystem::path(sources_.front()->name).parent_path().string();
     for (const std::string& p : options_.subroutine_path) folders += ", " + p;
-    fail(o.column, "o" + o.label + " call: no such subroutine (expected o" + o.label +
-                       " sub earlier in the program" +
-                       (o.label.front() == '<' ? ", or the file " + o.label.substr(1, o.label.size() - 2) +
-                                                     ".ngc in " + (folders.empty() ? std::string(".") : folders)
-                                               : std::string()) + ")");
+    fail(o.column, "o" + o.label + " call: no such subroutine (expected o" + o.label + " sub earlier in the program" +
+                       (o.label.front() == '<' ? ", or the file " + o.label.substr(1, o.label.size() - 2) + ".ngc in " +
+                                                     (folders.empty() ? std::string(".") : folders)
+                                               : std::string()) +
+                       ")");
   }
   if (frames_.size() > 64) fail(o.column, "subroutine calls nested more than 64 deep (a call that never returns?)");
   // Arguments: bracketed expressions, to #1..#30 of the call.
   std::vector<double> args;
   size_t i = skip_blanks(s, o.rest);
   while (i < s.size()) {
-    if (s[i] == '(') { i = skip_blanks(s, skip_comment(s, i)); continue; }
+    if (s[i] == '(') {
+      i = skip_blanks(s, skip_comment(s, i));
+      continue;
+    }
     if (s[i] == ';') break;
     if (s[i] != '[') fail(column_at(i), "unexpected " + describe(s[i]) + " in the call (expected arguments in [ ])");
     if (args.size() == 30) fail(column_at(i), "more than 30 arguments (expected at most 30)");
@@ -1126,7 +1139,9 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
   };
   std::string text;
   if (k == "sub") {
-    if (frames_.size() > 1) fail(o.column, "o" + label + " sub inside the subroutine o<" + f.sub + "> (expected definitions at the top level)");
+    if (frames_.size() > 1)
+      fail(o.column,
+           "o" + label + " sub inside the subroutine o<" + f.sub + "> (expected definitions at the top level)");
     only_comment_after(o.rest);
     subs_[label] = SubDefinition{mark_after(), here()};
     skip_to(label, {"endsub"}, here(), text);
@@ -1156,7 +1171,8 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
   }
   if (k == "elseif" || k == "else") {
     // The branch that ran ends here.
-    if (f.ifs.empty() || f.ifs.back().first != label) fail(o.column, "o" + label + " " + k + " without o" + label + " if");
+    if (f.ifs.empty() || f.ifs.back().first != label)
+      fail(o.column, "o" + label + " " + k + " without o" + label + " if");
     const std::string opened = f.ifs.back().second;
     skip_to(label, {"endif"}, opened, text);
     f.ifs.pop_back();
@@ -1220,7 +1236,9 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
     Loop& loop = find_loop();
     f.ifs.resize(loop.if_depth);
     const std::string opened = loop.where;
-    const char* end = loop.kind == Loop::Kind::While ? "endwhile" : loop.kind == Loop::Kind::Repeat ? "endrepeat" : "while";
+    const char* end = loop.kind == Loop::Kind::While    ? "endwhile"
+                      : loop.kind == Loop::Kind::Repeat ? "endrepeat"
+                                                        : "while";
     if (k == "break") {
       f.loops.pop_back();
       skip_to(label, {end}, opened, text);
@@ -1234,8 +1252,9 @@ bool Reader::o_word(const std::string& s, const OLine& o) {
     const OLine test = skip_to(label, {end}, opened, text);
     return o_word(text, test);
   }
-  fail(o.column, "unknown o-word keyword '" + k + "' (expected sub, endsub, call, return, if, elseif, else, endif, "
-                 "while, endwhile, do, break, continue, repeat or endrepeat)");
+  fail(o.column, "unknown o-word keyword '" + k +
+                     "' (expected sub, endsub, call, return, if, elseif, else, endif, "
+                     "while, endwhile, do, break, continue, repeat or endrepeat)");
 }
 
 size_t Reader::skip_comment(const std::string& s, size_t i) {
@@ -1250,7 +1269,8 @@ size_t Reader::skip_comment(const std::string& s, size_t i) {
     if (s[j] != '(') continue;
     ++depth;
     if (options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
-      program_.warnings.push_back(where(column_at(j)) + ": '(' inside a comment (rs274 refuses it; read as a nested comment)");
+      program_.warnings.push_back(where(column_at(j)) +
+                                  ": '(' inside a comment (rs274 refuses it; read as a nested comment)");
     }
   }
   if (first_close != std::string::npos) return first_close + 1;
@@ -1272,7 +1292,8 @@ double Reader::word_value(const std::string& s, size_t& i, char letter, std::str
   }
   const double value = detail::read_real_value(s, i, letter, *this);
   if (detail::is_vacant(value)) {
-    fail(column, std::string("vacant value in the ") + letter + " word (a variable never set, or #0; expected a value)");
+    fail(column,
+         std::string("vacant value in the ") + letter + " word (a variable never set, or #0; expected a value)");
   }
   text = num(value);
   return value;
@@ -1301,7 +1322,8 @@ void Reader::lex(const std::string& s, size_t i) {
         const double value = word_value(s, i, kind, text);
         Word& w = kind == 'R' ? line_words_.round : line_words_.chamfer;
         if (w.present) fail(column, std::string("second ,") + kind + " on the line (expected at most one)");
-        if (!(value > 0.0) || value > kMaxMagnitude) fail(column, std::string(",") + kind + " " + text + " (expected a length > 0)");
+        if (!(value > 0.0) || value > kMaxMagnitude)
+          fail(column, std::string(",") + kind + " " + text + " (expected a length > 0)");
         w = Word{true, value, column};
         first_word = false;
         continue;
@@ -1321,8 +1343,9 @@ void Reader::lex(const std::string& s, size_t i) {
       }
       ++i;
       // rs274ngc: one value ([...] for an expression); Fanuc and the others: an expression.
-      const double value = options_.flavor == GcodeOptions::Flavor::LinuxCnc ? detail::read_real_value(s, i, 0, *this)
-                                                                              : detail::read_open_expression(s, i, *this);
+      const double value = options_.flavor == GcodeOptions::Flavor::LinuxCnc
+                               ? detail::read_real_value(s, i, 0, *this)
+                               : detail::read_open_expression(s, i, *this);
       assignments_.push_back({ref, value, column});
       first_word = false;
       continue;
@@ -1353,8 +1376,9 @@ void Reader::lex(const std::string& s, size_t i) {
       // A Fanuc program number ("O1234" alone on a line) is accepted and ignored.
       const size_t j = skip_blanks(s, i);
       if (!first_word || j >= n || !is_digit(s[j])) {
-        fail(column, "o-word not at the start of its line, or without a keyword (expected o<name> or "
-                     "o<number> followed by sub, call, if, while, ...)");
+        fail(column,
+             "o-word not at the start of its line, or without a keyword (expected o<name> or "
+             "o<number> followed by sub, call, if, while, ...)");
       }
       std::string text;
       detail::read_plain_number(s, i, letter, *this, text, column);
@@ -1364,11 +1388,10 @@ void Reader::lex(const std::string& s, size_t i) {
     }
 
     std::string text;
-    const double value = letter == 'N' ? detail::read_plain_number(s, i, letter, *this, text, column)
-                                       : word_value(s, i, letter, text);
+    const double value =
+        letter == 'N' ? detail::read_plain_number(s, i, letter, *this, text, column) : word_value(s, i, letter, text);
     if (letter != 'N' && letter != 'F' && std::abs(value) > kMaxMagnitude) {
-      fail(column, std::string(1, letter) + " value " + text +
-                       " is out of range (expected |value| <= 1000000)");
+      fail(column, std::string(1, letter) + " value " + text + " is out of range (expected |value| <= 1000000)");
     }
     if ((letter == 'G' || letter == 'M') &&
         (letter == 'G' ? line_words_.g : line_words_.m).size() >= kMaxCodesPerLine) {
@@ -1437,7 +1460,8 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     Eigen::Vector3d p = to_program(base);
     if (line_words_.radius.present || line_words_.angle.present) {
       for (char letter : {'X', 'Y'}) {
-        if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
+        if (word(letter).present)
+          fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
       }
       p.head<2>() = polar_point(p.head<2>());
       programmed[0] = programmed[1] = true;
@@ -1453,7 +1477,8 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     for (int a = 0; a < 3; ++a) {
       if (!(std::abs(end[a]) <= kMaxMagnitude)) {
         fail(word(kAxisLetter[a]).present ? word(kAxisLetter[a]).column : 1,
-             std::string(1, kAxisLetter[a]) + " position " + num(end[a]) + " mm is out of range (expected within +-1e6 mm)");
+             std::string(1, kAxisLetter[a]) + " position " + num(end[a]) +
+                 " mm is out of range (expected within +-1e6 mm)");
       }
     }
     return end;
@@ -1467,12 +1492,14 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     // one not given keeps the current point's; in G91 both add to the current point's.
     const int column = radius.present ? radius.column : angle.column;
     for (char letter : {'X', 'Y'}) {
-      if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
+      if (word(letter).present)
+        fail(word(letter).column, std::string(1, letter) + " word with polar @/^ (expected one or the other)");
     }
     if (machine_coordinates_) fail(column, "polar @/^ with G53 (expected X Y)");
     if (!state_.known[0] || !state_.known[1]) {
-      fail(column, "polar @/^ while the X or Y position is unknown is not supported: vcut assumes no start position "
-                   "(expected an X Y move first)");
+      fail(column,
+           "polar @/^ while the X or Y position is unknown is not supported: vcut assumes no start position "
+           "(expected an X Y move first)");
     }
     const Eigen::Vector2d p = polar_point((base - offset).head<2>());
     end.x() = p.x() + offset.x();
@@ -1489,9 +1516,10 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
       end[a] = v;  // machine coordinates: no work offsets
     } else if (state_.incremental) {
       if (!state_.known[a]) {
-        fail(w.column, std::string("incremental (G91) ") + kAxisLetter[a] + " move while the " +
-                           kAxisLetter[a] + " position is unknown is not supported: vcut assumes no start "
-                           "position (expected an absolute " + kAxisLetter[a] + " move first)");
+        fail(w.column, std::string("incremental (G91) ") + kAxisLetter[a] + " move while the " + kAxisLetter[a] +
+                           " position is unknown is not supported: vcut assumes no start "
+                           "position (expected an absolute " +
+                           kAxisLetter[a] + " move first)");
       }
       end[a] = base[a] + v;
     } else {
@@ -1552,7 +1580,8 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
   }
   // A tilted plane's (or turned table's) frame can carry a point in range out of it.
   if (state_.twp || in_swing_) {
-    const Eigen::Vector3d end = state_.twp ? Eigen::Vector3d(state_.twp_rotation * block.end_mm + state_.twp_translation_mm) : block.end_mm;
+    const Eigen::Vector3d end =
+        state_.twp ? Eigen::Vector3d(state_.twp_rotation * block.end_mm + state_.twp_translation_mm) : block.end_mm;
     for (int a = 0; a < 3; ++a) {
       if (!(std::abs(end[a]) <= kMaxMagnitude)) {
         fail(1, std::string(1, kAxisLetter[a]) + " position " + num(end[a]) +
@@ -1610,21 +1639,18 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
     for (size_t index : pending) {
       if (index >= program_.blocks.size()) continue;  // a different Program was passed in
       Block& b = program_.blocks[index];
-      if (first.empty() && b.source.file >= 0 &&
-          static_cast<size_t>(b.source.file) < program_.files.size()) {
+      if (first.empty() && b.source.file >= 0 && static_cast<size_t>(b.source.file) < program_.files.size()) {
         first = program_.where(b.source);
       }
       b.start_mm[a] = b.end_mm[a] = value;
-      if (b.kind == MotionKind::Arc)
-        b.center_mm[a] = value;  // only the normal axis is ever pending
+      if (b.kind == MotionKind::Arc) b.center_mm[a] = value;  // only the normal axis is ever pending
       ++patched;
     }
     pending.clear();
     if (patched > 0) {
-      warn(word(kAxisLetter[a]).column, std::to_string(patched) + " earlier move(s) (first at " +
-                                            first + ") ran while " + kAxisLetter[a] +
-                                            " was unknown; they hold " + kAxisLetter[a] + " at " +
-                                            num(value) + " mm, its first programmed value");
+      warn(word(kAxisLetter[a]).column, std::to_string(patched) + " earlier move(s) (first at " + first +
+                                            ") ran while " + kAxisLetter[a] + " was unknown; they hold " +
+                                            kAxisLetter[a] + " at " + num(value) + " mm, its first programmed value");
     }
   }
   state_.position_mm = block.end_mm;
@@ -1669,11 +1695,14 @@ void Reader::straight(MotionKind kind, int column) {
   if (round.present || chamfer.present) {
     const Word& w = round.present ? round : chamfer;
     if (round.present && chamfer.present) fail(chamfer.column, ",R and ,C on one line (expected one of them)");
-    if (kind != MotionKind::Linear) fail(w.column, std::string(round.present ? ",R" : ",C") + " on a rapid (expected G1)");
-    if (compensating()) fail(w.column, std::string(round.present ? ",R" : ",C") + " with cutter compensation on (not supported yet)");
+    if (kind != MotionKind::Linear)
+      fail(w.column, std::string(round.present ? ",R" : ",C") + " on a rapid (expected G1)");
+    if (compensating())
+      fail(w.column, std::string(round.present ? ",R" : ",C") + " with cutter compensation on (not supported yet)");
     const size_t before = program_.blocks.size();
     append(block, programmed);
-    if (program_.blocks.size() == before) fail(w.column, std::string(round.present ? ",R" : ",C") + " on a line that does not move");
+    if (program_.blocks.size() == before)
+      fail(w.column, std::string(round.present ? ",R" : ",C") + " on a line that does not move");
     corner_ = PendingCorner{round.present, w.value * unit(), program_.blocks.size() - 1, w.column};
     return;
   }
@@ -1691,15 +1720,18 @@ void Reader::corner_to(Block& second, int column) {
   const Eigen::Vector3d corner = first.end_mm;
   const Eigen::Vector3d in = corner - first.start_mm, out = second.end_mm - corner;
   const double in_length = in.norm(), out_length = out.norm();
-  if (!(out_length > 0.0)) fail(column, std::string(what) + ": the next line does not move (expected the corner's second line)");
+  if (!(out_length > 0.0))
+    fail(column, std::string(what) + ": the next line does not move (expected the corner's second line)");
   const Eigen::Vector3d d1 = in / in_length, d2 = out / out_length;
   const double turn = std::acos(std::clamp(d1.dot(d2), -1.0, 1.0));
   if (turn < 1e-9) return;  // straight on: no corner
-  if (turn > M_PI - 1e-9) fail(column, std::string(what) + ": the next line turns back on the first (expected a corner)");
+  if (turn > M_PI - 1e-9)
+    fail(column, std::string(what) + ": the next line turns back on the first (expected a corner)");
   const double t = c.round ? c.size_mm * std::tan(turn / 2.0) : c.size_mm;
   if (t > in_length + 1e-9 || t > out_length + 1e-9) {
-    fail(column, std::string(what) + " " + num(c.size_mm) + " mm needs " + num(t) + " mm of each line, and the lines are " +
-                     num(in_length) + " and " + num(out_length) + " mm long (expected a smaller corner)");
+    fail(column, std::string(what) + " " + num(c.size_mm) + " mm needs " + num(t) +
+                     " mm of each line, and the lines are " + num(in_length) + " and " + num(out_length) +
+                     " mm long (expected a smaller corner)");
   }
   const Eigen::Vector3d t1 = corner - t * d1, t2 = corner + t * d2;
   first.end_mm = t1;
@@ -1711,7 +1743,8 @@ void Reader::corner_to(Block& second, int column) {
     const Eigen::Vector3d normal = d1.cross(d2).normalized();
     int a, b, n;
     plane_axes(a, b, n);
-    if (std::abs(std::abs(normal[n]) - 1.0) > 1e-9) fail(column, ",R between lines not in the active plane (expected both lines in it)");
+    if (std::abs(std::abs(normal[n]) - 1.0) > 1e-9)
+      fail(column, ",R between lines not in the active plane (expected both lines in it)");
     const Eigen::Vector3d toward = (d2 - d2.dot(d1) * d1).normalized();
     join.kind = MotionKind::Arc;
     join.center_mm = t1 + c.size_mm * toward;
@@ -1730,13 +1763,16 @@ void Reader::synchronized(int column) {
   const bool tap = state_.motion == Motion::RigidTap;
   const char* code = tap ? "G33.1" : "G33";
   const Word& k = word('K');
-  if (!k.present || !(k.value > 0.0)) fail(k.present ? k.column : column, std::string(code) + " without K > 0 (expected K, the length per spindle revolution)");
+  if (!k.present || !(k.value > 0.0))
+    fail(k.present ? k.column : column,
+         std::string(code) + " without K > 0 (expected K, the length per spindle revolution)");
   if (!(state_.spindle_rpm > 0.0) || state_.spindle == SpindleState::Off) {
     fail(column, std::string(code) + " with the spindle stopped (expected S and M3 or M4 before it)");
   }
   if (compensating()) fail(column, std::string(code) + " with cutter compensation on (expected G40 first)");
   if (tap && (word('X').present || word('Y').present)) {
-    fail(word('X').present ? word('X').column : word('Y').column, "G33.1 with X or Y (expected Z only: the tap goes down where the tool is)");
+    fail(word('X').present ? word('X').column : word('Y').column,
+         "G33.1 with X or Y (expected Z only: the tap goes down where the tool is)");
   }
   std::array<bool, 3> programmed{};
   Block block;
@@ -1744,7 +1780,8 @@ void Reader::synchronized(int column) {
   block.start_mm = state_.position_mm;
   block.end_mm = target(programmed);
   block.feed_mm_per_min = k.value * unit() * state_.spindle_rpm;
-  if (block.feed_mm_per_min > kMaxFeed_mm_per_min) fail(k.column, std::string(code) + " feed K x S is out of range (expected <= 1e9 mm/min)");
+  if (block.feed_mm_per_min > kMaxFeed_mm_per_min)
+    fail(k.column, std::string(code) + " feed K x S is out of range (expected <= 1e9 mm/min)");
   const bool inverse = state_.inverse_time;
   state_.inverse_time = false;  // a synchronized feed is not inverse time
   const Eigen::Vector3d top = state_.position_mm;
@@ -1784,11 +1821,13 @@ void Reader::spline(int column) {
   } else if (cubic && state_.spline_control_mm) {
     p1 = p0 + (p0 - *state_.spline_control_mm);
   } else {
-    fail(column, std::string(code) + " without I J (expected I J" + (cubic ? std::string(", or a G5 just before it") : std::string()) + ")");
+    fail(column, std::string(code) + " without I J (expected I J" +
+                     (cubic ? std::string(", or a G5 just before it") : std::string()) + ")");
   }
   std::vector<Eigen::Vector2d> control = {p0, p1};
   if (cubic) {
-    if (!word('P').present || !word('Q').present) fail(column, "G5 without P and Q (expected P Q, from the end to the second control point)");
+    if (!word('P').present || !word('Q').present)
+      fail(column, "G5 without P and Q (expected P Q, from the end to the second control point)");
     const Eigen::Vector2d p2 = p3 + Eigen::Vector2d(word('P').value, word('Q').value) * unit();
     control.push_back(p2);
     state_.spline_control_mm = p2;
@@ -1811,7 +1850,8 @@ void Reader::spline(int column) {
     second = std::max(second, degree * (degree - 1.0) * (control[i] - 2.0 * control[i + 1] + control[i + 2]).norm());
   }
   const int steps = static_cast<int>(std::clamp(std::ceil(std::sqrt(second / (8.0 * kSplineChordMm))), 1.0, 100000.0));
-  if (!state_.known[0] || !state_.known[1]) fail(column, std::string(code) + " from an unknown X or Y position (expected a move that sets them first)");
+  if (!state_.known[0] || !state_.known[1])
+    fail(column, std::string(code) + " from an unknown X or Y position (expected a move that sets them first)");
   for (int s = 1; s <= steps; ++s) {
     Block block;
     block.kind = MotionKind::Linear;
@@ -1832,11 +1872,13 @@ void Reader::nurbs_point(int column, bool first) {
     if (state_.nurbs) fail(column, "G5.2 inside a G5.2 NURBS block (expected G5.3 first)");
     if (state_.plane != Plane::XY) fail(column, "G5.2 outside G17 (expected the XY plane)");
     if (state_.comp.side != Comp::Side::Off) fail(column, "G5.2 with cutter compensation on (expected G40 first)");
-    if (!state_.known[0] || !state_.known[1]) fail(column, "G5.2 from an unknown X or Y position (expected a move that sets them first)");
+    if (!state_.known[0] || !state_.known[1])
+      fail(column, "G5.2 from an unknown X or Y position (expected a move that sets them first)");
     GcodeState::Nurbs n;
     n.feed_mm_per_min = feed_of_line(column);
     if (const Word& l = word('L'); l.present) {
-      if (l.value < 2.0 || !is_whole(l.value) || l.value > 20.0) fail(l.column, "G5.2 L" + num(l.value) + " (expected the order, a whole number 2..20)");
+      if (l.value < 2.0 || !is_whole(l.value) || l.value > 20.0)
+        fail(l.column, "G5.2 L" + num(l.value) + " (expected the order, a whole number 2..20)");
       n.order = static_cast<int>(l.value);
     }
     n.points.emplace_back(state_.position_mm.x(), state_.position_mm.y(), 1.0);
@@ -1845,9 +1887,12 @@ void Reader::nurbs_point(int column, bool first) {
     fail(word('L').column, "L on a NURBS control point (expected the order on the G5.2 line)");
   }
   for (char letter : {'Z', 'A', 'B', 'C'}) {
-    if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " in a G5.2 NURBS block (expected X Y P: the curve lies in the XY plane)");
+    if (word(letter).present)
+      fail(word(letter).column,
+           std::string(1, letter) + " in a G5.2 NURBS block (expected X Y P: the curve lies in the XY plane)");
   }
-  if (!word('X').present || !word('Y').present) fail(column, "a NURBS control point without both X and Y (expected X and Y)");
+  if (!word('X').present || !word('Y').present)
+    fail(column, "a NURBS control point without both X and Y (expected X and Y)");
   const Word& p = word('P');
   if (!p.present && !first) fail(column, "a NURBS control point without P (expected its weight P > 0)");
   if (p.present && !(p.value > 0.0)) fail(p.column, "NURBS weight P " + num(p.value) + " (expected P > 0)");
@@ -1864,7 +1909,8 @@ void Reader::nurbs_point(int column, bool first) {
 void Reader::nurbs_end(int column) {
   if (!state_.nurbs) fail(column, "G5.3 without a G5.2 NURBS block (expected G5.2 first)");
   for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
-    if (word(letter).present) fail(word(letter).column, "G5.3 with axis words (expected G5.3 alone: it ends the NURBS)");
+    if (word(letter).present)
+      fail(word(letter).column, "G5.3 with axis words (expected G5.3 alone: it ends the NURBS)");
   }
   const GcodeState::Nurbs nurbs = *state_.nurbs;
   state_.nurbs.reset();
@@ -1872,8 +1918,8 @@ void Reader::nurbs_end(int column) {
   const int k = nurbs.order;
   const int n = static_cast<int>(nurbs.points.size()) - 1;
   if (n + 1 < k) {
-    fail(column, "G5.3: a NURBS of order " + std::to_string(k) + " needs at least " + std::to_string(k) + " control points, it has " +
-                     std::to_string(n + 1));
+    fail(column, "G5.3: a NURBS of order " + std::to_string(k) + " needs at least " + std::to_string(k) +
+                     " control points, it has " + std::to_string(n + 1));
   }
   std::vector<double> knots;
   for (int i = 0; i <= n + k; ++i) knots.push_back(i < k ? 0.0 : i <= n ? i - k + 1.0 : n - k + 2.0);
@@ -1919,7 +1965,8 @@ void Reader::nurbs_end(int column) {
         flatten(m, b, pm, pb, depth + 1);
       };
   const double umax = n - k + 2.0;
-  for (int s = 0; s < n - k + 2; ++s) flatten(s, s + 1.0, point(s), s + 1 == n - k + 2 ? nurbs.points.back().head<2>() : point(s + 1.0), 0);
+  for (int s = 0; s < n - k + 2; ++s)
+    flatten(s, s + 1.0, point(s), s + 1 == n - k + 2 ? nurbs.points.back().head<2>() : point(s + 1.0), 0);
   for (double u : breaks) {
     Block block;
     block.kind = MotionKind::Linear;
@@ -1964,8 +2011,7 @@ void Reader::arc(int column) {
   for (int axis : {a, b}) {
     if (!state_.known[axis]) {
       fail(column, std::string(code) + " arc from an unknown " + kAxisLetter[axis] +
-                       " position (expected a move that sets " + kAxisLetter[axis] +
-                       " before the first arc)");
+                       " position (expected a move that sets " + kAxisLetter[axis] + " before the first arc)");
     }
   }
   int turns = 1;
@@ -1978,7 +2024,8 @@ void Reader::arc(int column) {
   }
 
   if (state_.comp.arc_not_allowed) {
-    fail(column, std::string(code) + " arc just after G40 (expected a straight move: the exit from cutter compensation)");
+    fail(column,
+         std::string(code) + " arc just after G40 (expected a straight move: the exit from cutter compensation)");
   }
   std::array<bool, 3> programmed{};
   Eigen::Vector3d end = target(programmed);
@@ -1993,9 +2040,8 @@ void Reader::arc(int column) {
     // CAM posts for Fanuc, Haas and the senders write a zero K in G17 arcs; the controls ignore it.
     const bool zero_ok = options_.flavor != GcodeOptions::Flavor::LinuxCnc && normal_word.value == 0.0;
     if (normal_word.present && !zero_ok) {
-      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " word in a " + plane_name +
-                                   "-plane arc (expected " + kCenterLetter[a] + " and " +
-                                   kCenterLetter[b] + ")");
+      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " word in a " + plane_name + "-plane arc (expected " +
+                                   kCenterLetter[a] + " and " + kCenterLetter[b] + ")");
     }
     const Eigen::Vector3d offset = state_.g5x_mm + state_.g92_mm;
     for (int k = 0; k < 2; ++k) {
@@ -2005,18 +2051,17 @@ void Reader::arc(int column) {
       if (w.present) {
         v = w.value * unit();
       } else if (state_.arc_center_absolute) {
-        fail(column, std::string(1, kCenterLetter[axis]) +
-                         " word missing in an absolute-centre (G90.1) arc");
+        fail(column, std::string(1, kCenterLetter[axis]) + " word missing in an absolute-centre (G90.1) arc");
       }
       center[k] = state_.arc_center_absolute ? v + offset[axis] : start[axis] + v;
     }
     if (rotated()) {  // G17 only: I J are along the rotated axes
       const Eigen::Vector2d ij(word('I').value * unit(), word('J').value * unit());
-      center = state_.arc_center_absolute ? Eigen::Vector2d(to_workpiece(Eigen::Vector3d(ij.x(), ij.y(), 0.0)).head<2>())
-                                          : Eigen::Vector2d(Eigen::Vector2d(start[a], start[b]) + Eigen::Rotation2Dd(rotation_angle()) * ij);
+      center = state_.arc_center_absolute
+                   ? Eigen::Vector2d(to_workpiece(Eigen::Vector3d(ij.x(), ij.y(), 0.0)).head<2>())
+                   : Eigen::Vector2d(Eigen::Vector2d(start[a], start[b]) + Eigen::Rotation2Dd(rotation_angle()) * ij);
     }
-    if (const std::string error = detail::centre_arc_error(s, e, center, arc_tolerance(), code);
-        !error.empty()) {
+    if (const std::string error = detail::centre_arc_error(s, e, center, arc_tolerance(), code); !error.empty()) {
       fail(column, error);
     }
     // A full circle: make start and end coincide exactly so that the sweep is 2*pi, not ~0.
@@ -2074,24 +2119,43 @@ double Reader::fanuc_system_variable(int number, int column) {
     switch (number) {
       case 4001:
         switch (g.motion) {
-          case Motion::Rapid: return 0;
-          case Motion::Linear: return 1;
-          case Motion::ArcClockwise: return 2;
-          case Motion::ArcCounterClockwise: return 3;
-          case Motion::Cycle: return g.cycle / 10.0;
-          default: return 80;
+          case Motion::Rapid:
+            return 0;
+          case Motion::Linear:
+            return 1;
+          case Motion::ArcClockwise:
+            return 2;
+          case Motion::ArcCounterClockwise:
+            return 3;
+          case Motion::Cycle:
+            return g.cycle / 10.0;
+          default:
+            return 80;
         }
-      case 4002: return g.plane == Plane::XY ? 17 : g.plane == Plane::ZX ? 18 : 19;
-      case 4003: return g.incremental ? 91 : 90;
-      case 4005: return g.inverse_time ? 93 : 94;
-      case 4006: return g.inches ? 20 : 21;
-      case 4007: return g.comp.side == GcodeState::CutterComp::Side::Off ? 40 : g.comp.side == GcodeState::CutterComp::Side::Left ? 41 : 42;
-      case 4008: return g.tcp == GcodeState::Tcp::Off ? 49 : 43;
-      case 4009: return g.motion == Motion::Cycle ? g.cycle / 10.0 : 80;
-      case 4010: return g.retract_to_r ? 99 : 98;
-      case 4014: return std::stod(g.work_offset.substr(1));
-      case 4015: return g.exact_stop ? 61 : 64;
-      default: return 0;
+      case 4002:
+        return g.plane == Plane::XY ? 17 : g.plane == Plane::ZX ? 18 : 19;
+      case 4003:
+        return g.incremental ? 91 : 90;
+      case 4005:
+        return g.inverse_time ? 93 : 94;
+      case 4006:
+        return g.inches ? 20 : 21;
+      case 4007:
+        return g.comp.side == GcodeState::CutterComp::Side::Off    ? 40
+               : g.comp.side == GcodeState::CutterComp::Side::Left ? 41
+                                                                   : 42;
+      case 4008:
+        return g.tcp == GcodeState::Tcp::Off ? 49 : 43;
+      case 4009:
+        return g.motion == Motion::Cycle ? g.cycle / 10.0 : 80;
+      case 4010:
+        return g.retract_to_r ? 99 : 98;
+      case 4014:
+        return std::stod(g.work_offset.substr(1));
+      case 4015:
+        return g.exact_stop ? 61 : 64;
+      default:
+        return 0;
     }
   }
   if (number >= 4101 && number <= 4130) {
@@ -2163,7 +2227,8 @@ bool Reader::find_sequence(long long number, Mark& found) {
     found = it->second;
     return true;
   }
-  if (!src->seekable) fail(0, "GOTO and M97 need to read the file again, and this input cannot seek (expected a regular file)");
+  if (!src->seekable)
+    fail(0, "GOTO and M97 need to read the file again, and this input cannot seek (expected a regular file)");
   const Mark back = mark_after();
   const int stop_line = src->line;
   auto matches = [&](const std::string& s) {
@@ -2254,8 +2319,8 @@ Mark Reader::locate_program(long long number, int column, const std::string& cal
   std::snprintf(digits4, sizeof digits4, "%04lld", number);
   std::snprintf(digits, sizeof digits, "%lld", number);
   std::vector<std::string> names;
-  for (const std::string& stem : {std::string("O") + digits4, std::string("O") + digits, std::string(digits4), std::string(digits),
-                                  std::string("o") + digits4, std::string("o") + digits}) {
+  for (const std::string& stem : {std::string("O") + digits4, std::string("O") + digits, std::string(digits4),
+                                  std::string(digits), std::string("o") + digits4, std::string("o") + digits}) {
     for (const char* ext : {"", ".nc", ".NC", ".ngc", ".tap", ".txt", ".min", ".eia"}) names.push_back(stem + ext);
   }
   auto open_source = [&](const std::filesystem::path& path) { return open_file(path, column, "subprogram"); };
@@ -2298,10 +2363,11 @@ Mark Reader::locate_program(long long number, int column, const std::string& cal
     }
   }
   std::string searched;
-  for (const auto& folder : folders) searched += (searched.empty() ? "" : ", ") + (folder.empty() ? std::string(".") : folder.string());
-  fail(column, caller + ": program O" + digits4 + " found nowhere (searched " + current_->name + " and, in " + searched +
-                   ", the files O" + digits4 + ".nc, " + digits + ".nc, O" + digits4 + " and any whose first line is O" +
-                   digits4 + ")");
+  for (const auto& folder : folders)
+    searched += (searched.empty() ? "" : ", ") + (folder.empty() ? std::string(".") : folder.string());
+  fail(column, caller + ": program O" + digits4 + " found nowhere (searched " + current_->name + " and, in " +
+                   searched + ", the files O" + digits4 + ".nc, " + digits + ".nc, O" + digits4 +
+                   " and any whose first line is O" + digits4 + ")");
 }
 
 void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
@@ -2310,7 +2376,8 @@ void Reader::fanuc_call(Frame::Kind kind, long long program, long long repeats, 
   if (repeats <= 0) return;  // L0: no call
   Mark body;
   if (kind == Frame::Kind::Subprogram && program < 0) {  // M97: a block of this program
-    if (!find_sequence(-program, body)) fail(column, what + ": no block N" + std::to_string(-program) + " in " + current_->name);
+    if (!find_sequence(-program, body))
+      fail(column, what + ": no block N" + std::to_string(-program) + " in " + current_->name);
   } else {
     body = find_program(program, column, what);
   }
@@ -2369,7 +2436,8 @@ int Reader::macro_statement(std::string& s, size_t i) {
   const int column = column_at(k);
   auto condition = [&](size_t& j, const char* statement) {
     j = skip_blanks(s, j);
-    if (j >= s.size() || s[j] != '[') fail(column_at(j), std::string(statement) + " without its condition (expected " + statement + " [...])");
+    if (j >= s.size() || s[j] != '[')
+      fail(column_at(j), std::string(statement) + " without its condition (expected " + statement + " [...])");
     const double c = detail::read_expression(s, j, *this);
     return !detail::is_vacant(c) && c != 0.0;
   };
@@ -2382,7 +2450,8 @@ int Reader::macro_statement(std::string& s, size_t i) {
     j = skip_blanks(s, j);
     std::string text;
     const double m = detail::read_plain_number(s, j, 0, *this, text, column_at(j));
-    if (m < 1.0 || m > 99.0 || m != std::floor(m)) fail(column_at(j), std::string(word) + text + " (expected " + word + "1.." + word + "99)");
+    if (m < 1.0 || m > 99.0 || m != std::floor(m))
+      fail(column_at(j), std::string(word) + text + " (expected " + word + "1.." + word + "99)");
     return static_cast<int>(m);
   };
   if (key.rfind("IF", 0) == 0 && skip_blanks(s, k + 2) < s.size() && s[skip_blanks(s, k + 2)] == '[') {
@@ -2403,13 +2472,15 @@ int Reader::macro_statement(std::string& s, size_t i) {
       for (size_t b = 0; b < j; ++b) s[b] = ' ';
       return 2;
     }
-    fail(column_at(word_at), "IF [...] without GOTO or THEN (expected IF [condition] GOTO n or IF [condition] THEN #i = ...)");
+    fail(column_at(word_at),
+         "IF [...] without GOTO or THEN (expected IF [condition] GOTO n or IF [condition] THEN #i = ...)");
   }
   if (key == "WHILE") {
     size_t j = after;
     const bool yes = condition(j, "WHILE");
     j = skip_blanks(s, j);
-    if (j + 1 >= s.size() || upper(s[j]) != 'D' || upper(s[j + 1]) != 'O') fail(column_at(j), "WHILE [...] without DO (expected WHILE [condition] DOm)");
+    if (j + 1 >= s.size() || upper(s[j]) != 'D' || upper(s[j + 1]) != 'O')
+      fail(column_at(j), "WHILE [...] without DO (expected WHILE [condition] DOm)");
     j += 2;
     const int m = loop_number(j, "DO");
     rest_is_comment(j);
@@ -2441,7 +2512,8 @@ int Reader::macro_statement(std::string& s, size_t i) {
         return 1;
       }
     }
-    fail(1, "the file ends inside WHILE [...] DO" + std::to_string(m) + " opened at " + opened + " (expected END" + std::to_string(m) + ")");
+    fail(1, "the file ends inside WHILE [...] DO" + std::to_string(m) + " opened at " + opened + " (expected END" +
+                std::to_string(m) + ")");
   }
   if (key == "END" && after < s.size() && is_digit(s[after])) {
     size_t j = after;
@@ -2499,11 +2571,14 @@ Eigen::Vector3d Reader::base_point() const {
 // diameter in program units). A negative radius swaps the side.
 void Reader::comp_on(const Code& g) {
   Comp& comp = state_.comp;
-  if (state_.plane == Plane::YZ) fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
+  if (state_.plane == Plane::YZ)
+    fail(g.column, g.text + " in G19 (expected G17 or G18: compensation works in XY and ZX)");
   if (state_.plane != Plane::XY && rotated()) fail(g.column, g.text + " in G18 with the XY rotation on (expected G17)");
   if (comp.side != Comp::Side::Off) fail(g.column, g.text + " with compensation already on (expected G40 first)");
   // Fanuc 0M and others name the radius register with H when no D is given.
-  const Word& d = !word('D').present && word('H').present && options_.flavor != GcodeOptions::Flavor::LinuxCnc ? word('H') : word('D');
+  const Word& d = !word('D').present && word('H').present && options_.flavor != GcodeOptions::Flavor::LinuxCnc
+                      ? word('H')
+                      : word('D');
   used_['D' - 'A'] = true;
   if (&d == &word('H')) used_['H' - 'A'] = true;
   double radius = 0.0;
@@ -2518,14 +2593,16 @@ void Reader::comp_on(const Code& g) {
     int tool = state_.tool;
     if (d.present) {
       const double n = std::floor(d.value + 0.5);
-      if (std::abs(d.value - n) > 1e-4 || n < 0.0) fail(d.column, g.text + " D " + num(d.value) + " (expected a whole tool number >= 0)");
+      if (std::abs(d.value - n) > 1e-4 || n < 0.0)
+        fail(d.column, g.text + " D " + num(d.value) + " (expected a whole tool number >= 0)");
       if (n > 0.0) tool = static_cast<int>(n);
     }
     const auto it = options_.tool_radius_mm.find(tool);
     if (it == options_.tool_radius_mm.end()) {
-      fail(d.present ? d.column : g.column,
-           g.text + ": tool " + std::to_string(tool) + (tool == 0 ? " (none in the spindle)" : "") +
-               " has no radius in the tool library (expected a tool the job's tools file lists, or G41.1/G42.1 D with a diameter)");
+      fail(d.present ? d.column : g.column, g.text + ": tool " + std::to_string(tool) +
+                                                (tool == 0 ? " (none in the spindle)" : "") +
+                                                " has no radius in the tool library (expected a tool the job's tools "
+                                                "file lists, or G41.1/G42.1 D with a diameter)");
     }
     radius = it->second;
   }
@@ -2569,14 +2646,15 @@ void Reader::comp_stop(bool program_end, int column) {
   }
 }
 
-
 void Reader::select_system(int index) {
   for (int a = 0; a < 3; ++a) {
     state_.g5x_mm[a] = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + a)];
   }
   const double rotation_deg = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + 9)];
-  if (rotation_deg != 0.0 && state_.rotation_rad != 0.0) fail(1, "a rotated coordinate system with G68 on (expected G69 first)");
-  if (rotation_deg != 0.0 && state_.twp) fail(1, "a rotated coordinate system with a tilted work plane on (expected G69 first)");
+  if (rotation_deg != 0.0 && state_.rotation_rad != 0.0)
+    fail(1, "a rotated coordinate system with G68 on (expected G69 first)");
+  if (rotation_deg != 0.0 && state_.twp)
+    fail(1, "a rotated coordinate system with a tilted work plane on (expected G69 first)");
   state_.system_rotation_rad = rotation_deg * M_PI / 180.0;
   state_.parameters[5220] = index + 1;
 }
@@ -2601,8 +2679,8 @@ void Reader::set_offsets(const Code& g) {
   for (char letter : {'A', 'B', 'C'}) {
     const Word& w = word(letter);
     if (w.present && w.value != 0.0) {
-      unsupported(w.column, g.text + std::string(1, letter), g.text + " with a rotary offset " + letter +
-                                                                 " (this reader offsets X Y Z only)");
+      unsupported(w.column, g.text + std::string(1, letter),
+                  g.text + " with a rotary offset " + letter + " (this reader offsets X Y Z only)");
     }
     used_[letter - 'A'] = true;
   }
@@ -2617,7 +2695,8 @@ void Reader::set_offsets(const Code& g) {
       fail(l.column, "G10 L" + num(l.value) + " (expected L1, L2, L10, L11 or L20)");
     }
     if (!p.present || p.value < 0.0 || p.value > 9.0 || !is_whole(p.value)) {
-      fail(p.present ? p.column : l.column, "G10 L" + num(l.value) + " needs P0..P9 (the coordinate system, 0 = active)");
+      fail(p.present ? p.column : l.column,
+           "G10 L" + num(l.value) + " needs P0..P9 (the coordinate system, 0 = active)");
     }
     const int active = static_cast<int>(std::lround(state_.parameters[5220])) - 1;
     const int k = p.value == 0.0 ? active : static_cast<int>(p.value) - 1;
@@ -2628,7 +2707,8 @@ void Reader::set_offsets(const Code& g) {
       state_.parameters[rotation_parameter] = r.value;
     }
     if (l.value == 20.0 && state_.parameters[rotation_parameter] != 0.0) {
-      fail(l.column, "G10 L20 on a rotated coordinate system (vcut sets L20 offsets on unrotated ones; expected G10 L2)");
+      fail(l.column,
+           "G10 L20 on a rotated coordinate system (vcut sets L20 offsets on unrotated ones; expected G10 L2)");
     }
     for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);
@@ -2636,8 +2716,9 @@ void Reader::set_offsets(const Code& g) {
       double offset = w.value * unit();
       if (l.value == 20.0) {
         if (!state_.known[a]) {
-          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] +
-                             " position is unknown is not supported: vcut assumes no start position (expected a move first)");
+          fail(w.column,
+               std::string("G10 L20 while the ") + kAxisLetter[a] +
+                   " position is unknown is not supported: vcut assumes no start position (expected a move first)");
         }
         offset = state_.position_mm[a] - state_.g92_mm[a] - offset;
       }
@@ -2652,8 +2733,9 @@ void Reader::set_offsets(const Code& g) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
       if (!state_.known[a]) {
-        fail(w.column, std::string("G92 while the ") + kAxisLetter[a] +
-                           " position is unknown is not supported: vcut assumes no start position (expected a move first)");
+        fail(w.column,
+             std::string("G92 while the ") + kAxisLetter[a] +
+                 " position is unknown is not supported: vcut assumes no start position (expected a move first)");
       }
       state_.g92_mm[a] = state_.position_mm[a] - state_.g5x_mm[a] - w.value * unit();
     }
@@ -2672,12 +2754,15 @@ void Reader::set_offsets(const Code& g) {
 // turn decides), and the rotary values after step n of them.
 int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
   double turn_deg = 0.0;
-  for (size_t a = 0; a < 3; ++a) turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
+  for (size_t a = 0; a < 3; ++a)
+    turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
   return std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
 }
-kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to, int n, int steps) {
+kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to, int n,
+                                    int steps) {
   kinematics::RotaryWords step = to;
-  for (size_t a = 0; a < 3; ++a) step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+  for (size_t a = 0; a < 3; ++a)
+    step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
   return step;
 }
 
@@ -2695,10 +2780,12 @@ void Reader::probe(int column, int code) {
   if (state_.comp.side != Comp::Side::Off) fail(column, name + " with cutter compensation on (expected G40 first)");
   if (state_.inverse_time) fail(column, name + " in inverse-time mode G93 (expected G94)");
   for (char letter : {'A', 'B', 'C'}) {
-    if (word(letter).present) fail(word(letter).column, std::string(1, letter) + " word on a probe move (expected X Y Z only)");
+    if (word(letter).present)
+      fail(word(letter).column, std::string(1, letter) + " word on a probe move (expected X Y Z only)");
   }
   for (int a = 0; a < 3; ++a) {
-    if (!state_.known[a]) fail(column, name + " while the " + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+    if (!state_.known[a])
+      fail(column, name + " while the " + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
   }
   std::array<bool, 3> programmed{};
   const Eigen::Vector3d end = target(programmed);
@@ -2713,11 +2800,15 @@ void Reader::probe(int column, int code) {
     const std::optional<double> hit = options_.probe_contact(start, end);
     const bool touching = hit && *hit <= 0.0;
     if (!away) {
-      if (touching) fail(column, name + ": the probe touches the stock where it starts (the control: the probe is already tripped)");
+      if (touching)
+        fail(column,
+             name + ": the probe touches the stock where it starts (the control: the probe is already tripped)");
       contact = hit.has_value();
       if (hit) s = *hit;
     } else {
-      if (!touching) fail(column, name + ": the probe does not touch the stock where it starts (the control: the probe is not tripped)");
+      if (!touching)
+        fail(column,
+             name + ": the probe does not touch the stock where it starts (the control: the probe is not tripped)");
       // The stock is convex (a box or a cylinder): it lets go where the move, run backwards
       // from its end, first touches it.
       const std::optional<double> back = options_.probe_contact(end, start);
@@ -2725,9 +2816,10 @@ void Reader::probe(int column, int code) {
       if (contact) s = 1.0 - *back;
     }
     if (!contact && needs_change) {
-      fail(column, name + " ends without " + (away ? "leaving" : "touching") +
-                       " the stock (the control stops with an error; expected the stock's surface in the probe's way, or G38." +
-                       (away ? "5" : "3") + ")");
+      fail(column,
+           name + " ends without " + (away ? "leaving" : "touching") +
+               " the stock (the control stops with an error; expected the stock's surface in the probe's way, or G38." +
+               (away ? "5" : "3") + ")");
     }
   } else {
     // No stock: the probe trips 0.254 mm (0.01 in) before its end, where LinuxCNC's
@@ -2737,8 +2829,9 @@ void Reader::probe(int column, int code) {
     s = length_mm > 0.0 ? 1.0 - kProbeBackoffMm / length_mm : 0.0;
     contact = false;  // #5070 = 0, as there
     if (state_.warned.insert("probe").second) {
-      warn(column, name + " with no stock to touch (vcut program reads none): the probe trips 0.254 mm before its end "
-                          "point, as LinuxCNC's rs274 has it; a job probes its stock");
+      warn(column, name +
+                       " with no stock to touch (vcut program reads none): the probe trips 0.254 mm before its end "
+                       "point, as LinuxCNC's rs274 has it; a job probes its stock");
     }
   }
   Block block;
@@ -2751,7 +2844,8 @@ void Reader::probe(int column, int code) {
   for (int a = 0; a < 3; ++a) {
     state_.parameters[static_cast<size_t>(5061 + a)] = at[a];
     state_.parameters[static_cast<size_t>(5064 + a)] = state_.rotary.angle_rad[static_cast<size_t>(a)] * 180.0 / M_PI;
-    if (code == 310 && options_.flavor != GcodeOptions::Flavor::Fanuc) state_.parameters[static_cast<size_t>(2000 + a)] = at[a];
+    if (code == 310 && options_.flavor != GcodeOptions::Flavor::Fanuc)
+      state_.parameters[static_cast<size_t>(2000 + a)] = at[a];
   }
   state_.parameters[5070] = contact ? 1.0 : 0.0;
 }
@@ -2769,7 +2863,8 @@ void Reader::twp_begin(const Code& g) {
   if (rotated()) fail(g.column, "G68.2 with a G68 rotation on (expected G69 first)");
   for (int a = 0; a < 3; ++a) {
     if (!state_.known[a]) {
-      fail(g.column, std::string("G68.2 while the ") + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+      fail(g.column, std::string("G68.2 while the ") + kAxisLetter[a] +
+                         " position is unknown (expected a move that sets it first)");
     }
   }
   const Word& p = word('P');
@@ -2788,8 +2883,10 @@ void Reader::twp_begin(const Code& g) {
   const double i = angle('I'), j = angle('J'), k = angle('K');
   const Eigen::Matrix3d r =
       p.present && p.value == 1.0
-          ? Eigen::Matrix3d(Turn(k, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitY()) * Turn(i, Eigen::Vector3d::UnitX()))
-          : Eigen::Matrix3d(Turn(i, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitX()) * Turn(k, Eigen::Vector3d::UnitZ()));
+          ? Eigen::Matrix3d(Turn(k, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitY()) *
+                            Turn(i, Eigen::Vector3d::UnitX()))
+          : Eigen::Matrix3d(Turn(i, Eigen::Vector3d::UnitZ()) * Turn(j, Eigen::Vector3d::UnitX()) *
+                            Turn(k, Eigen::Vector3d::UnitZ()));
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   for (int a = 0; a < 3; ++a) {
     if (word(kAxisLetter[a]).present) origin[a] = word(kAxisLetter[a]).value * unit();
@@ -2802,7 +2899,8 @@ void Reader::twp_begin(const Code& g) {
   state_.twp = state_.twp_feature = state_.twp_used = true;
   twp_first_block_ = program_.blocks.size();
   state_.position_mm = r.transpose() * (state_.position_mm - state_.twp_translation_mm);
-  if (state_.comp.machine_mm) *state_.comp.machine_mm = r.transpose() * (*state_.comp.machine_mm - state_.twp_translation_mm);
+  if (state_.comp.machine_mm)
+    *state_.comp.machine_mm = r.transpose() * (*state_.comp.machine_mm - state_.twp_translation_mm);
   state_.spline_control_mm.reset();
 }
 
@@ -2865,9 +2963,12 @@ void Reader::turned_frame(const Eigen::Vector3d& tip_mm, const Eigen::Vector3d* 
 // steps of at most 1 deg of rotary motion each.
 void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, int column) {
   if (block.kind == MotionKind::Arc) fail(column, "rotary words on an arc (expected them on a G0 or G1 line)");
-  if (hold_ || state_.comp.side != Comp::Side::Off) fail(column, "rotary words with cutter compensation on (expected G40 first)");
+  if (hold_ || state_.comp.side != Comp::Side::Off)
+    fail(column, "rotary words with cutter compensation on (expected G40 first)");
   for (int a = 0; a < 3; ++a) {
-    if (!state_.known[a]) fail(column, std::string("a rotary move while the ") + kAxisLetter[a] + " position is unknown (expected a move that sets it first)");
+    if (!state_.known[a])
+      fail(column, std::string("a rotary move while the ") + kAxisLetter[a] +
+                       " position is unknown (expected a move that sets it first)");
   }
   const kinematics::RotaryWords from = state_.rotary;
   kinematics::RotaryWords zero = from;
@@ -2896,7 +2997,8 @@ void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, i
 // out as straight tool-pose moves of at most 1 deg of rotary motion each (off the swing by at
 // most r (1 - cos 0.5 deg) = 0.004 % of the tip's distance from the rotary axis).
 void Reader::twp_turn(const Code& g) {
-  if (!state_.twp || !state_.twp_feature) fail(g.column, g.text + " without a tilted work plane (expected G68.2 first)");
+  if (!state_.twp || !state_.twp_feature)
+    fail(g.column, g.text + " without a tilted work plane (expected G68.2 first)");
   if (!options_.orient || !options_.tip_after_turn) {
     fail(g.column, g.text + " needs the machine's rotary axes (expected a job, or vcut program --machine)");
   }
@@ -2911,7 +3013,8 @@ void Reader::twp_turn(const Code& g) {
   int tilt_sign = 0;
   if (const Word& p = word('P'); p.present) {
     if (p.value != 0.0 && p.value != 1.0 && p.value != 2.0) {
-      fail(p.column, g.text + " P" + num(p.value) + " (expected P0 the least rotary motion, P1 the tilting axis positive, P2 negative)");
+      fail(p.column, g.text + " P" + num(p.value) +
+                         " (expected P0 the least rotary motion, P1 the tilting axis positive, P2 negative)");
     }
     tilt_sign = p.value == 1.0 ? 1 : p.value == 2.0 ? -1 : 0;
   }
@@ -2946,7 +3049,8 @@ void Reader::home_return(const Code& g) {
     const Eigen::Vector3d gauge = state_.position_mm - tip_offset();
     for (int a = 0; a < 3; ++a) state_.parameters[base + static_cast<size_t>(a)] = gauge[a];
     for (int r = 0; r < 3; ++r) {
-      state_.parameters[base + 3 + static_cast<size_t>(r)] = state_.rotary.angle_rad[static_cast<size_t>(r)] * 180.0 / M_PI;
+      state_.parameters[base + 3 + static_cast<size_t>(r)] =
+          state_.rotary.angle_rad[static_cast<size_t>(r)] * 180.0 / M_PI;
     }
     return;
   }
@@ -2971,7 +3075,8 @@ void Reader::home_return(const Code& g) {
   home.start_mm = state_.position_mm;
   home.end_mm = state_.position_mm;
   std::array<bool, 3> moved{};
-  const Eigen::Vector3d tip = Eigen::Vector3d(state_.parameters[base], state_.parameters[base + 1], state_.parameters[base + 2]) + tip_offset();
+  const Eigen::Vector3d tip =
+      Eigen::Vector3d(state_.parameters[base], state_.parameters[base + 1], state_.parameters[base + 2]) + tip_offset();
   for (int a = 0; a < 3; ++a) {
     if (any && !named[a]) continue;
     home.end_mm[a] = tip[a];
@@ -2993,10 +3098,15 @@ void Reader::home_return(const Code& g) {
 // current height, a rapid down to R, the cycle's own in-and-out, and the retract to R (G99)
 // or to the height the line started at (G98). Heights in program coordinates.
 void Reader::cycle(int column, bool new_series) {
-  const char* name = state_.cycle == 730 ? "G73" : state_.cycle == 810 ? "G81" : state_.cycle == 820 ? "G82"
-                     : state_.cycle == 830 ? "G83" : state_.cycle == 850 ? "G85" : "G89";
+  const char* name = state_.cycle == 730   ? "G73"
+                     : state_.cycle == 810 ? "G81"
+                     : state_.cycle == 820 ? "G82"
+                     : state_.cycle == 830 ? "G83"
+                     : state_.cycle == 850 ? "G85"
+                                           : "G89";
   if (state_.plane != Plane::XY) {
-    unsupported(column, std::string(name) + "plane", std::string(name) + " outside the XY plane (this reader drills along Z, G17)");
+    unsupported(column, std::string(name) + "plane",
+                std::string(name) + " outside the XY plane (this reader drills along Z, G17)");
     forget_axes(true);
     return;
   }
@@ -3016,14 +3126,17 @@ void Reader::cycle(int column, bool new_series) {
   if (z_word.present) state_.cycle_z = z_word.value;
   if (q_word.present) state_.cycle_q = q_word.value;
   if (p_word.present) state_.cycle_p = p_word.value;
-  if (new_series && !r_word.present) fail(column, std::string(name) + " without R (expected the retract plane R on the cycle's first line)");
-  if (new_series && !z_word.present) fail(column, std::string(name) + " without Z (expected the hole bottom Z on the cycle's first line)");
+  if (new_series && !r_word.present)
+    fail(column, std::string(name) + " without R (expected the retract plane R on the cycle's first line)");
+  if (new_series && !z_word.present)
+    fail(column, std::string(name) + " without Z (expected the hole bottom Z on the cycle's first line)");
   const bool pecks = state_.cycle == 730 || state_.cycle == 830;
   if (pecks && !(state_.cycle_q > 0.0)) {
     fail(q_word.present ? q_word.column : column, std::string(name) + " needs Q > 0 (the peck depth)");
   }
   if ((state_.cycle == 820 || state_.cycle == 890) && state_.cycle_p < 0.0) {
-    fail(p_word.present ? p_word.column : column, std::string(name) + " P " + num(state_.cycle_p) + " (expected a dwell >= 0 s)");
+    fail(p_word.present ? p_word.column : column,
+         std::string(name) + " P " + num(state_.cycle_p) + " (expected a dwell >= 0 s)");
   }
   int repeats = 1;
   if (l_word.present) {
@@ -3051,8 +3164,8 @@ void Reader::cycle(int column, bool new_series) {
     }
   }
   if (bottom > r) {
-    fail(z_word.present ? z_word.column : column, std::string(name) + " with the bottom Z " + num(bottom / u) +
-                                                      " above R " + num(r / u) + " (expected Z <= R)");
+    fail(z_word.present ? z_word.column : column,
+         std::string(name) + " with the bottom Z " + num(bottom / u) + " above R " + num(r / u) + " (expected Z <= R)");
   }
   const std::array<bool, 3> all = {true, true, true};
   auto move = [&](MotionKind kind, double x, double y, double z) {
@@ -3122,7 +3235,8 @@ bool Reader::execute() {
   if (o_column_ != 0) {  // a Fanuc program number alone on its line
     if (options_.flavor == GcodeOptions::Flavor::LinuxCnc || !current_->executed) return true;
     // The next program's number after this program's blocks: this one ends (no M30 before it).
-    if (frames_.size() > 1) fail(o_column_, "a program number inside a called program (expected M99 before the next program)");
+    if (frames_.size() > 1)
+      fail(o_column_, "a program number inside a called program (expected M99 before the next program)");
     warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
     return false;
   }
@@ -3145,19 +3259,29 @@ bool Reader::execute() {
   for (const Code& g : ln.g) {
     if ((g.number != 650 && g.number != 660) || options_.flavor == GcodeOptions::Flavor::LinuxCnc) continue;
     const std::string code = g.number == 650 ? "G65" : "G66";
-    if (ln.g.size() > 1) fail(ln.g[&g == &ln.g[0] ? 1 : 0].column, code + " with another G code (expected " + code + " alone: its words are arguments)");
+    if (ln.g.size() > 1)
+      fail(ln.g[&g == &ln.g[0] ? 1 : 0].column,
+           code + " with another G code (expected " + code + " alone: its words are arguments)");
     const Word& p = word('P');
-    if (!p.present || p.value < 0.0 || p.value != std::floor(p.value)) fail(p.present ? p.column : g.column, code + " without P, the macro's program number (expected " + code + " P<number>)");
+    if (!p.present || p.value < 0.0 || p.value != std::floor(p.value))
+      fail(p.present ? p.column : g.column,
+           code + " without P, the macro's program number (expected " + code + " P<number>)");
     const Word& l = word('L');
-    if (l.present && (l.value < 0.0 || l.value != std::floor(l.value))) fail(l.column, code + " L " + num(l.value) + " (expected a whole number of calls)");
-    static const struct { char letter; int number; } kArguments[] = {
-        {'A', 1}, {'B', 2}, {'C', 3}, {'I', 4}, {'J', 5}, {'K', 6}, {'D', 7}, {'E', 8}, {'F', 9}, {'H', 11}, {'Q', 17},
-        {'R', 18}, {'S', 19}, {'T', 20}, {'U', 21}, {'V', 22}, {'W', 23}, {'X', 24}, {'Y', 25}, {'Z', 26}};
+    if (l.present && (l.value < 0.0 || l.value != std::floor(l.value)))
+      fail(l.column, code + " L " + num(l.value) + " (expected a whole number of calls)");
+    static const struct {
+      char letter;
+      int number;
+    } kArguments[] = {{'A', 1},  {'B', 2},  {'C', 3},  {'I', 4},  {'J', 5},  {'K', 6},  {'D', 7},
+                      {'E', 8},  {'F', 9},  {'H', 11}, {'Q', 17}, {'R', 18}, {'S', 19}, {'T', 20},
+                      {'U', 21}, {'V', 22}, {'W', 23}, {'X', 24}, {'Y', 25}, {'Z', 26}};
     std::vector<std::pair<int, double>> arguments;
     for (const auto& a : kArguments) {
       if (word(a.letter).present) arguments.emplace_back(a.number, word(a.letter).value);
     }
-    if (ln.radius.present || ln.angle.present) fail(ln.radius.present ? ln.radius.column : ln.angle.column, "polar @/^ on a " + code + " line (expected letter arguments)");
+    if (ln.radius.present || ln.angle.present)
+      fail(ln.radius.present ? ln.radius.column : ln.angle.column,
+           "polar @/^ on a " + code + " line (expected letter arguments)");
     if (ln.m.size() > 1) fail(ln.m[1].column, "two M arguments on a " + code + " line (expected at most one, #13)");
     if (ln.m.size() == 1) arguments.emplace_back(13, std::stod(ln.m[0].text.substr(1)));
     const long long repeats = l.present ? static_cast<long long>(l.value) : 1;
@@ -3168,7 +3292,8 @@ bool Reader::execute() {
       modal_call_ = ModalCall{static_cast<long long>(p.value), repeats, "G66 P" + num(p.value), arguments};
       return true;
     }
-    fanuc_call(Frame::Kind::Macro, static_cast<long long>(p.value), repeats, g.column, "G65 P" + num(p.value), arguments);
+    fanuc_call(Frame::Kind::Macro, static_cast<long long>(p.value), repeats, g.column, "G65 P" + num(p.value),
+               arguments);
     return true;
   }
 
@@ -3178,24 +3303,23 @@ bool Reader::execute() {
   bool axis_user_all = false;
   // Fanuc: G80 is the canned-cycle cancel (group 9), so "G0 G80" is a rapid that ends the
   // cycle; rs274ngc has G80 in the motion group and refuses the pair.
-  const bool g80_apart = options_.flavor != GcodeOptions::Flavor::LinuxCnc &&
-                         std::count_if(ln.g.begin(), ln.g.end(), [](const Code& g) { return g_info(g.number).group == kMotion; }) > 1;
+  const bool g80_apart =
+      options_.flavor != GcodeOptions::Flavor::LinuxCnc &&
+      std::count_if(ln.g.begin(), ln.g.end(), [](const Code& g) { return g_info(g.number).group == kMotion; }) > 1;
   for (const Code& g : ln.g) {
     if (g80_apart && g.number == 800) continue;
     const GInfo info = g_info(g.number);
     if (info.group >= 0) {
       const Code*& slot = by_group[static_cast<size_t>(info.group)];
       if (slot != nullptr) {
-        fail(g.column, "two G codes of the " + std::string(group_name(info.group)) +
-                           " group on one line, " + slot->text + " and " + g.text +
-                           " (expected at most one)");
+        fail(g.column, "two G codes of the " + std::string(group_name(info.group)) + " group on one line, " +
+                           slot->text + " and " + g.text + " (expected at most one)");
       }
       slot = &g;
     }
     if (info.supported) continue;
-    const std::string message = info.group < 0
-                                    ? "unknown G code " + g.text
-                                    : "unsupported G code " + g.text + " (" + info.what + ")";
+    const std::string message =
+        info.group < 0 ? "unknown G code " + g.text : "unsupported G code " + g.text + " (" + info.what + ")";
     unsupported(g.column, g.text, message);
     lenient_ = true;  // warning mode: the code and the words it would use are ignored
     if (info.group == kNonModal && info.uses_axes) {
@@ -3207,8 +3331,7 @@ bool Reader::execute() {
   // motion instead, so it goes with G0/G1).
   if (axis_user != nullptr && axis_user->number != 530 && by_group[kMotion] != nullptr &&
       by_group[kMotion]->number != 800) {
-    const Code* later =
-        axis_user->column > by_group[kMotion]->column ? axis_user : by_group[kMotion];
+    const Code* later = axis_user->column > by_group[kMotion]->column ? axis_user : by_group[kMotion];
     fail(later->column, axis_user->text + " and " + by_group[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
@@ -3218,14 +3341,15 @@ bool Reader::execute() {
   // Fanuc G68 X Y R: X Y are the rotation's centre, not a move.
   const Code* rotation = by_group[kRotation];
   if (rotation != nullptr && rotation->number == 680 && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
-    fail(rotation->column, "unknown G code " + rotation->text + " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
+    fail(rotation->column, "unknown G code " + rotation->text +
+                               " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
   }
   const bool rotates = rotation != nullptr && rotation->number != 690;  // G68 / G68.2 take X Y Z
-  const bool sets_offsets =
-      non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
+  const bool sets_offsets = non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
   if (rotates && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
     const Code* later = rotation->column > by_group[kMotion]->column ? rotation : by_group[kMotion];
-    fail(later->column, rotation->text + " and " + by_group[kMotion]->text + " both use the axis words (expected them on separate lines)");
+    fail(later->column, rotation->text + " and " + by_group[kMotion]->text +
+                            " both use the axis words (expected them on separate lines)");
   }
   if (sets_offsets && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
     const Code* later = non_modal->column > by_group[kMotion]->column ? non_modal : by_group[kMotion];
@@ -3233,9 +3357,10 @@ bool Reader::execute() {
                             " both use the axis words (expected them on separate lines)");
   }
   machine_coordinates_ = non_modal != nullptr && non_modal->number == 530;
-  const Code* length_axes = by_group[kToolLength] != nullptr && (by_group[kToolLength]->number == 431 ||
-                                                                 by_group[kToolLength]->number == 432)
-                                ? by_group[kToolLength] : nullptr;
+  const Code* length_axes =
+      by_group[kToolLength] != nullptr && (by_group[kToolLength]->number == 431 || by_group[kToolLength]->number == 432)
+          ? by_group[kToolLength]
+          : nullptr;
   if (length_axes != nullptr && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
     const Code* later = length_axes->column > by_group[kMotion]->column ? length_axes : by_group[kMotion];
     fail(later->column, length_axes->text + " and " + by_group[kMotion]->text +
@@ -3244,7 +3369,7 @@ bool Reader::execute() {
 
   // --- M codes.
   std::array<const Code*, 11> m_by_group{};  // by M group 0..10
-  bool m_code[74] = {};  // supported M codes present, by number (M2 and M30 end the program)
+  bool m_code[74] = {};                      // supported M codes present, by number (M2 and M30 end the program)
   bool program_end = false;
   const Code* flow_code = nullptr;  // M97, M98 or M99
   for (const Code& m : ln.m) {
@@ -3253,8 +3378,8 @@ bool Reader::execute() {
       const Code*& slot = m_by_group[static_cast<size_t>(group)];
       // LinuxCNC's rs274 refuses two M codes of one group on a line, M7 with M8 included.
       if (slot != nullptr) {
-        fail(m.column, "two M codes of one modal group on one line, " + slot->text + " and " +
-                           m.text + " (expected at most one)");
+        fail(m.column, "two M codes of one modal group on one line, " + slot->text + " and " + m.text +
+                           " (expected at most one)");
       }
       slot = &m;
     }
@@ -3271,7 +3396,9 @@ bool Reader::execute() {
       continue;
     }
     if (m.number == 97 || m.number == 98 || m.number == 99) {  // calls and returns, after the motion
-      if (flow_code != nullptr) fail(m.column, "two call or return M codes on one line, " + flow_code->text + " and " + m.text + " (expected one)");
+      if (flow_code != nullptr)
+        fail(m.column,
+             "two call or return M codes on one line, " + flow_code->text + " and " + m.text + " (expected one)");
       flow_code = &m;
       continue;
     }
@@ -3299,8 +3426,9 @@ bool Reader::execute() {
   for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
     if (w.present && !(dwell_axis && letter == 'U')) {
-      unsupported(w.column, std::string(1, letter),
-                  std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
+      unsupported(
+          w.column, std::string(1, letter),
+          std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
     }
   }
   for (char letter : {'A', 'B', 'C'}) {
@@ -3319,8 +3447,8 @@ bool Reader::execute() {
   for (char letter : {'X', 'Y', 'Z', 'I', 'J', 'K', 'R'}) {
     const Word& w = word(letter);
     if (w.present && std::abs(w.value * unit()) > kMaxMagnitude) {
-      fail(w.column, std::string(1, letter) + " " + num(w.value) + " in = " +
-                         num(w.value * unit()) + " mm is out of range (expected within +-1e6 mm)");
+      fail(w.column, std::string(1, letter) + " " + num(w.value) + " in = " + num(w.value * unit()) +
+                         " mm is out of range (expected within +-1e6 mm)");
     }
   }
   if (const Code* g = by_group[kFeedMode]) state_.inverse_time = g->number == 930;
@@ -3385,7 +3513,8 @@ bool Reader::execute() {
     if (m_code[70]) {
       saved_modes_ = saved;
     } else {
-      if (frames_.size() <= 1) fail(m_by_group[10]->column, "M73 outside a subroutine (expected it in a called o-word sub)");
+      if (frames_.size() <= 1)
+        fail(m_by_group[10]->column, "M73 outside a subroutine (expected it in a called o-word sub)");
       frame().autorestore = saved;
     }
   }
@@ -3399,8 +3528,7 @@ bool Reader::execute() {
   std::string p_user;  // the code that took the P word
   auto use_p = [&](const std::string& code) {
     if (!p_user.empty()) {
-      fail(p.column,
-           "P word used by both " + p_user + " and " + code + " (expected them on separate lines)");
+      fail(p.column, "P word used by both " + p_user + " and " + code + " (expected them on separate lines)");
     }
     p_user = code;
     used_['P' - 'A'] = true;
@@ -3408,7 +3536,9 @@ bool Reader::execute() {
   if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40 && dwell_axis) {
     // Fanuc: G4 X<seconds> or U<seconds> (P in ms): no motion.
     const Word& t = word('X').present ? word('X') : word('U');
-    if (t.value < 0.0) fail(t.column, "G4 " + std::string(word('X').present ? "X" : "U") + " " + num(t.value) + " (expected seconds >= 0)");
+    if (t.value < 0.0)
+      fail(t.column,
+           "G4 " + std::string(word('X').present ? "X" : "U") + " " + num(t.value) + " (expected seconds >= 0)");
   } else if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40) {  // G4 dwell
     if (!p.present) fail(g->column, "G4 dwell without P (expected P seconds)");
     if (p.value < 0.0) fail(p.column, "G4 P " + num(p.value) + " (expected seconds >= 0)");
@@ -3420,7 +3550,9 @@ bool Reader::execute() {
       if (g != nullptr) fail(g->column, g->text + " with cutter compensation on (" + what + "; expected G40 first)");
     };
     const Plane plane = state_.plane;
-    if (const Code* g = by_group[kPlane]; g != nullptr && (g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ) != plane) {
+    if (const Code* g = by_group[kPlane]; g != nullptr && (g->number == 170   ? Plane::XY
+                                                           : g->number == 180 ? Plane::ZX
+                                                                              : Plane::YZ) != plane) {
       refuse(g, "a plane change");
     }
     refuse(by_group[kCoordinateSystem], "a coordinate system change");
@@ -3428,7 +3560,8 @@ bool Reader::execute() {
     if (non_modal != nullptr && (homes || stores_home || (non_modal->number >= 920 && non_modal->number <= 923))) {
       refuse(non_modal, "a move home or an axis offset");
     }
-    if (state_.motion == Motion::Cycle || (by_group[kMotion] != nullptr && by_group[kMotion]->number >= 730 && by_group[kMotion]->number != 800)) {
+    if (state_.motion == Motion::Cycle ||
+        (by_group[kMotion] != nullptr && by_group[kMotion]->number >= 730 && by_group[kMotion]->number != 800)) {
       refuse(by_group[kMotion] != nullptr ? by_group[kMotion] : &ln.g.front(), "a canned cycle");
     }
     if (m_code[6]) refuse(m_by_group[6], "a tool change");
@@ -3437,10 +3570,12 @@ bool Reader::execute() {
     state_.plane = g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ;
   }
   if (rotation != nullptr) {
-    if (state_.comp.side != Comp::Side::Off) fail(rotation->column, rotation->text + " with cutter compensation on (expected G40 first)");
+    if (state_.comp.side != Comp::Side::Off)
+      fail(rotation->column, rotation->text + " with cutter compensation on (expected G40 first)");
     if (corner_) {
-      fail(rotation->column, std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
-                                 " needs a G1 line next (expected the corner's second line before " + rotation->text + ")");
+      fail(rotation->column,
+           std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
+               " needs a G1 line next (expected the corner's second line before " + rotation->text + ")");
     }
     if (rotation->number == 690) {
       state_.rotation_rad = 0.0;
@@ -3448,7 +3583,8 @@ bool Reader::execute() {
     } else if (rotation->number == 682) {
       twp_begin(*rotation);
     } else {
-      if (state_.twp && state_.twp_feature) fail(rotation->column, "G68 with a tilted work plane on (expected G69 first)");
+      if (state_.twp && state_.twp_feature)
+        fail(rotation->column, "G68 with a tilted work plane on (expected G69 first)");
       if (state_.plane != Plane::XY) fail(rotation->column, "G68 outside G17 (this reader rotates in the XY plane)");
       const Word& r = word('R');
       if (!r.present) fail(rotation->column, "G68 without R (expected R, the rotation in degrees)");
@@ -3471,9 +3607,11 @@ bool Reader::execute() {
     };
     if (machine_coordinates_) refuse(non_modal, "machine coordinates");
     if (homes || stores_home) refuse(non_modal, "a reference position");
-    if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) refuse(non_modal, "an offset change");
+    if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923))
+      refuse(non_modal, "an offset change");
     refuse(by_group[kCoordinateSystem], "a coordinate system change");
-    if (by_group[kToolLength] != nullptr && by_group[kToolLength]->number == 435) refuse(by_group[kToolLength], "a tool axis vector");
+    if (by_group[kToolLength] != nullptr && by_group[kToolLength]->number == 435)
+      refuse(by_group[kToolLength], "a tool axis vector");
     if (m_code[6]) refuse(m_by_group[6], "a tool change");
   }
   if (const Code* g = by_group[kCutterComp]) {
@@ -3484,8 +3622,9 @@ bool Reader::execute() {
     }
   }
   if (const Code* g = by_group[kToolLength]) {
-    state_.tcp = g->number == 434 ? GcodeState::Tcp::Angles
-                 : g->number == 435 ? GcodeState::Tcp::Vector : GcodeState::Tcp::Off;
+    state_.tcp = g->number == 434   ? GcodeState::Tcp::Angles
+                 : g->number == 435 ? GcodeState::Tcp::Vector
+                                    : GcodeState::Tcp::Off;
     state_.length_comp = g->number == 430 || g->number == 431 || g->number == 432;
   }
   if (tcp_m_code_ >= 0) state_.tcp = tcp_m_code_ ? GcodeState::Tcp::Angles : GcodeState::Tcp::Off;
@@ -3511,8 +3650,7 @@ bool Reader::execute() {
     for (char letter : {'P', 'Q'}) {
       const Word& w = word(letter);
       if (w.present && w.value < 0.0) {
-        fail(w.column,
-             std::string("G64 ") + letter + " " + num(w.value) + " (expected a tolerance >= 0)");
+        fail(w.column, std::string("G64 ") + letter + " " + num(w.value) + " (expected a tolerance >= 0)");
       }
     }
     state_.exact_stop = false;
@@ -3529,19 +3667,32 @@ bool Reader::execute() {
   const bool was_cycle = state_.motion == Motion::Cycle;
   const int previous_cycle = state_.cycle;
   if (state_.nurbs && (by_group[kMotion] == nullptr || by_group[kMotion]->number != 53)) {
-    if (const Code* g = by_group[kMotion]) fail(g->column, g->text + " inside a G5.2 NURBS block (expected G5.3 first)");
+    if (const Code* g = by_group[kMotion])
+      fail(g->column, g->text + " inside a G5.2 NURBS block (expected G5.3 first)");
   }
   if (const Code* g = by_group[kMotion]; g != nullptr && g->number == 53) {
     nurbs_end(g->column);
   } else if (const Code* g = by_group[kMotion]) {
-    static const std::pair<int, Motion> kMotions[] = {
-        {0, Motion::Rapid},          {10, Motion::Linear},      {20, Motion::ArcClockwise},
-        {30, Motion::ArcCounterClockwise}, {800, Motion::None}, {330, Motion::SpindleSync},
-        {331, Motion::RigidTap},     {50, Motion::CubicSpline}, {51, Motion::QuadraticSpline},
-        {730, Motion::Cycle},        {810, Motion::Cycle},      {820, Motion::Cycle},
-        {830, Motion::Cycle},        {850, Motion::Cycle},      {890, Motion::Cycle},
-        {382, Motion::Probe},        {383, Motion::Probe},      {384, Motion::Probe},
-        {385, Motion::Probe},        {52, Motion::Nurbs}};
+    static const std::pair<int, Motion> kMotions[] = {{0, Motion::Rapid},
+                                                      {10, Motion::Linear},
+                                                      {20, Motion::ArcClockwise},
+                                                      {30, Motion::ArcCounterClockwise},
+                                                      {800, Motion::None},
+                                                      {330, Motion::SpindleSync},
+                                                      {331, Motion::RigidTap},
+                                                      {50, Motion::CubicSpline},
+                                                      {51, Motion::QuadraticSpline},
+                                                      {730, Motion::Cycle},
+                                                      {810, Motion::Cycle},
+                                                      {820, Motion::Cycle},
+                                                      {830, Motion::Cycle},
+                                                      {850, Motion::Cycle},
+                                                      {890, Motion::Cycle},
+                                                      {382, Motion::Probe},
+                                                      {383, Motion::Probe},
+                                                      {384, Motion::Probe},
+                                                      {385, Motion::Probe},
+                                                      {52, Motion::Nurbs}};
     state_.motion = Motion::Unsupported;
     for (const auto& [code, motion] : kMotions) {
       if (code == g->number) state_.motion = motion;
@@ -3574,13 +3725,17 @@ bool Reader::execute() {
     fail(motion_code->column, "G5.2 without X and Y (expected the first control point on its line)");
   }
   if (homes || stores_home) {
-    if (stores_home && has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it stores the current position)");
+    if (stores_home && has_axis)
+      fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text +
+                            " alone: it stores the current position)");
     home_return(*non_modal);
   } else if (non_modal != nullptr && non_modal->number == 310) {
     if (!has_axis) fail(non_modal->column, "G31 without axis words (expected the point the probe moves toward)");
     probe(non_modal->column, 310);
   } else if (non_modal != nullptr && (non_modal->number == 531 || non_modal->number == 536)) {
-    if (has_axis) fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
+    if (has_axis)
+      fail(axis_column,
+           non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
     used_['P' - 'A'] = true;
     twp_turn(*non_modal);
   } else if (axis_user != nullptr) {
@@ -3628,15 +3783,19 @@ bool Reader::execute() {
         if (state_.tcp == GcodeState::Tcp::Vector) {
           for (char letter : {'A', 'B', 'C'}) {
             if (word(letter).present) {
-              fail(word(letter).column, std::string(1, letter) + " word in G43.5 (the tool axis is I J K; expected G43.4 for rotary words)");
+              fail(word(letter).column,
+                   std::string(1, letter) + " word in G43.5 (the tool axis is I J K; expected G43.4 for rotary words)");
             }
           }
           const bool ijk = word('I').present || word('J').present || word('K').present;
           if (ijk) {
             // Fanuc: the components not given are 0.
             const Eigen::Vector3d v(word('I').value, word('J').value, word('K').value);
-            if (!(v.norm() > 1e-9)) fail(word('I').present ? word('I').column : word('J').present ? word('J').column : word('K').column,
-                                        "G43.5 tool axis I J K of zero length (expected a direction)");
+            if (!(v.norm() > 1e-9))
+              fail(word('I').present   ? word('I').column
+                   : word('J').present ? word('J').column
+                                       : word('K').column,
+                   "G43.5 tool axis I J K of zero length (expected a direction)");
             line_axis_ = v.normalized();
             for (char letter : {'I', 'J', 'K'}) used_[letter - 'A'] = true;
           }
@@ -3664,8 +3823,8 @@ bool Reader::execute() {
   }
 
   // Fanuc G66: the modal macro after a line that moves an axis (never from inside one).
-  const bool modal_call = modal_call_ && line_moves &&
-                          std::none_of(frames_.begin(), frames_.end(), [](const Frame& f) { return f.modal; });
+  const bool modal_call =
+      modal_call_ && line_moves && std::none_of(frames_.begin(), frames_.end(), [](const Frame& f) { return f.modal; });
   if (modal_call && flow_code != nullptr) {
     fail(flow_code->column, flow_code->text + " on a line that calls the G66 macro (expected it on a line of its own)");
   }
@@ -3675,19 +3834,22 @@ bool Reader::execute() {
     const Word& pw = word('P');
     const Word& lw = word('L');
     used_['P' - 'A'] = used_['L' - 'A'] = true;
-    if (lw.present && (lw.value < 0.0 || lw.value != std::floor(lw.value))) fail(lw.column, flow_code->text + " L " + num(lw.value) + " (expected a whole number of passes)");
+    if (lw.present && (lw.value < 0.0 || lw.value != std::floor(lw.value)))
+      fail(lw.column, flow_code->text + " L " + num(lw.value) + " (expected a whole number of passes)");
     if (pw.present && (pw.value < 0.0 || pw.value != std::floor(pw.value) || pw.value > 99999999.0)) {
       fail(pw.column, flow_code->text + " P " + num(pw.value) + " (expected a whole number)");
     }
     if (flow_code->number == 99) {
       if (!fanuc_return()) {
         // M99 in the main program: the control starts it again, endlessly; read once.
-        warn(flow_code->column, "M99 in the main program (the control runs it again from the top, endlessly); read once");
+        warn(flow_code->column,
+             "M99 in the main program (the control runs it again from the top, endlessly); read once");
         return false;
       }
       return true;
     }
-    if (!pw.present) fail(flow_code->column, flow_code->text + " without P (expected " + flow_code->text + " P<number>)");
+    if (!pw.present)
+      fail(flow_code->column, flow_code->text + " without P (expected " + flow_code->text + " P<number>)");
     long long program = static_cast<long long>(pw.value), repeats = lw.present ? static_cast<long long>(lw.value) : 1;
     if (flow_code->number == 98 && !lw.present && options_.flavor == GcodeOptions::Flavor::Fanuc && program > 9999) {
       repeats = program / 10000;  // Fanuc: M98 P30012 runs O0012 three times
@@ -3767,8 +3929,8 @@ bool Reader::execute() {
 
 }  // namespace
 
-void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options,
-                kinematics::Program& program, GcodeState& state) {
+void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options, kinematics::Program& program,
+                GcodeState& state) {
   validate_options(name, options);
   Reader reader(options, program, state);
   reader.run(in, name);

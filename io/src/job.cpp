@@ -11,9 +11,12 @@ namespace vcut::io {
 
 const char* engine_name(Engine engine) {
   switch (engine) {
-    case Engine::Dexel: return "dexel";
-    case Engine::Vdb: return "vdb";
-    case Engine::Both: return "both";
+    case Engine::Dexel:
+      return "dexel";
+    case Engine::Vdb:
+      return "vdb";
+    case Engine::Both:
+      return "both";
   }
   return "dexel";
 }
@@ -57,19 +60,22 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
   if (servo["period"]) {
     // A period beyond a second is a unit mistake (ms for s), not an interpolator.
     s.period_s = yaml.positive(servo["period"], "servo.period");
-    if (s.period_s > 1.0) yaml.fail(servo["period"], "servo.period", "the interpolation period in seconds, > 0 and at most 1 (e.g. 0.001)");
+    if (s.period_s > 1.0)
+      yaml.fail(servo["period"], "servo.period", "the interpolation period in seconds, > 0 and at most 1 (e.g. 0.001)");
   }
   const std::vector<kinematics::AxisSpec>& axes = job.machine_spec.axes;
   s.axes.assign(std::max<std::size_t>(1, axes.size()), all);
   if (const YAML::Node per_axis = servo["axes"]) {
-    if (!per_axis.IsMap()) yaml.fail(per_axis, "servo.axes", "a map from axis letters to loop settings, e.g. {X: {kv: 18}}");
+    if (!per_axis.IsMap())
+      yaml.fail(per_axis, "servo.axes", "a map from axis letters to loop settings, e.g. {X: {kv: 18}}");
     std::string letters;
     for (const auto& a : axes) letters += a.letter;
     for (const auto& kv : per_axis) {
       const std::string key = kv.first.as<std::string>();
       const std::size_t index = key.size() == 1 ? letters.find(key[0]) : std::string::npos;
       if (index == std::string::npos)
-        yaml.fail(kv.first, "servo.axes." + key, "an axis of the machine " + job.machine_spec.name + " (one of " + letters + ")");
+        yaml.fail(kv.first, "servo.axes." + key,
+                  "an axis of the machine " + job.machine_spec.name + " (one of " + letters + ")");
       yaml.only_keys(kv.second, "servo.axes." + key, {"kv", "omega_n", "zeta", "feed_forward"});
       read_servo_axis(yaml, kv.second, "servo.axes." + key + ".", s.axes[index]);
     }
@@ -85,7 +91,10 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
                   "a position loop stable at the period %g s (axis %s: Kv %g/s diverges when sampled; "
                   "an ideal velocity loop needs Kv x period < 2)",
                   s.period_s, letter.c_str(), s.axes[i].kv_per_s);
-    yaml.fail(own ? per_axis["kv"] : servo["kv"] ? servo["kv"] : servo, own ? "servo.axes." + letter + ".kv" : "servo.kv", what);
+    yaml.fail(own           ? per_axis["kv"]
+              : servo["kv"] ? servo["kv"]
+                            : servo,
+              own ? "servo.axes." + letter + ".kv" : "servo.kv", what);
   }
   job.servo = s;
 }
@@ -101,8 +110,9 @@ Job read_job(const std::string& path) {
   const YamlReader yaml(path);
   const YAML::Node root = yaml.load();
   if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
-  yaml.only_keys(root, "", {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify",
-                            "feed", "servo", "errors", "start"});
+  yaml.only_keys(root, "",
+                 {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify",
+                  "feed", "servo", "errors", "start"});
   const fs::path base = fs::absolute(fs::path(path)).parent_path();
   Job job;
   job.file = path;
@@ -113,8 +123,10 @@ Job read_job(const std::string& path) {
   job.machine_file = resolve_machine(job.machine);
   if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
   if (!fs::exists(job.machine_file))
-    yaml.fail(root["machine"], "machine", "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
-                                          "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " + job.machine_file + ")");
+    yaml.fail(root["machine"], "machine",
+              "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
+              "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " +
+                  job.machine_file + ")");
   job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
 
   job.tools_file = resolve(base, yaml.text(yaml.require(root, "tools", ""), "tools"));
@@ -129,7 +141,8 @@ Job read_job(const std::string& path) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
   } else {
     const YAML::Node files = yaml.require(program, "files", "program");
-    if (!files.IsSequence() || files.size() == 0) yaml.fail(files, "program.files", "a non-empty list of program files");
+    if (!files.IsSequence() || files.size() == 0)
+      yaml.fail(files, "program.files", "a non-empty list of program files");
     for (const auto& f : files) job.program_files.push_back(resolve(base, yaml.text(f, "program.files")));
   }
   if (program["dialect"]) {
@@ -162,17 +175,20 @@ Job read_job(const std::string& path) {
   }
   if (program["initial_tool"]) {
     const double t = yaml.positive(program["initial_tool"], "program.initial_tool");
-    if (t != std::floor(t) || t > 99999) yaml.fail(program["initial_tool"], "program.initial_tool", "a T number from 1 to 99999");
+    if (t != std::floor(t) || t > 99999)
+      yaml.fail(program["initial_tool"], "program.initial_tool", "a T number from 1 to 99999");
     job.initial_tool = static_cast<int>(t);
   }
   if (program["max_lines"]) {
     const double n = yaml.positive(program["max_lines"], "program.max_lines");
-    if (n != std::floor(n) || n > 1e12) yaml.fail(program["max_lines"], "program.max_lines", "a whole number of lines up to 1e12");
+    if (n != std::floor(n) || n > 1e12)
+      yaml.fail(program["max_lines"], "program.max_lines", "a whole number of lines up to 1e12");
     job.max_lines = static_cast<long long>(n);
   }
   if (program["block_delete"]) {
     const std::string mode = yaml.text(program["block_delete"], "program.block_delete");
-    if (mode != "on" && mode != "off") yaml.fail(program["block_delete"], "program.block_delete", "on (skip lines starting with '/') or off (run them)");
+    if (mode != "on" && mode != "off")
+      yaml.fail(program["block_delete"], "program.block_delete", "on (skip lines starting with '/') or off (run them)");
     job.block_delete = mode == "on";
   }
   if (program["arc_tolerance"]) {
@@ -212,16 +228,20 @@ Job read_job(const std::string& path) {
   } else if (const YAML::Node cyl = stock["cylinder"]) {
     yaml.only_keys(cyl, "stock.cylinder", {"center", "axis", "radius", "height"});
     job.stock.kind = StockSpec::Kind::Cylinder;
-    job.stock.cylinder.base_center_mm = yaml.vec3(yaml.require(cyl, "center", "stock.cylinder"), "stock.cylinder.center");
+    job.stock.cylinder.base_center_mm =
+        yaml.vec3(yaml.require(cyl, "center", "stock.cylinder"), "stock.cylinder.center");
     job.stock.cylinder.axis = cyl["axis"] ? yaml.vec3(cyl["axis"], "stock.cylinder.axis") : Eigen::Vector3d::UnitZ();
     if (job.stock.cylinder.axis.norm() < 1e-9) yaml.fail(cyl["axis"], "stock.cylinder.axis", "a non-zero vector");
     job.stock.cylinder.axis.normalize();
-    job.stock.cylinder.radius_mm = yaml.positive(yaml.require(cyl, "radius", "stock.cylinder"), "stock.cylinder.radius");
-    job.stock.cylinder.height_mm = yaml.positive(yaml.require(cyl, "height", "stock.cylinder"), "stock.cylinder.height");
+    job.stock.cylinder.radius_mm =
+        yaml.positive(yaml.require(cyl, "radius", "stock.cylinder"), "stock.cylinder.radius");
+    job.stock.cylinder.height_mm =
+        yaml.positive(yaml.require(cyl, "height", "stock.cylinder"), "stock.cylinder.height");
   } else {
     job.stock.kind = StockSpec::Kind::Mesh;
     const YAML::Node mesh = stock["mesh"];
-    job.stock.mesh_file = resolve(base, yaml.text(mesh.IsMap() ? yaml.require(mesh, "file", "stock.mesh") : mesh, "stock.mesh"));
+    job.stock.mesh_file =
+        resolve(base, yaml.text(mesh.IsMap() ? yaml.require(mesh, "file", "stock.mesh") : mesh, "stock.mesh"));
   }
 
   if (const YAML::Node design = root["design"]) {
@@ -240,14 +260,19 @@ Job read_job(const std::string& path) {
     yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
     if (engine["kind"]) {
       const std::string kind = yaml.text(engine["kind"], "engine.kind");
-      if (kind == "dexel") job.engine = Engine::Dexel;
-      else if (kind == "vdb") job.engine = Engine::Vdb;
-      else if (kind == "both") job.engine = Engine::Both;
-      else yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
+      if (kind == "dexel")
+        job.engine = Engine::Dexel;
+      else if (kind == "vdb")
+        job.engine = Engine::Vdb;
+      else if (kind == "both")
+        job.engine = Engine::Both;
+      else
+        yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
     }
     if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
     if (const YAML::Node threads = engine["threads"]) {
-      if (threads.IsScalar() && threads.Scalar() == "auto") job.threads = 0;
+      if (threads.IsScalar() && threads.Scalar() == "auto")
+        job.threads = 0;
       else {
         job.threads = yaml.integer(threads, "engine.threads");
         if (job.threads < 1) yaml.fail(threads, "engine.threads", "auto or a positive count");
@@ -257,21 +282,26 @@ Job read_job(const std::string& path) {
 
   job.out_dir = resolve(base, "out/" + job.name);
   if (const YAML::Node report = root["report"]) {
-    yaml.only_keys(report, "report", {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
+    yaml.only_keys(report, "report",
+                   {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
     if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
-    if (report["gouge_tolerance"]) job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
-    if (report["excess_tolerance"]) job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
+    if (report["gouge_tolerance"])
+      job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
+    if (report["excess_tolerance"])
+      job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
     if (report["collision_tolerance"])
       job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
     if (const YAML::Node page = report["page_triangles"]) {
       const int n = yaml.integer(page, "report.page_triangles");
-      if (n < 1000) yaml.fail(page, "report.page_triangles", "a count of at least 1000 (the machined mesh shown in report.html)");
+      if (n < 1000)
+        yaml.fail(page, "report.page_triangles", "a count of at least 1000 (the machined mesh shown in report.html)");
       job.page_triangles = static_cast<std::size_t>(n);
     }
   }
   if (const YAML::Node densify = root["densify"]) {
     yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
-    if (densify["chord_tolerance"]) job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
+    if (densify["chord_tolerance"])
+      job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
     if (densify["step"]) job.step_mm = yaml.positive(densify["step"], "densify.step");
     if (densify["angle"]) job.angle_step_deg = yaml.positive(densify["angle"], "densify.angle");
     if (densify["tolerance"]) job.densify_tolerance_mm = yaml.positive(densify["tolerance"], "densify.tolerance");
@@ -279,7 +309,8 @@ Job read_job(const std::string& path) {
   }
   if (const YAML::Node feed = root["feed"]) {
     yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
-    if (feed["acceleration"]) job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
+    if (feed["acceleration"])
+      job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
     if (feed["jerk"]) job.feed.path_jerk_mm_per_s3 = yaml.positive(feed["jerk"], "feed.jerk");
     if (feed["rapid"]) job.feed.rapid_mm_per_min = yaml.positive(feed["rapid"], "feed.rapid");
     if (feed["lookahead"]) {
@@ -304,7 +335,8 @@ Job read_job(const std::string& path) {
   }
   if (const YAML::Node errors = root["errors"]) {
     const std::string e = yaml.text(errors, "errors");
-    if (e != "machine" && e != "none") yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
+    if (e != "machine" && e != "none")
+      yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
     job.apply_errors = e == "machine";
   }
   return job;

@@ -21,8 +21,8 @@ class LineSource {
   // Lines in `bytes` more bytes, estimated from the first read (after the first next()).
   size_t estimate_lines(double bytes) const {
     if (first_bytes_ == 0 || !(bytes > 0.0)) return 0;
-    return static_cast<size_t>(std::min(
-        1e9, bytes * static_cast<double>(first_newlines_ + 1) / static_cast<double>(first_bytes_)));
+    return static_cast<size_t>(
+        std::min(1e9, bytes * static_cast<double>(first_newlines_ + 1) / static_cast<double>(first_bytes_)));
   }
   Result next(std::string& line) {
     line.clear();
@@ -35,8 +35,7 @@ class LineSource {
         pos_ = 0;
         if (reads_++ == 0) {
           first_bytes_ = end_;
-          first_newlines_ =
-              static_cast<size_t>(std::count(buffer_.data(), buffer_.data() + end_, '\n'));
+          first_newlines_ = static_cast<size_t>(std::count(buffer_.data(), buffer_.data() + end_, '\n'));
         }
         if (!in_) eof_ = true;
         if (end_ == 0) return any ? kLine : kEnd;

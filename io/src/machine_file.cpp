@@ -24,17 +24,14 @@ constexpr double kMinPerS = 1.0 / 60.0;
 // Translations along, then rotations about the frame's x y z.
 constexpr std::string_view kAxisLetters = "XYZABC";
 
-std::string join(const std::string& where, const std::string& key) {
-  return where.empty() ? key : where + "." + key;
-}
+std::string join(const std::string& where, const std::string& key) { return where.empty() ? key : where + "." + key; }
 
 // A key that is a list, a map or null ("? [a, b]: 1", "~: 1") is never one of ours (and
 // yaml-cpp cannot give its text).
 void scalar_keys(const YamlReader& yaml, const YAML::Node& map, const std::string& where) {
   for (const auto& kv : map)
     if (!kv.first.IsScalar())
-      yaml.fail(kv.first, where.empty() ? "machine" : where,
-                "a plain key (not a list, map or null)");
+      yaml.fail(kv.first, where.empty() ? "machine" : where, "a plain key (not a list, map or null)");
 }
 
 // yaml-cpp keeps both entries of a repeated key and answers map[key] with the first one, so
@@ -64,8 +61,7 @@ AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::No
   const std::string where = "axes." + letter;
   if (letter.size() != 1 || kAxisLetters.find(letter[0]) == std::string::npos)
     yaml.fail(key, where, "an axis letter X, Y, Z, A, B or C");
-  if (!a.IsMap())
-    yaml.fail(a, where, "a map like {kind: linear, direction: [1, 0, 0], limits: [min, max]}");
+  if (!a.IsMap()) yaml.fail(a, where, "a map like {kind: linear, direction: [1, 0, 0], limits: [min, max]}");
   AxisSpec axis;
   axis.letter = letter[0];
   const YAML::Node kind = yaml.require(a, "kind", where);
@@ -80,18 +76,14 @@ AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::No
   if (axis.kind == AxisKind::Linear) {
     for (const char* k : {"axis", "center"})
       if (a[k])
-        yaml.fail(a[k], join(where, k),
-                  "'direction' for a linear axis ('axis' and 'center' are for rotary axes)");
-    check_keys(yaml, a, where,
-               {"kind", "direction", "limits", "max_velocity", "max_acceleration", "max_jerk"});
+        yaml.fail(a[k], join(where, k), "'direction' for a linear axis ('axis' and 'center' are for rotary axes)");
+    check_keys(yaml, a, where, {"kind", "direction", "limits", "max_velocity", "max_acceleration", "max_jerk"});
     axis.direction = yaml.vec3(yaml.require(a, "direction", where), where + ".direction");
   } else {
     if (a["direction"])
       yaml.fail(a["direction"], where + ".direction",
                 "'axis' and 'center' for a rotary axis ('direction' is for linear axes)");
-    check_keys(
-        yaml, a, where,
-        {"kind", "axis", "center", "limits", "max_velocity", "max_acceleration", "max_jerk"});
+    check_keys(yaml, a, where, {"kind", "axis", "center", "limits", "max_velocity", "max_acceleration", "max_jerk"});
     axis.direction = yaml.vec3(yaml.require(a, "axis", where), where + ".axis");
     axis.center_mm = yaml.vec3(yaml.require(a, "center", where), where + ".center");
   }
@@ -101,8 +93,7 @@ AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::No
   const double unit = axis.kind == AxisKind::Rotary ? kRadPerDeg : 1.0;
   if (const YAML::Node limits = a["limits"]; limits && !limits.IsNull()) {
     if (!limits.IsSequence() || limits.size() != 2)
-      yaml.fail(limits, where + ".limits",
-                "a list of two numbers [min, max], or null for a continuous axis");
+      yaml.fail(limits, where + ".limits", "a list of two numbers [min, max], or null for a continuous axis");
     axis.limits = std::make_pair(yaml.number(limits[0], where + ".limits") * unit,
                                  yaml.number(limits[1], where + ".limits") * unit);
   }
@@ -121,8 +112,8 @@ AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::No
 
 // A component error: a constant, or {table: [[position, value], ...]} interpolated over the
 // axis position. Values in um or urad, positions in mm or deg.
-ErrorTable read_error_table(const YamlReader& yaml, const YAML::Node& node,
-                            const std::string& where, double value_unit, double position_unit) {
+ErrorTable read_error_table(const YamlReader& yaml, const YAML::Node& node, const std::string& where, double value_unit,
+                            double position_unit) {
   ErrorTable table;
   if (node.IsScalar()) {
     table.values.push_back(yaml.number(node, where) * value_unit);
@@ -134,8 +125,7 @@ ErrorTable read_error_table(const YamlReader& yaml, const YAML::Node& node,
   if (!rows.IsSequence() || rows.size() < 2)
     yaml.fail(rows, where + ".table", "a list of at least two rows [position, value]");
   for (const auto& row : rows) {
-    if (!row.IsSequence() || row.size() != 2)
-      yaml.fail(row, where + ".table", "a row [position, value]");
+    if (!row.IsSequence() || row.size() != 2) yaml.fail(row, where + ".table", "a row [position, value]");
     // Compared in internal units: deg -> rad can round two tiny positions (0 and 4.9e-324
     // deg) to the same one.
     const double position = yaml.number(row[0], where + ".table") * position_unit;
@@ -150,15 +140,13 @@ ErrorTable read_error_table(const YamlReader& yaml, const YAML::Node& node,
 // ISO 230-1 names: E_<T><L> a component error of axis L (T = X Y Z translation along, A B C
 // rotation about the frame's x y z), E_<T>0<L> a location error of axis L.
 void read_errors(const YamlReader& yaml, const YAML::Node& errors, MachineSpec& spec) {
-  if (!errors.IsMap())
-    yaml.fail(errors, "errors", "a map from ISO 230-1 error names to values, like {E_XX: 5}");
+  if (!errors.IsMap()) yaml.fail(errors, "errors", "a map from ISO 230-1 error names to values, like {E_XX: 5}");
   unique_keys(yaml, errors, "errors");
   for (const auto& kv : errors) {
     const std::string name = yaml.text(kv.first, "errors");
     const std::string where = "errors." + name;
     const bool location = name.size() == 5 && name[3] == '0';
-    if (name.rfind("E_", 0) != 0 || (name.size() != 4 && !location) ||
-        kAxisLetters.find(name[2]) == std::string::npos)
+    if (name.rfind("E_", 0) != 0 || (name.size() != 4 && !location) || kAxisLetters.find(name[2]) == std::string::npos)
       yaml.fail(kv.first, where,
                 "an ISO 230-1 error name like E_XX, E_CZ (component) or E_X0C, E_C0Y (location) "
                 "(unknown error name)");
@@ -167,19 +155,17 @@ void read_errors(const YamlReader& yaml, const YAML::Node& errors, MachineSpec& 
     for (AxisSpec& a : spec.axes)
       if (a.letter == letter) axis = &a;
     if (!axis)
-      yaml.fail(kv.first, where,
-                std::string("an error of an axis of this machine (it has no axis ") + letter + ")");
+      yaml.fail(kv.first, where, std::string("an error of an axis of this machine (it has no axis ") + letter + ")");
     const size_t term = kAxisLetters.find(name[2]);
     const bool rotation = term >= 3;
     const int i = static_cast<int>(term % 3);
     if (location) {
-      if (!kv.second.IsScalar())
-        yaml.fail(kv.second, where, "a number (location errors are constants)");
+      if (!kv.second.IsScalar()) yaml.fail(kv.second, where, "a number (location errors are constants)");
       const double value = yaml.number(kv.second, where);
       if (axis->kind == AxisKind::Linear && !rotation)
         yaml.fail(kv.first, where,
-                  std::string("a squareness error E_A0") + letter + "/E_B0" + letter + "/E_C0" +
-                      letter + ": offsets have no meaning for a linear axis");
+                  std::string("a squareness error E_A0") + letter + "/E_B0" + letter + "/E_C0" + letter +
+                      ": offsets have no meaning for a linear axis");
       if (rotation)
         axis->location.tilt_rad[i] = value * kRadPerUrad;
       else
@@ -188,8 +174,7 @@ void read_errors(const YamlReader& yaml, const YAML::Node& errors, MachineSpec& 
       const double position_unit = axis->kind == AxisKind::Rotary ? kRadPerDeg : 1.0;
       ErrorTable& table = rotation ? axis->errors.rotation_rad[static_cast<size_t>(i)]
                                    : axis->errors.translation_mm[static_cast<size_t>(i)];
-      table = read_error_table(yaml, kv.second, where, rotation ? kRadPerUrad : kMmPerUm,
-                               position_unit);
+      table = read_error_table(yaml, kv.second, where, rotation ? kRadPerUrad : kMmPerUm, position_unit);
     }
   }
 }
@@ -205,42 +190,37 @@ YAML::Mark mark_of(const YAML::Node& map, const std::string& path, const YAML::M
     if (!kv.first.IsScalar() || kv.first.Scalar() != head) continue;
     const YAML::Node& value = kv.second;
     const bool inline_value = value.IsScalar() || value.Style() == YAML::EmitterStyle::Flow;
-    const YAML::Mark here =
-        inline_value && !value.Mark().is_null() ? value.Mark() : kv.first.Mark();
+    const YAML::Mark here = inline_value && !value.Mark().is_null() ? value.Mark() : kv.first.Mark();
     return dot == std::string::npos ? here : mark_of(value, path.substr(dot + 1), here);
   }
   return fallback;
 }
 
-InputError problem_at(const std::string& file, const YAML::Node& root,
-                      const kinematics::SpecProblem& p) {
+InputError problem_at(const std::string& file, const YAML::Node& root, const kinematics::SpecProblem& p) {
   const YAML::Mark mark = mark_of(root, p.key, root.Mark());
   const int line = mark.is_null() ? 0 : mark.line + 1;
   const int column = mark.is_null() ? 0 : mark.column + 1;
   // validate() words its problems as what was expected, like YamlReader::fail; a warning
   // says what it repaired.
-  return InputError(file, line, column,
-                    "'" + p.key + "': " + (p.warning ? "" : "expected ") + p.message);
+  return InputError(file, line, column, "'" + p.key + "': " + (p.warning ? "" : "expected ") + p.message);
 }
 
 MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::path& base) {
   if (!root.IsMap()) {
     // An empty file (or one of comments only) has no node to point at: its first line.
     if (root.Mark().is_null())
-      throw InputError(yaml.file(), 1, 1,
-                       "'machine': expected a map of machine settings (the file is empty)");
+      throw InputError(yaml.file(), 1, 1, "'machine': expected a map of machine settings (the file is empty)");
     yaml.fail(root, "machine", "a map of machine settings");
   }
   check_keys(yaml, root, "",
-             {"machine", "topology", "axes", "spindle", "workpiece", "singularity_deg", "models",
-              "errors", "feed_interpretation", "home", "second_home", "m_codes"});
+             {"machine", "topology", "axes", "spindle", "workpiece", "singularity_deg", "models", "errors",
+              "feed_interpretation", "home", "second_home", "m_codes"});
   MachineSpec spec;
   spec.name = yaml.text(yaml.require(root, "machine", ""), "machine");
   spec.topology = yaml.text(yaml.require(root, "topology", ""), "topology");
 
   const YAML::Node axes = yaml.require(root, "axes", "");
-  if (!axes.IsMap())
-    yaml.fail(axes, "axes", "a map from axis letter to axis, like {X: {kind: linear, ...}}");
+  if (!axes.IsMap()) yaml.fail(axes, "axes", "a map from axis letter to axis, like {X: {kind: linear, ...}}");
   unique_keys(yaml, axes, "axes");
   for (const auto& kv : axes) spec.axes.push_back(read_axis(yaml, kv.first, kv.second));
   // Axis values are X Y Z A B C in that order whatever the file's order (as Machine keeps them).
@@ -250,14 +230,12 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
 
   if (const YAML::Node spindle = root["spindle"]) {
     check_keys(yaml, spindle, "spindle", {"gauge_point", "axis"});
-    if (spindle["gauge_point"])
-      spec.gauge_point_mm = yaml.vec3(spindle["gauge_point"], "spindle.gauge_point");
+    if (spindle["gauge_point"]) spec.gauge_point_mm = yaml.vec3(spindle["gauge_point"], "spindle.gauge_point");
     if (spindle["axis"]) spec.spindle_axis = yaml.vec3(spindle["axis"], "spindle.axis");
   }
   if (const YAML::Node workpiece = root["workpiece"]) {
     check_keys(yaml, workpiece, "workpiece", {"origin"});
-    if (workpiece["origin"])
-      spec.workpiece_origin_mm = yaml.vec3(workpiece["origin"], "workpiece.origin");
+    if (workpiece["origin"]) spec.workpiece_origin_mm = yaml.vec3(workpiece["origin"], "workpiece.origin");
   }
   if (const YAML::Node feed = root["feed_interpretation"]) {
     const std::string f = yaml.text(feed, "feed_interpretation");
@@ -279,9 +257,8 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
     std::map<char, double> home;
     for (const auto& kv : node) {
       const std::string letter = kv.first.Scalar();
-      const auto axis = std::find_if(spec.axes.begin(), spec.axes.end(), [&](const AxisSpec& a) {
-        return letter.size() == 1 && a.letter == letter[0];
-      });
+      const auto axis = std::find_if(spec.axes.begin(), spec.axes.end(),
+                                     [&](const AxisSpec& a) { return letter.size() == 1 && a.letter == letter[0]; });
       if (axis == spec.axes.end()) yaml.fail(kv.first, key + "." + letter, "an axis of this machine");
       const double v = yaml.number(kv.second, key + "." + letter);
       if (std::abs(v) > 1e6) yaml.fail(kv.second, key + "." + letter, "a value within +-1e6 (mm or deg)");
@@ -309,8 +286,7 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
     }
   }
   if (root["singularity_deg"])
-    spec.singularity_angle_rad =
-        yaml.non_negative(root["singularity_deg"], "singularity_deg") * kRadPerDeg;
+    spec.singularity_angle_rad = yaml.non_negative(root["singularity_deg"], "singularity_deg") * kRadPerDeg;
 
   if (const YAML::Node models = root["models"]) {
     if (!models.IsMap()) yaml.fail(models, "models", "a map from node letter to a list of models");
@@ -320,11 +296,9 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
       const std::string where = "models." + node;
       bool known = node == "W" || node == "T" || node == "F";
       for (const AxisSpec& a : spec.axes) known = known || node == std::string(1, a.letter);
-      if (!known)
-        yaml.fail(kv.first, where, "a node of this machine: one of its axis letters, W, T or F");
+      if (!known) yaml.fail(kv.first, where, "a node of this machine: one of its axis letters, W, T or F");
       if (!kv.second.IsSequence() || kv.second.size() == 0)
-        yaml.fail(kv.second, where,
-                  "a list of models like [{file: models/x.stl, origin: [0, 0, 0]}]");
+        yaml.fail(kv.second, where, "a list of models like [{file: models/x.stl, origin: [0, 0, 0]}]");
       for (const auto& m : kv.second) {
         check_keys(yaml, m, where, {"file", "origin"});
         kinematics::ModelSpec model;
@@ -353,8 +327,7 @@ MachineSpec read_machine_file(const std::string& path, std::vector<std::string>*
   try {
     spec = read_spec(yaml, root, base);
   } catch (const YAML::Exception& e) {  // a node yaml-cpp cannot convert (a non-scalar key)
-    throw InputError(path, e.mark.is_null() ? 0 : e.mark.line + 1,
-                     e.mark.is_null() ? 0 : e.mark.column + 1, e.msg);
+    throw InputError(path, e.mark.is_null() ? 0 : e.mark.line + 1, e.mark.is_null() ? 0 : e.mark.column + 1, e.msg);
   }
   const std::vector<kinematics::SpecProblem> problems = kinematics::validate(spec);
   for (const kinematics::SpecProblem& p : problems)

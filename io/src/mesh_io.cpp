@@ -25,8 +25,8 @@ namespace vcut::io {
 removal::TriangleMesh read_mesh(const std::string& path) {
   if (!std::filesystem::is_regular_file(path)) throw InputError(path, 0, 0, "mesh file not found");
   Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(
-      path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType);
+  const aiScene* scene =
+      importer.ReadFile(path, aiProcess_Triangulate | aiProcess_PreTransformVertices | aiProcess_SortByPType);
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(path, 0, 0, std::string("cannot read mesh: ") + importer.GetErrorString());
   removal::TriangleMesh mesh;
@@ -39,7 +39,8 @@ removal::TriangleMesh read_mesh(const std::string& path) {
       const aiVector3D& p = am->mVertices[v];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         throw InputError(path, 0, 0, "mesh has a vertex that is not a finite number");
-      const auto [it, inserted] = index_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(mesh.vertices_mm.size()));
+      const auto [it, inserted] =
+          index_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(mesh.vertices_mm.size()));
       if (inserted) mesh.vertices_mm.emplace_back(p.x, p.y, p.z);
       remap[v] = it->second;
     }
@@ -60,7 +61,8 @@ void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
   // mesh of no triangles (the stock cut away) is the header and a zero count.
   constexpr std::size_t kHeader = 84, kRecord = 50;
   const std::size_t n = mesh.triangles.size();
-  if (n > std::numeric_limits<std::uint32_t>::max()) throw InputError(path, 0, 0, "cannot write STL: more than 4,294,967,295 triangles");
+  if (n > std::numeric_limits<std::uint32_t>::max())
+    throw InputError(path, 0, 0, "cannot write STL: more than 4,294,967,295 triangles");
   std::string out(kHeader + kRecord * n, '\0');
   const std::string title = n == 0 ? "vcut: empty mesh" : "vcut: binary STL, mm";
   std::memset(out.data(), ' ', 80);
@@ -106,8 +108,9 @@ void write_deviation_ply(const std::string& path, const removal::TriangleMesh& m
   const std::size_t n = mesh.vertices_mm.size();
   std::string out;
   out.reserve(256 + n * 39 + mesh.triangles.size() * 13);
-  out += "ply\nformat binary_little_endian 1.0\ncomment vcut deviation map: deviation in mm, "
-         "negative = gouge, positive = excess; move -1 = initial stock; line = NC source line\n";
+  out +=
+      "ply\nformat binary_little_endian 1.0\ncomment vcut deviation map: deviation in mm, "
+      "negative = gouge, positive = excess; move -1 = initial stock; line = NC source line\n";
   out += "element vertex " + std::to_string(n) + "\n";
   out += "property float x\nproperty float y\nproperty float z\n";
   out += "property float nx\nproperty float ny\nproperty float nz\n";
@@ -118,7 +121,8 @@ void write_deviation_ply(const std::string& path, const removal::TriangleMesh& m
   for (std::size_t i = 0; i < n; ++i) {
     for (int c = 0; c < 3; ++c) put<float>(out, static_cast<float>(mesh.vertices_mm[i][c]));
     for (int c = 0; c < 3; ++c) put<float>(out, i < a.normals.size() ? static_cast<float>(a.normals[i][c]) : 0.0f);
-    const std::array<std::uint8_t, 3> rgb = i < a.colors.size() ? a.colors[i] : std::array<std::uint8_t, 3>{255, 255, 255};
+    const std::array<std::uint8_t, 3> rgb =
+        i < a.colors.size() ? a.colors[i] : std::array<std::uint8_t, 3>{255, 255, 255};
     for (int c = 0; c < 3; ++c) put<std::uint8_t>(out, rgb[static_cast<std::size_t>(c)]);
     put<float>(out, i < a.deviation_mm.size() ? static_cast<float>(a.deviation_mm[i]) : 0.0f);
     put<std::int32_t>(out, i < a.move.size() ? a.move[i] : -1);

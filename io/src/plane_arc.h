@@ -54,9 +54,8 @@ inline std::string centre_arc_error(const Eigen::Vector2d& s, const Eigen::Vecto
 // ("I/J/K"), for the messages. |R| may fall short of half the chord by short_tolerance_mm
 // (LinuxCNC: 0.00005 in = 0.00127 mm); the arc is then a half circle.
 inline std::string radius_arc_centre(const Eigen::Vector2d& s, const Eigen::Vector2d& e, double radius, bool clockwise,
-                                     const std::string& code, const std::string& word,
-                                     const std::string& centre_words, Eigen::Vector2d& center,
-                                     double short_tolerance_mm = 0.0) {
+                                     const std::string& code, const std::string& word, const std::string& centre_words,
+                                     Eigen::Vector2d& center, double short_tolerance_mm = 0.0) {
   const Eigen::Vector2d d = e - s;
   const double chord = d.norm();
   if (chord <= kSamePointMm) {

@@ -32,9 +32,7 @@ std::string upper(std::string s) {
   for (char& c : s) c = (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c;
   return s;
 }
-bool is_alnum(char c) {
-  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
-}
+bool is_alnum(char c) { return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_'; }
 bool is_digit(char c) { return c >= '0' && c <= '9'; }
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
 
@@ -60,9 +58,8 @@ bool has_word(const std::string& line, const char* word) {
 
 // An APT statement word followed by '/' (or a bare APT word) at the start of the line.
 bool apt_statement(const std::string& line) {
-  static const char* const kSlashWords[] = {"GOTO",   "FEDRAT", "CUTTER", "FROM",   "LOADTL",
-                                            "MULTAX", "TLAXIS", "CIRCLE", "SPINDL", "UNITS",
-                                            "GODLTA", "COOLNT", "INTOL",  "OUTTOL"};
+  static const char* const kSlashWords[] = {"GOTO",   "FEDRAT", "CUTTER", "FROM",   "LOADTL", "MULTAX", "TLAXIS",
+                                            "CIRCLE", "SPINDL", "UNITS",  "GODLTA", "COOLNT", "INTOL",  "OUTTOL"};
   static const char* const kBareWords[] = {"PARTNO", "PPRINT", "MULTAX", "FINI", "RAPID"};
   std::size_t j = 0;
   while (j < line.size() && is_alnum(line[j])) ++j;
@@ -95,9 +92,9 @@ bool letter_space_number(const std::string& line) {
 }
 
 std::string detect_from_text(const std::string& head) {
-  static const char* const kSinumerikWords[] = {
-      "TRAORI",   "TRAFOOF",   "ORIVECT",  "ORIAXES",  "ORIWKS", "ORIMKS", "ORIPLANE",
-      "ORICONCW", "ORICONCCW", "ORICONIO", "ORICONTO", "G641",   "G642"};
+  static const char* const kSinumerikWords[] = {"TRAORI",   "TRAFOOF",  "ORIVECT",  "ORIAXES",   "ORIWKS",
+                                                "ORIMKS",   "ORIPLANE", "ORICONCW", "ORICONCCW", "ORICONIO",
+                                                "ORICONTO", "G641",     "G642"};
   bool semicolon = false, letter_space = false, gcode_sign = false;
   std::size_t start = 0;
   for (int lines = 0; start < head.size() && lines < kSniffLines; ++lines) {
@@ -165,8 +162,7 @@ void check_text(const std::string& path, const std::string& head) {
   if (nul == std::string::npos) return;
   const std::size_t line_start = head.rfind('\n', nul);
   const int line = 1 + static_cast<int>(std::count(head.begin(), head.begin() + nul, '\n'));
-  const int column =
-      static_cast<int>(nul - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
+  const int column = static_cast<int>(nul - (line_start == std::string::npos ? 0 : line_start + 1)) + 1;
   throw InputError(path, line, column, "not a text file (a NUL byte; expected an NC program)");
 }
 
@@ -195,10 +191,13 @@ bool reads_like_fanuc_macro(const std::string& head) {
     while (i < line.size() && is_blank(line[i])) ++i;
     if (i < line.size() && line[i] == 'O' && i + 1 < line.size() && (line[i + 1] == '<' || is_digit(line[i + 1]))) {
       std::size_t j = i + 1;
-      if (line[j] == '<') j = line.find('>', j);
-      else while (j < line.size() && is_digit(line[j])) ++j;
+      if (line[j] == '<')
+        j = line.find('>', j);
+      else
+        while (j < line.size() && is_digit(line[j])) ++j;
       while (j != std::string::npos && j < line.size() && is_blank(line[j])) ++j;
-      if (j != std::string::npos && j < line.size() && line[j] >= 'A' && line[j] <= 'Z') return false;  // o<name> sub, o100 if ...
+      if (j != std::string::npos && j < line.size() && line[j] >= 'A' && line[j] <= 'Z')
+        return false;  // o<name> sub, o100 if ...
     }
     if (i < line.size() && line[i] == 'N') {
       ++i;
@@ -277,7 +276,8 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     double least = 2.0;
     for (int k = 0; k < shared->rotary_count(); ++k) {
       const int i = shared->rotary_axis(k);
-      const double parallel = std::abs(shared->axis(i).direction.normalized().dot(shared->spec().spindle_axis.normalized()));
+      const double parallel =
+          std::abs(shared->axis(i).direction.normalized().dot(shared->spec().spindle_axis.normalized()));
       if (parallel < least - 1e-9) {
         least = parallel;
         tilt = i;
@@ -296,10 +296,11 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
       for (int k = 0; k < shared->rotary_count(); ++k) {
         const int i = shared->rotary_axis(k);
         const auto& limits = shared->axis(i).limits;
-        if (limits && (solution.q[i] < limits->first - 1e-9 || solution.q[i] > limits->second + 1e-9) && outside.empty()) {
-          outside = "axis " + std::string(1, shared->axis(i).letter) + " would need " + detail::num(solution.q[i] * 180.0 / M_PI) +
-                    " deg, outside its limits [" + detail::num(limits->first * 180.0 / M_PI) + ", " +
-                    detail::num(limits->second * 180.0 / M_PI) + "]";
+        if (limits && (solution.q[i] < limits->first - 1e-9 || solution.q[i] > limits->second + 1e-9) &&
+            outside.empty()) {
+          outside = "axis " + std::string(1, shared->axis(i).letter) + " would need " +
+                    detail::num(solution.q[i] * 180.0 / M_PI) + " deg, outside its limits [" +
+                    detail::num(limits->first * 180.0 / M_PI) + ", " + detail::num(limits->second * 180.0 / M_PI) + "]";
         }
         cost += std::abs(solution.q[i] - previous[i]);
       }
@@ -309,8 +310,8 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
       }
       if (tilt_sign != 0 && solution.q[tilt] * tilt_sign < -1e-9) {
         if (violation.empty()) {
-          violation = "no solution with axis " + std::string(1, shared->axis(tilt).letter) + (tilt_sign > 0 ? " >= 0" : " <= 0") +
-                      " within the limits";
+          violation = "no solution with axis " + std::string(1, shared->axis(tilt).letter) +
+                      (tilt_sign > 0 ? " >= 0" : " <= 0") + " within the limits";
         }
         continue;
       }
@@ -319,7 +320,8 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
         best_cost = cost;
       }
     }
-    if (best == nullptr) return violation.empty() ? (ik.reason.empty() ? std::string("no solution") : ik.reason) : violation;
+    if (best == nullptr)
+      return violation.empty() ? (ik.reason.empty() ? std::string("no solution") : ik.reason) : violation;
     to = kinematics::RotaryWords{};
     for (int r = 0; r < 3; ++r) {
       const int i = shared->axis_index(static_cast<char>('A' + r));
@@ -329,7 +331,8 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     }
     return std::string();
   };
-  options.tip_after_turn = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip, const kinematics::RotaryWords& from,
+  options.tip_after_turn = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip,
+                                                            const kinematics::RotaryWords& from,
                                                             const kinematics::RotaryWords& to) {
     kinematics::AxisValues q = axis_values(from);
     if (!kinematics::solve_linear_axes(*shared, q, tip, length_of(tool))) return tip;
@@ -344,9 +347,12 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
 
 const char* reader_name(ProgramReader reader) {
   switch (reader) {
-    case ProgramReader::Gcode: return "gcode";
-    case ProgramReader::Apt: return "apt";
-    case ProgramReader::Sinumerik: return "sinumerik";
+    case ProgramReader::Gcode:
+      return "gcode";
+    case ProgramReader::Apt:
+      return "apt";
+    case ProgramReader::Sinumerik:
+      return "sinumerik";
   }
   return "gcode";
 }
@@ -366,8 +372,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) {
-      throw InputError(
-          path, 0, 0, std::string("cannot open program file for reading: ") + std::strerror(errno));
+      throw InputError(path, 0, 0, std::string("cannot open program file for reading: ") + std::strerror(errno));
     }
     check_text(path, sniff(path));
     const ProgramReader reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
@@ -375,9 +380,8 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       out.reader = reader;
     } else if (reader != out.reader) {
       throw InputError(path, 0, 0,
-                       std::string("is ") + describe_dialect(reader) + " but " + paths.front() +
-                           " is " + describe_dialect(out.reader) +
-                           " (expected one dialect for all program files)");
+                       std::string("is ") + describe_dialect(reader) + " but " + paths.front() + " is " +
+                           describe_dialect(out.reader) + " (expected one dialect for all program files)");
     }
     if (reader == ProgramReader::Sinumerik) {
       // The SINUMERIK reader takes the G-code options that apply to it: the job's work offsets
@@ -406,8 +410,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
   return out;
 }
 
-LoadedProgram read_program(const std::string& path, const std::string& dialect,
-                           const ProgramOptions& options) {
+LoadedProgram read_program(const std::string& path, const std::string& dialect, const ProgramOptions& options) {
   return read_programs({path}, dialect, options);
 }
 

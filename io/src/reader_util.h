@@ -65,8 +65,7 @@ inline void warn_unprogrammed_axes(const std::array<std::vector<std::size_t>, 3>
   for (std::size_t a = 0; a < 3; ++a) {
     if (pending[a].empty()) continue;
     program.warnings.push_back(name + ": " + kLetter[a] + " has not been programmed by the end of this file; " +
-                               std::to_string(pending[a].size()) +
-                               " move(s) hold it at 0 unless a later file sets it");
+                               std::to_string(pending[a].size()) + " move(s) hold it at 0 unless a later file sets it");
   }
 }
 

@@ -12,10 +12,10 @@ namespace vcut::io::detail {
 namespace {
 
 constexpr double kDegPerRad = 180.0 / M_PI;
-constexpr double kEqualTolerance = 1e-4;       // LinuxCNC's TOLERANCE_EQUAL for EQ and NE
-constexpr double kWholeTolerance = 1e-4;       // a parameter number this close to whole is whole
-constexpr int kMaxParameter = 5601;  // LinuxCNC 2.9 has #1..#5601
-constexpr int kMaxNesting = 64;                // brackets and functions within one value
+constexpr double kEqualTolerance = 1e-4;  // LinuxCNC's TOLERANCE_EQUAL for EQ and NE
+constexpr double kWholeTolerance = 1e-4;  // a parameter number this close to whole is whole
+constexpr int kMaxParameter = 5601;       // LinuxCNC 2.9 has #1..#5601
+constexpr int kMaxNesting = 64;           // brackets and functions within one value
 
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
 
@@ -41,15 +41,31 @@ std::string read_letters(const std::string& s, std::size_t& i) {
 enum class Op { Power, Times, Divide, Mod, Plus, Minus, Eq, Ne, Gt, Ge, Lt, Le, And, Or, Xor, None };
 
 int precedence(Op op, bool fanuc = false) {
-  if (fanuc && op == Op::And) return 5;                  // Fanuc: with * and /
+  if (fanuc && op == Op::And) return 5;                    // Fanuc: with * and /
   if (fanuc && (op == Op::Or || op == Op::Xor)) return 4;  // with + and -
   switch (op) {
-    case Op::Power: return 6;
-    case Op::Times: case Op::Divide: case Op::Mod: return 5;
-    case Op::Plus: case Op::Minus: return 4;
-    case Op::Eq: case Op::Ne: case Op::Gt: case Op::Ge: case Op::Lt: case Op::Le: return 3;
-    case Op::And: case Op::Or: case Op::Xor: return 2;
-    case Op::None: return 0;
+    case Op::Power:
+      return 6;
+    case Op::Times:
+    case Op::Divide:
+    case Op::Mod:
+      return 5;
+    case Op::Plus:
+    case Op::Minus:
+      return 4;
+    case Op::Eq:
+    case Op::Ne:
+    case Op::Gt:
+    case Op::Ge:
+    case Op::Lt:
+    case Op::Le:
+      return 3;
+    case Op::And:
+    case Op::Or:
+    case Op::Xor:
+      return 2;
+    case Op::None:
+      return 0;
   }
   return 0;
 }
@@ -61,49 +77,82 @@ Op peek_operator(const std::string& s, std::size_t i, std::size_t& next) {
   const char c = s[i];
   if (c == '*') {
     const std::size_t j = skip_blanks(s, i + 1);
-    if (j < s.size() && s[j] == '*') { next = j + 1; return Op::Power; }
+    if (j < s.size() && s[j] == '*') {
+      next = j + 1;
+      return Op::Power;
+    }
     next = i + 1;
     return Op::Times;
   }
-  if (c == '/') { next = i + 1; return Op::Divide; }
-  if (c == '+') { next = i + 1; return Op::Plus; }
-  if (c == '-') { next = i + 1; return Op::Minus; }
+  if (c == '/') {
+    next = i + 1;
+    return Op::Divide;
+  }
+  if (c == '+') {
+    next = i + 1;
+    return Op::Plus;
+  }
+  if (c == '-') {
+    next = i + 1;
+    return Op::Minus;
+  }
   if (!is_letter(c)) return Op::None;
   std::size_t j = i;
   const std::string word = read_letters(s, j);
-  static const struct { const char* name; Op op; } kWords[] = {
-      {"MOD", Op::Mod}, {"EQ", Op::Eq}, {"NE", Op::Ne}, {"GT", Op::Gt}, {"GE", Op::Ge},
-      {"LT", Op::Lt},   {"LE", Op::Le}, {"AND", Op::And}, {"OR", Op::Or}, {"XOR", Op::Xor}};
+  static const struct {
+    const char* name;
+    Op op;
+  } kWords[] = {{"MOD", Op::Mod}, {"EQ", Op::Eq}, {"NE", Op::Ne},   {"GT", Op::Gt}, {"GE", Op::Ge},
+                {"LT", Op::Lt},   {"LE", Op::Le}, {"AND", Op::And}, {"OR", Op::Or}, {"XOR", Op::Xor}};
   for (const auto& w : kWords) {
-    if (word == w.name) { next = j; return w.op; }
+    if (word == w.name) {
+      next = j;
+      return w.op;
+    }
   }
   return Op::None;
 }
 
 const char* op_name(Op op) {
   switch (op) {
-    case Op::Power: return "**";
-    case Op::Times: return "*";
-    case Op::Divide: return "/";
-    case Op::Mod: return "MOD";
-    case Op::Plus: return "+";
-    case Op::Minus: return "-";
-    case Op::Eq: return "EQ";
-    case Op::Ne: return "NE";
-    case Op::Gt: return "GT";
-    case Op::Ge: return "GE";
-    case Op::Lt: return "LT";
-    case Op::Le: return "LE";
-    case Op::And: return "AND";
-    case Op::Or: return "OR";
-    case Op::Xor: return "XOR";
-    case Op::None: return "?";
+    case Op::Power:
+      return "**";
+    case Op::Times:
+      return "*";
+    case Op::Divide:
+      return "/";
+    case Op::Mod:
+      return "MOD";
+    case Op::Plus:
+      return "+";
+    case Op::Minus:
+      return "-";
+    case Op::Eq:
+      return "EQ";
+    case Op::Ne:
+      return "NE";
+    case Op::Gt:
+      return "GT";
+    case Op::Ge:
+      return "GE";
+    case Op::Lt:
+      return "LT";
+    case Op::Le:
+      return "LE";
+    case Op::And:
+      return "AND";
+    case Op::Or:
+      return "OR";
+    case Op::Xor:
+      return "XOR";
+    case Op::None:
+      return "?";
   }
   return "?";
 }
 
-const char* const kFunctions[] = {"ABS", "ACOS", "ASIN", "ATAN", "COS", "EXISTS", "EXP", "FIX",
-                                  "FUP", "ROUND", "LN", "SIN", "SQRT", "TAN", "POW", "BIN", "BCD"};
+const char* const kFunctions[] = {"ABS",   "ACOS", "ASIN", "ATAN", "COS", "EXISTS", "EXP", "FIX", "FUP",
+                                  "ROUND", "LN",   "SIN",  "SQRT", "TAN", "POW",    "BIN", "BCD"};
 bool is_function(const std::string& name) {
   for (const char* f : kFunctions) {
     if (name == f) return true;
@@ -120,8 +169,8 @@ class Parser {
 
   double value(std::size_t& i, char letter) {
     if (++depth_ > kMaxNesting) {
-      context_.fail(column_at(i), "a value nested more than " + std::to_string(kMaxNesting) +
-                                      " brackets or functions deep");
+      context_.fail(column_at(i),
+                    "a value nested more than " + std::to_string(kMaxNesting) + " brackets or functions deep");
     }
     const double v = value_unguarded(i, letter);
     --depth_;
@@ -206,8 +255,8 @@ class Parser {
     auto argument = [&]() {
       i = skip_blanks(s_, i);
       if (i >= s_.size() || s_[i] != '[') {
-        context_.fail(column_at(i), name + " without its argument (expected " + name + "[...], found " +
-                                        found(s_, i) + ")");
+        context_.fail(column_at(i),
+                      name + " without its argument (expected " + name + "[...], found " + found(s_, i) + ")");
       }
       return bracketed(i);
     };
@@ -219,7 +268,8 @@ class Parser {
       // Fanuc: ATAN[y,x] (and ATAN[y]/[x]), POW[a,b].
       i = skip_blanks(s_, i);
       if (i >= s_.size() || s_[i] != '[') {
-        context_.fail(column_at(i), name + " without its arguments (expected " + name + "[a,b], found " + found(s_, i) + ")");
+        context_.fail(column_at(i),
+                      name + " without its arguments (expected " + name + "[a,b], found " + found(s_, i) + ")");
       }
       const std::size_t open = i++;
       const double a = zero_if_vacant(binary(i, 1));
@@ -228,17 +278,20 @@ class Parser {
         ++i;
         const double b = zero_if_vacant(binary(i, 1));
         i = skip_blanks(s_, i);
-        if (i >= s_.size() || s_[i] != ']') context_.fail(column_at(i >= s_.size() ? open : i), "expected ']' after the second argument of " + name);
+        if (i >= s_.size() || s_[i] != ']')
+          context_.fail(column_at(i >= s_.size() ? open : i), "expected ']' after the second argument of " + name);
         ++i;
         if (name == "POW") return apply(Op::Power, a, b, column);
         return std::atan2(a, b) * kDegPerRad;
       }
-      if (i >= s_.size() || s_[i] != ']') context_.fail(column_at(i >= s_.size() ? open : i), "expected ',' or ']' in " + name + "[...]");
+      if (i >= s_.size() || s_[i] != ']')
+        context_.fail(column_at(i >= s_.size() ? open : i), "expected ',' or ']' in " + name + "[...]");
       ++i;
       if (name == "POW") context_.fail(column, "POW takes two arguments (expected POW[a,b])");
       i = skip_blanks(s_, i);
       if (i >= s_.size() || s_[i] != '/') {
-        context_.fail(column_at(i), "ATAN takes two arguments (expected ATAN[y,x] or ATAN[y]/[x], found " + found(s_, i) + ")");
+        context_.fail(column_at(i),
+                      "ATAN takes two arguments (expected ATAN[y,x] or ATAN[y]/[x], found " + found(s_, i) + ")");
       }
       ++i;
       return std::atan2(a, zero_if_vacant(argument())) * kDegPerRad;
@@ -255,9 +308,11 @@ class Parser {
     }
     if (name == "EXISTS") {
       i = skip_blanks(s_, i);
-      if (i >= s_.size() || s_[i] != '[') context_.fail(column_at(i), "EXISTS without its argument (expected EXISTS[#<name>])");
+      if (i >= s_.size() || s_[i] != '[')
+        context_.fail(column_at(i), "EXISTS without its argument (expected EXISTS[#<name>])");
       const std::size_t j = skip_blanks(s_, i + 1);
-      if (j >= s_.size() || s_[j] != '#') context_.fail(column_at(j), "EXISTS takes a parameter (expected EXISTS[#<name>])");
+      if (j >= s_.size() || s_[j] != '#')
+        context_.fail(column_at(j), "EXISTS takes a parameter (expected EXISTS[#<name>])");
       std::size_t k = j + 1;
       const ParameterRef ref = parameter(k);
       k = skip_blanks(s_, k);
@@ -273,11 +328,13 @@ class Parser {
     const double x = zero_if_vacant(argument());
     if (name == "BIN" || name == "BCD") {
       // Fanuc: BCD code to binary, binary to BCD, on whole numbers >= 0.
-      if (x < 0.0 || x != std::floor(x) || x > 99999999.0) context_.fail(column, name + "[" + num(x) + "] (expected a whole number 0..99999999)");
+      if (x < 0.0 || x != std::floor(x) || x > 99999999.0)
+        context_.fail(column, name + "[" + num(x) + "] (expected a whole number 0..99999999)");
       long long in = static_cast<long long>(x), out = 0, scale = 1;
       for (; in > 0; scale *= name == "BIN" ? 10 : 16) {
         const long long digit = name == "BIN" ? in % 16 : in % 10;
-        if (name == "BIN" && digit > 9) context_.fail(column, "BIN[" + num(x) + "] is not a BCD code (a nibble above 9)");
+        if (name == "BIN" && digit > 9)
+          context_.fail(column, "BIN[" + num(x) + "] is not a BCD code (a nibble above 9)");
         out += digit * scale;
         in /= name == "BIN" ? 16 : 10;
       }
@@ -333,7 +390,9 @@ class Parser {
         }
         r = std::pow(a, b);
         break;
-      case Op::Times: r = a * b; break;
+      case Op::Times:
+        r = a * b;
+        break;
       case Op::Divide:
         if (b == 0.0) context_.fail(column, "division by zero (" + num(a) + " / 0)");
         r = a / b;
@@ -343,18 +402,41 @@ class Parser {
         r = std::fmod(a, b);
         if (r < 0.0) r += std::abs(b);  // LinuxCNC: the result is never negative
         break;
-      case Op::Plus: r = a + b; break;
-      case Op::Minus: r = a - b; break;
-      case Op::Eq: r = std::abs(a - b) < kEqualTolerance; break;
-      case Op::Ne: r = !(std::abs(a - b) < kEqualTolerance); break;
-      case Op::Gt: r = a > b; break;
-      case Op::Ge: r = a >= b; break;
-      case Op::Lt: r = a < b; break;
-      case Op::Le: r = a <= b; break;
-      case Op::And: r = a != 0.0 && b != 0.0; break;
-      case Op::Or: r = a != 0.0 || b != 0.0; break;
-      case Op::Xor: r = (a != 0.0) != (b != 0.0); break;
-      case Op::None: break;
+      case Op::Plus:
+        r = a + b;
+        break;
+      case Op::Minus:
+        r = a - b;
+        break;
+      case Op::Eq:
+        r = std::abs(a - b) < kEqualTolerance;
+        break;
+      case Op::Ne:
+        r = !(std::abs(a - b) < kEqualTolerance);
+        break;
+      case Op::Gt:
+        r = a > b;
+        break;
+      case Op::Ge:
+        r = a >= b;
+        break;
+      case Op::Lt:
+        r = a < b;
+        break;
+      case Op::Le:
+        r = a <= b;
+        break;
+      case Op::And:
+        r = a != 0.0 && b != 0.0;
+        break;
+      case Op::Or:
+        r = a != 0.0 || b != 0.0;
+        break;
+      case Op::Xor:
+        r = (a != 0.0) != (b != 0.0);
+        break;
+      case Op::None:
+        break;
     }
     if (!std::isfinite(r)) {
       context_.fail(column, num(a) + " " + op_name(op) + " " + num(b) + " is not a finite number");
@@ -455,8 +537,7 @@ std::string canonical_name(const std::string& raw, int column, const ValueContex
     if (is_blank(c)) continue;
     const bool ok = is_letter(c) || is_digit(c) || c == '_' || c == '.' || c == '-';
     if (!ok) {
-      context.fail(column, "character " + describe(c) +
-                               " in a name (expected letters, digits, _ . -)");
+      context.fail(column, "character " + describe(c) + " in a name (expected letters, digits, _ . -)");
     }
     name += (c >= 'A' && c <= 'Z') ? static_cast<char>(c - 'A' + 'a') : c;
   }

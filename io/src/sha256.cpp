@@ -27,7 +27,8 @@ std::string sha256_file(const std::string& path) {
   if (in.bad()) throw InputError(path, 0, 0, "cannot read file");
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
-  if (EVP_DigestFinal_ex(context.get(), digest, &length) != 1) throw std::runtime_error("OpenSSL: SHA-256 final failed");
+  if (EVP_DigestFinal_ex(context.get(), digest, &length) != 1)
+    throw std::runtime_error("OpenSSL: SHA-256 final failed");
   std::string hex;
   hex.reserve(2 * length);
   static const char kDigits[] = "0123456789abcdef";

@@ -67,9 +67,7 @@ using detail::num;
 using detail::upper;
 
 bool is_upper(char c) { return (c >= 'A' && c <= 'Z') || c == '_'; }
-int clamp_int(std::size_t v) {
-  return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v);
-}
+int clamp_int(std::size_t v) { return v >= static_cast<std::size_t>(INT_MAX) ? INT_MAX : static_cast<int>(v); }
 
 // One programmed value of a block.
 struct Value {
@@ -99,8 +97,8 @@ struct Line {
 
 class Reader {
  public:
-  Reader(const std::string& name, const SinumerikOptions& options, kinematics::Program& program,
-         SinumerikState& state, int file_index)
+  Reader(const std::string& name, const SinumerikOptions& options, kinematics::Program& program, SinumerikState& state,
+         int file_index)
       : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
 
   void run(std::istream& in) {
@@ -120,8 +118,7 @@ class Reader {
       if (number == INT_MAX) fail_at(number, 0, "too many lines");
       ++number;
       line_ = number;
-      if (r == detail::LineSource::kTooLong)
-        fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
+      if (r == detail::LineSource::kTooLong) fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
       if (!block(text)) break;
     }
     if (in.bad()) fail_at(number + 1, 0, "read error (expected a readable text file)");
@@ -131,17 +128,11 @@ class Reader {
   [[noreturn]] void fail_at(int line, int column, const std::string& message) const {
     throw InputError(name_, line, column, message);
   }
-  [[noreturn]] void fail(int column, const std::string& message) const {
-    fail_at(line_, column, message);
-  }
+  [[noreturn]] void fail(int column, const std::string& message) const { fail_at(line_, column, message); }
   [[noreturn]] void fail_here(const std::string& message) const { fail(column(i_), message); }
   int column(std::size_t i) const { return clamp_int(i + 1); }
-  std::string where(int column) const {
-    return name_ + ":" + std::to_string(line_) + ":" + std::to_string(column);
-  }
-  void warn(int column, const std::string& message) {
-    program_.warnings.push_back(where(column) + ": " + message);
-  }
+  std::string where(int column) const { return name_ + ":" + std::to_string(line_) + ":" + std::to_string(column); }
+  void warn(int column, const std::string& message) { program_.warnings.push_back(where(column) + ": " + message); }
 
   // An unsupported word: an error, or one warning per distinct word (then ignored).
   void unsupported(const std::string& word, int column, const std::string& why = {}) {
@@ -158,8 +149,7 @@ class Reader {
   void skip_argument();
   void code(char letter, int column);
   void keyword(const std::string& name, int column);
-  void set(Value& v, const char* name, double value, int column,
-           Value::Mode mode = Value::Mode::Modal);
+  void set(Value& v, const char* name, double value, int column, Value::Mode mode = Value::Mode::Modal);
   double literal();
   double expression(int depth);
   double term(int depth);
@@ -194,9 +184,7 @@ class Reader {
   double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
   Eigen::Vector3d offset() const {
     const auto it = options_.work_offsets_mm.find(state_.work_offset);
-    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end()
-               ? Eigen::Vector3d::Zero()
-               : it->second;
+    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero() : it->second;
   }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   bool orient(Block& block);
@@ -229,8 +217,7 @@ bool Reader::block(std::string& text) {
     const auto u = static_cast<unsigned char>(c);
     if (u < 0x20 || u == 0x7F) {
       if (c == '\t' || c == '\f' || c == '\v') continue;
-      if (c == '\r')
-        fail(column(k), "carriage return inside a line (expected \\n or \\r\\n line ends)");
+      if (c == '\r') fail(column(k), "carriage return inside a line (expected \\n or \\r\\n line ends)");
       fail(column(k), "not a text file: control byte " + describe(c) + " (expected an NC program)");
     }
     if (c == '"') quoted = !quoted;
@@ -266,8 +253,7 @@ void Reader::word() {
     unsupported("/", col, "block skip");
     return;
   }
-  if (!is_upper(c))
-    fail(col, "unexpected " + describe(c) + " (expected a word: an address and its value)");
+  if (!is_upper(c)) fail(col, "unexpected " + describe(c) + " (expected a word: an address and its value)");
   const std::string name = letters();
   // An address with a numeric extension (R1, A3, CR...) is always followed by '='; a letter
   // followed by digits and no '=' is the letter and its value (X10, G1, A3 = A at 3 deg).
@@ -411,24 +397,20 @@ double Reader::primary(int depth) {
   }
   if (at('(')) {
     if (name == "AC" || name == "IC") {
-      fail(col, name +
-                    "( inside an expression (expected it as the whole value of one coordinate, X=" +
-                    name + "(...))");
+      fail(col,
+           name + "( inside an expression (expected it as the whole value of one coordinate, X=" + name + "(...))");
     }
     ++i_;
     return function(name, col, depth + 1);
   }
-  fail(col,
-       "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
+  fail(col, "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
 }
 
 double Reader::function(const std::string& name, int col, int depth) {
   static const char* const kKnown[] = {"SIN",  "COS", "TAN", "ASIN",  "ACOS", "ATAN2",
                                        "SQRT", "ABS", "POT", "TRUNC", "ROUND"};
-  if (std::none_of(std::begin(kKnown), std::end(kKnown),
-                   [&](const char* k) { return name == k; })) {
-    fail(col, "unknown function " + name +
-                  "( (expected SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT TRUNC ROUND)");
+  if (std::none_of(std::begin(kKnown), std::end(kKnown), [&](const char* k) { return name == k; })) {
+    fail(col, "unknown function " + name + "( (expected SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT TRUNC ROUND)");
   }
   const double x = expression(depth);
   double y = 0.0;
@@ -522,9 +504,7 @@ void Reader::assignment(const std::string& address, int col) {
         }
       }
       const double v = expression(0);
-      Value* slot = a >= 'X'   ? &l_.axis[a - 'X']
-                    : a >= 'I' ? &l_.center[a - 'I']
-                               : &l_.rotary[a - 'A'];
+      Value* slot = a >= 'X' ? &l_.axis[a - 'X'] : a >= 'I' ? &l_.center[a - 'I'] : &l_.rotary[a - 'A'];
       set(*slot, address.c_str(), v, col);
       return;
     }
@@ -534,9 +514,8 @@ void Reader::assignment(const std::string& address, int col) {
       if (close == std::string::npos) fail(column(start), "string without its closing '\"'");
       const std::string text = s_.substr(i_, close - i_);
       i_ = close + 1;
-      const bool numeric =
-          !text.empty() && text.size() <= 5 &&
-          std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
+      const bool numeric = !text.empty() && text.size() <= 5 &&
+                           std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
       if (!numeric) {
         fail(col, "tool name T=\"" + text.substr(0, 64) +
                       "\" (expected a tool number, T1 or T=\"1\": tools are numbered in the tool "
@@ -572,11 +551,10 @@ void Reader::assignment(const std::string& address, int col) {
     // The manual gives NUT's range (0..180 deg) but not whether it is the full or the half
     // opening, nor which of the two cones of that opening through the start and the end it
     // selects; the reader would have to guess.
-    fail(
-        col,
-        "NUT= (the cone's opening angle) is not supported: the manual does not fix which cone it "
-        "selects (expected the cone by ORICONCW/ORICONCCW with its axis A6 B6 C6, by ORICONIO with "
-        "A7 B7 C7, or by ORICONTO)");
+    fail(col,
+         "NUT= (the cone's opening angle) is not supported: the manual does not fix which cone it "
+         "selects (expected the cone by ORICONCW/ORICONCCW with its axis A6 B6 C6, by ORICONIO with "
+         "A7 B7 C7, or by ORICONTO)");
   }
   unsupported(address + "=", col);
   skip_argument();
@@ -609,8 +587,7 @@ void Reader::code(char letter, int col) {
       fail(col, "R parameter without '=' (expected an assignment such as R1=10)");
     case 'N': {
       const double v = literal();
-      if (v < 0.0 || v != std::floor(v))
-        fail(col, "block number N" + num(v) + " (expected a whole number)");
+      if (v < 0.0 || v != std::floor(v)) fail(col, "block number N" + num(v) + " (expected a whole number)");
       return;
     }
     default:
@@ -752,23 +729,21 @@ void Reader::code(char letter, int col) {
 }
 
 void Reader::keyword(const std::string& name, int col) {
-  static const char* const kFlow[] = {
-      "IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",   "ENDFOR",  "LOOP",
-      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB", "GOTOC",   "CASE",
-      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "MCALL", "EXTCALL", "REPEATB"};
+  static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",   "ENDFOR",  "LOOP",
+                                      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB", "GOTOC",   "CASE",
+                                      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "MCALL", "EXTCALL", "REPEATB"};
   for (const char* w : kFlow) {
     if (name == w) {
-      fail(col,
-           name +
-               " (program flow, calls and definitions) is not supported: skipping it would change "
-               "what the program does (expected a program of motion blocks)");
+      fail(col, name +
+                    " (program flow, calls and definitions) is not supported: skipping it would change "
+                    "what the program does (expected a program of motion blocks)");
     }
   }
   // Frames and motion types whose axis words would otherwise be read as a plain move.
-  static const char* const kNotMoves[] = {
-      "TRANS",   "ATRANS", "ROT",   "AROT",   "SCALE",  "ASCALE",   "MIRROR",  "AMIRROR",
-      "ROTS",    "AROTS",  "CROTS", "SUPA",   "CIP",    "CT",       "ASPLINE", "BSPLINE",
-      "CSPLINE", "POLY",   "INVCW", "INVCCW", "TRACYL", "TRANSMIT", "TRAANG",  "OFFN"};
+  static const char* const kNotMoves[] = {"TRANS",  "ATRANS",  "ROT",     "AROT",     "SCALE",   "ASCALE",
+                                          "MIRROR", "AMIRROR", "ROTS",    "AROTS",    "CROTS",   "SUPA",
+                                          "CIP",    "CT",      "ASPLINE", "BSPLINE",  "CSPLINE", "POLY",
+                                          "INVCW",  "INVCCW",  "TRACYL",  "TRANSMIT", "TRAANG",  "OFFN"};
   for (const char* w : kNotMoves) {
     if (name == w) {
       fail(col, name +
@@ -783,9 +758,7 @@ void Reader::keyword(const std::string& name, int col) {
       if (!at(')')) {
         const double v = expression(1);
         if (v != 1.0) {
-          fail(col,
-               "TRAORI(" + num(v) +
-                   ") (expected TRAORI or TRAORI(1): the machine file has one transformation)");
+          fail(col, "TRAORI(" + num(v) + ") (expected TRAORI or TRAORI(1): the machine file has one transformation)");
         }
       }
       expect(')', "TRAORI( without its closing ')'");
@@ -819,16 +792,14 @@ void Reader::keyword(const std::string& name, int col) {
     // Siemens' "clockwise" is seen looking along the direction vector A6 B6 C6: a positive
     // (right-hand) turn about it, i.e. vcut's ConeCounterClockwise. The manual's example:
     // ORICONCW about (0,0,1) from (0,1,1)/sqrt2 to (1,0,1)/sqrt2 turns 270 deg.
-    state_.orientation =
-        name == "ORICONCW" ? OrientationMode::ConeCounterClockwise : OrientationMode::ConeClockwise;
+    state_.orientation = name == "ORICONCW" ? OrientationMode::ConeCounterClockwise : OrientationMode::ConeClockwise;
     state_.cone_by = SinumerikState::ConeBy::Axis;
     return;
   }
   if (name == "ORICONIO" || name == "ORICONTO") {
     // The reader makes these cones counterclockwise about the axis it derives (see orient).
     state_.orientation = OrientationMode::ConeCounterClockwise;
-    state_.cone_by =
-        name == "ORICONIO" ? SinumerikState::ConeBy::Intermediate : SinumerikState::ConeBy::Tangent;
+    state_.cone_by = name == "ORICONIO" ? SinumerikState::ConeBy::Intermediate : SinumerikState::ConeBy::Tangent;
     return;
   }
   if (name == "MSG") {
@@ -854,8 +825,7 @@ void Reader::execute() {
     state_.selected_tool = static_cast<int>(t);
   }
   if (l.m6) {
-    if (state_.selected_tool < 0)
-      fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
+    if (state_.selected_tool < 0) fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
     state_.tool = state_.selected_tool;
   }
   if (l.d.present) {
@@ -879,8 +849,8 @@ void Reader::execute() {
   for (Value* v : {&l.adis, &l.adispos}) {
     if (!v->present) continue;
     if (!(v->value >= 0.0 && v->value * unit <= kMaxMagnitude)) {
-      fail(v->column, std::string(v == &l.adis ? "ADIS" : "ADISPOS") + " " + num(v->value) +
-                          " (expected a distance 0..1e6 mm)");
+      fail(v->column,
+           std::string(v == &l.adis ? "ADIS" : "ADISPOS") + " " + num(v->value) + " (expected a distance 0..1e6 mm)");
     }
     (v == &l.adis ? state_.adis_mm : state_.adispos_mm) = v->value * unit;
   }
@@ -891,12 +861,10 @@ void Reader::execute() {
                                     : Motion::ArcCounterClockwise;
   }
   bool moves = false;
-  for (int k = 0; k < 3; ++k)
-    moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
+  for (int k = 0; k < 3; ++k) moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
   if (l.dwell_column > 0) {
     // G4 F.. (s) or S.. (revolutions): a dwell. Its F and S are not the feed and speed.
-    if (moves)
-      fail(l.dwell_column, "G4 (dwell) with axis words in the same block (expected G4 alone)");
+    if (moves) fail(l.dwell_column, "G4 (dwell) with axis words in the same block (expected G4 alone)");
     return;
   }
   if (l.f.present) {
@@ -915,8 +883,8 @@ void Reader::execute() {
       }
       Eigen::Vector3d c(l.cone[0].value, l.cone[1].value, l.cone[2].value);  // missing: 0
       if (!c.allFinite() || c.norm() < kMinVectorNorm || c.cwiseAbs().maxCoeff() > kMaxMagnitude) {
-        fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " +
-                                   num(c.z()) + ") (expected a vector of nonzero length)");
+        fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " + num(c.z()) +
+                                   ") (expected a vector of nonzero length)");
       }
       state_.cone_axis = c.normalized();
       break;
@@ -929,11 +897,10 @@ void Reader::execute() {
   const int cone_column = first_column(l.cone);
   const int middle_column = first_column(l.middle);
   if (cone_column > 0 && cone_mode && state_.cone_by != SinumerikState::ConeBy::Axis) {
-    fail(cone_column,
-         std::string("cone axis A6 B6 C6 under ") +
-             (state_.cone_by == SinumerikState::ConeBy::Intermediate ? "ORICONIO" : "ORICONTO") +
-             ", whose cone is fixed by the intermediate orientation or the tangent (expected "
-             "ORICONCW or ORICONCCW for a cone by its axis)");
+    fail(cone_column, std::string("cone axis A6 B6 C6 under ") +
+                          (state_.cone_by == SinumerikState::ConeBy::Intermediate ? "ORICONIO" : "ORICONTO") +
+                          ", whose cone is fixed by the intermediate orientation or the tangent (expected "
+                          "ORICONCW or ORICONCCW for a cone by its axis)");
   }
   if (middle_column > 0) {
     if (!cone_mode || state_.cone_by != SinumerikState::ConeBy::Intermediate) {
@@ -951,13 +918,11 @@ void Reader::execute() {
   // example: "the tool orientation goes through a full revolution on the outside of the same
   // taper").
   if (cone_column > 0 && cone_mode && state_.traori) moves = true;
-  const bool arc =
-      state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
+  const bool arc = state_.motion == Motion::ArcClockwise || state_.motion == Motion::ArcCounterClockwise;
   if (!arc) {
     for (int k = 0; k < 3; ++k) {
       if (l.center[k].present) {
-        fail(l.center[k].column,
-             std::string(1, kCenterLetter[k]) + " outside an arc (expected G2 or G3)");
+        fail(l.center[k].column, std::string(1, kCenterLetter[k]) + " outside an arc (expected G2 or G3)");
       }
     }
     if (l.cr.present) fail(l.cr.column, "CR= outside an arc (expected G2 or G3)");
@@ -980,13 +945,11 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     if (!w.present) continue;
     programmed[static_cast<std::size_t>(a)] = true;
     const double v = length_mm(w);
-    const bool incremental =
-        w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
+    const bool incremental = w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
     if (incremental) {
       if (!state_.known[static_cast<std::size_t>(a)]) {
-        fail(w.column, std::string("incremental ") + kAxisLetter[a] + " from an unknown " +
-                           kAxisLetter[a] + " position (expected an absolute " + kAxisLetter[a] +
-                           " first)");
+        fail(w.column, std::string("incremental ") + kAxisLetter[a] + " from an unknown " + kAxisLetter[a] +
+                           " position (expected an absolute " + kAxisLetter[a] + " first)");
       }
       end[a] = state_.position_mm[a] + v;
     } else {
@@ -1023,11 +986,9 @@ bool Reader::orient(Block& block) {
     const auto k = static_cast<std::size_t>(r);
     const char letter = static_cast<char>('A' + r);
     if (!(std::abs(w.value) <= kMaxMagnitude)) {
-      fail(w.column, std::string(1, letter) + " " + num(w.value) +
-                         " deg is out of range (expected within +-1e6)");
+      fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6)");
     }
-    const bool incremental =
-        w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
+    const bool incremental = w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
     if (incremental && !rotary.given[k]) {
       fail(w.column, std::string("incremental ") + letter + " from an unknown " + letter +
                          " position (expected an absolute " + letter + " first)");
@@ -1040,8 +1001,7 @@ bool Reader::orient(Block& block) {
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   if (!state_.traori) {
     if (vector) {
-      fail(vector_column,
-           "tool vector A3 B3 C3 without TRAORI (expected TRAORI before vector orientation)");
+      fail(vector_column, "tool vector A3 B3 C3 without TRAORI (expected TRAORI before vector orientation)");
     }
     if (axes) state_.rotary_program = true;
     state_.rotary = rotary;
@@ -1069,8 +1029,7 @@ bool Reader::orient(Block& block) {
   const Eigen::Vector3d tangent_in = state_.axis_tangent;
   state_.axis_tangent = Eigen::Vector3d::Zero();
   if (vector && axes) {
-    fail(vector_column,
-         "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
+    fail(vector_column, "tool vector A3 B3 C3 and rotary axes A B C in one block (expected one or the other)");
   }
   if (axes) {
     // Direct rotary axis positions under TRAORI: the pose engine solves the tool axis.
@@ -1129,8 +1088,8 @@ bool Reader::orient(Block& block) {
   // are set to zero"); the length does not matter.
   const Eigen::Vector3d v(l.vector[0].value, l.vector[1].value, l.vector[2].value);
   if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxMagnitude || v.norm() < kMinVectorNorm) {
-    fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " +
-                            num(v.z()) + ") (expected a vector of nonzero length)");
+    fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) +
+                            ") (expected a vector of nonzero length)");
   }
   const Eigen::Vector3d axis = v.normalized();
   block.start_axis = state_.tool_axis;
@@ -1147,20 +1106,18 @@ bool Reader::orient(Block& block) {
   const Eigen::Vector3d& c = axis;
   if (cone && state_.cone_by == ConeBy::Axis) {
     if (state_.cone_axis.isZero()) {
-      fail(vector_column,
-           "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
+      fail(vector_column, "ORICONCW/ORICONCCW without a cone axis (expected A6 B6 C6 in this block or before)");
     }
     const Eigen::Vector3d& k = state_.cone_axis;
     const double a0 = std::acos(std::clamp(block.start_axis.dot(k), -1.0, 1.0));
     const double a1 = std::acos(std::clamp(axis.dot(k), -1.0, 1.0));
     if (std::abs(a0 - a1) > kConeAngleToleranceRad) {
-      fail(vector_column, "end vector at " + num(a1 / kDegToRad) +
-                              " deg from the cone axis but the start at " + num(a0 / kDegToRad) +
+      fail(vector_column, "end vector at " + num(a1 / kDegToRad) + " deg from the cone axis but the start at " +
+                              num(a0 / kDegToRad) +
                               " deg (expected both on one cone about A6 B6 C6, within 0.006 deg)");
     }
     if (a0 < kConeAngleToleranceRad || M_PI - a0 < kConeAngleToleranceRad) {
-      fail(vector_column,
-           "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
+      fail(vector_column, "tool vector along the cone axis A6 B6 C6 (expected a cone with an opening)");
     }
     block.cone_axis = k;
   } else if (through_middle) {
@@ -1180,8 +1137,8 @@ bool Reader::orient(Block& block) {
                                              : l.middle[2].column;
     const Eigen::Vector3d w(l.middle[0].value, l.middle[1].value, l.middle[2].value);
     if (!w.allFinite() || w.cwiseAbs().maxCoeff() > kMaxMagnitude || w.norm() < kMinVectorNorm) {
-      fail(column, "intermediate orientation A7 B7 C7 (" + num(w.x()) + ", " + num(w.y()) + ", " +
-                       num(w.z()) + ") (expected a vector of nonzero length)");
+      fail(column, "intermediate orientation A7 B7 C7 (" + num(w.x()) + ", " + num(w.y()) + ", " + num(w.z()) +
+                       ") (expected a vector of nonzero length)");
     }
     const Eigen::Vector3d m = w.normalized();
     const double am = (m - a).norm(), mc = (c - m).norm(), ac = (c - a).norm();
@@ -1217,8 +1174,7 @@ bool Reader::orient(Block& block) {
     }
     block.cone_axis = t.cross(c - a).normalized();
     block.orientation = OrientationMode::ConeCounterClockwise;
-  } else if (state_.orientation == OrientationMode::Vector &&
-             block.start_axis.dot(axis) <= kOppositeAxisCosine) {
+  } else if (state_.orientation == OrientationMode::Vector && block.start_axis.dot(axis) <= kOppositeAxisCosine) {
     fail(vector_column,
          "tool vector opposite to the previous one (expected less than 180 deg of turn: "
          "no single great circle joins opposite vectors)");
@@ -1249,15 +1205,13 @@ void Reader::arc(Block& block, bool clockwise) {
   const bool ijk = l_.center[0].present || l_.center[1].present || l_.center[2].present;
   const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
   if (!cr.present && !ijk)
-    fail(column,
-         std::string(code) + " arc without I J K or CR= (expected the centre or the radius)");
+    fail(column, std::string(code) + " arc without I J K or CR= (expected the centre or the radius)");
   if (cr.present && ijk)
     fail(cr.column, std::string(code) + " arc with both CR= and I J K (expected one or the other)");
   for (int axis : {a, b}) {
     if (!state_.known[static_cast<std::size_t>(axis)]) {
       fail(column, std::string(code) + " arc from an unknown " + kAxisLetter[axis] +
-                       " position (expected a move that sets " + kAxisLetter[axis] +
-                       " before the first arc)");
+                       " position (expected a move that sets " + kAxisLetter[axis] + " before the first arc)");
     }
   }
   const Eigen::Vector3d start = block.start_mm;
@@ -1268,9 +1222,8 @@ void Reader::arc(Block& block, bool clockwise) {
   if (ijk) {
     const Value& normal_word = l_.center[c];
     if (normal_word.present) {
-      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name +
-                                   "-plane arc (expected " + kCenterLetter[a] + " and " +
-                                   kCenterLetter[b] + ")");
+      fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name + "-plane arc (expected " +
+                                   kCenterLetter[a] + " and " + kCenterLetter[b] + ")");
     }
     const Eigen::Vector3d off = offset();
     for (int k = 0; k < 2; ++k) {
@@ -1280,11 +1233,11 @@ void Reader::arc(Block& block, bool clockwise) {
       const double v = w.present ? length_mm(w) : 0.0;
       center[k] = w.present && w.mode == Value::Mode::Absolute ? v + off[axis] : start[axis] + v;
       if (!(std::abs(center[k]) <= kMaxMagnitude)) {
-        fail(w.column, std::string(1, kCenterLetter[axis]) +
-                           " gives a centre out of range (expected within +-1e6 mm)");
+        fail(w.column, std::string(1, kCenterLetter[axis]) + " gives a centre out of range (expected within +-1e6 mm)");
       }
     }
-    if (const std::string error = detail::centre_arc_error(s, e, center, {options_.arc_tolerance_mm, 0.001, kMaxMagnitude}, code);
+    if (const std::string error =
+            detail::centre_arc_error(s, e, center, {options_.arc_tolerance_mm, 0.001, kMaxMagnitude}, code);
         !error.empty()) {
       fail(column, error);
     }
@@ -1322,8 +1275,7 @@ void Reader::motion() {
     if (!state_.known[static_cast<std::size_t>(a)]) block.start_mm[a] = block.end_mm[a];
   }
   const bool reorients = orient(block);
-  if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise)
-    arc(block, m == Motion::ArcClockwise);
+  if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise) arc(block, m == Motion::ArcClockwise);
   const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
   if (m != Motion::Rapid) {
     if (state_.inverse_time) {
@@ -1362,8 +1314,7 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
     block.source = kinematics::SourceRef{file_index_, line_};
     program_.blocks.push_back(block);
     for (std::size_t a = 0; a < 3; ++a) {
-      if (!state_.known[a] && !programmed[a])
-        state_.pending[a].push_back(program_.blocks.size() - 1);
+      if (!state_.known[a] && !programmed[a]) state_.pending[a].push_back(program_.blocks.size() - 1);
     }
   }
   for (std::size_t a = 0; a < 3; ++a) {
@@ -1377,20 +1328,17 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
     for (std::size_t index : pending) {
       if (index >= program_.blocks.size()) continue;  // a different Program was passed in
       Block& b = program_.blocks[index];
-      if (first.empty() && b.source.file >= 0 &&
-          static_cast<std::size_t>(b.source.file) < program_.files.size()) {
+      if (first.empty() && b.source.file >= 0 && static_cast<std::size_t>(b.source.file) < program_.files.size()) {
         first = program_.where(b.source);
       }
       b.start_mm[static_cast<int>(a)] = b.end_mm[static_cast<int>(a)] = value;
-      if (b.kind == MotionKind::Arc)
-        b.center_mm[static_cast<int>(a)] = value;  // only the normal axis
+      if (b.kind == MotionKind::Arc) b.center_mm[static_cast<int>(a)] = value;  // only the normal axis
       ++patched;
     }
     pending.clear();
     if (patched > 0) {
-      warn(l_.axis[a].column, std::to_string(patched) + " earlier move(s) (first at " + first +
-                                  ") ran while " + kAxisLetter[a] + " was unknown; they hold " +
-                                  kAxisLetter[a] + " at " + num(value) +
+      warn(l_.axis[a].column, std::to_string(patched) + " earlier move(s) (first at " + first + ") ran while " +
+                                  kAxisLetter[a] + " was unknown; they hold " + kAxisLetter[a] + " at " + num(value) +
                                   " mm, its first programmed value");
     }
   }
@@ -1399,15 +1347,13 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
 
 void validate(const std::string& name, const SinumerikOptions& options) {
   if (!std::isfinite(options.arc_tolerance_mm) || options.arc_tolerance_mm < 0.0) {
-    throw InputError(name, 0, 0,
-                     "arc tolerance " + num(options.arc_tolerance_mm) +
-                         " mm in the options (expected a finite value >= 0)");
+    throw InputError(
+        name, 0, 0,
+        "arc tolerance " + num(options.arc_tolerance_mm) + " mm in the options (expected a finite value >= 0)");
   }
   for (const auto& [key, offset] : options.work_offsets_mm) {
     if (!offset.allFinite() || offset.cwiseAbs().maxCoeff() > kMaxMagnitude) {
-      throw InputError(
-          name, 0, 0,
-          "work offset " + key + " in the options (expected finite values within +-1e6 mm)");
+      throw InputError(name, 0, 0, "work offset " + key + " in the options (expected finite values within +-1e6 mm)");
     }
   }
 }

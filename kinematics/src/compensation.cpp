@@ -22,7 +22,8 @@ Eigen::Matrix<double, 6, 1> residual(const Machine& m, const AxisValues& q, cons
 
 }  // namespace
 
-CompensationResult compensate(const Machine& m, const ToolPose& target, double tool_length_mm, const AxisValues& start) {
+CompensationResult compensate(const Machine& m, const ToolPose& target, double tool_length_mm,
+                              const AxisValues& start) {
   ToolPose nominal = target;
   nominal.axis.normalize();
   CompensationResult out;

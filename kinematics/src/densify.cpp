@@ -14,7 +14,7 @@ namespace vcut::kinematics {
 namespace {
 constexpr double kTwoPi = 2.0 * M_PI;
 constexpr int kMaxMovesPerBlock = 1 << 20;  // tolerance search cap
-}
+}  // namespace
 
 int arc_chord_count(double radius_mm, double angle_rad, double tolerance_mm) {
   if (radius_mm <= tolerance_mm) return std::max(1, static_cast<int>(std::ceil(angle_rad / (M_PI / 2))));
@@ -29,7 +29,7 @@ double arc_angle_rad(const Block& b) {
   u -= u.dot(n) * n;
   w -= w.dot(n) * n;
   double angle = std::atan2(u.cross(w).dot(n), u.dot(w));  // (-pi, pi]
-  if (angle <= 1e-12) angle += kTwoPi;                       // (0, 2 pi]: start == end is a full turn
+  if (angle <= 1e-12) angle += kTwoPi;                     // (0, 2 pi]: start == end is a full turn
   return angle + kTwoPi * std::max(0, b.turns - 1);
 }
 
@@ -160,7 +160,8 @@ class BlockPath {
     p.tip_mm = tip_at(b_, s);
     if (mode_ == Mode::RotaryLinear) {
       p.axis = forward(*machine_, q0_ + s * (q1_ - q0_), tool_length_mm_).axis;
-    } else if (b_.orientation == OrientationMode::ConeClockwise || b_.orientation == OrientationMode::ConeCounterClockwise) {
+    } else if (b_.orientation == OrientationMode::ConeClockwise ||
+               b_.orientation == OrientationMode::ConeCounterClockwise) {
       p.axis = Eigen::AngleAxisd(s * cone_turn_rad(b_), b_.cone_axis.normalized()) * b_.start_axis;
     } else {
       p.axis = great_circle(b_.start_axis, b_.end_axis, s);
@@ -216,12 +217,16 @@ class BlockPath {
     const double g = (std::sqrt(5.0) - 1.0) / 2.0;
     for (int it = 0; it < 60; ++it) {
       const double m1 = hi - g * (hi - lo), m2 = lo + g * (hi - lo);
-      if (distance(m1) > distance(m2)) hi = m2;
-      else lo = m1;
+      if (distance(m1) > distance(m2))
+        hi = m2;
+      else
+        lo = m1;
     }
     const double s = 0.5 * (lo + hi);
-    if (distance(s) > best_d) best_d = distance(s);
-    else if (best_d > 0.0) lo = hi = static_cast<double>(best) / kScan;
+    if (distance(s) > best_d)
+      best_d = distance(s);
+    else if (best_d > 0.0)
+      lo = hi = static_cast<double>(best) / kScan;
     report.nonlinear_error_mm = best_d;
     report.nonlinear_at_mm = pose(0.5 * (lo + hi)).tip_mm;
   }
@@ -294,7 +299,8 @@ double deviation_for(const BlockPath& path, int q, const DensifySettings& settin
   ToolPose prev = path.pose(0.0);
   for (int k = 1; k <= q; ++k) {
     const ToolPose next = path.pose(static_cast<double>(k) / q);
-    worst = std::max(worst, move_deviation(path, prev, next, static_cast<double>(k - 1) / q, static_cast<double>(k) / q, settings));
+    worst = std::max(
+        worst, move_deviation(path, prev, next, static_cast<double>(k - 1) / q, static_cast<double>(k) / q, settings));
     prev = next;
   }
   return worst;
@@ -328,7 +334,8 @@ int moves_for(const Block& b, const BlockPath& path, const DensifySettings& sett
   if (b.kind == MotionKind::Arc) q = arc_moves(b, settings.chord_tolerance_mm);
   if (settings.step_mm > 0.0 && (b.kind != MotionKind::Rapid || path.axes_known()))
     q = std::max(q, static_cast<int>(std::ceil(path.length_mm() / settings.step_mm - 1e-12)));
-  if (settings.angle_step_rad > 0.0) q = std::max(q, static_cast<int>(std::ceil(turn / settings.angle_step_rad - 1e-12)));
+  if (settings.angle_step_rad > 0.0)
+    q = std::max(q, static_cast<int>(std::ceil(turn / settings.angle_step_rad - 1e-12)));
   return std::clamp(q, 1, kMaxMovesPerBlock);
 }
 
@@ -398,7 +405,8 @@ Densified densify(const Program& program, const DensifySettings& settings, const
       PoseSample sample;
       sample.block = static_cast<int>(i);
       // The end of the block is exactly the programmed pose.
-      sample.pose = (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
+      sample.pose =
+          (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
       if (machine) {
         if (path.axes_known()) {
           sample.axes = path.axes(s);

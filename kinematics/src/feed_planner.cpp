@@ -176,9 +176,7 @@ struct Profile {
 Profile make_profile(double L, double v_in, double v_out, double v_cruise, double a, double j) {
   Profile p;
   const double lo = std::max(v_in, v_out);
-  const auto distance = [&](double vp) {
-    return change_distance(v_in, vp, a, j) + change_distance(vp, v_out, a, j);
-  };
+  const auto distance = [&](double vp) { return change_distance(v_in, vp, a, j) + change_distance(vp, v_out, a, j); };
   double vp = std::max(lo, v_cruise);
   if (!std::isfinite(vp) || distance(vp) > L) {
     // Cruise not reached: the peak solves distance(vp) = L, increasing in vp. A peak above
@@ -214,8 +212,7 @@ double time_in_phase(const Phase& ph, double ds) {
   if (ds >= ph.length) return ph.duration;
   if (ph.jerk == 0.0 && ph.a0 == 0.0) return std::min(ph.duration, ds / ph.v0);
   const auto f = [&](double tau) { return std::make_pair(ph.distance(tau) - ds, ph.speed(tau)); };
-  return solve_increasing(f, 0.0, ph.duration, ph.duration * ds / ph.length,
-                          4.0 * kEps * ph.duration);
+  return solve_increasing(f, 0.0, ph.duration, ph.duration * ds / ph.length, 4.0 * kEps * ph.duration);
 }
 
 // ---------------------------------------------------------------- corners
@@ -298,8 +295,7 @@ struct AxisBounds {
   double v = kInf, a = kInf, j = kInf;
 };
 
-void axis_bounds(const Machine& machine, const AxisValues& q0, const AxisValues& q1, double ds,
-                 AxisBounds& out) {
+void axis_bounds(const Machine& machine, const AxisValues& q0, const AxisValues& q1, double ds, AxisBounds& out) {
   if (!(ds > 0.0)) return;
   const int n = std::min(machine.axis_count(), static_cast<int>(std::min(q0.size(), q1.size())));
   for (int k = 0; k < n; ++k) {
@@ -308,16 +304,15 @@ void axis_bounds(const Machine& machine, const AxisValues& q0, const AxisValues&
     const double ratio = dq / ds;
     const AxisSpec& axis = machine.axis(k);
     if (axis.max_velocity_per_s > 0.0) out.v = std::min(out.v, axis.max_velocity_per_s / ratio);
-    if (axis.max_acceleration_per_s2 > 0.0)
-      out.a = std::min(out.a, axis.max_acceleration_per_s2 / ratio);
+    if (axis.max_acceleration_per_s2 > 0.0) out.a = std::min(out.a, axis.max_acceleration_per_s2 / ratio);
     if (axis.max_jerk_per_s3 > 0.0) out.j = std::min(out.j, axis.max_jerk_per_s3 / ratio);
   }
 }
 
 // The rotary motion of a segment in degrees: the rotary axes' displacement (norm over the
 // axes, LinuxCNC's ABC length) when the machine axes are known, else the tool axis's turn.
-double rotation_deg(const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
-                    const Machine* machine, size_t i, Direction* direction) {
+double rotation_deg(const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes, const Machine* machine,
+                    size_t i, Direction* direction) {
   if (axes && machine) {
     Direction d = Direction::Zero();
     const AxisValues& q0 = (*axes)[i - 1];
@@ -374,8 +369,7 @@ double arc_curvature_radius(const Block& b) {
 // already) and for the Tip reading.
 double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes, const Machine* machine,
                        const FeedSettings& settings, size_t first, size_t last, const Run& run) {
-  if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip ||
-      !axes || !machine)
+  if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip || !axes || !machine)
     return 1.0;
   // The programmed X Y Z path: the line, or the arc (helix) of the words.
   const double xyz = b.kind == MotionKind::Arc ? arc_length_mm(b) : (b.end_mm - b.start_mm).norm();
@@ -384,18 +378,15 @@ double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes, cons
   const AxisValues& q1 = (*axes)[last];
   double rotary2 = 0.0;
   for (int k = 0; k < machine->axis_count() && k < q0.size() && k < q1.size(); ++k)
-    if (machine->axis(k).kind == AxisKind::Rotary)
-      rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
-  const double programmed = settings.axis_feed == FeedInterpretation::Combined
-                                ? std::sqrt(xyz * xyz + rotary2)
-                            : xyz > kStillTipMm ? xyz
-                                                : std::sqrt(rotary2);
+    if (machine->axis(k).kind == AxisKind::Rotary) rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
+  const double programmed = settings.axis_feed == FeedInterpretation::Combined ? std::sqrt(xyz * xyz + rotary2)
+                            : xyz > kStillTipMm                                ? xyz
+                                                                               : std::sqrt(rotary2);
   return programmed > 0.0 ? run.length / programmed : 1.0;
 }
 
-Run make_run(const Program& program, const std::vector<PoseSample>& samples,
-             const std::vector<AxisValues>* axes, const Machine* machine,
-             const FeedSettings& settings, int block, size_t first, size_t last,
+Run make_run(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
+             const Machine* machine, const FeedSettings& settings, int block, size_t first, size_t last,
              std::vector<double>& seg_len) {
   Run run;
   run.block = block;
@@ -403,13 +394,10 @@ Run make_run(const Program& program, const std::vector<PoseSample>& samples,
   run.last = last;
   const Block& b = program.blocks[static_cast<size_t>(block)];
   double tip = 0.0, rotation = 0.0;
-  for (size_t i = first; i <= last; ++i)
-    tip += (samples[i].pose.tip_mm - samples[i - 1].pose.tip_mm).norm();
+  for (size_t i = first; i <= last; ++i) tip += (samples[i].pose.tip_mm - samples[i - 1].pose.tip_mm).norm();
   if (tip <= kStillTipMm)
-    for (size_t i = first; i <= last; ++i)
-      rotation += rotation_deg(samples, axes, machine, i, nullptr);
-  run.unit =
-      tip > kStillTipMm ? Unit::Tip : (rotation > kStillRotationDeg ? Unit::Rotation : Unit::None);
+    for (size_t i = first; i <= last; ++i) rotation += rotation_deg(samples, axes, machine, i, nullptr);
+  run.unit = tip > kStillTipMm ? Unit::Tip : (rotation > kStillRotationDeg ? Unit::Rotation : Unit::None);
 
   AxisBounds bounds;
   bool have_in = false;
@@ -449,9 +437,7 @@ Run make_run(const Program& program, const std::vector<PoseSample>& samples,
   run.v_cap = bounds.v;
   if (arc) {
     const double radius = arc_curvature_radius(b);
-    if (radius > 0.0)
-      run.v_cap =
-          std::min({run.v_cap, std::sqrt(run.a * radius), std::cbrt(run.j * radius * radius)});
+    if (radius > 0.0) run.v_cap = std::min({run.v_cap, std::sqrt(run.a * radius), std::cbrt(run.j * radius * radius)});
   }
   const double f = b.feed_mm_per_min;
   if (!run.rapid && f > 0.0) {
@@ -463,16 +449,14 @@ Run make_run(const Program& program, const std::vector<PoseSample>& samples,
     }
   }
   // Rapids (and a feed move without a feed) run at the axes' speed, or the settings' rapid.
-  if (!std::isfinite(run.v_prog) && !std::isfinite(run.v_axis))
-    run.v_prog = settings.rapid_mm_per_min / 60.0;
+  if (!std::isfinite(run.v_prog) && !std::isfinite(run.v_axis)) run.v_prog = settings.rapid_mm_per_min / 60.0;
   run.v = std::max(kMinSpeed, std::min(run.v_prog, run.v_cap));
   // The axes set the speed where they bind before the feed and the arc's own bounds. G93
   // blocks are decided once their cruise speed is known (plan_feed step 4).
-  run.axis_limited = !run.rapid && run.g93_time_s == 0.0 && f > 0.0 && run.v_axis < run.v_prog &&
-                     run.v_axis <= run.v_cap;
+  run.axis_limited =
+      !run.rapid && run.g93_time_s == 0.0 && f > 0.0 && run.v_axis < run.v_prog && run.v_axis <= run.v_cap;
   run.exact_stop = b.exact_stop;
-  run.tolerance_mm =
-      b.blend_tolerance_mm >= 0.0 ? b.blend_tolerance_mm : settings.default_blend_tolerance_mm;
+  run.tolerance_mm = b.blend_tolerance_mm >= 0.0 ? b.blend_tolerance_mm : settings.default_blend_tolerance_mm;
   return run;
 }
 
@@ -505,8 +489,8 @@ bool continues(const Span& s, const Run& r) {
   if (!same_limit(s.v, r.v) || !same_limit(s.a, r.a) || !same_limit(s.j, r.j)) return false;
   const double theta = angle_between(s.dir_out, r.dir_in);
   if (theta <= kTangentRad) return true;
-  return s.unit == Unit::Tip && corner_speed(theta, s.tolerance_mm, std::min(s.a, r.a),
-                                             std::min(s.seg_out, r.seg_in)) >= std::max(s.v, r.v);
+  return s.unit == Unit::Tip &&
+         corner_speed(theta, s.tolerance_mm, std::min(s.a, r.a), std::min(s.seg_out, r.seg_in)) >= std::max(s.v, r.v);
 }
 
 std::vector<Span> make_spans(const std::vector<Run>& runs) {
@@ -546,15 +530,13 @@ double junction_limit(const Span& p, const Span& n) {
   const double theta = angle_between(p.dir_out, n.dir_in);
   // Rotations only continue without a stop when they turn on about the same axes.
   if (p.unit == Unit::Rotation) return theta <= kTangentRad ? v : 0.0;
-  return std::min(
-      v, corner_speed(theta, p.tolerance_mm, std::min(p.a, n.a), std::min(p.seg_out, n.seg_in)));
+  return std::min(v, corner_speed(theta, p.tolerance_mm, std::min(p.a, n.a), std::min(p.seg_out, n.seg_in)));
 }
 
 }  // namespace
 
-FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples,
-                   const std::vector<AxisValues>* axes, const Machine* machine,
-                   const FeedSettings& settings) {
+FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
+                   const Machine* machine, const FeedSettings& settings) {
   FeedPlan plan;
   const size_t n = samples.size();
   plan.t_s.assign(n, 0.0);
@@ -623,14 +605,12 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
     const auto duration = [&](double v) {
       return make_profile(s.length, speed[k], speed[k + 1], v, s.a, s.j).duration;
     };
-    double hi =
-        std::min(s.v_cap, std::max(speed[k], speed[k + 1]) + std::sqrt(2.0 * s.a * s.length));
+    double hi = std::min(s.v_cap, std::max(speed[k], speed[k + 1]) + std::sqrt(2.0 * s.a * s.length));
     hi = std::max(hi, s.v);
     if (duration(hi) >= s.g93_time_s) {
       s.v = hi;  // not achievable: as fast as the limits allow
       const Run& r = runs[s.moving_run];
-      runs[s.moving_run].axis_limited =
-          std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
+      runs[s.moving_run].axis_limited = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
       continue;
     }
     double lo = s.v;
@@ -658,8 +638,7 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
       // flat (j t^3/6), so the rounding of the arc length (1e-15 mm) would move it ~1e-6 s.
       double t = p.duration, v = speed[k + 1];
       if (p.count > 0 && arc < s.length) {
-        while (ph + 1 < p.count &&
-               arc > p.phase[static_cast<size_t>(ph)].s0 + p.phase[static_cast<size_t>(ph)].length)
+        while (ph + 1 < p.count && arc > p.phase[static_cast<size_t>(ph)].s0 + p.phase[static_cast<size_t>(ph)].length)
           ++ph;
         const Phase& phase = p.phase[static_cast<size_t>(ph)];
         const double tau = time_in_phase(phase, arc - phase.s0);
@@ -691,8 +670,7 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   for (const Run& r : runs) {
     plan.block_time_s[static_cast<size_t>(r.block)] += plan.t_s[r.last] - plan.t_s[r.first - 1];
     if (r.axis_limited)
-      for (size_t i = r.first; i <= r.last; ++i)
-        plan.axis_limited_samples.push_back(static_cast<int>(i));
+      for (size_t i = r.first; i <= r.last; ++i) plan.axis_limited_samples.push_back(static_cast<int>(i));
   }
   plan.cycle_time_s = plan.t_s.back();
   return plan;

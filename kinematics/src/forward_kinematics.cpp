@@ -11,7 +11,7 @@ Eigen::Matrix3d rotation(const Eigen::Vector3d& k, double angle_rad) {
   const double c = std::cos(angle_rad), s = std::sin(angle_rad), v = 1.0 - c;
   Eigen::Matrix3d r;
   r << c + k.x() * k.x() * v, k.x() * k.y() * v - k.z() * s, k.x() * k.z() * v + k.y() * s,  //
-      k.y() * k.x() * v + k.z() * s, c + k.y() * k.y() * v, k.y() * k.z() * v - k.x() * s,  //
+      k.y() * k.x() * v + k.z() * s, c + k.y() * k.y() * v, k.y() * k.z() * v - k.x() * s,   //
       k.z() * k.x() * v - k.y() * s, k.z() * k.y() * v + k.x() * s, c + k.z() * k.z() * v;
   return r;
 }
@@ -82,8 +82,7 @@ Chains chains(const Machine& m, const AxisValues& q, Geometry geometry) {
 
 ToolPose forward(const Machine& m, const AxisValues& q, double tool_length_mm, Geometry geometry) {
   const detail::Chains c = detail::chains(m, q, geometry);
-  const Eigen::Vector3d tip_frame =
-      c.tool.apply(m.spec().gauge_point_mm - tool_length_mm * m.spec().spindle_axis);
+  const Eigen::Vector3d tip_frame = c.tool.apply(m.spec().gauge_point_mm - tool_length_mm * m.spec().spindle_axis);
   const Eigen::Vector3d axis_frame = c.tool.R * m.spec().spindle_axis;
   ToolPose pose;
   pose.tip_mm = c.workpiece.R.transpose() * (tip_frame - c.workpiece.t);

@@ -34,8 +34,7 @@ double arc_distance(const Block& b, const Eigen::Vector3d& p, double s_guess) {
   Eigen::Vector3d w = p - b.center_mm;
   w -= w.dot(n) * n;
   const double total = arc_angle_rad(b);
-  if (u.norm() == 0.0 || w.norm() == 0.0 || !(total > 0.0))
-    return (p - arc_point(b, s_guess)).norm();
+  if (u.norm() == 0.0 || w.norm() == 0.0 || !(total > 0.0)) return (p - arc_point(b, s_guess)).norm();
   double phi = std::atan2(n.dot(u.cross(w)), u.dot(w));  // (-pi, pi] about n from the start
   const double guess = s_guess * total;
   phi += 2.0 * M_PI * std::round((guess - phi) / (2.0 * M_PI));
@@ -55,26 +54,22 @@ CommandedPath::CommandedPath(const Program& program, const std::vector<PoseSampl
   for (std::size_t i = 1; i < samples.size(); ++i) {
     const int b = samples[i].block;
     index = b == samples[i - 1].block ? index + 1 : 1;
-    const int q = b >= 0 && static_cast<std::size_t>(b) < blocks.size()
-                      ? std::max(1, blocks[static_cast<std::size_t>(b)].q)
-                      : 1;
+    const int q =
+        b >= 0 && static_cast<std::size_t>(b) < blocks.size() ? std::max(1, blocks[static_cast<std::size_t>(b)].q) : 1;
     param_[i] = static_cast<double>(index) / q;
   }
 }
 
-std::pair<std::size_t, std::size_t> CommandedPath::window(std::size_t nearest_last,
-                                                          std::size_t commanded) const {
+std::pair<std::size_t, std::size_t> CommandedPath::window(std::size_t nearest_last, std::size_t commanded) const {
   const std::size_t hi = std::min(samples_.size() - 1, commanded + kAheadSlack);
   return {std::min(hi, nearest_last > kBackSlack ? nearest_last - kBackSlack : 1), hi};
 }
 
-double CommandedPath::distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi,
-                               std::size_t* nearest) const {
+double CommandedPath::distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi, std::size_t* nearest) const {
   double best = std::numeric_limits<double>::infinity();
   std::size_t best_k = lo;
   for (std::size_t k = lo; k <= hi; ++k) {
-    const double d =
-        detail::segment_nearest(p, samples_[k - 1].pose.tip_mm, samples_[k].pose.tip_mm).second;
+    const double d = detail::segment_nearest(p, samples_[k - 1].pose.tip_mm, samples_[k].pose.tip_mm).second;
     if (d < best) best = d, best_k = k;
   }
   if (nearest) *nearest = best_k;
@@ -95,10 +90,8 @@ double CommandedPath::refine(const Eigen::Vector3d& p, std::size_t k, double pol
   }
   // An axis block: the axes run linearly, the tip on the machine's curve between the two
   // samples; its distance from p is unimodal over so short a piece (golden section).
-  if (!machine_ || from.axes.size() != machine_->axis_count() || to.axes.size() != from.axes.size())
-    return polyline;
-  const double length =
-      tool_length_mm_ && k < tool_length_mm_->size() ? (*tool_length_mm_)[k] : 0.0;
+  if (!machine_ || from.axes.size() != machine_->axis_count() || to.axes.size() != from.axes.size()) return polyline;
+  const double length = tool_length_mm_ && k < tool_length_mm_->size() ? (*tool_length_mm_)[k] : 0.0;
   const auto d = [&](double t) {
     return (forward(*machine_, from.axes + t * (to.axes - from.axes), length).tip_mm - p).norm();
   };
@@ -115,8 +108,7 @@ double CommandedPath::refine(const Eigen::Vector3d& p, std::size_t k, double pol
   return std::min({d1, d2, d(0.0), d(1.0)});
 }
 
-std::size_t for_each_period(const InterpolatorInput& in,
-                            const std::function<void(const PeriodSample&)>& visit) {
+std::size_t for_each_period(const InterpolatorInput& in, const std::function<void(const PeriodSample&)>& visit) {
   const std::vector<PoseSample>& samples = *in.samples;
   const FeedPlan& plan = *in.feed;
   const Program& program = *in.program;
@@ -138,8 +130,7 @@ std::size_t for_each_period(const InterpolatorInput& in,
     const int block = samples[segment].block;
     out.segment = segment;
     out.block = block;
-    out.feed =
-        block >= 0 && program.blocks[static_cast<std::size_t>(block)].kind != MotionKind::Rapid;
+    out.feed = block >= 0 && program.blocks[static_cast<std::size_t>(block)].kind != MotionKind::Rapid;
     const double length = length_at(length_sample);
     out.actual_pose = forward(machine, out.actual, length, in.geometry);
     if (in.commanded_pose) out.commanded_pose = forward(machine, out.commanded, length);
@@ -165,8 +156,7 @@ std::size_t for_each_period(const InterpolatorInput& in,
       return path.distance(p.actual_pose.tip_mm, lo, hi, nullptr);
     };
     const double g = (std::sqrt(5.0) - 1.0) / 2.0;
-    double a = -1.0, b = 1.0, x1 = b - g * (b - a), x2 = a + g * (b - a), e1 = error(x1),
-           e2 = error(x2);
+    double a = -1.0, b = 1.0, x1 = b - g * (b - a), x2 = a + g * (b - a), e1 = error(x1), e2 = error(x2);
     for (int it = 0; it < kGoldenIterations / 2; ++it) {
       if (e1 < e2) {
         a = x1, x1 = x2, e1 = e2, x2 = a + g * (b - a), e2 = error(x2);
@@ -201,8 +191,7 @@ std::size_t for_each_period(const InterpolatorInput& in,
     const double f = at.fraction;
     AxisValues q = a.axes + f * (b.axes - a.axes);
     const int block = b.block;
-    if (f <= 0.0 || f >= 1.0 || block < 0 ||
-        !program.blocks[static_cast<std::size_t>(block)].tool_pose)
+    if (f <= 0.0 || f >= 1.0 || block < 0 || !program.blocks[static_cast<std::size_t>(block)].tool_pose)
       return last_command = q;
     bool turns = false;
     for (int k = 0; k < machine.rotary_count(); ++k)
@@ -215,8 +204,8 @@ std::size_t for_each_period(const InterpolatorInput& in,
       solve_linear_axes(machine, q, tip, length);
       return last_command = q;
     }
-    const IkResult r = inverse(machine, ToolPose{tip, great_circle(a.pose.axis, b.pose.axis, f)},
-                               length, &last_command, in.ik);
+    const IkResult r =
+        inverse(machine, ToolPose{tip, great_circle(a.pose.axis, b.pose.axis, f)}, length, &last_command, in.ik);
     return last_command = r.ok() ? r.q() : q;
   };
 

@@ -14,7 +14,7 @@ namespace vcut::kinematics {
 namespace {
 
 constexpr double kTwoPi = 2.0 * M_PI;
-constexpr double kLimitSlack = 1e-9;   // mm or rad: a value this far past a limit is still on it
+constexpr double kLimitSlack = 1e-9;      // mm or rad: a value this far past a limit is still on it
 constexpr double kFreeAngleSine = 1e-12;  // a vector this close to a rotation axis has no angle about it
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kMaxWindings = 4.0;  // windings listed per axis when its limits span more turns
@@ -44,8 +44,8 @@ std::string value_in_file_units(const AxisSpec& a, double v) {
 
 std::string limit_text(const AxisSpec& a) {
   const double f = a.kind == AxisKind::Rotary ? kRadToDeg : 1.0;
-  return std::string("axis ") + a.letter + " limits [" + num(a.limits->first * f) + ", " +
-         num(a.limits->second * f) + "]";
+  return std::string("axis ") + a.letter + " limits [" + num(a.limits->first * f) + ", " + num(a.limits->second * f) +
+         "]";
 }
 
 // The linear axis values that put the tip at `tip_mm` once the rotary values in q are fixed.
@@ -158,11 +158,13 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
     branches.push_back({0.0, 0.0});
   } else if (nr == 1) {
     const Eigen::Vector3d k1 = m.axis(m.rotary_axis(0)).direction;
-    const double miss = std::abs(std::asin(std::clamp(u_w.dot(k1), -1.0, 1.0)) - std::asin(std::clamp(u0.dot(k1), -1.0, 1.0)));
+    const double miss =
+        std::abs(std::asin(std::clamp(u_w.dot(k1), -1.0, 1.0)) - std::asin(std::clamp(u0.dot(k1), -1.0, 1.0)));
     if (miss > settings.orientation_tolerance_rad)
       return unreachable(std::string("orientation out of reach: axis ") + m.axis(m.rotary_axis(0)).letter +
                          " keeps the tool at " + num(std::acos(std::clamp(u0.dot(k1), -1.0, 1.0)) * kRadToDeg) +
-                         " deg from its axis, the pose asks " + num(std::acos(std::clamp(u_w.dot(k1), -1.0, 1.0)) * kRadToDeg));
+                         " deg from its axis, the pose asks " +
+                         num(std::acos(std::clamp(u_w.dot(k1), -1.0, 1.0)) * kRadToDeg));
     double b1 = angle_about(k1, u0, u_w);
     if (std::isnan(b1)) b1 = previous ? m.rotary_sign(0) * *prev_angle(0) : 0.0;
     branches.push_back({b1, 0.0});
@@ -204,15 +206,15 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
         if (std::isnan(b2)) b2 = previous ? s2 * *prev_angle(1) : 0.0;
         branches.push_back({b1, b2});
       } else {
-      const double z = std::sqrt(z2);
-      for (double sign : {1.0, -1.0}) {
-        const Eigen::Vector3d c = x * k1 + y * k2 + sign * z * n;
-        double b2 = angle_about(k2, u0, c);
-        if (std::isnan(b2)) b2 = previous ? s2 * *prev_angle(1) : 0.0;  // u0 along k2: k2 changes nothing
-        const double b1 = angle_about(k1, c, u_w);
-        branches.push_back({b1, b2});
-        if (z == 0.0) break;
-      }
+        const double z = std::sqrt(z2);
+        for (double sign : {1.0, -1.0}) {
+          const Eigen::Vector3d c = x * k1 + y * k2 + sign * z * n;
+          double b2 = angle_about(k2, u0, c);
+          if (std::isnan(b2)) b2 = previous ? s2 * *prev_angle(1) : 0.0;  // u0 along k2: k2 changes nothing
+          const double b1 = angle_about(k1, c, u_w);
+          branches.push_back({b1, b2});
+          if (z == 0.0) break;
+        }
       }
     }
   }
@@ -280,7 +282,8 @@ IkResult inverse(const Machine& m, const ToolPose& pose, double tool_length_mm, 
       const int a = m.rotary_axis(k);
       cost += std::abs(s.q[a] - (previous ? (*previous)[a] : 0.0));
     }
-    const int pref_miss = (pref >= 0 && settings.preferred_sign != 0 && s.q[pref] * settings.preferred_sign < -kLimitSlack) ? 1 : 0;
+    const int pref_miss =
+        (pref >= 0 && settings.preferred_sign != 0 && s.q[pref] * settings.preferred_sign < -kLimitSlack) ? 1 : 0;
     bool better;
     if (previous)
       better = cost < best_cost - 1e-9 || (cost < best_cost + 1e-9 && pref_miss < best_pref);

@@ -10,8 +10,8 @@
 namespace vcut::kinematics {
 namespace {
 
-constexpr double kUnitTolerance = 1e-6;      // |v| this close to 1 is normalised with a warning
-constexpr double kParallelSine = 1e-6;       // linear axes whose directions' sine is below this are parallel
+constexpr double kUnitTolerance = 1e-6;  // |v| this close to 1 is normalised with a warning
+constexpr double kParallelSine = 1e-6;   // linear axes whose directions' sine is below this are parallel
 
 std::string fixed(double v) {
   char buf[32];
@@ -45,7 +45,8 @@ double ErrorTable::at(double position) const {
   if (positions.empty() || values.size() == 1) return values.front();
   if (position <= positions.front()) return values.front();
   if (position >= positions.back()) return values.back();
-  const auto hi = static_cast<size_t>(std::upper_bound(positions.begin(), positions.end(), position) - positions.begin());
+  const auto hi =
+      static_cast<size_t>(std::upper_bound(positions.begin(), positions.end(), position) - positions.begin());
   const size_t lo = hi - 1;
   const double s = (position - positions[lo]) / (positions[hi] - positions[lo]);
   return values[lo] + s * (values[hi] - values[lo]);
@@ -65,7 +66,8 @@ std::vector<SpecProblem> validate(MachineSpec& spec) {
   std::string seen;
   for (char c : topo) {
     if (!(c == 'W' || c == 'F' || c == 'T' || is_axis_letter(c)))
-      out.push_back({"topology", std::string("letters W, F, T and axis letters X Y Z A B C (unknown letter '") + c + "')", false});
+      out.push_back({"topology",
+                     std::string("letters W, F, T and axis letters X Y Z A B C (unknown letter '") + c + "')", false});
     else if (seen.find(c) != std::string::npos)
       out.push_back({"topology", std::string("each letter once (duplicate letter '") + c + "')", false});
     seen += c;
@@ -82,7 +84,8 @@ std::vector<SpecProblem> validate(MachineSpec& spec) {
     for (size_t j = 0; j < i; ++j)
       if (spec.axes[j].letter == a.letter) out.push_back({key, "each axis once (duplicate axis)", false});
     if (topo.find(a.letter) == std::string::npos)
-      out.push_back({key, std::string("an axis named in the topology (") + a.letter + " is not in '" + topo + "')", false});
+      out.push_back(
+          {key, std::string("an axis named in the topology (") + a.letter + " is not in '" + topo + "')", false});
     check_unit(a.direction, key + (a.kind == AxisKind::Linear ? ".direction" : ".axis"), out);
     if (a.limits && !(a.limits->first < a.limits->second))
       out.push_back({key + ".limits", "limits [min, max] with min < max (inverted or empty limits)", false});
@@ -92,11 +95,15 @@ std::vector<SpecProblem> validate(MachineSpec& spec) {
   }
   for (char c : topo) {
     if (c == 'W' || c == 'F' || c == 'T') continue;
-    const bool found = std::any_of(spec.axes.begin(), spec.axes.end(), [c](const AxisSpec& a) { return a.letter == c; });
-    if (!found) out.push_back({"axes", std::string("an entry for every axis of the topology (missing axis ") + c + ")", false});
+    const bool found =
+        std::any_of(spec.axes.begin(), spec.axes.end(), [c](const AxisSpec& a) { return a.letter == c; });
+    if (!found)
+      out.push_back({"axes", std::string("an entry for every axis of the topology (missing axis ") + c + ")", false});
   }
   if (linear != 3) out.push_back({"axes", "three linear axes (got " + std::to_string(linear) + ")", false});
-  if (rotary > 2) out.push_back({"axes", "at most two rotary axes (got " + std::to_string(rotary) + "): more than two rotary axes", false});
+  if (rotary > 2)
+    out.push_back(
+        {"axes", "at most two rotary axes (got " + std::to_string(rotary) + "): more than two rotary axes", false});
   check_unit(spec.spindle_axis, "spindle.axis", out);
   for (const SpecProblem& p : out)
     if (!p.warning) return out;
@@ -109,7 +116,8 @@ std::vector<SpecProblem> validate(MachineSpec& spec) {
     for (size_t j = i + 1; j < lin.size(); ++j)
       if (lin[i]->direction.cross(lin[j]->direction).norm() < kParallelSine)
         out.push_back({std::string("axes.") + lin[j]->letter + ".direction",
-                       std::string("a direction not parallel to axis ") + lin[i]->letter + " (parallel linear axes)", false});
+                       std::string("a direction not parallel to axis ") + lin[i]->letter + " (parallel linear axes)",
+                       false});
   const bool errors_so_far = std::any_of(out.begin(), out.end(), [](const SpecProblem& p) { return !p.warning; });
   if (lin.size() == 3 && !errors_so_far &&
       std::abs(lin[0]->direction.cross(lin[1]->direction).dot(lin[2]->direction)) < kParallelSine)
@@ -140,8 +148,7 @@ Machine::Machine(MachineSpec spec) : spec_(std::move(spec)) {
     if (axis(*it).kind == AxisKind::Rotary) rotary_.push_back({*it, -1.0});
   for (int i : tool_chain_)
     if (axis(i).kind == AxisKind::Rotary) rotary_.push_back({i, 1.0});
-  for (const AxisSpec& a : spec_.axes)
-    has_errors_ = has_errors_ || !a.errors.empty() || !a.location.empty();
+  for (const AxisSpec& a : spec_.axes) has_errors_ = has_errors_ || !a.errors.empty() || !a.location.empty();
 }
 
 int Machine::axis_index(char letter) const {

@@ -76,7 +76,8 @@ PoseChain run_pose_chain(const Program& program, const Machine& machine, const s
   run.tool_length_mm.resize(samples.size(), 0.0);
   for (size_t i = 0; i < samples.size(); ++i) {
     const int block = std::max(0, samples[i].block);
-    const auto it = program.blocks.empty() ? tool_length_mm.end() : tool_length_mm.find(program.blocks[static_cast<size_t>(block)].tool);
+    const auto it = program.blocks.empty() ? tool_length_mm.end()
+                                           : tool_length_mm.find(program.blocks[static_cast<size_t>(block)].tool);
     run.tool_length_mm[i] = it == tool_length_mm.end() ? 0.0 : it->second;
   }
 
@@ -157,7 +158,8 @@ PoseChain run_pose_chain(const Program& program, const Machine& machine, const s
     }
   }
   for (size_t b = 0; b < run.block_contour.size(); ++b)
-    if (run.block_contour[b].count) run.block_contour[b].rms_um = std::sqrt(block_sum2[b] / static_cast<double>(run.block_contour[b].count));
+    if (run.block_contour[b].count)
+      run.block_contour[b].rms_um = std::sqrt(block_sum2[b] / static_cast<double>(run.block_contour[b].count));
   run.rms_contour_error_um = feed_count == 0 ? 0.0 : std::sqrt(sum2 / static_cast<double>(feed_count));
   return run;
 }

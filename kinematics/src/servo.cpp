@@ -25,8 +25,7 @@ constexpr double kMaxPeriods = 1e9;  // a longer run is a units mistake, not a j
 // 4x4 matrix [[A, B], [0, 0]] dT (Van Loan). That covers under-, critically and
 // over-damped loops alike. First order (ideal velocity loop, x' = u): x += u dT, exact.
 ServoLoop::Axis ServoLoop::discretize(const ServoAxis& axis, double dt) {
-  if (!std::isfinite(axis.kv_per_s) || axis.kv_per_s < 0.0)
-    fail("kv_per_s must be finite and >= 0");
+  if (!std::isfinite(axis.kv_per_s) || axis.kv_per_s < 0.0) fail("kv_per_s must be finite and >= 0");
   if (!std::isfinite(axis.omega_n_per_s)) fail("omega_n_per_s must be finite");
   if (!std::isfinite(axis.feed_forward) || axis.feed_forward < 0.0 || axis.feed_forward > 1.0)
     fail("feed_forward must be in [0, 1]");
@@ -106,8 +105,8 @@ void ServoLoop::step(const AxisValues& c) {
 // ends, so the quintic Hermite interpolant is used; its error is at most max|x^(6)| dT^6 /
 // 46080 (after a velocity step dv, |x^(6)| <= dv omega_n^5 / sqrt(1 - zeta^2): 1.4e-5 mm for
 // dv = 1 m/s, omega_n = 120/s, zeta = 0.8, dT = 5 ms), and zero at the instants.
-AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0,
-                             const std::array<Eigen::Vector3d, 5>& s1, double r) const {
+AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0, const std::array<Eigen::Vector3d, 5>& s1,
+                             double r) const {
   AxisValues o(axes_);
   const double dt = dt_;
   const double r2 = r * r, r3 = r2 * r, r4 = r3 * r, r5 = r4 * r;
@@ -120,9 +119,8 @@ AxisValues ServoLoop::within(const std::array<Eigen::Vector3d, 5>& s0,
   for (int j = 0; j < axes_; ++j) {
     const Eigen::Vector3d& a = s0[j];
     const Eigen::Vector3d& b = s1[j];
-    o[j] = model_[j].second_order
-               ? h0 * a[0] + h1 * a[1] + h2 * a[2] + h5 * b[0] + h4 * b[1] + h3 * b[2]
-               : a[0] + r * (b[0] - a[0]);
+    o[j] = model_[j].second_order ? h0 * a[0] + h1 * a[1] + h2 * a[2] + h5 * b[0] + h4 * b[1] + h3 * b[2]
+                                  : a[0] + r * (b[0] - a[0]);
   }
   return o;
 }
@@ -134,8 +132,7 @@ double ServoLoop::max_speed() const {
   return v;
 }
 
-std::vector<AxisValues> simulate_servo(const std::vector<double>& t_s,
-                                       const std::vector<AxisValues>& commanded,
+std::vector<AxisValues> simulate_servo(const std::vector<double>& t_s, const std::vector<AxisValues>& commanded,
                                        const ServoSettings& settings) {
   // ---- checks: these are programmer errors, the io layer has validated user input
   const std::size_t n = t_s.size();

@@ -1,6 +1,5 @@
 #include "vcut/pipeline/check.h"
 
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,9 +15,12 @@ namespace vcut::pipeline {
 
 const char* to_string(Severity severity) {
   switch (severity) {
-    case Severity::Error: return "error";
-    case Severity::Warning: return "warning";
-    case Severity::Note: return "note";
+    case Severity::Error:
+      return "error";
+    case Severity::Warning:
+      return "warning";
+    case Severity::Note:
+      return "note";
   }
   return "note";
 }
@@ -27,9 +29,12 @@ namespace {
 
 Eigen::AlignedBox3d stock_bounds(const io::Job& job) {
   switch (job.stock.kind) {
-    case io::StockSpec::Kind::Box: return removal::bounds_of(job.stock.box);
-    case io::StockSpec::Kind::Cylinder: return removal::bounds_of(job.stock.cylinder);
-    case io::StockSpec::Kind::Mesh: break;
+    case io::StockSpec::Kind::Box:
+      return removal::bounds_of(job.stock.box);
+    case io::StockSpec::Kind::Cylinder:
+      return removal::bounds_of(job.stock.cylinder);
+    case io::StockSpec::Kind::Mesh:
+      break;
   }
   removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
   return removal::bounds_of(removal::StockShape(std::move(mesh)));
@@ -39,7 +44,8 @@ Eigen::AlignedBox3d stock_bounds(const io::Job& job) {
 // that is shortest); <= 0 when they do not overlap.
 double penetration_mm(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b) {
   double depth = std::numeric_limits<double>::infinity();
-  for (int k = 0; k < 3; ++k) depth = std::min(depth, std::min(a.max()[k], b.max()[k]) - std::max(a.min()[k], b.min()[k]));
+  for (int k = 0; k < 3; ++k)
+    depth = std::min(depth, std::min(a.max()[k], b.max()[k]) - std::max(a.min()[k], b.min()[k]));
   return depth;
 }
 
@@ -79,7 +85,8 @@ class EventLog {
     events_.push_back(e);
     first_block_.push_back(block);
   }
-  void add_line(Severity severity, const std::string& kind, const std::string& line, const std::string& detail, int block) {
+  void add_line(Severity severity, const std::string& kind, const std::string& line, const std::string& detail,
+                int block) {
     CheckEvent e;
     e.severity = severity;
     e.kind = kind;
@@ -92,7 +99,8 @@ class EventLog {
   std::vector<CheckEvent> take() {
     std::vector<std::size_t> order(events_.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return first_block_[a] < first_block_[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::size_t a, std::size_t b) { return first_block_[a] < first_block_[b]; });
     std::vector<CheckEvent> out;
     for (std::size_t i : order) out.push_back(events_[i]);
     return out;
@@ -132,9 +140,9 @@ CheckResult run_check(const io::Job& job) {
   // The pose engine's findings, by their first block.
   for (const PoseEvent& e : run.events) {
     const int block = std::max(e.first_block, 0);
-    const Severity s = e.kind == PoseEventKind::Unreachable                                              ? Severity::Error
+    const Severity s = e.kind == PoseEventKind::Unreachable                                         ? Severity::Error
                        : e.kind == PoseEventKind::Singular || e.kind == PoseEventKind::DensifyError ? Severity::Warning
-                                                                                                      : Severity::Note;
+                                                                                                    : Severity::Note;
     log.add_line(s, to_string(e.kind), e.line, e.detail, block);
   }
 
@@ -155,7 +163,9 @@ CheckResult run_check(const io::Job& job) {
     const kinematics::Block& b = program.blocks[static_cast<std::size_t>(block)];
     const bool rapid = b.kind == kinematics::MotionKind::Rapid;
     if (b.tool == 0) {
-      if (!rapid) log.add(Severity::Error, "no_tool", block, "a feed move with no tool in the spindle", 0.0, samples[i].pose.tip_mm);
+      if (!rapid)
+        log.add(Severity::Error, "no_tool", block, "a feed move with no tool in the spindle", 0.0,
+                samples[i].pose.tip_mm);
       continue;
     }
     const int c = cutter_of_tool.at(b.tool);
@@ -178,7 +188,8 @@ CheckResult run_check(const io::Job& job) {
       if (depth > tolerance_mm) {
         if (rapid)
           log.add(Severity::Warning, "rapid_in_stock_box", block,
-                  "a rapid with the cutting part " + mm(depth) + " inside the stock's box (a collision unless that material is gone)",
+                  "a rapid with the cutting part " + mm(depth) +
+                      " inside the stock's box (a collision unless that material is gone)",
                   depth, m.end_mm);
         else if (b.spindle == kinematics::SpindleState::Off)
           log.add(Severity::Error, "spindle_stopped_feed", block,
@@ -187,7 +198,8 @@ CheckResult run_check(const io::Job& job) {
       probes.clear();
       removal::append_body_probes(probes, m, bodies[static_cast<std::size_t>(c)]);
       for (const removal::Move& p : probes) {
-        const Eigen::AlignedBox3d part = removal::TranslationSweep(parts.cutters[static_cast<std::size_t>(p.cutter)], p).bounds();
+        const Eigen::AlignedBox3d part =
+            removal::TranslationSweep(parts.cutters[static_cast<std::size_t>(p.cutter)], p).bounds();
         const bool holder = p.probe == removal::ProbeKind::Holder;
         if (holder) {
           ToolClearance& t = clearance[b.tool];

@@ -35,10 +35,10 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
   const auto& samples = run.densified.samples;
   const auto& program = run.program;
   const bool apt = run.reader == io::ProgramReader::Apt;
-  text = apt ? "$$ vcut compensate: " + job.name + " on " + machine.name() +
-                               ", one GOTO per densified pose\nUNITS/MM\nMULTAX/ON\n"
-                         : "(vcut compensate: " + job.name + " on " + machine.name() +
-                               ", one line per densified pose)\nG21 G90 G94\n";
+  text =
+      apt ? "$$ vcut compensate: " + job.name + " on " + machine.name() +
+                ", one GOTO per densified pose\nUNITS/MM\nMULTAX/ON\n"
+          : "(vcut compensate: " + job.name + " on " + machine.name() + ", one line per densified pose)\nG21 G90 G94\n";
   int tool = -1;
   double feed = -1.0;
   for (size_t i = 0; i < samples.size(); ++i) {
@@ -47,8 +47,9 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
     const double length = run.tool_length_mm[i];
     const kinematics::CompensationResult c = kinematics::compensate(machine, s.pose, length, s.axes);
     ++report.poses;
-    const double before = kinematics::pose_error(s.pose, kinematics::forward(machine, s.axes, length, kinematics::Geometry::Actual))
-                              .tip_um.norm();
+    const double before =
+        kinematics::pose_error(s.pose, kinematics::forward(machine, s.axes, length, kinematics::Geometry::Actual))
+            .tip_um.norm();
     const std::string line = block ? program.where(block->source) : "start";
     if (before > report.max_error_before_um) report.max_error_before_um = before, report.max_error_line = line;
     report.max_residual_tip_um = std::max(report.max_residual_tip_um, c.residual_tip_um);
@@ -84,7 +85,9 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
     if (holder && holder->tool != tool && holder->tool > 0) {
       tool = holder->tool;
       text += "T" + std::to_string(tool) + " M6\n";
-      if (holder->spindle_rpm > 0) text += "S" + gcode_num(holder->spindle_rpm) + (holder->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
+      if (holder->spindle_rpm > 0)
+        text += "S" + gcode_num(holder->spindle_rpm) +
+                (holder->spindle == kinematics::SpindleState::CounterClockwise ? " M4\n" : " M3\n");
     }
     // X Y Z of an axis program: the tip at all-zero rotary axes for these linear axes.
     kinematics::AxisValues linear = c.q;

@@ -29,9 +29,12 @@ kinematics::FeedInterpretation axis_feed_of(const io::Job& job, io::ProgramReade
 
 const char* feed_interpretation_name(kinematics::FeedInterpretation f) {
   switch (f) {
-    case kinematics::FeedInterpretation::LinuxCnc: return "linuxcnc";
-    case kinematics::FeedInterpretation::Combined: return "combined";
-    case kinematics::FeedInterpretation::Tip: return "tip";
+    case kinematics::FeedInterpretation::LinuxCnc:
+      return "linuxcnc";
+    case kinematics::FeedInterpretation::Combined:
+      return "combined";
+    case kinematics::FeedInterpretation::Tip:
+      return "tip";
   }
   return "linuxcnc";
 }
@@ -40,7 +43,8 @@ const char* feed_interpretation_name(kinematics::FeedInterpretation f) {
 // program (a fraction of the move; 0: it starts inside), or none. A box by its slabs; a
 // cylinder by its axial slab and the quadratic of its side. A mesh stock: none (the reader
 // warns that its probes trip at their end).
-static std::optional<double> stock_contact(const io::StockSpec& stock, const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+static std::optional<double> stock_contact(const io::StockSpec& stock, const Eigen::Vector3d& a,
+                                           const Eigen::Vector3d& b) {
   double lo = 0.0, hi = 1.0;
   // Clips [lo, hi] to the s where lower <= value0 + s * rate <= upper.
   auto clip = [&](double value0, double rate, double lower, double upper) {
@@ -117,7 +121,8 @@ JobProgram read_job_program(const io::Job& job) {
   }
   io::LoadedProgram loaded = io::read_programs(job.program_files, job.dialect, reading);
   if (loaded.reader == io::ProgramReader::Gcode &&
-      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(), [](const kinematics::Block& b) { return !b.tool_pose; })) {
+      std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(),
+                  [](const kinematics::Block& b) { return !b.tool_pose; })) {
     machine_start(true);
     loaded = io::read_programs(job.program_files, job.dialect, reading);
   }
@@ -132,10 +137,14 @@ JobProgram read_job_program(const io::Job& job) {
 
 const char* to_string(PoseEventKind kind) {
   switch (kind) {
-    case PoseEventKind::Unreachable: return "unreachable";
-    case PoseEventKind::Singular: return "singular";
-    case PoseEventKind::AxisLimitedSpeed: return "axis_limited_speed";
-    case PoseEventKind::DensifyError: return "densify_error";
+    case PoseEventKind::Unreachable:
+      return "unreachable";
+    case PoseEventKind::Singular:
+      return "singular";
+    case PoseEventKind::AxisLimitedSpeed:
+      return "axis_limited_speed";
+    case PoseEventKind::DensifyError:
+      return "densify_error";
   }
   return "unreachable";
 }
@@ -154,9 +163,7 @@ PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period) {
   return run_pose_engine(job, read_job_program(job), job.resolution_mm, every_period);
 }
 
-namespace {
-
-}  // namespace
+namespace {}  // namespace
 
 PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period) {
   PoseRun run;
@@ -211,7 +218,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
                   job.servo->period_s, periods, feed.cycle_time_s, span_s / kMaxPeriods);
     throw InputError(job.file, 0, 0, what);
   };
-  static_cast<kinematics::PoseChain&>(run) = kinematics::run_pose_chain(program, machine, tool_length_mm, chain, every_period);
+  static_cast<kinematics::PoseChain&>(run) =
+      kinematics::run_pose_chain(program, machine, tool_length_mm, chain, every_period);
   if (run.max_contour_block >= 0)
     run.max_contour_line = program.where(program.blocks[static_cast<size_t>(run.max_contour_block)].source);
   const auto& samples = run.densified.samples;
@@ -260,12 +268,15 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     while (j < blocks.size() && blocks[j].singular) miss = std::max(miss, blocks[j++].singular_miss_rad);
     const kinematics::SourceRef a = program.blocks[i].source, b = program.blocks[j - 1].source;
     std::string where = program.where(a);
-    if (b.file == a.file && b.line != a.line) where += "-" + std::to_string(b.line);
-    else if (b.file != a.file) where += " to " + program.where(b);
+    if (b.file == a.file && b.line != a.line)
+      where += "-" + std::to_string(b.line);
+    else if (b.file != a.file)
+      where += " to " + program.where(b);
     char detail[160];
     std::snprintf(detail, sizeof detail,
                   "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "
-                  "(largest tool-axis miss %.3g urad)", j - i, miss * 1e6);
+                  "(largest tool-axis miss %.3g urad)",
+                  j - i, miss * 1e6);
     run.events.push_back({PoseEventKind::Singular, where, detail, static_cast<int>(i), static_cast<int>(j - 1)});
     i = j;
   }
@@ -275,7 +286,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     const int block = samples[static_cast<size_t>(s)].block;
     if (block < 0 || block == last_block) continue;
     last_block = block;
-    run.events.push_back({PoseEventKind::AxisLimitedSpeed, program.where(program.blocks[static_cast<size_t>(block)].source),
+    run.events.push_back({PoseEventKind::AxisLimitedSpeed,
+                          program.where(program.blocks[static_cast<size_t>(block)].source),
                           "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   return run;

@@ -45,10 +45,14 @@ double total_ram_mb() {
 }
 
 // Consecutive lines of one file merge into a span; in the order of file name, then line.
-std::vector<kinematics::SourceSpan> merge_lines(const kinematics::Program& program, std::vector<kinematics::SourceRef> refs) {
-  const auto key = [&](const kinematics::SourceRef& r) { return std::make_pair(std::cref(program.files[static_cast<std::size_t>(r.file)]), r.line); };
+std::vector<kinematics::SourceSpan> merge_lines(const kinematics::Program& program,
+                                                std::vector<kinematics::SourceRef> refs) {
+  const auto key = [&](const kinematics::SourceRef& r) {
+    return std::make_pair(std::cref(program.files[static_cast<std::size_t>(r.file)]), r.line);
+  };
   std::sort(refs.begin(), refs.end(), [&](const auto& a, const auto& b) { return key(a) < key(b); });
-  refs.erase(std::unique(refs.begin(), refs.end(), [](const auto& a, const auto& b) { return a.file == b.file && a.line == b.line; }),
+  refs.erase(std::unique(refs.begin(), refs.end(),
+                         [](const auto& a, const auto& b) { return a.file == b.file && a.line == b.line; }),
              refs.end());
   std::vector<kinematics::SourceSpan> out;
   for (std::size_t i = 0; i < refs.size();) {
@@ -72,27 +76,34 @@ removal::TriangleMesh transformed(removal::TriangleMesh mesh, const io::DesignSp
 
 const char* collision_kind(removal::ProbeKind probe) {
   switch (probe) {
-    case removal::ProbeKind::Rapid: return "rapid_into_stock";
-    case removal::ProbeKind::Shank: return "shank_collision";
-    case removal::ProbeKind::Holder: return "holder_collision";
-    case removal::ProbeKind::SpindleStopped: return "spindle_stopped_cut";
+    case removal::ProbeKind::Rapid:
+      return "rapid_into_stock";
+    case removal::ProbeKind::Shank:
+      return "shank_collision";
+    case removal::ProbeKind::Holder:
+      return "holder_collision";
+    case removal::ProbeKind::SpindleStopped:
+      return "spindle_stopped_cut";
   }
   return "collision";
 }
 
 const char* collision_part(removal::ProbeKind probe) {
   switch (probe) {
-    case removal::ProbeKind::Shank: return "shank";
-    case removal::ProbeKind::Holder: return "holder";
-    default: return "cutting part";
+    case removal::ProbeKind::Shank:
+      return "shank";
+    case removal::ProbeKind::Holder:
+      return "holder";
+    default:
+      return "cutting part";
   }
 }
 
 // One record per run of consecutive blocks with the same kind of collision (a shank
 // dragging through material for a hundred moves is one event): lines as a range, the
 // deepest depth and where it was.
-std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, const removal::MoveList& moves,
-                                               const kinematics::Program& program) {
+std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found,
+                                               const removal::MoveList& moves, const kinematics::Program& program) {
   std::vector<removal::Collision> sorted = found;
   std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
   std::vector<CollisionRecord> out;
@@ -103,7 +114,8 @@ std::vector<CollisionRecord> collision_records(const std::vector<removal::Collis
     const std::string kind = collision_kind(m.probe);
     const auto it = open.find(kind);
     CollisionRecord* r = nullptr;
-    if (it != open.end() && out[it->second].tool == b.tool && m.block <= out[it->second].last_block + 1) r = &out[it->second];
+    if (it != open.end() && out[it->second].tool == b.tool && m.block <= out[it->second].last_block + 1)
+      r = &out[it->second];
     if (r == nullptr) {
       open[kind] = out.size();
       r = &out.emplace_back();
@@ -135,20 +147,26 @@ std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run) {
   std::vector<std::string> warnings = job.warnings;
   warnings.insert(warnings.end(), run.program.warnings.begin(), run.program.warnings.end());
   for (const PoseEvent& e : run.events)
-    if (e.kind == PoseEventKind::Unreachable) warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
+    if (e.kind == PoseEventKind::Unreachable)
+      warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
   return warnings;
 }
 
 removal::StockShape stock_shape(const io::Job& job) {
   switch (job.stock.kind) {
-    case io::StockSpec::Kind::Box: return job.stock.box;
-    case io::StockSpec::Kind::Cylinder: return job.stock.cylinder;
-    case io::StockSpec::Kind::Mesh: break;
+    case io::StockSpec::Kind::Box:
+      return job.stock.box;
+    case io::StockSpec::Kind::Cylinder:
+      return job.stock.cylinder;
+    case io::StockSpec::Kind::Mesh:
+      break;
   }
   removal::TriangleMesh mesh = io::read_mesh(job.stock.mesh_file);
   if (!removal::is_closed(mesh))
-    throw InputError(job.stock.mesh_file, 0, 0, "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
+    throw InputError(
+        job.stock.mesh_file, 0, 0,
+        "stock mesh is not closed (every edge must join exactly two triangles), so its inside is undefined");
   if (removal::signed_volume_mm3(mesh) < 0.0)
     for (auto& t : mesh.triangles) std::swap(t[1], t[2]);
   return mesh;
@@ -178,7 +196,8 @@ CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolutio
   for (const auto& b : program.blocks) {
     if (b.tool == 0) {
       if (b.kind != kinematics::MotionKind::Rapid)
-        throw InputError(program.where(b.source) + ": feed move with no tool in the spindle (expected T<n> M6 before it)");
+        throw InputError(program.where(b.source) +
+                         ": feed move with no tool in the spindle (expected T<n> M6 before it)");
       continue;
     }
     if (cutter_index.count(b.tool)) continue;
@@ -212,8 +231,8 @@ CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolutio
     out.cutting_moves += !m.rapid;
     const std::size_t first_piece = list.size();
     if (turns) {
-      const int pieces = removal::five_axis_pieces(out.moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
-                                                   rotation_bound_mm);
+      const int pieces = removal::five_axis_pieces(out.moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis,
+                                                   to.axis, rotation_bound_mm);
       removal::append_five_axis_move(list, m, from.axis, to.axis, pieces);
       out.rotating_moves += 1;
     } else {
@@ -253,7 +272,8 @@ double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::
     std::ostringstream msg;
     msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
         << stock_box.max().transpose() << "] mm";
-    if (!path_box.isEmpty()) msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
+    if (!path_box.isEmpty())
+      msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
     msg << "): check the work offsets and the stock";
     throw InputError(job.file, 0, 0, msg.str());
   }
@@ -267,8 +287,8 @@ double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::
     std::ostringstream msg;
     msg << "resolution " << resolution_mm;
     msg.precision(0);
-    msg << std::fixed << " mm needs about " << estimate_mb << " MB for this stock, more than the "
-        << limit_mb << " MB allowed (--max-memory): choose a coarser resolution";
+    msg << std::fixed << " mm needs about " << estimate_mb << " MB for this stock, more than the " << limit_mb
+        << " MB allowed (--max-memory): choose a coarser resolution";
     msg.precision(3);
     throw InputError(msg.str());
   }
@@ -377,7 +397,8 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     const removal::SurfaceMesh other = second->surface();
     result.engines.vdb_cut_s = std::chrono::duration<double>(t1 - t0).count();
     result.engines.vdb_mesh_s = std::chrono::duration<double>(Clock::now() - t1).count();
-    static_cast<removal::SurfaceDifference&>(result.engines) = removal::surface_difference(machined, other, v, removal::kSharpEdgeDeg);
+    static_cast<removal::SurfaceDifference&>(result.engines) =
+        removal::surface_difference(machined, other, v, removal::kSharpEdgeDeg);
     stage_done("check");
   }
 
@@ -388,7 +409,8 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     std::unique_ptr<removal::Stock> nominal = make_stock(job, shape, v, merge_flat);
     nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const removal::SurfaceMesh nominal_surface = nominal->surface();
-    static_cast<removal::SurfaceDifference&>(result.nominal) = removal::surface_difference(machined, nominal_surface, v);
+    static_cast<removal::SurfaceDifference&>(result.nominal) =
+        removal::surface_difference(machined, nominal_surface, v);
     // The NC line: the machined vertex nearest the largest difference.
     double best = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < machined.mesh.vertices_mm.size(); ++i) {
@@ -418,7 +440,8 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
       // Every dexel endpoint against the design, exactly: the summary's figures then do not
       // depend on meshing (the mesh's regions still give areas and outlines).
-      const removal::EndpointDeviation found = removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
+      const removal::EndpointDeviation found =
+          removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
       EndpointCheck& e = result.endpoints;
       e.done = true;
       e.points = found.points;
@@ -443,7 +466,10 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
       std::vector<kinematics::SourceRef> refs;
       std::set<int> tools;
       for (int move : r.moves) {
-        if (move < 0) { rec.initial_stock = true; continue; }
+        if (move < 0) {
+          rec.initial_stock = true;
+          continue;
+        }
         const auto& b = block_of(move);
         refs.push_back(b.source);
         tools.insert(b.tool);
@@ -466,8 +492,10 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     const std::vector<double> area = removal::vertex_areas_mm2(machined.mesh);
     for (std::size_t i = 0; i < deviation.size(); ++i) {
       const double d = deviation[i];
-      const std::size_t bin = d < -span ? 0 : d >= span ? bins + 1
-                                         : 1 + std::min<std::size_t>(bins - 1, static_cast<std::size_t>((d + span) / (2.0 * span) * bins));
+      const std::size_t bin =
+          d < -span   ? 0
+          : d >= span ? bins + 1
+                      : 1 + std::min<std::size_t>(bins - 1, static_cast<std::size_t>((d + span) / (2.0 * span) * bins));
       ++result.histogram_counts[bin];
       result.histogram_area_mm2[bin] += area[i];
     }

@@ -38,11 +38,14 @@ void require_finer(const std::optional<double>& reference, const std::vector<dou
   if (!(*reference > 0.0) || !std::isfinite(*reference))
     throw InputError(std::string(option) + ": " + number(*reference) + " is not a positive number of " + unit);
   if (*reference >= finest)
-    throw InputError(std::string(option) + ": " + number(*reference) + " " + unit + " is not finer than the finest setting (" +
-                     number(finest) + " " + unit + "); the reference must be finer than every setting");
+    throw InputError(std::string(option) + ": " + number(*reference) + " " + unit +
+                     " is not finer than the finest setting (" + number(finest) + " " + unit +
+                     "); the reference must be finer than every setting");
 }
 
-double finest_over_4(const std::vector<double>& values) { return *std::min_element(values.begin(), values.end()) / 4.0; }
+double finest_over_4(const std::vector<double>& values) {
+  return *std::min_element(values.begin(), values.end()) / 4.0;
+}
 
 io::Job with_setting(io::Job job, const DensifySetting& s) {
   job.densify_given = true;
@@ -80,16 +83,19 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   require_positive(angles, "--angles", "deg");
   require_positive(tolerances, "--tolerances", "mm");
   if (steps.empty() && angles.empty() && tolerances.empty())
-    throw InputError("study densification: no settings: give --steps, --angles or --tolerances (comma-separated lists)");
+    throw InputError(
+        "study densification: no settings: give --steps, --angles or --tolerances (comma-separated lists)");
   if (!tolerances.empty() && (!steps.empty() || !angles.empty()))
-    throw InputError("--tolerances cannot be combined with --steps or --angles: tolerance mode replaces the step and the angle");
+    throw InputError(
+        "--tolerances cannot be combined with --steps or --angles: tolerance mode replaces the step and the angle");
   if (!steps.empty() && !angles.empty() && steps.size() != angles.size())
     throw InputError("--steps and --angles: expected the same number of values (they are paired by position), got " +
                      std::to_string(steps.size()) + " and " + std::to_string(angles.size()));
-  auto reference_needs = [](const std::optional<double>& reference, const std::vector<double>& values, const char* option,
-                            const char* list) {
+  auto reference_needs = [](const std::optional<double>& reference, const std::vector<double>& values,
+                            const char* option, const char* list) {
     if (reference && values.empty())
-      throw InputError(std::string(option) + " without " + list + ": the reference refines the settings " + list + " lists");
+      throw InputError(std::string(option) + " without " + list + ": the reference refines the settings " + list +
+                       " lists");
   };
   reference_needs(options.reference_step_mm, steps, "--reference-step", "--steps");
   reference_needs(options.reference_angle_deg, angles, "--reference-angle", "--angles");
@@ -119,10 +125,12 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
 
   const double resolution_mm = options.resolution_mm.value_or(job.resolution_mm);
   if (s.accuracy_mm < resolution_mm / 100.0)
-    s.warnings.push_back("accuracy " + number(s.accuracy_mm) + " mm is below what meshes at " + number(resolution_mm) +
-                         " mm resolve (about 1/100 of it): figures near it are meshing noise; choose a finer --resolution");
+    s.warnings.push_back(
+        "accuracy " + number(s.accuracy_mm) + " mm is below what meshes at " + number(resolution_mm) +
+        " mm resolve (about 1/100 of it): figures near it are meshing noise; choose a finer --resolution");
 
-  if (!(resolution_mm > 0.0) || !std::isfinite(resolution_mm)) throw InputError("--resolution: expected a positive number of mm");
+  if (!(resolution_mm > 0.0) || !std::isfinite(resolution_mm))
+    throw InputError("--resolution: expected a positive number of mm");
   s.resolution_mm = resolution_mm;
   const int threads = options.threads.value_or(job.threads);
   s.threads = threads > 0 ? threads : tbb::info::default_concurrency();
@@ -174,7 +182,8 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   }
   const auto failed = std::count_if(s.rows.begin(), s.rows.end(), [](const StudyRow& r) { return !r.error.empty(); });
   if (static_cast<std::size_t>(failed) == s.rows.size())
-    throw InputError("study densification: no setting could be run; " + s.rows.front().label + ": " + s.rows.front().error);
+    throw InputError("study densification: no setting could be run; " + s.rows.front().label + ": " +
+                     s.rows.front().error);
   removal::SurfaceMesh reference_surface;
   try {
     reference_surface = run(reference, settings.size(), s.reference);
@@ -184,7 +193,8 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   for (std::size_t i = 0; i < settings.size(); ++i) {
     StudyRow& row = s.rows[i];
     if (!surfaces[i]) continue;
-    const removal::SurfaceDifference d = removal::surface_difference(*surfaces[i], reference_surface, s.resolution_mm, removal::kSharpEdgeDeg);
+    const removal::SurfaceDifference d =
+        removal::surface_difference(*surfaces[i], reference_surface, s.resolution_mm, removal::kSharpEdgeDeg);
     row.max_mm = d.max_mm;
     row.rms_mm = d.rms_mm;
     row.p99_mm = d.p99_mm;
@@ -204,7 +214,8 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     }
     const StudyRow& best = s.rows[static_cast<std::size_t>(s.recommended)];
     const auto size = [](const DensifySetting& d) { return d.step_mm + d.angle_deg + d.tolerance_mm; };
-    if (r.poses < best.poses || (r.poses == best.poses && size(r.setting) > size(best.setting))) s.recommended = static_cast<int>(i);
+    if (r.poses < best.poses || (r.poses == best.poses && size(r.setting) > size(best.setting)))
+      s.recommended = static_cast<int>(i);
   }
   s.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();
   s.peak_memory_mb = peak_memory_mb();

@@ -34,16 +34,31 @@ Eigen::Vector3d nearest_on_triangle(const Eigen::Vector3d& x, const Eigen::Vecto
                                     const Eigen::Vector3d& c, Feature& feature) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = x - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0.0 && d2 <= 0.0) { feature = Feature::VertexA; return a; }
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    feature = Feature::VertexA;
+    return a;
+  }
   const Eigen::Vector3d bp = x - b;
   const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0.0 && d4 <= d3) { feature = Feature::VertexB; return b; }
+  if (d3 >= 0.0 && d4 <= d3) {
+    feature = Feature::VertexB;
+    return b;
+  }
   const Eigen::Vector3d cp = x - c;
   const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0.0 && d5 <= d6) { feature = Feature::VertexC; return c; }
+  if (d6 >= 0.0 && d5 <= d6) {
+    feature = Feature::VertexC;
+    return c;
+  }
   const double va = d3 * d6 - d5 * d4, vb = d5 * d2 - d1 * d6, vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) { feature = Feature::EdgeAB; return a + d1 / (d1 - d3) * ab; }
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) { feature = Feature::EdgeAC; return a + d2 / (d2 - d6) * ac; }
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    feature = Feature::EdgeAB;
+    return a + d1 / (d1 - d3) * ab;
+  }
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    feature = Feature::EdgeAC;
+    return a + d2 / (d2 - d6) * ac;
+  }
   if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
     feature = Feature::EdgeBC;
     return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
@@ -71,13 +86,15 @@ class TriangleGrid {
     area_mm2.reserve(corners.size());
     for (const Eigen::Vector3i& t : corners) {
       for (int i = 0; i < 3; ++i) box.extend(points[static_cast<std::size_t>(t[i])]);
-      area_mm2.push_back(0.5 * (points[static_cast<std::size_t>(t[1])] - points[static_cast<std::size_t>(t[0])])
-                                   .cross(points[static_cast<std::size_t>(t[2])] - points[static_cast<std::size_t>(t[0])])
-                                   .norm());
+      area_mm2.push_back(0.5 *
+                         (points[static_cast<std::size_t>(t[1])] - points[static_cast<std::size_t>(t[0])])
+                             .cross(points[static_cast<std::size_t>(t[2])] - points[static_cast<std::size_t>(t[0])])
+                             .norm());
     }
     // Cells about the size of a typical triangle (the median: a few large faces beside
     // many small ones do not count); at most kMaxCells cells.
-    std::nth_element(area_mm2.begin(), area_mm2.begin() + static_cast<std::ptrdiff_t>(area_mm2.size() / 2), area_mm2.end());
+    std::nth_element(area_mm2.begin(), area_mm2.begin() + static_cast<std::ptrdiff_t>(area_mm2.size() / 2),
+                     area_mm2.end());
     const Eigen::Vector3d size = box.sizes().cwiseMax(1e-9);
     cell_mm_ = std::max(2.0 * std::sqrt(area_mm2[area_mm2.size() / 2]), 1e-6 * size.maxCoeff());
     const double cells = (size / cell_mm_).array().ceil().prod();
@@ -150,7 +167,8 @@ class TriangleGrid {
           for (int i = at[0] - shell; i <= at[0] + shell; i += step) {
             if (i < lo[0] || i > hi[0]) continue;
             const Eigen::Vector3d cell_lo = origin_ + cell_mm_ * Eigen::Vector3d(i, j, k);
-            const Eigen::Vector3d cell_gap = (cell_lo - x).cwiseMax(x - (cell_lo.array() + cell_mm_).matrix()).cwiseMax(0.0);
+            const Eigen::Vector3d cell_gap =
+                (cell_lo - x).cwiseMax(x - (cell_lo.array() + cell_mm_).matrix()).cwiseMax(0.0);
             if (cell_gap.squaredNorm() > best) continue;
             const std::size_t cell = (static_cast<std::size_t>(k) * n_[1] + j) * n_[0] + i;
             for (std::uint32_t e = first_[cell]; e < first_[cell + 1]; ++e) {
@@ -206,8 +224,10 @@ class TriangleGrid {
           // The plane's height along d over the column's four corners (the column clipped
           // to the triangle's box), widened by a thousandth of a cell for rounding.
           double h_lo = std::numeric_limits<double>::infinity(), h_hi = -h_lo;
-          const double x0 = std::max(origin_[p] + i * cell_mm_, box.min()[p]), x1 = std::min(origin_[p] + (i + 1) * cell_mm_, box.max()[p]);
-          const double y0 = std::max(origin_[q] + j * cell_mm_, box.min()[q]), y1 = std::min(origin_[q] + (j + 1) * cell_mm_, box.max()[q]);
+          const double x0 = std::max(origin_[p] + i * cell_mm_, box.min()[p]),
+                       x1 = std::min(origin_[p] + (i + 1) * cell_mm_, box.max()[p]);
+          const double y0 = std::max(origin_[q] + j * cell_mm_, box.min()[q]),
+                       y1 = std::min(origin_[q] + (j + 1) * cell_mm_, box.max()[q]);
           for (double xp : {x0, x1})
             for (double yq : {y0, y1}) {
               const double h = a[d] - (normal[p] * (xp - a[p]) + normal[q] * (yq - a[q])) / normal[d];
@@ -231,9 +251,11 @@ class TriangleGrid {
   // Whether triangle abc meets the cell (separating axes: the nine edge-cross-axis
   // directions and the plane's normal; the cell lies within the triangle's box already),
   // the cell grown by a millionth of its size so that rounding never drops a triangle.
-  bool meets_cell(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, const int idx[3]) const {
+  bool meets_cell(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                  const int idx[3]) const {
     const double half = 0.5 * cell_mm_ * (1.0 + 1e-6);
-    const Eigen::Vector3d centre = origin_ + cell_mm_ * (Eigen::Vector3d(idx[0], idx[1], idx[2]).array() + 0.5).matrix();
+    const Eigen::Vector3d centre =
+        origin_ + cell_mm_ * (Eigen::Vector3d(idx[0], idx[1], idx[2]).array() + 0.5).matrix();
     const Eigen::Vector3d v[3] = {a - centre, b - centre, c - centre};
     auto separates = [&](const Eigen::Vector3d& axis) {
       const double p0 = axis.dot(v[0]), p1 = axis.dot(v[1]), p2 = axis.dot(v[2]);
@@ -258,9 +280,9 @@ class TriangleGrid {
 
 struct DesignDistance::Impl {
   std::vector<Triangle> triangles;
-  std::vector<Eigen::Vector3i> corners;          // vertex ids per kept triangle
-  std::vector<Eigen::Vector3d> face_normal;      // unit
-  std::vector<Eigen::Vector3d> vertex_normal;    // angle-weighted sum
+  std::vector<Eigen::Vector3i> corners;                            // vertex ids per kept triangle
+  std::vector<Eigen::Vector3d> face_normal;                        // unit
+  std::vector<Eigen::Vector3d> vertex_normal;                      // angle-weighted sum
   std::unordered_map<std::uint64_t, Eigen::Vector3d> edge_normal;  // sum of adjacent faces
   std::vector<Eigen::Vector3d> points;
   Tree tree;
@@ -305,7 +327,8 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
   m.closed = is_closed(design);
   m.tree.insert(m.triangles.begin(), m.triangles.end());
   m.tree.build();
-  m.tree.do_not_accelerate_distance_queries();  // the KD-tree hint made tie-breaking between equally near triangles vary
+  m.tree
+      .do_not_accelerate_distance_queries();  // the KD-tree hint made tie-breaking between equally near triangles vary
   m.grid = TriangleGrid(m.points, m.corners);
 }
 
@@ -341,11 +364,12 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& h
   }
   if (f == m.triangles.size()) {
     const K::Point_3 query(x.x(), x.y(), x.z());
-    const auto hit = hint.triangle < m.triangles.size()
-        ? m.tree.closest_point_and_primitive(
-              query, std::make_pair(K::Point_3(hint.point_mm.x(), hint.point_mm.y(), hint.point_mm.z()),
-                                    m.triangles.begin() + static_cast<std::ptrdiff_t>(hint.triangle)))
-        : m.tree.closest_point_and_primitive(query);
+    const auto hit =
+        hint.triangle < m.triangles.size()
+            ? m.tree.closest_point_and_primitive(
+                  query, std::make_pair(K::Point_3(hint.point_mm.x(), hint.point_mm.y(), hint.point_mm.z()),
+                                        m.triangles.begin() + static_cast<std::ptrdiff_t>(hint.triangle)))
+            : m.tree.closest_point_and_primitive(query);
     f = static_cast<std::size_t>(hit.second - m.triangles.begin());
   }
   // The nearest point on it and its feature (vertex, edge, face) choose the pseudo-normal
@@ -358,13 +382,26 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& h
   auto edge = [&](int i, int j) { return m.edge_normal.at(edge_key(t[i], t[j])); };
   Eigen::Vector3d normal = m.face_normal[f];
   switch (feature) {
-    case Feature::VertexA: normal = m.vertex_normal[static_cast<std::size_t>(t[0])]; break;
-    case Feature::VertexB: normal = m.vertex_normal[static_cast<std::size_t>(t[1])]; break;
-    case Feature::VertexC: normal = m.vertex_normal[static_cast<std::size_t>(t[2])]; break;
-    case Feature::EdgeAB: normal = edge(0, 1); break;
-    case Feature::EdgeAC: normal = edge(0, 2); break;
-    case Feature::EdgeBC: normal = edge(1, 2); break;
-    case Feature::Face: break;
+    case Feature::VertexA:
+      normal = m.vertex_normal[static_cast<std::size_t>(t[0])];
+      break;
+    case Feature::VertexB:
+      normal = m.vertex_normal[static_cast<std::size_t>(t[1])];
+      break;
+    case Feature::VertexC:
+      normal = m.vertex_normal[static_cast<std::size_t>(t[2])];
+      break;
+    case Feature::EdgeAB:
+      normal = edge(0, 1);
+      break;
+    case Feature::EdgeAC:
+      normal = edge(0, 2);
+      break;
+    case Feature::EdgeBC:
+      normal = edge(1, 2);
+      break;
+    case Feature::Face:
+      break;
   }
   const Eigen::Vector3d d = x - nearest;
   const double distance = d.norm();
@@ -414,7 +451,10 @@ Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, co
         const std::size_t v = stack.back();
         stack.pop_back();
         const double depth = sign * result.deviation_mm[v];
-        if (depth > r.depth_mm) { r.depth_mm = depth; r.deepest_mm = mesh.vertices_mm[v]; }
+        if (depth > r.depth_mm) {
+          r.depth_mm = depth;
+          r.deepest_mm = mesh.vertices_mm[v];
+        }
         r.area_mm2 += area[v];
         r.centroid_mm += area[v] * mesh.vertices_mm[v];
         weight += area[v];

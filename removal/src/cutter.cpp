@@ -68,17 +68,20 @@ double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p) {
   if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, rho, p.z());
   const CutterCore k = core_of(cutter);
   // The core cylinder is a disk extruded over an interval (exact).
-  return detail::extrude(rho - k.core_radius_mm,
-                         detail::interval_distance(p.z(), k.z_low_mm, k.z_high_mm)) -
+  return detail::extrude(rho - k.core_radius_mm, detail::interval_distance(p.z(), k.z_low_mm, k.z_high_mm)) -
          k.rounding_mm;
 }
 
 std::string to_string(CutterType type) {
   switch (type) {
-    case CutterType::Flat: return "flat";
-    case CutterType::Ball: return "ball";
-    case CutterType::BullNose: return "bull";
-    case CutterType::VBit: return "vbit";
+    case CutterType::Flat:
+      return "flat";
+    case CutterType::Ball:
+      return "ball";
+    case CutterType::BullNose:
+      return "bull";
+    case CutterType::VBit:
+      return "vbit";
   }
   return "?";
 }

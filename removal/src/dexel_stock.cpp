@@ -49,7 +49,10 @@ class SegmentList {
   SegmentList(const SegmentList&) = delete;
   SegmentList& operator=(const SegmentList&) = delete;
   SegmentList(SegmentList&& other) noexcept : size_(other.size_), capacity_(other.capacity_) {
-    if (capacity_ > 1) many_ = other.many_; else one_ = other.one_;
+    if (capacity_ > 1)
+      many_ = other.many_;
+    else
+      one_ = other.one_;
     other.size_ = 0;
     other.capacity_ = 1;
   }
@@ -102,13 +105,19 @@ struct HugePageAllocator {
     return static_cast<T*>(p);
   }
   void deallocate(T* p, std::size_t n) {
-    if (n * sizeof(T) < 4 * kHuge) ::operator delete(p);
-    else std::free(p);
+    if (n * sizeof(T) < 4 * kHuge)
+      ::operator delete(p);
+    else
+      std::free(p);
   }
   template <class U>
-  bool operator==(const HugePageAllocator<U>&) const { return true; }
+  bool operator==(const HugePageAllocator<U>&) const {
+    return true;
+  }
   template <class U>
-  bool operator!=(const HugePageAllocator<U>&) const { return false; }
+  bool operator!=(const HugePageAllocator<U>&) const {
+    return false;
+  }
 };
 
 // The two lattice axes of a family, in increasing order.
@@ -126,9 +135,7 @@ struct Family {
   std::vector<std::uint64_t> occupied;
   double length_mm = 0.0;  // material along all rays
 
-  bool contains(int iu, int iw) const {
-    return iu >= lo_u && iu < lo_u + n_u && iw >= lo_w && iw < lo_w + n_w;
-  }
+  bool contains(int iu, int iw) const { return iu >= lo_u && iu < lo_u + n_u && iw >= lo_w && iw < lo_w + n_w; }
   const SegmentList& at(int iu, int iw) const {
     return rays[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(n_u) +
                 static_cast<std::size_t>(iu - lo_u)];
@@ -140,7 +147,8 @@ struct Family {
   int tiles() const { return tiles_u * tiles_w; }
   // Word `word` of the row at iw: rays lo_u + 64 word ... lo_u + 64 word + 63.
   std::uint64_t& occupied_word(int word, int iw) {
-    return occupied[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(words_u) + static_cast<std::size_t>(word)];
+    return occupied[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(words_u) +
+                    static_cast<std::size_t>(word)];
   }
 };
 
@@ -180,16 +188,21 @@ double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelS
   std::uint32_t j = i;
   while (j + 1 < n && s[j + 1].lo_mm < b) ++j;
   double removed = 0.0;
-  for (std::uint32_t k = i; k <= j; ++k) removed += static_cast<double>(std::min(s[k].hi_mm, b)) - std::max(s[k].lo_mm, a);
+  for (std::uint32_t k = i; k <= j; ++k)
+    removed += static_cast<double>(std::min(s[k].hi_mm, b)) - std::max(s[k].lo_mm, a);
   DexelSegment pieces[2];
   std::uint32_t kept = 0;
   if (s[i].lo_mm < a) {
-    if (a - s[i].lo_mm > kMinSegment_mm) pieces[kept++] = {s[i].lo_mm, a, s[i].lo_move, move};
-    else removed += static_cast<double>(a) - s[i].lo_mm;
+    if (a - s[i].lo_mm > kMinSegment_mm)
+      pieces[kept++] = {s[i].lo_mm, a, s[i].lo_move, move};
+    else
+      removed += static_cast<double>(a) - s[i].lo_mm;
   }
   if (s[j].hi_mm > b) {
-    if (s[j].hi_mm - b > kMinSegment_mm) pieces[kept++] = {b, s[j].hi_mm, move, s[j].hi_move};
-    else removed += static_cast<double>(s[j].hi_mm) - b;
+    if (s[j].hi_mm - b > kMinSegment_mm)
+      pieces[kept++] = {b, s[j].hi_mm, move, s[j].hi_move};
+    else
+      removed += static_cast<double>(s[j].hi_mm) - b;
   }
   const std::uint32_t gone = j - i + 1, size = n - gone + kept;
   if (size > n) {
@@ -261,7 +274,8 @@ struct Handover {
   };
   OnAxis on_axis(int axis) const {
     const auto [i1, i2] = kOther[static_cast<std::size_t>(axis)];
-    return {c[i1], c[i2], d[i1], d[i2], c[axis] * d[axis], d[axis], a[i1], a[i2], c[axis] * a[axis], a[axis], da, height_mm};
+    return {c[i1],   c[i2], d[i1],    d[i2], c[axis] * d[axis], d[axis], a[i1], a[i2], c[axis] * a[axis],
+            a[axis], da,    height_mm};
   }
 };
 
@@ -272,7 +286,7 @@ struct Handover {
 struct RowHandover {
   bool on = false;
   double slope = 0.0, g_max = 0.0, g_min = 0.0;
-  double base0 = 0.0, base_w = 0.0;  // base(w) = base0 + base_w w - clamp term
+  double base0 = 0.0, base_w = 0.0;                      // base(w) = base0 + base_w w - clamp term
   double clamp_c = 0.0, clamp_d = 0.0, height_mm = 0.0;  // x, y rays: d clamp(w - c, 0, H)
 
   double base(double w) const { return base0 + base_w * w - clamp_d * std::clamp(w - clamp_c, 0.0, height_mm); }
@@ -318,8 +332,8 @@ RowHandover row_handover(const Handover& h, int axis, double s_lo, double s_hi) 
 }
 
 struct MoveHandover {
-  Handover from_start;  // on: the cutting move before ended at this move's start
-  Handover to_end;      // on: the cutting move after starts at this move's end
+  Handover from_start;         // on: the cutting move before ended at this move's start
+  Handover to_end;             // on: the cutting move after starts at this move's end
   Eigen::AlignedBox3d bounds;  // the sweep's box, as the cut loop sees it
   std::size_t next = 0;        // with to_end: the next cutting move
 };
@@ -363,7 +377,7 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
 }
 
 struct Probe {
-  int move;     // index in the batch
+  int move;  // index in the batch
   int axis;
   double overlap_mm;
   Vector3d where_mm;
@@ -383,7 +397,6 @@ struct TileResult {
 };
 
 }  // namespace
-
 
 struct DexelStock::Impl {
   double v = 0.1;  // ray spacing, mm
@@ -418,7 +431,8 @@ struct DexelStock::Impl {
       f.tiles_u = (f.n_u + kTileU - 1) / kTileU;
       f.tiles_w = (f.n_w + kTileW - 1) / kTileW;
       f.words_u = (f.n_u + 63) / 64;
-      f.rays = std::vector<SegmentList, HugePageAllocator<SegmentList>>(static_cast<std::size_t>(f.n_u) * static_cast<std::size_t>(f.n_w));
+      f.rays = std::vector<SegmentList, HugePageAllocator<SegmentList>>(static_cast<std::size_t>(f.n_u) *
+                                                                        static_cast<std::size_t>(f.n_w));
     }
   }
 
@@ -453,7 +467,8 @@ struct DexelStock::Impl {
     for (Family& f : families) {
       double total = 0.0;
       for (const SegmentList& ray : f.rays)
-        for (std::uint32_t i = 0; i < ray.size(); ++i) total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
+        for (std::uint32_t i = 0; i < ray.size(); ++i)
+          total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
       f.length_mm = total;
     }
   }
@@ -500,7 +515,8 @@ void DexelStock::Impl::fill_mesh(const TriangleMesh& mesh) {
       std::vector<std::vector<std::pair<double, int>>> hits(static_cast<std::size_t>(f.n_u));
       for (int t : rows[static_cast<std::size_t>(row)]) {
         Vector3d p[3];
-        for (int c = 0; c < 3; ++c) p[c] = mesh.vertices_mm[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(t)][c])];
+        for (int c = 0; c < 3; ++c)
+          p[c] = mesh.vertices_mm[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(t)][c])];
         auto cross2 = [&](const Vector3d& a, const Vector3d& b, double pu, double pw) {
           return (b[a1] - a[a1]) * (pw - a[a2]) - (b[a2] - a[a2]) * (pu - a[a1]);
         };
@@ -606,8 +622,7 @@ DexelStock::DexelStock(const StockShape& shape, double spacing_mm) : impl_(std::
       o[axis] = 0.0;
       o[kOther[static_cast<std::size_t>(axis)][0]] = u;
       o[kOther[static_cast<std::size_t>(axis)][1]] = w;
-      return detail::line_cylinder(axis, o, c.base_center_mm, c.axis.normalized() * c.height_mm,
-                                   c.radius_mm, lo, hi);
+      return detail::line_cylinder(axis, o, c.base_center_mm, c.axis.normalized() * c.height_mm, c.radius_mm, lo, hi);
     });
   } else {
     const auto& mesh = std::get<TriangleMesh>(shape);
@@ -635,7 +650,9 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   std::map<int, std::array<Probe, 3>> probes;
   std::array<double, 3> removed_mm = {0.0, 0.0, 0.0};
   std::array<int, 4> tile_base = {0, 0, 0, 0};
-  for (int a = 0; a < 3; ++a) tile_base[static_cast<std::size_t>(a + 1)] = tile_base[static_cast<std::size_t>(a)] + m.families[static_cast<std::size_t>(a)].tiles();
+  for (int a = 0; a < 3; ++a)
+    tile_base[static_cast<std::size_t>(a + 1)] =
+        tile_base[static_cast<std::size_t>(a)] + m.families[static_cast<std::size_t>(a)].tiles();
   const int tiles = tile_base[3];
   std::vector<int> start(static_cast<std::size_t>(tiles) + 1);
   std::vector<int> entries;
@@ -689,8 +706,10 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
       u_lo = std::max(u_lo, (n_empty ? t : std::min(t, b.at(w, b.g_min))) - kMargin_mm);
     } else if (e.all(w, e.g_max)) {  // skipped: u outside N
       if (n_empty) return false;
-      if (b.slope > 0.0) u_hi = std::min(u_hi, b.at(w, b.g_min) + kMargin_mm);
-      else u_lo = std::max(u_lo, b.at(w, b.g_min) - kMargin_mm);
+      if (b.slope > 0.0)
+        u_hi = std::min(u_hi, b.at(w, b.g_min) + kMargin_mm);
+      else
+        u_lo = std::max(u_lo, b.at(w, b.g_min) - kMargin_mm);
     }
     return u_lo <= u_hi;
   };
@@ -723,7 +742,8 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   // The span [lo, hi] of the ray's material within [box_lo, box_hi] (false: none there):
   // from the first interval ending above box_lo to the last one starting below box_hi, so
   // that material elsewhere along the ray does not widen it.
-  auto material_within = [](const DexelSegment* s, std::uint32_t n, double box_lo, double box_hi, double& lo, double& hi) {
+  auto material_within = [](const DexelSegment* s, std::uint32_t n, double box_lo, double box_hi, double& lo,
+                            double& hi) {
     std::uint32_t i = 0, j = n - 1;
     while (i < j && s[i].hi_mm <= box_lo) ++i;
     while (j > i && s[j].lo_mm >= box_hi) --j;
@@ -768,13 +788,16 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
             visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu);
       }
     };
-    for (std::size_t i = first; i < last; ++i) for_each_tile(i, [&](int t) { ++start[static_cast<std::size_t>(t) + 1]; });
+    for (std::size_t i = first; i < last; ++i)
+      for_each_tile(i, [&](int t) { ++start[static_cast<std::size_t>(t) + 1]; });
     for (int t = 0; t < tiles; ++t) start[static_cast<std::size_t>(t) + 1] += start[static_cast<std::size_t>(t)];
     entries.resize(static_cast<std::size_t>(start[static_cast<std::size_t>(tiles)]));
     {
       std::vector<int> fill(start.begin(), start.end() - 1);
       for (std::size_t i = first; i < last; ++i)
-        for_each_tile(i, [&](int t) { entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = static_cast<int>(i - first); });
+        for_each_tile(i, [&](int t) {
+          entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = static_cast<int>(i - first);
+        });
     }
     std::vector<int> busy;
     for (int t = 0; t < tiles; ++t)
@@ -990,7 +1013,8 @@ void set_bits(std::uint64_t* words, int first, int last) {
 // and back, through tables (both sit in the mesher's innermost loops).
 constexpr std::array<int, kBrick> kMortonSpread = [] {
   std::array<int, kBrick> t{};
-  for (int i = 0; i < kBrick; ++i) t[static_cast<std::size_t>(i)] = static_cast<int>(morton_spread(static_cast<std::uint64_t>(i)));
+  for (int i = 0; i < kBrick; ++i)
+    t[static_cast<std::size_t>(i)] = static_cast<int>(morton_spread(static_cast<std::uint64_t>(i)));
   return t;
 }();
 int morton(int x, int y, int z) {
@@ -1005,7 +1029,8 @@ const std::array<MortonCell, kBrickCells> kMortonCells = [] {
   for (int code = 0; code < kBrickCells; ++code)
     for (int b = 0; b < kBrickLevels; ++b)
       for (int a = 0; a < 3; ++a)
-        t[static_cast<std::size_t>(code)].index[a] = static_cast<std::uint8_t>(t[static_cast<std::size_t>(code)].index[a] | ((code >> (3 * b + a)) & 1) << b);
+        t[static_cast<std::size_t>(code)].index[a] =
+            static_cast<std::uint8_t>(t[static_cast<std::size_t>(code)].index[a] | ((code >> (3 * b + a)) & 1) << b);
   return t;
 }();
 std::array<int, 3> unmorton(int code) {
@@ -1021,11 +1046,11 @@ struct BrickSigns {
 };
 
 struct BrickMesh {
-  std::array<int, 3> origin;            // lattice index of the brick's first node
-  std::vector<std::uint16_t> cells;     // active cells, Morton codes ascending
-  std::vector<std::uint32_t> vertex;    // per active cell: index into points
+  std::array<int, 3> origin;          // lattice index of the brick's first node
+  std::vector<std::uint16_t> cells;   // active cells, Morton codes ascending
+  std::vector<std::uint32_t> vertex;  // per active cell: index into points
   std::vector<Vector3d> points;
-  std::uint32_t first_vertex = 0;       // global index of points[0]
+  std::uint32_t first_vertex = 0;  // global index of points[0]
 };
 
 class Contour {
@@ -1034,7 +1059,8 @@ class Contour {
     // Node index range per axis: the y rays span x as u, the x rays y and z.
     lo_ = {m.families[1].lo_u, m.families[0].lo_u, m.families[0].lo_w};
     count_ = {m.families[1].n_u, m.families[0].n_u, m.families[0].n_w};
-    for (int a = 0; a < 3; ++a) bricks_[static_cast<std::size_t>(a)] = (count_[static_cast<std::size_t>(a)] - 1 + kBrick - 1) / kBrick;
+    for (int a = 0; a < 3; ++a)
+      bricks_[static_cast<std::size_t>(a)] = (count_[static_cast<std::size_t>(a)] - 1 + kBrick - 1) / kBrick;
   }
 
   SurfaceMesh run() {
@@ -1075,7 +1101,8 @@ class Contour {
     // Bricks in lattice order, numbered; vertices numbered brick after brick.
     column_first_.assign(static_cast<std::size_t>(columns) + 1, 0);
     for (int c = 0; c < columns; ++c) {
-      column_first_[static_cast<std::size_t>(c) + 1] = column_first_[static_cast<std::size_t>(c)] + by_column[static_cast<std::size_t>(c)].size();
+      column_first_[static_cast<std::size_t>(c) + 1] =
+          column_first_[static_cast<std::size_t>(c)] + by_column[static_cast<std::size_t>(c)].size();
       for (BrickMesh& b : by_column[static_cast<std::size_t>(c)]) bricks_list_.push_back(std::move(b));
     }
     by_column.clear();
@@ -1097,7 +1124,8 @@ class Contour {
       CellTable& table = tables.local();
       std::vector<std::uint64_t>& bits = column_bits.local();
       for (int c = range.begin(); c != range.end(); ++c) {
-        const std::size_t first = column_first_[static_cast<std::size_t>(c)], last = column_first_[static_cast<std::size_t>(c) + 1];
+        const std::size_t first = column_first_[static_cast<std::size_t>(c)],
+                          last = column_first_[static_cast<std::size_t>(c) + 1];
         if (first == last) continue;
         node_bits(c, bits);
         for (std::size_t i = first; i < last; ++i) {
@@ -1109,7 +1137,8 @@ class Contour {
     });
     SurfaceMesh mesh;
     mesh.mesh.vertices_mm.reserve(next);
-    for (const BrickMesh& b : bricks_list_) mesh.mesh.vertices_mm.insert(mesh.mesh.vertices_mm.end(), b.points.begin(), b.points.end());
+    for (const BrickMesh& b : bricks_list_)
+      mesh.mesh.vertices_mm.insert(mesh.mesh.vertices_mm.end(), b.points.begin(), b.points.end());
     std::size_t triangles = 0;
     for (const auto& f : faces) triangles += f.size();
     mesh.mesh.triangles.reserve(triangles);
@@ -1208,7 +1237,10 @@ class Contour {
   // order) without looking at each cell's twelve edges. False: not such a brick.
   bool plane(BrickMesh& b, const BrickSigns& sg) const {
     for (int a = 0; a < 3; ++a)
-      if (lo_[static_cast<std::size_t>(a)] + count_[static_cast<std::size_t>(a)] - 1 - b.origin[static_cast<std::size_t>(a)] < kBrick) return false;
+      if (lo_[static_cast<std::size_t>(a)] + count_[static_cast<std::size_t>(a)] - 1 -
+              b.origin[static_cast<std::size_t>(a)] <
+          kBrick)
+        return false;
     constexpr std::uint32_t kFull = (1u << (kBrick + 1)) - 1u, kSteps = (1u << kBrick) - 1u;
     // Bit k of a pattern: node k inside; its steps: bit k when nodes k and k + 1 differ.
     auto single_step = [](std::uint32_t pattern, int& step) {
@@ -1223,7 +1255,8 @@ class Contour {
       if (!single_step(first, step)) return false;
       axis = 2;
     } else {
-      if (!std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == 0 || c == kFull; })) return false;
+      if (!std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == 0 || c == kFull; }))
+        return false;
       std::uint32_t along_x = 0, along_y = 0;
       for (int k = 0; k <= kBrick; ++k) {
         along_x |= (sg.at(k, 0) != 0 ? 1u : 0u) << k;
@@ -1236,9 +1269,12 @@ class Contour {
           by_x = by_x && in == (((along_x >> x) & 1u) != 0);
           by_y = by_y && in == (((along_y >> y) & 1u) != 0);
         }
-      if (by_x && single_step(along_x, step)) axis = 0;
-      else if (by_y && single_step(along_y, step)) axis = 1;
-      else return false;
+      if (by_x && single_step(along_x, step))
+        axis = 0;
+      else if (by_y && single_step(along_y, step))
+        axis = 1;
+      else
+        return false;
     }
     // The crossings: the rays along `axis` through the brick's nodes of the other two axes.
     const auto [o1, o2] = kOther[static_cast<std::size_t>(axis)];
@@ -1335,8 +1371,8 @@ class Contour {
     std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
     // Octree merging, level by level: a block's cells are a run of the Morton order.
     const std::size_t n = cells.size();
-    std::vector<std::uint32_t> group(n);      // the run start of each cell's merged block
-    std::vector<std::uint8_t> merged(n, 1);   // the cell's block so far is one vertex
+    std::vector<std::uint32_t> group(n);     // the run start of each cell's merged block
+    std::vector<std::uint8_t> merged(n, 1);  // the cell's block so far is one vertex
     for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
     double tolerance = kFlatTolerance * m_.v;
     // Without flat merging only exact axis planes merge (untouched stock faces, floors of a
@@ -1450,8 +1486,7 @@ class Contour {
         for (std::uint16_t code : cells) local[code] = -1;
       }
     } clear{local, b.cells};
-    for (std::size_t i = 0; i < b.cells.size(); ++i)
-      local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
+    for (std::size_t i = 0; i < b.cells.size(); ++i) local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
     // A brick merged into one vertex (a flat sheet, a plane brick) has quads only across its
     // lower faces: one whose four cells all lie in the brick has four equal corners.
     const bool one_vertex = b.points.size() == 1;

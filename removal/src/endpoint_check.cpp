@@ -10,13 +10,14 @@
 
 namespace vcut::removal {
 
-EndpointDeviation endpoint_deviation(const std::vector<DexelEndpoint>& points, const Eigen::Vector3d& origin_mm, double v,
-                                     const DesignDistance& design, const CompareSettings& settings) {
+EndpointDeviation endpoint_deviation(const std::vector<DexelEndpoint>& points, const Eigen::Vector3d& origin_mm,
+                                     double v, const DesignDistance& design, const CompareSettings& settings) {
   // order[i]: the i-th point in Morton order (a ray's two ends can lie a stock's length apart).
   std::vector<std::pair<std::uint64_t, std::size_t>> order(points.size());
   tbb::parallel_for(std::size_t{0}, points.size(), [&](std::size_t i) {
     const Eigen::Vector3d c = ((points[i].x_mm - origin_mm) / v).array().max(0.0);
-    order[i] = {morton_code(static_cast<std::uint64_t>(c.x()), static_cast<std::uint64_t>(c.y()), static_cast<std::uint64_t>(c.z())),
+    order[i] = {morton_code(static_cast<std::uint64_t>(c.x()), static_cast<std::uint64_t>(c.y()),
+                            static_cast<std::uint64_t>(c.z())),
                 i};
   });
   // The pairs are distinct: one sorted order for any thread count.

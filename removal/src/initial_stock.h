@@ -18,8 +18,7 @@ class DesignDistance;
 namespace vcut::removal::detail {
 
 inline double box_distance(const BoxShape& box, const Eigen::Vector3d& x) {
-  const Eigen::Vector3d q =
-      (x - 0.5 * (box.min_mm + box.max_mm)).cwiseAbs() - 0.5 * (box.max_mm - box.min_mm);
+  const Eigen::Vector3d q = (x - 0.5 * (box.min_mm + box.max_mm)).cwiseAbs() - 0.5 * (box.max_mm - box.min_mm);
   return q.cwiseMax(0.0).norm() + std::min(q.maxCoeff(), 0.0);
 }
 
@@ -32,7 +31,7 @@ inline double cylinder_distance(const CylinderShape& c, const Eigen::Vector3d& x
 
 // The initial stock's signed distance; a mesh stock keeps its distance structure alive in
 // `mesh_distance`.
-std::function<double(const Eigen::Vector3d&)> initial_distance(
-    const StockShape& shape, std::shared_ptr<const DesignDistance>& mesh_distance);
+std::function<double(const Eigen::Vector3d&)> initial_distance(const StockShape& shape,
+                                                               std::shared_ptr<const DesignDistance>& mesh_distance);
 
 }  // namespace vcut::removal::detail

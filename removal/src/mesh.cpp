@@ -59,7 +59,8 @@ std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh) {
     auto fv = om.cfv_iter(fh);
     const OMesh::Point a = om.point(*fv), b = om.point(*++fv), c = om.point(*++fv);
     const OMesh::Point n = (b - a) % (c - a);
-    for (const auto& vh : om.fv_range(fh)) normals[static_cast<std::size_t>(vh.idx())] += Eigen::Vector3d(n[0], n[1], n[2]);
+    for (const auto& vh : om.fv_range(fh))
+      normals[static_cast<std::size_t>(vh.idx())] += Eigen::Vector3d(n[0], n[1], n[2]);
   }
   for (auto& n : normals) {
     const double len = n.norm();
@@ -96,7 +97,8 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   }
   omerr().disable();
   for (const auto& t : mesh.triangles)
-    om.add_face(handles[static_cast<std::size_t>(t[0])], handles[static_cast<std::size_t>(t[1])], handles[static_cast<std::size_t>(t[2])]);
+    om.add_face(handles[static_cast<std::size_t>(t[0])], handles[static_cast<std::size_t>(t[1])],
+                handles[static_cast<std::size_t>(t[2])]);
   omerr().enable();
   om.request_vertex_status();
   om.request_edge_status();
@@ -130,7 +132,9 @@ bool is_closed(const TriangleMesh& mesh) {
   // Each directed edge must appear once and its reverse once.
   std::unordered_map<std::uint64_t, int> directed;
   directed.reserve(mesh.triangles.size() * 3);
-  auto key = [](int a, int b) { return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b); };
+  auto key = [](int a, int b) {
+    return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
+  };
   for (const auto& t : mesh.triangles)
     for (int c = 0; c < 3; ++c)
       if (++directed[key(t[c], t[(c + 1) % 3])] > 1) return false;

@@ -39,7 +39,9 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
   for (int k = 0; k < n; ++k) {
     Move piece = move;
     piece.start_mm = move.start_mm + (static_cast<double>(k) / n) * (move.end_mm - move.start_mm);
-    piece.end_mm = k + 1 == n ? move.end_mm : Eigen::Vector3d(move.start_mm + (static_cast<double>(k + 1) / n) * (move.end_mm - move.start_mm));
+    piece.end_mm =
+        k + 1 == n ? move.end_mm
+                   : Eigen::Vector3d(move.start_mm + (static_cast<double>(k + 1) / n) * (move.end_mm - move.start_mm));
     piece.axis = kinematics::great_circle(a, b, (k + 0.5) / n);
     out.push_back(piece);
   }

@@ -23,11 +23,15 @@ double golden_argmin(F&& f, double a, double b, double tolerance) {
   double fc = f(c), fe = f(e);
   while (b - a > tolerance) {
     if (fc <= fe) {
-      b = e; e = c; fe = fc;
+      b = e;
+      e = c;
+      fe = fc;
       c = b - kInvPhi * (b - a);
       fc = f(c);
     } else {
-      a = c; c = e; fc = fe;
+      a = c;
+      c = e;
+      fc = fe;
       e = a + kInvPhi * (b - a);
       fe = f(e);
     }
@@ -36,7 +40,10 @@ double golden_argmin(F&& f, double a, double b, double tolerance) {
   double best = 0.5 * (a + b), f_best = f(best);
   for (double t : {a, b}) {
     const double ft = f(t);
-    if (ft < f_best) { best = t; f_best = ft; }
+    if (ft < f_best) {
+      best = t;
+      f_best = ft;
+    }
   }
   return best;
 }
@@ -93,8 +100,8 @@ void widen(double& lo, double& hi, double a, double b) {
 
 }  // namespace
 
-bool line_cylinder(int axis, const Vector3d& o, const Vector3d& p, const Vector3d& d, double r,
-                   double& lo, double& hi) {
+bool line_cylinder(int axis, const Vector3d& o, const Vector3d& p, const Vector3d& d, double r, double& lo,
+                   double& hi) {
   const double dd = d.squaredNorm();
   if (dd <= kTiny_mm * kTiny_mm) return false;
   Vector3d m = o - p;
@@ -154,7 +161,11 @@ double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 }  // namespace
 
 RaySweep::RaySweep(const Cutter& cutter, const Move& move)
-    : sweep_(cutter, move), cutter_(cutter), core_(core_of(cutter)), p0_(move.start_mm), delta_(move.end_mm - move.start_mm) {
+    : sweep_(cutter, move),
+      cutter_(cutter),
+      core_(core_of(cutter)),
+      p0_(move.start_mm),
+      delta_(move.end_mm - move.start_mm) {
   radius_mm_ = cutter.type == CutterType::VBit ? section_radius(cutter, cutter.flute_length_mm)
                                                : core_.core_radius_mm + core_.rounding_mm;
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
@@ -390,10 +401,11 @@ double RaySweep::row_section(int axis, double w) const {
   if (h_hi < 0.0 || h_lo > height_mm_) return -1.0;
   // The section grows up to `full` above the tip, then stays or shrinks: its largest value
   // over [h_lo, h_hi] is at the point of that range nearest to `full`.
-  const double full = cutter_.type == CutterType::VBit ? std::min(height_mm_, underside_height(cutter_, radius_mm_))
-                                                      : core_.z_low_mm;
+  const double full =
+      cutter_.type == CutterType::VBit ? std::min(height_mm_, underside_height(cutter_, radius_mm_)) : core_.z_low_mm;
   const double h = std::clamp(std::clamp(full, h_lo, h_hi), 0.0, height_mm_);
-  return cutter_.type == CutterType::VBit ? section_radius(cutter_, h) : core_section_radius(core_, cutter_.flute_length_mm, h);
+  return cutter_.type == CutterType::VBit ? section_radius(cutter_, h)
+                                          : core_section_radius(core_, cutter_.flute_length_mm, h);
 }
 
 double RaySweep::row_floor(int axis, double w) const {
@@ -426,8 +438,7 @@ bool RaySweep::interval_below(int axis, double u, double w, double top, double& 
 // its side (not on an end plane) is on the capsule's boundary, so the spheres are needed only
 // for an end that is not. Anything else goes through ball_general.
 __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int count, const double* u,
-                                                        const double* top, double* lo, double* hi,
-                                                        bool* hit) const {
+                                                        const double* top, double* lo, double* hi, bool* hit) const {
   if (method_ != Method::Ball) {
     for (int k = 0; k < count; ++k) hit[k] = interval(axis, u[k], w, lo[k], hi[k]);
     return;
@@ -479,9 +490,9 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
       // slice [b0, b1] is too, and where it holds both discs' widest slices (sqrt is monotonic,
       // so no disc slice is wider than sqrt(r2)) it is the whole answer wherever t0 is in range.
       double b0 = -kInf, b1 = kInf;
-      const bool band_holds_discs = band && n_u == 0.0 && n_s != 0.0 && t_s == 0.0 &&
-                                    clip_inv(n_base, inv_n_s, -r, r, b0, b1) &&
-                                    b0 <= std::min(s0c, s1c) - std::sqrt(r2) && b1 >= std::max(s0c, s1c) + std::sqrt(r2);
+      const bool band_holds_discs =
+          band && n_u == 0.0 && n_s != 0.0 && t_s == 0.0 && clip_inv(n_base, inv_n_s, -r, r, b0, b1) &&
+          b0 <= std::min(s0c, s1c) - std::sqrt(r2) && b1 >= std::max(s0c, s1c) + std::sqrt(r2);
       for (int k = 0; k < count; ++k) {
         if (band_holds_discs) {
           const double t0 = t_base + t_u * u[k];
@@ -501,7 +512,8 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
           double e0 = -kInf, e1 = kInf;
           const double n0 = n_base + n_u * u[k], t0 = t_base + t_u * u[k];
           const bool in_n = n_s == 0.0 ? n0 >= -r && n0 <= r : clip_inv(n0, inv_n_s, -r, r, e0, e1);
-          if (in_n && (t_s == 0.0 ? t0 >= 0.0 && t0 <= 1.0 : clip_inv(t0, inv_t_s, 0.0, 1.0, e0, e1))) widen(l, h, e0, e1);
+          if (in_n && (t_s == 0.0 ? t0 >= 0.0 && t0 <= 1.0 : clip_inv(t0, inv_t_s, 0.0, 1.0, e0, e1)))
+            widen(l, h, e0, e1);
         }
         hit[k] = l <= h;
         lo[k] = l;
@@ -547,7 +559,8 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
-    case Method::Ball: return interval_below(axis, u, w, kInf, lo, hi);
+    case Method::Ball:
+      return interval_below(axis, u, w, kInf, lo, hi);
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
     case Method::General: {
@@ -595,7 +608,8 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   // Its derivative g'(t) = slope + U'(rho) rho'(t), and g'' in `second` (U the underside
   // as a function of the distance rho to the axis; infinite where the side is vertical).
   const double rc = core_.core_radius_mm, r = core_.rounding_mm;
-  const double cone = cutter_.type == CutterType::VBit ? 1.0 / std::tan(0.5 * cutter_.tip_angle_deg * M_PI / 180.0) : 0.0;
+  const double cone =
+      cutter_.type == CutterType::VBit ? 1.0 / std::tan(0.5 * cutter_.tip_angle_deg * M_PI / 180.0) : 0.0;
   auto slope_at = [&](double slope, double t, double& second) {
     const double rho = std::hypot(qx - t * dx, qy - t * dy);
     const double drho = rho > 0.0 ? (t * dd - qd) / rho : 0.0;
@@ -632,9 +646,12 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
     double t = dd > 0.0 ? std::clamp(qd / dd, ta, tb) : 0.5 * (ta + tb);
     for (int iteration = 0; iteration < 100 && hi_t - lo_t > t_tolerance; ++iteration) {
       const double d1 = slope_at(slope, t, second);
-      if (d1 < 0.0) lo_t = t;
-      else if (d1 > 0.0) hi_t = t;
-      else break;
+      if (d1 < 0.0)
+        lo_t = t;
+      else if (d1 > 0.0)
+        hi_t = t;
+      else
+        break;
       double next = second > 0.0 && std::isfinite(second) ? t - d1 / second : 0.5 * (lo_t + hi_t);
       if (!(next > lo_t && next < hi_t)) next = 0.5 * (lo_t + hi_t);
       const bool converged = std::abs(next - t) <= t_tolerance;
@@ -645,9 +662,9 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   };
   // Where the line stays over the flat core of a bull-nose's underside for the whole move
   // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
-  const bool over_core = cutter_.type != CutterType::VBit &&
-                         std::max(std::hypot(qx - ta * dx, qy - ta * dy), std::hypot(qx - tb * dx, qy - tb * dy)) <=
-                             core_.core_radius_mm;
+  const bool over_core =
+      cutter_.type != CutterType::VBit &&
+      std::max(std::hypot(qx - ta * dx, qy - ta * dy), std::hypot(qx - tb * dx, qy - tb * dy)) <= core_.core_radius_mm;
   lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
   hi = p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
   return true;
@@ -737,7 +754,9 @@ bool RaySweep::tilted_flat(int axis, const Vector3d& o, double& lo, double& hi, 
     decided = false;  // degenerate: a strip, not an ellipse
     return false;
   }
-  auto q = [&](double s, double t) { return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW; };
+  auto q = [&](double s, double t) {
+    return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW;
+  };
   constexpr double kSlack = 1e-12;  // mm (and mm^2 for q): points on a boundary count as inside
   auto inside_lines = [&](double s, double t) {
     const double h = hw + he * s - hd * t;
@@ -780,7 +799,8 @@ bool RaySweep::tilted_flat(int axis, const Vector3d& o, double& lo, double& hi, 
   for (int i = 0; i < n_lines; ++i) {
     const Line& l = lines[i];
     const double qa = EE * l.ds * l.ds - 2.0 * ED * l.ds * l.dt + DD * l.dt * l.dt;
-    const double qb = 2.0 * (EE * l.ps * l.ds - ED * (l.ps * l.dt + l.pt * l.ds) + DD * l.pt * l.dt + WE * l.ds - WD * l.dt);
+    const double qb =
+        2.0 * (EE * l.ps * l.ds - ED * (l.ps * l.dt + l.pt * l.ds) + DD * l.pt * l.dt + WE * l.ds - WD * l.dt);
     const double qc = q(l.ps, l.pt);
     if (qa <= 0.0) continue;
     const double disc = qb * qb - 4.0 * qa * qc;

@@ -39,8 +39,8 @@ inline constexpr double kRaySearchTolerance_mm = 1e-9;
 
 // The line o + s e_axis (o[axis] ignored) against the solid cylinder of radius r around the
 // segment p -> p + d, between the planes through p and p + d normal to d: [lo, hi] of s.
-bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
-                   const Eigen::Vector3d& d, double r, double& lo, double& hi);
+bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p, const Eigen::Vector3d& d, double r,
+                   double& lo, double& hi);
 
 // Hidden: used only inside vcut_removal, so its calls from the cut's loop go direct.
 class __attribute__((visibility("hidden"))) RaySweep {
@@ -56,8 +56,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool interval_below(int axis, double u, double w, double top, double& lo, double& hi) const;
   // interval_below for `count` rays of one row at w, at u[k] with material up to top[k]:
   // hit[k], lo[k], hi[k]. One call per row keeps the kernel's constants in registers.
-  void intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo,
-                       double* hi, bool* hit) const;
+  void intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo, double* hi,
+                       bool* hit) const;
 
   const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
 
@@ -132,14 +132,14 @@ class __attribute__((visibility("hidden"))) RaySweep {
   int spheres_ = 0, edges_ = 0;
   Method method_;
   CutterCore core_;
-  double radius_mm_;       // R
-  double height_mm_;       // H = z_high + r, the top of the cutting part
+  double radius_mm_;  // R
+  double height_mm_;  // H = z_high + r, the top of the cutting part
   Eigen::Vector3d p0_, delta_;
   Eigen::Vector3d tool_axis_ = Eigen::Vector3d::UnitZ();
   // Ball: the parallelogram c0 + a*A + b*B, a, b in [0, 1].
   Eigen::Vector3d c0_, edge_a_, edge_b_;
   Eigen::Vector3d normal_, dual_a_, dual_b_;  // slab normal and dual basis (no slab if zero)
-  int segments_ = 0;          // 0: sphere, 1: one capsule c0 -> c0 + edge_a, 2: parallelogram
+  int segments_ = 0;                          // 0: sphere, 1: one capsule c0 -> c0 + edge_a, 2: parallelogram
   bool vertical_axis_ = false;
 };
 

@@ -29,7 +29,8 @@ std::vector<bool> sharp_vertices(const TriangleMesh& mesh, double limit_deg) {
   for (std::size_t f = 0; f < mesh.triangles.size(); ++f) {
     const auto& t = mesh.triangles[f];
     const Eigen::Vector3d& p0 = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
-    face[f] = (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - p0).cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - p0);
+    face[f] = (mesh.vertices_mm[static_cast<std::size_t>(t[1])] - p0)
+                  .cross(mesh.vertices_mm[static_cast<std::size_t>(t[2])] - p0);
     for (int c = 0; c < 3; ++c) mean[static_cast<std::size_t>(t[c])] += face[f];
   }
   const double cos_limit = std::cos(limit_deg * M_PI / 180.0);
@@ -49,7 +50,8 @@ std::vector<bool> sharp_vertices(const TriangleMesh& mesh, double limit_deg) {
 // Vertices of `mesh` within `radius_mm` of any of `points` (a hash grid of that cell size).
 std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& points, double radius_mm) {
   auto cell = [&](const Eigen::Vector3d& p) {
-    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)), static_cast<long>(std::floor(p.y() / radius_mm)),
+    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)),
+                               static_cast<long>(std::floor(p.y() / radius_mm)),
                                static_cast<long>(std::floor(p.z() / radius_mm))};
   };
   std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> grid;
@@ -75,8 +77,7 @@ std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen:
 
 }  // namespace
 
-SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v,
-                                     double sharp_edge_deg) {
+SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg) {
   const DesignDistance to_b(b.mesh), to_a(a.mesh);
   const std::size_t na = a.mesh.vertices_mm.size();
   std::vector<double> d(na + b.mesh.vertices_mm.size());
@@ -91,7 +92,8 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
       for (std::size_t i = 0; i < sharp.size(); ++i)
         if (sharp[i]) edge_points.push_back(m->mesh.vertices_mm[i]);
     }
-    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v), sb = near_points(b.mesh, edge_points, kEdgeReach * v);
+    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v),
+                            sb = near_points(b.mesh, edge_points, kEdgeReach * v);
     std::copy(sa.begin(), sa.end(), skip.begin());
     std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
   }

@@ -15,8 +15,8 @@ namespace {
 constexpr double kProjectionTolerance_mm = 1e-7;
 }  // namespace
 
-std::function<double(const Eigen::Vector3d&)> initial_distance(
-    const StockShape& shape, std::shared_ptr<const DesignDistance>& mesh_distance) {
+std::function<double(const Eigen::Vector3d&)> initial_distance(const StockShape& shape,
+                                                               std::shared_ptr<const DesignDistance>& mesh_distance) {
   if (const auto* box = std::get_if<BoxShape>(&shape))
     return [b = *box](const Eigen::Vector3d& x) { return box_distance(b, x); };
   if (const auto* cyl = std::get_if<CylinderShape>(&shape))
@@ -36,8 +36,7 @@ int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<C
   return id_base;
 }
 
-SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points,
-                               const std::vector<openvdb::Vec3I>& triangles,
+SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const std::vector<openvdb::Vec3I>& triangles,
                                const std::vector<openvdb::Vec4I>& quads) {
   SurfaceMesh mesh;
   mesh.mesh.vertices_mm.reserve(points.size());
@@ -72,7 +71,10 @@ void project_onto_machined_surface(const std::vector<Move>& moves, const std::ve
         active = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
           const double cut = -sweeps[k].distance(x);
-          if (cut > f) { f = cut; active = nearby[v][k]; }
+          if (cut > f) {
+            f = cut;
+            active = nearby[v][k];
+          }
         }
         return f;
       };

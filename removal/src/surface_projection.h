@@ -20,8 +20,7 @@ int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<C
 
 // volumeToMesh's polygons as an outward, counter-clockwise triangle mesh (OpenVDB winds
 // level-set polygons clockwise seen from outside; quads are split in two).
-SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points,
-                               const std::vector<openvdb::Vec3I>& triangles,
+SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const std::vector<openvdb::Vec3I>& triangles,
                                const std::vector<openvdb::Vec4I>& quads);
 
 // Moves every vertex onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0

@@ -17,8 +17,7 @@ constexpr double kDegenerateMotion_mm = 1e-9;
 
 // Any rotation taking `axis` to +Z (the cutter is symmetric about its axis).
 Eigen::Matrix3d rotation_to_z(const Eigen::Vector3d& axis) {
-  return Eigen::Quaterniond::FromTwoVectors(axis.normalized(), Eigen::Vector3d::UnitZ())
-      .toRotationMatrix();
+  return Eigen::Quaterniond::FromTwoVectors(axis.normalized(), Eigen::Vector3d::UnitZ()).toRotationMatrix();
 }
 
 }  // namespace
@@ -62,8 +61,8 @@ bool TranslationSweep::start_dominates(const Eigen::AlignedBox3d& box) const {
   const Eigen::Vector3d& d = delta_tool_;
   const double z = d.z() >= 0.0 ? center.z() + half.z() : center.z() - half.z();
   const double g = z - std::clamp(z, core_.z_low_mm, core_.z_high_mm);
-  const double most = d.x() * center.x() + std::abs(d.x()) * half.x() + d.y() * center.y() +
-                      std::abs(d.y()) * half.y() + d.z() * g;
+  const double most =
+      d.x() * center.x() + std::abs(d.x()) * half.x() + d.y() * center.y() + std::abs(d.y()) * half.y() + d.z() * g;
   return most <= 0.0;
 }
 
@@ -148,15 +147,13 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
       const double len2 = d.squaredNorm();
       const double t = len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
       const double d_plane = (y.head<2>() - t * d).norm() - core_.core_radius_mm;
-      return extrude(d_plane, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm)) -
-             core_.rounding_mm;
+      return extrude(d_plane, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm)) - core_.rounding_mm;
     }
     case Kind::Along: {
       // Core + segment = a longer cylinder.
       const double lo = core_.z_low_mm + std::min(0.0, delta_tool_.z());
       const double hi = core_.z_high_mm + std::max(0.0, delta_tool_.z());
-      return extrude(y.head<2>().norm() - core_.core_radius_mm, interval_distance(y.z(), lo, hi)) -
-             core_.rounding_mm;
+      return extrude(y.head<2>().norm() - core_.core_radius_mm, interval_distance(y.z(), lo, hi)) - core_.rounding_mm;
     }
     case Kind::General: {
       if (core_.core_radius_mm == 0.0 && cutter_.type != CutterType::VBit) {
@@ -181,7 +178,8 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
         if (height > 0.0) best = std::min({best, segment(Eigen::Vector3d::Zero(), up), segment(delta_tool_, up)});
         return std::sqrt(best) - core_.rounding_mm;
       }
-      if (cutter_.type != CutterType::VBit) return cylinder_sweep_distance(y, far_mm + core_.rounding_mm) - core_.rounding_mm;
+      if (cutter_.type != CutterType::VBit)
+        return cylinder_sweep_distance(y, far_mm + core_.rounding_mm) - core_.rounding_mm;
       // f(t) = d_core(y - t*delta) is convex in t (signed distance of a convex set along a
       // line), and |f'| <= |delta|: golden-section search brackets the minimum.
       constexpr double kInvPhi = 0.6180339887498949;
@@ -194,11 +192,15 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
         const double lower = std::min(fc, fe) - (b - a) * delta_length_;
         if (lower >= far_core) return lower - core_.rounding_mm;
         if (fc <= fe) {
-          b = e; e = c; fe = fc;
+          b = e;
+          e = c;
+          fe = fc;
           c = b - kInvPhi * (b - a);
           fc = core_distance(y - c * delta_tool_);
         } else {
-          a = c; c = e; fc = fe;
+          a = c;
+          c = e;
+          fc = fe;
           e = a + kInvPhi * (b - a);
           fe = core_distance(y - e * delta_tool_);
         }

@@ -41,9 +41,7 @@ int floor_div(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
 // Fraction of a voxel inside material for level-set value phi (mm): exact for a plane
 // crossing a column of voxels along its normal, the usual first-order volume estimate.
-inline double inside_fraction(double phi, double voxel) {
-  return std::clamp(0.5 - phi / voxel, 0.0, 1.0);
-}
+inline double inside_fraction(double phi, double voxel) { return std::clamp(0.5 - phi / voxel, 0.0, 1.0); }
 
 enum class EntryKind : std::uint8_t { Clear, Near, Probe };
 struct Entry {
@@ -108,8 +106,8 @@ struct BlockResult {
   float value[kLeafVoxels];
   std::int32_t id[kLeafVoxels];
   bool all_outside = false;
-  bool all_inside = false;  // every voxel at -w or deeper: never cut (no move ids either)
-  bool changed = false;     // any value or move id differs from what the block held
+  bool all_inside = false;      // every voxel at -w or deeper: never cut (no move ids either)
+  bool changed = false;         // any value or move id differs from what the block held
   double removed_voxels = 0.0;  // in voxel volumes
   std::vector<Collision> probes;
 };
@@ -117,8 +115,8 @@ struct BlockResult {
 }  // namespace
 
 struct VdbStock::Impl {
-  double v = 0.1;   // voxel size, mm
-  double w = 0.3;   // narrow-band half width, mm
+  double v = 0.1;  // voxel size, mm
+  double w = 0.3;  // narrow-band half width, mm
   openvdb::FloatGrid::Ptr grid;
   // Move ids by leaf block (the occupancy map's index); none: every voxel kNoMove.
   std::vector<std::unique_ptr<BlockIds>> block_ids;
@@ -142,12 +140,9 @@ struct VdbStock::Impl {
     return (static_cast<std::int64_t>(k) * coarse_dims.y() + j) * coarse_dims.x() + i;
   }
   Coord leaf_origin(int i, int j, int k) const {
-    return Coord((leaf_min.x() + i) * kLeafDim, (leaf_min.y() + j) * kLeafDim,
-                 (leaf_min.z() + k) * kLeafDim);
+    return Coord((leaf_min.x() + i) * kLeafDim, (leaf_min.y() + j) * kLeafDim, (leaf_min.z() + k) * kLeafDim);
   }
-  Eigen::Vector3d voxel_position(const Coord& c) const {
-    return Eigen::Vector3d(c.x() * v, c.y() * v, c.z() * v);
-  }
+  Eigen::Vector3d voxel_position(const Coord& c) const { return Eigen::Vector3d(c.x() * v, c.y() * v, c.z() * v); }
 
   void setup_region(const Eigen::AlignedBox3d& bounds) {
     shape_bounds = bounds;
@@ -181,8 +176,10 @@ struct VdbStock::Impl {
           auto* leaf = new FloatLeaf(o, static_cast<float>(w));
           for (int n = 0; n < kLeafVoxels; ++n) {
             const double phi = sdf(voxel_position(leaf->offsetToGlobalCoord(n)));
-            if (std::abs(phi) < w) leaf->setValueOn(n, static_cast<float>(phi));
-            else leaf->setValueOff(n, static_cast<float>(phi < 0 ? -w : w));
+            if (std::abs(phi) < w)
+              leaf->setValueOn(n, static_cast<float>(phi));
+            else
+              leaf->setValueOff(n, static_cast<float>(phi < 0 ? -w : w));
           }
           mine.push_back(leaf);
         }
@@ -236,12 +233,13 @@ struct VdbStock::Impl {
         for (int ci = lo[0] / kCoarse; ci <= hi[0] / kCoarse; ++ci) {
           if (coarse_count[static_cast<std::size_t>(coarse_index(ci, cj, ck))] == 0) continue;
           const Coord co = leaf_origin(ci * kCoarse, cj * kCoarse, ck * kCoarse);
-          const double sc = sweep.distance(voxel_position(co) +
-                                           Eigen::Vector3d::Constant((kCoarse * kLeafDim * 0.5 - 0.5) * v),
-                                           w + coarse_half_diag + v);
+          const double sc =
+              sweep.distance(voxel_position(co) + Eigen::Vector3d::Constant((kCoarse * kLeafDim * 0.5 - 0.5) * v),
+                             w + coarse_half_diag + v);
           if (sc > w + coarse_half_diag) continue;
-          if (continues && sweep.start_dominates(Eigen::AlignedBox3d(
-                               voxel_position(co), voxel_position(co) + Eigen::Vector3d::Constant((kCoarse * kLeafDim - 1) * v)))) {
+          if (continues &&
+              sweep.start_dominates(Eigen::AlignedBox3d(
+                  voxel_position(co), voxel_position(co) + Eigen::Vector3d::Constant((kCoarse * kLeafDim - 1) * v)))) {
             continue;
           }
           for (int k = std::max(lo[2], ck * kCoarse); k <= std::min(hi[2], ck * kCoarse + kCoarse - 1); ++k)
@@ -249,15 +247,15 @@ struct VdbStock::Impl {
               for (int i = std::max(lo[0], ci * kCoarse); i <= std::min(hi[0], ci * kCoarse + kCoarse - 1); ++i) {
                 const std::int64_t index = leaf_index(i, j, k);
                 if (!occupied[static_cast<std::size_t>(index)]) continue;
-                const double s = sweep.distance(voxel_position(leaf_origin(i, j, k)) +
-                                                Eigen::Vector3d::Constant(3.5 * v), w + half_diag + v);
+                const double s = sweep.distance(
+                    voxel_position(leaf_origin(i, j, k)) + Eigen::Vector3d::Constant(3.5 * v), w + half_diag + v);
                 if (s > w + half_diag) continue;
                 const Eigen::Vector3d corner = voxel_position(leaf_origin(i, j, k));
                 if (continues && !rapid &&
                     sweep.start_dominates(Eigen::AlignedBox3d(corner, corner + Eigen::Vector3d::Constant(7 * v)))) {
                   continue;
                 }
-                const EntryKind kind = rapid ? EntryKind::Probe
+                const EntryKind kind = rapid                  ? EntryKind::Probe
                                        : s < -(w + half_diag) ? EntryKind::Clear
                                                               : EntryKind::Near;
                 out.push_back({index, move, kind});
@@ -306,7 +304,10 @@ struct VdbStock::Impl {
       switch (e->kind) {
         case EntryKind::Clear:
           for (int n = 0; n < kLeafVoxels; ++n)
-            if (r.value[n] < wf) { r.value[n] = wf; r.id[n] = id_offset + e->move; }
+            if (r.value[n] < wf) {
+              r.value[n] = wf;
+              r.id[n] = id_offset + e->move;
+            }
           not_outside = 0;
           break;
         case EntryKind::Near: {
@@ -330,8 +331,8 @@ struct VdbStock::Impl {
             if (sweep.distance(position[n]) >= 0.0) continue;
             // Depth below the material surface; the band stores at most w, deeper voxels
             // take the initial stock's depth (exact where no cut came near).
-            const double depth = r.value[n] > -wf ? -static_cast<double>(r.value[n])
-                                                  : std::max(w, -initial_distance(position[n]));
+            const double depth =
+                r.value[n] > -wf ? -static_cast<double>(r.value[n]) : std::max(w, -initial_distance(position[n]));
             if (depth > deepest.depth_mm) deepest = {e->move, depth, position[n]};
           }
           if (deepest.depth_mm > 0.0) r.probes.push_back(deepest);
@@ -371,8 +372,10 @@ struct VdbStock::Impl {
     FloatLeaf* leaf = tree.touchLeaf(o);
     for (int n = 0; n < kLeafVoxels; ++n) {
       const float phi = r.value[n];
-      if (std::abs(phi) < wf) leaf->setValueOn(n, phi);
-      else leaf->setValueOff(n, phi < 0 ? -wf : wf);
+      if (std::abs(phi) < wf)
+        leaf->setValueOn(n, phi);
+      else
+        leaf->setValueOff(n, phi < 0 ? -wf : wf);
     }
     if (std::all_of(r.id, r.id + kLeafVoxels, [](std::int32_t id) { return id == kNoMove; })) {
       ids.reset();
@@ -399,7 +402,8 @@ Eigen::AlignedBox3d bounds_of(const StockShape& shape) {
   Eigen::AlignedBox3d b;
   if (const auto* c = std::get_if<CylinderShape>(&shape)) {
     // Box of the two end disks: per axis, the disk extends radius * sqrt(1 - axis_a^2).
-    const Eigen::Vector3d ext = (Eigen::Vector3d::Ones() - c->axis.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() * c->radius_mm;
+    const Eigen::Vector3d ext =
+        (Eigen::Vector3d::Ones() - c->axis.cwiseAbs2()).cwiseMax(0.0).cwiseSqrt() * c->radius_mm;
     for (const Eigen::Vector3d& p : {c->base_center_mm, Eigen::Vector3d(c->base_center_mm + c->height_mm * c->axis)}) {
       b.extend(p - ext);
       b.extend(p + ext);
@@ -465,9 +469,8 @@ VdbStock::VdbStock(const StockShape& shape, double voxel_mm) : impl_(std::make_u
     for (const auto& t : mesh.triangles)
       triangles.emplace_back(static_cast<unsigned>(t[0]), static_cast<unsigned>(t[1]), static_cast<unsigned>(t[2]));
     openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec3I> adapter(points, triangles);
-    m.grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(adapter, *transform,
-                                                             static_cast<float>(kVdbHalfWidthVoxels),
-                                                             static_cast<float>(kVdbHalfWidthVoxels));
+    m.grid = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
+        adapter, *transform, static_cast<float>(kVdbHalfWidthVoxels), static_cast<float>(kVdbHalfWidthVoxels));
   }
   m.grid->setGridClass(openvdb::GRID_LEVEL_SET);
   m.compute_occupancy();

@@ -16,16 +16,15 @@ namespace {
 // ---- PNG (ISO/IEC 15948: signature, IHDR, IDAT, IEND; CRC-32 over type and data) ----------
 
 void put_u32(std::string& out, std::uint32_t v) {
-  for (int shift = 24; shift >= 0; shift -= 8)
-    out.push_back(static_cast<char>((v >> shift) & 0xff));
+  for (int shift = 24; shift >= 0; shift -= 8) out.push_back(static_cast<char>((v >> shift) & 0xff));
 }
 
 void put_chunk(std::string& out, const char* type, const std::string& data) {
   put_u32(out, static_cast<std::uint32_t>(data.size()));
   const std::string body = std::string(type, 4) + data;
   out += body;
-  put_u32(out, static_cast<std::uint32_t>(crc32(0, reinterpret_cast<const Bytef*>(body.data()),
-                                                static_cast<uInt>(body.size()))));
+  put_u32(out, static_cast<std::uint32_t>(
+                   crc32(0, reinterpret_cast<const Bytef*>(body.data()), static_cast<uInt>(body.size()))));
 }
 
 // The Paeth predictor (PNG spec §9.4).
@@ -50,11 +49,7 @@ std::string filter_rows(const Image& image) {
       long cost = 0;
       for (size_t i = 0; i < stride; ++i) {
         const int a = i >= 3 ? row[i - 3] : 0, b = up[i], c = i >= 3 ? up[i - 3] : 0;
-        const int predictor = type == 0   ? 0
-                              : type == 1 ? a
-                              : type == 2 ? b
-                              : type == 3 ? (a + b) / 2
-                                          : paeth(a, b, c);
+        const int predictor = type == 0 ? 0 : type == 1 ? a : type == 2 ? b : type == 3 ? (a + b) / 2 : paeth(a, b, c);
         trial[i] = static_cast<std::uint8_t>(row[i] - predictor);
         cost += std::abs(static_cast<int>(static_cast<std::int8_t>(trial[i])));
       }
@@ -78,15 +73,13 @@ double distance_to_segment(double px, double py, Point2 a, Point2 b) {
 
 // Strokes all segments as one shape: coverage is the maximum over the segments, so joins and
 // crossings are not darkened twice. Pixel coverage ~ half-width + 1/2 - centre distance.
-void stroke(Image& image, const std::vector<std::array<Point2, 2>>& segments, Rgb colour,
-            double width_px) {
+void stroke(Image& image, const std::vector<std::array<Point2, 2>>& segments, Rgb colour, double width_px) {
   if (segments.empty() || image.width <= 0 || image.height <= 0) return;
   const double reach = width_px / 2 + 0.5, peak = std::min(1.0, width_px);
   double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
   for (const auto& s : segments)
     for (const Point2& p : s)
-      x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x),
-      y1 = std::max(y1, p.y);
+      x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
   const int bx0 = std::max(0, static_cast<int>(std::floor(x0 - reach)));
   const int by0 = std::max(0, static_cast<int>(std::floor(y0 - reach)));
   const int bx1 = std::min(image.width - 1, static_cast<int>(std::floor(x1 + reach)));
@@ -101,8 +94,7 @@ void stroke(Image& image, const std::vector<std::array<Point2, 2>>& segments, Rg
     const int sy1 = std::min(by1, static_cast<int>(std::floor(std::max(a.y, b.y) + reach)));
     for (int y = sy0; y <= sy1; ++y)
       for (int x = sx0; x <= sx1; ++x) {
-        const double c =
-            std::min(peak, clamp01(reach - distance_to_segment(x + 0.5, y + 0.5, a, b)));
+        const double c = std::min(peak, clamp01(reach - distance_to_segment(x + 0.5, y + 0.5, a, b)));
         float& cell = coverage[static_cast<size_t>(y - by0) * w + (x - bx0)];
         cell = std::max(cell, static_cast<float>(c));
       }
@@ -115,8 +107,7 @@ void stroke(Image& image, const std::vector<std::array<Point2, 2>>& segments, Rg
 }
 
 // A polyline's segments; a single point is a dot (a zero-length segment).
-void append_polyline(std::vector<std::array<Point2, 2>>& segments,
-                     const std::vector<Point2>& points) {
+void append_polyline(std::vector<std::array<Point2, 2>>& segments, const std::vector<Point2>& points) {
   for (size_t i = 0; i < points.size(); ++i)
     if (i > 0 || points.size() == 1) segments.push_back({points[i > 0 ? i - 1 : 0], points[i]});
 }
@@ -265,17 +256,15 @@ void Image::set(int x, int y, Rgb colour) {
 void Image::blend(int x, int y, Rgb colour, double alpha) {
   if (!contains(x, y)) return;
   std::uint8_t* p = rgb.data() + (static_cast<size_t>(y) * width + x) * 3;
-  for (int k = 0; k < 3; ++k)
-    p[k] = static_cast<std::uint8_t>(std::lround(p[k] + clamp01(alpha) * (colour[k] - p[k])));
+  for (int k = 0; k < 3; ++k) p[k] = static_cast<std::uint8_t>(std::lround(p[k] + clamp01(alpha) * (colour[k] - p[k])));
 }
 
 std::string encode_png(const Image& image) {
   const std::string raw = filter_rows(image);
   uLongf size = compressBound(static_cast<uLong>(raw.size()));
   std::string compressed(size, '\0');
-  if (compress2(reinterpret_cast<Bytef*>(compressed.data()), &size,
-                reinterpret_cast<const Bytef*>(raw.data()), static_cast<uLong>(raw.size()),
-                6) != Z_OK)
+  if (compress2(reinterpret_cast<Bytef*>(compressed.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
+                static_cast<uLong>(raw.size()), 6) != Z_OK)
     throw InputError("PNG: zlib compression failed");
   compressed.resize(size);
 
@@ -312,8 +301,7 @@ void fill_rect(Image& image, double x0, double y0, double x1, double y1, Rgb col
             iy1 = std::min(image.height - 1, static_cast<int>(std::ceil(y1)) - 1);
   for (int y = iy0; y <= iy1; ++y) {
     const double cy = std::min(y + 1.0, y1) - std::max(double(y), y0);
-    for (int x = ix0; x <= ix1; ++x)
-      image.blend(x, y, colour, cy * (std::min(x + 1.0, x1) - std::max(double(x), x0)));
+    for (int x = ix0; x <= ix1; ++x) image.blend(x, y, colour, cy * (std::min(x + 1.0, x1) - std::max(double(x), x0)));
   }
 }
 
@@ -329,16 +317,14 @@ double text_width(const std::string& text, double height_px) {
   return units * height_px / kCapUnits;
 }
 
-void draw_text(Image& image, const std::string& text, Point2 at, double height_px, Rgb colour,
-               Align align, double angle_rad) {
+void draw_text(Image& image, const std::string& text, Point2 at, double height_px, Rgb colour, Align align,
+               double angle_rad) {
   const double unit = height_px / kCapUnits;
   // Text frame: u along the baseline, v up; on screen (y down) u -> (cos, -sin), v -> (-sin, -cos).
   const double c = std::cos(angle_rad), s = std::sin(angle_rad);
   const double width = text_width(text, height_px);
   double pen = align == Align::kLeft ? 0.0 : align == Align::kCenter ? -width / 2 : -width;
-  const auto place = [&](double u, double v) {
-    return Point2{at.x + u * c - v * s, at.y - u * s - v * c};
-  };
+  const auto place = [&](double u, double v) { return Point2{at.x + u * c - v * s, at.y - u * s - v * c}; };
   std::vector<std::array<Point2, 2>> segments;
   for (char ch : text) {
     const int left = ink_x(ch)[0];

@@ -92,8 +92,12 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
   if (result.compared) result.outputs.push_back("deviation.ply");
   for (const auto& f : snapshot_files) result.outputs.push_back(f);
   result.outputs.push_back("gouges.csv");
-  if (!page.empty()) result.outputs.push_back("report.html");
-  else result.warnings.push_back("report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from web/)");
+  if (!page.empty())
+    result.outputs.push_back("report.html");
+  else
+    result.warnings.push_back(
+        "report.html not written: its page template was not built (it needs Node.js and npm; `make` builds it from "
+        "web/)");
   result.stage_seconds.emplace_back("write", std::chrono::duration<double>(Clock::now() - t_start).count());
   result.outputs.push_back("report.json");
   result.wall_time_s = wall_now();

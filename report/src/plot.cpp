@@ -109,7 +109,8 @@ class PngCanvas : public Canvas {
   void disc(Point2 centre, double r, Rgb c) override { fill_circle(image_, centre, r, c); }
   void ring(Point2 centre, double r, Rgb c, double width) override {
     std::vector<Point2> p;
-    for (int i = 0; i <= 64; ++i) p.push_back({centre.x + r * std::cos(i * M_PI / 32), centre.y + r * std::sin(i * M_PI / 32)});
+    for (int i = 0; i <= 64; ++i)
+      p.push_back({centre.x + r * std::cos(i * M_PI / 32), centre.y + r * std::sin(i * M_PI / 32)});
     draw_polyline(image_, p, c, width);
   }
   void text(const std::string& s, Point2 at, double height, Rgb c, Align align, bool vertical) override {
@@ -124,11 +125,20 @@ std::string escape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -150,8 +160,9 @@ class SvgCanvas : public Canvas {
  public:
   std::string body;
   void line(Point2 a, Point2 b, Rgb c, double width, bool dashed) override {
-    body += "<line x1=\"" + num(a.x) + "\" y1=\"" + num(a.y) + "\" x2=\"" + num(b.x) + "\" y2=\"" + num(b.y) + "\" stroke=\"" +
-            colour(c) + "\" stroke-width=\"" + num(width) + "\"" + (dashed ? " stroke-dasharray=\"8 5\"" : "") + "/>\n";
+    body += "<line x1=\"" + num(a.x) + "\" y1=\"" + num(a.y) + "\" x2=\"" + num(b.x) + "\" y2=\"" + num(b.y) +
+            "\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) + "\"" +
+            (dashed ? " stroke-dasharray=\"8 5\"" : "") + "/>\n";
   }
   void polyline(const std::vector<Point2>& p, Rgb c, double width) override {
     body += "<polyline fill=\"none\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) +
@@ -160,23 +171,25 @@ class SvgCanvas : public Canvas {
     body += "\"/>\n";
   }
   void rect(double x0, double y0, double x1, double y1, Rgb fill, const Rgb* stroke) override {
-    body += "<rect x=\"" + num(x0) + "\" y=\"" + num(y0) + "\" width=\"" + num(x1 - x0) + "\" height=\"" + num(y1 - y0) +
-            "\" fill=\"" + colour(fill) + "\"" + (stroke ? " stroke=\"" + colour(*stroke) + "\"" : std::string()) + "/>\n";
+    body += "<rect x=\"" + num(x0) + "\" y=\"" + num(y0) + "\" width=\"" + num(x1 - x0) + "\" height=\"" +
+            num(y1 - y0) + "\" fill=\"" + colour(fill) + "\"" +
+            (stroke ? " stroke=\"" + colour(*stroke) + "\"" : std::string()) + "/>\n";
   }
   void disc(Point2 centre, double r, Rgb c) override {
-    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) + "\" fill=\"" + colour(c) + "\"/>\n";
+    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) + "\" fill=\"" +
+            colour(c) + "\"/>\n";
   }
   void ring(Point2 centre, double r, Rgb c, double width) override {
-    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) + "\" fill=\"none\" stroke=\"" +
-            colour(c) + "\" stroke-width=\"" + num(width) + "\"/>\n";
+    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) +
+            "\" fill=\"none\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) + "\"/>\n";
   }
   void text(const std::string& s, Point2 at, double height, Rgb c, Align align, bool vertical) override {
     const char* anchor = align == Align::kLeft ? "start" : align == Align::kCenter ? "middle" : "end";
     // The stroke font's height is that of capitals; a sans-serif's is about 0.72 em.
-    body += "<text x=\"" + num(at.x) + "\" y=\"" + num(at.y) + "\" font-size=\"" + num(height / 0.72) + "\" fill=\"" + colour(c) +
-            "\" text-anchor=\"" + anchor + "\"" +
-            (vertical ? " transform=\"rotate(-90 " + num(at.x) + " " + num(at.y) + ")\"" : std::string()) + ">" + escape(s) +
-            "</text>\n";
+    body += "<text x=\"" + num(at.x) + "\" y=\"" + num(at.y) + "\" font-size=\"" + num(height / 0.72) + "\" fill=\"" +
+            colour(c) + "\" text-anchor=\"" + anchor + "\"" +
+            (vertical ? " transform=\"rotate(-90 " + num(at.x) + " " + num(at.y) + ")\"" : std::string()) + ">" +
+            escape(s) + "</text>\n";
   }
 };
 
@@ -248,15 +261,14 @@ struct Spot {
 class LabelPlacer {
  public:
   explicit LabelPlacer(Box area) : area_(area) {}
-  void add_text(const Box& b) { text_.push_back(b); }    // never covered by a label
-  void add_mark(const Box& b) { marks_.push_back(b); }   // covered only when nothing else fits
+  void add_text(const Box& b) { text_.push_back(b); }   // never covered by a label
+  void add_mark(const Box& b) { marks_.push_back(b); }  // covered only when nothing else fits
   void add_line(Point2 a, Point2 b) { lines_.push_back({a, b}); }
 
   // The first of `spots` with the least clutter under it, its box then taken. A label that
   // would leave the area or cover other text gets no spot, unless `always`: then the least
   // bad one.
-  std::optional<Spot> place(const std::string& text, double height_px,
-                            const std::vector<Spot>& spots, bool always) {
+  std::optional<Spot> place(const std::string& text, double height_px, const std::vector<Spot>& spots, bool always) {
     std::optional<Spot> best;
     double best_cost = std::numeric_limits<double>::infinity();
     for (const Spot& s : spots) {
@@ -283,9 +295,12 @@ class LabelPlacer {
 // Spots beside a marker of radius r: right, left, above, below, the upper ones first.
 std::vector<Spot> spots_beside(Point2 p, double r, double height_px) {
   const double gap = r + 2.0, below = p.y + gap + height_px, above = p.y - gap;
-  return {{{p.x + gap, above}, Align::kLeft},         {{p.x + gap, below}, Align::kLeft},
-          {{p.x - gap, above}, Align::kRight},        {{p.x - gap, below}, Align::kRight},
-          {{p.x, above - 2.0}, Align::kCenter},       {{p.x, below + 2.0}, Align::kCenter},
+  return {{{p.x + gap, above}, Align::kLeft},
+          {{p.x + gap, below}, Align::kLeft},
+          {{p.x - gap, above}, Align::kRight},
+          {{p.x - gap, below}, Align::kRight},
+          {{p.x, above - 2.0}, Align::kCenter},
+          {{p.x, below + 2.0}, Align::kCenter},
           {{p.x + gap + 2.0, p.y + height_px / 2.0}, Align::kLeft},
           {{p.x - gap - 2.0, p.y + height_px / 2.0}, Align::kRight}};
 }
@@ -295,8 +310,10 @@ std::vector<Spot> spots_beside(Point2 p, double r, double height_px) {
 std::vector<Spot> spots_along_mark(bool horizontal, double at_px, const Box& frame) {
   const double h = kPointText;
   if (!horizontal)
-    return {{{at_px + 5.0, frame.y0 + 16.0}, Align::kLeft}, {{at_px - 5.0, frame.y0 + 16.0}, Align::kRight},
-            {{at_px + 5.0, frame.y1 - 8.0}, Align::kLeft}, {{at_px - 5.0, frame.y1 - 8.0}, Align::kRight}};
+    return {{{at_px + 5.0, frame.y0 + 16.0}, Align::kLeft},
+            {{at_px - 5.0, frame.y0 + 16.0}, Align::kRight},
+            {{at_px + 5.0, frame.y1 - 8.0}, Align::kLeft},
+            {{at_px - 5.0, frame.y1 - 8.0}, Align::kRight}};
   const double mid = (frame.x0 + frame.x1) / 2.0, above = at_px - 5.0, below = at_px + 5.0 + h;
   return {{{frame.x1 - 6.0, above}, Align::kRight}, {{frame.x1 - 6.0, below}, Align::kRight},
           {{frame.x0 + 6.0, above}, Align::kLeft},  {{frame.x0 + 6.0, below}, Align::kLeft},
@@ -321,8 +338,7 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
   for (std::size_t i = 0; i < y_ticks.size(); ++i) {
     const double y = f.y.to_px(y_ticks[i]);
     canvas.line({x0, y}, {x1, y}, kGrid, 1.0, false);
-    canvas.text(y_labels[i], {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight,
-                false);
+    canvas.text(y_labels[i], {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight, false);
   }
   canvas.polyline({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}, kFrame, 1.0);
   canvas.text(panel.title, {(x0 + x1) / 2.0, y0 - 14.0}, kPanelTitleText, kInk, Align::kCenter, false);
@@ -375,14 +391,12 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
       if (!std::isfinite(m.value) || m.label.empty()) continue;
       const double at_px = m.horizontal ? f.y.to_px(m.value) : f.x.to_px(m.value);
       const std::vector<Spot> spots = spots_along_mark(m.horizontal, at_px, {x0, y0, x1, y1});
-      if (const auto spot = p.place(m.label, kPointText, spots, true))
-        out.push_back({m.label, *spot, m.colour});
+      if (const auto spot = p.place(m.label, kPointText, spots, true)) out.push_back({m.label, *spot, m.colour});
     }
     for (const PlotHighlight& hl : panel.highlights) {
       if (!finite(hl.at) || hl.label.empty()) continue;
       const std::vector<Spot> spots = spots_beside(to_px(hl.at), kRingRadius, kPointText);
-      if (const auto spot = p.place(hl.label, kPointText, spots, true))
-        out.push_back({hl.label, *spot, hl.colour});
+      if (const auto spot = p.place(hl.label, kPointText, spots, true)) out.push_back({hl.label, *spot, hl.colour});
     }
     for (const PlotSeries& s : panel.series)
       for (std::size_t i = 0; i < s.points.size() && i < s.labels.size(); ++i) {
@@ -409,9 +423,8 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     for (const auto& e : entries) text_px = std::max(text_px, text_width(e.first, kLabelText));
     const double w = 40.0 + text_px, h = 10.0 + kLegendRow * static_cast<double>(entries.size());
     std::size_t fewest = std::numeric_limits<std::size_t>::max();
-    for (const Point2 corner :
-         {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0},
-          Point2{x1 - 10.0 - w, y1 - 10.0 - h}, Point2{x0 + 10.0, y1 - 10.0 - h}}) {
+    for (const Point2 corner : {Point2{x1 - 10.0 - w, y0 + 10.0}, Point2{x0 + 10.0, y0 + 10.0},
+                                Point2{x1 - 10.0 - w, y1 - 10.0 - h}, Point2{x0 + 10.0, y1 - 10.0 - h}}) {
       const Box box{corner.x, corner.y, corner.x + w, corner.y + h};
       LabelPlacer with_legend = placer;
       with_legend.add_text(box);
@@ -421,14 +434,12 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
         for (const Point2& p : s.points)
           if (finite(p)) under += overlap_area(around(to_px(p), kMarkerRadius + 2.0), box) > 0.0;
       for (const PlotHighlight& hl : panel.highlights)
-        if (finite(hl.at))
-          under += overlap_area(around(to_px(hl.at), kRingRadius + 3.0), box) > 0.0;
+        if (finite(hl.at)) under += overlap_area(around(to_px(hl.at), kRingRadius + 3.0), box) > 0.0;
       if (under < fewest) fewest = under, legend = box, labels = std::move(placed);
     }
   }
 
-  for (const Label& l : labels)
-    canvas.text(l.text, l.spot.at, kPointText, l.colour, l.spot.align, false);
+  for (const Label& l : labels) canvas.text(l.text, l.spot.at, kPointText, l.colour, l.spot.align, false);
   if (entries.empty()) return;
   const Rgb legend_fill{250, 250, 250};
   canvas.rect(legend.x0, legend.y0, legend.x1, legend.y1, legend_fill, &kFrame);
@@ -436,8 +447,7 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     const double y = legend.y0 + 5.0 + kLegendRow * (static_cast<double>(i) + 0.5);
     canvas.line({legend.x0 + 8.0, y}, {legend.x0 + 28.0, y}, entries[i].second, 2.0, false);
     canvas.disc({legend.x0 + 18.0, y}, 3.5, entries[i].second);
-    canvas.text(entries[i].first, {legend.x0 + 34.0, y + kLabelText / 2.0}, kLabelText, kInk,
-                Align::kLeft, false);
+    canvas.text(entries[i].first, {legend.x0 + 34.0, y + kLabelText / 2.0}, kLabelText, kInk, Align::kLeft, false);
   }
 }
 
@@ -465,7 +475,8 @@ double PlotAxis::to_px(double value) const {
 std::vector<double> PlotAxis::ticks() const {
   if (!log) return linear_ticks(min, max);
   std::vector<double> out;
-  const int d0 = static_cast<int>(std::ceil(std::log10(min) - 1e-9)), d1 = static_cast<int>(std::floor(std::log10(max) + 1e-9));
+  const int d0 = static_cast<int>(std::ceil(std::log10(min) - 1e-9)),
+            d1 = static_cast<int>(std::floor(std::log10(max) + 1e-9));
   const bool fill = d1 - d0 + 1 < 3;
   for (int d = d0 - 1; d <= d1; ++d)
     for (double m : {1.0, 2.0, 5.0}) {
@@ -488,7 +499,8 @@ PanelFrame panel_frame(const Plot& plot, std::size_t index) {
       ex.add(p.x, panel.log_x);
       ey.add(p.y, panel.log_y);
     }
-  for (const PlotMarkLine& m : panel.marks) (m.horizontal ? ey : ex).add(m.value, m.horizontal ? panel.log_y : panel.log_x);
+  for (const PlotMarkLine& m : panel.marks)
+    (m.horizontal ? ey : ex).add(m.value, m.horizontal ? panel.log_y : panel.log_x);
   for (const PlotHighlight& h : panel.highlights) {
     ex.add(h.at.x, panel.log_x);
     ey.add(h.at.y, panel.log_y);
@@ -502,7 +514,8 @@ PanelFrame panel_frame(const Plot& plot, std::size_t index) {
 std::string render_svg(const Plot& plot) {
   SvgCanvas canvas;
   draw_plot(canvas, plot);
-  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" width=\"" +
+  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" "
+         "width=\"" +
          std::to_string(plot.width_px) + "\" height=\"" + std::to_string(plot.height_px) + "\" viewBox=\"0 0 " +
          std::to_string(plot.width_px) + " " + std::to_string(plot.height_px) +
          "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n" + canvas.body + "</svg>\n";

@@ -23,7 +23,8 @@ std::string num(double v, int digits = 10) {
 
 pipeline::PoseRun run_pose_engine_with_periods(const io::Job& job, const std::string& periods_path) {
   if (!job.servo)
-    throw InputError(job.file, 0, 0, "--every-period: the job has no 'servo:' (the interpolation periods are the servo's)");
+    throw InputError(job.file, 0, 0,
+                     "--every-period: the job has no 'servo:' (the interpolation periods are the servo's)");
   pipeline::JobProgram input = pipeline::read_job_program(job);
   const kinematics::Machine machine(job.machine_spec);
   std::vector<std::string> lines;  // the NC line of each block
@@ -36,7 +37,8 @@ pipeline::PoseRun run_pose_engine_with_periods(const io::Job& job, const std::st
     std::string header = "t,block,source";
     for (const char* side : {"commanded_", "actual_"})
       for (int a = 0; a < machine.axis_count(); ++a) header += std::string(",") + side + machine.axis(a).letter;
-    header += ",commanded_x,commanded_y,commanded_z,actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um\n";
+    header +=
+        ",commanded_x,commanded_y,commanded_z,actual_x,actual_y,actual_z,actual_i,actual_j,actual_k,contour_error_um\n";
     out << header;
     std::string row;
     const pipeline::PeriodVisitor visit = [&](const kinematics::PeriodSample& p) {
@@ -93,7 +95,8 @@ void write_blocks_csv(const std::string& path, const io::Job& job, const pipelin
   (void)job;
   const bool actual = !run.actual.empty();
   const auto& blocks = run.densified.blocks;
-  std::string text = "block,source,kind,q,time_s,nonlinear_error_mm,nonlinear_x,nonlinear_y,nonlinear_z,singular,unreachable";
+  std::string text =
+      "block,source,kind,q,time_s,nonlinear_error_mm,nonlinear_x,nonlinear_y,nonlinear_z,singular,unreachable";
   if (actual) text += ",contour_max_um,contour_rms_um,contour_max_x,contour_max_y,contour_max_z";
   text += "\n";
   auto quoted = [](const std::string& t) {
@@ -105,13 +108,14 @@ void write_blocks_csv(const std::string& path, const io::Job& job, const pipelin
   for (size_t b = 0; b < blocks.size(); ++b) {
     const auto& block = run.program.blocks[b];
     const auto& r = blocks[b];
-    text += std::to_string(b) + "," + run.program.where(block.source) + "," + kKinds[static_cast<int>(block.kind)] + "," +
-            std::to_string(r.q) + "," + num(b < run.feed.block_time_s.size() ? run.feed.block_time_s[b] : 0.0) + "," +
-            num(r.nonlinear_error_mm);
+    text += std::to_string(b) + "," + run.program.where(block.source) + "," + kKinds[static_cast<int>(block.kind)] +
+            "," + std::to_string(r.q) + "," + num(b < run.feed.block_time_s.size() ? run.feed.block_time_s[b] : 0.0) +
+            "," + num(r.nonlinear_error_mm);
     for (int k = 0; k < 3; ++k) text += "," + num(r.nonlinear_at_mm[k]);
     text += std::string(",") + (r.singular ? "1" : "0") + "," + quoted(r.unreachable);
     if (actual) {
-      const pipeline::PoseRun::BlockContour c = b < run.block_contour.size() ? run.block_contour[b] : pipeline::PoseRun::BlockContour{};
+      const pipeline::PoseRun::BlockContour c =
+          b < run.block_contour.size() ? run.block_contour[b] : pipeline::PoseRun::BlockContour{};
       text += "," + num(c.max_um) + "," + num(c.rms_um);
       for (int k = 0; k < 3; ++k) text += "," + num(c.at_mm[k]);
     }

@@ -9,12 +9,12 @@
 
 namespace vcut::report {
 
+using pipeline::axis_feed_of;
+using pipeline::feed_interpretation_name;
 using pipeline::PoseEvent;
 using pipeline::PoseRun;
 using pipeline::RegionRecord;
 using pipeline::SimulationResult;
-using pipeline::axis_feed_of;
-using pipeline::feed_interpretation_name;
 namespace {
 
 using nlohmann::ordered_json;
@@ -77,12 +77,19 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   for (const auto& e : r.excess) j["excess"].push_back(region(e));
   j["collisions"] = ordered_json::array();
   for (const auto& c : r.collisions)
-    j["collisions"].push_back({{"kind", c.kind}, {"part", c.part}, {"line", c.line}, {"deepest_line", c.deepest_line},
-                               {"tool", c.tool}, {"depth_mm", um(c.depth_mm)}, {"where", vec(c.where_mm)}, {"moves", c.moves}});
+    j["collisions"].push_back({{"kind", c.kind},
+                               {"part", c.part},
+                               {"line", c.line},
+                               {"deepest_line", c.deepest_line},
+                               {"tool", c.tool},
+                               {"depth_mm", um(c.depth_mm)},
+                               {"where", vec(c.where_mm)},
+                               {"moves", c.moves}});
   ordered_json h;
   h["unit"] = "mm";
   h["edges_mm"] = ordered_json::array();
-  for (double e : r.histogram_edges_mm) h["edges_mm"].push_back(std::isinf(e) ? ordered_json(e < 0 ? "-inf" : "inf") : ordered_json(um(e)));
+  for (double e : r.histogram_edges_mm)
+    h["edges_mm"].push_back(std::isinf(e) ? ordered_json(e < 0 ? "-inf" : "inf") : ordered_json(um(e)));
   h["vertex_counts"] = r.histogram_counts;
   h["area_mm2"] = ordered_json::array();
   for (double a : r.histogram_area_mm2) h["area_mm2"].push_back(um(a));
@@ -90,7 +97,9 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   if (r.endpoints.done) {
     // Which points the summary's gouge and excess figures were measured at.
     ordered_json e;
-    e["measured_at"] = "dexel endpoints: every point where a ray of the tri-dexel stock enters or leaves material, exact distance to the design's triangles";
+    e["measured_at"] =
+        "dexel endpoints: every point where a ray of the tri-dexel stock enters or leaves material, exact distance to "
+        "the design's triangles";
     e["points"] = r.endpoints.points;
     e["max_gouge_mm"] = um(r.endpoints.max_gouge_mm);
     e["deepest"] = vec(r.endpoints.deepest_mm);
@@ -102,9 +111,11 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   }
   if (r.engines.done) {
     ordered_json e;
-    e["compared"] = "tri-dexel and OpenVDB machined surfaces, every vertex of each against the other's triangles; "
-                    "vertices within two cells of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) apart, as edge_*: "
-                    "each mesher cuts such an edge's corner anywhere within a cell or two";
+    e["compared"] =
+        "tri-dexel and OpenVDB machined surfaces, every vertex of each against the other's triangles; "
+        "vertices within two cells of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) "
+        "apart, as edge_*: "
+        "each mesher cuts such an edge's corner anywhere within a cell or two";
     e["max_mm"] = um(r.engines.max_mm);
     e["rms_mm"] = um(r.engines.rms_mm);
     e["p99_mm"] = um(r.engines.p99_mm);
@@ -127,8 +138,10 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     e["rotating_moves"] = r.rotating_moves;
     e["max_nonlinear_error_mm"] = um(p.max_nonlinear_error_mm);
     if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
-    e["cut_with"] = p.actual.empty() ? "nominal poses" : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
-                                                         : job.servo ? "actual poses (servo lag)" : "actual poses (machine errors)";
+    e["cut_with"] = p.actual.empty()                  ? "nominal poses"
+                    : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
+                    : job.servo                       ? "actual poses (servo lag)"
+                                                      : "actual poses (machine errors)";
     e["feed_interpretation"] = feed_interpretation_name(axis_feed_of(job, p.reader));
     if (job.servo) {
       // The servo runs every interpolation period; the cut follows its path thinned to a bound.
@@ -143,15 +156,17 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
       e["rms_contour_error_um"] = std::round(p.rms_contour_error_um * 1e3) / 1e3;
     }
     e["events"] = ordered_json::array();
-    for (const PoseEvent& ev : p.events) e["events"].push_back({{"kind", pipeline::to_string(ev.kind)}, {"line", ev.line}, {"detail", ev.detail}});
+    for (const PoseEvent& ev : p.events)
+      e["events"].push_back({{"kind", pipeline::to_string(ev.kind)}, {"line", ev.line}, {"detail", ev.detail}});
     if (r.nominal.done) {
-      e["nominal_vs_actual"] = {{"compared", "the part cut with the actual poses against the part cut with the nominal ones"},
-                                {"max_mm", um(r.nominal.max_mm)},
-                                {"rms_mm", um(r.nominal.rms_mm)},
-                                {"p99_mm", um(r.nominal.p99_mm)},
-                                {"max_at", vec(r.nominal.max_where_mm)},
-                                {"max_line", r.nominal.max_line},
-                                {"vertices", r.nominal.vertices}};
+      e["nominal_vs_actual"] = {
+          {"compared", "the part cut with the actual poses against the part cut with the nominal ones"},
+          {"max_mm", um(r.nominal.max_mm)},
+          {"rms_mm", um(r.nominal.rms_mm)},
+          {"p99_mm", um(r.nominal.p99_mm)},
+          {"max_at", vec(r.nominal.max_where_mm)},
+          {"max_line", r.nominal.max_line},
+          {"vertices", r.nominal.vertices}};
     }
     j["pose_engine"] = e;
   }

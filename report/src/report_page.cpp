@@ -18,10 +18,10 @@
 
 namespace vcut::report {
 
+using pipeline::CollisionRecord;
 using pipeline::PoseEvent;
 using pipeline::PoseRun;
 using pipeline::RegionRecord;
-using pipeline::CollisionRecord;
 using pipeline::SimulationResult;
 namespace {
 
@@ -53,7 +53,8 @@ ordered_json encode_mesh(const removal::TriangleMesh& mesh) {
 // first block's line to the last's in one file, else the first's alone), at most 20 each.
 class SourceTexts {
  public:
-  SourceTexts(const kinematics::Program& program, const std::vector<std::string>& paths) : program_(program), paths_(paths) {}
+  SourceTexts(const kinematics::Program& program, const std::vector<std::string>& paths)
+      : program_(program), paths_(paths) {}
 
   // Index in the sources table of a program line (registered for reading).
   int index(int file, int line) {
@@ -128,7 +129,8 @@ std::string base64(const void* data, std::size_t bytes) {
   char* o = out.data();
   std::size_t i = 0;
   for (; i + 3 <= bytes; i += 3, o += 4) {
-    const std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
+    const std::uint32_t v =
+        static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
     o[0] = kAlphabet[(v >> 18) & 63];
     o[1] = kAlphabet[(v >> 12) & 63];
     o[2] = kAlphabet[(v >> 6) & 63];
@@ -152,8 +154,8 @@ std::string report_template_path() {
   return "";
 }
 
-void write_report_page(const std::string& path, const std::string& template_path, const io::Job& job, const pipeline::SimulationResult& r,
-                       const ReportPageInput& input) {
+void write_report_page(const std::string& path, const std::string& template_path, const io::Job& job,
+                       const pipeline::SimulationResult& r, const ReportPageInput& input) {
   std::string page;
   {
     std::ifstream in(template_path, std::ios::binary);
@@ -164,7 +166,8 @@ void write_report_page(const std::string& path, const std::string& template_path
   }
   const std::size_t slot = page.find(kReportDataMarker);
   if (slot == std::string::npos)
-    throw InputError(template_path, 0, 0, std::string("not a report page template (no ") + kReportDataMarker + " slot)");
+    throw InputError(template_path, 0, 0,
+                     std::string("not a report page template (no ") + kReportDataMarker + " slot)");
 
   const PoseRun& run = r.pose_run;
   const kinematics::Program& program = run.program;
@@ -180,20 +183,23 @@ void write_report_page(const std::string& path, const std::string& template_path
   for (const auto& f : program.files) files += (files.empty() ? "" : ", ") + f;
   row("program", files + " (" + io::reader_name(run.reader) + ")");
   row("machine", job.machine);
-  row("engine", std::string(io::engine_name(job.engine)) + ", " + fixed(r.resolution_mm, 3, "mm") + ", " + std::to_string(r.threads) + " threads");
+  row("engine", std::string(io::engine_name(job.engine)) + ", " + fixed(r.resolution_mm, 3, "mm") + ", " +
+                    std::to_string(r.threads) + " threads");
   if (job.step_mm > 0.0) row("densify step", fixed(job.step_mm, 3, "mm"));
   if (job.angle_step_deg > 0.0) row("densify angle", fixed(job.angle_step_deg, 3, "deg"));
   if (job.densify_tolerance_mm > 0.0) row("densify tolerance", fixed(job.densify_tolerance_mm, 4, "mm"));
   row("chord tolerance", fixed(pipeline::chord_tolerance_mm(job, r.resolution_mm), 4, "mm"));
   row("servo", job.servo ? "on" : "off");
   row("machine errors", job.apply_errors ? "on" : "off");
-  row("tolerances", "gouge " + fixed(job.gouge_tolerance_mm, 3, "mm") + ", excess " + fixed(job.excess_tolerance_mm, 3, "mm") +
-                        ", collision " + fixed(job.collision_tolerance_mm, 3, "mm"));
+  row("tolerances", "gouge " + fixed(job.gouge_tolerance_mm, 3, "mm") + ", excess " +
+                        fixed(job.excess_tolerance_mm, 3, "mm") + ", collision " +
+                        fixed(job.collision_tolerance_mm, 3, "mm"));
   for (const auto& [number, tool] : run.tools)
-    row("T" + std::to_string(number), removal::to_string(tool.type) + " D" + fixed(tool.diameter_mm, 3, "") + " r" +
-                                          fixed(tool.corner_radius_mm, 3, "") + ", flutes " + fixed(tool.flute_length_mm, 1, "mm") +
-                                          ", out of holder " + fixed(tool.length_mm, 1, "mm") +
-                                          (tool.holder_diameter_mm > 0.0 ? ", holder D" + fixed(tool.holder_diameter_mm, 1, "") : ""));
+    row("T" + std::to_string(number),
+        removal::to_string(tool.type) + " D" + fixed(tool.diameter_mm, 3, "") + " r" +
+            fixed(tool.corner_radius_mm, 3, "") + ", flutes " + fixed(tool.flute_length_mm, 1, "mm") +
+            ", out of holder " + fixed(tool.length_mm, 1, "mm") +
+            (tool.holder_diameter_mm > 0.0 ? ", holder D" + fixed(tool.holder_diameter_mm, 1, "") : ""));
   j["job"] = {{"name", job.name},
               {"file", job.file},
               {"engine", io::engine_name(job.engine)},
@@ -226,7 +232,8 @@ void write_report_page(const std::string& path, const std::string& template_path
       vertex_source.push_back(-1);
       continue;
     }
-    const kinematics::SourceRef& src = program.blocks[static_cast<std::size_t>(input.moves->moves[static_cast<std::size_t>(move)].block)].source;
+    const kinematics::SourceRef& src =
+        program.blocks[static_cast<std::size_t>(input.moves->moves[static_cast<std::size_t>(move)].block)].source;
     vertex_source.push_back(sources.index(src.file, src.line));
   }
   mesh["source"] = typed_base64(vertex_source);
@@ -261,13 +268,23 @@ void write_report_page(const std::string& path, const std::string& template_path
   add_regions("excess", r.excess);
   for (const CollisionRecord& c : r.collisions) {
     std::ostringstream detail;
-    detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at " << c.deepest_line;
-    events.push_back({{{"kind", c.kind}, {"line", c.line}, {"detail", detail.str()}, {"depth_mm", c.depth_mm}, {"where", vec(c.where_mm)}},
+    detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at "
+           << c.deepest_line;
+    events.push_back({{{"kind", c.kind},
+                       {"line", c.line},
+                       {"detail", detail.str()},
+                       {"depth_mm", c.depth_mm},
+                       {"where", vec(c.where_mm)}},
                       sources.add(run.program.span_of_blocks(c.first_block, c.last_block))});
   }
   for (const PoseEvent& e : run.events)
-    events.push_back({{{"kind", pipeline::to_string(e.kind)}, {"line", e.line}, {"detail", e.detail}, {"depth_mm", nullptr}, {"where", nullptr}},
-                      e.first_block < 0 ? std::vector<int>{} : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
+    events.push_back({{{"kind", pipeline::to_string(e.kind)},
+                       {"line", e.line},
+                       {"detail", e.detail},
+                       {"depth_mm", nullptr},
+                       {"where", nullptr}},
+                      e.first_block < 0 ? std::vector<int>{}
+                                        : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
 
   // Feed and contour error over time, at most 4,000 points (each the largest contour error
   // of its stretch, so peaks survive).

@@ -80,9 +80,9 @@ Plot study_plot(const StudyResult& s) {
   time.log_x = t_min > 0.0 && t_max > 10.0 * t_min;
   plot.panels = {density, time};
   std::ostringstream foot;
-  foot << "reference: " << s.reference.label << " (" << s.reference.poses << " poses, " << std::fixed << std::setprecision(2)
-       << s.reference.wall_time_s << " s); " << io::engine_name(s.engine) << " engine at " << number(s.resolution_mm) << " mm, " << s.threads
-       << " threads";
+  foot << "reference: " << s.reference.label << " (" << s.reference.poses << " poses, " << std::fixed
+       << std::setprecision(2) << s.reference.wall_time_s << " s); " << io::engine_name(s.engine) << " engine at "
+       << number(s.resolution_mm) << " mm, " << s.threads << " threads";
   plot.footnote = foot.str();
   return plot;
 }
@@ -90,7 +90,9 @@ Plot study_plot(const StudyResult& s) {
 nlohmann::ordered_json row_json(const StudyRow& r) {
   nlohmann::ordered_json j;
   j["setting"] = r.label;
-  const auto set_or_null = [](double x) { return x > 0.0 ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr); };
+  const auto set_or_null = [](double x) {
+    return x > 0.0 ? nlohmann::ordered_json(x) : nlohmann::ordered_json(nullptr);
+  };
   j["step_mm"] = set_or_null(r.setting.step_mm);
   j["angle_deg"] = set_or_null(r.setting.angle_deg);
   j["tolerance_mm"] = set_or_null(r.setting.tolerance_mm);
@@ -117,15 +119,19 @@ void write_study(const std::string& folder, pipeline::StudyResult& s, const io::
   std::vector<std::string>& outputs = s.outputs;
   // study.csv: one row per setting, then the reference.
   std::ostringstream csv;
-  csv << "setting,step_mm,angle_deg,tolerance_mm,poses,moves,max_mm,rms_mm,p99_mm,edge_max_mm,wall_time_s,meets_accuracy,reference,"
+  csv << "setting,step_mm,angle_deg,tolerance_mm,poses,moves,max_mm,rms_mm,p99_mm,edge_max_mm,wall_time_s,meets_"
+         "accuracy,reference,"
          "error\n";
   auto csv_row = [&](const StudyRow& r, bool reference) {
     auto opt = [](double x) { return x > 0.0 ? number(x) : std::string(); };
     csv << io::csv_field(r.label) << ',' << opt(r.setting.step_mm) << ',' << opt(r.setting.angle_deg) << ','
         << opt(r.setting.tolerance_mm) << ',';
     if (r.error.empty()) {
-      csv << r.poses << ',' << r.moves << ',' << number(r.max_mm) << ',' << number(r.rms_mm) << ',' << number(r.p99_mm) << ','
-          << number(r.edge_max_mm) << ',' << number(r.wall_time_s) << ',' << (reference ? "" : r.meets ? "yes" : "no");
+      csv << r.poses << ',' << r.moves << ',' << number(r.max_mm) << ',' << number(r.rms_mm) << ',' << number(r.p99_mm)
+          << ',' << number(r.edge_max_mm) << ',' << number(r.wall_time_s) << ','
+          << (reference ? ""
+              : r.meets ? "yes"
+                        : "no");
     } else {
       csv << ",,,,,,,";
     }
@@ -146,10 +152,13 @@ void write_study(const std::string& folder, pipeline::StudyResult& s, const io::
   j["varied"] = s.varied;
   j["accuracy_mm"] = s.accuracy_mm;
   // What the settings leave as the job has it (0 = not set).
-  j["job_densify"] = {{"step_mm", job.step_mm}, {"angle_deg", job.angle_step_deg}, {"tolerance_mm", job.densify_tolerance_mm}};
+  j["job_densify"] = {
+      {"step_mm", job.step_mm}, {"angle_deg", job.angle_step_deg}, {"tolerance_mm", job.densify_tolerance_mm}};
   j["metric"] =
-      "distance of each setting's machined surface from the reference's: every vertex of each against the other's triangles, "
-      "vertices within 2 voxels of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) apart: meshing "
+      "distance of each setting's machined surface from the reference's: every vertex of each against the other's "
+      "triangles, "
+      "vertices within 2 voxels of a sharp edge (a face turned more than 20 deg from the vertex's mean normal) apart: "
+      "meshing "
       "cuts such an edge's corner anywhere within a cell or two, so their largest distance is edge_max_mm, not max_mm; "
       "what is left resolves about resolution / 100";
   j["reference"] = row_json(s.reference);

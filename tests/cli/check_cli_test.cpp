@@ -23,9 +23,11 @@ class Check : public ::testing::Test {
     dir = fresh_test_dir("vcut_check_");
     // 10 mm flat end mill: 5 mm of flutes, an 8 mm shank up to 20 mm, a 30 mm holder above.
     write(dir / "tools.yaml",
-          "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: 30, holder_length: 40}\n");
-    job = "job: check\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: p.ngc}\n"
-          "stock: {box: {min: [0, 0, -30], max: [60, 40, 0]}}\nreport: {out: out}\n";
+          "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: "
+          "30, holder_length: 40}\n");
+    job =
+        "job: check\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: p.ngc}\n"
+        "stock: {box: {min: [0, 0, -30], max: [60, 40, 0]}}\nreport: {out: out}\n";
   }
   void TearDown() override { fs::remove_all(dir); }
   CommandResult check(const std::string& program) {
@@ -90,7 +92,8 @@ TEST_F(Check, AxisLimitIsAnError) {
   EXPECT_EQ(r.exit_code, 1) << r.output;
   const auto j = json();
   bool found = false;
-  for (const auto& e : j["events"]) found = found || (e["kind"] == "unreachable" && e["line"] == "p.ngc:5" && e["severity"] == "error");
+  for (const auto& e : j["events"])
+    found = found || (e["kind"] == "unreachable" && e["line"] == "p.ngc:5" && e["severity"] == "error");
   EXPECT_TRUE(found) << j.dump(1);
 }
 
@@ -102,7 +105,8 @@ TEST_F(Check, EventsInProgramOrderInADashedFileName) {
   job = std::string("job: check\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: part-01.ngc}\n") +
         "stock: {box: {min: [0, 0, -30], max: [60, 40, 0]}}\nreport: {out: out}\n";
   write(dir / "job.yaml", job);
-  write(dir / "part-01.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5 A0 C0\nG1 Z-8 F500\nG1 X30\nG0 Z100\nG1 A60 F500\nG0 A0\nM30\n");
+  write(dir / "part-01.ngc",
+        "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5 A0 C0\nG1 Z-8 F500\nG1 X30\nG0 Z100\nG1 A60 F500\nG0 A0\nM30\n");
   const CommandResult r = run_vcut("check " + (dir / "job.yaml").string() + " --json " + (dir / "check.json").string());
   EXPECT_EQ(r.exit_code, 1) << r.output;
   const auto j = json();

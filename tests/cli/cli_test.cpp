@@ -38,16 +38,20 @@ void write_ascii_stl(const fs::path& path, const vcut::removal::TriangleMesh& m)
 class Simulate : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("vcut_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir = fs::temp_directory_path() /
+          ("vcut_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
-    write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, corner_radius: 0, flute_length: 25, shank_diameter: 10, length: 40}\n");
+    write(dir / "tools.yaml",
+          "tools:\n  1: {type: flat, diameter: 10, corner_radius: 0, flute_length: 25, shank_diameter: 10, length: "
+          "40}\n");
     // Line 7 cuts the slot; the tip runs at z = -2 across the whole box.
     program = "%\nG17 G21 G90 G94 G54\nT1 M6\nS10000 M3\nG0 X-10 Y20 Z5\nG1 Z-2 F500\nG1 X70\nG0 Z5\nM30\n%\n";
     write(dir / "slot.ngc", program);
-    job = "job: slot\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\noffsets: {G54: [0, 0, 0]}\n"
-          "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\nengine: {kind: vdb, resolution: 0.1, threads: 2}\n"
-          "report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.02}\n";
+    job =
+        "job: slot\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\noffsets: {G54: [0, 0, 0]}\n"
+        "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\nengine: {kind: vdb, resolution: 0.1, threads: 2}\n"
+        "report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.02}\n";
   }
   void TearDown() override { fs::remove_all(dir); }
   CommandResult simulate(const std::string& extra = "") {
@@ -125,7 +129,8 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   // The warning reaches the page's data (the page lists data.warnings) and report.json.
   ASSERT_TRUE(j["warnings"].is_array());
   bool m31 = false;
-  for (const auto& w : j["warnings"]) m31 = m31 || w.get<std::string>().find("slot.ngc:4:1: M code M31") != std::string::npos;
+  for (const auto& w : j["warnings"])
+    m31 = m31 || w.get<std::string>().find("slot.ngc:4:1: M code M31") != std::string::npos;
   EXPECT_TRUE(m31) << j["warnings"].dump();
   EXPECT_NE(report()["warnings"].dump().find("M code M31"), std::string::npos);
   ASSERT_FALSE(j["regions"].empty());
@@ -141,7 +146,9 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
     unsigned char header[24] = {};
     png.read(reinterpret_cast<char*>(header), sizeof header);
     EXPECT_EQ(std::string(reinterpret_cast<char*>(header) + 1, 3), "PNG") << view;
-    const auto be32 = [&](int at) { return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3]; };
+    const auto be32 = [&](int at) {
+      return (header[at] << 24) | (header[at + 1] << 16) | (header[at + 2] << 8) | header[at + 3];
+    };
     EXPECT_EQ(be32(16), 1600) << view;  // IHDR width
     EXPECT_EQ(be32(20), 1200) << view;  // IHDR height
   }
@@ -204,9 +211,11 @@ TEST_F(Simulate, RapidThroughStockIsACollisionWithItsLine) {
 // along the z rays: 3, 3, 2 and 1 mm exactly (dexel engine).
 TEST_F(Simulate, ShankHolderAndStoppedSpindleCollisionsWithTheirLines) {
   write(dir / "tools.yaml",
-        "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: 30, holder_length: 40}\n");
-  program = "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5\nG1 Z-8 F500\nG1 X30\nG0 Z5\nG0 X45\nG1 Z-22\nG0 Z50\nM5\n"
-            "G0 X-10 Y10\nG1 Z-1\nG1 X20\nG0 Z50\nM30\n";
+        "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, shank_diameter: 8, length: 20, holder_diameter: 30, "
+        "holder_length: 40}\n");
+  program =
+      "G21 G90\nT1 M6\nS1000 M3\nG0 X-10 Y20 Z5\nG1 Z-8 F500\nG1 X30\nG0 Z5\nG0 X45\nG1 Z-22\nG0 Z50\nM5\n"
+      "G0 X-10 Y10\nG1 Z-1\nG1 X20\nG0 Z50\nM30\n";
   job = std::regex_replace(job, std::regex("engine: \\{kind: vdb, "), "engine: {");
   job = std::regex_replace(job, std::regex("min: \\[0, 0, -20\\]"), "min: [0, 0, -30]");
   const CommandResult r = simulate();
@@ -229,7 +238,9 @@ TEST_F(Simulate, ShankHolderAndStoppedSpindleCollisionsWithTheirLines) {
 TEST_F(Simulate, HolderLengthNeedsAHolderDiameter) {
   write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, holder_length: 40}\n");
   expect_error(simulate(), "tools.yaml:2:");
-  write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, length: 20, holder_diameter: 30, gauge_length: 50, holder_length: 40}\n");
+  write(dir / "tools.yaml",
+        "tools:\n  1: {type: flat, diameter: 10, flute_length: 5, length: 20, holder_diameter: 30, gauge_length: 50, "
+        "holder_length: 40}\n");
   expect_error(simulate(), "gauge_length");
 }
 

@@ -16,17 +16,13 @@ struct Csv {
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
 
-  bool has(const std::string& name) const {
-    return std::find(header.begin(), header.end(), name) != header.end();
-  }
+  bool has(const std::string& name) const { return std::find(header.begin(), header.end(), name) != header.end(); }
   int column(const std::string& name) const {
     const auto it = std::find(header.begin(), header.end(), name);
     EXPECT_NE(it, header.end()) << "no column " << name;
     return it == header.end() ? 0 : static_cast<int>(it - header.begin());
   }
-  const std::string& text(size_t row, const std::string& name) const {
-    return rows.at(row).at(column(name));
-  }
+  const std::string& text(size_t row, const std::string& name) const { return rows.at(row).at(column(name)); }
   double num(size_t row, const std::string& name) const { return std::stod(text(row, name)); }
 };
 

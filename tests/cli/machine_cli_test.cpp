@@ -62,11 +62,9 @@ std::vector<double> ac_axis(double a_deg, double c_deg) {
 // workpiece point sits in the frame at q = c0 + Rx(a) (Rz(c) p - c0), c0 = (0, -20, -100) the
 // A centre (the C centre is the origin); the tool side is X Y Z translations of the spindle
 // nose (0, 0, 500), tip = nose - L z. So X = q.x, Y = q.y, Z = q.z - 500 + L.
-std::vector<double> ac_linear(const std::vector<double>& p, double a_deg, double c_deg,
-                              double length_mm) {
+std::vector<double> ac_linear(const std::vector<double>& p, double a_deg, double c_deg, double length_mm) {
   const double a = a_deg * kRadPerDeg, c = c_deg * kRadPerDeg;
-  const double x = std::cos(c) * p[0] - std::sin(c) * p[1],
-               y = std::sin(c) * p[0] + std::cos(c) * p[1], z = p[2];
+  const double x = std::cos(c) * p[0] - std::sin(c) * p[1], y = std::sin(c) * p[0] + std::cos(c) * p[1], z = p[2];
   const double ry = y + 20.0, rz = z + 100.0;  // minus c0
   return {x, -20.0 + std::cos(a) * ry - std::sin(a) * rz,
           -100.0 + std::sin(a) * ry + std::cos(a) * rz - 500.0 + length_mm};
@@ -135,10 +133,10 @@ Csv read_csv(const fs::path& path) {
 class MachineCli : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() /
-          ("vcut_machine_cli_" +
-           std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) +
-           "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    dir =
+        fs::temp_directory_path() /
+        ("vcut_machine_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->test_suite_name()) +
+         "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(dir);
     fs::create_directories(dir);
   }
@@ -182,11 +180,9 @@ class FkCli : public MachineCli {};
 class IkCli : public MachineCli {};
 class MachineCliErrors : public MachineCli {};
 
-void expect_vec(const json& v, const std::vector<double>& expected, double tolerance,
-                const std::string& what) {
+void expect_vec(const json& v, const std::vector<double>& expected, double tolerance, const std::string& what) {
   ASSERT_TRUE(v.is_array() && v.size() == 3) << what << ": " << v;
-  for (size_t k = 0; k < 3; ++k)
-    EXPECT_NEAR(v[k].get<double>(), expected[k], tolerance) << what << "[" << k << "]";
+  for (size_t k = 0; k < 3; ++k) EXPECT_NEAR(v[k].get<double>(), expected[k], tolerance) << what << "[" << k << "]";
 }
 
 std::string axes_arg(const json& q) {
@@ -211,9 +207,8 @@ TEST_F(MachineCli, TableTableAcInWords) {
     if (line.rfind("  C: ", 0) == 0) c_line = line;
     if (line.rfind("  X: ", 0) == 0) x_line = line;
   }
-  EXPECT_NE(a_line.find("limits -120 .. 30 deg"), std::string::npos)
-      << a_line;                                                      // limits: [-120, 30]
-  EXPECT_NE(c_line.find("continuous"), std::string::npos) << c_line;  // limits: null
+  EXPECT_NE(a_line.find("limits -120 .. 30 deg"), std::string::npos) << a_line;  // limits: [-120, 30]
+  EXPECT_NE(c_line.find("continuous"), std::string::npos) << c_line;             // limits: null
   EXPECT_EQ(c_line.find("limits"), std::string::npos) << c_line;
   EXPECT_NE(x_line.find("limits -300 .. 300 mm"), std::string::npos) << x_line;
   EXPECT_NE(r.output.find("geometric errors: none"), std::string::npos) << r.output;
@@ -260,8 +255,7 @@ TEST_F(FkCli, LocationErrorOfCMovesTheTipByHand) {
     EXPECT_NEAR(j["error"]["axis_tilt_urad"].get<double>(), 0.0, kRoundOffUm);
     // Nominal tip at C = c: Rz(-c) (0, 0, 500) = (0, 0, 500); actual = nominal + error.
     expect_vec(j["tip"], {0.0, 0.0, 500.0}, kRoundOffMm, "tip");
-    expect_vec(j["actual"]["tip"], {tip_um[0] / 1000.0, tip_um[1] / 1000.0, 500.0}, kRoundOffMm,
-               "actual.tip");
+    expect_vec(j["actual"]["tip"], {tip_um[0] / 1000.0, tip_um[1] / 1000.0, 500.0}, kRoundOffMm, "actual.tip");
   }
 }
 
@@ -276,28 +270,24 @@ TEST_F(FkCli, CsvBatchAddsThePoseColumns) {
   //   = (0, -100, 20), + c0 = (0, -120, -80); axis (0, -1, 0).
   // The columns in a shuffled order: they are matched by name.
   write(dir / "in.csv", "A,C,X,Y,Z\n40,0,0,0,0\n0,90,10,20,-100\n-90,0,0,0,-500\n");
-  const CommandResult r = run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() +
-                                   " --out " + (dir / "out.csv").string());
+  const CommandResult r =
+      run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() + " --out " + (dir / "out.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv t = read_csv(dir / "out.csv");
-  const std::vector<std::string> header = {
-      "A", "C", "X", "Y", "Z", "tip_x", "tip_y", "tip_z", "axis_i", "axis_j", "axis_k", "status"};
+  const std::vector<std::string> header = {"A",     "C",     "X",      "Y",      "Z",      "tip_x",
+                                           "tip_y", "tip_z", "axis_i", "axis_j", "axis_k", "status"};
   EXPECT_EQ(t.header, header);
   ASSERT_EQ(t.rows.size(), 3u);
   const double s40 = std::sin(40 * kRadPerDeg), c40 = std::cos(40 * kRadPerDeg);
   const std::vector<std::vector<double>> tips = {
-      {0.0, -20.0 + 20 * c40 + 600 * s40, -100.0 - 20 * s40 + 600 * c40},
-      {20.0, -10.0, 400.0},
-      {0.0, -120.0, -80.0}};
-  const std::vector<std::vector<double>> axes = {
-      {0.0, s40, c40}, {0.0, 0.0, 1.0}, {0.0, -1.0, 0.0}};
+      {0.0, -20.0 + 20 * c40 + 600 * s40, -100.0 - 20 * s40 + 600 * c40}, {20.0, -10.0, 400.0}, {0.0, -120.0, -80.0}};
+  const std::vector<std::vector<double>> axes = {{0.0, s40, c40}, {0.0, 0.0, 1.0}, {0.0, -1.0, 0.0}};
   const std::vector<std::vector<std::string>> inputs = {
       {"40", "0", "0", "0", "0"}, {"0", "90", "10", "20", "-100"}, {"-90", "0", "0", "0", "-500"}};
   for (size_t i = 0; i < 3; ++i) {
     SCOPED_TRACE("row " + std::to_string(i + 1));
     ASSERT_EQ(t.rows[i].size(), header.size());
-    for (size_t k = 0; k < 5; ++k)
-      EXPECT_EQ(t.rows[i][k], inputs[i][k]);  // input columns kept, in order
+    for (size_t k = 0; k < 5; ++k) EXPECT_EQ(t.rows[i][k], inputs[i][k]);  // input columns kept, in order
     const char* tip_cols[] = {"tip_x", "tip_y", "tip_z"};
     const char* axis_cols[] = {"axis_i", "axis_j", "axis_k"};
     for (size_t k = 0; k < 3; ++k) {
@@ -370,8 +360,8 @@ TEST_F(IkCli, PreviousPicksTheNearestWindingOfC) {
 TEST_F(IkCli, AxisBeyondTheCradleIsUnreachable) {
   // An axis 130 deg from +z: cos a = cos 130, a = +-130, both outside A's [-120, 30].
   const double t = 130 * kRadPerDeg;
-  const CommandResult r = run_vcut("ik table-table-ac --tip 0,0,0 --axis " + g17(std::sin(t)) +
-                                   ",0," + g17(std::cos(t)));
+  const CommandResult r =
+      run_vcut("ik table-table-ac --tip 0,0,0 --axis " + g17(std::sin(t)) + ",0," + g17(std::cos(t)));
   EXPECT_EQ(r.exit_code, 0) << r.output;  // a result, not an input error
   const json j = json::parse(r.output);
   EXPECT_EQ(j["status"], "unreachable");
@@ -384,8 +374,7 @@ TEST_F(IkCli, ThreeAxisCannotTilt) {
   EXPECT_EQ(r.exit_code, 0) << r.output;
   const json j = json::parse(r.output);
   EXPECT_EQ(j["status"], "unreachable");
-  EXPECT_NE(j["reason"].get<std::string>().find("orientation out of reach"), std::string::npos)
-      << j["reason"];
+  EXPECT_NE(j["reason"].get<std::string>().find("orientation out of reach"), std::string::npos) << j["reason"];
 }
 
 TEST_F(IkCli, CompensatesALocationError) {
@@ -397,19 +386,16 @@ TEST_F(IkCli, CompensatesALocationError) {
   const std::string machine = error_machine();
   const json j = run_json("ik " + machine + " " + kPoseArgs + " --errors");
   EXPECT_EQ(j["status"], "ok");
-  expect_vec(j["actual"]["error_tip_um"], {5 * kSqrt2, -5 * kSqrt2, 0.0}, kRoundOffUm,
-             "actual.error_tip_um");
+  expect_vec(j["actual"]["error_tip_um"], {5 * kSqrt2, -5 * kSqrt2, 0.0}, kRoundOffUm, "actual.error_tip_um");
   const json& c = j["compensated"];
   EXPECT_TRUE(c["converged"].get<bool>()) << c;
   EXPECT_LE(c["residual_tip_um"].get<double>(), kCompensationResidualUm);
   const json& nominal = j["chosen"];
   EXPECT_NEAR(c["axes"]["X"].get<double>(), nominal["X"].get<double>() + 0.010, kRoundOffMm);
   for (const char* letter : {"Y", "Z", "A", "C"})
-    EXPECT_NEAR(c["axes"][letter].get<double>(), nominal[letter].get<double>(), kRoundOffMm)
-        << letter;
+    EXPECT_NEAR(c["axes"][letter].get<double>(), nominal[letter].get<double>(), kRoundOffMm) << letter;
   // The compensated commands, run forward with the errors, give back the nominal pose.
-  const json f =
-      run_json("fk " + machine + " --errors --tool-length 50 --axes " + axes_arg(c["axes"]));
+  const json f = run_json("fk " + machine + " --errors --tool-length 50 --axes " + axes_arg(c["axes"]));
   expect_vec(f["actual"]["tip"], {10.0, 0.0, 0.0}, kCompensatedTipMm, "fk actual tip");
   expect_vec(f["actual"]["axis"], {0.5, 0.5, 1.0 / kSqrt2}, 1e-9, "fk actual axis");
 }
@@ -431,8 +417,8 @@ std::string path_csv() {
 
 TEST_F(IkCli, CsvPathOneRowPerPose) {
   write(dir / "path.csv", path_csv());
-  const CommandResult r = run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() +
-                                   " --out " + (dir / "axes.csv").string());
+  const CommandResult r =
+      run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() + " --out " + (dir / "axes.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv t = read_csv(dir / "axes.csv");
   const std::vector<std::string> header = {"tip_x", "tip_y", "tip_z", "axis_i", "axis_j", "axis_k",
@@ -465,14 +451,12 @@ TEST_F(IkCli, CsvWithErrorsAddsCompensatedColumns) {
   // As in CompensatesALocationError: on every reachable row comp_X = X + 0.010, the rest equal.
   const std::string machine = error_machine();
   write(dir / "path.csv", path_csv());
-  const CommandResult r =
-      run_vcut("ik " + machine + " --errors --csv " + (dir / "path.csv").string() + " --out " +
-               (dir / "axes.csv").string());
+  const CommandResult r = run_vcut("ik " + machine + " --errors --csv " + (dir / "path.csv").string() + " --out " +
+                                   (dir / "axes.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv t = read_csv(dir / "axes.csv");
-  for (const char* c :
-       {"X", "C", "status", "actual_x", "actual_k", "error_um", "tilt_urad", "comp_X", "comp_Y",
-        "comp_Z", "comp_A", "comp_C", "residual_um", "residual_urad"})
+  for (const char* c : {"X", "C", "status", "actual_x", "actual_k", "error_um", "tilt_urad", "comp_X", "comp_Y",
+                        "comp_Z", "comp_A", "comp_C", "residual_um", "residual_urad"})
     EXPECT_GE(t.column(c), 0) << c;
   ASSERT_EQ(t.rows.size(), 4u);
   for (size_t i : {0u, 1u, 3u}) {
@@ -481,8 +465,7 @@ TEST_F(IkCli, CsvWithErrorsAddsCompensatedColumns) {
     EXPECT_NEAR(t.number(i, "error_um"), 10.0, 1e-6);  // |Rz(-c) d| = 10 um at every C
     EXPECT_NEAR(t.number(i, "comp_X"), t.number(i, "X") + 0.010, kCsvPrecisionMm);
     for (const char* letter : {"Y", "Z", "A", "C"})
-      EXPECT_NEAR(t.number(i, std::string("comp_") + letter), t.number(i, letter), kCsvPrecisionMm)
-          << letter;
+      EXPECT_NEAR(t.number(i, std::string("comp_") + letter), t.number(i, letter), kCsvPrecisionMm) << letter;
     EXPECT_LE(t.number(i, "residual_um"), kCompensationResidualUm);
   }
   EXPECT_EQ(t.cell(2, "comp_X"), "");
@@ -498,8 +481,7 @@ TEST_F(MachineCliErrors, MissingMachineFile) {
 
 TEST_F(MachineCliErrors, YamlErrorNamesTheLine) {
   // The stray ']' is on line 4.
-  write(dir / "bad.yaml",
-        "machine: x\ntopology: WFXYZT\naxes:\n  X: {kind: linear, direction: [1, 0, 0]]}\n");
+  write(dir / "bad.yaml", "machine: x\ntopology: WFXYZT\naxes:\n  X: {kind: linear, direction: [1, 0, 0]]}\n");
   expect_error(run_vcut("fk " + (dir / "bad.yaml").string() + " --axes X=1"), "bad.yaml:4:");
 }
 
@@ -530,8 +512,8 @@ TEST_F(MachineCliErrors, CsvWithoutOut) {
 TEST_F(MachineCliErrors, CsvCellNotANumberNamesFileLineColumn) {
   // Line 3, "1,2,zz,4,5": the bad cell starts at column 5.
   write(dir / "in.csv", "X,Y,Z,A,C\n1,2,3,4,5\n1,2,zz,4,5\n");
-  const CommandResult r = run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() +
-                                   " --out " + (dir / "out.csv").string());
+  const CommandResult r =
+      run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() + " --out " + (dir / "out.csv").string());
   expect_error(r, "in.csv:3:5");
   EXPECT_NE(r.output.find("zz"), std::string::npos) << r.output;
   expect_folder({"in.csv"});
@@ -539,15 +521,15 @@ TEST_F(MachineCliErrors, CsvCellNotANumberNamesFileLineColumn) {
 
 TEST_F(MachineCliErrors, CsvMissingAColumn) {
   write(dir / "in.csv", "X,Y,Z,A\n1,2,3,4\n");
-  const CommandResult r = run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() +
-                                   " --out " + (dir / "out.csv").string());
+  const CommandResult r =
+      run_vcut("fk table-table-ac --csv " + (dir / "in.csv").string() + " --out " + (dir / "out.csv").string());
   expect_error(r, "in.csv:1");
   EXPECT_NE(r.output.find("'C'"), std::string::npos) << r.output;
   expect_folder({"in.csv"});
 
   write(dir / "path.csv", "tip_x,tip_y,tip_z,axis_i,axis_j\n0,0,0,0,0\n");
-  const CommandResult ik = run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() +
-                                    " --out " + (dir / "out.csv").string());
+  const CommandResult ik =
+      run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() + " --out " + (dir / "out.csv").string());
   expect_error(ik, "path.csv:1");
   EXPECT_NE(ik.output.find("'axis_k'"), std::string::npos) << ik.output;
   expect_folder({"in.csv", "path.csv"});
@@ -556,9 +538,9 @@ TEST_F(MachineCliErrors, CsvMissingAColumn) {
 TEST_F(MachineCliErrors, IkBatchFailingMidwayLeavesNoOutput) {
   // Row 2 (line 3) is fine as a number but a zero tool axis.
   write(dir / "path.csv", "tip_x,tip_y,tip_z,axis_i,axis_j,axis_k\n0,0,0,0,0,1\n0,0,0,0,0,0\n");
-  expect_error(run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() + " --out " +
-                        (dir / "out.csv").string()),
-               "path.csv:3");
+  expect_error(
+      run_vcut("ik table-table-ac --csv " + (dir / "path.csv").string() + " --out " + (dir / "out.csv").string()),
+      "path.csv:3");
   expect_folder({"path.csv"});
 }
 

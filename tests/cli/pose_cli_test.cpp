@@ -25,8 +25,8 @@ namespace {
 namespace fs = std::filesystem;
 using vcut::cli::test::CommandResult;
 using vcut::cli::test::Csv;
-using vcut::cli::test::read_csv;
 using vcut::cli::test::expect_error;
+using vcut::cli::test::read_csv;
 using vcut::cli::test::run_vcut;
 using vcut::cli::test::write;
 
@@ -63,8 +63,7 @@ class PoseCli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir = fs::temp_directory_path() /
-          ("vcut_pose_cli_" +
-           std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+          ("vcut_pose_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     write(dir / "tools.yaml",
@@ -77,8 +76,8 @@ class PoseCli : public ::testing::Test {
   // `vcut poses` on job text (written to NAME.yaml), CSV to NAME.csv.
   Csv poses(const std::string& name, const std::string& job) {
     write(dir / (name + ".yaml"), job);
-    const CommandResult r = run_vcut("poses --quiet " + (dir / (name + ".yaml")).string() +
-                                     " --out " + (dir / (name + ".csv")).string());
+    const CommandResult r =
+        run_vcut("poses --quiet " + (dir / (name + ".yaml")).string() + " --out " + (dir / (name + ".csv")).string());
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return read_csv(dir / (name + ".csv"));
   }
@@ -168,15 +167,13 @@ TEST_F(PoseCli, ThreeAxisRestToRestBlockTime) {
 TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
   // A 110 mm lead-in along -Y ends tangent to the clockwise circle about the origin, run three
   // times (P3): the lag's transient decays as exp(-Kv t), 4.5e-5 after 0.5 s.
-  write(dir / "circle.ngc",
-        "G21 G90 G94 G17\nT1 M6\nG0 X10 Y110 Z5\nG1 Y0 F3000\nG2 X10 Y0 I-10 J0 P3\nM2\n");
-  const Csv csv =
-      poses("circle",
-            "job: circle\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: circle.ngc, initial_tool: 1}\n"
-            "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\n"
-            "densify: {chord_tolerance: 0.0001, step: 0.5}\n"
-            "servo: {kv: 20, omega_n: ideal, period: 0.0001}\n"
-            "start: {X: 10, Y: 110, Z: 5}\n");  // T1's tip at rest on the lead-in's start
+  write(dir / "circle.ngc", "G21 G90 G94 G17\nT1 M6\nG0 X10 Y110 Z5\nG1 Y0 F3000\nG2 X10 Y0 I-10 J0 P3\nM2\n");
+  const Csv csv = poses("circle",
+                        "job: circle\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: circle.ngc, initial_tool: 1}\n"
+                        "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\n"
+                        "densify: {chord_tolerance: 0.0001, step: 0.5}\n"
+                        "servo: {kv: 20, omega_n: ideal, period: 0.0001}\n"
+                        "start: {X: 10, Y: 110, Z: 5}\n");  // T1's tip at rest on the lead-in's start
   const double F = 3000.0, v = F / 60.0, kv = 20.0, R = 10.0, w = v / R;
   const double shrink_um = 1000.0 * R * (1.0 - 1.0 / std::sqrt(1.0 + (w / kv) * (w / kv)));
   ASSERT_GT(csv.rows.size(), 100u);
@@ -191,17 +188,13 @@ TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
       // Lag along the line: no contour error anywhere on it.
       EXPECT_LT(csv.num(r, "contour_error_um"), 1e-3) << "row " << r;
       EXPECT_NEAR(csv.num(r, "actual_x"), 10.0, 1e-9) << "row " << r;
-      if (t - line_start < 1.0 || std::abs(csv.num(r, "feed") - F) > 1e-6)
-        continue;  // cruise, settled
+      if (t - line_start < 1.0 || std::abs(csv.num(r, "feed") - F) > 1e-6) continue;  // cruise, settled
       ++line_rows;
-      EXPECT_NEAR(csv.num(r, "actual_y") - csv.num(r, "y"), v / kv, 1e-6)
-          << "row " << r;  // behind: moving -Y
+      EXPECT_NEAR(csv.num(r, "actual_y") - csv.num(r, "y"), v / kv, 1e-6) << "row " << r;  // behind: moving -Y
     } else if (source == "circle.ngc:5") {
-      if (t - circle_start < 0.5 || std::abs(csv.num(r, "feed") - F) > 1e-6)
-        continue;  // steady, before slowing
+      if (t - circle_start < 0.5 || std::abs(csv.num(r, "feed") - F) > 1e-6) continue;  // steady, before slowing
       ++circle_rows;
-      EXPECT_NEAR(csv.num(r, "contour_error_um"), shrink_um, kRelativeServo * shrink_um)
-          << "row " << r;
+      EXPECT_NEAR(csv.num(r, "contour_error_um"), shrink_um, kRelativeServo * shrink_um) << "row " << r;
       // Inside the commanded circle by that much.
       const double radius = std::hypot(csv.num(r, "actual_x"), csv.num(r, "actual_y"));
       EXPECT_NEAR(1000.0 * (R - radius), shrink_um, kRelativeServo * shrink_um) << "row " << r;
@@ -219,22 +212,19 @@ TEST_F(PoseCli, CompensateRoundTrip) {
   std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/table-table-ac.yaml");
   std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
   ASSERT_FALSE(machine.empty());
-  ASSERT_EQ(machine.find("\nerrors:"), std::string::npos)
-      << "the bundled file's errors block is live";
-  machine +=
-      "\nerrors: {E_X0C: 20, E_A0C: 80, E_XX: {table: [[-300, -10], [300, 15]]}, E_C0Y: 40}\n";
+  ASSERT_EQ(machine.find("\nerrors:"), std::string::npos) << "the bundled file's errors block is live";
+  machine += "\nerrors: {E_X0C: 20, E_A0C: 80, E_XX: {table: [[-300, -10], [300, 15]]}, E_C0Y: 40}\n";
   write(dir / "machine.yaml", machine);
-  write(dir / "square.ngc",
-        "G21 G90 G94\nT1 M6\nG0 X50 Y20 Z5\nG1 Z-2 F600\nG1 X90\nG1 Y40\nG1 X50 Y20\nG0 Z5\nM2\n");
+  write(dir / "square.ngc", "G21 G90 G94\nT1 M6\nG0 X50 Y20 Z5\nG1 Z-2 F600\nG1 X90\nG1 Y40\nG1 X50 Y20\nG0 Z5\nM2\n");
   const std::string common =
       "machine: machine.yaml\ntools: tools.yaml\nstock: {box: {min: [0, 0, -20], max: [100, 60, "
       "0]}}\nstart: {X: 50, Y: 20, Z: 5}\n";  // T1 (initial_tool) at rest at the first point
   const std::string nominal_job =
       "job: nominal\n" + common + "program: {file: square.ngc, initial_tool: 1}\ndensify: {step: 2}\n";
   const Csv nominal = poses("nominal", nominal_job);
-  const Csv uncompensated = poses(
-      "uncompensated", "job: uncompensated\n" + common +
-                           "program: {file: square.ngc, initial_tool: 1}\ndensify: {step: 2}\nerrors: machine\n");
+  const Csv uncompensated =
+      poses("uncompensated", "job: uncompensated\n" + common +
+                                 "program: {file: square.ngc, initial_tool: 1}\ndensify: {step: 2}\nerrors: machine\n");
 
   // Without compensation the errors show (so the comparison below can fail): E_XX alone moves
   // the tip 2.5 + X/24 um along x, 4.6 to 6.3 um at X = 50..90, and E_A0C tilts the table
@@ -243,26 +233,22 @@ TEST_F(PoseCli, CompensateRoundTrip) {
   double max_error_mm = 0.0;
   for (size_t r = 0; r < uncompensated.rows.size(); ++r)
     for (const char* c : {"x", "y", "z"})
-      max_error_mm = std::max(
-          max_error_mm,
-          std::abs(uncompensated.num(r, std::string("actual_") + c) - uncompensated.num(r, c)));
+      max_error_mm =
+          std::max(max_error_mm, std::abs(uncompensated.num(r, std::string("actual_") + c) - uncompensated.num(r, c)));
   EXPECT_GT(max_error_mm, 0.005);
 
-  const CommandResult c = run_vcut("compensate " + (dir / "nominal.yaml").string() + " --out " +
-                                   (dir / "comp.ngc").string());
+  const CommandResult c =
+      run_vcut("compensate " + (dir / "nominal.yaml").string() + " --out " + (dir / "comp.ngc").string());
   ASSERT_EQ(c.exit_code, 0) << c.output;  // every pose converged
   EXPECT_NE(c.output.find("residual after compensation"), std::string::npos) << c.output;
   std::ifstream comp_in(dir / "comp.ngc");
-  const std::string comp((std::istreambuf_iterator<char>(comp_in)),
-                         std::istreambuf_iterator<char>());
-  EXPECT_NE(comp.find("(square.ngc:5)"), std::string::npos)
-      << comp;  // comments name the source line
-  EXPECT_FALSE(std::regex_search(comp, std::regex("[0-9][eE][-+]?[0-9]")))
-      << "rs274 numbers have no exponent:\n"
-      << comp;
+  const std::string comp((std::istreambuf_iterator<char>(comp_in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(comp.find("(square.ngc:5)"), std::string::npos) << comp;  // comments name the source line
+  EXPECT_FALSE(std::regex_search(comp, std::regex("[0-9][eE][-+]?[0-9]"))) << "rs274 numbers have no exponent:\n"
+                                                                           << comp;
 
-  const Csv actual = poses("compensated", "job: compensated\n" + common +
-                                              "program: {file: comp.ngc}\nerrors: machine\n");
+  const Csv actual =
+      poses("compensated", "job: compensated\n" + common + "program: {file: comp.ngc}\nerrors: machine\n");
   // Row alignment: comp.ngc has one line per row of the nominal run, its start row included
   // (the "(start)" line), and each line is one block that densifies into one sample (axis
   // blocks, no step or angle limit). The read-back run adds its own start row before them:
@@ -275,13 +261,11 @@ TEST_F(PoseCli, CompensateRoundTrip) {
     for (const char* k : {"X", "Y", "Z"})
       EXPECT_NEAR(actual.num(r + 1, k), nominal.num(r, k), 0.1) << "nominal row " << r << ", " << k;
     for (const char* k : {"A", "C"})
-      EXPECT_NEAR(actual.num(r + 1, k), nominal.num(r, k), 0.01)
-          << "nominal row " << r << ", " << k;
+      EXPECT_NEAR(actual.num(r + 1, k), nominal.num(r, k), 0.01) << "nominal row " << r << ", " << k;
   }
   int compared = 0;
   for (size_t r = 0; r < nominal.rows.size(); ++r) {
-    const bool feed_row = nominal.text(r, "source") != "" &&
-                          nominal.text(r, "source") != "square.ngc:3" &&
+    const bool feed_row = nominal.text(r, "source") != "" && nominal.text(r, "source") != "square.ngc:3" &&
                           nominal.text(r, "source") != "square.ngc:8";  // G1 lines 4-7
     if (!feed_row) continue;
     ++compared;
@@ -325,7 +309,8 @@ TEST_F(PoseCli, CompensateAptRoundTrip) {
       worst = std::max(worst, std::abs(actual.num(r, std::string("actual_") + k) - nominal.num(r, k)));
   EXPECT_LT(worst, kPrintPrecision);
   // Without compensation the same poses miss by tens of um (the test can fail).
-  const Csv raw = poses("apt_raw", "job: r\n" + common + "program: {file: tilt.apt}\ndensify: {step: 5}\nerrors: machine\n");
+  const Csv raw =
+      poses("apt_raw", "job: r\n" + common + "program: {file: tilt.apt}\ndensify: {step: 5}\nerrors: machine\n");
   double raw_worst = 0.0;
   for (size_t r = 0; r < raw.rows.size(); ++r)
     for (const char* k : {"x", "y", "z"})
@@ -338,9 +323,7 @@ TEST_F(PoseCli, CompensateNeedsErrors) {
   write(dir / "job.yaml",
         "job: none\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: square.ngc}\n"
         "stock: {box: {min: [0, 0, -20], max: [100, 60, 0]}}\n");
-  expect_error(
-      run_vcut("compensate " + (dir / "job.yaml").string() + " --out " + (dir / "c.ngc").string()),
-      "errors");
+  expect_error(run_vcut("compensate " + (dir / "job.yaml").string() + " --out " + (dir / "c.ngc").string()), "errors");
   EXPECT_FALSE(fs::exists(dir / "c.ngc"));
 }
 
@@ -362,15 +345,14 @@ TEST_F(PoseCli, FiveAxisFlankPlane) {
   write(dir / "flank.apt",
         "$$ flank cut, axis tilted 20 deg about y\nUNITS/MM\nCUTTER/10\nLOADTL/1\nMULTAX/ON\n"
         "FROM/15,-35,30," +
-            a + "\nFEDRAT/600,MMPM\nGOTO/15,-35,-10," + a + "\nGOTO/15,35,-10," + a +
-            "\nGOTO/15,35,30," + a + "\nFINI\n");
+            a + "\nFEDRAT/600,MMPM\nGOTO/15,-35,-10," + a + "\nGOTO/15,35,-10," + a + "\nGOTO/15,35,30," + a +
+            "\nFINI\n");
   const double v = 0.2;
-  const nlohmann::json j =
-      simulate("flank",
-               "job: flank\nmachine: table-table-ac\ntools: tools.yaml\n"
-               "program: {file: flank.apt, dialect: apt}\n"
-               "stock: {box: {min: [0, -20, -20], max: [18, 20, 0]}}\n"
-               "engine: {kind: dexel, resolution: 0.2, threads: 2}\nreport: {out: out_flank}\n");
+  const nlohmann::json j = simulate("flank",
+                                    "job: flank\nmachine: table-table-ac\ntools: tools.yaml\n"
+                                    "program: {file: flank.apt, dialect: apt}\n"
+                                    "stock: {box: {min: [0, -20, -20], max: [18, 20, 0]}}\n"
+                                    "engine: {kind: dexel, resolution: 0.2, threads: 2}\nreport: {out: out_flank}\n");
   ASSERT_TRUE(j.contains("pose_engine")) << j.dump();
   EXPECT_EQ(j["pose_engine"]["poses"], 4);  // FROM/ and three GOTO/s, one sample each
   EXPECT_EQ(j["pose_engine"]["rotating_moves"], 0);
@@ -436,11 +418,10 @@ TEST_F(PoseCli, ThreePlusTwoTiltedPlaneHoles) {
 TEST_F(PoseCli, ProbeTouchesTheStock) {
   write(dir / "probe.ngc",
         "G21 G90 G17\nT1 M6\nG0 X10 Y10 Z10\nG38.2 Z-25 F100\nG10 L20 P1 Z0\nG0 Z5\nG1 Z-2 F200\nX20\nG0 Z20\nM30\n");
-  const nlohmann::json j =
-      simulate("probe",
-               "job: probe\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: probe.ngc}\n"
-               "stock: {box: {min: [0, 0, -10], max: [40, 40, 0]}}\n"
-               "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out_probe}\n");
+  const nlohmann::json j = simulate("probe",
+                                    "job: probe\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: probe.ngc}\n"
+                                    "stock: {box: {min: [0, 0, -10], max: [40, 40, 0]}}\n"
+                                    "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out_probe}\n");
   const double removed = M_PI * 25.0 * 2.0 + 10.0 * 10.0 * 2.0;
   EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), removed, 0.005 * removed);
 }
@@ -466,13 +447,11 @@ TEST_F(PoseCli, FiveAxisTiltingEnginesAgree) {
     // FROM/, the plunge, 30 deg in steps of at most 2 deg (q = 15), the retract.
     EXPECT_EQ(j["pose_engine"]["poses"], 1 + 1 + 15 + 1);
     EXPECT_EQ(j["pose_engine"]["rotating_moves"], 15);
-    for (const auto& e : j["pose_engine"]["events"])
-      EXPECT_NE(e["kind"], "unreachable") << e.dump();
+    for (const auto& e : j["pose_engine"]["events"]) EXPECT_NE(e["kind"], "unreachable") << e.dump();
     EXPECT_GT(j["summary"]["removed_volume_mm3"].get<double>(), 1000.0);
     if (engine == "both") {
       ASSERT_TRUE(j.contains("engine_check")) << j.dump();
-      EXPECT_LT(j["engine_check"]["p99_mm"].get<double>(), v / 4 + v / 10)
-          << j["engine_check"].dump();
+      EXPECT_LT(j["engine_check"]["p99_mm"].get<double>(), v / 4 + v / 10) << j["engine_check"].dump();
     }
   }
 }
@@ -502,9 +481,7 @@ TEST_F(PoseCli, BadPoseKeys) {
   for (const auto& [line, key] : cases) {
     SCOPED_TRACE(line);
     write(dir / "bad.yaml", base + line);
-    expect_error(
-        run_vcut("poses " + (dir / "bad.yaml").string() + " --out " + (dir / "bad.csv").string()),
-        key);
+    expect_error(run_vcut("poses " + (dir / "bad.yaml").string() + " --out " + (dir / "bad.csv").string()), key);
     EXPECT_FALSE(fs::exists(dir / "bad.csv"));
   }
 }

@@ -34,8 +34,7 @@ class ProgramCli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir = fs::temp_directory_path() /
-          ("vcut_program_cli_" +
-           std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+          ("vcut_program_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
   }
@@ -141,8 +140,7 @@ TEST_F(ProgramCli, GcodeFile) {
   EXPECT_EQ(r[1]["turns"], 1);
   EXPECT_EQ(r[1]["source"], file + ":4");
   // The same file named as APT is an APT error on its first line.
-  expect_error(run_vcut("program " + file + " --dialect apt"),
-               file + ":1:5: unexpected 'G' after G21");
+  expect_error(run_vcut("program " + file + " --dialect apt"), file + ":1:5: unexpected 'G' after G21");
 }
 
 TEST_F(ProgramCli, Errors) {
@@ -152,8 +150,7 @@ TEST_F(ProgramCli, Errors) {
   const std::string good = (dir / "good.apt").string();
   write(good, "FROM/0,0,0\nFEDRAT/1\nGOTO/1,0,0\n");
   expect_error(run_vcut("program " + good + " --dialect heidenhain"), "unknown program dialect");
-  expect_error(run_vcut("program " + good + " --machine " + (dir / "none.yaml").string()),
-               "none.yaml");
+  expect_error(run_vcut("program " + good + " --machine " + (dir / "none.yaml").string()), "none.yaml");
   const std::string mpf = (dir / "five.mpf").string();
   write(mpf, "N10 TRAORI\nN20 CYCLE800()\n");
   expect_error(run_vcut("program " + mpf), mpf + ":2:5: CYCLE800 is not supported");

@@ -38,16 +38,13 @@ inline std::filesystem::path fresh_test_dir(const std::string& prefix) {
   return dir;
 }
 
-inline void write(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream(path) << text;
-}
+inline void write(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
 
 // A bad input: exit code 2 and one line "vcut: error: ..." containing `fragment`.
 inline void expect_error(const CommandResult& r, const std::string& fragment) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("vcut: error: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find(fragment), std::string::npos)
-      << "expected '" << fragment << "' in: " << r.output;
+  EXPECT_NE(r.output.find(fragment), std::string::npos) << "expected '" << fragment << "' in: " << r.output;
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
 }
 

@@ -57,8 +57,7 @@ double reference_contour_mm(const Reference& r) {
   std::vector<std::array<double, 3>> s(n);
   for (size_t j = 0; j < n; ++j) s[j] = {c0[j], 0.0, 0.0};
   const auto f = [](const std::array<double, 3>& y, double u) {
-    return std::array<double, 3>{y[1], y[2],
-                                 kOmegaN * kOmegaN * (u - y[1]) - 2.0 * kZeta * kOmegaN * y[2]};
+    return std::array<double, 3>{y[1], y[2], kOmegaN * kOmegaN * (u - y[1]) - 2.0 * kZeta * kOmegaN * y[2]};
   };
   std::vector<std::vector<double>> sub_states(n, std::vector<double>(kSub));
   double worst = 0.0;
@@ -75,8 +74,7 @@ double reference_contour_mm(const Reference& r) {
         const auto k3 = f(y, u);
         for (int i = 0; i < 3; ++i) y[i] = s[j][i] + h * k3[i];
         const auto k4 = f(y, u);
-        for (int i = 0; i < 3; ++i)
-          s[j][i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        for (int i = 0; i < 3; ++i) s[j][i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
         sub_states[j][static_cast<size_t>(m)] = s[j][0];
       }
     }
@@ -103,35 +101,30 @@ double segment_distance(const std::array<double, 3>& p, const std::array<double,
 // ---------------------------------------------------------------- the CLI side
 
 // Fast X Y Z axes, shared by both test machines.
-#define VCUT_FAST_XYZ_AXES \
-    "  X: {kind: linear, direction: [1, 0, 0], limits: [-1000, 1000], max_velocity: 100000, " \
-    "max_acceleration: 1e7, max_jerk: 1e9}\n" \
-    "  Y: {kind: linear, direction: [0, 1, 0], limits: [-1000, 1000], max_velocity: 100000, " \
-    "max_acceleration: 1e7, max_jerk: 1e9}\n" \
-    "  Z: {kind: linear, direction: [0, 0, 1], limits: [-1000, 1000], max_velocity: 100000, " \
-    "max_acceleration: 1e7, max_jerk: 1e9}\n"
+#define VCUT_FAST_XYZ_AXES                                                                  \
+  "  X: {kind: linear, direction: [1, 0, 0], limits: [-1000, 1000], max_velocity: 100000, " \
+  "max_acceleration: 1e7, max_jerk: 1e9}\n"                                                 \
+  "  Y: {kind: linear, direction: [0, 1, 0], limits: [-1000, 1000], max_velocity: 100000, " \
+  "max_acceleration: 1e7, max_jerk: 1e9}\n"                                                 \
+  "  Z: {kind: linear, direction: [0, 0, 1], limits: [-1000, 1000], max_velocity: 100000, " \
+  "max_acceleration: 1e7, max_jerk: 1e9}\n"
 
 // A three-axis machine (and a B-head one) whose axes are fast enough that the feed planner
 // does not slow the corner: the command runs at F through it, as in seed 004.
-const char* kFastXyz =
-    "machine: fast-xyz\ntopology: WFXYZT\naxes:\n"
-    VCUT_FAST_XYZ_AXES
-    "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
+const char* kFastXyz = "machine: fast-xyz\ntopology: WFXYZT\naxes:\n" VCUT_FAST_XYZ_AXES
+                       "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
 // B turns the head about the line x = 0, z = 580 (parallel to Y): with the tool 320 mm out of
 // the nose at z = 400 the tip is L = 500 mm from the B axis, as in seed 004.
-const char* kSwivel =
-    "machine: swivel-b\ntopology: WFXYZBT\naxes:\n"
-    VCUT_FAST_XYZ_AXES
-    "  B: {kind: rotary, axis: [0, 1, 0], center: [0, 0, 580], limits: [-90, 90], max_velocity: "
-    "1e6, max_acceleration: 1e7, max_jerk: 1e9}\n"
-    "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
+const char* kSwivel = "machine: swivel-b\ntopology: WFXYZBT\naxes:\n" VCUT_FAST_XYZ_AXES
+                      "  B: {kind: rotary, axis: [0, 1, 0], center: [0, 0, 580], limits: [-90, 90], max_velocity: "
+                      "1e6, max_acceleration: 1e7, max_jerk: 1e9}\n"
+                      "spindle: {gauge_point: [0, 0, 400], axis: [0, 0, 1]}\nworkpiece: {origin: [0, 0, 0]}\n";
 
 class ServoCli : public ::testing::Test {
  protected:
   void SetUp() override {
     dir = fs::temp_directory_path() /
-          ("vcut_servo_cli_" +
-           std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+          ("vcut_servo_cli_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     write(dir / "fast.yaml", kFastXyz);
@@ -147,8 +140,8 @@ class ServoCli : public ::testing::Test {
   // `vcut poses` on a job; the whole output.
   CommandResult poses(const std::string& name, const std::string& job) {
     write(dir / (name + ".yaml"), job);
-    const CommandResult r = run_vcut("poses " + (dir / (name + ".yaml")).string() + " --out " +
-                                     (dir / (name + ".csv")).string());
+    const CommandResult r =
+        run_vcut("poses " + (dir / (name + ".yaml")).string() + " --out " + (dir / (name + ".csv")).string());
     EXPECT_EQ(r.exit_code, 0) << r.output;
     return r;
   }
@@ -162,8 +155,8 @@ class ServoCli : public ::testing::Test {
     return std::stod(m[1]) / 1000.0;
   }
   // `program_keys`: more keys of the program map, each followed by ", ".
-  std::string job(const std::string& machine, const std::string& program,
-                  const std::string& extra = "", const std::string& program_keys = "") {
+  std::string job(const std::string& machine, const std::string& program, const std::string& extra = "",
+                  const std::string& program_keys = "") {
     return "job: servo\nmachine: " + machine + "\ntools: tools.yaml\nprogram: {" + program_keys + "file: " + program +
            "}\nstock: {box: {min: [-10, -10, -10], max: [210, 210, 0]}}\nfeed: {acceleration: 1e7, "
            "jerk: 1e9}\n"
@@ -182,8 +175,8 @@ TEST_F(ServoCli, Seed004CornerWithoutDensify) {
   for (double feed : {10000.0, 20000.0, 40000.0}) {
     SCOPED_TRACE(feed);
     const std::string name = "corner" + std::to_string(static_cast<int>(feed));
-    write(dir / (name + ".ngc"), "G21 G90 G94 G17\nT1 M6\nG1 X0 Y0 Z0 F" + std::to_string(feed) +
-                                     "\nG1 X100 Y0\nG1 X100 Y100\nM2\n");
+    write(dir / (name + ".ngc"),
+          "G21 G90 G94 G17\nT1 M6\nG1 X0 Y0 Z0 F" + std::to_string(feed) + "\nG1 X100 Y0\nG1 X100 Y100\nM2\n");
     const double v = feed / 60.0;
     Reference r;
     r.duration_s = 200.0 / v;
@@ -193,8 +186,7 @@ TEST_F(ServoCli, Seed004CornerWithoutDensify) {
     };
     r.tip = [](const Axes& x) { return std::array<double, 3>{x[0], x[1], x[2]}; };
     r.path = [](const std::array<double, 3>& p) {
-      return std::min(segment_distance(p, {0, 0, 0}, {100, 0, 0}),
-                      segment_distance(p, {100, 0, 0}, {100, 100, 0}));
+      return std::min(segment_distance(p, {0, 0, 0}, {100, 0, 0}), segment_distance(p, {100, 0, 0}, {100, 100, 0}));
     };
     const double expected = reference_contour_mm(r);
     const double got = printed_contour_mm(poses(name, job("fast.yaml", name + ".ngc")));
@@ -209,14 +201,12 @@ TEST_F(ServoCli, Seed004CornerWithoutDensify) {
 // Densification changes the contour error by no more than the sampling's bound: the
 // corner at 40 m/min with no densify, a 0.5 mm step and a 0.1 mm step.
 TEST_F(ServoCli, ContourErrorIndependentOfDensification) {
-  write(dir / "corner.ngc",
-        "G21 G90 G94 G17\nT1 M6\nG1 X0 Y0 Z0 F40000\nG1 X100 Y0\nG1 X100 Y100\nM2\n");
+  write(dir / "corner.ngc", "G21 G90 G94 G17\nT1 M6\nG1 X0 Y0 Z0 F40000\nG1 X100 Y0\nG1 X100 Y100\nM2\n");
   const double none = printed_contour_mm(poses("none", job("fast.yaml", "corner.ngc")));
   for (const char* densify : {"densify: {step: 0.5}\n", "densify: {step: 0.1}\n"}) {
     SCOPED_TRACE(densify);
     // The printed value has 10 nm steps; the peak search ends at 1e-5 of a period.
-    EXPECT_NEAR(printed_contour_mm(poses("dense", job("fast.yaml", "corner.ngc", densify))), none,
-                1e-4);
+    EXPECT_NEAR(printed_contour_mm(poses("dense", job("fast.yaml", "corner.ngc", densify))), none, 1e-4);
   }
 }
 
@@ -224,8 +214,8 @@ TEST_F(ServoCli, ContourErrorIndependentOfDensification) {
 TEST_F(ServoCli, Seed004Circle) {
   for (double feed : {10000.0, 20000.0, 40000.0}) {
     SCOPED_TRACE(feed);
-    write(dir / "circle.ngc", "G21 G90 G94 G17\nT1 M6\nG1 X100 Y0 Z0 F" + std::to_string(feed) +
-                                  "\nG3 X100 Y0 I-100 J0\nM2\n");
+    write(dir / "circle.ngc",
+          "G21 G90 G94 G17\nT1 M6\nG1 X100 Y0 Z0 F" + std::to_string(feed) + "\nG3 X100 Y0 I-100 J0\nM2\n");
     const double v = feed / 60.0, R = 100.0;
     Reference r;
     r.duration_s = 2.0 * M_PI * R / v;
@@ -239,7 +229,8 @@ TEST_F(ServoCli, Seed004Circle) {
     // The vcut side at a fine chord tolerance: the commanded axes run on the chords between
     // densified poses, 0.1 um off the circle.
     const double got = printed_contour_mm(
-        poses("circle", job("fast.yaml", "circle.ngc", "densify: {chord_tolerance: 0.0001}\nstart: {X: 100, Y: 0, Z: 0}\n", "initial_tool: 1, ")));
+        poses("circle", job("fast.yaml", "circle.ngc",
+                            "densify: {chord_tolerance: 0.0001}\nstart: {X: 100, Y: 0, Z: 0}\n", "initial_tool: 1, ")));
     EXPECT_NEAR(got, expected, kSeed004 * expected);
   }
 }
@@ -266,15 +257,12 @@ TEST_F(ServoCli, Seed004SwivelHead) {
       return Axes{200.0 * f + 500.0 * std::sin(b), 200.0 * f, -580.0 + 500.0 * std::cos(b), b};
     };
     r.tip = [](const Axes& x) {
-      return std::array<double, 3>{x[0] - 500.0 * std::sin(x[3]), x[1],
-                                   x[2] + 580.0 - 500.0 * std::cos(x[3])};
+      return std::array<double, 3>{x[0] - 500.0 * std::sin(x[3]), x[1], x[2] + 580.0 - 500.0 * std::cos(x[3])};
     };
-    r.path = [](const std::array<double, 3>& p) {
-      return segment_distance(p, {0, 0, 0}, {200, 200, 0});
-    };
+    r.path = [](const std::array<double, 3>& p) { return segment_distance(p, {0, 0, 0}, {200, 200, 0}); };
     const double expected = reference_contour_mm(r);
-    const double got = printed_contour_mm(
-        poses("swivel_job", job("swivel.yaml", "swivel.apt", "densify: {tolerance: 0.0001}\n")));
+    const double got =
+        printed_contour_mm(poses("swivel_job", job("swivel.yaml", "swivel.apt", "densify: {tolerance: 0.0001}\n")));
     EXPECT_NEAR(got, expected, kSeed004 * expected);
   }
 }
@@ -299,15 +287,13 @@ TEST_F(ServoCli, PerAxisGainsGiveTheTiltedEllipse) {
   const Csv blocks = read_csv(dir / "ellipse_blocks.csv");
   double third = -1.0;
   for (size_t r = 0; r < blocks.rows.size(); ++r)
-    if (blocks.text(r, "source") == "circle.ngc:6")
-      third = blocks.num(r, "contour_max_um") / 1000.0;
+    if (blocks.text(r, "source") == "circle.ngc:6") third = blocks.num(r, "contour_max_um") / 1000.0;
   const double R = 10.0, w = 50.0 / R;
   const double ax = 1.0 / std::hypot(1.0, w / 20.0), px = std::atan(w / 20.0);
   const double ay = 1.0 / std::hypot(1.0, w / 10.0), py = std::atan(w / 10.0);
   // Rows: x = A_x (cos phi_x cos t + sin phi_x sin t), y = A_y (-sin phi_y cos t + cos phi_y sin
   // t).
-  const double m00 = ax * std::cos(px), m01 = ax * std::sin(px), m10 = -ay * std::sin(py),
-               m11 = ay * std::cos(py);
+  const double m00 = ax * std::cos(px), m01 = ax * std::sin(px), m10 = -ay * std::sin(py), m11 = ay * std::cos(py);
   const double a = m00 * m00 + m10 * m10, b = m00 * m01 + m10 * m11, c = m01 * m01 + m11 * m11;
   const double lambda_min = 0.5 * (a + c) - std::sqrt(0.25 * (a - c) * (a - c) + b * b);
   const double expected = R * (1.0 - std::sqrt(lambda_min));
@@ -322,12 +308,11 @@ TEST_F(ServoCli, PerAxisGainsGiveTheTiltedEllipse) {
 // `densify: {angle: 8}` a warning names ring.ngc:11 and the 28 (1 - cos 4 deg) chord error.
 TEST_F(ServoCli, RingDefaultDensificationAndCoarseWarning) {
   const std::string ring = std::string(VCUT_SOURCE_DIR) + "/examples/ring/";
-  const std::string base =
-      "job: ring\nmachine: table-table-ac\ntools: " + ring + "tools.yaml\nprogram: {file: " + ring +
-      "ring.ngc}\nstock: {cylinder: {center: [0, 0, -20], radius: 30, height: 20}}\n"
-      "engine: {kind: dexel, resolution: 0.1}\n";
-  write(dir / "plain.yaml",
-        base + "report: {out: " + (dir / "plain").string() + ", gouge_tolerance: 0.01}\n");
+  const std::string base = "job: ring\nmachine: table-table-ac\ntools: " + ring +
+                           "tools.yaml\nprogram: {file: " + ring +
+                           "ring.ngc}\nstock: {cylinder: {center: [0, 0, -20], radius: 30, height: 20}}\n"
+                           "engine: {kind: dexel, resolution: 0.1}\n";
+  write(dir / "plain.yaml", base + "report: {out: " + (dir / "plain").string() + ", gouge_tolerance: 0.01}\n");
   const CommandResult plain = run_vcut("simulate " + (dir / "plain.yaml").string());
   ASSERT_EQ(plain.exit_code, 0) << plain.output;
   EXPECT_EQ(plain.output.find("warning"), std::string::npos) << plain.output;
@@ -337,15 +322,14 @@ TEST_F(ServoCli, RingDefaultDensificationAndCoarseWarning) {
   EXPECT_NEAR(report["summary"]["removed_volume_mm3"].get<double>(), groove, 0.005 * groove);
   EXPECT_TRUE(report["warnings"].empty()) << report["warnings"].dump();
 
-  write(dir / "coarse.yaml", base + "densify: {angle: 8}\nreport: {out: " +
-                                 (dir / "coarse").string() + ", gouge_tolerance: 0.01}\n");
+  write(dir / "coarse.yaml",
+        base + "densify: {angle: 8}\nreport: {out: " + (dir / "coarse").string() + ", gouge_tolerance: 0.01}\n");
   const CommandResult coarse =
       run_vcut("poses " + (dir / "coarse.yaml").string() + " --out " + (dir / "c.csv").string());
   ASSERT_EQ(coarse.exit_code, 0) << coarse.output;
   char chord[16];
   std::snprintf(chord, sizeof chord, "%.3f mm", 28.0 * (1.0 - std::cos(4.0 * kDeg)));
-  EXPECT_NE(coarse.output.find("ring.ngc:11: the densified moves leave the tool tip " +
-                               std::string(chord)),
+  EXPECT_NE(coarse.output.find("ring.ngc:11: the densified moves leave the tool tip " + std::string(chord)),
             std::string::npos)
       << coarse.output;
 }
@@ -358,8 +342,7 @@ TEST_F(ServoCli, RingDefaultDensificationAndCoarseWarning) {
 TEST_F(ServoCli, FeedInterpretations) {
   std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/table-table-ac.yaml");
   std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
-  machine = std::regex_replace(machine, std::regex("max_acceleration: [0-9.e]+"),
-                               "max_acceleration: 1e7");
+  machine = std::regex_replace(machine, std::regex("max_acceleration: [0-9.e]+"), "max_acceleration: 1e7");
   machine = std::regex_replace(machine, std::regex("max_jerk: [0-9.e]+"), "max_jerk: 1e9");
   machine = std::regex_replace(machine, std::regex("max_velocity: [0-9.e]+"), "max_velocity: 1e6");
   write(dir / "spiral.ngc", "G21 G90 G94\nT1 M6\nG0 X20 Y0 Z0 A0 C0\nG1 X30 C90 F600\nM2\n");
@@ -371,9 +354,8 @@ TEST_F(ServoCli, FeedInterpretations) {
     const double f0 = static_cast<double>(i) / n, f1 = static_cast<double>(i + 1) / n;
     tip_mm += (f1 - f0) / 6.0 * (speed(f0) + 4.0 * speed(0.5 * (f0 + f1)) + speed(f1));
   }
-  const std::pair<const char*, double> cases[] = {{"linuxcnc", 10.0 / 10.0},
-                                                  {"combined", std::hypot(10.0, 90.0) / 10.0},
-                                                  {"tip", tip_mm / 10.0}};
+  const std::pair<const char*, double> cases[] = {
+      {"linuxcnc", 10.0 / 10.0}, {"combined", std::hypot(10.0, 90.0) / 10.0}, {"tip", tip_mm / 10.0}};
   for (const auto& [reading, seconds] : cases) {
     SCOPED_TRACE(reading);
     write(dir / "m.yaml", machine + "\nfeed_interpretation: " + reading + "\n");
@@ -395,8 +377,7 @@ TEST_F(ServoCli, FeedInterpretations) {
   write(dir / "bad.yaml",
         "job: feed\nmachine: m.yaml\ntools: tools.yaml\nprogram: {file: spiral.ngc}\n"
         "stock: {box: {min: [-40, -40, -20], max: [40, 40, 0]}}\n");
-  vcut::cli::test::expect_error(run_vcut("poses " + (dir / "bad.yaml").string()),
-                                "feed_interpretation");
+  vcut::cli::test::expect_error(run_vcut("poses " + (dir / "bad.yaml").string()), "feed_interpretation");
 }
 
 // --every-period: every period's row, commanded and actual; the actual lags the command by
@@ -408,8 +389,8 @@ TEST_F(ServoCli, EveryPeriodRows) {
         "stock: {box: {min: [-10, -10, -10], max: [110, 10, 0]}}\nfeed: {acceleration: 1e7, jerk: "
         "1e9}\n"
         "servo: {kv: 20, omega_n: ideal, period: 0.001}\nstart: {X: 0, Y: 0, Z: 0}\n");
-  const CommandResult r = run_vcut("poses --every-period " + (dir / "line.yaml").string() +
-                                   " --out " + (dir / "p.csv").string());
+  const CommandResult r =
+      run_vcut("poses --every-period " + (dir / "line.yaml").string() + " --out " + (dir / "p.csv").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const Csv periods = read_csv(dir / "p_periods.csv");
   ASSERT_GT(periods.rows.size(), 2000u);  // 2 s of line at 1 ms, then the settling
@@ -427,8 +408,7 @@ TEST_F(ServoCli, EveryPeriodRows) {
   write(dir / "noservo.yaml",
         "job: line\nmachine: fast.yaml\ntools: tools.yaml\nprogram: {file: line.ngc}\n"
         "stock: {box: {min: [-10, -10, -10], max: [110, 10, 0]}}\n");
-  vcut::cli::test::expect_error(run_vcut("poses --every-period " + (dir / "noservo.yaml").string()),
-                                "servo");
+  vcut::cli::test::expect_error(run_vcut("poses --every-period " + (dir / "noservo.yaml").string()), "servo");
 }
 
 }  // namespace

@@ -34,11 +34,13 @@ class Study : public ::testing::Test {
  protected:
   void SetUp() override {
     dir = fresh_test_dir("vcut_study_");
-    write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 6, flute_length: 20, shank_diameter: 6, length: 30}\n");
+    write(dir / "tools.yaml",
+          "tools:\n  1: {type: flat, diameter: 6, flute_length: 20, shank_diameter: 6, length: 30}\n");
     program = "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X40 Y0 Z5 A0 C0\nG1 Z-3 F500\nG1 X28\nG1 C360 F2000\nG0 Z5\nM30\n";
-    job = "job: turn\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: turn.ngc}\n"
-          "stock: {cylinder: {center: [0, 0, -6], radius: 30, height: 6}}\n"
-          "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out, gouge_tolerance: 0.01}\n";
+    job =
+        "job: turn\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: turn.ngc}\n"
+        "stock: {cylinder: {center: [0, 0, -6], radius: 30, height: 6}}\n"
+        "engine: {kind: dexel, resolution: 0.1, threads: 2}\nreport: {out: out, gouge_tolerance: 0.01}\n";
   }
   void TearDown() override { fs::remove_all(dir); }
   CommandResult study(const std::string& args) {
@@ -110,14 +112,16 @@ TEST_F(Study, NoSettingMeetsTheAccuracy) {
   EXPECT_NE(r.output.find("no setting is within 0.0001 mm of the reference"), std::string::npos) << r.output;
   const nlohmann::json j = json();
   EXPECT_TRUE(j["recommended"].is_null());
-  EXPECT_NE(r.output.find("warning: accuracy 0.0001 mm is below what meshes at 0.5 mm resolve"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("warning: accuracy 0.0001 mm is below what meshes at 0.5 mm resolve"), std::string::npos)
+      << r.output;
   EXPECT_EQ(j["reference"]["setting"], "angle 1 deg");  // the finest / 4
   EXPECT_TRUE(fs::exists(dir / "out" / "study.png"));
 }
 
 TEST_F(Study, BadOptionsAreClearErrorsAndWriteNothing) {
   expect_error(study("--angles 8,0"), "--angles: 0 is not a positive number of deg");
-  expect_error(study("--angles 8,2 --reference-angle 4"), "--reference-angle: 4 deg is not finer than the finest setting (2 deg)");
+  expect_error(study("--angles 8,2 --reference-angle 4"),
+               "--reference-angle: 4 deg is not finer than the finest setting (2 deg)");
   expect_error(study("--angles 8 --tolerances 0.01"), "--tolerances cannot be combined with --steps or --angles");
   expect_error(study("--angles 8,4 --reference-step 0.1"), "--reference-step without --steps");
   expect_error(study("--steps 1,0.5 --angles 8"), "expected the same number of values");

@@ -376,8 +376,7 @@ TEST(AptReader, CircleInATiltedPlaneHelixAndFullCircle) {
 
 TEST(AptReader, CircleInInches) {
   // UNITS/INCHES: centre and radius convert too: r = 1 in = 25.4 mm.
-  const AptProgram a =
-      read("UNITS/INCHES\nFROM/1,0,0\nFEDRAT/10\nCIRCLE/0,0,0,0,0,1,1\nGOTO/-1,0,0\n");
+  const AptProgram a = read("UNITS/INCHES\nFROM/1,0,0\nFEDRAT/10\nCIRCLE/0,0,0,0,0,1,1\nGOTO/-1,0,0\n");
   ASSERT_EQ(a.program.blocks.size(), 1u);
   expect_vec(a.program.blocks[0].end_mm, {-kInch, 0, 0});
   EXPECT_NEAR(swept_angle(a.program.blocks[0]), kPi, kTol);
@@ -487,8 +486,8 @@ TEST(AptReader, CutterErrors) {
   EXPECT_APT_ERROR("CUTTER/1,0,0,0,0,0,2,9\n", 1, 22, "expected d, d,r or d,r,e,f,alpha,beta,h");
   EXPECT_APT_ERROR("CUTTER/TOOL,10\n", 1, 8, "expected a number");
   // A second cutter for a tool number that has cut with another one.
-  EXPECT_APT_ERROR("FROM/0,0,0\nFEDRAT/1\nLOADTL/1\nCUTTER/10\nGOTO/1,0,0\nCUTTER/8\nGOTO/2,0,0\n",
-                   7, 1, "has cut with another cutter");
+  EXPECT_APT_ERROR("FROM/0,0,0\nFEDRAT/1\nLOADTL/1\nCUTTER/10\nGOTO/1,0,0\nCUTTER/8\nGOTO/2,0,0\n", 7, 1,
+                   "has cut with another cutter");
 }
 
 // ---------------------------------------------------------------- bad input
@@ -530,8 +529,9 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("CUTTER/4\nCUTCOM/RIGHT\nLOADTL/2\n", 3, 1, "LOADTL/ with CUTCOM on");
   EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/1,0,0\n", 5, 1,
                    "entry move of 1 mm in the plane is not longer than the tool radius 2 mm");
-  EXPECT_APT_ERROR("CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/10,0,0\nCUTCOM/OFF\nCIRCLE/10,5,0,0,0,1,5\nGOTO/10,10,0\n",
-                   8, 1, "a CIRCLE/ just after CUTCOM/OFF");
+  EXPECT_APT_ERROR(
+      "CUTTER/4\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/10,0,0\nCUTCOM/OFF\nCIRCLE/10,5,0,0,0,1,5\nGOTO/10,10,0\n",
+      8, 1, "a CIRCLE/ just after CUTCOM/OFF");
   const AptProgram off = read("CUTCOM/OFF\nFROM/0,0,10\nFEDRAT/100\nGOTO/10,0,0\n");
   EXPECT_TRUE(off.program.warnings.empty());
   EXPECT_EQ(off.program.blocks.size(), 1u);
@@ -548,15 +548,13 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
 TEST(AptReader, CircleErrors) {
   const std::string head = "FROM/10,0,0\nFEDRAT/100\n";
   // The end point is 11 mm from the axis, the circle's radius 10.
-  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nGOTO/0,11,0\n", 4, 1,
-                   "expected a point on that circle");
+  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nGOTO/0,11,0\n", 4, 1, "expected a point on that circle");
   // The start (the current point) is not on the circle.
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,9\nGOTO/0,9,0\n", 3, 20, "the arc's start");
   // CIRCLE/ without its GOTO/: at the end of the file, or another motion first.
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\n", 3, 1, "without the GOTO/");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nGODLTA/0,0,1\n", 4, 1, "expected the GOTO/");
-  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nRAPID\nGOTO/0,10,0\n", 4, 1,
-                   "expected the GOTO/");
+  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nRAPID\nGOTO/0,10,0\n", 4, 1, "expected the GOTO/");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nCIRCLE/0,0,0,0,0,1,10\n", 4, 1, "second CIRCLE/");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nFINI\n", 4, 1, "expected the GOTO/");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,0,10\n", 3, 14, "zero circle axis");
@@ -607,8 +605,8 @@ class ProgramFiles : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = std::filesystem::temp_directory_path() /
-           ("vcut_apt_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
-            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+           ("vcut_apt_test_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::create_directories(dir_);
   }
   void TearDown() override { std::filesystem::remove_all(dir_); }
@@ -639,8 +637,7 @@ TEST_F(ProgramFiles, DetectDialectByExtensionThenContent) {
   EXPECT_EQ(detect_dialect(write("e.txt", "N10 G0 X0\nN20 TRAORI\n")), "sinumerik");
   EXPECT_EQ(detect_dialect(write("f.txt", "N10 G2 X10 Y0 CR=5\n")), "sinumerik");
   EXPECT_EQ(detect_dialect(write("g.txt", "DEF REAL R1\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("h.txt", "; seed 000\nN7 X -1320 Y -1320 Z 1000 A 0 C 0\n")),
-            "sinumerik");
+  EXPECT_EQ(detect_dialect(write("h.txt", "; seed 000\nN7 X -1320 Y -1320 Z 1000 A 0 C 0\n")), "sinumerik");
   EXPECT_EQ(detect_dialect(write("i.txt", "%\n(TRAORI in a comment)\nG0 X1 Y2\n%\n")), "gcode");
   EXPECT_EQ(detect_dialect(write("j.txt", "G21 G90\nG1 X1 F100 ; LinuxCNC comment\n")), "gcode");
   EXPECT_EQ(detect_dialect(write("k", "")), "gcode");
@@ -679,24 +676,17 @@ TEST_F(ProgramFiles, ReadProgramErrors) {
     return "no error";
   };
   const std::string mpf = write("s.mpf", "N10 TRAORI\nN20 CYCLE800()\n");
-  EXPECT_NE(message([&] { read_program(mpf, "auto"); }).find(":2:5: CYCLE800 is not supported"),
-            std::string::npos);
-  EXPECT_NE(message([&] { read_program(mpf, "heidenhain"); }).find("unknown program dialect"),
-            std::string::npos);
+  EXPECT_NE(message([&] { read_program(mpf, "auto"); }).find(":2:5: CYCLE800 is not supported"), std::string::npos);
+  EXPECT_NE(message([&] { read_program(mpf, "heidenhain"); }).find("unknown program dialect"), std::string::npos);
   const std::string binary = write("t.apt", std::string("GOTO/1\n\x01\x02\0\0", 11));
   const std::string m = message([&] { read_program(binary, "auto"); });
   EXPECT_EQ(m.rfind(binary + ":2:3: not a text file", 0), 0u) << m;
   const std::string gcode = write("u.ngc", "G0 X1\n");
   const std::string apt = write("v.apt", "FROM/0,0,0\n");
-  EXPECT_NE(message([&] {
-              read_programs({gcode, apt}, "auto");
-            }).find("one dialect"),
+  EXPECT_NE(message([&] { read_programs({gcode, apt}, "auto"); }).find("one dialect"), std::string::npos);
+  EXPECT_NE(message([&] { read_program((dir_ / "none.apt").string(), "auto"); }).find("cannot open"),
             std::string::npos);
-  EXPECT_NE(
-      message([&] { read_program((dir_ / "none.apt").string(), "auto"); }).find("cannot open"),
-      std::string::npos);
-  EXPECT_NE(message([&] { read_program(dir_.string(), "auto"); }).find("is a directory"),
-            std::string::npos);
+  EXPECT_NE(message([&] { read_program(dir_.string(), "auto"); }).find("is a directory"), std::string::npos);
 }
 
 // CUTCOM/RIGHT around a square with a half-circle top, run counterclockwise: the tool (radius 2)
@@ -708,7 +698,8 @@ TEST_F(ProgramFiles, ReadProgramErrors) {
 TEST(AptReader, CutcomOffsetsTheContourAsG42) {
   const AptProgram apt = read(
       "UNITS/MM\nCUTTER/4\nFROM/-10,-10,5\nFEDRAT/200\nGOTO/-10,-10,-1\nCUTCOM/RIGHT,XYPLAN,1\nGOTO/0,0,-1\n"
-      "GOTO/20,0,-1\nGOTO/20,20,-1\nCIRCLE/10,20,-1,0,0,1,10\nGOTO/0,20,-1\nGOTO/0,0,-1\nCUTCOM/OFF\nGOTO/-10,-10,-1\nFINI\n");
+      "GOTO/20,0,-1\nGOTO/20,20,-1\nCIRCLE/10,20,-1,0,0,1,10\nGOTO/0,20,-1\nGOTO/0,0,-1\nCUTCOM/OFF\nGOTO/"
+      "-10,-10,-1\nFINI\n");
   const std::vector<Block>& b = apt.program.blocks;
   ASSERT_EQ(b.size(), 8u);
   EXPECT_LT((b[2].end_mm - Eigen::Vector3d(20, -2, -1)).norm(), 1e-9);
@@ -724,7 +715,8 @@ TEST(AptReader, CutcomOffsetsTheContourAsG42) {
   options.start_mm = Eigen::Vector3d(-10, -10, 5);
   kinematics::Program gcode;
   GcodeState state;
-  std::istringstream in("G21 G90 G17 F200\nG1 Z-1\nG42.1 D4\nG1 X0 Y0\nX20\nY20\nG3 X0 Y20 I-10 J0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n");
+  std::istringstream in(
+      "G21 G90 G17 F200\nG1 Z-1\nG42.1 D4\nG1 X0 Y0\nX20\nY20\nG3 X0 Y20 I-10 J0\nG1 Y0\nG40\nG1 X-10 Y-10\nM2\n");
   read_gcode(in, "square.ngc", options, gcode, state);
   ASSERT_EQ(gcode.blocks.size(), b.size());
   for (size_t k = 0; k < b.size(); ++k) {

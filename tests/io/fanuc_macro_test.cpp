@@ -33,7 +33,9 @@ std::string error_of(const std::string& text, const GcodeOptions& options = {}) 
   return gcode_test::error_text(text, fanuc(options), "macro.nc");
 }
 
-Eigen::Vector3d last_end(const Program& p) { return p.blocks.empty() ? Eigen::Vector3d::Constant(-999) : p.blocks.back().end_mm; }
+Eigen::Vector3d last_end(const Program& p) {
+  return p.blocks.empty() ? Eigen::Vector3d::Constant(-999) : p.blocks.back().end_mm;
+}
 
 TEST(FanucMacro, WhileLoopSumsOneToTen) {
   const Program p = read("#1=0\n#2=1\nWHILE[#2LE10]DO1\n#1=#1+#2\n#2=#2+1\nEND1\nG0 X#1\nM30\n");
@@ -54,8 +56,7 @@ TEST(FanucMacro, IfGotoCountsDown) {
 TEST(FanucMacro, G65ArgumentsAreLocalsOfTheCall) {
   // A -> #1, B -> #2, X -> #24; the caller's #1 comes back after M99; the macro's own #3 (no C
   // given) is vacant.
-  const Program p = read(
-      "#1=7\nG65 P9001 A2 B3 X4\nG0 Y#1\nM30\nO9001\nG0 X[#1*#2+#24]\nIF[#3EQ#0]THEN#100=1\nM99\n");
+  const Program p = read("#1=7\nG65 P9001 A2 B3 X4\nG0 Y#1\nM30\nO9001\nG0 X[#1*#2+#24]\nIF[#3EQ#0]THEN#100=1\nM99\n");
   ASSERT_EQ(p.blocks.size(), 2u);
   EXPECT_EQ(p.blocks[0].end_mm.x(), 10.0);
   EXPECT_EQ(last_end(p), Eigen::Vector3d(10, 7, 0));
@@ -70,19 +71,21 @@ TEST(FanucMacro, G66CallsTheMacroAfterEachMoveUntilG67) {
       "G90 G0 X0 Y0 Z10\nG66 P9000 Z-5. R2. F100.\nX10.\nX20.\nG67\nX30.\nM30\n"
       "O9000\nG1 Z#26 F#9\nG0 Z#18\nM99\n");
   const std::vector<Eigen::Vector3d> want = {{0, 0, 10}, {10, 0, 10}, {10, 0, -5}, {10, 0, 2},
-                                             {20, 0, 2}, {20, 0, -5}, {20, 0, 2}, {30, 0, 2}};
+                                             {20, 0, 2}, {20, 0, -5}, {20, 0, 2},  {30, 0, 2}};
   ASSERT_EQ(p.blocks.size(), want.size());
   for (size_t k = 0; k < want.size(); ++k) EXPECT_EQ(p.blocks[k].end_mm, want[k]) << "block " << k;
   EXPECT_EQ(p.blocks[2].kind, kinematics::MotionKind::Linear);
   EXPECT_EQ(p.blocks[2].feed_mm_per_min, 100.0);
-  EXPECT_EQ(p.blocks[2].source.line, 9);  // from the macro's line
+  EXPECT_EQ(p.blocks[2].source.line, 9);                       // from the macro's line
   EXPECT_EQ(p.blocks[4].kind, kinematics::MotionKind::Rapid);  // the G0 the macro left
   // A second G66, a call on a moving line, and a macro found nowhere are errors.
   EXPECT_NE(error_of("G66 P9000\nG66 P9000\nM30\nO9000\nM99\n").find("macro.nc:2:1: G66 while a modal call is on"),
             std::string::npos);
-  EXPECT_NE(error_of("G0 X0\nG66 P9000\nX1 M98 P9000\nM30\nO9000\nM99\n").find("macro.nc:3:4: M98 on a line that calls the G66 macro"),
+  EXPECT_NE(error_of("G0 X0\nG66 P9000\nX1 M98 P9000\nM30\nO9000\nM99\n")
+                .find("macro.nc:3:4: M98 on a line that calls the G66 macro"),
             std::string::npos);
-  EXPECT_NE(error_of("G66 P9123\nM30\n").find("macro.nc:1:5: G66 P9123: program O9123 found nowhere"), std::string::npos);
+  EXPECT_NE(error_of("G66 P9123\nM30\n").find("macro.nc:1:5: G66 P9123: program O9123 found nowhere"),
+            std::string::npos);
 }
 
 TEST(FanucMacro, VacantValues) {
@@ -152,7 +155,8 @@ TEST(FanucMacro, ProgramFileOnTheSearchPath) {
 }
 
 TEST(FanucMacro, AlarmsStopsAndBadFlow) {
-  EXPECT_NE(error_of("G0 X1\n#3000=12 (TOOL BROKEN)\n").find("macro.nc:2:1: alarm #3000 = 12: TOOL BROKEN"), std::string::npos);
+  EXPECT_NE(error_of("G0 X1\n#3000=12 (TOOL BROKEN)\n").find("macro.nc:2:1: alarm #3000 = 12: TOOL BROKEN"),
+            std::string::npos);
   const Program stop = read("#3006=1 (CHECK PART)\nG0 X1\n");
   ASSERT_EQ(stop.warnings.size(), 1u);
   EXPECT_NE(stop.warnings[0].find("stop #3006: CHECK PART"), std::string::npos);

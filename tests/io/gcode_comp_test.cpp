@@ -47,8 +47,7 @@ void expect_line(const Block& b, const Eigen::Vector3d& start, const Eigen::Vect
 // turns toward the tool, so the offset path is the square shrunk by r = 1 mm: its corners are
 // where the offset sides meet. G40, then the exit move from the last offset point.
 TEST(CutterComp, LeftInsideSquareMeetsAtTheCorners) {
-  const Program p = read(
-      "G21 G17 G90 F100\nG41.1 D2\nG1 X10 Y0\nG1 X10 Y10\nG1 X0 Y10\nG40\nG1 X-5 Y10\nM2\n");
+  const Program p = read("G21 G17 G90 F100\nG41.1 D2\nG1 X10 Y0\nG1 X10 Y10\nG1 X0 Y10\nG40\nG1 X-5 Y10\nM2\n");
   ASSERT_EQ(p.blocks.size(), 4u);
   // Entry: from the uncompensated start to the end pushed r to the left of the move, then
   // pulled back along it to the corner of the next side's offset line.
@@ -112,14 +111,17 @@ TEST(CutterComp, ImpossibleCompensationIsAnError) {
   // moves from (5, 5) to (5, -2) against its direction +Y).
   const std::string gouge = error_of("F100\nG41.1 D10\nG1 X10 Y0\nG1 X10 Y3\nG1 X0 Y3\n");
   EXPECT_NE(gouge.find("comp.ngc:5:1: cutter compensation: the straight move before this one would run backwards"),
-            std::string::npos) << gouge;
+            std::string::npos)
+      << gouge;
   EXPECT_NE(gouge.find("tool radius 5 mm"), std::string::npos) << gouge;
   // An arc smaller than the tool with the tool inside it.
-  EXPECT_NE(error_of("F100\nG41.1 D4\nG1 X10\nG3 X10 Y3 R1.5\n").find("arc of radius 1.5 mm with the tool (radius 2 mm) on its inside"),
+  EXPECT_NE(error_of("F100\nG41.1 D4\nG1 X10\nG3 X10 Y3 R1.5\n")
+                .find("arc of radius 1.5 mm with the tool (radius 2 mm) on its inside"),
             std::string::npos);
   // What LinuxCNC refuses while compensation is on.
   EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG18\n").find("G18 with cutter compensation on"), std::string::npos);
-  EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG81 X0 Z-1 R1\n").find("G81 with cutter compensation on"), std::string::npos);
+  EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG81 X0 Z-1 R1\n").find("G81 with cutter compensation on"),
+            std::string::npos);
   EXPECT_NE(error_of("F100\nG41.1 D2\nG41.1 D2\n").find("already on"), std::string::npos);
   EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG40\nG2 X20 R5\n").find("arc just after G40"), std::string::npos);
   EXPECT_NE(error_of("G19\nG41.1 D2\n").find("G41.1 in G19"), std::string::npos);
@@ -132,7 +134,8 @@ TEST(CutterComp, ImpossibleCompensationIsAnError) {
   EXPECT_NE(gcode_test::error_text("G0 X-5 Y0\nG41.1 D4\nG1 X0 Y5 F100\n", unknown, "u.ngc")
                 .find("u.ngc:3:1: cutter compensation while the Z position is unknown"),
             std::string::npos);
-  const Program known = gcode_test::read_text("G0 X-5 Y0\nG41.1 D4\nG1 X0 Y5 Z1 F100\nG1 X10\nG40 G0 X20\n", unknown, "u.ngc");
+  const Program known =
+      gcode_test::read_text("G0 X-5 Y0\nG41.1 D4\nG1 X0 Y5 Z1 F100\nG1 X10\nG40 G0 X20\n", unknown, "u.ngc");
   ASSERT_FALSE(known.blocks.empty());
   EXPECT_EQ(known.blocks.back().end_mm, Eigen::Vector3d(20, 5, 1));
 }
@@ -144,8 +147,7 @@ TEST(HomeReturn, ThroughTheIntermediatePointToTheReference) {
   options.start_mm = Eigen::Vector3d(0, 0, 100);
   options.reference_mm = {Eigen::Vector3d(1, 2, 3), Eigen::Vector3d(4, 5, 6)};
   options.tool_length_mm = {{1, 10.0}};
-  const Program p = read(
-      "T1 M6\nG0 X5 Y5 Z5\nG91 G28 Z0\nG90 G28 X7\nG30\nG28.1\nG0 X0 Y0 Z0\nG28\nM2\n", options);
+  const Program p = read("T1 M6\nG0 X5 Y5 Z5\nG91 G28 Z0\nG90 G28 X7\nG30\nG28.1\nG0 X0 Y0 Z0\nG28\nM2\n", options);
   ASSERT_EQ(p.blocks.size(), 7u);
   // T1 M6: the spindle stays at the start's gauge point (0, 0, 100); the tip is 10 below.
   expect_line(p.blocks[0], {0, 0, 90}, {5, 5, 5});
@@ -154,7 +156,7 @@ TEST(HomeReturn, ThroughTheIntermediatePointToTheReference) {
   expect_line(p.blocks[3], {7, 5, -7}, {1, 5, -7});  // X only to the reference
   expect_line(p.blocks[4], {1, 5, -7}, {4, 5, -4});  // G30: every axis, tip 6 - 10
   expect_line(p.blocks[5], {4, 5, -4}, {0, 0, 0});
-  expect_line(p.blocks[6], {0, 0, 0}, {4, 5, -4});   // G28 to what G28.1 stored
+  expect_line(p.blocks[6], {0, 0, 0}, {4, 5, -4});  // G28 to what G28.1 stored
   for (const Block& b : p.blocks) EXPECT_EQ(b.kind, MotionKind::Rapid);
   EXPECT_NE(error_of("G28.1 X1\n").find("G28.1 with axis words"), std::string::npos);
   EXPECT_NE(error_of("G0 G28 X1\n").find("both use the axis words"), std::string::npos);
@@ -236,12 +238,12 @@ TEST(GcodeSplines, VerticesOnTheCurveChordsWithinAMicron) {
 // (cx, cy) by 90 deg is (cx - (y - cy), cy + (x - cx))); G91 increments and I J turn too;
 // G69 ends it.
 TEST(CoordinateRotation, G68TurnsPointsIncrementsAndCentres) {
-  const Program p = read(
-      "G21 G17 G90 F100\nG68 X10 Y0 R90\nG1 X20 Y0\nG91 G1 X5\nG90 G2 X20 Y0 I-2.5 J0\nG69\nG1 X0 Y0\nM2\n");
+  const Program p =
+      read("G21 G17 G90 F100\nG68 X10 Y0 R90\nG1 X20 Y0\nG91 G1 X5\nG90 G2 X20 Y0 I-2.5 J0\nG69\nG1 X0 Y0\nM2\n");
   ASSERT_EQ(p.blocks.size(), 4u);
   expect_line(p.blocks[0], {0, 0, 0}, {10, 10, 0});    // (20, 0) about (10, 0)
   expect_line(p.blocks[1], {10, 10, 0}, {10, 15, 0});  // the increment (5, 0) turned to (0, 5)
-  const Block& arc = p.blocks[2];                       // program (25, 0) -> (20, 0) about (22.5, 0)
+  const Block& arc = p.blocks[2];                      // program (25, 0) -> (20, 0) about (22.5, 0)
   ASSERT_EQ(arc.kind, MotionKind::Arc);
   expect_point(arc.end_mm, {10, 10, 0}, "arc end");
   expect_point(arc.center_mm, {10, 12.5, 0}, "arc centre");

@@ -32,8 +32,8 @@ TEST(Probe, G382StopsOnTheStockAndReportsWhere) {
   // From Z10 toward Z-5 the tip meets z = 0 two thirds of the way; G10 L20 then makes that
   // Z0 of G54 (offset 0 here, so a G1 Z-2 goes 2 below the surface).
   const auto program = read_text(
-      "G21 G90 F100\nG0 X3 Y4 Z10\nG38.2 Z-5\n#1 = #5063\n#2 = #5070\nG10 L20 P1 Z0\nG0 Z[#1 + 5 + #2 * 100]\n", with_floor(),
-      "probe.ngc");
+      "G21 G90 F100\nG0 X3 Y4 Z10\nG38.2 Z-5\n#1 = #5063\n#2 = #5070\nG10 L20 P1 Z0\nG0 Z[#1 + 5 + #2 * 100]\n",
+      with_floor(), "probe.ngc");
   ASSERT_EQ(program.blocks.size(), 3u);
   EXPECT_EQ(program.blocks[1].kind, kinematics::MotionKind::Linear);
   EXPECT_DOUBLE_EQ(program.blocks[1].feed_mm_per_min, 100.0);
@@ -45,7 +45,8 @@ TEST(Probe, G382StopsOnTheStockAndReportsWhere) {
 
 TEST(Probe, WithoutContact) {
   // G38.3 and G31 run to their end (#5070 = 0); G38.2 is an error, as on the control.
-  const auto program = read_text("G21 G90 F100\nG0 X0 Y0 Z10\nG38.3 Z2\nG0 Z[20 + #5070 * 100]\n", with_floor(), "miss.ngc");
+  const auto program =
+      read_text("G21 G90 F100\nG0 X0 Y0 Z10\nG38.3 Z2\nG0 Z[20 + #5070 * 100]\n", with_floor(), "miss.ngc");
   EXPECT_NEAR(program.blocks[1].end_mm.z(), 2.0, 1e-12);
   EXPECT_NEAR(program.blocks.back().end_mm.z(), 20.0, 1e-12);
   const std::string e = error_text("G21 G90 F100\nG0 X0 Y0 Z10\nG38.2 Z2\n", with_floor(), "miss2.ngc");
@@ -80,13 +81,15 @@ TEST(Probe, WithoutAStockAsLinuxCncsRs274) {
   // its start on a shorter move; #5070 = 0; a G38.2 of zero length is refused.
   GcodeOptions options;
   options.start_mm = Eigen::Vector3d::Zero();
-  const auto program = read_text("G21 G90 F10\nG0 Z5\nG38.2 Z-10\nG38.3 X0.1\nG0 Y[#5070 + #5061 * 1000]\n", options, "stub.ngc");
+  const auto program =
+      read_text("G21 G90 F10\nG0 Z5\nG38.2 Z-10\nG38.3 X0.1\nG0 Y[#5070 + #5061 * 1000]\n", options, "stub.ngc");
   ASSERT_EQ(program.blocks.size(), 4u);
   EXPECT_NEAR(program.blocks[1].end_mm.z(), -9.746, 1e-12);
   EXPECT_NEAR(program.blocks[2].end_mm.x(), 0.1 - 0.254, 1e-12);
   EXPECT_NEAR(program.blocks[3].end_mm.y(), -154.0, 1e-9);
   ASSERT_EQ(program.warnings.size(), 1u);
-  EXPECT_NE(program.warnings[0].find("stub.ngc:3:1: G38.2 with no stock to touch"), std::string::npos) << program.warnings[0];
+  EXPECT_NE(program.warnings[0].find("stub.ngc:3:1: G38.2 with no stock to touch"), std::string::npos)
+      << program.warnings[0];
   const std::string e = error_text("G21 G90 F10\nG0 Z5\nG38.2 Z5\n", options, "zero.ngc");
   EXPECT_NE(e.find("zero.ngc:3:1: G38.2 to where the probe is"), std::string::npos) << e;
 }

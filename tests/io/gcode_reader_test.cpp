@@ -47,18 +47,17 @@ InputError error_of(const std::string& text, const GcodeOptions& options = {}) {
 
 #define EXPECT_INPUT_ERROR(text, line_, column_, fragment) \
   EXPECT_INPUT_ERROR_WITH(text, line_, column_, fragment, GcodeOptions{})
-#define EXPECT_INPUT_ERROR_WITH(text, line_, column_, fragment, options)                      \
-  do {                                                                                        \
-    const InputError e_ = error_of(text, options);                                            \
-    EXPECT_EQ(e_.file(), "test.ngc");                                                         \
-    EXPECT_EQ(e_.line(), line_) << e_.what();                                                 \
-    EXPECT_EQ(e_.column(), column_) << e_.what();                                             \
-    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();         \
-    EXPECT_EQ(std::string(e_.what()).rfind(std::string("test.ngc:") + std::to_string(line_) + \
-                                               ":" + std::to_string(column_) + ": ",          \
-                                           0),                                                \
-              0u)                                                                             \
-        << e_.what();                                                                         \
+#define EXPECT_INPUT_ERROR_WITH(text, line_, column_, fragment, options)                                       \
+  do {                                                                                                         \
+    const InputError e_ = error_of(text, options);                                                             \
+    EXPECT_EQ(e_.file(), "test.ngc");                                                                          \
+    EXPECT_EQ(e_.line(), line_) << e_.what();                                                                  \
+    EXPECT_EQ(e_.column(), column_) << e_.what();                                                              \
+    EXPECT_NE(std::string(e_.what()).find(fragment), std::string::npos) << e_.what();                          \
+    EXPECT_EQ(std::string(e_.what()).rfind(                                                                    \
+                  std::string("test.ngc:") + std::to_string(line_) + ":" + std::to_string(column_) + ": ", 0), \
+              0u)                                                                                              \
+        << e_.what();                                                                                          \
   } while (0)
 
 void expect_vec(const Eigen::Vector3d& actual, const Eigen::Vector3d& expected, double tol = kTol) {
@@ -303,9 +302,8 @@ TEST(GcodeReader, RandomArcsLieOnTheirCircles) {
     const double half = std::hypot(e[a] - s[a], e[b] - s[b]) / 2.0;
     const double r = half * extra(rng);
     char text[512];
-    std::snprintf(text, sizeof text, "%s G0 X%.6f Y%.6f Z%.6f\n%s X%.6f Y%.6f Z%.6f R%.6f F100\n",
-                  planes[plane], s.x(), s.y(), s.z(), cw ? "G2" : "G3", e.x(), e.y(), e.z(),
-                  long_arc ? -r : r);
+    std::snprintf(text, sizeof text, "%s G0 X%.6f Y%.6f Z%.6f\n%s X%.6f Y%.6f Z%.6f R%.6f F100\n", planes[plane], s.x(),
+                  s.y(), s.z(), cw ? "G2" : "G3", e.x(), e.y(), e.z(), long_arc ? -r : r);
     SCOPED_TRACE(text);
     const Program p = read(text);
     ASSERT_EQ(p.blocks.size(), 1u);  // the first G0 moves nothing
@@ -367,8 +365,7 @@ TEST(GcodeReader, AbsoluteArcCentreG901) {
   expect_vec(p.blocks.at(0).center_mm, {0, 0, 0});
   GcodeOptions options;
   options.work_offsets_mm["G54"] = Eigen::Vector3d(100, 200, 0);
-  const Program q =
-      read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\nG91.1 G2 X10 Y0 I0 J-10\n", options);
+  const Program q = read("G90.1\nG0 X10 Y0 Z0\nG3 X0 Y10 I0 J0 F100\nG91.1 G2 X10 Y0 I0 J-10\n", options);
   ASSERT_EQ(q.blocks.size(), 2u);
   expect_vec(q.blocks[0].center_mm, {100, 200, 0});
   expect_vec(q.blocks[0].end_mm, {100, 210, 0});
@@ -442,8 +439,7 @@ TEST(GcodeReader, ProgramEndIgnoresLaterLinesAndResetsModes) {
 TEST(GcodeReader, ToolChangeAndSpindleState) {
   // T only selects; M6 loads the selected tool (LinuxCNC). M5 on a motion line stops the
   // spindle before the motion (rs274ngc: spindle control precedes motion).
-  const Program p =
-      read("T1 M6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X1 F10\nT2\nG1 X2\nM6\nM4 S500\nG1 X3\nM5 G1 X4\n");
+  const Program p = read("T1 M6\nS1000 M3\nG0 X0 Y0 Z0\nG1 X1 F10\nT2\nG1 X2\nM6\nM4 S500\nG1 X3\nM5 G1 X4\n");
   ASSERT_EQ(p.blocks.size(), 4u);
   EXPECT_EQ(p.blocks[0].tool, 1);
   EXPECT_EQ(p.blocks[0].spindle, SpindleState::Clockwise);
@@ -512,8 +508,7 @@ TEST(GcodeReader, ReadsAFileByPath) {
 
 TEST(GcodeReader, LongLinesAndManyLines) {
   // A 1 MB comment and 1 MB of blanks inside one line; then 200000 short lines.
-  const std::string long_line =
-      "G0 X0 Y0 Z0 (" + std::string(1 << 20, 'c') + ")" + std::string(1 << 20, ' ') + "\n";
+  const std::string long_line = "G0 X0 Y0 Z0 (" + std::string(1 << 20, 'c') + ")" + std::string(1 << 20, ' ') + "\n";
   EXPECT_TRUE(read(long_line).blocks.empty());
   std::string many = "G0 X0 Y0 Z0\nG1 F100\n";
   for (int i = 1; i <= 200000; ++i) many += (i % 2 ? "X1\n" : "X0\n");
@@ -584,7 +579,8 @@ TEST(GcodeReader, NurbsG52G53) {
   // A rational quadratic with the middle weight cos 45 deg is a circular arc: (10, 0), (10, 10)
   // w 0.7071, (0, 10) is the quarter circle of radius 10 about the origin. Every vertex lies on
   // it and every chord within 1 um of it (its sagitta R - distance of the chord's middle).
-  const Program p = read("G21 G90 G17 F100\nG0 X10 Y0 Z2\nG5.2 X10 Y10 P0.70710678118654752 L3\nX0 Y10 P1\nG5.3\nG1 X-5\n", options);
+  const Program p =
+      read("G21 G90 G17 F100\nG0 X10 Y0 Z2\nG5.2 X10 Y10 P0.70710678118654752 L3\nX0 Y10 P1\nG5.3\nG1 X-5\n", options);
   ASSERT_GT(p.blocks.size(), 50u);  // chords of 1 um sagitta on R 10: at most 0.283 mm long
   double worst_vertex = 0.0, worst_sagitta = 0.0;
   for (size_t k = 1; k + 1 < p.blocks.size(); ++k) {
@@ -606,9 +602,15 @@ TEST(GcodeReader, NurbsG52G53) {
   EXPECT_TRUE(through);
   expect_vec(q.blocks.back().end_mm, {20, 10, 0});
   // What LinuxCNC's rs274 refuses, refused.
-  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1 L4\nX2 Y0 P1\nG5.3\n", options).what()).find("test.ngc:5:1: G5.3: a NURBS of order 4 needs at least 4 control points"), std::string::npos);
-  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nX2 Y0\n", options).what()).find("test.ngc:4:1: a NURBS control point without P"), std::string::npos);
-  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nG1 X2\n", options).what()).find("test.ngc:4:1: G1 inside a G5.2 NURBS block"), std::string::npos);
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1 L4\nX2 Y0 P1\nG5.3\n", options).what())
+                .find("test.ngc:5:1: G5.3: a NURBS of order 4 needs at least 4 control points"),
+            std::string::npos);
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nX2 Y0\n", options).what())
+                .find("test.ngc:4:1: a NURBS control point without P"),
+            std::string::npos);
+  EXPECT_NE(std::string(error_of("G0 X0 Y0\nF10\nG5.2 X1 Y1\nG1 X2\n", options).what())
+                .find("test.ngc:4:1: G1 inside a G5.2 NURBS block"),
+            std::string::npos);
 }
 
 TEST(GcodeReader, CoordinateSystemRotationG10L2R) {
@@ -629,12 +631,15 @@ TEST(GcodeReader, CoordinateSystemRotationG10L2R) {
   expect_vec(p.blocks[2].end_mm, turned(30, 0));
   expect_vec(p.blocks[2].center_mm, turned(30, 10));  // I J along the turned axes
   expect_vec(p.blocks[3].end_mm, turned(35, 0));      // G91 X5 along the turned X
-  expect_vec(p.blocks[4].end_mm, {10, 5, 1});          // R0: unturned again
+  expect_vec(p.blocks[4].end_mm, {10, 5, 1});         // R0: unturned again
   // #5420.. read the programmed (turned) coordinates.
   const Program q = read("G21 G90\nG10 L2 P1 R90\nG0 X3 Y4\nG0 X[#5420 + 1]\n", options);
   expect_vec(q.blocks.back().end_mm, {-4, 4, 0});
-  EXPECT_NE(std::string(error_of("G10 L2 P1 R30\nG92 X0\n", options).what()).find("test.ngc:2:1: G92 with a rotation on"), std::string::npos);
-  EXPECT_NE(std::string(error_of("G10 L20 P1 X0 R30\n", options).what()).find("test.ngc:1:15: G10 L20 with R"), std::string::npos);
+  EXPECT_NE(
+      std::string(error_of("G10 L2 P1 R30\nG92 X0\n", options).what()).find("test.ngc:2:1: G92 with a rotation on"),
+      std::string::npos);
+  EXPECT_NE(std::string(error_of("G10 L20 P1 X0 R30\n", options).what()).find("test.ngc:1:15: G10 L20 with R"),
+            std::string::npos);
   EXPECT_NE(std::string(error_of("G10 L2 P1 R30\nG18\nG0 X0 Y0 Z0\nG2 X10 Z0 K5 F10\n", options).what())
                 .find("test.ngc:4:1: G2 outside G17 with the XY rotation on"),
             std::string::npos);
@@ -688,8 +693,7 @@ TEST(GcodeReaderErrors, ArcEndNotOnCircle) {
   // r_start = 10, r_end = 10.1: 0.1 mm > 0.0283 mm and > 0.1 % of r. Reported at the G2 word,
   // or at the first axis word when the arc is modal (r_end = 10.198 there).
   EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10.1 I-10 F100\n", 2, 1, "not on its circle");
-  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10 I-10 F100\n  X10 Y2 J10\n", 3, 3,
-                     "not on its circle");
+  EXPECT_INPUT_ERROR("G0 X10 Y0 Z0\nG2 X0 Y-10 I-10 F100\n  X10 Y2 J10\n", 3, 3, "not on its circle");
   EXPECT_INPUT_ERROR("G0 X0 Y0 Z0\nG2 X0 Y0 I0 J0 F10\n", 2, 1, "zero-radius");
 }
 
@@ -726,7 +730,7 @@ TEST(GcodeReaderErrors, BadNumbers) {
 
 TEST(GcodeReaderErrors, CommentsAndMissingNumbers) {
   EXPECT_INPUT_ERROR("G0 X1 (oops\n", 1, 7, "unterminated comment");
-  EXPECT_NO_THROW(read("G0 X1 (a (b))\n"));                  // comments nest (CAM posts write them)
+  EXPECT_NO_THROW(read("G0 X1 (a (b))\n"));                     // comments nest (CAM posts write them)
   EXPECT_INPUT_ERROR("G0 X1 (a))\n", 1, 10, "unexpected ')'");  // one ')' too many
   EXPECT_INPUT_ERROR("G0 X\n", 1, 4, "expected a number after 'X', found end of line");
   EXPECT_INPUT_ERROR("G0 X Y1\n", 1, 4, "found 'Y'");

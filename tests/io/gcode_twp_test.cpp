@@ -173,7 +173,8 @@ TEST(TiltedPlane, G531HoldsTheLinearAxesAndG536TheTip) {
   auto rx = [](double deg) { return Eigen::AngleAxisd(deg * kDeg, Eigen::Vector3d::UnitX()).toRotationMatrix(); };
   expect_near(program.blocks.back().end_mm, Eigen::Vector3d(0, -220, -80), 1e-9, "end of the swing");
   expect_near(program.blocks[44].end_mm, c + rx(45) * (p - c), 1e-9, "half way");
-  expect_near(program.blocks[44].end_mm, Eigen::Vector3d(0, -20 + 20 * M_SQRT1_2 - 200 * M_SQRT1_2, -100 + 220 * M_SQRT1_2), 1e-9,
+  expect_near(program.blocks[44].end_mm,
+              Eigen::Vector3d(0, -20 + 20 * M_SQRT1_2 - 200 * M_SQRT1_2, -100 + 220 * M_SQRT1_2), 1e-9,
               "half way, by hand");
   EXPECT_NEAR(program.blocks.back().end_rotary.angle_rad[0], -90 * kDeg, 1e-9);
   EXPECT_NEAR(program.blocks.back().end_rotary.angle_rad[2], 0.0, 1e-9);
@@ -236,8 +237,8 @@ TEST(TiltedPlane, AMoveToWhereTheMachineStandsMakesNoBlock) {
   const GcodeOptions options = machine_options("table-table-ac");
   for (int a = -1; a >= -113; a -= 7) {
     for (int c = -170; c <= 170; c += 37) {
-      const std::string text = "G43 H1 G0 X10.3 Y-7.1 Z50.7 A0 C0\nG0 A" + std::to_string(a) + " C" + std::to_string(c) +
-                               "\nG0 Z50.7\nX10.3 Y-7.1\nG1 X11 F100\n";
+      const std::string text = "G43 H1 G0 X10.3 Y-7.1 Z50.7 A0 C0\nG0 A" + std::to_string(a) + " C" +
+                               std::to_string(c) + "\nG0 Z50.7\nX10.3 Y-7.1\nG1 X11 F100\n";
       const auto program = read_text(text, options, "stand.nc");
       for (const Block& b : program.blocks) {
         EXPECT_NE(b.source.line, 3) << "A" << a << " C" << c;
@@ -266,23 +267,30 @@ TEST(TiltedPlane, RollPitchYawWithP1) {
 
 TEST(TiltedPlane, WhatItRefusesNamesTheLine) {
   const GcodeOptions options = fanuc_at_z100();
-  EXPECT_NE(error_text("G53.1\n", options, "a.nc").find("a.nc:1:1: G53.1 without a tilted work plane (expected G68.2 first)"),
+  EXPECT_NE(
+      error_text("G53.1\n", options, "a.nc").find("a.nc:1:1: G53.1 without a tilted work plane (expected G68.2 first)"),
+      std::string::npos);
+  EXPECT_NE(
+      error_text("G68.2 I0 J45. K0\nG53.1\n", options, "b.nc").find("b.nc:2:1: G53.1 needs the machine's rotary axes"),
+      std::string::npos);
+  EXPECT_NE(error_text("G68.2 P2 X0 Y0 Z0\n", options, "c.nc").find("c.nc:1:7: G68.2 P2 (expected P0"),
             std::string::npos);
-  EXPECT_NE(error_text("G68.2 I0 J45. K0\nG53.1\n", options, "b.nc").find("b.nc:2:1: G53.1 needs the machine's rotary axes"),
-            std::string::npos);
-  EXPECT_NE(error_text("G68.2 P2 X0 Y0 Z0\n", options, "c.nc").find("c.nc:1:7: G68.2 P2 (expected P0"), std::string::npos);
-  EXPECT_NE(error_text("G68.2 I0 J45. K0\nG0 A10.\n", options, "d.nc").find("d.nc:2:4: A word with a tilted work plane on"),
-            std::string::npos);
-  EXPECT_NE(error_text("G68.2 I0 J45. K0\nG91 G28 Z0\n", options, "e.nc").find("e.nc:2:5: G28 with a tilted work plane on"),
-            std::string::npos);
+  EXPECT_NE(
+      error_text("G68.2 I0 J45. K0\nG0 A10.\n", options, "d.nc").find("d.nc:2:4: A word with a tilted work plane on"),
+      std::string::npos);
+  EXPECT_NE(
+      error_text("G68.2 I0 J45. K0\nG91 G28 Z0\n", options, "e.nc").find("e.nc:2:5: G28 with a tilted work plane on"),
+      std::string::npos);
   EXPECT_NE(error_text("G68.2 I0 J45. K0\nG55\n", options, "f.nc").find("f.nc:2:1: G55 with a tilted work plane on"),
             std::string::npos);
-  EXPECT_NE(error_text("G68.2 I0 J45. K0\nG68.2 I0 J30. K0\n", options, "g.nc").find("g.nc:2:1: G68.2 with a tilted work plane on"),
+  EXPECT_NE(error_text("G68.2 I0 J45. K0\nG68.2 I0 J30. K0\n", options, "g.nc")
+                .find("g.nc:2:1: G68.2 with a tilted work plane on"),
             std::string::npos);
   // The AC trunnion's A stops at -120: a tool axis 150 deg from vertical is out of reach.
   const GcodeOptions ac = machine_options("table-table-ac");
   const std::string unreachable = error_text("G68.2 I0 J150. K0\nG53.1\n", ac, "h.nc");
-  EXPECT_NE(unreachable.find("h.nc:2:1: G53.1: the machine cannot turn the tool to the tilted plane's Z"), std::string::npos)
+  EXPECT_NE(unreachable.find("h.nc:2:1: G53.1: the machine cannot turn the tool to the tilted plane's Z"),
+            std::string::npos)
       << unreachable;
   EXPECT_NE(unreachable.find("outside its limits [-120, 30]"), std::string::npos) << unreachable;
 }

@@ -83,8 +83,7 @@ axes:
 
 // Reads `text` as a machine file; fails the test unless that raises an InputError at the
 // line holding `marker` whose message holds every fragment.
-void expect_error(const std::string& text, const std::string& marker,
-                  std::initializer_list<const char*> fragments) {
+void expect_error(const std::string& text, const std::string& marker, std::initializer_list<const char*> fragments) {
   const std::string file = write(text);
   const int line = line_of(text, marker);
   try {
@@ -96,8 +95,7 @@ void expect_error(const std::string& text, const std::string& marker,
     EXPECT_EQ(e.line(), line) << what;
     EXPECT_GT(e.column(), 0) << what;
     EXPECT_EQ(what.rfind(file + ":" + std::to_string(line) + ":", 0), 0u) << what;
-    for (const char* f : fragments)
-      EXPECT_NE(what.find(f), std::string::npos) << "'" << f << "' not in: " << what;
+    for (const char* f : fragments) EXPECT_NE(what.find(f), std::string::npos) << "'" << f << "' not in: " << what;
   }
 }
 
@@ -171,9 +169,9 @@ errors:
   EXPECT_TRUE(a.direction.isApprox(Eigen::Vector3d::UnitX()));
   EXPECT_TRUE(a.center_mm.isApprox(Eigen::Vector3d(0, 20, 10)));
   ASSERT_TRUE(a.limits.has_value());
-  EXPECT_NEAR(a.limits->first, -2.0 * kPi / 3.0, kTol);  // -120 deg
-  EXPECT_NEAR(a.limits->second, kPi / 6.0, kTol);        // 30 deg
-  EXPECT_NEAR(a.max_velocity_per_s, kPi / 2.0, kTol);    // 5400 deg/min = 90 deg/s = 1.5708 rad/s
+  EXPECT_NEAR(a.limits->first, -2.0 * kPi / 3.0, kTol);     // -120 deg
+  EXPECT_NEAR(a.limits->second, kPi / 6.0, kTol);           // 30 deg
+  EXPECT_NEAR(a.max_velocity_per_s, kPi / 2.0, kTol);       // 5400 deg/min = 90 deg/s = 1.5708 rad/s
   EXPECT_NEAR(a.max_acceleration_per_s2, 2.0 * kPi, kTol);  // 360 deg/s^2
   EXPECT_NEAR(a.max_jerk_per_s3, 20.0 * kPi, 1e-11);        // 3600 deg/s^3
 
@@ -269,13 +267,11 @@ TEST(MachineFileError, SecondYamlDocument) {
 }
 
 TEST(MachineFileError, UnknownLetterInTopology) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "WCAFXYZT", "WCAFXYZQT"), "topology:", "'topology'",
-                       "unknown", "Q");
+  EXPECT_MACHINE_ERROR(replace(kBase, "WCAFXYZT", "WCAFXYZQT"), "topology:", "'topology'", "unknown", "Q");
 }
 
 TEST(MachineFileError, DuplicateLetterInTopology) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "WCAFXYZT", "WCAFXYZXT"), "topology:", "'topology'",
-                       "duplicate");
+  EXPECT_MACHINE_ERROR(replace(kBase, "WCAFXYZT", "WCAFXYZXT"), "topology:", "'topology'", "duplicate");
 }
 
 TEST(MachineFileError, TopologyAxisMissingFromAxes) {
@@ -289,13 +285,12 @@ TEST(MachineFileError, AxisMissingFromTopology) {
 }
 
 TEST(MachineFileError, ZeroVector) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "direction: [1, 0, 0]", "direction: [0, 0, 0]"),
-                       "  X:", "'axes.X.direction'", "zero");
+  EXPECT_MACHINE_ERROR(replace(kBase, "direction: [1, 0, 0]", "direction: [0, 0, 0]"), "  X:", "'axes.X.direction'",
+                       "zero");
 }
 
 TEST(MachineFileError, VectorFarFromUnitLength) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "axis: [1, 0, 0]", "axis: [1, 1, 0]"),
-                       "  A:", "'axes.A.axis'", "unit");
+  EXPECT_MACHINE_ERROR(replace(kBase, "axis: [1, 0, 0]", "axis: [1, 1, 0]"), "  A:", "'axes.A.axis'", "unit");
 }
 
 TEST(MachineFileError, VectorNearUnitLengthIsNormalisedWithAWarning) {
@@ -304,8 +299,7 @@ TEST(MachineFileError, VectorNearUnitLengthIsNormalisedWithAWarning) {
   std::vector<std::string> warnings;
   const MachineSpec spec = read_machine_file(file, &warnings);
   ASSERT_EQ(warnings.size(), 1u);
-  EXPECT_EQ(warnings[0].rfind(file + ":" + std::to_string(line_of(text, "  Y:")) + ":", 0), 0u)
-      << warnings[0];
+  EXPECT_EQ(warnings[0].rfind(file + ":" + std::to_string(line_of(text, "  Y:")) + ":", 0), 0u) << warnings[0];
   EXPECT_NE(warnings[0].find("axes.Y.direction"), std::string::npos) << warnings[0];
   EXPECT_NEAR(axis(spec, 'Y').direction.norm(), 1.0, 1e-15);
   EXPECT_NEAR(axis(spec, 'Y').direction.y(), 1.0, 1e-15);
@@ -313,8 +307,8 @@ TEST(MachineFileError, VectorNearUnitLengthIsNormalisedWithAWarning) {
 }
 
 TEST(MachineFileError, ParallelLinearAxes) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "direction: [0, 1, 0]", "direction: [-1, 0, 0]"),
-                       "  Y:", "'axes.Y.direction'", "parallel");
+  EXPECT_MACHINE_ERROR(replace(kBase, "direction: [0, 1, 0]", "direction: [-1, 0, 0]"), "  Y:", "'axes.Y.direction'",
+                       "parallel");
 }
 
 TEST(MachineFileError, ThreeRotaryAxes) {
@@ -324,22 +318,19 @@ TEST(MachineFileError, ThreeRotaryAxes) {
 }
 
 TEST(MachineFileError, InvertedLimits) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "[300, -300]"), "  X:", "'axes.X.limits'",
-                       "min < max");
+  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "[300, -300]"), "  X:", "'axes.X.limits'", "min < max");
 }
 
 // --- mistakes the reader finds itself ---
 
 TEST(MachineFileError, UnknownErrorName) {
-  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  E_QX: 5\n", "E_QX", "'errors.E_QX'",
-                       "unknown error name");
-  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  EXX2: 5\n", "EXX2", "'errors.EXX2'",
-                       "unknown error name");
+  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  E_QX: 5\n", "E_QX", "'errors.E_QX'", "unknown error name");
+  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  EXX2: 5\n", "EXX2", "'errors.EXX2'", "unknown error name");
 }
 
 TEST(MachineFileError, SquarenessOffsetOnLinearAxis) {
-  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_C0Y: 5\n  E_X0Y: 5\n", "E_X0Y", "'errors.E_X0Y'",
-                       "squareness", "offsets have no meaning for a linear axis");
+  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_C0Y: 5\n  E_X0Y: 5\n", "E_X0Y", "'errors.E_X0Y'", "squareness",
+                       "offsets have no meaning for a linear axis");
 }
 
 TEST(MachineFileError, ErrorOfAnAxisTheMachineLacks) {
@@ -359,13 +350,12 @@ TEST(MachineFileError, TableNotAscending) {
 }
 
 TEST(MachineFileError, LocationErrorIsAConstant) {
-  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_X0C: {table: [[0, 0], [360, 1]]}\n", "E_X0C",
-                       "'errors.E_X0C'", "constant");
+  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_X0C: {table: [[0, 0], [360, 1]]}\n", "E_X0C", "'errors.E_X0C'",
+                       "constant");
 }
 
 TEST(MachineFileError, DuplicateErrorName) {
-  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  E_XX: 6\n", "E_XX: 6", "'errors.E_XX'",
-                       "duplicate");
+  EXPECT_MACHINE_ERROR(kBase + "errors:\n  E_XX: 5\n  E_XX: 6\n", "E_XX: 6", "'errors.E_XX'", "duplicate");
 }
 
 TEST(MachineFileError, ErrorValueNotANumber) {
@@ -373,70 +363,60 @@ TEST(MachineFileError, ErrorValueNotANumber) {
 }
 
 TEST(MachineFileError, MissingModelFile) {
-  EXPECT_MACHINE_ERROR(kBase + "models:\n  A: [{file: models/missing.stl}]\n", "missing.stl",
-                       "'models.A.file'", "missing.stl");
+  EXPECT_MACHINE_ERROR(kBase + "models:\n  A: [{file: models/missing.stl}]\n", "missing.stl", "'models.A.file'",
+                       "missing.stl");
 }
 
 TEST(MachineFileError, ModelOnANodeTheMachineLacks) {
   write("solid b\nendsolid b\n", "b.stl");
-  EXPECT_MACHINE_ERROR(kBase + "models:\n  B: [{file: b.stl}]\n", "  B:", "'models.B'",
-                       "node of this machine");
+  EXPECT_MACHINE_ERROR(kBase + "models:\n  B: [{file: b.stl}]\n", "  B:", "'models.B'", "node of this machine");
 }
 
 TEST(MachineFileError, InvalidYaml) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "limits: [-200, 200]}", "limits: [-200, 200]]}"),
-                       "  Y:", "invalid YAML");
+  EXPECT_MACHINE_ERROR(replace(kBase, "limits: [-200, 200]}", "limits: [-200, 200]]}"), "  Y:", "invalid YAML");
 }
 
 TEST(MachineFileError, UnknownKey) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "max_velocity: 20000", "max_velocty: 20000"),
-                       "  X:", "'axes.X.max_velocty'", "unknown key");
-  EXPECT_MACHINE_ERROR(kBase + "spindel: {axis: [0, 0, 1]}\n", "spindel", "'spindel'",
+  EXPECT_MACHINE_ERROR(replace(kBase, "max_velocity: 20000", "max_velocty: 20000"), "  X:", "'axes.X.max_velocty'",
                        "unknown key");
+  EXPECT_MACHINE_ERROR(kBase + "spindel: {axis: [0, 0, 1]}\n", "spindel", "'spindel'", "unknown key");
 }
 
 TEST(MachineFileError, MissingRequiredKey) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "topology: WCAFXYZT\n", ""), "machine:", "'topology'",
-                       "missing key");
+  EXPECT_MACHINE_ERROR(replace(kBase, "topology: WCAFXYZT\n", ""), "machine:", "'topology'", "missing key");
   EXPECT_MACHINE_ERROR(replace(kBase, "kind: linear, direction: [1, 0, 0]", "kind: linear"),
                        "  X:", "'axes.X.direction'", "missing key");
 }
 
 TEST(MachineFileError, DuplicateAxis) {
-  EXPECT_MACHINE_ERROR(kBase + "  X: {kind: linear, direction: [1, 0, 0]}\n",
-                       "direction: [1, 0, 0]}\n", "'axes.X'", "duplicate");
+  EXPECT_MACHINE_ERROR(kBase + "  X: {kind: linear, direction: [1, 0, 0]}\n", "direction: [1, 0, 0]}\n", "'axes.X'",
+                       "duplicate");
 }
 
 TEST(MachineFileError, AxisKind) {
-  EXPECT_MACHINE_ERROR(
-      replace(kBase, "kind: linear, direction: [0, 0, 1]", "kind: prismatic, direction: [0, 0, 1]"),
-      "  Z:", "'axes.Z.kind'", "linear or rotary");
+  EXPECT_MACHINE_ERROR(replace(kBase, "kind: linear, direction: [0, 0, 1]", "kind: prismatic, direction: [0, 0, 1]"),
+                       "  Z:", "'axes.Z.kind'", "linear or rotary");
 }
 
 TEST(MachineFileError, LinearAxisWithRotaryKeys) {
-  EXPECT_MACHINE_ERROR(
-      replace(kBase, "kind: linear, direction: [1, 0, 0]", "kind: linear, axis: [1, 0, 0]"),
-      "  X:", "'axes.X.axis'", "'direction' for a linear axis");
-  EXPECT_MACHINE_ERROR(
-      replace(kBase, "kind: rotary, axis: [1, 0, 0]", "kind: rotary, direction: [1, 0, 0]"),
-      "  A:", "'axes.A.direction'", "'axis' and 'center' for a rotary axis");
+  EXPECT_MACHINE_ERROR(replace(kBase, "kind: linear, direction: [1, 0, 0]", "kind: linear, axis: [1, 0, 0]"),
+                       "  X:", "'axes.X.axis'", "'direction' for a linear axis");
+  EXPECT_MACHINE_ERROR(replace(kBase, "kind: rotary, axis: [1, 0, 0]", "kind: rotary, direction: [1, 0, 0]"),
+                       "  A:", "'axes.A.direction'", "'axis' and 'center' for a rotary axis");
 }
 
 TEST(MachineFileError, LimitsShape) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "[-300, 0, 300]"), "  X:", "'axes.X.limits'",
-                       "two numbers");
-  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "300"), "  X:", "'axes.X.limits'",
-                       "two numbers");
+  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "[-300, 0, 300]"), "  X:", "'axes.X.limits'", "two numbers");
+  EXPECT_MACHINE_ERROR(replace(kBase, "[-300, 300]", "300"), "  X:", "'axes.X.limits'", "two numbers");
 }
 
 TEST(MachineFileError, NonPositiveDynamics) {
-  EXPECT_MACHINE_ERROR(replace(kBase, "max_velocity: 5400", "max_velocity: -5400"),
-                       "  A:", "'axes.A.max_velocity'", "positive");
+  EXPECT_MACHINE_ERROR(replace(kBase, "max_velocity: 5400", "max_velocity: -5400"), "  A:", "'axes.A.max_velocity'",
+                       "positive");
 }
 
 TEST(MachineFileError, UnknownAxisLetter) {
-  EXPECT_MACHINE_ERROR(kBase + "  U: {kind: linear, direction: [1, 0, 0]}\n", "  U:", "'axes.U'",
-                       "axis letter");
+  EXPECT_MACHINE_ERROR(kBase + "  U: {kind: linear, direction: [1, 0, 0]}\n", "  U:", "'axes.U'", "axis letter");
 }
 
 // --- bundled machines ---
@@ -450,10 +430,9 @@ TEST(MachineFile, ResolvesOnlyBareNamesOfBundledMachines) {
 
 TEST(MachineFile, BundledMachinesRead) {
   int found = 0;
-  for (const char* name : {"3axis", "table-table-ac", "table-table-bc", "head-table-bc",
-                           "head-head-ac", "gantry-wyxzcat"}) {
-    const fs::path expected =
-        fs::path(VCUT_SOURCE_DIR) / "examples" / "machines" / (std::string(name) + ".yaml");
+  for (const char* name :
+       {"3axis", "table-table-ac", "table-table-bc", "head-table-bc", "head-head-ac", "gantry-wyxzcat"}) {
+    const fs::path expected = fs::path(VCUT_SOURCE_DIR) / "examples" / "machines" / (std::string(name) + ".yaml");
     if (!fs::exists(expected)) continue;
     ++found;
     const std::string path = resolve_machine(name);

@@ -65,8 +65,12 @@ TEST(MeshIo, BinaryStlHoldsEachTriangleWithItsNormal) {
 }
 
 TEST(MeshIo, Base64MatchesRfc4648) {
-  const std::pair<std::string, std::string> vectors[] = {{"", ""},         {"f", "Zg=="},         {"fo", "Zm8="},
-                                                         {"foo", "Zm9v"}, {"foob", "Zm9vYg=="}, {"fooba", "Zm9vYmE="},
+  const std::pair<std::string, std::string> vectors[] = {{"", ""},
+                                                         {"f", "Zg=="},
+                                                         {"fo", "Zm8="},
+                                                         {"foo", "Zm9v"},
+                                                         {"foob", "Zm9vYg=="},
+                                                         {"fooba", "Zm9vYmE="},
                                                          {"foobar", "Zm9vYmFy"}};
   for (const auto& [in, out] : vectors) EXPECT_EQ(report::base64(in.data(), in.size()), out) << in;
   const unsigned char high[] = {0xfb, 0xff, 0xbf};  // the alphabet's last two characters

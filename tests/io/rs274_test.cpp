@@ -63,21 +63,21 @@ constexpr MotionKind F = MotionKind::Linear;
 TEST(Rs274Expressions, PrecedenceAndAssociativity) {
   EXPECT_NEAR(x_of("[1 + 2 * 3]"), 7.0, kTol);
   EXPECT_NEAR(x_of("[[1 + 2] * 3]"), 9.0, kTol);
-  EXPECT_NEAR(x_of("[10 - 4 - 3]"), 3.0, kTol);      // left to right
-  EXPECT_NEAR(x_of("[2 ** 3 ** 2]"), 64.0, kTol);    // (2^3)^2: left to right as well
-  EXPECT_NEAR(x_of("[2 * 3 ** 2]"), 18.0, kTol);     // ** before *
+  EXPECT_NEAR(x_of("[10 - 4 - 3]"), 3.0, kTol);    // left to right
+  EXPECT_NEAR(x_of("[2 ** 3 ** 2]"), 64.0, kTol);  // (2^3)^2: left to right as well
+  EXPECT_NEAR(x_of("[2 * 3 ** 2]"), 18.0, kTol);   // ** before *
   EXPECT_NEAR(x_of("[12 / 4 / 3]"), 1.0, kTol);
-  EXPECT_NEAR(x_of("[1 + 2 GT 2]"), 1.0, kTol);      // + before GT
+  EXPECT_NEAR(x_of("[1 + 2 GT 2]"), 1.0, kTol);        // + before GT
   EXPECT_NEAR(x_of("[1 GT 2 OR 3 GT 2]"), 1.0, kTol);  // GT before OR
-  EXPECT_NEAR(x_of("[1 AND 0 XOR 1]"), 1.0, kTol);   // (1 AND 0) XOR 1
+  EXPECT_NEAR(x_of("[1 AND 0 XOR 1]"), 1.0, kTol);     // (1 AND 0) XOR 1
   EXPECT_NEAR(x_of("[-2 * -3]"), 6.0, kTol);
   EXPECT_NEAR(x_of("-[2 + 3]"), -5.0, kTol);
-  EXPECT_NEAR(x_of("[ 1 0 . 5 ]"), 10.5, kTol);      // blanks inside numbers are ignored
+  EXPECT_NEAR(x_of("[ 1 0 . 5 ]"), 10.5, kTol);  // blanks inside numbers are ignored
 }
 
 TEST(Rs274Expressions, ModuloComparisonAndLogic) {
   EXPECT_NEAR(x_of("[7 MOD 3]"), 1.0, kTol);
-  EXPECT_NEAR(x_of("[-7 MOD 3]"), 2.0, kTol);   // never negative: -1 + 3
+  EXPECT_NEAR(x_of("[-7 MOD 3]"), 2.0, kTol);  // never negative: -1 + 3
   EXPECT_NEAR(x_of("[7.5 mod 2]"), 1.5, kTol);
   EXPECT_NEAR(x_of("[1 EQ 1.00005]"), 1.0, kTol);  // EQ within 1e-4
   EXPECT_NEAR(x_of("[1 EQ 1.001]"), 0.0, kTol);
@@ -91,7 +91,7 @@ TEST(Rs274Expressions, ModuloComparisonAndLogic) {
 }
 
 TEST(Rs274Expressions, Functions) {
-  EXPECT_NEAR(x_of("COS[60]"), 0.5, 1e-12);     // degrees
+  EXPECT_NEAR(x_of("COS[60]"), 0.5, 1e-12);  // degrees
   EXPECT_NEAR(x_of("SIN[30]"), 0.5, 1e-12);
   EXPECT_NEAR(x_of("TAN[45]"), 1.0, 1e-12);
   EXPECT_NEAR(x_of("ACOS[0]"), 90.0, 1e-12);
@@ -102,9 +102,9 @@ TEST(Rs274Expressions, Functions) {
   EXPECT_NEAR(x_of("EXP[0]"), 1.0, kTol);
   EXPECT_NEAR(x_of("LN[1]"), 0.0, kTol);
   EXPECT_NEAR(x_of("ABS[-3]"), 3.0, kTol);
-  EXPECT_NEAR(x_of("FIX[-2.5]"), -3.0, kTol);   // down
-  EXPECT_NEAR(x_of("FUP[-2.5]"), -2.0, kTol);   // up
-  EXPECT_NEAR(x_of("ROUND[2.5]"), 3.0, kTol);   // halves away from zero
+  EXPECT_NEAR(x_of("FIX[-2.5]"), -3.0, kTol);  // down
+  EXPECT_NEAR(x_of("FUP[-2.5]"), -2.0, kTol);  // up
+  EXPECT_NEAR(x_of("ROUND[2.5]"), 3.0, kTol);  // halves away from zero
   EXPECT_NEAR(x_of("ROUND[-2.5]"), -3.0, kTol);
   EXPECT_NEAR(x_of("[2 * abs[-1.5]]"), 3.0, kTol);  // case-insensitive
   EXPECT_NEAR(x_of("[EXISTS[#<a>] * 10 + EXISTS[#<b>]]", "#<a> = 1\n"), 10.0, kTol);
@@ -140,12 +140,12 @@ TEST(Rs274Expressions, Errors) {
 
 TEST(Rs274Parameters, NumberedNamedAndIndirect) {
   EXPECT_NEAR(x_of("#1", "#1 = 4.5\n"), 4.5, kTol);
-  EXPECT_NEAR(x_of("##2", "#2 = 7\n#7 = 3\n"), 3.0, kTol);          // #[#2] = #7
+  EXPECT_NEAR(x_of("##2", "#2 = 7\n#7 = 3\n"), 3.0, kTol);  // #[#2] = #7
   EXPECT_NEAR(x_of("#[1 + 1]", "#2 = 8\n"), 8.0, kTol);
   EXPECT_NEAR(x_of("#<my depth>", "#<MyDepth> = 2.5\n"), 2.5, kTol);  // blanks and case ignored
   EXPECT_NEAR(x_of("#<_g>", "#<_g> = -1\n"), -1.0, kTol);
-  EXPECT_NEAR(x_of("#99", ""), 0.0, kTol);                           // unset numbered: 0
-  EXPECT_NEAR(x_of("[#<_unset> + 1]", ""), 1.0, kTol);               // unset global: 0
+  EXPECT_NEAR(x_of("#99", ""), 0.0, kTol);              // unset numbered: 0
+  EXPECT_NEAR(x_of("[#<_unset> + 1]", ""), 1.0, kTol);  // unset global: 0
   // Every value on a line is read before any parameter of the line is set.
   EXPECT_NEAR(x_of("#1", "#1 = 1\n#1 = 2 #2 = #1\n#1 = #2\n"), 1.0, kTol);
   EXPECT_NEAR(x_of("#3", "#3 = 1 #3 = 2\n"), 2.0, kTol);  // the last setting wins
@@ -197,8 +197,9 @@ TEST(Rs274ControlFlow, WhileDoRepeatBreakContinue) {
   ASSERT_EQ(p.blocks.size(), 3u);
   EXPECT_NEAR(p.blocks[2].end_mm.x(), 6.0, kTol);
   // break leaves the loop; continue skips the rest of one pass (X 1..5, Y only for odd ones).
-  p = read("G0 X0 Y0 Z0\n#1 = 0\no5 while [1]\n  #1 = [#1 + 1]\n  o6 if [#1 GT 5]\n    o5 break\n  o6 endif\n"
-           "  G0 X#1\n  o7 if [[#1 MOD 2] EQ 0]\n    o5 continue\n  o7 endif\n  G0 Y#1\no5 endwhile\nG0 Z1\n");
+  p = read(
+      "G0 X0 Y0 Z0\n#1 = 0\no5 while [1]\n  #1 = [#1 + 1]\n  o6 if [#1 GT 5]\n    o5 break\n  o6 endif\n"
+      "  G0 X#1\n  o7 if [[#1 MOD 2] EQ 0]\n    o5 continue\n  o7 endif\n  G0 Y#1\no5 endwhile\nG0 Z1\n");
   std::vector<Eigen::Vector3d> expected = {{1, 0, 0}, {1, 1, 0}, {2, 1, 0}, {3, 1, 0}, {3, 3, 0},
                                            {4, 3, 0}, {5, 3, 0}, {5, 5, 0}, {5, 5, 1}};
   const auto got = ends(p);
@@ -208,7 +209,7 @@ TEST(Rs274ControlFlow, WhileDoRepeatBreakContinue) {
 
 TEST(Rs274ControlFlow, SubroutinesArgumentsScopeAndReturn) {
   const Program p = read(
-      "o<square> sub\n"             // #1 = side, #2 = z
+      "o<square> sub\n"  // #1 = side, #2 = z
       "  #<half> = [#1 / 2]\n"
       "  G1 X#<half> Y[-#<half>] Z#2 F100\n"
       "  G1 Y#<half>\n"
@@ -226,11 +227,12 @@ TEST(Rs274ControlFlow, SubroutinesArgumentsScopeAndReturn) {
 TEST(Rs274ControlFlow, SubroutineFileOnTheSearchPath) {
   const auto dir = std::filesystem::temp_directory_path() / "vcut_rs274_sub_test";
   std::filesystem::create_directories(dir / "lib");
-  std::ofstream(dir / "lib" / "peck.ngc") << "(a subroutine file)\no<peck> sub\n  G1 Z#1 F50\n  G0 Z2\no<peck> endsub\nM2\n";
+  std::ofstream(dir / "lib" / "peck.ngc")
+      << "(a subroutine file)\no<peck> sub\n  G1 Z#1 F50\n  G0 Z2\no<peck> endsub\nM2\n";
   GcodeOptions options;
   options.subroutine_path = {(dir / "lib").string()};
-  const Program p = read("G0 X0 Y0 Z2\no<peck> call [-3]\nG0 X5\no<PECK> call [-4]\n", options,
-                         (dir / "main.ngc").string());
+  const Program p =
+      read("G0 X0 Y0 Z2\no<peck> call [-3]\nG0 X5\no<PECK> call [-4]\n", options, (dir / "main.ngc").string());
   expect_path(p, {{F, {0, 0, -3}}, {R, {0, 0, 2}}, {R, {5, 0, 2}}, {F, {5, 0, -4}}, {R, {5, 0, 2}}});
   ASSERT_EQ(p.files.size(), 2u);
   EXPECT_EQ(p.where(p.blocks[0].source), (dir / "lib" / "peck.ngc").string() + ":3");
@@ -380,29 +382,51 @@ TEST(Rs274Tcp, Blocks) {
 TEST(Rs274Cycles, G81G98AndG99) {
   // From Z10: rapid over the hole, rapid to R2, feed to Z-5, back to the starting height
   // (G98) or to R (G99). The second hole, in G99, starts at R: no rapid down.
-  expect_path(read("G0 X0 Y0 Z10\nF100\nG98 G81 X5 Y5 Z-5 R2\nG99 X8\nG80\n"),
-              {{R, {5, 5, 10}}, {R, {5, 5, 2}}, {F, {5, 5, -5}}, {R, {5, 5, 10}},
-               {R, {8, 5, 10}}, {R, {8, 5, 2}}, {F, {8, 5, -5}}, {R, {8, 5, 2}}});
+  expect_path(read("G0 X0 Y0 Z10\nF100\nG98 G81 X5 Y5 Z-5 R2\nG99 X8\nG80\n"), {{R, {5, 5, 10}},
+                                                                                {R, {5, 5, 2}},
+                                                                                {F, {5, 5, -5}},
+                                                                                {R, {5, 5, 10}},
+                                                                                {R, {8, 5, 10}},
+                                                                                {R, {8, 5, 2}},
+                                                                                {F, {8, 5, -5}},
+                                                                                {R, {8, 5, 2}}});
   // Starting below R: first a rapid straight up to R.
   expect_path(read("G0 X0 Y0 Z0\nF100\nG81 X1 Z-1 R3\n"),
               {{R, {0, 0, 3}}, {R, {1, 0, 3}}, {F, {1, 0, -1}}, {R, {1, 0, 3}}});
   // G91 with L3: R from the current Z (5 - 3 = 2), Z from R (2 - 4 = -2), holes 2 mm apart.
   const Program p = read("G0 X0 Y0 Z5\nF100\nG91 G99 G81 X2 R-3 Z-4 L3\n");
-  expect_path(p, {{R, {2, 0, 5}}, {R, {2, 0, 2}}, {F, {2, 0, -2}}, {R, {2, 0, 2}},
-                  {R, {4, 0, 2}}, {F, {4, 0, -2}}, {R, {4, 0, 2}},
-                  {R, {6, 0, 2}}, {F, {6, 0, -2}}, {R, {6, 0, 2}}});
+  expect_path(p, {{R, {2, 0, 5}},
+                  {R, {2, 0, 2}},
+                  {F, {2, 0, -2}},
+                  {R, {2, 0, 2}},
+                  {R, {4, 0, 2}},
+                  {F, {4, 0, -2}},
+                  {R, {4, 0, 2}},
+                  {R, {6, 0, 2}},
+                  {F, {6, 0, -2}},
+                  {R, {6, 0, 2}}});
   EXPECT_NEAR(p.blocks[2].feed_mm_per_min, 100.0, kTol);
 }
 
 TEST(Rs274Cycles, PeckingG83AndG73) {
   // Q2 from R1 to Z-5: pecks to -1 and -3, then the bottom. G83 retracts to R after each
   // peck and comes back to 0.254 mm (0.010 in) above it; G73 only backs off 0.254 mm.
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G83 Z-5 R1 Q2\n"),
-              {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, 1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
-               {R, {0, 0, 1}}, {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
-  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G73 Z-5 R1 Q2\n"),
-              {{R, {0, 0, 1}}, {F, {0, 0, -1}}, {R, {0, 0, -0.746}}, {F, {0, 0, -3}},
-               {R, {0, 0, -2.746}}, {F, {0, 0, -5}}, {R, {0, 0, 5}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G83 Z-5 R1 Q2\n"), {{R, {0, 0, 1}},
+                                                               {F, {0, 0, -1}},
+                                                               {R, {0, 0, 1}},
+                                                               {R, {0, 0, -0.746}},
+                                                               {F, {0, 0, -3}},
+                                                               {R, {0, 0, 1}},
+                                                               {R, {0, 0, -2.746}},
+                                                               {F, {0, 0, -5}},
+                                                               {R, {0, 0, 5}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G73 Z-5 R1 Q2\n"), {{R, {0, 0, 1}},
+                                                               {F, {0, 0, -1}},
+                                                               {R, {0, 0, -0.746}},
+                                                               {F, {0, 0, -3}},
+                                                               {R, {0, 0, -2.746}},
+                                                               {F, {0, 0, -5}},
+                                                               {R, {0, 0, 5}}});
 }
 
 TEST(Rs274Cycles, BoringG85AndDwellG82G89) {
@@ -426,20 +450,29 @@ TEST(Rs274Polar, DistanceAndAngle) {
   expect_path(read("G0 X10 Y0 Z0\nG91 G0 ^90\nG0 @-4\n"), {{R, {0, 10, 0}}, {R, {0, 6, 0}}});
   // A bolt circle: G91 G81 turning 120 deg per hole from (15, 0); R from the series' start Z0.
   const double s = 15 * std::sqrt(3.0) / 2;
-  expect_path(read("G0 X15 Y0 Z0\nG91 G81 R1 Z-5 ^120 L3 F10\n"),
-              {{R, {15, 0, 1}},
-               {R, {-7.5, s, 1}}, {F, {-7.5, s, -4}}, {R, {-7.5, s, 1}},
-               {R, {-7.5, -s, 1}}, {F, {-7.5, -s, -4}}, {R, {-7.5, -s, 1}},
-               {R, {15, 0, 1}}, {F, {15, 0, -4}}, {R, {15, 0, 1}}});
+  expect_path(read("G0 X15 Y0 Z0\nG91 G81 R1 Z-5 ^120 L3 F10\n"), {{R, {15, 0, 1}},
+                                                                   {R, {-7.5, s, 1}},
+                                                                   {F, {-7.5, s, -4}},
+                                                                   {R, {-7.5, s, 1}},
+                                                                   {R, {-7.5, -s, 1}},
+                                                                   {F, {-7.5, -s, -4}},
+                                                                   {R, {-7.5, -s, 1}},
+                                                                   {R, {15, 0, 1}},
+                                                                   {F, {15, 0, -4}},
+                                                                   {R, {15, 0, 1}}});
   EXPECT_NE(error_of("G0 @1\n").find("unknown"), std::string::npos);
 }
 
 TEST(Rs274Cycles, IncrementalRCountsFromTheSeriesStart) {
   // rs274: a G91 cycle line that continues a series takes R from the height the series began
   // at (Z0 here), not from where the previous hole left the tool (R = 1).
-  expect_path(read("G0 X0 Y0 Z0\nF10\nG91 G81 X1 R1 Z-5\nX1\n"),
-              {{R, {0, 0, 1}}, {R, {1, 0, 1}}, {F, {1, 0, -4}}, {R, {1, 0, 1}},
-               {R, {2, 0, 1}}, {F, {2, 0, -4}}, {R, {2, 0, 1}}});
+  expect_path(read("G0 X0 Y0 Z0\nF10\nG91 G81 X1 R1 Z-5\nX1\n"), {{R, {0, 0, 1}},
+                                                                  {R, {1, 0, 1}},
+                                                                  {F, {1, 0, -4}},
+                                                                  {R, {1, 0, 1}},
+                                                                  {R, {2, 0, 1}},
+                                                                  {F, {2, 0, -4}},
+                                                                  {R, {2, 0, 1}}});
 }
 
 TEST(Rs274Cycles, Errors) {

@@ -31,9 +31,7 @@ TEST(Sha256, KnownAnswers) {
   EXPECT_EQ(hash_of(std::string(1000000, 'a')), "cdc76e5c9914fb9281a1c7e284d73e67f1809a48a497200e046d39ccc7112cd0");
 }
 
-TEST(Sha256, MissingFileIsAnInputError) {
-  EXPECT_THROW(sha256_file("/nonexistent/vcut/file.ngc"), InputError);
-}
+TEST(Sha256, MissingFileIsAnInputError) { EXPECT_THROW(sha256_file("/nonexistent/vcut/file.ngc"), InputError); }
 
 }  // namespace
 }  // namespace vcut::io

@@ -61,8 +61,7 @@ InputError error_of(const std::string& text, const SinumerikOptions& options = {
   } while (false)
 
 void expect_vec(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double tol = kTol) {
-  EXPECT_LE((got - want).norm(), tol)
-      << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
+  EXPECT_LE((got - want).norm(), tol) << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
 }
 
 // Seed 000, Fig. 6: the letter-space-number blocks of the gantry program, without TRAORI: axis
@@ -184,10 +183,9 @@ TEST(SinumerikReader, OriconCone) {
   EXPECT_EQ(p.blocks[2].orientation, OrientationMode::ConeClockwise);
   expect_vec(p.blocks[2].cone_axis, {0, 0, 1});  // A6 B6 C6 are kept
   // The end off the start's cone: 0 deg vs 45 deg from the axis.
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n",
-                   4, 10, "expected both on one cone");
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCCW\nG1 F1 X1 A3=1 C3=1\n", 4, 10,
-                   "without a cone axis");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONCW\nG1 F1 X1 A3=0 C3=1 A6=0 B6=0 C6=1\n", 4, 10,
+                   "expected both on one cone");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONCCW\nG1 F1 X1 A3=1 C3=1\n", 4, 10, "without a cone axis");
 }
 
 // The tool vector of a cone block at fraction s, by the pose engine (densify's block_pose).
@@ -195,8 +193,8 @@ Eigen::Vector3d axis_at(const Block& b, double s) { return kinematics::block_pos
 
 std::string vec3(const char* letters, const Eigen::Vector3d& v) {
   char buf[160];
-  std::snprintf(buf, sizeof buf, " %c%c=%.17g %c%c=%.17g %c%c=%.17g", letters[0], letters[3], v.x(),
-                letters[1], letters[3], v.y(), letters[2], letters[3], v.z());
+  std::snprintf(buf, sizeof buf, " %c%c=%.17g %c%c=%.17g %c%c=%.17g", letters[0], letters[3], v.x(), letters[1],
+                letters[3], v.y(), letters[2], letters[3], v.z());
   return buf;
 }
 
@@ -231,19 +229,17 @@ TEST(SinumerikReader, OriconIntermediate) {
   EXPECT_EQ(read("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nX1 A3=1 C3=1\n").blocks.size(), 2u);
 
   // Errors, each naming line:column of the word at fault.
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=1 C7=1 A3=0 B3=1 C3=1\n",
-                   4, 10, "the intermediate and the start are 0 apart");
-  EXPECT_MPF_ERROR(
-      "TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=0 B3=1 C3=1\n", 4, 10,
-      "the intermediate and the end");
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=1 C3=1\n",
-                   4, 10, "the end and the start");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=1 C7=1 A3=0 B3=1 C3=1\n", 4, 10,
+                   "the intermediate and the start are 0 apart");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=0 B3=1 C3=1\n", 4, 10,
+                   "the intermediate and the end");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 B7=1 C7=1 A3=1 C3=1\n", 4, 10,
+                   "the end and the start");
   EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A3=0 B3=1 C3=1\n", 4, 10,
                    "ORICONIO end vector without the intermediate orientation A7 B7 C7");
   EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 A7=1\n", 2, 10, "A7 B7 C7 outside ORICONIO");
   EXPECT_MPF_ERROR("TRAORI\nORICONIO\nG1 F1 X0 B7=1\n", 3, 10, "without the end vector A3 B3 C3");
-  EXPECT_MPF_ERROR("TRAORI\nORICONIO\nG1 F1 X0 C6=1 A3=1\n", 3, 10,
-                   "cone axis A6 B6 C6 under ORICONIO");
+  EXPECT_MPF_ERROR("TRAORI\nORICONIO\nG1 F1 X0 C6=1 A3=1\n", 3, 10, "cone axis A6 B6 C6 under ORICONIO");
   EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONIO\nG1 F1 X1 A7=0 A3=0 B3=1 C3=1\n", 4, 10,
                    "intermediate orientation A7 B7 C7 (0, 0, 0)");
 }
@@ -300,14 +296,12 @@ TEST(SinumerikReader, OriconTangent) {
   expect_vec(axis_at(cone.blocks[5], 0.5), {s, 0, c});  // from +Y through +X to -Y: 0 deg half way
 
   // No tangent: at the start, after a block that did not turn the tool, after rotary axes.
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONTO\nG1 F1 X1 A3=1 C3=1\n", 4, 10,
-                   "ORICONTO without a tangent");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0\nORICONTO\nG1 F1 X1 A3=1 C3=1\n", 4, 10, "ORICONTO without a tangent");
   EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nG1 F1 X5\nORICONTO\nX6 A3=0 B3=1 C3=1\n", 5, 4,
                    "ORICONTO without a tangent");
   EXPECT_MPF_ERROR("TRAORI\nORIAXES\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONTO\nX6 A3=0 B3=1 C3=1\n", 5, 4,
                    "ORICONTO without a tangent");
-  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONTO C6=1\n", 3, 10,
-                   "cone axis A6 B6 C6 under ORICONTO");
+  EXPECT_MPF_ERROR("TRAORI\nG0 X0 Y0 Z0 A3=1 C3=1\nORICONTO C6=1\n", 3, 10, "cone axis A6 B6 C6 under ORICONTO");
 }
 
 // Randomized (fixed seed): ORICONIO's densified vectors stay on one cone, pass the intermediate
@@ -321,13 +315,13 @@ TEST(SinumerikReader, OriconRandomCircles) {
   int cases = 0;
   while (cases < 200) {
     const Eigen::Vector3d a = unit(), m = unit(), e = unit(), u0 = unit();
-    if ((a - m).norm() < 0.1 || (m - e).norm() < 0.1 || (a - e).norm() < 0.1 ||
-        (u0 - a).norm() < 0.1 || (u0 + a).norm() < 0.1) {
+    if ((a - m).norm() < 0.1 || (m - e).norm() < 0.1 || (a - e).norm() < 0.1 || (u0 - a).norm() < 0.1 ||
+        (u0 + a).norm() < 0.1) {
       continue;
     }
     ++cases;
-    const Program p = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", a) + "\nORICONIO G1 F100 X1" +
-                           vec3("ABC7", m) + vec3("ABC3", e) + "\n");
+    const Program p = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", a) + "\nORICONIO G1 F100 X1" + vec3("ABC7", m) +
+                           vec3("ABC3", e) + "\n");
     ASSERT_EQ(p.blocks.size(), 2u);
     const Block& b = p.blocks[1];
     const Eigen::Vector3d k = b.cone_axis;
@@ -346,8 +340,8 @@ TEST(SinumerikReader, OriconRandomCircles) {
     expect_vec(axis_at(b, 1.0), e, kPoseTol);
     for (int i = 0; i <= 8; ++i) EXPECT_NEAR(axis_at(b, i / 8.0).dot(k), a.dot(k), kPoseTol);
 
-    const Program q = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", u0) + "\nG1 F100 X1" +
-                           vec3("ABC3", a) + "\nORICONTO X2" + vec3("ABC3", e) + "\n");
+    const Program q = read("TRAORI\nG0 X0 Y0 Z0" + vec3("ABC3", u0) + "\nG1 F100 X1" + vec3("ABC3", a) +
+                           "\nORICONTO X2" + vec3("ABC3", e) + "\n");
     ASSERT_EQ(q.blocks.size(), 3u);
     const Block& t = q.blocks[2];
     // Great circle u0 -> a: at a it moves along the part of a - u0 perpendicular to a.
@@ -355,8 +349,7 @@ TEST(SinumerikReader, OriconRandomCircles) {
     EXPECT_GT((axis_at(t, 1e-7) - axis_at(t, 0.0)).normalized().dot(tangent), 1.0 - 1e-6);
     EXPECT_NEAR(t.cone_axis.dot(tangent), 0.0, kPoseTol);
     expect_vec(axis_at(t, 1.0), e, kPoseTol);
-    for (int i = 0; i <= 8; ++i)
-      EXPECT_NEAR(axis_at(t, i / 8.0).dot(t.cone_axis), a.dot(t.cone_axis), kPoseTol);
+    for (int i = 0; i <= 8; ++i) EXPECT_NEAR(axis_at(t, i / 8.0).dot(t.cone_axis), a.dot(t.cone_axis), kPoseTol);
   }
 }
 
@@ -563,8 +556,7 @@ TEST(SinumerikReader, TechnologyAndBlending) {
 }
 
 TEST(SinumerikReader, RefusedWords) {
-  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10,
-                   "NUT= (the cone's opening angle) is not supported");
+  EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 NUT=30\n", 2, 10, "NUT= (the cone's opening angle) is not supported");
   EXPECT_MPF_ERROR("TRAORI\nORIMKS\nG1 F1 X0 Y0 Z0 A3=1 C3=1\n", 3, 16, "under ORIMKS");
   EXPECT_MPF_ERROR("G1 F1 X0 Y0 Z0 A3=1 C3=1\n", 1, 16, "without TRAORI");
   EXPECT_MPF_ERROR("TRAORI\nG1 F1 X0 Y0 Z0 A10\nX1 A3=1 C3=1\n", 3, 4,
@@ -618,8 +610,7 @@ TEST(SinumerikReader, UnknownStart) {
   expect_vec(p.blocks[0].start_mm, {10, 0, 3});
   expect_vec(p.blocks[0].end_mm, {20, 0, 3});
   ASSERT_EQ(p.warnings.size(), 1u);
-  EXPECT_NE(p.warnings[0].find("test.mpf:3:1: 1 earlier move(s) (first at test.mpf:2) ran while Z"),
-            std::string::npos)
+  EXPECT_NE(p.warnings[0].find("test.mpf:3:1: 1 earlier move(s) (first at test.mpf:2) ran while Z"), std::string::npos)
       << p.warnings[0];
 }
 

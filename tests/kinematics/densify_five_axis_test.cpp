@@ -25,7 +25,9 @@ Eigen::Matrix3d rz(double a) { return Eigen::AngleAxisd(a, Eigen::Vector3d::Unit
 // nose (0, 0, 150), programming zero (5, -3, 40).
 const Eigen::Vector3d kCenterA(0, 20, 10), kGauge(0, 0, 150), kOrigin(5, -3, 40);
 
-Eigen::Vector3d trt_axis(double a, double c) { return {std::sin(a) * std::sin(c), std::sin(a) * std::cos(c), std::cos(a)}; }
+Eigen::Vector3d trt_axis(double a, double c) {
+  return {std::sin(a) * std::sin(c), std::sin(a) * std::cos(c), std::cos(a)};
+}
 
 // The tip in the workpiece frame for tool tip t in the frame: W is turned by Rx(a) about
 // the A line after Rz(c) about the C line (through the origin).
@@ -145,7 +147,8 @@ TEST(DensifyFiveAxis, OriaxesFollowsLinearlyInterpolatedAngles) {
     const double f = static_cast<double>(k) / 60.0;
     const double a = a0 + f * (a1 - a0), c = c0 + f * (c1 - c0);
     EXPECT_LT((d.samples[k].pose.axis - trt_axis(a, c)).norm(), kExact) << k;
-    EXPECT_LT((d.samples[k].pose.tip_mm - (b.start_mm + f * (b.end_mm - b.start_mm))).norm(), kExact) << "TCP keeps the tip on its line";
+    EXPECT_LT((d.samples[k].pose.tip_mm - (b.start_mm + f * (b.end_mm - b.start_mm))).norm(), kExact)
+        << "TCP keeps the tip on its line";
     EXPECT_NEAR(d.samples[k].axes[A], a, kExact);
     EXPECT_NEAR(d.samples[k].axes[C], c, kExact);
   }
@@ -229,9 +232,10 @@ double measured_deviation(const Block& b, const std::vector<ToolPose>& poses, do
       const ToolPose truth = trt_truth(b, (k + t) / q);
       const Eigen::Vector3d tip = p0.tip_mm + t * (p1.tip_mm - p0.tip_mm);
       // Great circle by the spherical interpolation formula (independent of Rodrigues).
-      const Eigen::Vector3d axis = theta < 1e-12 ? p0.axis
-                                                 : Eigen::Vector3d((std::sin((1 - t) * theta) * p0.axis +
-                                                                    std::sin(t * theta) * p1.axis) / std::sin(theta));
+      const Eigen::Vector3d axis =
+          theta < 1e-12 ? p0.axis
+                        : Eigen::Vector3d((std::sin((1 - t) * theta) * p0.axis + std::sin(t * theta) * p1.axis) /
+                                          std::sin(theta));
       for (double h : {0.0, length}) {
         const double d = ((truth.tip_mm + h * truth.axis) - (tip + h * axis)).norm();
         const double angle = std::atan2(truth.axis.cross(axis).norm(), truth.axis.dot(axis));

@@ -35,8 +35,7 @@ Block line(const Eigen::Vector3d& from, const Eigen::Vector3d& to, double feed_m
 Program polyline(const std::vector<Eigen::Vector3d>& points, double feed_mm_per_min) {
   Program p;
   p.files = {"test.ngc"};
-  for (size_t i = 1; i < points.size(); ++i)
-    p.blocks.push_back(line(points[i - 1], points[i], feed_mm_per_min));
+  for (size_t i = 1; i < points.size(); ++i) p.blocks.push_back(line(points[i - 1], points[i], feed_mm_per_min));
   return p;
 }
 
@@ -56,8 +55,7 @@ std::vector<PoseSample> straight_samples(const Program& p, int q) {
     const Block& b = p.blocks[i];
     for (int k = 1; k <= q; ++k) {
       const Eigen::Vector3d tip =
-          k == q ? b.end_mm
-                 : Eigen::Vector3d(b.start_mm + (b.end_mm - b.start_mm) * (double(k) / q));
+          k == q ? b.end_mm : Eigen::Vector3d(b.start_mm + (b.end_mm - b.start_mm) * (double(k) / q));
       s.push_back(sample(tip, Eigen::Vector3d::UnitZ(), static_cast<int>(i)));
     }
   }
@@ -154,8 +152,7 @@ Differences differences(const std::vector<double>& s, const FeedPlan& plan, doub
     acc.push_back((plan.speed_mm_per_s[i] - plan.speed_mm_per_s[i - 1]) / dt);
     d.acceleration = std::max(d.acceleration, std::abs(acc.back()));
     // trapezoid rule error for s = integral of v: |v''| <= j bounds it by j dt^3 / 12
-    const double err = std::abs(s[i] - s[i - 1] -
-                                0.5 * (plan.speed_mm_per_s[i] + plan.speed_mm_per_s[i - 1]) * dt);
+    const double err = std::abs(s[i] - s[i - 1] - 0.5 * (plan.speed_mm_per_s[i] + plan.speed_mm_per_s[i - 1]) * dt);
     d.trapezoid = std::max(d.trapezoid, err / (j * dt * dt * dt / 12 + 1e-15 * std::abs(s[i])));
   }
   for (size_t i = 1; i < acc.size(); ++i) {
@@ -190,8 +187,7 @@ TEST(FeedScurve, ContinuousAndWithinLimits) {
 // each block's speed within its feed, and each corner within the blend rule.
 TEST(FeedScurve, RandomProgramsStayWithinLimits) {
   std::mt19937 rng(5);
-  std::uniform_real_distribution<double> length(0.05, 8.0), turn(-2.5, 2.5), feed(300, 6000),
-      unit(0, 1);
+  std::uniform_real_distribution<double> length(0.05, 8.0), turn(-2.5, 2.5), feed(300, 6000), unit(0, 1);
   const double a = 800, j = 30000;
   for (int trial = 0; trial < 20; ++trial) {
     std::vector<Eigen::Vector3d> pts = {Eigen::Vector3d::Zero()};
@@ -199,8 +195,7 @@ TEST(FeedScurve, RandomProgramsStayWithinLimits) {
     for (int k = 0; k < 40; ++k) {
       heading += turn(rng);
       const double l = length(rng);
-      pts.push_back(pts.back() +
-                    l * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.1 * turn(rng)));
+      pts.push_back(pts.back() + l * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.1 * turn(rng)));
     }
     Program p = polyline(pts, 1000);
     for (Block& b : p.blocks) {
@@ -221,8 +216,7 @@ TEST(FeedScurve, RandomProgramsStayWithinLimits) {
     EXPECT_LE(d.trapezoid, 1 + kLimit) << "trial " << trial;
     for (size_t i = 1; i < samples.size(); ++i) {
       const Block& b = p.blocks[static_cast<size_t>(samples[i].block)];
-      EXPECT_LE(plan.speed_mm_per_s[i], b.feed_mm_per_min / 60 * (1 + kLimit))
-          << "trial " << trial << " sample " << i;
+      EXPECT_LE(plan.speed_mm_per_s[i], b.feed_mm_per_min / 60 * (1 + kLimit)) << "trial " << trial << " sample " << i;
     }
     for (size_t k = 0; k + 1 < p.blocks.size(); ++k) {
       const double v = plan.speed_mm_per_s[(k + 1) * 40];
@@ -232,11 +226,10 @@ TEST(FeedScurve, RandomProgramsStayWithinLimits) {
       const Eigen::Vector3d u = (p.blocks[k].end_mm - p.blocks[k].start_mm).normalized();
       const Eigen::Vector3d w = (p.blocks[k + 1].end_mm - p.blocks[k + 1].start_mm).normalized();
       const double theta = std::acos(std::clamp(u.dot(w), -1.0, 1.0));
-      const double tol = p.blocks[k].blend_tolerance_mm >= 0 ? p.blocks[k].blend_tolerance_mm
-                                                             : fs.default_blend_tolerance_mm;
+      const double tol =
+          p.blocks[k].blend_tolerance_mm >= 0 ? p.blocks[k].blend_tolerance_mm : fs.default_blend_tolerance_mm;
       const double radius = tol * std::cos(theta / 2) / (1 - std::cos(theta / 2));
-      EXPECT_LE(v, std::sqrt(a * radius) * (1 + 1e-6) + 1e-12)
-          << "trial " << trial << " corner " << k;
+      EXPECT_LE(v, std::sqrt(a * radius) * (1 + 1e-6) + 1e-12) << "trial " << trial << " corner " << k;
     }
     EXPECT_NEAR(plan.speed_mm_per_s.back(), 0.0, 1e-9);
   }
@@ -291,8 +284,7 @@ TEST(FeedJunction, CollinearBlocksKeepFullSpeed) {
   const Program p = polyline({{0, 0, 0}, {50, 0, 0}, {100, 0, 0}}, v * 60);
   const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, nullptr, limits(a, j));
   expect_relative(plan.speed_mm_per_s[10], v, kClosedForm, "junction speed");
-  expect_relative(plan.cycle_time_s, full_limits_time(100, v, a, j), kClosedForm,
-                  "one S-curve over both");
+  expect_relative(plan.cycle_time_s, full_limits_time(100, v, a, j), kClosedForm, "one S-curve over both");
   expect_relative(plan.block_time_s[0], plan.cycle_time_s / 2, kClosedForm, "symmetric halves");
 }
 
@@ -322,8 +314,7 @@ Machine xyz_machine(double vx, double vy, double ay) {
   MachineSpec spec;
   spec.name = "xyz";
   spec.topology = "WFXYZT";
-  const Eigen::Vector3d dirs[3] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-                                   Eigen::Vector3d::UnitZ()};
+  const Eigen::Vector3d dirs[3] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ()};
   for (int k = 0; k < 3; ++k) {
     AxisSpec ax;
     ax.letter = "XYZ"[k];
@@ -356,8 +347,7 @@ TEST(FeedInverseTime, BlockTakesOneOverFMinutes) {
   const std::vector<AxisValues> q = axes_of(s);
   const double a = 50, j = 5000;  // a^2/j = 0.5 < v: all limits reached
   const FeedPlan limited = plan_feed(p, s, &q, &m, limits(a, j));
-  expect_relative(limited.block_time_s[0], full_limits_time(50, 10, a, j), kClosedForm,
-                  "limited by X");
+  expect_relative(limited.block_time_s[0], full_limits_time(50, 10, a, j), kClosedForm, "limited by X");
   EXPECT_EQ(limited.axis_limited_samples.size(), 50u);
 }
 
@@ -373,8 +363,7 @@ TEST(FeedAxisLimits, SlowAxisBoundsThePathSpeedByItsRatio) {
   const std::vector<PoseSample> s = straight_samples(p, 25);
   const std::vector<AxisValues> q = axes_of(s);
   const FeedPlan plan = plan_feed(p, s, &q, &m, limits(a, j));
-  expect_relative(plan.block_time_s[0], full_limits_time(50, 5 / 0.8, 200 / 0.8, j), kClosedForm,
-                  "Y-limited block");
+  expect_relative(plan.block_time_s[0], full_limits_time(50, 5 / 0.8, 200 / 0.8, j), kClosedForm, "Y-limited block");
   expect_relative(plan.block_time_s[1], full_limits_time(100, 20, a, j), kClosedForm, "free block");
   std::vector<int> expected;
   for (int i = 1; i <= 25; ++i) expected.push_back(i);
@@ -393,13 +382,12 @@ TEST(FeedAxisLimits, RapidsRunAtTheAxesSpeed) {
   const std::vector<AxisValues> q = axes_of(s);
   const double L = 100 * std::sqrt(2.0);
   FeedSettings fs = limits(a, j);
-  expect_relative(plan_feed(p, s, &q, &m, fs).cycle_time_s,
-                  full_limits_time(L, 50 * std::sqrt(2.0), a, j), kClosedForm, "axis speed");
+  expect_relative(plan_feed(p, s, &q, &m, fs).cycle_time_s, full_limits_time(L, 50 * std::sqrt(2.0), a, j), kClosedForm,
+                  "axis speed");
   fs.rapid_mm_per_min = 3000;
-  expect_relative(plan_feed(p, s, nullptr, nullptr, fs).cycle_time_s, full_limits_time(L, 50, a, j),
-                  kClosedForm, "settings' rapid");
-  EXPECT_TRUE(plan_feed(p, s, &q, &m, fs)
-                  .axis_limited_samples.empty());  // rapids are axis-speed by definition
+  expect_relative(plan_feed(p, s, nullptr, nullptr, fs).cycle_time_s, full_limits_time(L, 50, a, j), kClosedForm,
+                  "settings' rapid");
+  EXPECT_TRUE(plan_feed(p, s, &q, &m, fs).axis_limited_samples.empty());  // rapids are axis-speed by definition
 }
 
 TEST(FeedRotation, PureRotationIsTimedInDegreesPerMinute) {
@@ -413,8 +401,7 @@ TEST(FeedRotation, PureRotationIsTimedInDegreesPerMinute) {
   std::vector<PoseSample> s;
   for (int k = 0; k <= 90; ++k) {
     const double phi = k * M_PI / 180;
-    s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(std::sin(phi), 0, std::cos(phi)),
-                       k == 0 ? -1 : 0));
+    s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(std::sin(phi), 0, std::cos(phi)), k == 0 ? -1 : 0));
   }
   const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, 9 + 2 * std::sqrt(10 / j), kClosedForm, "rotation time");
@@ -429,8 +416,8 @@ TEST(FeedRotation, RotaryAxisLimitBoundsARotation) {
   MachineSpec spec;
   spec.name = "xyza";
   spec.topology = "WAFXYZT";
-  const Eigen::Vector3d dirs[4] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(),
-                                   Eigen::Vector3d::UnitZ(), Eigen::Vector3d::UnitX()};
+  const Eigen::Vector3d dirs[4] = {Eigen::Vector3d::UnitX(), Eigen::Vector3d::UnitY(), Eigen::Vector3d::UnitZ(),
+                                   Eigen::Vector3d::UnitX()};
   for (int k = 0; k < 4; ++k) {
     AxisSpec ax;
     ax.letter = "XYZA"[k];
@@ -447,15 +434,13 @@ TEST(FeedRotation, RotaryAxisLimitBoundsARotation) {
   std::vector<AxisValues> q;
   for (int k = 0; k <= 90; ++k) {
     const double phi = k * M_PI / 180;
-    s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, -std::sin(phi), std::cos(phi)),
-                       k == 0 ? -1 : 0));
+    s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, -std::sin(phi), std::cos(phi)), k == 0 ? -1 : 0));
     AxisValues v(4);
     v << 0, 0, 0, phi;
     q.push_back(v);
   }
   const FeedPlan plan = plan_feed(p, s, &q, &m, limits(a, j));
-  expect_relative(plan.cycle_time_s, 90.0 / 5 + 2 * std::sqrt(5 / j), kClosedForm,
-                  "A-limited rotation");
+  expect_relative(plan.cycle_time_s, 90.0 / 5 + 2 * std::sqrt(5 / j), kClosedForm, "A-limited rotation");
   EXPECT_EQ(plan.axis_limited_samples.size(), 90u);
 }
 
@@ -475,13 +460,11 @@ TEST(FeedArc, CentripetalAccelerationBoundsTheSpeed) {
   double L = 0;
   for (int k = 0; k <= 1000; ++k) {
     const double phi = M_PI * k / 1000;
-    s.push_back(sample({R * std::cos(phi), R * std::sin(phi), 0}, Eigen::Vector3d::UnitZ(),
-                       k == 0 ? -1 : 0));
+    s.push_back(sample({R * std::cos(phi), R * std::sin(phi), 0}, Eigen::Vector3d::UnitZ(), k == 0 ? -1 : 0));
     if (k > 0) L += (s[k].pose.tip_mm - s[k - 1].pose.tip_mm).norm();
   }
   const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, limits(a, j));
-  expect_relative(plan.cycle_time_s, full_limits_time(L, std::sqrt(a * R), a, j), kClosedForm,
-                  "arc");
+  expect_relative(plan.cycle_time_s, full_limits_time(L, std::sqrt(a * R), a, j), kClosedForm, "arc");
 }
 
 TEST(FeedLookahead, ShortCollinearBlocksReachCruise) {
@@ -539,8 +522,7 @@ TEST(FeedLookahead, LongerWindowsAreNeverSlower) {
       EXPECT_GT(plan.speed_mm_per_s[i], 0.0) << "window " << w;
       EXPECT_LE(plan.speed_mm_per_s[i], corner * (1 + kLimit)) << "window " << w;
     }
-    if (w >= 400)
-      expect_relative(plan.speed_mm_per_s[200], corner, kClosedForm, "corner speed mid-program");
+    if (w >= 400) expect_relative(plan.speed_mm_per_s[200], corner, kClosedForm, "corner speed mid-program");
   }
   EXPECT_GT(times.front(), times.back() * 1.01);  // one block of look-ahead costs time
   expect_relative(times[5], times[6], kClosedForm, "window beyond the program");
@@ -568,8 +550,7 @@ TEST(PathCursor, FollowsTheSCurveBetweenSamples) {
     const PathPosition at = cursor.at(t);
     return 25.0 * (static_cast<double>(at.segment) - 1.0 + at.fraction);
   };
-  for (double t : {0.0, 0.002, 0.005, 0.0099})
-    EXPECT_NEAR(s_at(t), 1e5 * t * t * t / 6.0, kClosedForm * 100.0);
+  for (double t : {0.0, 0.002, 0.005, 0.0099}) EXPECT_NEAR(s_at(t), 1e5 * t * t * t / 6.0, kClosedForm * 100.0);
   // Acceleration over: v = a^2/(2j) + a (t - a/j) at the end of the constant-acceleration
   // phase (0.1 - a/j long); cruise from then at 100 mm/s: compare two instants in cruise.
   const double t0 = plan.cycle_time_s / 2.0 - 0.05;

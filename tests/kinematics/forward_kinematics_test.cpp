@@ -49,21 +49,17 @@ std::string str(const Eigen::Vector3d& v) {
   return buf;
 }
 
-::testing::AssertionResult near(const Eigen::Vector3d& got, const Eigen::Vector3d& want,
-                                double tol) {
+::testing::AssertionResult near(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double tol) {
   const double err = (got - want).cwiseAbs().maxCoeff();
   if (err <= tol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure()
-         << "got " << str(got) << ", want " << str(want) << ": max error " << err << " > " << tol;
+  return ::testing::AssertionFailure() << "got " << str(got) << ", want " << str(want) << ": max error " << err << " > "
+                                       << tol;
 }
 
-::testing::AssertionResult near_rotation(const Eigen::Matrix3d& got, const Eigen::Matrix3d& want,
-                                         double tol) {
+::testing::AssertionResult near_rotation(const Eigen::Matrix3d& got, const Eigen::Matrix3d& want, double tol) {
   const double err = (got - want).cwiseAbs().maxCoeff();
   if (err <= tol) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << "rotation\n"
-                                       << got << "\nwant\n"
-                                       << want << "\nmax error " << err;
+  return ::testing::AssertionFailure() << "rotation\n" << got << "\nwant\n" << want << "\nmax error " << err;
 }
 
 using test::linear;
@@ -122,8 +118,8 @@ MachineSpec table_table_ac(const Eigen::Vector3d& center_a, const Eigen::Vector3
   MachineSpec s;
   s.name = "table-table-ac";
   s.topology = "WCAFXYZT";
-  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}),
-            rotary('A', {1, 0, 0}, center_a), rotary('C', {0, 0, 1}, center_c)};
+  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}), rotary('A', {1, 0, 0}, center_a),
+            rotary('C', {0, 0, 1}, center_c)};
   s.gauge_point_mm = gauge;
   s.workpiece_origin_mm = origin;
   return s;
@@ -149,8 +145,8 @@ MachineSpec table_table_ac(const Eigen::Vector3d& center_a, const Eigen::Vector3
 // vectors [1,0,0] and [0,0,1] do here (its header calls that "the opposite of the
 // conventional axis directions", ISO 841's primed table axes).
 ToolPose table_table_ac_closed_form(double x, double y, double z, double a, double c, double L,
-                                    const Eigen::Vector3d& cA, const Eigen::Vector3d& cC,
-                                    const Eigen::Vector3d& g, const Eigen::Vector3d& o) {
+                                    const Eigen::Vector3d& cA, const Eigen::Vector3d& cC, const Eigen::Vector3d& g,
+                                    const Eigen::Vector3d& o) {
   const double tx = x + g.x(), ty = y + g.y(), tz = z + g.z() - L;
   const double dx = tx - cA.x(), dy = ty - cA.y(), dz = tz - cA.z();
   const double ex = dx + cA.x() - cC.x();
@@ -165,15 +161,14 @@ ToolPose table_table_ac_closed_form(double x, double y, double z, double a, doub
 
 TEST(ForwardTableTableAC, ClosedFormOnRandomGeometriesAndAxes) {
   std::mt19937 rng(3001);
-  std::uniform_real_distribution<double> lin(-500.0, 500.0), a_deg(-120.0, 30.0),
-      c_deg(-720.0, 720.0), length(0.0, 250.0);
+  std::uniform_real_distribution<double> lin(-500.0, 500.0), a_deg(-120.0, 30.0), c_deg(-720.0, 720.0),
+      length(0.0, 250.0);
   for (int m = 0; m < 20; ++m) {
     const Eigen::Vector3d cA = random_vector(rng, 200.0), cC = random_vector(rng, 200.0);
     const Eigen::Vector3d g = random_vector(rng, 600.0), o = random_vector(rng, 150.0);
     const Machine machine(table_table_ac(cA, cC, g, o));
     for (int k = 0; k < 50; ++k) {
-      const double x = lin(rng), y = lin(rng), z = lin(rng), a = a_deg(rng) * kDeg,
-                   c = c_deg(rng) * kDeg;
+      const double x = lin(rng), y = lin(rng), z = lin(rng), a = a_deg(rng) * kDeg, c = c_deg(rng) * kDeg;
       const double L = length(rng);
       const AxisValues q = values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'A', a}, {'C', c}});
       const ToolPose got = forward(machine, q, L);
@@ -197,10 +192,8 @@ TEST(ForwardTableTableAC, HandWorkedQuarterTurns) {
   // + cA = (10, -220, -60). C = 90 deg: Rz(-90)(10, -220, -60) = (-220, -10, -60).
   // Tool axis: Rz(-90) Rx(90) e_z = Rz(-90)(0, -1, 0) = (-1, 0, 0).
   const Machine machine(table_table_ac({0, -20, -100}, {0, 0, 0}, {0, 0, 500}, {0, 0, 0}));
-  const ToolPose p = forward(
-      machine,
-      values(machine, {{'X', 10}, {'Y', 20}, {'Z', -300}, {'A', -90 * kDeg}, {'C', 90 * kDeg}}),
-      100);
+  const ToolPose p =
+      forward(machine, values(machine, {{'X', 10}, {'Y', 20}, {'Z', -300}, {'A', -90 * kDeg}, {'C', 90 * kDeg}}), 100);
   EXPECT_TRUE(near(p.tip_mm, {-220, -10, -60}, kExactMm));
   EXPECT_TRUE(near(p.axis, {-1, 0, 0}, kExactUnit));
 }
@@ -213,8 +206,8 @@ MachineSpec table_table_bc(const Eigen::Vector3d& center_b, const Eigen::Vector3
   MachineSpec s;
   s.name = "table-table-bc";
   s.topology = "WCBFXYZT";
-  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}),
-            rotary('B', {0, 1, 0}, center_b), rotary('C', {0, 0, 1}, center_c)};
+  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}), rotary('B', {0, 1, 0}, center_b),
+            rotary('C', {0, 0, 1}, center_c)};
   s.gauge_point_mm = gauge;
   s.workpiece_origin_mm = origin;
   return s;
@@ -233,8 +226,8 @@ MachineSpec table_table_bc(const Eigen::Vector3d& center_b, const Eigen::Vector3
 // r_B = (x-rot-point + x-offset, ., z-rot-point + z-offset): the same formula with o = 0, so
 // its positive B and C also turn the table right-hand about +y and +z, as here.
 ToolPose table_table_bc_closed_form(double x, double y, double z, double b, double c, double L,
-                                    const Eigen::Vector3d& cB, const Eigen::Vector3d& cC,
-                                    const Eigen::Vector3d& g, const Eigen::Vector3d& o) {
+                                    const Eigen::Vector3d& cB, const Eigen::Vector3d& cC, const Eigen::Vector3d& g,
+                                    const Eigen::Vector3d& o) {
   const double tx = x + g.x(), ty = y + g.y(), tz = z + g.z() - L;
   const double dx = tx - cB.x(), dy = ty - cB.y(), dz = tz - cB.z();
   const double ex = std::cos(b) * dx - std::sin(b) * dz + cB.x() - cC.x();
@@ -249,18 +242,16 @@ ToolPose table_table_bc_closed_form(double x, double y, double z, double b, doub
 
 TEST(ForwardTableTableBC, ClosedFormOnRandomGeometriesAndAxes) {
   std::mt19937 rng(3002);
-  std::uniform_real_distribution<double> lin(-500.0, 500.0), b_deg(-110.0, 110.0),
-      c_deg(-720.0, 720.0), length(0.0, 250.0);
+  std::uniform_real_distribution<double> lin(-500.0, 500.0), b_deg(-110.0, 110.0), c_deg(-720.0, 720.0),
+      length(0.0, 250.0);
   for (int m = 0; m < 20; ++m) {
     const Eigen::Vector3d cB = random_vector(rng, 200.0), cC = random_vector(rng, 200.0);
     const Eigen::Vector3d g = random_vector(rng, 600.0), o = random_vector(rng, 150.0);
     const Machine machine(table_table_bc(cB, cC, g, o));
     for (int k = 0; k < 50; ++k) {
-      const double x = lin(rng), y = lin(rng), z = lin(rng), b = b_deg(rng) * kDeg,
-                   c = c_deg(rng) * kDeg;
+      const double x = lin(rng), y = lin(rng), z = lin(rng), b = b_deg(rng) * kDeg, c = c_deg(rng) * kDeg;
       const double L = length(rng);
-      const ToolPose got =
-          forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'B', b}, {'C', c}}), L);
+      const ToolPose got = forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'B', b}, {'C', c}}), L);
       const ToolPose want = table_table_bc_closed_form(x, y, z, b, c, L, cB, cC, g, o);
       SCOPED_TRACE("machine " + std::to_string(m) + " sample " + std::to_string(k));
       EXPECT_TRUE(near(got.tip_mm, want.tip_mm, kExactMm));
@@ -276,10 +267,8 @@ TEST(ForwardTableTableBC, HandWorkedQuarterTurns) {
   // Rz(90)(-320, -40, -90) = (40, -320, -90). Axis: Rz(90) Ry(-90) e_z = Rz(90)(-1, 0, 0) = (0, -1,
   // 0).
   const Machine machine(table_table_bc({0, 0, -120}, {0, 0, 0}, {0, 0, 450}, {0, 0, 0}));
-  const ToolPose p = forward(
-      machine,
-      values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'B', 90 * kDeg}, {'C', -90 * kDeg}}),
-      50);
+  const ToolPose p =
+      forward(machine, values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'B', 90 * kDeg}, {'C', -90 * kDeg}}), 50);
   EXPECT_TRUE(near(p.tip_mm, {40, -320, -90}, kExactMm));
   EXPECT_TRUE(near(p.axis, {0, -1, 0}, kExactUnit));
 }
@@ -292,21 +281,20 @@ TEST(ForwardHeadTableBC, ClosedFormOnRandomGeometriesAndAxes) {
   //   t = v + cB + Ry(b)(g - L e_z - cB),  u_F = Ry(b) e_z = (sin b, 0, cos b);
   // frame -> workpiece T_C Tr(o): p_w = Rz(-c)(t - cC) + cC - o, u_w = Rz(-c) u_F.
   std::mt19937 rng(3003);
-  std::uniform_real_distribution<double> lin(-500.0, 500.0), b_deg(-110.0, 110.0),
-      c_deg(-360.0, 360.0), length(0.0, 250.0);
+  std::uniform_real_distribution<double> lin(-500.0, 500.0), b_deg(-110.0, 110.0), c_deg(-360.0, 360.0),
+      length(0.0, 250.0);
   for (int m = 0; m < 10; ++m) {
     const Eigen::Vector3d cB = random_vector(rng, 600.0), cC = random_vector(rng, 200.0);
     const Eigen::Vector3d g = random_vector(rng, 600.0), o = random_vector(rng, 150.0);
     MachineSpec s;
     s.topology = "WCFXYZBT";
-    s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}),
-              rotary('B', {0, 1, 0}, cB), rotary('C', {0, 0, 1}, cC)};
+    s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}), rotary('B', {0, 1, 0}, cB),
+              rotary('C', {0, 0, 1}, cC)};
     s.gauge_point_mm = g;
     s.workpiece_origin_mm = o;
     const Machine machine(s);
     for (int k = 0; k < 50; ++k) {
-      const double x = lin(rng), y = lin(rng), z = lin(rng), b = b_deg(rng) * kDeg,
-                   c = c_deg(rng) * kDeg;
+      const double x = lin(rng), y = lin(rng), z = lin(rng), b = b_deg(rng) * kDeg, c = c_deg(rng) * kDeg;
       const double L = length(rng);
       const double hx = g.x() - cB.x(), hy = g.y() - cB.y(), hz = g.z() - L - cB.z();
       const double tx = x + cB.x() + std::cos(b) * hx + std::sin(b) * hz;
@@ -314,12 +302,11 @@ TEST(ForwardHeadTableBC, ClosedFormOnRandomGeometriesAndAxes) {
       const double tz = z + cB.z() - std::sin(b) * hx + std::cos(b) * hz;
       const double ux = std::sin(b), uz = std::cos(b);
       // Rz(-c)(v) = (cos c v_x + sin c v_y, -sin c v_x + cos c v_y, v_z).
-      const Eigen::Vector3d want_tip(
-          std::cos(c) * (tx - cC.x()) + std::sin(c) * (ty - cC.y()) + cC.x() - o.x(),
-          -std::sin(c) * (tx - cC.x()) + std::cos(c) * (ty - cC.y()) + cC.y() - o.y(), tz - o.z());
+      const Eigen::Vector3d want_tip(std::cos(c) * (tx - cC.x()) + std::sin(c) * (ty - cC.y()) + cC.x() - o.x(),
+                                     -std::sin(c) * (tx - cC.x()) + std::cos(c) * (ty - cC.y()) + cC.y() - o.y(),
+                                     tz - o.z());
       const Eigen::Vector3d want_axis(std::cos(c) * ux, -std::sin(c) * ux, uz);
-      const ToolPose got =
-          forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'B', b}, {'C', c}}), L);
+      const ToolPose got = forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'B', b}, {'C', c}}), L);
       SCOPED_TRACE("machine " + std::to_string(m) + " sample " + std::to_string(k));
       EXPECT_TRUE(near(got.tip_mm, want_tip, kExactMm));
       EXPECT_TRUE(near(got.axis, want_axis, kExactUnit));
@@ -333,21 +320,20 @@ TEST(ForwardHeadHeadAC, ClosedFormOnRandomGeometriesAndAxes) {
   //   t = v + cC + Rz(c)(cA + Rx(a)(g - L e_z - cA) - cC),
   //   u = Rz(c) Rx(a) e_z = (sin a sin c, -sin a cos c, cos a);  W on the frame: p_w = t - o.
   std::mt19937 rng(3004);
-  std::uniform_real_distribution<double> lin(-800.0, 800.0), a_deg(-105.0, 105.0),
-      c_deg(-360.0, 360.0), length(0.0, 250.0);
+  std::uniform_real_distribution<double> lin(-800.0, 800.0), a_deg(-105.0, 105.0), c_deg(-360.0, 360.0),
+      length(0.0, 250.0);
   for (int m = 0; m < 10; ++m) {
     const Eigen::Vector3d cC = random_vector(rng, 800.0), cA = random_vector(rng, 800.0);
     const Eigen::Vector3d g = random_vector(rng, 800.0), o = random_vector(rng, 150.0);
     MachineSpec s;
     s.topology = "WFXYZCAT";
-    s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}),
-              rotary('C', {0, 0, 1}, cC), rotary('A', {1, 0, 0}, cA)};
+    s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}), rotary('C', {0, 0, 1}, cC),
+              rotary('A', {1, 0, 0}, cA)};
     s.gauge_point_mm = g;
     s.workpiece_origin_mm = o;
     const Machine machine(s);
     for (int k = 0; k < 50; ++k) {
-      const double x = lin(rng), y = lin(rng), z = lin(rng), a = a_deg(rng) * kDeg,
-                   c = c_deg(rng) * kDeg;
+      const double x = lin(rng), y = lin(rng), z = lin(rng), a = a_deg(rng) * kDeg, c = c_deg(rng) * kDeg;
       const double L = length(rng);
       // h = g - L e_z - cA; Rx(a) h = (h_x, cos a h_y - sin a h_z, sin a h_y + cos a h_z).
       const double hx = g.x() - cA.x(), hy = g.y() - cA.y(), hz = g.z() - L - cA.z();
@@ -356,12 +342,9 @@ TEST(ForwardHeadHeadAC, ClosedFormOnRandomGeometriesAndAxes) {
       const double kz = cA.z() + std::sin(a) * hy + std::cos(a) * hz - cC.z();
       // Rz(c)(k) = (cos c k_x - sin c k_y, sin c k_x + cos c k_y, k_z).
       const Eigen::Vector3d want_tip(x + cC.x() + std::cos(c) * kx - std::sin(c) * ky - o.x(),
-                                     y + cC.y() + std::sin(c) * kx + std::cos(c) * ky - o.y(),
-                                     z + cC.z() + kz - o.z());
-      const Eigen::Vector3d want_axis(std::sin(a) * std::sin(c), -std::sin(a) * std::cos(c),
-                                      std::cos(a));
-      const ToolPose got =
-          forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'C', c}, {'A', a}}), L);
+                                     y + cC.y() + std::sin(c) * kx + std::cos(c) * ky - o.y(), z + cC.z() + kz - o.z());
+      const Eigen::Vector3d want_axis(std::sin(a) * std::sin(c), -std::sin(a) * std::cos(c), std::cos(a));
+      const ToolPose got = forward(machine, values(machine, {{'X', x}, {'Y', y}, {'Z', z}, {'C', c}, {'A', a}}), L);
       SCOPED_TRACE("machine " + std::to_string(m) + " sample " + std::to_string(k));
       EXPECT_TRUE(near(got.tip_mm, want_tip, kExactMm));
       EXPECT_TRUE(near(got.axis, want_axis, kExactUnit));
@@ -413,8 +396,7 @@ TEST(GantryWYXZCAT, AllZeroEveryNodeOnTheFrame) {
   for (char n : std::string("YXZCAW")) {
     SCOPED_TRACE(std::string("node ") + n);
     EXPECT_TRUE(near(node(nodes, n).pose.translation(), Eigen::Vector3d::Zero(), kExactMm));
-    EXPECT_TRUE(
-        near_rotation(node(nodes, n).pose.linear(), Eigen::Matrix3d::Identity(), kExactUnit));
+    EXPECT_TRUE(near_rotation(node(nodes, n).pose.linear(), Eigen::Matrix3d::Identity(), kExactUnit));
   }
   EXPECT_TRUE(near(node(nodes, 'T').pose.translation(), {0, 0, 2400}, kExactMm));
   const std::vector<ModelPose> models = model_poses(machine, machine.zero());
@@ -442,8 +424,7 @@ TEST(GantryWYXZCAT, A90SwingsTheSpindleNoseAboutTheALine) {
   EXPECT_TRUE(near(node(nodes, 'A').pose.translation(), {0, 2725, 2875}, kExactMm));
   EXPECT_TRUE(near_rotation(node(nodes, 'A').pose.linear(), rx(kPi / 2), kExactUnit));
   EXPECT_TRUE(near(node(nodes, 'C').pose.translation(), {0, 0, 0}, kExactMm));
-  EXPECT_TRUE(
-      near_rotation(node(nodes, 'C').pose.linear(), Eigen::Matrix3d::Identity(), kExactUnit));
+  EXPECT_TRUE(near_rotation(node(nodes, 'C').pose.linear(), Eigen::Matrix3d::Identity(), kExactUnit));
   const std::vector<ModelPose> models = model_poses(machine, q);
   EXPECT_TRUE(near(model(models, "a.stl").pose.translation(), {1500, 1425, 4450}, kExactMm));
   EXPECT_TRUE(near(model(models, "c.stl").pose.translation(), {-1500, -1500, -1300}, kExactMm));
@@ -487,8 +468,7 @@ TEST(GantryWYXZCAT, AllAxesMoved) {
   //   -1600); A: T_A (1500, 1575, 1300) = (1500, 1425, 4450); Rz(90) -> (-1425, 1500, 4450); + v =
   //   (-1325, 1700, 4150).
   const Machine machine(gantry());
-  const AxisValues q =
-      values(machine, {{'X', 100}, {'Y', 200}, {'Z', -300}, {'C', 90 * kDeg}, {'A', 90 * kDeg}});
+  const AxisValues q = values(machine, {{'X', 100}, {'Y', 200}, {'Z', -300}, {'C', 90 * kDeg}, {'A', 90 * kDeg}});
   const std::vector<NodePose> nodes = node_poses(machine, q);
   EXPECT_TRUE(near(node(nodes, 'Y').pose.translation(), {0, 200, 0}, kExactMm));
   EXPECT_TRUE(near(node(nodes, 'X').pose.translation(), {100, 200, 0}, kExactMm));
@@ -517,8 +497,7 @@ TEST(GantryWYXZCAT, GeneralAnglesNoseAndTip) {
   // -sin a cos c, cos a).
   const double a = -45 * kDeg, c = 30 * kDeg;
   const Machine machine(gantry());
-  const AxisValues q =
-      values(machine, {{'X', -1320}, {'Y', -1320}, {'Z', 1000}, {'C', c}, {'A', a}});
+  const AxisValues q = values(machine, {{'X', -1320}, {'Y', -1320}, {'Z', 1000}, {'C', c}, {'A', a}});
   const double ny = -75 + 75 * std::cos(a) + 400 * std::sin(a);
   const double nz = 2800 + 75 * std::sin(a) - 400 * std::cos(a);
   const Eigen::Vector3d nose(-1320 - std::sin(c) * ny, -1320 + std::cos(c) * ny, 1000 + nz);
@@ -570,8 +549,7 @@ TEST(ErrorTableAt, ConstantEmptyAndTable) {
 // frame origin carried by the axis); a rotary node is
 // Tr(c) Tr(offset) Rot(tilt) R(axis, value) Tr(-c) (component errors, none here, after R).
 
-const Eigen::Vector3d kCenterA(0, -20, -100), kCenterC(0, 0, 0), kGauge(0, 0, 500),
-    kOrigin(0, 0, 0);
+const Eigen::Vector3d kCenterA(0, -20, -100), kCenterC(0, 0, 0), kGauge(0, 0, 500), kOrigin(0, 0, 0);
 
 MachineSpec ac_spec() { return table_table_ac(kCenterA, kCenterC, kGauge, kOrigin); }
 
@@ -604,22 +582,20 @@ TEST(ErrorLocation, X0CDisplacesTheTableInTheFrameAtEveryAngle) {
     for (const auto& k : cases) {
       SCOPED_TRACE("A = " + std::to_string(a_deg) + ", C = " + std::to_string(k.c_deg));
       const AxisValues q =
-          values(machine,
-                 {{'X', 30}, {'Y', -40}, {'Z', -200}, {'A', a_deg * kDeg}, {'C', k.c_deg * kDeg}});
+          values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'A', a_deg * kDeg}, {'C', k.c_deg * kDeg}});
       const ToolPose nominal = forward(machine, q, 100);
       const ToolPose actual = forward(machine, q, 100, Geometry::Actual);
       const PoseError e = pose_error(nominal, actual);
       EXPECT_TRUE(near(e.tip_um, k.tip_um, kExactUm));
       EXPECT_NEAR(e.axis_tilt_urad, 0.0, kTiltUrad);
       // Against the closed form with the exact nominal: p_w + (-Rz(-c) d).
-      const ToolPose ideal = table_table_ac_closed_form(30, -40, -200, a_deg * kDeg, k.c_deg * kDeg,
-                                                        100, kCenterA, kCenterC, kGauge, kOrigin);
+      const ToolPose ideal = table_table_ac_closed_form(30, -40, -200, a_deg * kDeg, k.c_deg * kDeg, 100, kCenterA,
+                                                        kCenterC, kGauge, kOrigin);
       EXPECT_TRUE(near(actual.tip_mm, ideal.tip_mm + k.tip_um * 1e-3, kExactMm));
     }
   }
   // The C node itself (A = 0, C = 90): Tr(d) Rz(90) about cC = 0 -> origin d = (0.010, 0, 0).
-  const NodePose c_node =
-      node(node_poses(machine, values(machine, {{'C', 90 * kDeg}}), Geometry::Actual), 'C');
+  const NodePose c_node = node(node_poses(machine, values(machine, {{'C', 90 * kDeg}}), Geometry::Actual), 'C');
   EXPECT_TRUE(near(c_node.pose.translation(), {0.010, 0, 0}, kExactMm));
   EXPECT_TRUE(near_rotation(c_node.pose.linear(), rz(kPi / 2), kExactUnit));
 }
@@ -637,20 +613,16 @@ TEST(ErrorLocation, A0CTiltsTheToolAxisBy100urad) {
     for (double c_deg : {0.0, 90.0, 180.0}) {
       SCOPED_TRACE("A = " + std::to_string(a_deg) + ", C = " + std::to_string(c_deg));
       const double a = a_deg * kDeg, c = c_deg * kDeg;
-      const AxisValues q =
-          values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'A', a}, {'C', c}});
+      const AxisValues q = values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'A', a}, {'C', c}});
       const ToolPose actual = forward(machine, q, 100, Geometry::Actual);
-      EXPECT_TRUE(
-          near(actual.axis,
-               {std::sin(a + e) * std::sin(c), std::sin(a + e) * std::cos(c), std::cos(a + e)},
-               kExactUnit));
+      EXPECT_TRUE(near(actual.axis, {std::sin(a + e) * std::sin(c), std::sin(a + e) * std::cos(c), std::cos(a + e)},
+                       kExactUnit));
       EXPECT_NEAR(pose_error(forward(machine, q, 100), actual).axis_tilt_urad, 100.0, kTiltUrad);
       // Tip: t = (30, -40, -200 + 500 - 100) = (30, -40, 200); T_A^-1 t = cA + Rx(-a)(t - cA), then
       // Rx(-e), then Rz(-c).
       const Eigen::Vector3d t(30, -40, 200);
       const Eigen::Vector3d in_a = kCenterA + rx(-a) * (t - kCenterA);
-      EXPECT_TRUE(
-          near(actual.tip_mm, rz(-c) * rx(-e) * (in_a - kCenterC) + kCenterC - kOrigin, kExactMm));
+      EXPECT_TRUE(near(actual.tip_mm, rz(-c) * rx(-e) * (in_a - kCenterC) + kCenterC - kOrigin, kExactMm));
     }
   }
 }
@@ -666,20 +638,16 @@ TEST(ErrorSquareness, C0YShearsYTowardMinusX) {
   const Machine machine(s);
   for (double y : {100.0, -100.0}) {
     const AxisValues q = values(machine, {{'X', 20}, {'Y', y}, {'Z', -150}});
-    const PoseError err =
-        pose_error(forward(machine, q, 100), forward(machine, q, 100, Geometry::Actual));
-    EXPECT_TRUE(near(err.tip_um, Eigen::Vector3d(-y * std::sin(e), y * (std::cos(e) - 1), 0) * 1e3,
-                     kExactUm));
+    const PoseError err = pose_error(forward(machine, q, 100), forward(machine, q, 100, Geometry::Actual));
+    EXPECT_TRUE(near(err.tip_um, Eigen::Vector3d(-y * std::sin(e), y * (std::cos(e) - 1), 0) * 1e3, kExactUm));
     EXPECT_NEAR(err.axis_tilt_urad, 0.0, kTiltUrad);
   }
   // With A = -30 deg, C = 45 deg the frame displacement y (-sin e, cos e - 1, 0) reaches the
   // part turned by the inverse table rotation: Rz(-c) Rx(-a) applied to it.
   const double a = -30 * kDeg, c = 45 * kDeg;
   const AxisValues q = values(machine, {{'X', 20}, {'Y', 100}, {'Z', -150}, {'A', a}, {'C', c}});
-  const PoseError err =
-      pose_error(forward(machine, q, 100), forward(machine, q, 100, Geometry::Actual));
-  const Eigen::Vector3d frame_shift_um =
-      Eigen::Vector3d(-100 * std::sin(e), 100 * (std::cos(e) - 1), 0) * 1e3;
+  const PoseError err = pose_error(forward(machine, q, 100), forward(machine, q, 100, Geometry::Actual));
+  const Eigen::Vector3d frame_shift_um = Eigen::Vector3d(-100 * std::sin(e), 100 * (std::cos(e) - 1), 0) * 1e3;
   EXPECT_TRUE(near(err.tip_um, rz(-c) * rx(-a) * frame_shift_um, kExactUm));
 }
 
@@ -700,12 +668,10 @@ TEST(ErrorComponent, BXPitchWithAbbeOffset) {
   const AxisValues q = values(machine, {{'X', 150}, {'Y', 40}, {'Z', -150}});
   const ToolPose actual = forward(machine, q, 100, Geometry::Actual);
   const PoseError err = pose_error(forward(machine, q, 100), actual);
-  EXPECT_TRUE(near(err.tip_um, Eigen::Vector3d(250 * std::sin(e), 0, 250 * (std::cos(e) - 1)) * 1e3,
-                   kExactUm));
+  EXPECT_TRUE(near(err.tip_um, Eigen::Vector3d(250 * std::sin(e), 0, 250 * (std::cos(e) - 1)) * 1e3, kExactUm));
   EXPECT_NEAR(err.axis_tilt_urad, 30.0, kTiltUrad);
   EXPECT_TRUE(near(actual.axis, {std::sin(e), 0, std::cos(e)}, kExactUnit));
-  EXPECT_TRUE(near(actual.tip_mm, Eigen::Vector3d(150 + 250 * std::sin(e), 40, 250 * std::cos(e)),
-                   kExactMm));
+  EXPECT_TRUE(near(actual.tip_mm, Eigen::Vector3d(150 + 250 * std::sin(e), 40, 250 * std::cos(e)), kExactMm));
 }
 
 TEST(ErrorComponent, XXPositioningTable) {
@@ -717,11 +683,9 @@ TEST(ErrorComponent, XXPositioningTable) {
   exx.values = {0.0, 4e-3};
   axis_of(s, 'X').errors.translation_mm[0] = exx;
   const Machine machine(s);
-  for (const auto& [x, want_um] :
-       {std::pair{150.0, 3.0}, std::pair{-300.0, 0.0}, std::pair{0.0, 2.0}}) {
+  for (const auto& [x, want_um] : {std::pair{150.0, 3.0}, std::pair{-300.0, 0.0}, std::pair{0.0, 2.0}}) {
     const AxisValues q = values(machine, {{'X', x}, {'Y', 10}, {'Z', -100}});
-    const PoseError err =
-        pose_error(forward(machine, q, 50), forward(machine, q, 50, Geometry::Actual));
+    const PoseError err = pose_error(forward(machine, q, 50), forward(machine, q, 50, Geometry::Actual));
     EXPECT_TRUE(near(err.tip_um, {want_um, 0, 0}, kExactUm)) << "X = " << x;
   }
 }
@@ -743,8 +707,7 @@ TEST(ErrorComposition, OffsetThenTiltThenRotationOnOneAxis) {
   const Machine machine(s);
   const AxisValues q = values(machine, {{'X', 30}, {'Y', -40}, {'Z', -200}, {'C', 90 * kDeg}});
   const ToolPose actual = forward(machine, q, 100, Geometry::Actual);
-  const Eigen::Vector3d want(-41 * std::cos(e) + 200 * std::sin(e), -30,
-                             41 * std::sin(e) + 200 * std::cos(e));
+  const Eigen::Vector3d want(-41 * std::cos(e) + 200 * std::sin(e), -30, 41 * std::sin(e) + 200 * std::cos(e));
   EXPECT_TRUE(near(actual.tip_mm, want, kExactMm));
   // u_w = Rz(-90) Rx(-e) e_z = Rz(-90)(0, sin e, cos e) = (sin e, 0, cos e).
   EXPECT_TRUE(near(actual.axis, {std::sin(e), 0, std::cos(e)}, kExactUnit));
@@ -789,8 +752,7 @@ TEST(ErrorComposition, ComponentErrorOnXAndLocationErrorOnC) {
   axis_of(s, 'C').location.offset_mm = {0.010, 0, 0};
   const Machine machine(s);
   const AxisValues q = values(machine, {{'X', -50}, {'Y', 60}, {'Z', -250}, {'C', 90 * kDeg}});
-  const PoseError err =
-      pose_error(forward(machine, q, 80), forward(machine, q, 80, Geometry::Actual));
+  const PoseError err = pose_error(forward(machine, q, 80), forward(machine, q, 80, Geometry::Actual));
   EXPECT_TRUE(near(err.tip_um, {0, 5, 0}, kExactUm));
   EXPECT_NEAR(err.axis_tilt_urad, 0.0, kTiltUrad);
 }

@@ -29,8 +29,8 @@ Machine table_table() {
   MachineSpec s;
   s.name = "tt";
   s.topology = "WCAFXYZT";
-  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}),
-            rotary('A', {1, 0, 0}, {0, 0, 0}), rotary('C', {0, 0, 1}, {0, 0, 0})};
+  s.axes = {linear('X', {1, 0, 0}), linear('Y', {0, 1, 0}), linear('Z', {0, 0, 1}), rotary('A', {1, 0, 0}, {0, 0, 0}),
+            rotary('C', {0, 0, 1}, {0, 0, 0})};
   return Machine(s);
 }
 
@@ -76,8 +76,7 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
   program.blocks.push_back(b);
 
   DensifySettings coarse;
-  coarse.angle_step_rad =
-      30.0 * M_PI / 180.0;  // q = 3: chords 28 (1 - cos 15 deg) = 0.95 mm inside
+  coarse.angle_step_rad = 30.0 * M_PI / 180.0;  // q = 3: chords 28 (1 - cos 15 deg) = 0.95 mm inside
   Timed timed(program, m, coarse);
   const Densified& d = timed.densified;
   ASSERT_EQ(d.samples.size(), 4u);
@@ -99,8 +98,7 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
     double best = 1e9;
     for (std::size_t k = 1; k < d.samples.size(); ++k) {
       const Eigen::Vector3d a = d.samples[k - 1].pose.tip_mm, c = d.samples[k].pose.tip_mm;
-      const double t =
-          std::clamp((p.actual_pose.tip_mm - a).dot(c - a) / (c - a).squaredNorm(), 0.0, 1.0);
+      const double t = std::clamp((p.actual_pose.tip_mm - a).dot(c - a) / (c - a).squaredNorm(), 0.0, 1.0);
       best = std::min(best, (p.actual_pose.tip_mm - (a + t * (c - a))).norm());
     }
     polyline_worst = std::max(polyline_worst, best);
@@ -110,9 +108,7 @@ TEST(Interpolator, AxisBlockContourIsAgainstTheMachinesCurve) {
   ASSERT_EQ(periods.size(), count);
   for (std::size_t k = 1; k < periods.size(); ++k) {
     // One period late, and on the circle of radius 28.
-    EXPECT_NEAR((periods[k].actual - periods[k - 1].commanded).cwiseAbs().maxCoeff(), 0.0,
-                kRounding)
-        << k;
+    EXPECT_NEAR((periods[k].actual - periods[k - 1].commanded).cwiseAbs().maxCoeff(), 0.0, kRounding) << k;
     EXPECT_NEAR(periods[k].actual_pose.tip_mm.head<2>().norm(), 28.0, kRounding) << k;
     EXPECT_LT(periods[k].contour_error_mm, kRounding) << k;
     EXPECT_NEAR(periods[k].commanded_pose.tip_mm.head<2>().norm(), 28.0, kRounding) << k;
@@ -145,8 +141,7 @@ TEST(Interpolator, SettlesOnTheEnd) {
     last = p;
   });
   EXPECT_GT(last.t_s, plan.cycle_time_s);
-  EXPECT_NEAR((last.actual - d.samples.back().axes).cwiseAbs().maxCoeff(), 0.0,
-              in.settle_tolerance);
+  EXPECT_NEAR((last.actual - d.samples.back().axes).cwiseAbs().maxCoeff(), 0.0, in.settle_tolerance);
   EXPECT_NEAR(last.actual_pose.tip_mm.x(), 50.0, in.settle_tolerance);
 }
 

@@ -114,7 +114,7 @@ TEST(InverseKinematics, ContinuousAndWideAxesListEveryWinding) {
     if (std::abs(s.q[bc.axis_index('B')] - 30 * kDeg) < 1e-9 &&
         std::abs(std::remainder(s.q[bc.axis_index('C')] - 100 * kDeg, 2 * M_PI)) < 1e-9)
       ++windings_of_q;
-  EXPECT_EQ(windings_of_q, 2);  // C = 100 and C = -260 deg
+  EXPECT_EQ(windings_of_q, 2);        // C = 100 and C = -260 deg
   EXPECT_EQ(r.solutions.size(), 4u);  // two branches (B = +-30) x two windings
 }
 
@@ -142,7 +142,8 @@ TEST(MachineValidation, CoplanarLinearAxesAreAnErrorEvenAfterANormalisation) {
   s.axes[2].direction = Eigen::Vector3d(0.6, 0.8, 0.0);
   s.spindle_axis = Eigen::Vector3d(1e-7, 0, 1);
   bool coplanar = false;
-  for (const SpecProblem& p : validate(s)) coplanar = coplanar || (!p.warning && p.message.find("one plane") != std::string::npos);
+  for (const SpecProblem& p : validate(s))
+    coplanar = coplanar || (!p.warning && p.message.find("one plane") != std::string::npos);
   EXPECT_TRUE(coplanar);
   EXPECT_THROW(Machine{s}, std::invalid_argument);
 }

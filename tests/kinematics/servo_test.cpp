@@ -71,8 +71,7 @@ Trajectory sample(double duration_s, double step_s, const std::function<AxisValu
   return tr;
 }
 
-double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a,
-                        const Eigen::Vector2d& b) {
+double segment_distance(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   const Eigen::Vector2d d = b - a;
   const double s = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
   return (p - a - s * d).norm();
@@ -143,8 +142,7 @@ TEST(ServoFirstOrder, CornerContourErrorIsVOverKvOverE) {
   double e_max = 0.0;
   for (const AxisValues& p : act) {
     const Eigen::Vector2d q(p[0], p[1]);
-    e_max = std::max(e_max, std::min(segment_distance(q, {-leg, 0}, {0, 0}),
-                                     segment_distance(q, {0, 0}, {0, leg})));
+    e_max = std::max(e_max, std::min(segment_distance(q, {-leg, 0}, {0, 0}), segment_distance(q, {0, 0}, {0, leg})));
   }
   EXPECT_NEAR(e_max / (std::exp(-1.0) * v / kv), 1.0, kContinuousLimitRel);
 }
@@ -206,8 +204,7 @@ TEST(ServoSecondOrder, VelocityStepResponseMatchesTheClosedForm) {
     }
     // DC gain 1: the settled velocity is V (e^{-sigma 0.4 s} <= e^{-16}; slope over 0.1 s).
     const std::size_t last = act.size() - 1, back = last - 70;
-    EXPECT_NEAR((act[last][0] - act[back][0]) / (cmd.t_s[last] - cmd.t_s[back]) / v, 1.0,
-                kSteadyRel);
+    EXPECT_NEAR((act[last][0] - act[back][0]) / (cmd.t_s[last] - cmd.t_s[back]) / v, 1.0, kSteadyRel);
   }
 }
 
@@ -231,9 +228,7 @@ TEST(ServoSecondOrder, VelocityStepOvershootAndDcGain) {
       cmd.t_s.insert(it, p);
     }
     const auto act = simulate_servo(cmd.t_s, cmd.x, settings_for(dt, ServoAxis{0.0, wn, z, 1.0}));
-    auto at = [&](double t) {
-      return act[std::lower_bound(cmd.t_s.begin(), cmd.t_s.end(), t) - cmd.t_s.begin()][0];
-    };
+    auto at = [&](double t) { return act[std::lower_bound(cmd.t_s.begin(), cmd.t_s.end(), t) - cmd.t_s.begin()][0]; };
     const double peak = (at(tp + h) - at(tp - h)) / (2 * h) / v;
     EXPECT_NEAR(peak - 1.0, std::exp(-kPi * z / std::sqrt(1 - z * z)), kOvershootTol);
     const double settled = (at(0.45 + h) - at(0.45 - h)) / (2 * h) / v;  // e^{-0.3*120*0.44} = 1e-7
@@ -250,8 +245,8 @@ TEST(ServoLoop, RampLagIsOneMinusFeedForwardTimesVOverKvAndHoldIsReached) {
   for (double wn : {0.0, 120.0}) {
     for (double ff : {0.0, 0.5, 1.0}) {
       SCOPED_TRACE("wn " + std::to_string(wn) + " ff " + std::to_string(ff));
-      const Trajectory cmd = sample(
-          t_stop + 1.5, dt / 2, [&](double t) { return axis_values({v * std::min(t, t_stop)}); });
+      const Trajectory cmd =
+          sample(t_stop + 1.5, dt / 2, [&](double t) { return axis_values({v * std::min(t, t_stop)}); });
       const auto act = simulate_servo(cmd.t_s, cmd.x, settings_for(dt, ServoAxis{kv, wn, 0.8, ff}));
       const std::size_t at_stop = static_cast<std::size_t>(std::lround(t_stop / (dt / 2)));
       EXPECT_NEAR(cmd.x[at_stop][0] - act[at_stop][0], (1.0 - ff) * v / kv, kExactMm);
@@ -308,8 +303,7 @@ TEST(ServoAxes, OneToFiveAxesAreIndependentAndDeterministic) {
 }
 
 TEST(ServoInput, SingleStampIsTheCommandAtRest) {
-  const auto a =
-      simulate_servo({1.5}, {axis_values({1.0, 2.0, 3.0})}, settings_for(0.005, ServoAxis{}));
+  const auto a = simulate_servo({1.5}, {axis_values({1.0, 2.0, 3.0})}, settings_for(0.005, ServoAxis{}));
   ASSERT_EQ(a.size(), 1u);
   EXPECT_EQ(a[0], axis_values({1.0, 2.0, 3.0}));
 }
@@ -339,20 +333,14 @@ TEST(ServoInput, ProgrammerErrorsThrowInvalidArgument) {
     edit(s);
     return s;
   };
-  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.period_s = 0; })),
-               std::invalid_argument);
-  EXPECT_THROW(simulate_servo(t, x, with([&](ServoSettings& s) { s.period_s = nan; })),
-               std::invalid_argument);
-  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes.clear(); })),
-               std::invalid_argument);
-  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes.resize(3); })),
-               std::invalid_argument);
-  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes[0].kv_per_s = -1; })),
-               std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.period_s = 0; })), std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([&](ServoSettings& s) { s.period_s = nan; })), std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes.clear(); })), std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes.resize(3); })), std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes[0].kv_per_s = -1; })), std::invalid_argument);
   EXPECT_THROW(simulate_servo(t, x, with([](ServoSettings& s) { s.axes[0].feed_forward = 1.5; })),
                std::invalid_argument);
-  EXPECT_THROW(simulate_servo(t, x, with([&](ServoSettings& s) { s.axes[0].zeta = nan; })),
-               std::invalid_argument);
+  EXPECT_THROW(simulate_servo(t, x, with([&](ServoSettings& s) { s.axes[0].zeta = nan; })), std::invalid_argument);
   EXPECT_THROW(simulate_servo(t, x, with([&](ServoSettings& s) { s.axes[0].omega_n_per_s = inf; })),
                std::invalid_argument);
 }
@@ -378,8 +366,7 @@ constexpr double kPaperRel = 0.10;  // figures to ~2 digits off a plot
 constexpr double kZohModelRel = 0.01;
 
 struct Seed004Row {
-  double corner_contour, corner_distance, circle_max, circle_first_order, circle_third_order,
-      circle_zoh, line;
+  double corner_contour, corner_distance, circle_max, circle_first_order, circle_third_order, circle_zoh, line;
 };
 
 Seed004Row seed004_row(double v_m_per_min) {
@@ -398,8 +385,7 @@ Seed004Row seed004_row(double v_m_per_min) {
   for (const AxisValues& p : simulate_servo(corner.t_s, corner.x, s)) {
     const Eigen::Vector2d q(p[0], p[1]);
     row.corner_contour = std::max(
-        row.corner_contour,
-        std::min(segment_distance(q, {0, 0}, {0, ye}), segment_distance(q, {0, ye}, {xe, ye})));
+        row.corner_contour, std::min(segment_distance(q, {0, 0}, {0, ye}), segment_distance(q, {0, ye}, {xe, ye})));
     row.corner_distance = std::min(row.corner_distance, (q - Eigen::Vector2d(0, ye)).norm());
   }
 
@@ -414,9 +400,9 @@ Seed004Row seed004_row(double v_m_per_min) {
   // Expected shrinks R (1 - |H(jw)|), H = L / (1 + L): first order L = Kv / s (the issue's
   // formula); third order L = Kv wn^2 / (s (s^2 + 2 xi wn s + wn^2)); and that times e^{-s dT/2}.
   const std::complex<double> jw(0.0, w);
-  const std::complex<double> l3 = kv * axis.omega_n_per_s * axis.omega_n_per_s /
-                                  (jw * (jw * jw + 2 * axis.zeta * axis.omega_n_per_s * jw +
-                                         axis.omega_n_per_s * axis.omega_n_per_s));
+  const std::complex<double> l3 =
+      kv * axis.omega_n_per_s * axis.omega_n_per_s /
+      (jw * (jw * jw + 2 * axis.zeta * axis.omega_n_per_s * jw + axis.omega_n_per_s * axis.omega_n_per_s));
   const std::complex<double> lz = l3 * std::exp(-jw * (dt / 2));
   row.circle_first_order = r * (1.0 - 1.0 / std::sqrt(1.0 + (w / kv) * (w / kv)));
   row.circle_third_order = r * (1.0 - std::abs(l3 / (1.0 + l3)));
@@ -429,13 +415,11 @@ Seed004Row seed004_row(double v_m_per_min) {
   const Trajectory line = sample(t_end + 1.0, step, [&](double t) {
     const double b = 2 * alpha * v * std::min(t, t_end) / span - alpha;
     const double rr = len * std::sin(b) + span * std::tan(b) / (2 * std::tan(alpha));
-    return axis_values(
-        {rr * std::cos(th) + xc / 2, rr * std::sin(th) + yc / 2, len * std::cos(b), b});
+    return axis_values({rr * std::cos(th) + xc / 2, rr * std::sin(th) + yc / 2, len * std::cos(b), b});
   });
   const Eigen::Vector3d dir(std::cos(th), std::sin(th), 0.0);
   for (const AxisValues& p : simulate_servo(line.t_s, line.x, settings_for(dt, axis))) {
-    const Eigen::Vector3d tip(p[0] - len * std::sin(p[3]) * std::cos(th),
-                              p[1] - len * std::sin(p[3]) * std::sin(th),
+    const Eigen::Vector3d tip(p[0] - len * std::sin(p[3]) * std::cos(th), p[1] - len * std::sin(p[3]) * std::sin(th),
                               p[2] - len * std::cos(p[3]));
     const double along = std::clamp(tip.dot(dir), 0.0, span);
     row.line = std::max(row.line, (tip - along * dir).norm());
@@ -459,15 +443,12 @@ TEST(ServoSeed004, CornerCircleAndSwivelLineBesideThePaper) {
     std::printf(
         "  %7.0f |       %7.3f %9.3f %5.2f |      %6.3f %9.3f %9.3f %7.3f %5.2f |     %6.3f "
         "%5.2f\n",
-        speeds[i], r.corner_contour, r.corner_distance, paper_corner[i], r.circle_max,
-        r.circle_first_order, r.circle_third_order, r.circle_zoh, paper_circle[i], r.line,
-        paper_line[i]);
+        speeds[i], r.corner_contour, r.corner_distance, paper_corner[i], r.circle_max, r.circle_first_order,
+        r.circle_third_order, r.circle_zoh, paper_circle[i], r.line, paper_line[i]);
     RecordProperty("corner_contour_mm_" + std::to_string(static_cast<int>(speeds[i])),
                    std::to_string(r.corner_contour));
-    RecordProperty("circle_shrink_mm_" + std::to_string(static_cast<int>(speeds[i])),
-                   std::to_string(r.circle_max));
-    RecordProperty("line_error_mm_" + std::to_string(static_cast<int>(speeds[i])),
-                   std::to_string(r.line));
+    RecordProperty("circle_shrink_mm_" + std::to_string(static_cast<int>(speeds[i])), std::to_string(r.circle_max));
+    RecordProperty("line_error_mm_" + std::to_string(static_cast<int>(speeds[i])), std::to_string(r.line));
 
     EXPECT_NEAR(r.corner_distance / paper_corner[i], 1.0, kPaperRel) << speeds[i] << " m/min";
     EXPECT_NEAR(r.circle_max / paper_circle[i], 1.0, kPaperRel) << speeds[i] << " m/min";
@@ -478,8 +459,7 @@ TEST(ServoSeed004, CornerCircleAndSwivelLineBesideThePaper) {
     // hold) explain: it matches the third-order + ZOH loop, and lies below the first-order
     // shrink by that model's difference.
     EXPECT_NEAR(r.circle_max / r.circle_zoh, 1.0, kZohModelRel) << speeds[i] << " m/min";
-    EXPECT_NEAR((r.circle_first_order - r.circle_max) / (r.circle_first_order - r.circle_zoh), 1.0,
-                kZohModelRel);
+    EXPECT_NEAR((r.circle_first_order - r.circle_max) / (r.circle_first_order - r.circle_zoh), 1.0, kZohModelRel);
   }
   // A linear loop: corner errors scale as v, line errors as v^2, each to 1 % (the corner's
   // 100 mm legs settle, 150 ms at 40 m/min against a ~30 ms loop time constant; the line's
@@ -529,8 +509,7 @@ TEST(ServoStability, MatchesTheClosedFormAndASimulation) {
       if (k >= 100 && k < 200) early = std::max(early, e);
       if (k >= 1900) late = std::max(late, e);
     }
-    EXPECT_EQ(servo_stable(second, 0.005), late < early)
-        << "Kv " << kv << ": early " << early << ", late " << late;
+    EXPECT_EQ(servo_stable(second, 0.005), late < early) << "Kv " << kv << ": early " << early << ", late " << late;
   }
 }
 

@@ -36,7 +36,8 @@ inline AxisSpec rotary(char letter, Eigen::Vector3d axis, Eigen::Vector3d center
 constexpr double kContinuous = 0.0;  // lo = hi = 0: no limits
 
 inline MachineSpec spec(const std::string& name, const std::string& topology, std::vector<AxisSpec> axes,
-                 Eigen::Vector3d gauge = Eigen::Vector3d::Zero(), Eigen::Vector3d origin = Eigen::Vector3d::Zero()) {
+                        Eigen::Vector3d gauge = Eigen::Vector3d::Zero(),
+                        Eigen::Vector3d origin = Eigen::Vector3d::Zero()) {
   MachineSpec s;
   s.name = name;
   s.topology = topology;
@@ -51,7 +52,8 @@ inline MachineSpec spec(const std::string& name, const std::string& topology, st
 inline std::vector<MachineSpec> machines() {
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(), z = Eigen::Vector3d::UnitZ();
   std::vector<MachineSpec> out;
-  out.push_back(spec("3axis", "WXYFZT", {linear('X', -x, -400, 400), linear('Y', -y, -250, 250), linear('Z', z, -300, 200)}));
+  out.push_back(
+      spec("3axis", "WXYFZT", {linear('X', -x, -400, 400), linear('Y', -y, -250, 250), linear('Z', z, -300, 200)}));
   out.push_back(spec("trt-ac", "WCAFXYZT",
                      {linear('X', x, -300, 300), linear('Y', y, -300, 300), linear('Z', z, -300, 300),
                       rotary('A', x, {0, 20, 10}, -120, 30), rotary('C', z, {0, 0, 0}, kContinuous, kContinuous)},

@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 class Stages : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir = fs::temp_directory_path() / ("vcut_pipeline_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    dir = fs::temp_directory_path() /
+          ("vcut_pipeline_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir);
     fs::create_directories(dir);
     write("tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 25, shank_diameter: 10, length: 40}\n");
@@ -59,7 +60,8 @@ TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
   ASSERT_EQ(machine.find("\nerrors:"), std::string::npos);
   write("machine.yaml", machine + "\nerrors: {E_ZZ: 30}\n");
   io::write_stl((dir / "part.stl").string(), removal::test::slotted_block(5.0, 2.0));
-  const std::string design = "design: {file: part.stl}\nreport: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n";
+  const std::string design =
+      "design: {file: part.stl}\nreport: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n";
   const std::string path = (dir / "machine.yaml").string();
   const SimulationResult nominal = simulate(job(design, path), {});
   EXPECT_FALSE(nominal.nominal.done);  // no errors asked: nothing to compare

@@ -23,11 +23,11 @@ constexpr double kOffset = 0.05;
 TEST(DesignDistance, BoxSignsAndDistances) {
   const DesignDistance d(test::box_mesh({0, 0, 0}, {10, 10, 10}));
   EXPECT_TRUE(d.closed());
-  EXPECT_NEAR(d.signed_distance({5, 5, 12}), 2.0, 1e-12);          // above a face
-  EXPECT_NEAR(d.signed_distance({5, 5, 9}), -1.0, 1e-12);          // inside
-  EXPECT_NEAR(d.signed_distance({13, 14, 5}), 5.0, 1e-12);         // beside an edge: 3-4-5
-  EXPECT_NEAR(d.signed_distance({-1, -2, -2}), 3.0, 1e-12);        // beyond a corner
-  EXPECT_NEAR(d.signed_distance({0.5, 0.5, 0.5}), -0.5, 1e-12);    // inside near a corner
+  EXPECT_NEAR(d.signed_distance({5, 5, 12}), 2.0, 1e-12);        // above a face
+  EXPECT_NEAR(d.signed_distance({5, 5, 9}), -1.0, 1e-12);        // inside
+  EXPECT_NEAR(d.signed_distance({13, 14, 5}), 5.0, 1e-12);       // beside an edge: 3-4-5
+  EXPECT_NEAR(d.signed_distance({-1, -2, -2}), 3.0, 1e-12);      // beyond a corner
+  EXPECT_NEAR(d.signed_distance({0.5, 0.5, 0.5}), -0.5, 1e-12);  // inside near a corner
 }
 
 // A mesh of lines only: nothing to measure against, an infinite distance (no crash).
@@ -47,8 +47,8 @@ double brute_triangle_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& 
                                const Eigen::Vector3d& c) {
   const Eigen::Vector3d n = (b - a).cross(c - a).normalized();
   const Eigen::Vector3d foot = x - n.dot(x - a) * n;
-  const bool inside = (b - a).cross(foot - a).dot(n) >= 0 && (c - b).cross(foot - b).dot(n) >= 0 &&
-                      (a - c).cross(foot - c).dot(n) >= 0;
+  const bool inside =
+      (b - a).cross(foot - a).dot(n) >= 0 && (c - b).cross(foot - b).dot(n) >= 0 && (a - c).cross(foot - c).dot(n) >= 0;
   if (inside) return std::abs(n.dot(x - a));
   auto segment = [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
     const double t = std::clamp((x - p).dot(q - p) / (q - p).squaredNorm(), 0.0, 1.0);
@@ -109,7 +109,8 @@ TEST(DesignDistance, GridSearchMatchesBruteForce) {
     for (const Eigen::Vector3d& e : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1e-3, 0, 0), Eigen::Vector3d(0, 1e-3, 0),
                                      Eigen::Vector3d(0, 0, 1e-3)})
       cube.vertices_mm.push_back(o + e);
-    for (const Eigen::Vector3i& t : {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 1, 3), Eigen::Vector3i(0, 3, 2), Eigen::Vector3i(1, 2, 3)})
+    for (const Eigen::Vector3i& t :
+         {Eigen::Vector3i(0, 2, 1), Eigen::Vector3i(0, 1, 3), Eigen::Vector3i(0, 3, 2), Eigen::Vector3i(1, 2, 3)})
       cube.triangles.push_back(t + Eigen::Vector3i::Constant(base));
   }
   auto inside_cube = [](const Eigen::Vector3d& x) { return (x.array() > 0.0).all() && (x.array() < 100.0).all(); };
@@ -127,14 +128,15 @@ TEST(DesignDistance, GridSearchMatchesBruteForce) {
     const DesignDistance d(*c.mesh);
     std::vector<Eigen::Vector3d> points;
     for (int i = 0; i < 1500; ++i) {
-      const Eigen::Vector3d box_point = c.lo + (c.hi - c.lo).cwiseProduct(Eigen::Vector3d(unit(random), unit(random), unit(random)));
+      const Eigen::Vector3d box_point =
+          c.lo + (c.hi - c.lo).cwiseProduct(Eigen::Vector3d(unit(random), unit(random), unit(random)));
       points.push_back(box_point);
       // Near the surface: a vertex moved a little.
       const Eigen::Vector3d& v = c.mesh->vertices_mm[random() % c.mesh->vertices_mm.size()];
       points.push_back(v + 0.05 * Eigen::Vector3d(unit(random) - 0.5, unit(random) - 0.5, unit(random) - 0.5));
     }
     points.emplace_back(500.0, 300.0, -200.0);  // far outside: beyond the grid's search
-    DistanceHint carried;  // hints from the previous, often far, point
+    DistanceHint carried;                       // hints from the previous, often far, point
     int tested = 0;
     for (const Eigen::Vector3d& x : points) {
       const double expected = brute_distance(*c.mesh, x);
@@ -195,7 +197,7 @@ TEST(Compare, DesignIntoTheMaterialIsAGouge) {
     ++floor;
   }
   EXPECT_GT(floor, 100);
-  EXPECT_EQ(c.gouges[0].moves, std::vector<int>{1});  // the cutting move, nothing else
+  EXPECT_EQ(c.gouges[0].moves, std::vector<int>{1});    // the cutting move, nothing else
   EXPECT_NEAR(c.gouges[0].centroid_mm.y(), 20.0, 1.0);  // the slot's floor and walls
   EXPECT_NEAR(c.gouges[0].deepest_mm.z(), -2.0, 2.0 + kV);
   // Floor 60 x 9.9 plus walls 2 x 60 x 1.95: the gouged area, within the edge strips.

@@ -131,7 +131,10 @@ TEST(DexelStock, FlatAndBullEndpointsLieOnTheirSweeps) {
         double best_t = 0.0, best = f(0.0);
         for (int i = 1; i <= 2000; ++i) {
           const double t = i / 2000.0;
-          if (f(t) < best) { best = f(t); best_t = t; }
+          if (f(t) < best) {
+            best = f(t);
+            best_t = t;
+          }
         }
         double lo = std::max(0.0, best_t - 1.0 / 2000), hi = std::min(1.0, best_t + 1.0 / 2000);
         for (int i = 0; i < 100; ++i) {
@@ -245,7 +248,8 @@ Groove measure(const DexelStock& stock, double x, int iz) {
     if (!ray.empty()) g.depth_mm = std::max(g.depth_mm, -static_cast<double>(ray.back().hi_mm));
   }
   const auto ray = stock.ray(1, ix, iz);
-  for (std::size_t s = 1; s < ray.size(); ++s) g.width_mm = std::max(g.width_mm, static_cast<double>(ray[s].lo_mm - ray[s - 1].hi_mm));
+  for (std::size_t s = 1; s < ray.size(); ++s)
+    g.width_mm = std::max(g.width_mm, static_cast<double>(ray[s].lo_mm - ray[s - 1].hi_mm));
   return g;
 }
 
@@ -338,12 +342,18 @@ TEST(DexelStock, VBitRampMatchesTheConeSweep) {
     double best_t = 0.0;
     for (int k = 0; k <= 4000; ++k) {
       const double t = k / 4000.0, d = cutter_distance(cutter, x - (a + t * (b - a)));
-      if (d < best) { best = d; best_t = t; }
+      if (d < best) {
+        best = d;
+        best_t = t;
+      }
     }
     double lo = std::max(0.0, best_t - 1e-3), hi = std::min(1.0, best_t + 1e-3);
     for (int k = 0; k < 100; ++k) {
       const double m1 = lo + (hi - lo) / 3, m2 = hi - (hi - lo) / 3;
-      if (cutter_distance(cutter, x - (a + m1 * (b - a))) < cutter_distance(cutter, x - (a + m2 * (b - a)))) hi = m2; else lo = m1;
+      if (cutter_distance(cutter, x - (a + m1 * (b - a))) < cutter_distance(cutter, x - (a + m2 * (b - a))))
+        hi = m2;
+      else
+        lo = m1;
     }
     best = std::min(best, cutter_distance(cutter, x - (a + 0.5 * (lo + hi) * (b - a))));
     worst = std::max(worst, std::abs(best));
@@ -408,7 +418,8 @@ TEST(DexelStock, SameRaysForOneAndTwoThreads) {
   }
   ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
   EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
-                        s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)), 0);
+                        s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
+            0);
   EXPECT_EQ(s1.vertex_move, s2.vertex_move);
 }
 
@@ -440,9 +451,12 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
     Eigen::Vector3d p(3, 3, 9);
     for (int i = 0; i < 240; ++i) {
       Eigen::Vector3d q;
-      if (i % 40 < 20) q = p + Eigen::Vector3d((i / 40) % 2 ? -0.5 : 0.5, 0, c.level_rows ? 0.0 : dip(rng));  // rows
-      else if (i % 40 < 23) q = p + Eigen::Vector3d(0, 0.35, 0);                         // stepover
-      else q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));                       // wandering
+      if (i % 40 < 20)
+        q = p + Eigen::Vector3d((i / 40) % 2 ? -0.5 : 0.5, 0, c.level_rows ? 0.0 : dip(rng));  // rows
+      else if (i % 40 < 23)
+        q = p + Eigen::Vector3d(0, 0.35, 0);  // stepover
+      else
+        q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
       q.z() = std::clamp(q.z(), 6.0, 11.0);
       q.x() = std::clamp(q.x(), 1.0, 19.0);
       q.y() = std::clamp(q.y(), 1.0, 14.0);

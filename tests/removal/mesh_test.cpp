@@ -21,7 +21,8 @@ TriangleMesh uv_sphere(double r_mm, int rings, int segments) {
     const double theta = M_PI * i / rings;
     for (int j = 0; j < segments; ++j) {
       const double phi = 2.0 * M_PI * j / segments;
-      m.vertices_mm.push_back({r_mm * std::sin(theta) * std::cos(phi), r_mm * std::sin(theta) * std::sin(phi), r_mm * std::cos(theta)});
+      m.vertices_mm.push_back(
+          {r_mm * std::sin(theta) * std::cos(phi), r_mm * std::sin(theta) * std::sin(phi), r_mm * std::cos(theta)});
     }
   }
   m.vertices_mm.push_back({0, 0, -r_mm});

@@ -17,9 +17,9 @@
 namespace vcut::removal {
 namespace {
 
-constexpr double kV = 0.1;              // voxel size of these tests, mm
-constexpr double kSurfaceTol = kV / 10; // issue 2: vertices within v/10 of the analytic surface
-constexpr double kVolumeTol = 0.005;    // issue 2: removed volume within 0.5 %
+constexpr double kV = 0.1;               // voxel size of these tests, mm
+constexpr double kSurfaceTol = kV / 10;  // issue 2: vertices within v/10 of the analytic surface
+constexpr double kVolumeTol = 0.005;     // issue 2: removed volume within 0.5 %
 
 const BoxShape kBox{{0, 0, -20}, {60, 40, 0}};
 
@@ -185,7 +185,8 @@ TYPED_TEST(StockTest, SameBytesForOneAndTwoThreads) {
   ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
   ASSERT_EQ(s1.mesh.triangles.size(), s2.mesh.triangles.size());
   EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
-                        s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)), 0);
+                        s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
+            0);
   EXPECT_EQ(s1.vertex_move, s2.vertex_move);
 }
 

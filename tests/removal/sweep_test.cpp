@@ -38,10 +38,10 @@ double segment_distance(const Eigen::Vector3d& x, const Eigen::Vector3d& a, cons
 
 TEST(CutterDistance, FlatBallBullProfiles) {
   const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
-  EXPECT_NEAR(cutter_distance(flat, {0, 0, -1}), 1.0, kClosedForm_mm);   // below the tip face
-  EXPECT_NEAR(cutter_distance(flat, {7, 0, 5}), 2.0, kClosedForm_mm);    // beside the flank
-  EXPECT_NEAR(cutter_distance(flat, {8, 0, -4}), 5.0, kClosedForm_mm);   // from the rim: 3-4-5
-  EXPECT_NEAR(cutter_distance(flat, {0, 0, 1}), -1.0, kClosedForm_mm);   // inside, 1 above the face
+  EXPECT_NEAR(cutter_distance(flat, {0, 0, -1}), 1.0, kClosedForm_mm);  // below the tip face
+  EXPECT_NEAR(cutter_distance(flat, {7, 0, 5}), 2.0, kClosedForm_mm);   // beside the flank
+  EXPECT_NEAR(cutter_distance(flat, {8, 0, -4}), 5.0, kClosedForm_mm);  // from the rim: 3-4-5
+  EXPECT_NEAR(cutter_distance(flat, {0, 0, 1}), -1.0, kClosedForm_mm);  // inside, 1 above the face
   const Cutter ball = cutter(CutterType::Ball, 6, 3, 20);
   EXPECT_NEAR(cutter_distance(ball, {0, 0, -1}), 1.0, kClosedForm_mm);
   EXPECT_NEAR(cutter_distance(ball, {4, 0, 0}), std::hypot(4.0, 3.0) - 3.0, kClosedForm_mm);  // from the centre (0,0,3)
@@ -119,8 +119,10 @@ TEST(TranslationSweep, GeneralCylinderSweepNearItsSurface) {
         EXPECT_LE(d, brute + kGeneralSweepTolerance_mm) << x.transpose();
         EXPECT_GE(d, brute - 0.5 * length / kInstances - kGeneralSweepTolerance_mm) << x.transpose();
         const double far = 0.3, near = sweep.distance(x, far);
-        if (d < far - 1e-9) EXPECT_NEAR(near, d, kGeneralSweepTolerance_mm) << x.transpose();
-        else EXPECT_GE(near, far - kGeneralSweepTolerance_mm) << x.transpose();
+        if (d < far - 1e-9)
+          EXPECT_NEAR(near, d, kGeneralSweepTolerance_mm) << x.transpose();
+        else
+          EXPECT_GE(near, far - kGeneralSweepTolerance_mm) << x.transpose();
       }
     }
 }

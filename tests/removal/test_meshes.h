@@ -33,9 +33,14 @@ inline TriangleMesh extrude_yz(const std::vector<Eigen::Vector2d>& polygon, cons
 // A box [0,length] x [0,40] x [-20,0] with a rectangular slot along x centred at y = 20,
 // `half_width` wide each side and `depth` deep.
 inline TriangleMesh slotted_block(double half_width, double depth, double length = 60.0) {
-  const std::vector<Eigen::Vector2d> polygon = {{0, -20}, {40, -20}, {40, 0}, {20 + half_width, 0},
-                                                {20 + half_width, -depth}, {20 - half_width, -depth},
-                                                {20 - half_width, 0}, {0, 0}};
+  const std::vector<Eigen::Vector2d> polygon = {{0, -20},
+                                                {40, -20},
+                                                {40, 0},
+                                                {20 + half_width, 0},
+                                                {20 + half_width, -depth},
+                                                {20 - half_width, -depth},
+                                                {20 - half_width, 0},
+                                                {0, 0}};
   return extrude_yz(polygon, {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 7}}, 0.0, length);
 }
 

@@ -55,8 +55,7 @@ Image decode_png(const std::string& path) {
     if (type == "IHDR") {
       image.width = static_cast<int>(read_u32(data, 0));
       image.height = static_cast<int>(read_u32(data, 4));
-      EXPECT_EQ(data.substr(8), std::string("\x08\x02\x00\x00\x00", 5))
-          << "8-bit RGB, no interlace";
+      EXPECT_EQ(data.substr(8), std::string("\x08\x02\x00\x00\x00", 5)) << "8-bit RGB, no interlace";
     } else if (type == "IDAT") {
       idat += data;
     }
@@ -67,9 +66,7 @@ Image decode_png(const std::string& path) {
   const size_t stride = static_cast<size_t>(image.width) * 3;
   std::vector<std::uint8_t> raw((stride + 1) * image.height);
   uLongf raw_size = raw.size();
-  EXPECT_EQ(
-      uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()),
-      Z_OK);
+  EXPECT_EQ(uncompress(raw.data(), &raw_size, reinterpret_cast<const Bytef*>(idat.data()), idat.size()), Z_OK);
   EXPECT_EQ(raw_size, raw.size());
   image.rgb.assign(stride * image.height, 0);
   for (int y = 0; y < image.height; ++y) {
@@ -114,8 +111,7 @@ TEST(Canvas, LineColoursThePixelsOnIt) {
   // The pixel holding a point of the segment has its centre within sqrt(2)/2 of the line, so
   // a coverage of at least 1 - 0.71; a pixel whose centre is over 1 px off is untouched.
   for (double t = 0; t <= 1; t += 0.001) {
-    const int x = static_cast<int>(a.x + t * (b.x - a.x)),
-              y = static_cast<int>(a.y + t * (b.y - a.y));
+    const int x = static_cast<int>(a.x + t * (b.x - a.x)), y = static_cast<int>(a.y + t * (b.y - a.y));
     EXPECT_LT(image.get(x, y)[0], 255 - 70) << x << "," << y;
   }
   const double dx = b.x - a.x, dy = b.y - a.y, length = std::hypot(dx, dy);
@@ -164,8 +160,7 @@ TEST(Canvas, TextScalesWithItsHeight) {
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
       if (image.get(x, y)[0] < 128)
-        top = std::min(top, y), bottom = std::max(bottom, y), left = std::min(left, x),
-        right = std::max(right, x);
+        top = std::min(top, y), bottom = std::max(bottom, y), left = std::min(left, x), right = std::max(right, x);
   EXPECT_NEAR(top, 70 - height, stroke / 2 + 1);
   EXPECT_NEAR(bottom + 1, 70, stroke / 2 + 1);
   EXPECT_NEAR(left, 20, stroke / 2 + 1);
@@ -220,20 +215,16 @@ TEST(Snapshot, SquareFromTopCoversItsArea) {
   const double angle = kPi / 6, spread = std::cos(angle) + std::sin(angle);
   const double scale = 360 / (10 * spread), side_px = 10 * scale;
   const TriangleMesh turned = square(10, angle);
-  const int n =
-      count_not(render_snapshot(turned, red, view_direction("top"), options), options.background);
+  const int n = count_not(render_snapshot(turned, red, view_direction("top"), options), options.background);
   EXPECT_NEAR(n, side_px * side_px, 4 * side_px * spread + 4);
 
-  const double centre_x_mm = 10 * (std::cos(angle) - std::sin(angle)) / 2,
-               centre_y_mm = 10 * spread / 2;
+  const double centre_x_mm = 10 * (std::cos(angle) - std::sin(angle)) / 2, centre_y_mm = 10 * spread / 2;
   int inside = 0;
   for (int y = 0; y < 400; ++y)
     for (int x = 0; x < 400; ++x) {
       // Back to the square's own (u, v) in mm: undo the screen map, then the turn.
-      const double X = (x + 0.5 - 200) / scale + centre_x_mm,
-                   Y = -(y + 0.5 - 200) / scale + centre_y_mm;
-      const double u = std::cos(angle) * X + std::sin(angle) * Y,
-                   v = -std::sin(angle) * X + std::cos(angle) * Y;
+      const double X = (x + 0.5 - 200) / scale + centre_x_mm, Y = -(y + 0.5 - 200) / scale + centre_y_mm;
+      const double u = std::cos(angle) * X + std::sin(angle) * Y, v = -std::sin(angle) * X + std::cos(angle) * Y;
       inside += u > 0 && u < 10 && v > 0 && v < 10;
     }
   EXPECT_NEAR(n, inside, 4 * side_px / 64);
@@ -244,8 +235,8 @@ TriangleMesh unit_cube(std::vector<Rgb>& colours) {
   TriangleMesh mesh;
   for (int i = 0; i < 8; ++i) {
     mesh.vertices_mm.emplace_back(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-    colours.push_back({std::uint8_t(255 * (i & 1)), std::uint8_t(255 * ((i >> 1) & 1)),
-                       std::uint8_t(255 * ((i >> 2) & 1))});
+    colours.push_back(
+        {std::uint8_t(255 * (i & 1)), std::uint8_t(255 * ((i >> 1) & 1)), std::uint8_t(255 * ((i >> 2) & 1))});
   }
   mesh.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
                     {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
@@ -280,8 +271,7 @@ TEST(Snapshot, SameBytesForOneAndTwoThreads) {
   for (int t = 0; t < 20000; ++t) {
     const Eigen::Vector3d centre(coordinate(random), coordinate(random), coordinate(random));
     for (int k = 0; k < 3; ++k) {
-      mesh.vertices_mm.push_back(centre +
-                                 Eigen::Vector3d(jitter(random), jitter(random), jitter(random)));
+      mesh.vertices_mm.push_back(centre + Eigen::Vector3d(jitter(random), jitter(random), jitter(random)));
       colours.push_back({std::uint8_t(random()), std::uint8_t(random()), std::uint8_t(random())});
     }
     mesh.triangles.emplace_back(3 * t, 3 * t + 1, 3 * t + 2);

@@ -34,9 +34,9 @@ TEST(PlotAxis, LinearAndLogMapping) {
   log.px_max = 100.0;
   EXPECT_NEAR(log.to_px(1e-2), 300.0, 1e-9);  // the middle decade, half way
   EXPECT_NEAR(log.to_px(1e-1), 100.0, 1e-9);
-  EXPECT_NEAR(log.to_px(0.0), 500.0, 1e-9);    // not drawable on a log scale: the minimum
+  EXPECT_NEAR(log.to_px(0.0), 500.0, 1e-9);  // not drawable on a log scale: the minimum
   EXPECT_NEAR(log.to_px(-5.0), 500.0, 1e-9);
-  EXPECT_NEAR(log.to_px(1e-5), 500.0, 1e-9);   // below the range: the minimum
+  EXPECT_NEAR(log.to_px(1e-5), 500.0, 1e-9);  // below the range: the minimum
 }
 
 TEST(PlotAxis, Ticks) {
@@ -96,7 +96,8 @@ TEST(Plot, SvgAndPngPutAMarkerWhereTheFrameSays) {
   std::snprintf(cx, sizeof cx, "%.2f", x);
   std::snprintf(cy, sizeof cy, "%.2f", y);
   const std::string svg = render_svg(plot);
-  EXPECT_NE(svg.find("<circle cx=\"" + std::string(cx) + "\" cy=\"" + cy + "\" r=\"4.00\" fill=\"#1f77b4\"/>"), std::string::npos)
+  EXPECT_NE(svg.find("<circle cx=\"" + std::string(cx) + "\" cy=\"" + cy + "\" r=\"4.00\" fill=\"#1f77b4\"/>"),
+            std::string::npos)
       << svg;
   EXPECT_NE(svg.find("a &lt;&amp;&gt; &quot;title&quot;"), std::string::npos);
   EXPECT_EQ(svg.find("<&>"), std::string::npos);
@@ -155,8 +156,7 @@ TEST(Plot, LogValueZeroIsDrawnAtTheAxisMinimum) {
   const PanelFrame f = panel_frame(plot, 0);
   EXPECT_NEAR(f.y.to_px(0.0), f.y.px_min, 1e-9);
   const Image image = render_png(plot);
-  EXPECT_EQ(image.get(static_cast<int>(f.x.to_px(2.0)), static_cast<int>(f.y.px_min)),
-            (Rgb{214, 39, 40}));
+  EXPECT_EQ(image.get(static_cast<int>(f.x.to_px(2.0)), static_cast<int>(f.y.px_min)), (Rgb{214, 39, 40}));
 }
 
 struct DrawnText {
@@ -171,8 +171,7 @@ std::vector<DrawnText> svg_texts(const std::string& svg, const std::string& pref
       "<text x=\"([-0-9.]+)\" y=\"([-0-9.]+)\" font-size=\"([0-9.]+)\" fill=\"#[0-9a-f]{6}\" "
       "text-anchor=\"(start|middle|end)\">([^<]*)</text>");
   std::vector<DrawnText> out;
-  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), element); it != std::sregex_iterator();
-       ++it) {
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), element); it != std::sregex_iterator(); ++it) {
     const std::smatch& m = *it;
     if (m[5].str().rfind(prefix, 0) != 0) continue;
     const double x = std::stod(m[1]), y = std::stod(m[2]), height = std::stod(m[3]) * 0.72;
@@ -197,8 +196,7 @@ TEST(Plot, PointLabelsDoNotOverlap) {
     s.labels.push_back("setting " + std::to_string(i) + " mm/0.125 deg");
   }
   PlotSeries scale{"", {31, 119, 180}, {{1.0, 1.0}, {512.0, 1.0}}, false, true, {}};
-  crowded.series = {
-      s, scale};  // three decades of y: the labelled points lie within 1 px of each other
+  crowded.series = {s, scale};  // three decades of y: the labelled points lie within 1 px of each other
   crowded.marks.push_back({true, 0.00101, "setting mark", {200, 40, 40}});
   PlotPanel spread = crowded;
   spread.marks.clear();

@@ -70,14 +70,13 @@ struct AptState {
   bool known = false;  // position known (after FROM/ or a first GOTO/)
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d pose_axis = Eigen::Vector3d::UnitZ();  // the tool axis at position_mm
-  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // the axis a motion without i,j,k ends with
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();       // the axis a motion without i,j,k ends with
   bool multax = false;
   bool inches = false;
   bool rapid_next = false;
   double feed_mm_per_min = 0.0;  // 0: no FEDRAT/ yet
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;
-  kinematics::SpindleState spindle_direction =
-      kinematics::SpindleState::Clockwise;  // for SPINDL/ON
+  kinematics::SpindleState spindle_direction = kinematics::SpindleState::Clockwise;  // for SPINDL/ON
   double spindle_rpm = 0.0;
   bool loadtl_seen = false;
   int tool = 1;  // the tool of the next motion
@@ -102,7 +101,6 @@ struct AptState {
 AptProgram read_apt(const std::string& path, const AptOptions& options = {});
 // Appends one CL file read from `in` (named `name` in errors and sources) to `out`. Memory:
 // one statement at a time (lines up to 1 MiB, statements up to 1 MiB), plus the output.
-void read_apt(std::istream& in, const std::string& name, const AptOptions& options, AptProgram& out,
-              AptState& state);
+void read_apt(std::istream& in, const std::string& name, const AptOptions& options, AptProgram& out, AptState& state);
 
 }  // namespace vcut::io

@@ -22,8 +22,7 @@ struct GcodeOptions {
   // Work offsets by name ("G54".."G59.3"): the workpiece-frame position (mm) of that system's
   // zero. Block coordinates = programmed coordinates (in mm) + the active offset. Default all zero.
   std::map<std::string, Eigen::Vector3d> work_offsets_mm;
-  bool unsupported_as_warning =
-      false;  // an unsupported word: one warning per distinct word, then ignored
+  bool unsupported_as_warning = false;  // an unsupported word: one warning per distinct word, then ignored
   // Whose rules the reader follows where controls differ: LinuxCNC (rs274ngc: a nested
   // comment is a warning, G80 shares group 1 with G0..G3), Fanuc/Haas, or Generic (the
   // dialect "gcode" and auto-detected files: rs274ngc's semantics, the controls' tolerance).
@@ -100,8 +99,8 @@ struct GcodeOptions {
 // position carry over from the previous file when `state` is passed back in).
 struct GcodeState;  // opaque modal state (define it in the header; fields are yours)
 kinematics::Program read_gcode(const std::string& path, const GcodeOptions& options);
-void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options,
-                kinematics::Program& program, GcodeState& state);
+void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& options, kinematics::Program& program,
+                GcodeState& state);
 
 // The modal state between lines and between files. Start from a default-constructed one
 // (LinuxCNC's power-on modes: G17 G21 G90 G91.1 G94 G54 M5, no motion mode, no F, no tool;
@@ -111,8 +110,21 @@ struct GcodeState {
   // SpindleSync: G33 (a straight feed at K per spindle revolution); RigidTap: G33.1 (down and
   // back at K per revolution); CubicSpline, QuadraticSpline: G5, G5.1 (LinuxCNC); Probe:
   // G38.2..G38.5; Nurbs: between G5.2 and G5.3.
-  enum class Motion { None, Rapid, Linear, ArcClockwise, ArcCounterClockwise, Cycle, SpindleSync, RigidTap,
-                      CubicSpline, QuadraticSpline, Probe, Nurbs, Unsupported };
+  enum class Motion {
+    None,
+    Rapid,
+    Linear,
+    ArcClockwise,
+    ArcCounterClockwise,
+    Cycle,
+    SpindleSync,
+    RigidTap,
+    CubicSpline,
+    QuadraticSpline,
+    Probe,
+    Nurbs,
+    Unsupported
+  };
   enum class Plane { XY, ZX, YZ };  // G17, G18, G19
 
   Motion motion = Motion::None;  // None until G0..G3; G80 sets it back
@@ -122,7 +134,7 @@ struct GcodeState {
   bool inches = false;               // G20
   bool incremental = false;          // G91
   bool arc_center_absolute = false;  // G90.1 (default G91.1)
-  std::string work_offset = "G54";  // the active coordinate system
+  std::string work_offset = "G54";   // the active coordinate system
 
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();  // workpiece frame, where known
   // Known from the start when GcodeOptions::start_mm is given; an axis becomes unknown after
@@ -141,8 +153,8 @@ struct GcodeState {
   enum class Tcp { Off, Angles, Vector };
   Tcp tcp = Tcp::Off;
   Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();  // G43.5: the last I J K, unit
-  bool exact_stop = false;           // G61 / G61.1 (G64 clears it)
-  double blend_tolerance_mm = -1.0;  // G64 P; < 0: none given
+  bool exact_stop = false;                               // G61 / G61.1 (G64 clears it)
+  double blend_tolerance_mm = -1.0;                      // G64 P; < 0: none given
 
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
@@ -211,16 +223,16 @@ struct GcodeState {
   struct CutterComp {
     enum class Side { Off, Left, Right };
     Side side = Side::Off;
-    double radius_mm = 0.0;       // > 0 compensates; 0 (a tool of no radius) moves as programmed
-    bool first_move = true;       // the next move is the entry move
-    bool arc_not_allowed = false; // the move after G40 must be straight
+    double radius_mm = 0.0;        // > 0 compensates; 0 (a tool of no radius) moves as programmed
+    bool first_move = true;        // the next move is the entry move
+    bool arc_not_allowed = false;  // the move after G40 must be straight
     Eigen::Vector3d program_mm = Eigen::Vector3d::Zero();  // the last programmed (uncompensated) end
     struct Held {
       kinematics::Block block;
       Eigen::Vector2d direction = Eigen::Vector2d::Zero();  // straight: the programmed direction
       double sweep_rad = 0.0;                               // arc: the programmed sweep
     };
-    std::vector<Held> held;  // moves whose end the next corner may still move
+    std::vector<Held> held;                              // moves whose end the next corner may still move
     Eigen::Vector2d endpoint = Eigen::Vector2d::Zero();  // where the held move starts (gouge checks)
     bool endpoint_valid = false;
     std::optional<Eigen::Vector3d> machine_mm;  // after G40: the last compensated end, where the machine is

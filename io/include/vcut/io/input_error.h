@@ -10,10 +10,7 @@ namespace vcut {
 class InputError : public std::runtime_error {
  public:
   InputError(std::string file, int line, int column, const std::string& message)
-      : std::runtime_error(format(file, line, column, message)),
-        file_(std::move(file)),
-        line_(line),
-        column_(column) {}
+      : std::runtime_error(format(file, line, column, message)), file_(std::move(file)), line_(line), column_(column) {}
   explicit InputError(const std::string& message) : std::runtime_error(message) {}
 
   const std::string& file() const { return file_; }
@@ -21,8 +18,7 @@ class InputError : public std::runtime_error {
   int column() const { return column_; }
 
  private:
-  static std::string format(const std::string& file, int line, int column,
-                            const std::string& message) {
+  static std::string format(const std::string& file, int line, int column, const std::string& message) {
     std::string where = file;
     if (line > 0) where += ":" + std::to_string(line);
     if (line > 0 && column > 0) where += ":" + std::to_string(column);

@@ -39,7 +39,7 @@ struct Job {
   std::string file;  // the job file itself
   std::string name;
   std::string machine = "3axis";  // as written: a bundled machine's name or a path
-  std::string machine_file;        // the machine file it names
+  std::string machine_file;       // the machine file it names
   kinematics::MachineSpec machine_spec;
   std::vector<std::string> warnings;  // from reading the job's files
   std::string tools_file;
@@ -49,15 +49,15 @@ struct Job {
   // their cutters (CUTTER/); the tool library wins for a T number it has.
   std::string dialect = "auto";
   bool unsupported_as_warning = false;
-  bool unknown_m_code_as_error = false;  // program.unsupported: error (unset: such M codes warn)
-  bool block_delete = true;              // program.block_delete: on (skip '/' lines) | off
+  bool unknown_m_code_as_error = false;    // program.unsupported: error (unset: such M codes warn)
+  bool block_delete = true;                // program.block_delete: on (skip '/' lines) | off
   std::optional<double> arc_tolerance_mm;  // program.arc_tolerance (mm); none: the reader's default
   // start: {X, Y, Z}: the tip's G53 position (mm) when the program starts; none: the machine's home.
   std::optional<std::map<char, double>> start_mm;
   std::vector<std::string> subroutine_path;  // G-code: folders searched for <name>.ngc subroutine files
-  long long max_lines = 100'000'000;          // G-code: lines read before a loop is taken to be endless
-  std::map<int, bool> tcp_m_codes;            // G-code: M codes switching TCP on (true) / off
-  int initial_tool = 0;                       // G-code: the tool in the spindle at the start (0: none)
+  long long max_lines = 100'000'000;         // G-code: lines read before a loop is taken to be endless
+  std::map<int, bool> tcp_m_codes;           // G-code: M codes switching TCP on (true) / off
+  int initial_tool = 0;                      // G-code: the tool in the spindle at the start (0: none)
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
@@ -69,17 +69,17 @@ struct Job {
   double excess_tolerance_mm = 0.1;
   std::size_t page_triangles = 2'000'000;  // report.html shows the machined mesh decimated to this
   double collision_tolerance_mm = 0.01;
-  double chord_tolerance_mm = 0.0;  // arcs; 0 = resolution / 20
+  double chord_tolerance_mm = 0.0;    // arcs; 0 = resolution / 20
   double step_mm = 0.0;               // densify.step: lambda; 0 = none
   double angle_step_deg = 0.0;        // densify.angle: phi; 0 = none
   double densify_tolerance_mm = 0.0;  // densify.tolerance: epsilon (tolerance mode); 0 = off
   // false (no `densify:` key): every block within min(resolution / 10, gouge tolerance / 2)
   // of the machine's path (io::default_densify_tolerance_mm).
   bool densify_given = false;
-  kinematics::FeedSettings feed;                  // feed: acceleration, jerk, lookahead, rapid
+  kinematics::FeedSettings feed;  // feed: acceleration, jerk, lookahead, rapid
   // servo: present = simulate servo lag, one loop per machine axis (in axis order).
   std::optional<kinematics::ServoSettings> servo;
-  bool apply_errors = false;                      // errors: machine
+  bool apply_errors = false;  // errors: machine
 };
 
 // Throws vcut::InputError (file:line:column, key, what was expected).

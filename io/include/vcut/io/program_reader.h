@@ -52,8 +52,7 @@ struct LoadedProgram {
 // mode and arc tolerance). A file with a NUL byte in its first 64 KiB is
 // "not a text file". Several files run in sequence with one modal state; all must be of one
 // dialect.
-LoadedProgram read_program(const std::string& path, const std::string& dialect,
-                           const ProgramOptions& options = {});
+LoadedProgram read_program(const std::string& path, const std::string& dialect, const ProgramOptions& options = {});
 LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
                             const ProgramOptions& options = {});
 

@@ -98,8 +98,8 @@ struct SinumerikState {
   bool orimks = false;
   kinematics::OrientationMode orientation = kinematics::OrientationMode::Vector;
   Eigen::Vector3d tool_axis = Eigen::Vector3d::UnitZ();  // the last tool vector, unit
-  int axis_set_by_rotary_line = 0;  // > 0: the orientation was last set by A B C on that line
-  Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();  // A6 B6 C6, unit; zero: none yet
+  int axis_set_by_rotary_line = 0;                       // > 0: the orientation was last set by A B C on that line
+  Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();   // A6 B6 C6, unit; zero: none yet
   // How a cone mode's cone is given: by A6 B6 C6 (ORICONCW/CCW, `orientation` says which way),
   // through A7 B7 C7 (ORICONIO) or by the tangent (ORICONTO); the last two are made
   // counterclockwise about the axis they determine.

@@ -62,10 +62,10 @@ struct BlockReport {
   // straight tip path.
   double chord_error_mm = 0.0;
   Eigen::Vector3d chord_error_at_mm = Eigen::Vector3d::Zero();
-  bool singular = false;    // a pose of this block is singular (free angle kept)
+  bool singular = false;           // a pose of this block is singular (free angle kept)
   double singular_miss_rad = 0.0;  // the largest tool-axis miss that keeping it caused
-  std::string unreachable;  // why a pose of this block cannot be reached ("" = all reached)
-  std::string note;         // e.g. ORIAXES without a machine, done as ORIVECT
+  std::string unreachable;         // why a pose of this block cannot be reached ("" = all reached)
+  std::string note;                // e.g. ORIAXES without a machine, done as ORIVECT
 };
 
 struct Densified {

@@ -46,9 +46,9 @@ struct SpanTiming {
 };
 
 struct FeedPlan {
-  std::vector<double> t_s;                // per sample of the densified list, ascending
-  std::vector<double> speed_mm_per_s;     // path speed of the tip at each sample
-  std::vector<double> block_time_s;       // per program block
+  std::vector<double> t_s;             // per sample of the densified list, ascending
+  std::vector<double> speed_mm_per_s;  // path speed of the tip at each sample
+  std::vector<double> block_time_s;    // per program block
   double cycle_time_s = 0.0;
   // Where a machine axis limit (not the programmed feed) set the speed: sample indices.
   std::vector<int> axis_limited_samples;
@@ -83,7 +83,7 @@ class PathCursor {
 // bounded so that each axis stays within its velocity, acceleration and jerk. Blocks whose
 // tip stands still while the tool turns are timed on the rotary motion (LinuxCNC: F in
 // deg/min; the path limits then read deg/s^2 and deg/s^3); their tip speed is 0.
-FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples,
-                   const std::vector<AxisValues>* axes, const Machine* machine, const FeedSettings& settings);
+FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
+                   const Machine* machine, const FeedSettings& settings);
 
 }  // namespace vcut::kinematics

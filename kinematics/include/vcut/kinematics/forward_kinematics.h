@@ -34,10 +34,8 @@ ToolPose forward(const Machine& machine, const AxisValues& q, double tool_length
                  Geometry geometry = Geometry::Ideal);
 
 // Every axis node, then W and T, in the frame (animation, collision).
-std::vector<NodePose> node_poses(const Machine& machine, const AxisValues& q,
-                                 Geometry geometry = Geometry::Ideal);
-std::vector<ModelPose> model_poses(const Machine& machine, const AxisValues& q,
-                                   Geometry geometry = Geometry::Ideal);
+std::vector<NodePose> node_poses(const Machine& machine, const AxisValues& q, Geometry geometry = Geometry::Ideal);
+std::vector<ModelPose> model_poses(const Machine& machine, const AxisValues& q, Geometry geometry = Geometry::Ideal);
 
 // The volumetric error of a pose (seed 002 eqs. 1.16-1.17): actual minus nominal tip in the
 // workpiece frame, and the angle between the actual and nominal tool axes.

@@ -30,7 +30,7 @@ struct InterpolatorInput {
   const std::vector<double>* tool_length_mm = nullptr;  // per sample
   ServoSettings servo;                                  // its period is the interpolation period
   Geometry geometry = Geometry::Ideal;
-  IkSettings ik;  // the inverse kinematics of TCP moves between samples (densify's settings)
+  IkSettings ik;                // the inverse kinematics of TCP moves between samples (densify's settings)
   bool commanded_pose = false;  // also the commanded tool pose (forward kinematics) per period
   // After the program's end the loops run on until every axis is within this of its last
   // command and at rest (mm or rad; mm/s or rad/s), at most settle_max_s.
@@ -40,10 +40,9 @@ struct InterpolatorInput {
 
 struct PeriodSample {
   double t_s = 0.0;
-  std::size_t segment =
-      1;             // the densified move being interpolated: samples[segment - 1] -> [segment]
-  int block = 0;     // its program block (the block being commanded)
-  bool feed = true;  // not a rapid
+  std::size_t segment = 1;  // the densified move being interpolated: samples[segment - 1] -> [segment]
+  int block = 0;            // its program block (the block being commanded)
+  bool feed = true;         // not a rapid
   // A densified sample's own instant (poses.csv's actual columns): its index; -1 for an
   // interpolation period. The loops' state between two periods comes from the quintic
   // Hermite of ServoLoop::within_last_period.
@@ -66,19 +65,16 @@ struct PeriodSample {
 // contour error is each block's true path where it is known in closed form (lines; arcs and helices
 // of tool-pose blocks; the machine's curve of an axis block, from its axes), otherwise the
 // densified polyline.
-std::size_t for_each_period(const InterpolatorInput& input,
-                            const std::function<void(const PeriodSample&)>& visit);
+std::size_t for_each_period(const InterpolatorInput& input, const std::function<void(const PeriodSample&)>& visit);
 
 // The commanded path near a point (used by for_each_period, exposed for tests): the
 // distance from p to the densified path's moves lo..hi (indices of their end samples),
 // refined on the true path of the nearest one.
 class CommandedPath {
  public:
-  CommandedPath(const Program& program, const std::vector<PoseSample>& samples,
-                const std::vector<BlockReport>& blocks, const Machine* machine,
-                const std::vector<double>* tool_length_mm);
-  double distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi,
-                  std::size_t* nearest) const;
+  CommandedPath(const Program& program, const std::vector<PoseSample>& samples, const std::vector<BlockReport>& blocks,
+                const Machine* machine, const std::vector<double>* tool_length_mm);
+  double distance(const Eigen::Vector3d& p, std::size_t lo, std::size_t hi, std::size_t* nearest) const;
   // The moves [lo, hi] to search for an actual tip: the lag runs along the path, so from a
   // few moves before the one found nearest last to a couple beyond the one commanded.
   std::pair<std::size_t, std::size_t> window(std::size_t nearest_last, std::size_t commanded) const;

@@ -39,8 +39,8 @@ struct IkResult {
   // Both branches, every 2 pi winding within limits (at most 4 per axis, those nearest the
   // previous value, when the limits span more turns).
   std::vector<IkSolution> solutions;
-  int chosen = -1;                    // index into solutions; -1 when unreachable
-  std::string reason;                 // unreachable: why; singular: what was kept
+  int chosen = -1;     // index into solutions; -1 when unreachable
+  std::string reason;  // unreachable: why; singular: what was kept
   // Singular poses: the angle between the requested tool axis and the one reached with the
   // kept free angle (0 elsewhere).
   double orientation_error_rad = 0.0;

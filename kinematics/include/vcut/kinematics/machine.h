@@ -65,9 +65,9 @@ struct AxisSpec {
   Eigen::Vector3d direction = Eigen::Vector3d::UnitX();  // linear: motion; rotary: turning axis
   Eigen::Vector3d center_mm = Eigen::Vector3d::Zero();   // rotary: a point on the axis line
   std::optional<std::pair<double, double>> limits;       // mm or rad; none = continuous
-  double max_velocity_per_s = 0.0;       // mm/s or rad/s; 0 = not given
-  double max_acceleration_per_s2 = 0.0;  // mm/s^2 or rad/s^2
-  double max_jerk_per_s3 = 0.0;          // mm/s^3 or rad/s^3
+  double max_velocity_per_s = 0.0;                       // mm/s or rad/s; 0 = not given
+  double max_acceleration_per_s2 = 0.0;                  // mm/s^2 or rad/s^2
+  double max_jerk_per_s3 = 0.0;                          // mm/s^3 or rad/s^3
   ComponentErrors errors;
   LocationErrors location;
 };
@@ -91,10 +91,10 @@ struct MachineSpec {
   std::string name;
   std::string topology = "WXYZFT";
   std::vector<AxisSpec> axes;
-  Eigen::Vector3d gauge_point_mm = Eigen::Vector3d::Zero();  // spindle nose at all-zero axes
-  Eigen::Vector3d spindle_axis = Eigen::Vector3d::UnitZ();   // tip -> spindle, at all-zero axes
+  Eigen::Vector3d gauge_point_mm = Eigen::Vector3d::Zero();       // spindle nose at all-zero axes
+  Eigen::Vector3d spindle_axis = Eigen::Vector3d::UnitZ();        // tip -> spindle, at all-zero axes
   Eigen::Vector3d workpiece_origin_mm = Eigen::Vector3d::Zero();  // programming zero at zero
-  std::map<char, std::vector<ModelSpec>> models;  // by node letter (an axis, W, T or F)
+  std::map<char, std::vector<ModelSpec>> models;                  // by node letter (an axis, W, T or F)
   double singularity_angle_rad = 0.1 * 3.14159265358979323846 / 180.0;
   // The machine file's feed_interpretation; none: by the program's dialect.
   std::optional<FeedInterpretation> feed_interpretation;

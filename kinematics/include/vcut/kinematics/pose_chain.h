@@ -25,7 +25,7 @@ namespace vcut::kinematics {
 struct PoseChainSettings {
   DensifySettings densify;
   FeedSettings feed;
-  std::optional<ServoSettings> servo;  // present: servo lag, every interpolation period
+  std::optional<ServoSettings> servo;   // present: servo lag, every interpolation period
   Geometry geometry = Geometry::Ideal;  // Actual: the machine's geometric errors on every pose
   // With servo: the thinned actual path keeps every period's tool (tip, and the axis over
   // densify.cutter_length_mm) within this of its chords (mm).

@@ -63,9 +63,9 @@ struct Block {
   Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();  // Cone modes: unit axis of the cone
   double feed_mm_per_min = 0.0;  // 0 for rapids; InverseTime: 1 / F is the block's time in minutes
   FeedMode feed_mode = FeedMode::UnitsPerMinute;
-  bool exact_stop = false;          // G61 / G9 / G60: the path stops at the end of this block
+  bool exact_stop = false;           // G61 / G9 / G60: the path stops at the end of this block
   double blend_tolerance_mm = -1.0;  // G64 P: allowed path deviation at the junction; < 0: none given
-  int tool = 0;                  // T number in the spindle (0 = none)
+  int tool = 0;                      // T number in the spindle (0 = none)
   SpindleState spindle = SpindleState::Off;
   double spindle_rpm = 0.0;
   SourceRef source;

@@ -67,8 +67,7 @@ class ServoLoop {
   double dt_ = 0.0;
   int axes_ = 0;
   std::array<Axis, 5> model_{};
-  AxisValues within(const std::array<Eigen::Vector3d, 5>& a,
-                    const std::array<Eigen::Vector3d, 5>& b, double r) const;
+  AxisValues within(const std::array<Eigen::Vector3d, 5>& a, const std::array<Eigen::Vector3d, 5>& b, double r) const;
   // (x, x', x'') per axis: now, one and two steps back.
   std::array<Eigen::Vector3d, 5> s_{}, s_prev_{}, s_prev2_{};
   std::array<double, 5> c_prev_{};
@@ -87,8 +86,7 @@ class ServoLoop {
 // std::invalid_argument on empty or mismatched input, non-ascending or non-finite stamps,
 // non-finite values or settings out of range (programmer errors: the io layer validates
 // user input). Stability (e.g. Kv dT < 2 for an ideal velocity loop) is the caller's.
-std::vector<AxisValues> simulate_servo(const std::vector<double>& t_s,
-                                       const std::vector<AxisValues>& commanded,
+std::vector<AxisValues> simulate_servo(const std::vector<double>& t_s, const std::vector<AxisValues>& commanded,
                                        const ServoSettings& settings);
 
 }  // namespace vcut::kinematics

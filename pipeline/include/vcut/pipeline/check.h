@@ -21,9 +21,9 @@ const char* to_string(Severity severity);
 
 struct CheckEvent {
   Severity severity = Severity::Warning;
-  std::string kind;    // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
-                       // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
-  std::string line;    // "file:line" or "file:first-last"
+  std::string kind;  // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
+                     // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
+  std::string line;  // "file:line" or "file:first-last"
   std::string detail;
   double depth_mm = 0.0;  // how far into the stock's box (0 where it does not apply)
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();

@@ -37,7 +37,7 @@ struct RegionRecord {
   std::vector<kinematics::SourceSpan> spans;  // the NC lines of the moves that made it
   std::vector<std::string> lines;             // the spans as text: "file:line" or "file:first-last"
   std::vector<int> tools;                     // T numbers; empty for untouched stock
-  bool initial_stock = false;      // part of the region was never cut
+  bool initial_stock = false;                 // part of the region was never cut
 };
 
 // Consecutive blocks with the same collision make one record.
@@ -62,7 +62,7 @@ struct EndpointCheck {
   std::size_t points = 0;
   double max_gouge_mm = 0.0, max_excess_mm = 0.0;  // positive figures, 0 when none
   Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
-  std::string deepest_line;  // "file:line" of the move that made the deepest gouge point
+  std::string deepest_line;                         // "file:line" of the move that made the deepest gouge point
   std::size_t gouge_points = 0, excess_points = 0;  // beyond the tolerances
 };
 
@@ -97,7 +97,7 @@ struct SimulationResult {
   double wall_time_s = 0.0;
   double peak_memory_mb = 0.0, stock_memory_mb = 0.0, estimated_memory_mb = 0.0;
   std::vector<std::pair<std::string, std::string>> input_hashes;  // path, sha256 (by the writer)
-  std::vector<std::string> outputs;                                // files written, by the writer
+  std::vector<std::string> outputs;                               // files written, by the writer
   EndpointCheck endpoints;
   EngineCheck engines;
   NominalCheck nominal;
@@ -138,8 +138,8 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job);
 // come near the stock (work offsets), or a stock whose estimated memory at this resolution
 // (both engines' with engine: both) exceeds max_memory_mb (0: 75 % of RAM). Returns the
 // estimate (MB).
-double require_cuttable(const io::Job& job, const CutMoves& moves, const removal::StockShape& shape, double resolution_mm,
-                        double max_memory_mb);
+double require_cuttable(const io::Job& job, const CutMoves& moves, const removal::StockShape& shape,
+                        double resolution_mm, double max_memory_mb);
 // 5. The stock the cut goes into: tri-dexel, or OpenVDB with engine: vdb. merge_flat: the
 // dexel mesher merges flat regions into large triangles (off where two cuts' meshes are
 // compared to a few um: merged blocks cut gentle creases differently in two meshes).

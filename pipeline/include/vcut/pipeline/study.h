@@ -72,9 +72,8 @@ struct StudyResult {
   double wall_time_s = 0.0, peak_memory_mb = 0.0;
 };
 
-// Runs the study (report::write_study writes its files). Bad options or input are a vcut::InputError, and so is a study in which
-// no setting could be run; a setting that cannot be run (e.g. a pose out of reach) is a row
-// with its error.
+// Runs the study (report::write_study writes its files). Bad options or input are a vcut::InputError, and so is a study
+// in which no setting could be run; a setting that cannot be run (e.g. a pose out of reach) is a row with its error.
 StudyResult run_densification_study(const io::Job& job, const StudyOptions& options);
 
 }  // namespace vcut::pipeline

@@ -74,7 +74,6 @@ struct Comparison {
   double max_excess_mm = 0.0;
 };
 
-Comparison compare(const SurfaceMesh& machined, const DesignDistance& design,
-                   const CompareSettings& settings);
+Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, const CompareSettings& settings);
 
 }  // namespace vcut::removal

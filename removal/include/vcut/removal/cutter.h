@@ -20,9 +20,9 @@ struct Cutter {
   double corner_radius_mm = 0.0;  // 0 flat, diameter/2 ball, in between bull-nose
   double flute_length_mm = 0.0;   // height of the cutting part above the tip
   double shank_diameter_mm = 0.0;
-  double length_mm = 0.0;  // out of the holder
+  double length_mm = 0.0;        // out of the holder
   double gauge_length_mm = 0.0;  // spindle nose (gauge line) to tip, for the machine's kinematics
-  double tip_angle_deg = 0.0;  // VBit: included angle of the cone, (0, 180)
+  double tip_angle_deg = 0.0;    // VBit: included angle of the cone, (0, 180)
   // The holder, a cylinder from `length_mm` up along the axis; 0 = none given (not checked).
   double holder_diameter_mm = 0.0;
   double holder_length_mm = 0.0;

@@ -23,7 +23,7 @@ struct EndpointDeviation {
 // The points are measured in Morton order of their lattice cells (cell size v from
 // origin_mm), so that consecutive queries are neighbours; of equally deep gouge points the
 // first in that order is the deepest: one answer for any thread count.
-EndpointDeviation endpoint_deviation(const std::vector<DexelEndpoint>& points, const Eigen::Vector3d& origin_mm, double v,
-                                     const DesignDistance& design, const CompareSettings& settings);
+EndpointDeviation endpoint_deviation(const std::vector<DexelEndpoint>& points, const Eigen::Vector3d& origin_mm,
+                                     double v, const DesignDistance& design, const CompareSettings& settings);
 
 }  // namespace vcut::removal

@@ -26,10 +26,10 @@ struct Move {
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();  // tool tip
   Eigen::Vector3d end_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();  // unit, tip -> spindle
-  int cutter = 0;      // index into MoveList::cutters
-  int block = -1;      // index of the NC block it came from
-  bool rapid = false;  // rapids never cut: touching material is a collision
-  ProbeKind probe = ProbeKind::Rapid;  // with `rapid`: what the probe stands for
+  int cutter = 0;                                   // index into MoveList::cutters
+  int block = -1;                                   // index of the NC block it came from
+  bool rapid = false;                               // rapids never cut: touching material is a collision
+  ProbeKind probe = ProbeKind::Rapid;               // with `rapid`: what the probe stands for
 };
 
 struct MoveList {
@@ -47,8 +47,7 @@ struct MoveList {
 // would be first order in the step at a sharp rim; here only the rotation is discretised.
 double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces);
 // The fewest pieces that keep the error within bound_mm (at least 1).
-int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
-                     double bound_mm);
+int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1, double bound_mm);
 // Appends the n pieces of `move` (its `axis` is ignored) to `out`.
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, int pieces);

@@ -31,7 +31,7 @@ double surface_area_mm2(const StockShape& shape);
 
 struct Collision {
   int move = -1;
-  double depth_mm = 0.0;                  // deepest penetration into material
+  double depth_mm = 0.0;  // deepest penetration into material
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
 };
 

@@ -16,7 +16,7 @@ struct SurfaceDifference {
   bool done = false;
   double max_mm = 0.0, rms_mm = 0.0, p99_mm = 0.0;  // over every vertex of both surfaces
   Eigen::Vector3d max_where_mm = Eigen::Vector3d::Zero();
-  std::size_t vertices = 0, beyond_quarter = 0;      // vertices farther apart than v/4
+  std::size_t vertices = 0, beyond_quarter = 0;  // vertices farther apart than v/4
   // With sharp edges left out: how many vertices were, and the largest distance among them.
   std::size_t edge_vertices = 0;
   double edge_max_mm = 0.0;
@@ -31,7 +31,6 @@ inline constexpr double kSharpEdgeDeg = 20.0;
 // where an incident face's normal strays more than that from their mean) are left out of
 // max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
 // within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
-SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v,
-                                     double sharp_edge_deg = 0.0);
+SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg = 0.0);
 
 }  // namespace vcut::removal

@@ -29,8 +29,7 @@ class TranslationSweep {
 
   // With far_mm: where the distance is at least far_mm, any value >= far_mm may come back
   // (a cheaper lower bound); elsewhere the exact distance.
-  double distance(const Eigen::Vector3d& x_mm,
-                  double far_mm = std::numeric_limits<double>::infinity()) const;
+  double distance(const Eigen::Vector3d& x_mm, double far_mm = std::numeric_limits<double>::infinity()) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
   // Whether, at every point of `box` (workpiece frame), the nearest cutter instance of the
@@ -52,7 +51,7 @@ class TranslationSweep {
   double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
 
   CutterCore core_;
-  Cutter cutter_;  // a V-bit's distance comes from its profile, not from a core
+  Cutter cutter_;            // a V-bit's distance comes from its profile, not from a core
   Eigen::Matrix3d to_tool_;  // workpiece -> tool frame rotation (tool axis to +Z)
   Eigen::Vector3d origin_;   // tip at t = 0
   Eigen::Vector3d delta_tool_;

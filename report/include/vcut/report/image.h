@@ -39,8 +39,7 @@ struct Point2 {
 // Strokes with round caps and joins, anti-aliased by the covered fraction of each pixel
 // (approximated by the distance of its centre to the stroke).
 void draw_line(Image& image, Point2 from, Point2 to, Rgb colour, double width_px = 1.0);
-void draw_polyline(Image& image, const std::vector<Point2>& points, Rgb colour,
-                   double width_px = 1.0);
+void draw_polyline(Image& image, const std::vector<Point2>& points, Rgb colour, double width_px = 1.0);
 // Exact area coverage of the rectangle [x0, x1] x [y0, y1].
 void fill_rect(Image& image, double x0, double y0, double x1, double y1, Rgb colour);
 void fill_circle(Image& image, Point2 centre, double radius_px, Rgb colour);

@@ -14,9 +14,9 @@ namespace vcut::report {
 struct PlotSeries {
   std::string name;  // in the panel's legend
   Rgb colour{31, 119, 180};
-  std::vector<Point2> points;  // data coordinates, in the given order
-  bool line = true;            // join the points
-  bool markers = true;         // a filled circle at each point
+  std::vector<Point2> points;       // data coordinates, in the given order
+  bool line = true;                 // join the points
+  bool markers = true;              // a filled circle at each point
   std::vector<std::string> labels;  // empty, or one short label per point written beside it
 };
 

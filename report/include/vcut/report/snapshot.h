@@ -50,8 +50,7 @@ Image render_snapshot(const removal::TriangleMesh& mesh, const std::vector<Rgb>&
 // Writes <stem>_iso.png, <stem>_top.png and <stem>_front.png into `folder` (created when
 // missing), each titled "<title> (<view>)", atomically; returns those file names.
 std::vector<std::string> write_snapshots(const std::string& folder, const std::string& stem,
-                                         const removal::TriangleMesh& mesh,
-                                         const std::vector<Rgb>& colours,
+                                         const removal::TriangleMesh& mesh, const std::vector<Rgb>& colours,
                                          const SnapshotOptions& options);
 
 }  // namespace vcut::report
