@@ -1,5 +1,6 @@
-# vcut: `make demo` sets up and runs the bundled example; `make test` sets up and runs
-# every test (also under AddressSanitizer/UBSan) and fuzzes the program readers for a minute;
+# vcut: `make demo` sets up and runs the bundled example; `make test` checks the formatting,
+# sets up and runs every test (also under AddressSanitizer/UBSan) and fuzzes the program
+# readers for a minute;
 # `make bench` measures.
 BUILD ?= build
 BUILD_SAN ?= build-sanitize
@@ -9,7 +10,7 @@ SAN_OPT ?= -O1 -g1 -DNDEBUG
 JOBS ?= $(shell nproc)
 CMAKE_FLAGS ?=
 
-.PHONY: deps build demo test test-release test-sanitize test-fuzz bench clean
+.PHONY: deps build demo test test-format test-release test-sanitize test-fuzz bench clean
 
 deps:
 	@scripts/install-deps
@@ -38,7 +39,12 @@ test-fuzz: deps
 	@scripts/install-deps --test
 	BUILD_FUZZ=build-fuzz scripts/fuzz-readers 60
 
-test: test-release test-sanitize test-fuzz
+# Every C++ file as clang-format writes it (.clang-format).
+test-format: deps
+	@scripts/install-deps --test
+	scripts/check-format
+
+test: test-format test-release test-sanitize test-fuzz
 
 bench: build
 	@scripts/install-deps --bench
