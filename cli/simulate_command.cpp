@@ -1,0 +1,80 @@
+#include "simulate_command.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "progress.h"
+#include "vcut/io/atomic_file.h"
+#include "vcut/io/job.h"
+#include "vcut/pipeline/simulate.h"
+#include "vcut/report/outputs.h"
+
+namespace vcut::cli {
+namespace {
+
+int run_simulate(const std::string& job_file, const pipeline::SimulateOptions& base, const std::string& out,
+                 bool quiet) {
+  const io::Job job = io::read_job(job_file);
+  pipeline::SimulateOptions options = base;
+  const std::string out_dir = out.empty() ? job.out_dir : out;
+  // Fail on an unwritable output folder before hours of cutting, not after.
+  io::ensure_writable_folder(out_dir);
+  ProgressBar bar(!quiet);
+  options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
+    bar.update(stage, done, total);
+  };
+  pipeline::SimulationResult r = pipeline::simulate(job, options);
+  report::write_simulation(out_dir, job, r, options.progress);
+  bar.finish();
+  for (const auto& w : r.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  if (!quiet) {
+    std::printf("job %s: %zu blocks, %zu moves (%zu cutting) at %.3g mm, %d threads, %.2f s, peak %.0f MB\n",
+                r.job_name.c_str(), r.blocks, r.moves, r.cutting_moves, r.resolution_mm, r.threads, r.wall_time_s,
+                r.peak_memory_mb);
+    std::printf("removed %.1f mm3 of %.1f mm3\n", r.removed_volume_mm3, r.initial_volume_mm3);
+    for (const auto& c : r.collisions)
+      std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", c.kind.c_str(), c.part.c_str(), c.tool,
+                  c.line.c_str(), c.depth_mm, c.deepest_line.c_str());
+    if (r.compared) {
+      std::printf("max gouge %.4f mm in %zu region(s), max excess %.4f mm in %zu region(s)\n", r.max_gouge_mm,
+                  r.gouges.size(), r.max_excess_mm, r.excess.size());
+      for (std::size_t i = 0; i < r.gouges.size() && i < 5; ++i) {
+        std::string lines;
+        for (const auto& l : r.gouges[i].lines) lines += " " + l;
+        std::printf("  gouge %.4f mm deep, %.3f mm2 at (%.2f, %.2f, %.2f):%s\n", r.gouges[i].depth_mm,
+                    r.gouges[i].area_mm2, r.gouges[i].deepest_mm.x(), r.gouges[i].deepest_mm.y(),
+                    r.gouges[i].deepest_mm.z(), lines.c_str());
+      }
+    }
+    std::printf("report: %s/report.json\n", out_dir.c_str());
+  }
+  return 0;
+}
+
+}  // namespace
+
+void add_simulate_command(CLI::App& app, SimulateCommand& c) {
+  c.command = app.add_subcommand("simulate", "Cut the job's program into its stock and compare with the design");
+  c.command->add_option("job", c.job, "Job file (YAML)")->required();
+  c.command->add_option("--resolution", c.resolution_mm, "Voxel size in mm (overrides engine.resolution)")
+      ->check(CLI::PositiveNumber);
+  c.command->add_option("--threads", c.threads, "Worker threads, 0 = all cores (overrides engine.threads)")
+      ->check(CLI::NonNegativeNumber);
+  c.command->add_option("--out", c.out, "Output folder (overrides report.out)");
+  c.command
+      ->add_option("--max-memory", c.max_memory_mb,
+                   "Refuse a stock needing more than this many MB (default 75% of RAM)")
+      ->check(CLI::PositiveNumber);
+  c.command->add_flag("--quiet,-q", c.quiet, "Print nothing but errors and warnings");
+}
+
+std::optional<int> run_simulate_command(const SimulateCommand& c) {
+  if (!c.command || !*c.command) return std::nullopt;
+  pipeline::SimulateOptions options;
+  if (c.resolution_mm > 0.0) options.resolution_mm = c.resolution_mm;
+  if (c.threads >= 0) options.threads = c.threads;
+  options.max_memory_mb = c.max_memory_mb;
+  return run_simulate(c.job, options, c.out, c.quiet);
+}
+
+}  // namespace vcut::cli
