@@ -400,6 +400,11 @@ class Reader : public detail::ValueContext, public detail::CompHost {
       : options_(options), program_(program), state_(state) {}
 
   void run(std::istream& in, const std::string& name);
+  // After an error: the blocks read in a tilted plane go to the workpiece frame as well, so
+  // that what was read before the error is well formed.
+  void emit_frames() {
+    if (state_.twp) twp_emit();
+  }
 
   // detail::ValueContext
   double numbered_parameter(int number, int column) override;
@@ -595,7 +600,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   Eigen::Vector2d hold_direction_ = Eigen::Vector2d::Zero();
   double hold_sweep_rad_ = 0.0;
   void forget_axes(bool all);
-  void select_system(int index);
+  void select_system(int index, int column = 1);
   double feed_of_line(int column) const;
 
   const GcodeOptions& options_;
@@ -2646,7 +2651,10 @@ void Reader::comp_stop(bool program_end, int column) {
   }
 }
 
-void Reader::select_system(int index) {
+void Reader::select_system(int index, int column) {
+  // The tilted plane's frame was made from the offsets at G68.2: G54..G59.3, G10 L2/L20 and
+  // G92 are refused there by execute(); a parameter (#5221..) that moves the active offset too.
+  if (state_.twp_feature) fail(column, "a work offset change with a tilted work plane on (expected G69 first)");
   for (int a = 0; a < 3; ++a) {
     state_.g5x_mm[a] = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + a)];
   }
@@ -3639,7 +3647,7 @@ bool Reader::execute() {
   }
   if (const Code* g = by_group[kCoordinateSystem]; g != nullptr) {
     state_.work_offset = g->text;
-    select_system(system_index(g->number));
+    select_system(system_index(g->number), g->column);
   }
   exact_stop_line_ = by_group[kNonModal] != nullptr && by_group[kNonModal]->number == 90;
   if (const Code* g = by_group[kPathControl]; g != nullptr && g->number != 640) {
@@ -3933,7 +3941,12 @@ void read_gcode(std::istream& in, const std::string& name, const GcodeOptions& o
                 GcodeState& state) {
   validate_options(name, options);
   Reader reader(options, program, state);
-  reader.run(in, name);
+  try {
+    reader.run(in, name);
+  } catch (const InputError&) {
+    reader.emit_frames();
+    throw;
+  }
   detail::warn_unprogrammed_axes(state.pending, name, program);
 }
 

@@ -5,9 +5,11 @@
 
 #include <cmath>
 #include <map>
+#include <sstream>
 #include <string>
 
 #include "gcode_text.h"
+#include "vcut/io/input_error.h"
 #include "vcut/io/machine_file.h"
 #include "vcut/io/program_reader.h"
 #include "vcut/kinematics/forward_kinematics.h"
@@ -265,6 +267,19 @@ TEST(TiltedPlane, RollPitchYawWithP1) {
   expect_near(last_of_line(pitch, 2).end_mm, Eigen::Vector3d(5, 0, 0), 1e-9, "Ry(90) (0, 0, 5)");
 }
 
+// An error inside a tilted plane: what was read before it is in the workpiece frame, as the
+// blocks after G69 would be (the fuzzer found them left in the feature frame). The frame: the
+// origin X10 (G54 = 0), no turn.
+TEST(TiltedPlane, BlocksBeforeAnErrorAreOnTheWorkpiece) {
+  kinematics::Program program;
+  GcodeState state;
+  std::istringstream in("G68.2 X10. Y0 Z0 I0 J0 K0\nG0 X0 Y0 Z5.\nG1 X1. F100\nG1 X1. S\n");
+  EXPECT_THROW(read_gcode(in, "err.nc", fanuc_at_z100(), program, state), InputError);
+  ASSERT_EQ(program.blocks.size(), 2u);
+  expect_near(program.blocks[0].end_mm, Eigen::Vector3d(10, 0, 5), 1e-12, "G0 on the workpiece");
+  expect_near(program.blocks[1].end_mm, Eigen::Vector3d(11, 0, 5), 1e-12, "G1 on the workpiece");
+}
+
 TEST(TiltedPlane, WhatItRefusesNamesTheLine) {
   const GcodeOptions options = fanuc_at_z100();
   EXPECT_NE(
@@ -282,6 +297,10 @@ TEST(TiltedPlane, WhatItRefusesNamesTheLine) {
       error_text("G68.2 I0 J45. K0\nG91 G28 Z0\n", options, "e.nc").find("e.nc:2:5: G28 with a tilted work plane on"),
       std::string::npos);
   EXPECT_NE(error_text("G68.2 I0 J45. K0\nG55\n", options, "f.nc").find("f.nc:2:1: G55 with a tilted work plane on"),
+            std::string::npos);
+  // A parameter that moves the active offset (G54's X) would move the plane's frame too.
+  EXPECT_NE(error_text("G68.2 I0 J45. K0\n#5221 = 5.\n", options, "p.nc")
+                .find("p.nc:2:1: a work offset change with a tilted work plane on"),
             std::string::npos);
   EXPECT_NE(error_text("G68.2 I0 J45. K0\nG68.2 I0 J30. K0\n", options, "g.nc")
                 .find("g.nc:2:1: G68.2 with a tilted work plane on"),
