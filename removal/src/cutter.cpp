@@ -27,7 +27,9 @@ double vbit_slope(double tip_angle_deg) {
 }
 
 // Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
-// (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that.
+// (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that. Its
+// edge on the axis (0, H) - (0, 0) bounds the half-plane, not the solid of revolution: it
+// counts for inside or out, never as the nearest surface.
 double vbit_profile_distance(const Cutter& c, double rho, double z) {
   const double slope = vbit_slope(c.tip_angle_deg);
   const double height = c.flute_length_mm;
@@ -41,9 +43,10 @@ double vbit_profile_distance(const Cutter& c, double rho, double z) {
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector2d a = v[i], b = v[(i + 1) % 4], e = b - a;
     if (e.squaredNorm() == 0.0) continue;
+    if (e.x() * (q.y() - a.y()) - e.y() * (q.x() - a.x()) < 0.0) inside = false;
+    if (i == 3) continue;  // the axis
     const double t = std::clamp((q - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
     best = std::min(best, (q - a - t * e).norm());
-    if (e.x() * (q.y() - a.y()) - e.y() * (q.x() - a.x()) < 0.0) inside = false;
   }
   return inside ? -best : best;
 }

@@ -1,0 +1,250 @@
+// The tri-dexel stock's inside, shared by its three parts: ray storage (dexel_stock.cpp), the
+// cut (dexel_cut.cpp) and the mesher (dexel_mesher.cpp). Private to the removal library.
+#pragma once
+
+#include <tbb/parallel_for.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <functional>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include <sys/mman.h>
+
+#include "vcut/removal/compare.h"
+#include "vcut/removal/dexel_stock.h"
+
+namespace vcut::removal {
+namespace dexel {
+
+
+using Eigen::Vector3d;
+constexpr int kNoMove = -1;
+// A tile of one family: kTileU rays along u by kTileW rows. A move's work per tile (its
+// rays' range, its neighbours' hand-over bounds) and per row (range, section) is done once
+// per tile it covers: long rows, so that a tool's rows fall in one or two tiles (W1, a 6 mm
+// ball at 0.05 mm: cut 7.3 -> 6.4 s with 256 x 8 against 64 x 4; W1 on 40 mm, 1 thread,
+// 1.109 -> 1.017 s with 512 x 16 against 256 x 8).
+constexpr int kTileU = 512, kTileW = 16;
+static_assert(kTileU % 64 == 0, "a tile row's occupied rays are whole 64-bit words");
+constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
+// Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
+constexpr float kMinSegment_mm = 1e-6f;
+
+// The intervals of one ray: one inline, more on the heap (24 bytes per ray).
+class SegmentList {
+ public:
+  SegmentList() : one_{0.0f, 0.0f, kNoMove, kNoMove} {}
+  ~SegmentList() {
+    if (capacity_ > 1) delete[] many_;
+  }
+  SegmentList(const SegmentList&) = delete;
+  SegmentList& operator=(const SegmentList&) = delete;
+  SegmentList(SegmentList&& other) noexcept : size_(other.size_), capacity_(other.capacity_) {
+    if (capacity_ > 1)
+      many_ = other.many_;
+    else
+      one_ = other.one_;
+    other.size_ = 0;
+    other.capacity_ = 1;
+  }
+  SegmentList& operator=(SegmentList&&) = delete;
+
+  std::uint32_t size() const { return size_; }
+  const DexelSegment* data() const { return capacity_ > 1 ? many_ : &one_; }
+  DexelSegment* data() { return capacity_ > 1 ? many_ : &one_; }
+  std::size_t heap_bytes() const { return capacity_ > 1 ? capacity_ * sizeof(DexelSegment) : 0; }
+
+  void assign(const DexelSegment* s, std::uint32_t n) {
+    if (n > capacity_) {
+      const std::uint32_t capacity = std::max(n, 2 * capacity_);
+      auto* fresh = new DexelSegment[capacity];
+      if (capacity_ > 1) delete[] many_;
+      many_ = fresh;
+      capacity_ = capacity;
+    }
+    if (n > 0) std::memmove(data(), s, n * sizeof(DexelSegment));
+    size_ = n;
+  }
+  // Keeps the first n intervals (n <= size()).
+  void truncate(std::uint32_t n) { size_ = n; }
+
+ private:
+  union {
+    DexelSegment one_;
+    DexelSegment* many_;
+  };
+  std::uint32_t size_ = 0, capacity_ = 1;
+};
+static_assert(sizeof(SegmentList) == 24, "one ray should stay 24 bytes");
+
+// Room for the rays: hundreds of MB, on transparent huge pages where Linux grants them, so
+// that filling the stock faults per 2 MiB instead of per 4 KiB (W1's stock stage: 0.6 s,
+// then 0.06-0.4 s on this noisy VM; the cut itself measured no different). Advice only.
+template <class T>
+struct HugePageAllocator {
+  using value_type = T;
+  HugePageAllocator() = default;
+  template <class U>
+  HugePageAllocator(const HugePageAllocator<U>&) {}
+  static constexpr std::size_t kHuge = std::size_t{2} << 20;
+  T* allocate(std::size_t n) {
+    const std::size_t bytes = n * sizeof(T);
+    if (bytes < 4 * kHuge) return static_cast<T*>(::operator new(bytes));
+    void* p = std::aligned_alloc(kHuge, (bytes + kHuge - 1) / kHuge * kHuge);
+    if (p == nullptr) throw std::bad_alloc();
+    ::madvise(p, (bytes + kHuge - 1) / kHuge * kHuge, MADV_HUGEPAGE);
+    return static_cast<T*>(p);
+  }
+  void deallocate(T* p, std::size_t n) {
+    if (n * sizeof(T) < 4 * kHuge)
+      ::operator delete(p);
+    else
+      std::free(p);
+  }
+  template <class U>
+  bool operator==(const HugePageAllocator<U>&) const {
+    return true;
+  }
+  template <class U>
+  bool operator!=(const HugePageAllocator<U>&) const {
+    return false;
+  }
+};
+
+// The two lattice axes of a family, in increasing order.
+constexpr std::array<std::array<int, 2>, 3> kOther = {{{1, 2}, {0, 2}, {0, 1}}};
+
+struct Family {
+  int axis = 0;
+  int lo_u = 0, lo_w = 0;  // lattice index of the first ray along the two other axes
+  int n_u = 0, n_w = 0;
+  int tiles_u = 0, tiles_w = 0;
+  int words_u = 0;  // occupied words per row
+  std::vector<SegmentList, HugePageAllocator<SegmentList>> rays;
+  // Which rays hold material: a bit per ray, 64-bit words along each row, so a cut walks
+  // only the rays with material (each word lies within one tile: a tile writes only its own).
+  std::vector<std::uint64_t> occupied;
+  double length_mm = 0.0;  // material along all rays
+
+  bool contains(int iu, int iw) const { return iu >= lo_u && iu < lo_u + n_u && iw >= lo_w && iw < lo_w + n_w; }
+  const SegmentList& at(int iu, int iw) const {
+    return rays[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(n_u) +
+                static_cast<std::size_t>(iu - lo_u)];
+  }
+  SegmentList& at(int iu, int iw) {
+    return rays[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(n_u) +
+                static_cast<std::size_t>(iu - lo_u)];
+  }
+  int tiles() const { return tiles_u * tiles_w; }
+  // Word `word` of the row at iw: rays lo_u + 64 word ... lo_u + 64 word + 63.
+  std::uint64_t& occupied_word(int word, int iw) {
+    return occupied[static_cast<std::size_t>(iw - lo_w) * static_cast<std::size_t>(words_u) +
+                    static_cast<std::size_t>(word)];
+  }
+};
+
+}  // namespace dexel
+
+using namespace dexel;  // included by the stock's three source files only
+
+struct DexelStock::Impl {
+  double v = 0.1;  // ray spacing, mm
+  std::array<Family, 3> families;
+  Eigen::AlignedBox3d shape_bounds;
+  std::function<double(const Eigen::Vector3d&)> initial_distance;
+  std::shared_ptr<const DesignDistance> initial_mesh;
+  std::vector<Move> moves;
+  std::vector<Cutter> cutters;
+  bool flat_merging = true;
+
+  // World coordinate of lattice index i along any axis: rays sit mid-cell, so a box whose
+  // faces lie on multiples of v is measured exactly.
+  double position(int i) const { return (i + 0.5) * v; }
+  double index_of(double x) const { return x / v - 0.5; }
+
+  void setup(const Eigen::AlignedBox3d& box) {
+    std::array<int, 3> lo, count;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = static_cast<int>(std::floor(index_of(box.min()[a]))) - 1;
+      const int hi = static_cast<int>(std::ceil(index_of(box.max()[a]))) + 1;
+      count[a] = hi - lo[a] + 1;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      Family& f = families[static_cast<std::size_t>(axis)];
+      const auto [a1, a2] = kOther[static_cast<std::size_t>(axis)];
+      f.axis = axis;
+      f.lo_u = lo[static_cast<std::size_t>(a1)];
+      f.lo_w = lo[static_cast<std::size_t>(a2)];
+      f.n_u = count[static_cast<std::size_t>(a1)];
+      f.n_w = count[static_cast<std::size_t>(a2)];
+      f.tiles_u = (f.n_u + kTileU - 1) / kTileU;
+      f.tiles_w = (f.n_w + kTileW - 1) / kTileW;
+      f.words_u = (f.n_u + 63) / 64;
+      f.rays = std::vector<SegmentList, HugePageAllocator<SegmentList>>(static_cast<std::size_t>(f.n_u) *
+                                                                        static_cast<std::size_t>(f.n_w));
+    }
+  }
+
+  // Fills every ray with its intervals inside an analytic stock.
+  template <class Interval>
+  void fill(Interval&& interval) {
+    for (Family& f : families) {
+      tbb::parallel_for(0, f.n_w, [&](int row) {
+        const int iw = f.lo_w + row;
+        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+          double a, b;
+          if (interval(f.axis, position(iu), position(iw), a, b) && b - a > kMinSegment_mm) {
+            const DexelSegment seg{static_cast<float>(a), static_cast<float>(b), kNoMove, kNoMove};
+            f.at(iu, iw).assign(&seg, 1);
+          }
+        }
+      });
+    }
+  }
+
+  void fill_mesh(const TriangleMesh& mesh);
+  void find_occupied() {
+    for (Family& f : families) {
+      f.occupied.assign(static_cast<std::size_t>(f.n_w) * static_cast<std::size_t>(f.words_u), 0);
+      for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw)
+        for (int k = 0; k < f.n_u; ++k)
+          if (f.at(f.lo_u + k, iw).size() > 0) f.occupied_word(k / 64, iw) |= std::uint64_t{1} << (k % 64);
+    }
+  }
+
+  void sum_lengths() {
+    for (Family& f : families) {
+      double total = 0.0;
+      for (const SegmentList& ray : f.rays)
+        for (std::uint32_t i = 0; i < ray.size(); ++i)
+          total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
+      f.length_mm = total;
+    }
+  }
+
+  Vector3d point(int axis, int iu, int iw, double s) const {
+    Vector3d x;
+    x[axis] = s;
+    x[kOther[static_cast<std::size_t>(axis)][0]] = position(iu);
+    x[kOther[static_cast<std::size_t>(axis)][1]] = position(iw);
+    return x;
+  }
+
+  // Lattice index range [first, last] of rays of family f within [lo, hi] on its axis a1/a2.
+  bool ray_range(const Family& f, const Eigen::AlignedBox3d& box, int& u0, int& u1, int& w0, int& w1) const {
+    const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+    u0 = std::max(f.lo_u, static_cast<int>(std::ceil(index_of(box.min()[a1]))));
+    u1 = std::min(f.lo_u + f.n_u - 1, static_cast<int>(std::floor(index_of(box.max()[a1]))));
+    w0 = std::max(f.lo_w, static_cast<int>(std::ceil(index_of(box.min()[a2]))));
+    w1 = std::min(f.lo_w + f.n_w - 1, static_cast<int>(std::floor(index_of(box.max()[a2]))));
+    return u0 <= u1 && w0 <= w1;
+  }
+};
+
+}  // namespace vcut::removal

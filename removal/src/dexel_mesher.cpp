@@ -1,0 +1,635 @@
+// DexelStock::surface: the mesher (exact ray crossings, flat regions merged, each vertex with
+// the move that made it).
+#include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+
+#include "dexel_impl.h"
+#include "surface_projection.h"
+#include "vcut/removal/morton.h"
+
+namespace vcut::removal {
+
+namespace {
+
+// ---- The surface by dual contouring on the rays' lattice ----
+//
+// Nodes are the lattice points; a node's inside/outside comes from the z ray through it
+// (one family decides, so neighbouring cells always agree). A cell (the cube between eight
+// nodes) whose nodes differ holds the surface: one vertex, the mean of the crossings on
+// its edges where the signs change (each the endpoint of the ray along that edge, exact);
+// every edge where the sign changes gives a quad joining the four cells around it. Where
+// the surface is flat, cells are merged: the lattice is cut into bricks of 16^3 cells, and
+// within a brick an octree block of 2, 4, 8 or 16 cells a side whose cells' points lie
+// within kFlatTolerance of one plane shares a single vertex; a quad whose corners now
+// coincide becomes a triangle or disappears. Merging only renames vertices, so the mesh
+// stays closed across merged and unmerged cells and across bricks. Bricks are meshed in
+// parallel and joined in lattice order: the same mesh for any thread count.
+constexpr int kBrick = 16;
+constexpr int kBrickCells = kBrick * kBrick * kBrick;
+constexpr int kBrickLevels = 4;  // 16 = 2^4
+// A merged block's points lie within this fraction of the spacing of its plane.
+constexpr double kFlatTolerance = 0.05;
+// Crossings this close (mm) to one axis plane lie on it (float endpoints of one face agree).
+constexpr double kExactPlane_mm = 1e-6;
+
+// Sets bits first..last (inclusive) of a bit array.
+void set_bits(std::uint64_t* words, int first, int last) {
+  const int w0 = first >> 6, w1 = last >> 6;
+  const std::uint64_t head = ~std::uint64_t{0} << (first & 63);
+  const std::uint64_t tail = ~std::uint64_t{0} >> (63 - (last & 63));
+  if (w0 == w1) {
+    words[w0] |= head & tail;
+    return;
+  }
+  words[w0] |= head;
+  for (int w = w0 + 1; w < w1; ++w) words[w] = ~std::uint64_t{0};
+  words[w1] |= tail;
+}
+
+// A cell's Morton code within its brick (bit 3b + a: bit b of its index along axis a),
+// and back, through tables (both sit in the mesher's innermost loops).
+constexpr std::array<int, kBrick> kMortonSpread = [] {
+  std::array<int, kBrick> t{};
+  for (int i = 0; i < kBrick; ++i)
+    t[static_cast<std::size_t>(i)] = static_cast<int>(morton_spread(static_cast<std::uint64_t>(i)));
+  return t;
+}();
+int morton(int x, int y, int z) {
+  return kMortonSpread[static_cast<std::size_t>(x)] | kMortonSpread[static_cast<std::size_t>(y)] << 1 |
+         kMortonSpread[static_cast<std::size_t>(z)] << 2;
+}
+struct MortonCell {
+  std::uint8_t index[3];
+};
+const std::array<MortonCell, kBrickCells> kMortonCells = [] {
+  std::array<MortonCell, kBrickCells> t{};
+  for (int code = 0; code < kBrickCells; ++code)
+    for (int b = 0; b < kBrickLevels; ++b)
+      for (int a = 0; a < 3; ++a)
+        t[static_cast<std::size_t>(code)].index[a] =
+            static_cast<std::uint8_t>(t[static_cast<std::size_t>(code)].index[a] | ((code >> (3 * b + a)) & 1) << b);
+  return t;
+}();
+std::array<int, 3> unmorton(int code) {
+  const MortonCell& c = kMortonCells[static_cast<std::size_t>(code)];
+  return {c.index[0], c.index[1], c.index[2]};
+}
+
+// Node signs of one brick: bit t of column (x, y) is node (x0 + x, y0 + y, z0 + t).
+struct BrickSigns {
+  std::array<std::uint32_t, (kBrick + 1) * (kBrick + 1)> column{};
+  std::uint32_t at(int x, int y) const { return column[static_cast<std::size_t>(y * (kBrick + 1) + x)]; }
+  bool inside(int x, int y, int z) const { return (at(x, y) >> z) & 1u; }
+};
+
+struct BrickMesh {
+  std::array<int, 3> origin;          // lattice index of the brick's first node
+  std::vector<std::uint16_t> cells;   // active cells, Morton codes ascending
+  std::vector<std::uint32_t> vertex;  // per active cell: index into points
+  std::vector<Vector3d> points;
+  std::uint32_t first_vertex = 0;  // global index of points[0]
+};
+
+class Contour {
+ public:
+  explicit Contour(const DexelStock::Impl& m) : m_(m) {
+    // Node index range per axis: the y rays span x as u, the x rays y and z.
+    lo_ = {m.families[1].lo_u, m.families[0].lo_u, m.families[0].lo_w};
+    count_ = {m.families[1].n_u, m.families[0].n_u, m.families[0].n_w};
+    for (int a = 0; a < 3; ++a)
+      bricks_[static_cast<std::size_t>(a)] = (count_[static_cast<std::size_t>(a)] - 1 + kBrick - 1) / kBrick;
+  }
+
+  SurfaceMesh run() {
+    const int columns = bricks_[0] * bricks_[1];
+    std::vector<std::vector<BrickMesh>> by_column(static_cast<std::size_t>(columns));
+    // Node signs a brick column at a time: each node column's inside nodes as bits over the
+    // whole height, from which each brick takes its 17.
+    const std::size_t words = column_words();
+    tbb::enumerable_thread_specific<std::vector<std::uint64_t>> column_bits;
+    tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
+      std::vector<std::uint64_t>& bits = column_bits.local();
+      std::vector<std::uint64_t> in_any(words), in_all(words);
+      for (int c = range.begin(); c != range.end(); ++c) {
+        const auto [x0, y0] = column_origin(c);
+        node_bits(c, bits);
+        // Nodes inside in any and in all of the brick column's node columns: a brick whose
+        // nodes are all out, or all in, holds no surface (most of a stock's bricks).
+        std::fill(in_any.begin(), in_any.end(), 0);
+        std::fill(in_all.begin(), in_all.end(), ~std::uint64_t{0});
+        for (std::size_t col = 0; col < kNodeColumns; ++col) {
+          const std::uint64_t* row = bits.data() + col * words;
+          for (std::size_t w = 0; w < words; ++w) {
+            in_any[w] |= row[w];
+            in_all[w] &= row[w];
+          }
+        }
+        for (int bk = 0; bk < bricks_[2]; ++bk) {
+          const int shift = bk * kBrick;
+          if (levels(in_any.data(), shift) == 0 || levels(in_all.data(), shift) == kFullColumn) continue;
+          BrickSigns sg;
+          brick_signs(bits, shift, sg);
+          BrickMesh b;
+          b.origin = {x0, y0, lo_[2] + shift};
+          if (plane(b, sg) || vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
+        }
+      }
+    });
+    // Bricks in lattice order, numbered; vertices numbered brick after brick.
+    column_first_.assign(static_cast<std::size_t>(columns) + 1, 0);
+    for (int c = 0; c < columns; ++c) {
+      column_first_[static_cast<std::size_t>(c) + 1] =
+          column_first_[static_cast<std::size_t>(c)] + by_column[static_cast<std::size_t>(c)].size();
+      for (BrickMesh& b : by_column[static_cast<std::size_t>(c)]) bricks_list_.push_back(std::move(b));
+    }
+    by_column.clear();
+    std::uint32_t next = 0;
+    for (BrickMesh& b : bricks_list_) {
+      b.first_vertex = next;
+      next += static_cast<std::uint32_t>(b.points.size());
+    }
+    std::vector<std::vector<Triangle>> faces(bricks_list_.size());
+    // Each thread's table of a brick's cells by position, -1 where no cell is, as every
+    // brick leaves it.
+    tbb::enumerable_thread_specific<CellTable> tables([] {
+      CellTable t;
+      t.fill(-1);
+      return t;
+    });
+    // A brick column at a time again, its node bits found once for all its bricks.
+    tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
+      CellTable& table = tables.local();
+      std::vector<std::uint64_t>& bits = column_bits.local();
+      for (int c = range.begin(); c != range.end(); ++c) {
+        const std::size_t first = column_first_[static_cast<std::size_t>(c)],
+                          last = column_first_[static_cast<std::size_t>(c) + 1];
+        if (first == last) continue;
+        node_bits(c, bits);
+        for (std::size_t i = first; i < last; ++i) {
+          BrickSigns sg;
+          brick_signs(bits, bricks_list_[i].origin[2] - lo_[2], sg);
+          quads(bricks_list_[i], sg, table, faces[i]);
+        }
+      }
+    });
+    SurfaceMesh mesh;
+    mesh.mesh.vertices_mm.reserve(next);
+    for (const BrickMesh& b : bricks_list_)
+      mesh.mesh.vertices_mm.insert(mesh.mesh.vertices_mm.end(), b.points.begin(), b.points.end());
+    std::size_t triangles = 0;
+    for (const auto& f : faces) triangles += f.size();
+    mesh.mesh.triangles.reserve(triangles);
+    for (const auto& f : faces) mesh.mesh.triangles.insert(mesh.mesh.triangles.end(), f.begin(), f.end());
+    return mesh;
+  }
+
+ private:
+  using Triangle = Eigen::Vector3i;
+  using CellTable = std::array<int, kBrickCells>;  // a brick's vertex per cell, -1: none
+
+  // The runs [k0, k1] of inside nodes (within [k_lo, k_hi]) on the z ray through (i, j):
+  // nodes k with lo <= position(k) <= hi for one of its intervals (a node on an endpoint
+  // is inside).
+  template <class Visit>
+  void column_nodes(int i, int j, int k_lo, int k_hi, Visit&& visit) const {
+    const Family& z = m_.families[2];
+    if (!z.contains(i, j)) return;
+    const SegmentList& ray = z.at(i, j);
+    for (std::uint32_t s = 0; s < ray.size(); ++s) {
+      const float lo = ray.data()[s].lo_mm, hi = ray.data()[s].hi_mm;
+      int k0 = static_cast<int>(std::ceil(m_.index_of(lo)));
+      while (m_.position(k0) < lo) ++k0;
+      while (m_.position(k0 - 1) >= lo) --k0;
+      int k1 = static_cast<int>(std::floor(m_.index_of(hi)));
+      while (m_.position(k1) > hi) --k1;
+      while (m_.position(k1 + 1) <= hi) ++k1;
+      k0 = std::max(k0, k_lo);
+      k1 = std::min(k1, k_hi);
+      if (k0 <= k1) visit(k0, k1);
+    }
+  }
+
+  static constexpr std::size_t kNodeColumns = (kBrick + 1) * (kBrick + 1);
+  static constexpr std::uint32_t kFullColumn = (1u << (kBrick + 1)) - 1u;  // a brick's 17 nodes
+
+  // Lattice x and y of brick column c's first node.
+  std::pair<int, int> column_origin(int c) const {
+    return {lo_[0] + (c % bricks_[0]) * kBrick, lo_[1] + (c / bricks_[0]) * kBrick};
+  }
+
+  // 64-bit words per node column over the lattice's height, with room for a brick's 17
+  // bits read past the last node.
+  std::size_t column_words() const { return static_cast<std::size_t>(count_[2] + 64) / 64 + 1; }
+
+  // The inside nodes of brick column c's node columns (17 x 17, x fastest), a bit per node
+  // over the lattice's height (the bricks' column bits are not kept between the passes:
+  // 1.2 KB a brick).
+  void node_bits(int c, std::vector<std::uint64_t>& bits) const {
+    const std::size_t words = column_words();
+    bits.assign(kNodeColumns * words, 0);
+    const auto [x0, y0] = column_origin(c);
+    for (std::size_t col = 0; col < kNodeColumns; ++col) {
+      std::uint64_t* row = bits.data() + col * words;
+      column_nodes(x0 + static_cast<int>(col % (kBrick + 1)), y0 + static_cast<int>(col / (kBrick + 1)), lo_[2],
+                   lo_[2] + count_[2] - 1, [&](int k0, int k1) { set_bits(row, k0 - lo_[2], k1 - lo_[2]); });
+    }
+  }
+
+  // Bits shift .. shift + kBrick of a node column's bits.
+  static std::uint32_t levels(const std::uint64_t* row, int shift) {
+    const std::size_t w = static_cast<std::size_t>(shift) >> 6;
+    const int offset = shift & 63;
+    std::uint64_t v = row[w] >> offset;
+    if (offset > 64 - (kBrick + 1)) v |= row[w + 1] << (64 - offset);
+    return static_cast<std::uint32_t>(v) & kFullColumn;
+  }
+
+  // The node signs of the brick `shift` nodes up its column, from the column's node bits.
+  void brick_signs(const std::vector<std::uint64_t>& bits, int shift, BrickSigns& out) const {
+    const std::size_t words = column_words();
+    for (std::size_t col = 0; col < kNodeColumns; ++col) out.column[col] = levels(bits.data() + col * words, shift);
+  }
+
+  // Where the ray of family `axis` at (iu, iw) crosses between nodes n and n + 1: the
+  // ray's endpoint there (the middle when the ray has none: the z rays decided otherwise).
+  double crossing(int axis, int iu, int iw, int n) const {
+    const Family& f = m_.families[static_cast<std::size_t>(axis)];
+    const double a = m_.position(n), b = m_.position(n + 1);
+    if (f.contains(iu, iw)) {
+      const SegmentList& ray = f.at(iu, iw);
+      for (std::uint32_t s = 0; s < ray.size(); ++s) {
+        const DexelSegment& seg = ray.data()[s];
+        if (seg.lo_mm >= a && seg.lo_mm <= b) return seg.lo_mm;
+        if (seg.hi_mm >= a && seg.hi_mm <= b) return seg.hi_mm;
+        if (seg.lo_mm > b) break;
+      }
+    }
+    return 0.5 * (a + b);
+  }
+
+  // A whole brick crossed by one axis plane that no cut touched (a stock face, a level
+  // floor): every node column steps once along one axis at the same place, and every
+  // crossing on that axis is the same number. vertices() would merge all its cells into one
+  // vertex; this gives the same cells and the same vertex (the same sums, in the same
+  // order) without looking at each cell's twelve edges. False: not such a brick.
+  bool plane(BrickMesh& b, const BrickSigns& sg) const {
+    for (int a = 0; a < 3; ++a)
+      if (lo_[static_cast<std::size_t>(a)] + count_[static_cast<std::size_t>(a)] - 1 -
+              b.origin[static_cast<std::size_t>(a)] <
+          kBrick)
+        return false;
+    constexpr std::uint32_t kFull = (1u << (kBrick + 1)) - 1u, kSteps = (1u << kBrick) - 1u;
+    // Bit k of a pattern: node k inside; its steps: bit k when nodes k and k + 1 differ.
+    auto single_step = [](std::uint32_t pattern, int& step) {
+      const std::uint32_t steps = (pattern ^ (pattern >> 1)) & kSteps;
+      if (steps == 0 || (steps & (steps - 1)) != 0) return false;
+      step = __builtin_ctz(steps);
+      return true;
+    };
+    int axis = -1, step = 0;
+    const std::uint32_t first = sg.column[0];
+    if (std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == first; })) {
+      if (!single_step(first, step)) return false;
+      axis = 2;
+    } else {
+      if (!std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == 0 || c == kFull; }))
+        return false;
+      std::uint32_t along_x = 0, along_y = 0;
+      for (int k = 0; k <= kBrick; ++k) {
+        along_x |= (sg.at(k, 0) != 0 ? 1u : 0u) << k;
+        along_y |= (sg.at(0, k) != 0 ? 1u : 0u) << k;
+      }
+      bool by_x = true, by_y = true;
+      for (int y = 0; y <= kBrick; ++y)
+        for (int x = 0; x <= kBrick; ++x) {
+          const bool in = sg.at(x, y) != 0;
+          by_x = by_x && in == (((along_x >> x) & 1u) != 0);
+          by_y = by_y && in == (((along_y >> y) & 1u) != 0);
+        }
+      if (by_x && single_step(along_x, step))
+        axis = 0;
+      else if (by_y && single_step(along_y, step))
+        axis = 1;
+      else
+        return false;
+    }
+    // The crossings: the rays along `axis` through the brick's nodes of the other two axes.
+    const auto [o1, o2] = kOther[static_cast<std::size_t>(axis)];
+    const int g = b.origin[static_cast<std::size_t>(axis)] + step;
+    const int g1 = b.origin[static_cast<std::size_t>(o1)], g2 = b.origin[static_cast<std::size_t>(o2)];
+    // crossing() takes (u, w) as its family orders them: z rays (x, y), x rays (y, z), y rays (x, z).
+    const double value = crossing(axis, g1, g2, g);
+    for (int j = 0; j <= kBrick; ++j)
+      for (int i = 0; i <= kBrick; ++i)
+        if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
+    // The cells at `step` along the axis, in Morton order, each adding its four crossings
+    // in the order vertices() visits them.
+    std::array<std::uint16_t, kBrick * kBrick> codes;
+    std::size_t n = 0;
+    for (int j = 0; j < kBrick; ++j)
+      for (int i = 0; i < kBrick; ++i) {
+        std::array<int, 3> cell;
+        cell[static_cast<std::size_t>(axis)] = step;
+        cell[static_cast<std::size_t>(o1)] = i;
+        cell[static_cast<std::size_t>(o2)] = j;
+        codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
+      }
+    std::sort(codes.begin(), codes.end());
+    b.cells.assign(codes.begin(), codes.end());
+    b.vertex.assign(codes.size(), 0);
+    Vector3d sum = Vector3d::Zero();
+    for (std::uint16_t code : codes) {
+      const std::array<int, 3> cell = unmorton(code);
+      const int i = cell[static_cast<std::size_t>(o1)], j = cell[static_cast<std::size_t>(o2)];
+      for (int d = 0; d < 4; ++d) {
+        const int e1 = d & 1, e2 = d >> 1;
+        Vector3d at;
+        at[axis] = value;
+        at[o1] = m_.position(g1 + i + e1);
+        at[o2] = m_.position(g2 + j + e2);
+        sum += at;
+      }
+    }
+    b.points.assign(1, sum / static_cast<double>(4 * static_cast<int>(codes.size())));
+    return true;
+  }
+
+  // The brick's active cells and their (merged) vertices; false when it has none.
+  bool vertices(BrickMesh& b, const BrickSigns& sg) const {
+    const int limit[3] = {std::min(kBrick, lo_[0] + count_[0] - 1 - b.origin[0]),
+                          std::min(kBrick, lo_[1] + count_[1] - 1 - b.origin[1]),
+                          std::min(kBrick, lo_[2] + count_[2] - 1 - b.origin[2])};
+    // Per active cell: its crossings (a run of `points`) and which way the surface faces
+    // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
+    struct Cell {
+      std::uint16_t code;
+      std::uint8_t facing;
+      std::uint8_t count;
+      std::uint32_t first;
+    };
+    std::vector<Cell> cells;
+    std::vector<Vector3d> points;
+    for (int y = 0; y < limit[1]; ++y) {
+      for (int x = 0; x < limit[0]; ++x) {
+        const std::uint32_t c00 = sg.at(x, y), c10 = sg.at(x + 1, y), c01 = sg.at(x, y + 1), c11 = sg.at(x + 1, y + 1);
+        const std::uint32_t all = c00 & c10 & c01 & c11, any = c00 | c10 | c01 | c11;
+        const std::uint32_t agree = ~(all ^ any);  // the four columns agree at this node
+        const std::uint32_t uniform = agree & (agree >> 1) & ~(all ^ (all >> 1));
+        std::uint32_t active = ~uniform & ((1u << limit[2]) - 1u);
+        while (active != 0) {
+          const int z = __builtin_ctz(active);
+          active &= active - 1;
+          Cell cell{static_cast<std::uint16_t>(morton(x, y, z)), 0, 0, static_cast<std::uint32_t>(points.size())};
+          const int gx = b.origin[0] + x, gy = b.origin[1] + y, gz = b.origin[2] + z;
+          // An edge whose ends differ: its crossing (looked up only then) joins the cell's.
+          auto edge = [&](int axis, bool lower_inside, bool upper_inside, auto&& at) {
+            if (lower_inside == upper_inside) return;
+            cell.facing |= static_cast<std::uint8_t>(1u << (2 * axis + (lower_inside ? 0 : 1)));
+            points.push_back(at());
+            ++cell.count;
+          };
+          for (int d = 0; d < 4; ++d) {
+            const int e1 = d & 1, e2 = d >> 1;
+            edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1), [&] {
+              return Vector3d(m_.position(gx + e1), m_.position(gy + e2), crossing(2, gx + e1, gy + e2, gz));
+            });
+            edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2), [&] {
+              return Vector3d(crossing(0, gy + e1, gz + e2, gx), m_.position(gy + e1), m_.position(gz + e2));
+            });
+            edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2), [&] {
+              return Vector3d(m_.position(gx + e1), crossing(1, gx + e1, gz + e2, gy), m_.position(gz + e2));
+            });
+          }
+          cells.push_back(cell);
+        }
+      }
+    }
+    if (cells.empty()) return false;
+    std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
+    // Octree merging, level by level: a block's cells are a run of the Morton order.
+    const std::size_t n = cells.size();
+    std::vector<std::uint32_t> group(n);     // the run start of each cell's merged block
+    std::vector<std::uint8_t> merged(n, 1);  // the cell's block so far is one vertex
+    for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
+    double tolerance = kFlatTolerance * m_.v;
+    // Without flat merging only exact axis planes merge (untouched stock faces, floors of a
+    // level flat end mill): such a block meets a differently inclined one only across
+    // cells that hold both, so none of its triangles crosses a crease.
+    const bool any_plane = m_.flat_merging;
+    if (!any_plane) tolerance = kExactPlane_mm;
+    for (int level = 1; level <= kBrickLevels; ++level) {
+      const int shift = 3 * level;
+      for (std::size_t first = 0; first < n;) {
+        std::size_t last = first;
+        while (last < n && (cells[last].code >> shift) == (cells[first].code >> shift)) ++last;
+        bool candidate = true;
+        for (std::size_t i = first; i < last && candidate; ++i) candidate = merged[i] != 0;
+        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance, any_plane)) {
+          for (std::size_t i = first; i < last; ++i) group[i] = static_cast<std::uint32_t>(first);
+        } else {
+          for (std::size_t i = first; i < last; ++i) merged[i] = 0;
+        }
+        first = last;
+      }
+    }
+    // Each vertex at the mean of its cells' crossings.
+    b.cells.resize(n);
+    b.vertex.resize(n);
+    std::vector<int> members;
+    for (std::size_t i = 0; i < n; ++i) {
+      b.cells[i] = cells[i].code;
+      if (group[i] == i) {
+        b.points.push_back(Vector3d::Zero());
+        members.push_back(0);
+      }
+      const std::uint32_t vertex = static_cast<std::uint32_t>(b.points.size() - 1);
+      b.vertex[i] = vertex;
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) b.points[vertex] += points[cells[i].first + k];
+      members[vertex] += cells[i].count;
+    }
+    for (std::size_t p = 0; p < b.points.size(); ++p) b.points[p] /= std::max(members[p], 1);
+    return true;
+  }
+
+  // Whether the cells first..last hold one flat sheet: the surface faces one way along each
+  // axis (two sheets of a thin wall face opposite ways) and every crossing lies within
+  // `tolerance` of one plane.
+  template <class Cells>
+  static bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
+                   double tolerance, bool any_plane) {
+    std::uint8_t facing = 0;
+    for (std::size_t i = first; i < last; ++i) facing |= cells[i].facing;
+    for (int a = 0; a < 3; ++a)
+      if (((facing >> (2 * a)) & 3u) == 3u) return false;
+    Vector3d lo = points[cells[first].first], hi = lo, mean = Vector3d::Zero();
+    std::size_t count = 0;
+    for (std::size_t i = first; i < last; ++i) {
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) {
+        const Vector3d& p = points[cells[i].first + k];
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+        mean += p;
+        ++count;
+      }
+    }
+    if ((hi - lo).minCoeff() <= 2.0 * tolerance) return true;  // an axis plane
+    if (!any_plane) return false;
+    mean /= static_cast<double>(count);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (std::size_t i = first; i < last; ++i) {
+      for (std::uint32_t k = 0; k < cells[i].count; ++k) {
+        const Vector3d d = points[cells[i].first + k] - mean;
+        cov += d * d.transpose();
+      }
+    }
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    const Vector3d normal = eig.eigenvectors().col(0);
+    for (std::size_t i = first; i < last; ++i)
+      for (std::uint32_t k = 0; k < cells[i].count; ++k)
+        if (std::abs(normal.dot(points[cells[i].first + k] - mean)) > tolerance) return false;
+    return true;
+  }
+
+  // The vertex (global index) of the cell at lattice index g, which must be active.
+  int vertex_of(const std::array<int, 3>& g) const {
+    std::array<int, 3> brick, local;
+    for (int a = 0; a < 3; ++a) {
+      const int rel = g[static_cast<std::size_t>(a)] - lo_[static_cast<std::size_t>(a)];
+      brick[static_cast<std::size_t>(a)] = rel / kBrick;
+      local[static_cast<std::size_t>(a)] = rel % kBrick;
+    }
+    const std::size_t column = static_cast<std::size_t>(brick[1] * bricks_[0] + brick[0]);
+    const auto first = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column]);
+    const auto last = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column + 1]);
+    const int z0 = lo_[2] + brick[2] * kBrick;
+    const auto it = std::lower_bound(first, last, z0, [](const BrickMesh& b, int z) { return b.origin[2] < z; });
+    if (it == last || it->origin[2] != z0) return -1;
+    const std::uint16_t code = static_cast<std::uint16_t>(morton(local[0], local[1], local[2]));
+    const auto c = std::lower_bound(it->cells.begin(), it->cells.end(), code);
+    if (c == it->cells.end() || *c != code) return -1;
+    return static_cast<int>(it->first_vertex + it->vertex[static_cast<std::size_t>(c - it->cells.begin())]);
+  }
+
+  // The faces of every sign-changing edge starting at one of the brick's active cells'
+  // lowest node.
+  void quads(const BrickMesh& b, const BrickSigns& sg, CellTable& local, std::vector<Triangle>& out) const {
+    // The brick's own cells by position in `local` (most quads stay inside their brick),
+    // cleared again on the way out.
+    struct Clear {
+      CellTable& local;
+      const std::vector<std::uint16_t>& cells;
+      ~Clear() {
+        for (std::uint16_t code : cells) local[code] = -1;
+      }
+    } clear{local, b.cells};
+    for (std::size_t i = 0; i < b.cells.size(); ++i) local[b.cells[i]] = static_cast<int>(b.first_vertex + b.vertex[i]);
+    // A brick merged into one vertex (a flat sheet, a plane brick) has quads only across its
+    // lower faces: one whose four cells all lie in the brick has four equal corners.
+    const bool one_vertex = b.points.size() == 1;
+    for (std::uint16_t code : b.cells) {
+      const auto [x, y, z] = unmorton(code);
+      if (one_vertex && x > 0 && y > 0 && z > 0) continue;
+      const bool in = sg.inside(x, y, z);
+      for (int a = 0; a < 3; ++a) {
+        const bool other = a == 0 ? sg.inside(x + 1, y, z) : a == 1 ? sg.inside(x, y + 1, z) : sg.inside(x, y, z + 1);
+        if (other == in) continue;
+        // Cells around the edge, counter-clockwise seen from +a.
+        const int e1 = (a + 1) % 3, e2 = (a + 2) % 3;
+        std::array<int, 4> v;
+        const int offsets[4][2] = {{0, 0}, {-1, 0}, {-1, -1}, {0, -1}};
+        bool ok = true;
+        for (int q = 0; q < 4; ++q) {
+          std::array<int, 3> c = {x, y, z};
+          c[static_cast<std::size_t>(e1)] += offsets[q][0];
+          c[static_cast<std::size_t>(e2)] += offsets[q][1];
+          if (c[0] >= 0 && c[1] >= 0 && c[2] >= 0) {
+            v[static_cast<std::size_t>(q)] = local[static_cast<std::size_t>(morton(c[0], c[1], c[2]))];
+          } else {
+            for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(k)] += b.origin[static_cast<std::size_t>(k)];
+            v[static_cast<std::size_t>(q)] = vertex_of(c);
+          }
+          ok = ok && v[static_cast<std::size_t>(q)] >= 0;
+        }
+        if (!ok) continue;
+        if (!in) std::swap(v[1], v[3]);  // the surface faces -a
+        emit(v, out);
+      }
+    }
+  }
+
+  void emit(const std::array<int, 4>& v, std::vector<Triangle>& out) const {
+    // Merged cells share vertices: drop repeated corners, keeping the cyclic order.
+    std::array<int, 4> u;
+    int n = 0;
+    for (int q = 0; q < 4; ++q) {
+      const int c = v[static_cast<std::size_t>(q)];
+      if (n > 0 && u[static_cast<std::size_t>(n - 1)] == c) continue;
+      u[static_cast<std::size_t>(n++)] = c;
+    }
+    if (n > 1 && u[static_cast<std::size_t>(n - 1)] == u[0]) --n;
+    if (n == 3) {
+      out.emplace_back(u[0], u[1], u[2]);
+    } else if (n == 4) {
+      out.emplace_back(u[0], u[1], u[2]);
+      out.emplace_back(u[0], u[2], u[3]);
+    }
+  }
+
+  const DexelStock::Impl& m_;
+  std::array<int, 3> lo_{}, count_{}, bricks_{};
+  std::vector<BrickMesh> bricks_list_;
+  std::vector<std::size_t> column_first_;
+};
+
+SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
+
+}  // namespace
+
+SurfaceMesh DexelStock::surface() const {
+  const Impl& m = *impl_;
+  const double v = m.v;
+  SurfaceMesh mesh = contour_mesh(m);
+  // The moves that made the crossings around each vertex: its candidates on the exact surface.
+  const std::size_t count = mesh.mesh.vertices_mm.size();
+  std::vector<std::vector<int>> nearby(count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 512), [&](const auto& range) {
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      const Vector3d& x = mesh.mesh.vertices_mm[p];
+      Eigen::Vector3i base;
+      for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
+      std::vector<int>& ids = nearby[p];
+      for (const Family& f : m.families) {
+        const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+        const double s_lo = m.position(base[f.axis] - 1), s_hi = m.position(base[f.axis] + 2);
+        for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
+          for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
+            if (!f.contains(iu, iw)) continue;
+            const SegmentList& ray = f.at(iu, iw);
+            for (std::uint32_t s = 0; s < ray.size(); ++s) {
+              const DexelSegment& seg = ray.data()[s];
+              if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo && seg.lo_mm <= s_hi) ids.push_back(seg.lo_move);
+              if (seg.hi_move != kNoMove && seg.hi_mm >= s_lo && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
+            }
+          }
+        }
+      }
+      std::sort(ids.begin(), ids.end());
+      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+    }
+  });
+  // A vertex lies in its lattice cell, so the surface is within a cell diagonal.
+  detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * v, mesh);
+  return mesh;
+}
+
+}  // namespace vcut::removal
