@@ -79,9 +79,14 @@ TEST_F(Check, CleanProgramIsAGo) {
   EXPECT_EQ(j["verdict"], "go");
   EXPECT_TRUE(j["events"].empty()) << j.dump(1);
   EXPECT_NEAR(j["tools"][0]["holder_clearance_mm"].get<double>(), 19.0, 1e-9);
-  // Cycle time: 5 mm at rapid is short; the feed moves alone take (6 + 80) mm / 500 mm/min
-  // = 10.32 s, so the whole is more than that.
-  EXPECT_GT(j["cycle_time_s"].get<double>(), 10.32);
+  // Cycle time: the feed moves alone take (6 + 80) mm / 500 mm/min = 10.32 s. The first
+  // rapid starts from the machine at its zero, the tip 340 mm above the table (gauge point
+  // 400, tool 60): 335 mm of Z at no more than Z's 500 mm/s, at least 0.67 s; at most that
+  // plus a full jerk-limited ramp up and down (to 500 mm/s: 2 x 0.07 s of jerk, 0.073 s at
+  // 3500 mm/s2, 0.213 s each way), 1.1 s. The 6 mm retract and the feed moves' four
+  // starts and stops (0.026 s ramps at 8.33 mm/s) add at most 0.3 s and 0.1 s.
+  EXPECT_GT(j["cycle_time_s"].get<double>(), 10.32 + 0.67);
+  EXPECT_LT(j["cycle_time_s"].get<double>(), 10.32 + 1.1 + 0.3 + 0.1);
 }
 
 // Out of the machine's reach: A is limited to [-120, 30] deg on the AC trunnion.

@@ -64,6 +64,22 @@ class Simulate : public ::testing::Test {
     return nlohmann::json::parse(in);
   }
   bool no_output() { return !fs::exists(dir / "out") || fs::is_empty(dir / "out"); }
+  // simulate() with a stand-in page template (one data slot in its <script> element), so
+  // that the page's data is read without the web build.
+  static constexpr const char* kDataOpen = "<script id=\"vcut-data\" type=\"application/json\">";
+  CommandResult simulate_with_stand_in_page() {
+    write(dir / "template.html", std::string("<html>") + kDataOpen + "__VCUT_REPORT_DATA__</script></html>\n");
+    ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
+    const CommandResult r = simulate();
+    ::unsetenv("VCUT_REPORT_TEMPLATE");
+    return r;
+  }
+  std::string page_html() {
+    std::ifstream in(dir / "out" / "report.html");
+    std::stringstream page;
+    page << in.rdbuf();
+    return page.str();
+  }
 
   fs::path dir;
   std::string program, job;
@@ -108,17 +124,11 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   job += "design: {file: part.stl}\n";
   program.replace(program.find("G1 X70"), 6, "G1 X70 (</script><!-- floor)");
   program.replace(program.find("T1 M6\n"), 6, "T1 M6\nM31\n");  // an M code the machine does not declare
-  const std::string open = "<script id=\"vcut-data\" type=\"application/json\">";
-  write(dir / "template.html", "<html>" + open + "__VCUT_REPORT_DATA__</script></html>\n");
-  ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
-  const CommandResult r = simulate();
-  ::unsetenv("VCUT_REPORT_TEMPLATE");
+  const std::string open = kDataOpen;
+  const CommandResult r = simulate_with_stand_in_page();
   ASSERT_EQ(r.exit_code, 0) << r.output;
 
-  std::ifstream page_in(dir / "out" / "report.html");
-  std::stringstream page;
-  page << page_in.rdbuf();
-  const std::string html = page.str();
+  const std::string html = page_html();
   const std::size_t a = html.find(open), b = html.find("</script>", a);
   ASSERT_NE(a, std::string::npos);
   ASSERT_NE(b, std::string::npos);
@@ -161,17 +171,12 @@ TEST_F(Simulate, ReportPageFindsTheTextOfAFileNameWithASpace) {
   job.replace(job.find("slot.ngc"), 8, "my slot-01.ngc");
   job += "design: {file: part.stl}\n";
   write(dir / "my slot-01.ngc", program);
-  const std::string open = "<script id=\"vcut-data\" type=\"application/json\">";
-  write(dir / "template.html", "<html>" + open + "__VCUT_REPORT_DATA__</script></html>\n");
-  ::setenv("VCUT_REPORT_TEMPLATE", (dir / "template.html").c_str(), 1);
-  const CommandResult r = simulate();
-  ::unsetenv("VCUT_REPORT_TEMPLATE");
+  const CommandResult r = simulate_with_stand_in_page();
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  std::ifstream page_in(dir / "out" / "report.html");
-  std::stringstream page;
-  page << page_in.rdbuf();
-  const std::string html = page.str();
+  const std::string html = page_html();
+  const std::string open = kDataOpen;
   const std::size_t a = html.find(open), b = html.find("</script>", a);
+  ASSERT_NE(a, std::string::npos);
   ASSERT_NE(b, std::string::npos);
   const auto j = nlohmann::json::parse(html.substr(a + open.size(), b - a - open.size()));
   ASSERT_FALSE(j["regions"].empty());

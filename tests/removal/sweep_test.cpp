@@ -49,6 +49,18 @@ TEST(CutterDistance, FlatBallBullProfiles) {
   // Torus tube centre circle radius 3 at z = 2: point (6, 0, 0) is sqrt(3^2 + 2^2) - 2 away.
   EXPECT_NEAR(cutter_distance(bull, {6, 0, 0}), std::sqrt(13.0) - 2.0, kClosedForm_mm);
   EXPECT_NEAR(cutter_distance(bull, {2, 0, -0.5}), 0.5, kClosedForm_mm);  // under the flat part
+  // V-bit, 90 deg included, 10 mm: the cone r = z up to z = 5, then the flank r = 5 up to 20.
+  // In the (r, z) half-plane the slant is the line r = z: a point's distance to it is
+  // |r - z| / sqrt 2 where its foot ((r + z) / 2, (r + z) / 2) lies on the cone's segment.
+  Cutter vbit = cutter(CutterType::VBit, 10, 0, 20);
+  vbit.tip_angle_deg = 90.0;
+  EXPECT_NEAR(cutter_distance(vbit, {0, 0, -1}), 1.0, kClosedForm_mm);                   // below the point
+  EXPECT_NEAR(cutter_distance(vbit, {3, 0, 0}), 3.0 / std::sqrt(2.0), kClosedForm_mm);   // foot (1.5, 1.5)
+  EXPECT_NEAR(cutter_distance(vbit, {0, 4, 2}), 2.0 / std::sqrt(2.0), kClosedForm_mm);   // r 4, z 2: foot (3, 3)
+  EXPECT_NEAR(cutter_distance(vbit, {0, 0, 2}), -2.0 / std::sqrt(2.0), kClosedForm_mm);  // inside, on the axis
+  EXPECT_NEAR(cutter_distance(vbit, {7, 0, 8}), 2.0, kClosedForm_mm);                    // beside the flank
+  // r 8, z 1: foot (4.5, 4.5) still on the slant, nearer than the rim (5, 5), 5 away.
+  EXPECT_NEAR(cutter_distance(vbit, {8, 0, 1}), 7.0 / std::sqrt(2.0), kClosedForm_mm);
 }
 
 TEST(TranslationSweep, BallIsACapsule) {
