@@ -22,7 +22,6 @@
 namespace vcut::removal {
 namespace dexel {
 
-
 using Eigen::Vector3d;
 constexpr int kNoMove = -1;
 // A tile of one family: kTileU rays along u by kTileW rows. A move's work per tile (its
