@@ -365,6 +365,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
   AptState apt_state;
   AptProgram apt;
   SinumerikState sinumerik_state;
+  bool first = true;
   for (const std::string& path : paths) {
     std::error_code ec;
     if (fs::is_directory(path, ec)) {
@@ -376,8 +377,9 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
     }
     check_text(path, sniff(path));
     const ProgramReader reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
-    if (&path == &paths.front()) {
+    if (first) {
       out.reader = reader;
+      first = false;
     } else if (reader != out.reader) {
       throw InputError(path, 0, 0,
                        std::string("is ") + describe_dialect(reader) + " but " + paths.front() + " is " +
