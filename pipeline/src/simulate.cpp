@@ -102,32 +102,33 @@ const char* collision_part(removal::ProbeKind probe) {
 // One record per run of consecutive blocks with the same kind of collision (a shank
 // dragging through material for a hundred moves is one event): lines as a range, the
 // deepest depth and where it was.
-std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found,
-                                               const removal::MoveList& moves, const kinematics::Program& program) {
+std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, const CutMoves& moves,
+                                               const kinematics::Program& program) {
   std::vector<removal::Collision> sorted = found;
   std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
   std::vector<CollisionRecord> out;
   std::map<std::string, std::size_t> open;  // kind -> its latest record
   for (const removal::Collision& c : sorted) {
-    const removal::Move& m = moves.moves[static_cast<std::size_t>(c.move)];
-    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(m.block)];
-    const std::string kind = collision_kind(m.probe);
+    const auto move = static_cast<std::size_t>(c.move);
+    const int block = moves.block(move);
+    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(block)];
+    const std::string kind = collision_kind(moves.probe_kind(move));
     const auto it = open.find(kind);
     CollisionRecord* r = nullptr;
-    if (it != open.end() && out[it->second].tool == b.tool && m.block <= out[it->second].last_block + 1)
+    if (it != open.end() && out[it->second].tool == b.tool && block <= out[it->second].last_block + 1)
       r = &out[it->second];
     if (r == nullptr) {
       open[kind] = out.size();
       r = &out.emplace_back();
       r->kind = kind;
-      r->part = collision_part(m.probe);
+      r->part = collision_part(moves.probe_kind(move));
       r->line = program.where(b.source);
       r->first_line = b.source;
       r->tool = b.tool;
-      r->first_block = r->last_block = m.block;
+      r->first_block = r->last_block = block;
     }
-    if (m.block != r->last_block) {
-      r->last_block = m.block;
+    if (block != r->last_block) {
+      r->last_block = block;
       if (b.source.file == r->first_line.file && b.source.line > r->first_line.line)
         r->line = program.where(r->first_line) + "-" + std::to_string(b.source.line);
     }
@@ -189,10 +190,10 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
 // translation pieces within v/10 of the rigid motion (removal::five_axis_pieces). With
 // `probes`, the tool's shank and holder follow every move and a feed move made with the
 // spindle stopped is probed before it cuts (collisions).
-CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolution_mm) {
+CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resolution_mm)
+    : run_(run), actual_(actual), probes_(probes), rotation_bound_mm_(resolution_mm / 10.0) {
   const kinematics::Program& program = run.program;
-  CutMoves out;
-  std::map<int, int> cutter_index;
+  removal::MoveList tools;
   for (const auto& b : program.blocks) {
     if (b.tool == 0) {
       if (b.kind != kinematics::MotionKind::Rapid)
@@ -200,74 +201,95 @@ CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolutio
                          ": feed move with no tool in the spindle (expected T<n> M6 before it)");
       continue;
     }
-    if (cutter_index.count(b.tool)) continue;
-    cutter_index[b.tool] = static_cast<int>(out.moves.cutters.size());
-    out.moves.cutters.push_back(run.tools.at(b.tool));
+    if (cutter_index_.count(b.tool)) continue;
+    cutter_index_[b.tool] = static_cast<int>(tools.cutters.size());
+    tools.cutters.push_back(run.tools.at(b.tool));
   }
   // The shank and holder of every tool (their cutters follow the tools' in the list).
-  const std::vector<removal::ToolBody> bodies = removal::add_tool_bodies(out.moves);
-  const auto& samples = run.densified.samples;
-  const double rotation_bound_mm = resolution_mm / 10.0;
-  const std::size_t n = actual ? run.actual_path.size() : samples.size();
-  const auto pose = [&](std::size_t i) -> const kinematics::ToolPose& {
-    return actual ? run.actual_path[i].pose : samples[i].pose;
-  };
-  std::vector<removal::Move>& list = out.moves.moves;
-  for (std::size_t i = 1; i < n; ++i) {
-    const int block = actual ? run.actual_path[i].block : samples[i].block;
-    const auto& b = program.blocks[static_cast<std::size_t>(block)];
-    if (b.tool == 0) continue;  // a rapid before the first tool change moves nothing
-    const kinematics::ToolPose& from = pose(i - 1);
-    const kinematics::ToolPose& to = pose(i);
-    removal::Move m;
-    m.start_mm = from.tip_mm;
-    m.end_mm = to.tip_mm;
-    m.axis = to.axis;
-    m.cutter = cutter_index.at(b.tool);
-    m.block = block;
-    m.rapid = b.kind == kinematics::MotionKind::Rapid;
-    const bool turns = (from.axis - to.axis).norm() > 1e-12;
-    if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) continue;
-    out.cutting_moves += !m.rapid;
-    const std::size_t first_piece = list.size();
-    if (turns) {
-      const int pieces = removal::five_axis_pieces(out.moves.cutters[static_cast<std::size_t>(m.cutter)], from.axis,
-                                                   to.axis, rotation_bound_mm);
-      removal::append_five_axis_move(list, m, from.axis, to.axis, pieces);
-      out.rotating_moves += 1;
-    } else {
-      list.push_back(m);
-    }
-    if (!probes) continue;
-    const std::vector<removal::Move> pieces(list.begin() + static_cast<std::ptrdiff_t>(first_piece), list.end());
-    list.resize(first_piece);
-    for (const removal::Move& piece : pieces) {
-      if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
-        removal::Move stopped = piece;
-        stopped.rapid = true;
-        stopped.probe = removal::ProbeKind::SpindleStopped;
-        list.push_back(stopped);
-      }
-      list.push_back(piece);
-      removal::append_body_probes(list, piece, bodies[static_cast<std::size_t>(piece.cutter)]);
+  bodies_ = removal::add_tool_bodies(tools);
+  cutters_ = std::move(tools.cutters);
+  samples_ = actual ? run.actual_path.size() : run.densified.samples.size();
+  std::vector<removal::Move> moves;
+  for (std::size_t i = 1; i < samples_; ++i) {
+    moves.clear();
+    moves_into(i, moves);
+    if (moves.empty()) continue;
+    const bool rapid = program.blocks[static_cast<std::size_t>(moves.front().block)].kind == kinematics::MotionKind::Rapid;
+    cutting_moves += !rapid;
+    const kinematics::ToolPose& from = actual ? run.actual_path[i - 1].pose : run.densified.samples[i - 1].pose;
+    const kinematics::ToolPose& to = actual ? run.actual_path[i].pose : run.densified.samples[i].pose;
+    rotating_moves += (from.axis - to.axis).norm() > 1e-12;
+    for (const removal::Move& m : moves) {
+      blocks_.push_back(m.block);
+      kinds_.push_back(m.rapid ? static_cast<std::uint8_t>(m.probe) : kCut);
+      count += !m.rapid || m.probe == removal::ProbeKind::Rapid;
     }
   }
-  for (const auto& m : list) out.count += !m.rapid || m.probe == removal::ProbeKind::Rapid;
-  return out;
 }
 
-double require_cuttable(const io::Job& job, const CutMoves& cut, const removal::StockShape& shape, double resolution_mm,
+void CutMoves::moves_into(std::size_t i, std::vector<removal::Move>& out) const {
+  const kinematics::Program& program = run_.program;
+  const int block = actual_ ? run_.actual_path[i].block : run_.densified.samples[i].block;
+  const auto& b = program.blocks[static_cast<std::size_t>(block)];
+  if (b.tool == 0) return;  // a rapid before the first tool change moves nothing
+  const kinematics::ToolPose& from = actual_ ? run_.actual_path[i - 1].pose : run_.densified.samples[i - 1].pose;
+  const kinematics::ToolPose& to = actual_ ? run_.actual_path[i].pose : run_.densified.samples[i].pose;
+  removal::Move m;
+  m.start_mm = from.tip_mm;
+  m.end_mm = to.tip_mm;
+  m.axis = to.axis;
+  m.cutter = cutter_index_.at(b.tool);
+  m.block = block;
+  m.rapid = b.kind == kinematics::MotionKind::Rapid;
+  const bool turns = (from.axis - to.axis).norm() > 1e-12;
+  if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) return;
+  const std::size_t first_piece = out.size();
+  if (turns) {
+    const int pieces = removal::five_axis_pieces(cutters_[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
+                                                 rotation_bound_mm_);
+    removal::append_five_axis_move(out, m, from.axis, to.axis, pieces);
+  } else {
+    out.push_back(m);
+  }
+  if (!probes_) return;
+  const std::vector<removal::Move> pieces(out.begin() + static_cast<std::ptrdiff_t>(first_piece), out.end());
+  out.resize(first_piece);
+  for (const removal::Move& piece : pieces) {
+    if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
+      removal::Move stopped = piece;
+      stopped.rapid = true;
+      stopped.probe = removal::ProbeKind::SpindleStopped;
+      out.push_back(stopped);
+    }
+    out.push_back(piece);
+    removal::append_body_probes(out, piece, bodies_[static_cast<std::size_t>(piece.cutter)]);
+  }
+}
+
+bool CutMoves::next(std::vector<removal::Move>& out, std::size_t wanted) {
+  const std::size_t before = out.size();
+  while (sample_ < samples_ && out.size() - before < wanted) moves_into(sample_++, out);
+  return out.size() > before;
+}
+
+double require_cuttable(const io::Job& job, CutMoves& cut, const removal::StockShape& shape, double resolution_mm,
                         double max_memory_mb) {
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
   bool overlap = false;
   Eigen::AlignedBox3d path_box;
-  for (const auto& m : cut.moves.moves) {
-    if (m.rapid) continue;
-    path_box.extend(m.start_mm);
-    path_box.extend(m.end_mm);
-    const removal::TranslationSweep sweep(cut.moves.cutters[static_cast<std::size_t>(m.cutter)], m);
-    overlap = overlap || sweep.bounds().intersects(stock_box);
+  std::vector<removal::Move> batch;
+  cut.rewind();
+  while (cut.next(batch, 4096)) {
+    for (const auto& m : batch) {
+      if (m.rapid) continue;
+      path_box.extend(m.start_mm);
+      path_box.extend(m.end_mm);
+      const removal::TranslationSweep sweep(cut.cutters()[static_cast<std::size_t>(m.cutter)], m);
+      overlap = overlap || sweep.bounds().intersects(stock_box);
+    }
+    batch.clear();
   }
+  cut.rewind();
   if (!overlap && cut.cutting_moves > 0) {
     std::ostringstream msg;
     msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
@@ -335,14 +357,13 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // 3. Moves: the actual poses (servo, errors) when there are any, else the nominal; with
   // the nominal ones as well for the nominal cut.
   const bool cut_actual = !run.actual_path.empty();
-  CutMoves cut_moves = moves_of(run, cut_actual, true, v);
-  removal::MoveList& moves = cut_moves.moves;
+  CutMoves moves(run, cut_actual, true, v);
   result.poses = run.densified.samples.size();
-  result.cutting_moves = cut_moves.cutting_moves;
-  result.rotating_moves = cut_moves.rotating_moves;
-  removal::MoveList nominal_moves;
-  if (cut_actual) nominal_moves = moves_of(run, false, false, v).moves;
-  result.moves = cut_moves.count;
+  result.cutting_moves = moves.cutting_moves;
+  result.rotating_moves = moves.rotating_moves;
+  std::optional<CutMoves> nominal_moves;
+  if (cut_actual) nominal_moves.emplace(run, false, false, v);
+  result.moves = moves.count;
   stage_done("densify");
 
   // 4. Stock, and the design, read now, before the cut, so that a file that cannot be used
@@ -354,7 +375,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
   std::optional<removal::TriangleMesh> design_mesh = design_of(job);  // kept for the report page
   if (design_mesh) hashed.push_back(job.design->file);
-  result.estimated_memory_mb = require_cuttable(job, cut_moves, shape, v, options.max_memory_mb);
+  result.estimated_memory_mb = require_cuttable(job, moves, shape, v, options.max_memory_mb);
   // The primary engine makes the outputs; with engine: both the OpenVDB one checks it. A
   // machine-error run compares the actual with the nominal part (a few um): no flat merging.
   const bool merge_flat = !cut_actual;
@@ -373,7 +394,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   result.final_volume_mm3 = stock.volume_mm3();
   result.stock_memory_mb = static_cast<double>(stock.memory_bytes()) / (1024.0 * 1024.0);
   auto block_of = [&](int move) -> const kinematics::Block& {
-    return program.blocks[static_cast<std::size_t>(moves.moves[static_cast<std::size_t>(move)].block)];
+    return program.blocks[static_cast<std::size_t>(moves.block(static_cast<std::size_t>(move)))];
   };
   result.collisions = collision_records(cut.collisions, moves, program);
   stage_done("cut");
@@ -392,6 +413,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     // machined surfaces, both ways, is the self-check.
     progress("check", 0, 1);
     const auto t0 = Clock::now();
+    moves.rewind();
     second->cut(moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const auto t1 = Clock::now();
     const removal::SurfaceMesh other = second->surface();
@@ -407,7 +429,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     // measure how far the real part departs from the programmed one.
     progress("nominal", 0, 1);
     std::unique_ptr<removal::Stock> nominal = make_stock(job, shape, v, merge_flat);
-    nominal->cut(nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
+    nominal->cut(*nominal_moves, removal::CutOptions{job.collision_tolerance_mm, {}});
     const removal::SurfaceMesh nominal_surface = nominal->surface();
     static_cast<removal::SurfaceDifference&>(result.nominal) =
         removal::surface_difference(machined, nominal_surface, v);
@@ -505,7 +527,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   result.input_files = std::move(hashed);
   result.machined = std::move(machined);
   result.deviation_mm = std::move(deviation);
-  result.move_list = std::move(moves);
+  result.move_blocks = moves.blocks();
   result.design = std::move(design_mesh);
   result.stock_box = stock_box;
   result.wall_time_s = std::chrono::duration<double>(Clock::now() - t_start).count();

@@ -150,7 +150,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     const io::Job j = with_setting(base, setting);
     const PoseRun poses = run_pose_engine(j, read_job_program(j), resolution_mm);
     // What the machine cuts: the actual path with servo or errors.
-    const CutMoves cut = moves_of(poses, !poses.actual_path.empty(), false, resolution_mm);
+    CutMoves cut(poses, !poses.actual_path.empty(), false, resolution_mm);
     const removal::StockShape shape = stock_shape(j);
     require_cuttable(j, cut, shape, resolution_mm, options.max_memory_mb);
     // Two settings' meshes are compared to resolution / 100: no flat merging (make_stock).
@@ -158,7 +158,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     removal::CutOptions cut_options;
     cut_options.collision_tolerance_mm = j.collision_tolerance_mm;
     cut_options.progress = [&](std::size_t done, std::size_t total) { progress("cut", done, total); };
-    stock->cut(cut.moves, cut_options);
+    stock->cut(cut, cut_options);
     progress("mesh", 0, 1);
     removal::SurfaceMesh surface = stock->surface();
     row.poses = poses.densified.samples.size();

@@ -13,6 +13,7 @@
 
 #include "dexel_impl.h"
 #include "initial_stock.h"
+#include "move_batches.h"
 #include "ray_sweep.h"
 #include "surface_projection.h"
 
@@ -275,12 +276,14 @@ int probe_family(const Move& move) {
 
 }  // namespace
 
-CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
+CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   Impl& m = *impl_;
   CutResult result;
-  const std::size_t total = list.moves.size();
+  const std::size_t total = source.size_hint();
+  const std::vector<Cutter>& cutters = source.cutters();
   // Rays' endpoints hold move ids that count across calls: remember every move.
-  const int id_base = detail::remember_moves(list, m.moves, m.cutters);
+  const int id_base = static_cast<int>(m.moves.size());
+  const int cutter_base = detail::remember_cutters(cutters, m.cutters);
   // Per rapid: the longest overlap with material seen along each family.
   std::map<int, std::array<Probe, 3>> probes;
   std::array<double, 3> removed_mm = {0.0, 0.0, 0.0};
@@ -293,7 +296,13 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
   std::vector<int> entries;
   std::vector<TileResult> results(static_cast<std::size_t>(tiles));
   tbb::enumerable_thread_specific<std::vector<DexelSegment>> scratch;
-  const std::vector<MoveHandover> handover = handovers(list);
+  // The moves around a batch that its hand-over tests look at: the last cutting move before
+  // it and those after it up to the next cutting move (the batch is window.moves[off..]).
+  MoveList window;
+  window.cutters = cutters;
+  std::vector<MoveHandover> handover;  // of the window's moves
+  std::optional<Move> last_cutting;    // before the batch
+  detail::MoveBatches batches(source);
   // The same for a whole row of an upright tool at once: narrows [u_lo, u_hi] to the rays
   // that neither neighbour takes (false: none), from bounds that hold for any material
   // along the rays within the move's box, so that no ray skipped here would be kept by the
@@ -398,12 +407,28 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
     return !r.back.covers(u, w, lo, hi);
   };
 
-  for (std::size_t first = 0; first < total; first += kBatchMoves) {
-    const std::size_t last = std::min(total, first + kBatchMoves);
-    std::vector<std::optional<detail::RaySweep>> sweeps(last - first);
+  for (std::size_t first = 0;;) {
+    const std::size_t count = std::min(kBatchMoves, batches.fill(kBatchMoves));
+    if (count == 0) break;
+    // Look ahead to the first cutting move after the batch (or the end).
+    std::size_t ahead = count;
+    for (;; ++ahead) {
+      if (ahead == batches.held().size() && batches.fill(ahead + kBatchMoves) == ahead) break;
+      if (!batches.held()[ahead].rapid) break;
+    }
+    const std::size_t last = first + count;
+    window.moves.clear();
+    if (last_cutting) window.moves.push_back(*last_cutting);
+    const std::size_t off = window.moves.size();
+    window.moves.insert(window.moves.end(), batches.held().begin(),
+                        batches.held().begin() + static_cast<std::ptrdiff_t>(std::min(ahead + 1, batches.held().size())));
+    handover = handovers(window);
+    const Move* const batch = window.moves.data() + off;
+    detail::remember_moves(batch, count, cutter_base, m.moves);
+    std::vector<std::optional<detail::RaySweep>> sweeps(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 256), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i)
-        sweeps[i - first].emplace(list.cutters.at(static_cast<std::size_t>(list.moves[i].cutter)), list.moves[i]);
+        sweeps[i - first].emplace(cutters.at(static_cast<std::size_t>(batch[i - first].cutter)), batch[i - first]);
     });
     // Bin the batch's moves to the tiles of rays their sweep's box covers (counting sort:
     // within a tile the moves stay in program order).
@@ -412,7 +437,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
       // Material never leaves the initial stock's box: a sweep clear of it (a holder probe
       // high above the part) meets no ray's material.
       if (!sweeps[i - first]->bounds().intersects(m.shape_bounds)) return;
-      const int only = probe_family(list.moves[i]);
+      const int only = probe_family(batch[i - first]);
       for (int a = 0; a < 3; ++a) {
         if (only >= 0 && a != only) continue;
         const Family& f = m.families[static_cast<std::size_t>(a)];
@@ -454,7 +479,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
           const int i = entries[static_cast<std::size_t>(e)];
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
-          const Move& move = list.moves[first + static_cast<std::size_t>(i)];
+          const Move& move = batch[i];
           const int id = id_base + static_cast<int>(first) + i;
           int u0, u1, w0, w1;
           m.ray_range(f, sweep.bounds(), u0, u1, w0, w1);
@@ -469,7 +494,7 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
           const Vector3d motion = move.end_mm - move.start_mm;
           const bool use_window = std::abs(motion[a]) * 2.0 >= motion.norm();
           Probe probe{i, a, 0.0, Vector3d::Zero()};
-          const MoveHandover& hand = handover[first + static_cast<std::size_t>(i)];
+          const MoveHandover& hand = handover[off + static_cast<std::size_t>(i)];
           const RowNeighbours neighbours = row_neighbours(hand, a);
           // The ray-wise test only for a tilted tool, where the row-wise one cannot run: after
           // the row-wise bounds it cost more than the cuts it saved (W1 on 40 mm, 1 thread:
@@ -587,7 +612,11 @@ CutResult DexelStock::cut(const MoveList& list, const CutOptions& options) {
         }
       }
     }
-    if (options.progress) options.progress(last, total);
+    for (std::size_t i = 0; i < count; ++i)
+      if (!batch[i].rapid) last_cutting = batch[i];
+    batches.drop(count);
+    first = last;
+    if (options.progress) options.progress(last, std::max(total, last));
   }
   double removed = 0.0;
   for (int a = 0; a < 3; ++a) {

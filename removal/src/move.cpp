@@ -8,6 +8,14 @@
 #include <cmath>
 
 namespace vcut::removal {
+
+bool ListSource::next(std::vector<Move>& out, std::size_t wanted) {
+  const std::size_t n = std::min(wanted, list_.moves.size() - at_);
+  out.insert(out.end(), list_.moves.begin() + static_cast<std::ptrdiff_t>(at_),
+             list_.moves.begin() + static_cast<std::ptrdiff_t>(at_ + n));
+  at_ += n;
+  return n > 0;
+}
 namespace {
 
 constexpr int kMaxPieces = 1 << 16;

@@ -25,15 +25,18 @@ std::function<double(const Eigen::Vector3d&)> initial_distance(const StockShape&
   return [d = mesh_distance](const Eigen::Vector3d& x) { return d->signed_distance(x); };
 }
 
-int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<Cutter>& cutters) {
-  const int id_base = static_cast<int>(moves.size());
+int remember_cutters(const std::vector<Cutter>& from, std::vector<Cutter>& cutters) {
   const int cutter_base = static_cast<int>(cutters.size());
-  cutters.insert(cutters.end(), list.cutters.begin(), list.cutters.end());
-  for (Move move : list.moves) {
+  cutters.insert(cutters.end(), from.begin(), from.end());
+  return cutter_base;
+}
+
+void remember_moves(const Move* first, std::size_t count, int cutter_base, std::vector<Move>& moves) {
+  for (std::size_t i = 0; i < count; ++i) {
+    Move move = first[i];
     move.cutter += cutter_base;
     moves.push_back(move);
   }
-  return id_base;
 }
 
 SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const std::vector<openvdb::Vec3I>& triangles,

@@ -13,10 +13,11 @@
 
 namespace vcut::removal::detail {
 
-// Appends the list's moves (cutter indices shifted) and cutters to an engine's record of
-// every move cut so far, whose indices are the move ids the stock stores; returns the id
-// of the list's first move.
-int remember_moves(const MoveList& list, std::vector<Move>& moves, std::vector<Cutter>& cutters);
+// An engine's record of every move cut so far, whose indices are the move ids the stock
+// stores: a cut's cutters are appended first (returns the index of the first), then its
+// moves a batch at a time (cutter indices shifted by that).
+int remember_cutters(const std::vector<Cutter>& from, std::vector<Cutter>& cutters);
+void remember_moves(const Move* first, std::size_t count, int cutter_base, std::vector<Move>& moves);
 
 // volumeToMesh's polygons as an outward, counter-clockwise triangle mesh (OpenVDB winds
 // level-set polygons clockwise seen from outside; quads are split in two).

@@ -10,6 +10,7 @@
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
+#include <optional>
 #include <array>
 #include <cmath>
 #include <map>
@@ -21,6 +22,7 @@
 #include "vcut/removal/sweep.h"
 #include "distance.h"
 #include "initial_stock.h"
+#include "move_batches.h"
 #include "surface_projection.h"
 
 namespace vcut::removal {
@@ -480,43 +482,48 @@ VdbStock::~VdbStock() = default;
 
 double VdbStock::voxel_mm() const { return impl_->v; }
 
-CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
+CutResult VdbStock::cut(MoveSource& source, const CutOptions& options) {
   Impl& m = *impl_;
   CutResult result;
-  const std::size_t total = list.moves.size();
+  const std::size_t total = source.size_hint();
+  const std::vector<Cutter>& cutters = source.cutters();
   std::map<int, Collision> collisions;
   double removed_voxels = 0.0;
   // Move ids count across calls: remember every move with its cutter.
-  const int id_base = detail::remember_moves(list, m.moves, m.cutters);
+  const int id_base = static_cast<int>(m.moves.size());
+  const int cutter_base = detail::remember_cutters(cutters, m.cutters);
   // Moves that follow on from the cutter's previous cutting move (rapids and probes cut
   // nothing in between): where their start cutter is the nearest, the previous move has
   // already cut exactly that, and they are not evaluated there.
-  std::vector<std::uint8_t> follows(total, 0);
-  for (std::size_t i = 0, last_cut = total; i < total; ++i) {
-    const Move& move = list.moves[i];
-    if (move.rapid) continue;
-    if (last_cut < total) {
-      const Move& before = list.moves[last_cut];
-      follows[i] = before.cutter == move.cutter && before.end_mm == move.start_mm && before.axis == move.axis;
+  std::optional<Move> last_cut;
+  detail::MoveBatches batches(source);
+  std::vector<Move> batch;
+  for (std::size_t first = 0;; first += batch.size()) {
+    const std::size_t count = std::min(kBatchMoves, batches.fill(kBatchMoves));
+    if (count == 0) break;
+    batch.assign(batches.held().begin(), batches.held().begin() + static_cast<std::ptrdiff_t>(count));
+    batches.drop(count);
+    const std::size_t last = first + count;
+    detail::remember_moves(batch.data(), batch.size(), cutter_base, m.moves);
+    std::vector<std::uint8_t> batch_follows(batch.size(), 0);
+    for (std::size_t i = 0; i < batch.size(); ++i) {
+      const Move& move = batch[i];
+      if (move.rapid) continue;
+      if (last_cut)
+        batch_follows[i] =
+            last_cut->cutter == move.cutter && last_cut->end_mm == move.start_mm && last_cut->axis == move.axis;
+      last_cut = move;
     }
-    last_cut = i;
-  }
-  for (std::size_t first = 0; first < total; first += kBatchMoves) {
-    const std::size_t last = std::min(total, first + kBatchMoves);
     std::vector<TranslationSweep> sweeps;
     sweeps.reserve(last - first);
-    for (std::size_t i = first; i < last; ++i) {
-      const Move& move = list.moves[i];
-      sweeps.emplace_back(list.cutters.at(static_cast<std::size_t>(move.cutter)), move);
-    }
-    const std::vector<std::uint8_t> batch_follows(follows.begin() + static_cast<std::ptrdiff_t>(first),
-                                                  follows.begin() + static_cast<std::ptrdiff_t>(last));
+    for (const Move& move : batch) sweeps.emplace_back(cutters.at(static_cast<std::size_t>(move.cutter)), move);
     // 1. Bin every move of the batch to the leaf blocks its sweep can change.
     tbb::enumerable_thread_specific<std::vector<Entry>> binned;
     tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 16), [&](const auto& range) {
       auto& out = binned.local();
       for (std::size_t i = range.begin(); i != range.end(); ++i)
-        m.bin(sweeps[i - first], list.moves[i].rapid, follows[i] != 0, static_cast<std::int32_t>(i - first), out);
+        m.bin(sweeps[i - first], batch[i - first].rapid, batch_follows[i - first] != 0,
+              static_cast<std::int32_t>(i - first), out);
     });
     std::vector<Entry> entries;
     for (auto& part : binned) entries.insert(entries.end(), part.begin(), part.end());
@@ -553,7 +560,7 @@ CutResult VdbStock::cut(const MoveList& list, const CutOptions& options) {
         }
       }
     }
-    if (options.progress) options.progress(last, total);
+    if (options.progress) options.progress(last, std::max(total, last));
   }
   // Leaves left uniform (all +w or all -w, clamped values) become tiles: less to keep and to mesh.
   openvdb::tools::pruneLevelSet(m.grid->tree());

@@ -52,7 +52,7 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
       a.deviation_mm = deviation;
       a.move = machined.vertex_move;
       for (int m : machined.vertex_move) {
-        const int block = m < 0 ? -1 : result.move_list.moves[static_cast<std::size_t>(m)].block;
+        const int block = m < 0 ? -1 : result.move_blocks[static_cast<std::size_t>(m)];
         a.line.push_back(block < 0 ? 0 : program.blocks[static_cast<std::size_t>(block)].source.line);
       }
       io::write_deviation_ply((out / "deviation.ply").string(), machined.mesh, a);
@@ -79,7 +79,7 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
     writers.run([&] {
       ReportPageInput in;
       in.machined = &machined;
-      in.moves = &result.move_list;
+      in.move_blocks = &result.move_blocks;
       in.deviation_mm = deviation;
       in.design = result.design ? &*result.design : nullptr;
       in.stock_box = result.stock_box;

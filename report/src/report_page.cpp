@@ -228,12 +228,12 @@ void write_report_page(const std::string& path, const std::string& template_path
   vertex_source.reserve(kept.size());
   for (int k : kept) {
     const int move = machined.vertex_move[static_cast<std::size_t>(k)];
-    if (move < 0 || input.moves == nullptr || static_cast<std::size_t>(move) >= input.moves->moves.size()) {
+    if (move < 0 || input.move_blocks == nullptr || static_cast<std::size_t>(move) >= input.move_blocks->size()) {
       vertex_source.push_back(-1);
       continue;
     }
     const kinematics::SourceRef& src =
-        program.blocks[static_cast<std::size_t>(input.moves->moves[static_cast<std::size_t>(move)].block)].source;
+        program.blocks[static_cast<std::size_t>((*input.move_blocks)[static_cast<std::size_t>(move)])].source;
     vertex_source.push_back(sources.index(src.file, src.line));
   }
   mesh["source"] = typed_base64(vertex_source);

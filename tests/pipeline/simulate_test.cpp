@@ -79,14 +79,14 @@ TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
   EXPECT_EQ(actual.nominal.max_line, "slot.ngc:7");
 }
 
-// moves_of: a feed move with no tool is refused with its line; the stages compose as
+// CutMoves: a feed move with no tool is refused with its line; the stages compose as
 // simulate does (a 60 x 10 x 2 slot: 1200 mm3).
 TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   write("slot.ngc", "G21 G90\nG0 X-10 Y20 Z5\nG1 Z-2 F500\n");
   const io::Job no_tool = job("");
   const PoseRun bare = run_pose_engine(no_tool, read_job_program(no_tool), 0.1);
   try {
-    moves_of(bare, false, false, 0.1);
+    CutMoves(bare, false, false, 0.1);
     ADD_FAILURE() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("slot.ngc:3: feed move with no tool"), std::string::npos) << e.what();
@@ -94,14 +94,14 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   SetUp();
   const io::Job j = job("");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-  const CutMoves cut = moves_of(run, false, true, 0.1);
+  CutMoves cut(run, false, true, 0.1);
   EXPECT_EQ(cut.cutting_moves, 2u);  // the plunge and the slot, one pose each (lines need no densifying)
   EXPECT_EQ(cut.rotating_moves, 0u);
   const removal::StockShape shape = stock_shape(j);
   EXPECT_FALSE(design_of(j).has_value());
   EXPECT_GT(require_cuttable(j, cut, shape, 0.1, 0.0), 0.0);
   const auto stock = make_stock(j, shape, 0.1, true);
-  const double removed = stock->cut(cut.moves, {}).removed_volume_mm3;
+  const double removed = stock->cut(cut, {}).removed_volume_mm3;
   EXPECT_NEAR(removed, 1200.0, 6.0);
   EXPECT_NEAR(simulate(j, {}).removed_volume_mm3, removed, 1e-9);
   // engine: vdb makes the OpenVDB stock.
@@ -112,7 +112,8 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
 TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
   write("slot.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X500 Y500 Z5\nG1 Z-2 F500\nG1 X600\nM30\n");
   const io::Job j = job("");
-  const CutMoves cut = moves_of(run_pose_engine(j, read_job_program(j), 0.1), false, false, 0.1);
+  const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+  CutMoves cut(run, false, false, 0.1);
   try {
     require_cuttable(j, cut, stock_shape(j), 0.1, 0.0);
     ADD_FAILURE() << "no InputError";

@@ -5,7 +5,9 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -104,7 +106,7 @@ struct SimulationResult {
   // The values the outputs are made of (report::write_simulation).
   removal::SurfaceMesh machined;
   std::vector<double> deviation_mm;             // per machined vertex, with a design
-  removal::MoveList move_list;                  // what was cut, probes included
+  std::vector<int> move_blocks;                 // the block of each move cut (move ids), probes included
   std::optional<removal::TriangleMesh> design;  // placed as the job places it
   Eigen::AlignedBox3d stock_box;
   std::vector<std::string> input_files;  // every file the run read: job, machine, tools, programs, meshes
@@ -120,15 +122,44 @@ std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run);
 // errors: PoseRun::actual_path) as the cut's moves; a move that turns the tool axis is cut
 // in translation pieces within resolution / 10 of the rigid motion. With `probes` the
 // shank and holder of each tool follow every move, and a feed move with the spindle
-// stopped is probed first (collisions). A feed move with no tool is an InputError.
-struct CutMoves {
-  removal::MoveList moves;
+// stopped is probed first (collisions). The moves are made as the stock pulls them, a batch
+// at a time (removal::MoveSource): the program's moves are never all held. A first pass at
+// construction counts them, refuses a feed move with no tool (InputError) and keeps what
+// attribution needs of each move, its block and what it stands for (5 bytes).
+class CutMoves : public removal::MoveSource {
+ public:
+  CutMoves(const PoseRun& run, bool actual, bool probes, double resolution_mm);
+  const std::vector<removal::Cutter>& cutters() const override { return cutters_; }
+  bool next(std::vector<removal::Move>& out, std::size_t wanted) override;
+  std::size_t size_hint() const override { return blocks_.size(); }
+  // Hands the moves over again from the first (a second cut, a second look).
+  void rewind() { sample_ = 1; }
+
   std::size_t count = 0;           // the moves that cut or are a rapid's probe (report.json's "moves")
   std::size_t cutting_moves = 0;   // feed moves of the program path
   std::size_t rotating_moves = 0;  // of those, moves that turn the tool axis
-};
-CutMoves moves_of(const PoseRun& run, bool actual, bool probes, double resolution_mm);
+  // By move id (the order handed over): the program block it came from, whether it is a
+  // probe (it cuts nothing) and what for.
+  int block(std::size_t move) const { return blocks_[move]; }
+  bool probe(std::size_t move) const { return kinds_[move] != kCut; }
+  removal::ProbeKind probe_kind(std::size_t move) const { return static_cast<removal::ProbeKind>(kinds_[move]); }
+  const std::vector<int>& blocks() const { return blocks_; }
 
+ private:
+  static constexpr std::uint8_t kCut = 0xff;
+  // Appends the moves into sample i (from sample i - 1).
+  void moves_into(std::size_t i, std::vector<removal::Move>& out) const;
+
+  const PoseRun& run_;
+  bool actual_, probes_;
+  double rotation_bound_mm_;
+  std::vector<removal::Cutter> cutters_;
+  std::map<int, int> cutter_index_;           // T number -> cutters_
+  std::vector<removal::ToolBody> bodies_;     // the shank and holder of each tool's cutter
+  std::size_t samples_ = 0, sample_ = 1;      // poses in all, the next one to move into
+  std::vector<int> blocks_;
+  std::vector<std::uint8_t> kinds_;           // ProbeKind, or kCut
+};
 // 4. The job's stock: its box or cylinder, or its mesh read (closed, turned outward).
 removal::StockShape stock_shape(const io::Job& job);
 // The job's design mesh placed as the job says (rotate, then translate), or none.
@@ -138,7 +169,7 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job);
 // come near the stock (work offsets), or a stock whose estimated memory at this resolution
 // (both engines' with engine: both) exceeds max_memory_mb (0: 75 % of RAM). Returns the
 // estimate (MB).
-double require_cuttable(const io::Job& job, const CutMoves& moves, const removal::StockShape& shape,
+double require_cuttable(const io::Job& job, CutMoves& moves, const removal::StockShape& shape,
                         double resolution_mm, double max_memory_mb);
 // 5. The stock the cut goes into: tri-dexel, or OpenVDB with engine: vdb. merge_flat: the
 // dexel mesher merges flat regions into large triangles (off where two cuts' meshes are

@@ -41,7 +41,8 @@ class DexelStock final : public Stock {
   DexelStock(const StockShape& shape, double spacing_mm);
   ~DexelStock() override;
 
-  CutResult cut(const MoveList& moves, const CutOptions& options) override;
+  using Stock::cut;
+  CutResult cut(MoveSource& moves, const CutOptions& options) override;
   SurfaceMesh surface() const override;
   double volume_mm3() const override;
   std::size_t memory_bytes() const override;

@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -35,6 +36,33 @@ struct Move {
 struct MoveList {
   std::vector<Cutter> cutters;
   std::vector<Move> moves;
+};
+
+// Moves handed over in program order a bounded batch at a time, so that a program's moves
+// are never all held at once (Stock::cut pulls them; issue #22's values that stream).
+class MoveSource {
+ public:
+  virtual ~MoveSource() = default;
+  // Every cutter the moves name (Move::cutter indexes it), known before the first move.
+  virtual const std::vector<Cutter>& cutters() const = 0;
+  // Appends the next moves to `out`: about `wanted` of them (a source may finish what one
+  // block makes, a few more); false, with nothing appended, when none are left.
+  virtual bool next(std::vector<Move>& out, std::size_t wanted) = 0;
+  // The moves in all where known ahead (progress), else 0.
+  virtual std::size_t size_hint() const { return 0; }
+};
+
+// A whole MoveList as a source.
+class ListSource : public MoveSource {
+ public:
+  explicit ListSource(const MoveList& list) : list_(list) {}
+  const std::vector<Cutter>& cutters() const override { return list_.cutters; }
+  bool next(std::vector<Move>& out, std::size_t wanted) override;
+  std::size_t size_hint() const override { return list_.moves.size(); }
+
+ private:
+  const MoveList& list_;
+  std::size_t at_ = 0;
 };
 
 // A five-axis move: the tip goes straight from `move.start_mm` to `move.end_mm` while the tool

@@ -56,8 +56,14 @@ struct SurfaceMesh {
 class Stock {
  public:
   virtual ~Stock() = default;
-  // Removes every non-rapid move's swept volume, in program order; probes rapids.
-  virtual CutResult cut(const MoveList& moves, const CutOptions& options) = 0;
+  // Removes every non-rapid move's swept volume, in program order; probes rapids. Moves
+  // are pulled from the source a batch at a time; their ids (SurfaceMesh::vertex_move,
+  // Collision::move) count on across calls. Collision::move counts from this call's first.
+  virtual CutResult cut(MoveSource& moves, const CutOptions& options) = 0;
+  CutResult cut(const MoveList& moves, const CutOptions& options) {
+    ListSource source(moves);
+    return cut(source, options);
+  }
   virtual SurfaceMesh surface() const = 0;
   virtual double volume_mm3() const = 0;
   virtual std::size_t memory_bytes() const = 0;

@@ -19,7 +19,8 @@ class VdbStock final : public Stock {
   VdbStock(const StockShape& shape, double voxel_mm);
   ~VdbStock() override;
 
-  CutResult cut(const MoveList& moves, const CutOptions& options) override;
+  using Stock::cut;
+  CutResult cut(MoveSource& moves, const CutOptions& options) override;
   SurfaceMesh surface() const override;
   double volume_mm3() const override;
   std::size_t memory_bytes() const override;

@@ -22,7 +22,7 @@ inline constexpr const char* kReportDataMarker = "__VCUT_REPORT_DATA__";
 
 struct ReportPageInput {
   const removal::SurfaceMesh* machined = nullptr;
-  const removal::MoveList* moves = nullptr;       // the cut's moves (vertex_move indexes them)
+  const std::vector<int>* move_blocks = nullptr;  // the block of each move cut (vertex_move indexes it)
   std::vector<double> deviation_mm;               // per machined vertex; empty: no design
   const removal::TriangleMesh* design = nullptr;  // in the workpiece frame; null: none
   Eigen::AlignedBox3d stock_box;
