@@ -214,7 +214,8 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resoluti
     moves.clear();
     moves_into(i, moves);
     if (moves.empty()) continue;
-    const bool rapid = program.blocks[static_cast<std::size_t>(moves.front().block)].kind == kinematics::MotionKind::Rapid;
+    const bool rapid =
+        program.blocks[static_cast<std::size_t>(moves.front().block)].kind == kinematics::MotionKind::Rapid;
     cutting_moves += !rapid;
     const kinematics::ToolPose& from = actual ? run.actual_path[i - 1].pose : run.densified.samples[i - 1].pose;
     const kinematics::ToolPose& to = actual ? run.actual_path[i].pose : run.densified.samples[i].pose;
@@ -245,8 +246,8 @@ void CutMoves::moves_into(std::size_t i, std::vector<removal::Move>& out) const 
   if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) return;
   const std::size_t first_piece = out.size();
   if (turns) {
-    const int pieces = removal::five_axis_pieces(cutters_[static_cast<std::size_t>(m.cutter)], from.axis, to.axis,
-                                                 rotation_bound_mm_);
+    const int pieces =
+        removal::five_axis_pieces(cutters_[static_cast<std::size_t>(m.cutter)], from.axis, to.axis, rotation_bound_mm_);
     removal::append_five_axis_move(out, m, from.axis, to.axis, pieces);
   } else {
     out.push_back(m);

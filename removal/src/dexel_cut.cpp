@@ -420,8 +420,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     window.moves.clear();
     if (last_cutting) window.moves.push_back(*last_cutting);
     const std::size_t off = window.moves.size();
-    window.moves.insert(window.moves.end(), batches.held().begin(),
-                        batches.held().begin() + static_cast<std::ptrdiff_t>(std::min(ahead + 1, batches.held().size())));
+    window.moves.insert(
+        window.moves.end(), batches.held().begin(),
+        batches.held().begin() + static_cast<std::ptrdiff_t>(std::min(ahead + 1, batches.held().size())));
     handover = handovers(window);
     const Move* const batch = window.moves.data() + off;
     detail::remember_moves(batch, count, cutter_base, m.moves);

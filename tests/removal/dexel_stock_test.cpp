@@ -498,6 +498,70 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
   }
 }
 
+// The stock pulls moves a batch at a time (4,096), each batch looking at the cutting moves
+// on either side of it for its hand-over tests. Where the batches fall must not change the
+// cut: a raster of 9,000 moves cut as it is, behind 1, 1,000 or 4,095 rapids far from the
+// stock (moving every batch boundary), and handed over three moves at a time, leaves the
+// same rays bit for bit, each endpoint's move id shifted by the rapids in front.
+TEST(DexelStock, BatchBoundariesDoNotChangeTheCut) {
+  MoveList raster;
+  raster.cutters.push_back(make(CutterType::Ball, 3, 1.5, 12));
+  Eigen::Vector3d p(1, 1, 8.5);
+  for (int row = 0; row < 24; ++row)
+    for (int i = 0; i < 375; ++i) {
+      const Eigen::Vector3d q(row % 2 ? 19.75 - 0.05 * (i + 1) : 1 + 0.05 * (i + 1), 1 + 0.55 * row + 0.0015 * i,
+                              8.5 - 0.002 * i);
+      raster.moves.push_back(line(p, q));
+      p = q;
+    }
+  const BoxShape box{{0, 0, 0}, {20, 15, 10}};
+  DexelStock reference(box, 0.1);
+  reference.cut(raster, {});
+  const std::vector<DexelEndpoint> expected = reference.endpoints();
+  auto same_rays = [&](const DexelStock& stock, int shift) {
+    const std::vector<DexelEndpoint> got = stock.endpoints();
+    ASSERT_EQ(got.size(), expected.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(std::memcmp(got[i].x_mm.data(), expected[i].x_mm.data(), 3 * sizeof(double)), 0) << i;
+      ASSERT_EQ(got[i].move, expected[i].move < 0 ? -1 : expected[i].move + shift) << i;
+    }
+  };
+  for (int rapids : {1, 1000, 4095}) {
+    MoveList shifted;
+    shifted.cutters = raster.cutters;
+    for (int i = 0; i < rapids; ++i) {
+      Move away = line({100, 100, 50}, {101, 100, 50});
+      away.rapid = true;
+      shifted.moves.push_back(away);
+    }
+    shifted.moves.insert(shifted.moves.end(), raster.moves.begin(), raster.moves.end());
+    DexelStock stock(box, 0.1);
+    const CutResult r = stock.cut(shifted, {});
+    EXPECT_TRUE(r.collisions.empty());
+    same_rays(stock, rapids);
+  }
+  // A source that hands over three moves at a time.
+  class Trickle : public MoveSource {
+   public:
+    explicit Trickle(const MoveList& list) : list_(list) {}
+    const std::vector<Cutter>& cutters() const override { return list_.cutters; }
+    bool next(std::vector<Move>& out, std::size_t) override {
+      const std::size_t n = std::min<std::size_t>(3, list_.moves.size() - at_);
+      out.insert(out.end(), list_.moves.begin() + static_cast<std::ptrdiff_t>(at_),
+                 list_.moves.begin() + static_cast<std::ptrdiff_t>(at_ + n));
+      at_ += n;
+      return n > 0;
+    }
+
+   private:
+    const MoveList& list_;
+    std::size_t at_ = 0;
+  } trickle(raster);
+  DexelStock stock(box, 0.1);
+  stock.cut(trickle, {});
+  same_rays(stock, 0);
+}
+
 // The surface from dual contouring: closed and consistently wound (every directed edge
 // meets its reverse exactly once), enclosing the analytic volume, its vertices on the exact
 // surface; the untouched faces merged in both modes, the curved groove only with flat

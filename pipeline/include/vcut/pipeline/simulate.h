@@ -154,11 +154,11 @@ class CutMoves : public removal::MoveSource {
   bool actual_, probes_;
   double rotation_bound_mm_;
   std::vector<removal::Cutter> cutters_;
-  std::map<int, int> cutter_index_;           // T number -> cutters_
-  std::vector<removal::ToolBody> bodies_;     // the shank and holder of each tool's cutter
-  std::size_t samples_ = 0, sample_ = 1;      // poses in all, the next one to move into
+  std::map<int, int> cutter_index_;        // T number -> cutters_
+  std::vector<removal::ToolBody> bodies_;  // the shank and holder of each tool's cutter
+  std::size_t samples_ = 0, sample_ = 1;   // poses in all, the next one to move into
   std::vector<int> blocks_;
-  std::vector<std::uint8_t> kinds_;           // ProbeKind, or kCut
+  std::vector<std::uint8_t> kinds_;  // ProbeKind, or kCut
 };
 // 4. The job's stock: its box or cylinder, or its mesh read (closed, turned outward).
 removal::StockShape stock_shape(const io::Job& job);
@@ -169,8 +169,8 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job);
 // come near the stock (work offsets), or a stock whose estimated memory at this resolution
 // (both engines' with engine: both) exceeds max_memory_mb (0: 75 % of RAM). Returns the
 // estimate (MB).
-double require_cuttable(const io::Job& job, CutMoves& moves, const removal::StockShape& shape,
-                        double resolution_mm, double max_memory_mb);
+double require_cuttable(const io::Job& job, CutMoves& moves, const removal::StockShape& shape, double resolution_mm,
+                        double max_memory_mb);
 // 5. The stock the cut goes into: tri-dexel, or OpenVDB with engine: vdb. merge_flat: the
 // dexel mesher merges flat regions into large triangles (off where two cuts' meshes are
 // compared to a few um: merged blocks cut gentle creases differently in two meshes).
