@@ -134,7 +134,7 @@ void BM_PlanFeed(benchmark::State& state) {
     }
   }
   const FeedSettings settings;
-  for (auto _ : state) benchmark::DoNotOptimize(plan_feed(program, samples, nullptr, nullptr, settings).cycle_time_s);
+  for (auto _ : state) benchmark::DoNotOptimize(plan_feed(program, samples, nullptr, settings).cycle_time_s);
   state.SetItemsProcessed(state.iterations() * static_cast<int64_t>(samples.size()));
 }
 BENCHMARK(BM_PlanFeed)->Unit(benchmark::kMillisecond);

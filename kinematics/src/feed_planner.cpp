@@ -311,12 +311,12 @@ void axis_bounds(const Machine& machine, const AxisValues& q0, const AxisValues&
 
 // The rotary motion of a segment in degrees: the rotary axes' displacement (norm over the
 // axes, LinuxCNC's ABC length) when the machine axes are known, else the tool axis's turn.
-double rotation_deg(const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes, const Machine* machine,
+double rotation_deg(const std::vector<PoseSample>& samples, const std::vector<PoseSample>* axes, const Machine* machine,
                     size_t i, Direction* direction) {
   if (axes && machine) {
     Direction d = Direction::Zero();
-    const AxisValues& q0 = (*axes)[i - 1];
-    const AxisValues& q1 = (*axes)[i];
+    const AxisValues& q0 = (*axes)[i - 1].axes;
+    const AxisValues& q1 = (*axes)[i].axes;
     for (int k = 0; k < std::min(machine->axis_count(), 5); ++k)
       if (machine->axis(k).kind == AxisKind::Rotary && k < q0.size() && k < q1.size())
         d[k] = (q1[k] - q0[k]) * kRadToDeg;
@@ -367,15 +367,15 @@ double arc_curvature_radius(const Block& b) {
 // An axis block's tip speed per unit of F: the tip's length over the length F applies to
 // (FeedSettings::axis_feed); 1 for tool-pose blocks, for rotation-only runs (F in deg/min
 // already) and for the Tip reading.
-double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes, const Machine* machine,
+double axis_feed_scale(const Block& b, const std::vector<PoseSample>* axes, const Machine* machine,
                        const FeedSettings& settings, size_t first, size_t last, const Run& run) {
   if (b.tool_pose || run.unit != Unit::Tip || settings.axis_feed == FeedInterpretation::Tip || !axes || !machine)
     return 1.0;
   // The programmed X Y Z path: the line, or the arc (helix) of the words.
   const double xyz = b.kind == MotionKind::Arc ? arc_length_mm(b) : (b.end_mm - b.start_mm).norm();
   // The rotary axes' motion (deg) over the block.
-  const AxisValues& q0 = (*axes)[first - 1];
-  const AxisValues& q1 = (*axes)[last];
+  const AxisValues& q0 = (*axes)[first - 1].axes;
+  const AxisValues& q1 = (*axes)[last].axes;
   double rotary2 = 0.0;
   for (int k = 0; k < machine->axis_count() && k < q0.size() && k < q1.size(); ++k)
     if (machine->axis(k).kind == AxisKind::Rotary) rotary2 += std::pow((q1[k] - q0[k]) * kRadToDeg, 2);
@@ -385,7 +385,7 @@ double axis_feed_scale(const Block& b, const std::vector<AxisValues>* axes, cons
   return programmed > 0.0 ? run.length / programmed : 1.0;
 }
 
-Run make_run(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
+Run make_run(const Program& program, const std::vector<PoseSample>& samples, const std::vector<PoseSample>* axes,
              const Machine* machine, const FeedSettings& settings, int block, size_t first, size_t last,
              std::vector<double>& seg_len) {
   Run run;
@@ -421,7 +421,7 @@ Run make_run(const Program& program, const std::vector<PoseSample>& samples, con
       }
       run.dir_out = d;
       run.seg_out = ds;
-      if (axes && machine) axis_bounds(*machine, (*axes)[i - 1], (*axes)[i], ds, bounds);
+      if (axes && machine) axis_bounds(*machine, (*axes)[i - 1].axes, (*axes)[i].axes, ds, bounds);
     }
   }
   const bool arc = b.kind == MotionKind::Arc && b.tool_pose && run.unit == Unit::Tip;
@@ -535,16 +535,16 @@ double junction_limit(const Span& p, const Span& n) {
 
 }  // namespace
 
-FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
-                   const Machine* machine, const FeedSettings& settings) {
+FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const Machine* machine,
+                   const FeedSettings& settings) {
+  // The samples' machine axis values count where the machine is known.
+  const std::vector<PoseSample>* const axes = machine != nullptr ? &samples : nullptr;
   FeedPlan plan;
   const size_t n = samples.size();
   plan.t_s.assign(n, 0.0);
   plan.speed_mm_per_s.assign(n, 0.0);
   plan.block_time_s.assign(program.blocks.size(), 0.0);
   if (n < 2) return plan;
-  assert(!axes || axes->size() == n);
-  if (axes && axes->size() != n) axes = nullptr;
 
   // 1. Runs of consecutive samples of one block.
   std::vector<double> seg_len(n, 0.0);
@@ -623,8 +623,10 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
 
   // 5. Time stamps: the inverse of each span's s(t) at its samples' arc lengths.
   double t_span = 0.0, s_span = 0.0;
-  plan.path_s.assign(n, 0.0);
-  plan.spans.reserve(K);
+  if (settings.timing) {
+    plan.path_s.assign(n, 0.0);
+    plan.spans.reserve(K);
+  }
   plan.speed_mm_per_s[0] = spans.front().unit == Unit::Tip ? speed[0] : 0.0;
   for (size_t k = 0; k < K; ++k) {
     const Span& s = spans[k];
@@ -647,20 +649,22 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
       }
       plan.t_s[i] = t_span + t;
       plan.speed_mm_per_s[i] = s.unit == Unit::Tip ? v : 0.0;
-      plan.path_s[i] = s_span + arc;
+      if (settings.timing) plan.path_s[i] = s_span + arc;
     }
+    const double t0_s = t_span, s0 = s_span;
+    t_span += p.duration;
+    s_span += arc;
+    if (!settings.timing) continue;
     SpanTiming timing;
     timing.first_sample = first;
     timing.last_sample = last;
-    timing.t0_s = t_span;
+    timing.t0_s = t0_s;
     timing.duration_s = p.duration;
     for (int q = 0; q < p.count; ++q) {
       const Phase& ph = p.phase[static_cast<size_t>(q)];
-      timing.phases.push_back({t_span + ph.t0, s_span + ph.s0, ph.v0, ph.a0, ph.jerk, ph.duration});
+      timing.phases.push_back({t0_s + ph.t0, s0 + ph.s0, ph.v0, ph.a0, ph.jerk, ph.duration});
     }
     plan.spans.push_back(std::move(timing));
-    t_span += p.duration;
-    s_span += arc;
   }
   if (skipped)  // they take no time
     for (size_t i = 1; i < n; ++i)

@@ -68,10 +68,9 @@ PoseChain run_pose_chain(const Program& program, const Machine& machine, const s
   const auto& samples = run.densified.samples;
 
   // Time.
-  std::vector<AxisValues> axes;
-  axes.reserve(samples.size());
-  for (const auto& s : samples) axes.push_back(s.axes);
-  run.feed = plan_feed(program, samples, &axes, &machine, settings.feed);
+  FeedSettings feed = settings.feed;
+  feed.timing = settings.servo.has_value();  // the periods between the samples
+  run.feed = plan_feed(program, samples, &machine, feed);
 
   run.tool_length_mm.resize(samples.size(), 0.0);
   for (size_t i = 0; i < samples.size(); ++i) {
@@ -84,8 +83,10 @@ PoseChain run_pose_chain(const Program& program, const Machine& machine, const s
   // Actual poses: servo lag on the axes (every interpolation period), then the machine's
   // geometric errors.
   const Geometry geometry = settings.geometry;
-  run.block_contour.assign(program.blocks.size(), {});
-  std::vector<double> block_sum2(program.blocks.size(), 0.0);
+  // Per block only where there are actual poses.
+  const bool actual = (settings.servo && samples.size() > 1) || (geometry == Geometry::Actual && !samples.empty());
+  if (actual) run.block_contour.assign(program.blocks.size(), {});
+  std::vector<double> block_sum2(actual ? program.blocks.size() : 0, 0.0);
   size_t feed_count = 0;
   double sum2 = 0.0;
   // One contour error (mm) of a period (servo) or sample (errors only) into the figures; a

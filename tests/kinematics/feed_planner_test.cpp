@@ -83,7 +83,7 @@ TEST(FeedScurve, RestToRestWithAllLimitsReached) {
   const double L = 100, v = 50, a = 1000, j = 40000;  // a^2/j = 25 <= v; v Ta = 3.75 <= L
   const Program p = polyline({{0, 0, 0}, {60, 80, 0}}, v * 60);
   const std::vector<PoseSample> s = straight_samples(p, 200);
-  const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, s, nullptr, limits(a, j));
   const double T = full_limits_time(L, v, a, j);
   expect_relative(plan.cycle_time_s, T, kClosedForm, "cycle time");
   expect_relative(plan.block_time_s[0], T, kClosedForm, "block time");
@@ -103,7 +103,7 @@ TEST(FeedScurve, AccelerationLimitNotReached) {
   // T = L/v + Ta = L/v + 2 sqrt(v/j).
   const double L = 100, v = 50, a = 1000, j = 10000;  // a^2/j = 100 > v
   const Program p = polyline({{0, 0, 0}, {0, 0, -100}}, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, L / v + 2 * std::sqrt(v / j), kClosedForm, "cycle time");
   expect_relative(plan.speed_mm_per_s[50], v, kClosedForm, "cruise");
 }
@@ -116,7 +116,7 @@ TEST(FeedScurve, CruiseNotReachedAccelerationReached) {
   ASSERT_GE(vp, a * a / j);
   ASSERT_LT(vp, v);
   const Program p = polyline({{0, 0, 0}, {2, 0, 0}}, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, 2 * (vp / a + a / j), kClosedForm, "cycle time");
   expect_relative(plan.speed_mm_per_s[50], vp, kClosedForm, "peak at the midpoint");
 }
@@ -128,7 +128,7 @@ TEST(FeedScurve, NeitherCruiseNorAccelerationReached) {
   const double tau = std::cbrt(L / (2 * j));
   ASSERT_LT(j * tau, a);  // the acceleration peak stays below a
   const Program p = polyline({{0, 0, 0}, {0, 0.3, 0.4}}, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 100), nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, 4 * tau, kClosedForm, "cycle time");
   expect_relative(plan.speed_mm_per_s[50], j * tau * tau, kClosedForm, "peak at the midpoint");
 }
@@ -166,7 +166,7 @@ TEST(FeedScurve, ContinuousAndWithinLimits) {
   const double L = 20, v = 50, a = 1000, j = 40000;
   const Program p = polyline({{0, 0, 0}, {20, 0, 0}}, v * 60);
   const std::vector<PoseSample> samples = straight_samples(p, 2000);
-  const FeedPlan plan = plan_feed(p, samples, nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, samples, nullptr, limits(a, j));
   std::vector<double> s;
   for (const PoseSample& x : samples) s.push_back(x.pose.tip_mm.x());
   const Differences d = differences(s, plan, j);
@@ -206,7 +206,7 @@ TEST(FeedScurve, RandomProgramsStayWithinLimits) {
     const std::vector<PoseSample> samples = straight_samples(p, 40);
     FeedSettings fs = limits(a, j);
     fs.lookahead_blocks = 1 + trial % 7;  // windows much shorter than the program too
-    const FeedPlan plan = plan_feed(p, samples, nullptr, nullptr, fs);
+    const FeedPlan plan = plan_feed(p, samples, nullptr, fs);
     std::vector<double> s = {0};
     for (size_t i = 1; i < samples.size(); ++i)
       s.push_back(s.back() + (samples[i].pose.tip_mm - samples[i - 1].pose.tip_mm).norm());
@@ -250,7 +250,7 @@ TEST(FeedSeed000, WorkedCaseMatchesThePapersTimeStamps) {
   const Eigen::Vector3d n7(-1320, -1320, 1000), n8(-1100, -1100, 800);
   const Program p = polyline({n7, n8}, 1000);
   const std::vector<PoseSample> samples = straight_samples(p, 100);
-  const FeedPlan plan = plan_feed(p, samples, nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, samples, nullptr, limits(a, j));
   const double L = (n8 - n7).norm();
   const double T1 = F / a, T3 = F / a, S1 = F / 2 * T1, S3 = F / 2 * T3;
   const double T2 = (L - S1 - S3) / F;
@@ -272,7 +272,7 @@ TEST(FeedJunction, ExactStopStopsAtTheJunction) {
   const double v = 50, a = 1000, j = 40000;
   Program p = polyline({{0, 0, 0}, {50, 0, 0}, {100, 0, 0}}, v * 60);
   p.blocks[0].exact_stop = true;  // G9
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, limits(a, j));
   EXPECT_EQ(plan.speed_mm_per_s[10], 0.0);
   expect_relative(plan.block_time_s[0], full_limits_time(50, v, a, j), kClosedForm, "first block");
   expect_relative(plan.block_time_s[1], full_limits_time(50, v, a, j), kClosedForm, "second block");
@@ -282,7 +282,7 @@ TEST(FeedJunction, ExactStopStopsAtTheJunction) {
 TEST(FeedJunction, CollinearBlocksKeepFullSpeed) {
   const double v = 50, a = 1000, j = 40000;
   const Program p = polyline({{0, 0, 0}, {50, 0, 0}, {100, 0, 0}}, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, limits(a, j));
   expect_relative(plan.speed_mm_per_s[10], v, kClosedForm, "junction speed");
   expect_relative(plan.cycle_time_s, full_limits_time(100, v, a, j), kClosedForm, "one S-curve over both");
   expect_relative(plan.block_time_s[0], plan.cycle_time_s / 2, kClosedForm, "symmetric halves");
@@ -296,17 +296,17 @@ TEST(FeedJunction, RightAngleCornerFollowsTheBlendRule) {
   Program p = polyline({{0, 0, 0}, {100, 0, 0}, {100, 100, 0}}, v * 60);
   p.blocks[0].blend_tolerance_mm = tol;  // G64 P0.05
   const double expected = std::sqrt(a * tol / (std::sqrt(2.0) - 1));
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 20), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 20), nullptr, limits(a, j));
   expect_relative(plan.speed_mm_per_s[20], expected, kClosedForm, "corner speed");
 
   // Without P the settings' default tolerance applies; P0 stops.
   p.blocks[0].blend_tolerance_mm = -1;
   FeedSettings fs = limits(a, j);
   fs.default_blend_tolerance_mm = 0.01;
-  expect_relative(plan_feed(p, straight_samples(p, 20), nullptr, nullptr, fs).speed_mm_per_s[20],
+  expect_relative(plan_feed(p, straight_samples(p, 20), nullptr, fs).speed_mm_per_s[20],
                   std::sqrt(a * 0.01 / (std::sqrt(2.0) - 1)), kClosedForm, "default tolerance");
   p.blocks[0].blend_tolerance_mm = 0;
-  EXPECT_EQ(plan_feed(p, straight_samples(p, 20), nullptr, nullptr, fs).speed_mm_per_s[20], 0.0);
+  EXPECT_EQ(plan_feed(p, straight_samples(p, 20), nullptr, fs).speed_mm_per_s[20], 0.0);
 }
 
 // A three-axis machine built in code: X Y Z stacked on the frame, limits as given.
@@ -326,16 +326,16 @@ Machine xyz_machine(double vx, double vy, double ay) {
   return Machine(spec);
 }
 
-std::vector<AxisValues> axes_of(const std::vector<PoseSample>& s) {
-  std::vector<AxisValues> q;
-  for (const PoseSample& x : s) q.push_back(AxisValues(x.pose.tip_mm));  // X Y Z = tip
-  return q;
+// The samples with their machine axes X Y Z = the tip.
+std::vector<PoseSample> with_axes(std::vector<PoseSample> s) {
+  for (PoseSample& x : s) x.axes = AxisValues(x.pose.tip_mm);
+  return s;
 }
 
 TEST(FeedInverseTime, BlockTakesOneOverFMinutes) {
   Program p = polyline({{0, 0, 0}, {30, 40, 0}}, 2);  // G93 F2: half a minute
   p.blocks[0].feed_mode = FeedMode::InverseTime;
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 50), nullptr, nullptr, limits(500, 50000));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 50), nullptr, limits(500, 50000));
   expect_relative(plan.block_time_s[0], 30.0, kClosedForm, "G93 F2");
 
   // F600 asks for 0.1 s, beyond an X axis of 10 mm/s: the block runs rest to rest at the
@@ -343,10 +343,9 @@ TEST(FeedInverseTime, BlockTakesOneOverFMinutes) {
   p = polyline({{0, 0, 0}, {50, 0, 0}}, 600);
   p.blocks[0].feed_mode = FeedMode::InverseTime;
   const Machine m = xyz_machine(10.0, 0.0, 0.0);
-  const std::vector<PoseSample> s = straight_samples(p, 50);
-  const std::vector<AxisValues> q = axes_of(s);
+  const std::vector<PoseSample> s = with_axes(straight_samples(p, 50));
   const double a = 50, j = 5000;  // a^2/j = 0.5 < v: all limits reached
-  const FeedPlan limited = plan_feed(p, s, &q, &m, limits(a, j));
+  const FeedPlan limited = plan_feed(p, s, &m, limits(a, j));
   expect_relative(limited.block_time_s[0], full_limits_time(50, 10, a, j), kClosedForm, "limited by X");
   EXPECT_EQ(limited.axis_limited_samples.size(), 50u);
 }
@@ -360,9 +359,8 @@ TEST(FeedAxisLimits, SlowAxisBoundsThePathSpeedByItsRatio) {
   Program p = polyline({{0, 0, 0}, {30, 40, 0}, {130, 40, 0}}, 1200);
   p.blocks[0].exact_stop = true;
   const Machine m = xyz_machine(0.0, 5.0, 200.0);
-  const std::vector<PoseSample> s = straight_samples(p, 25);
-  const std::vector<AxisValues> q = axes_of(s);
-  const FeedPlan plan = plan_feed(p, s, &q, &m, limits(a, j));
+  const std::vector<PoseSample> s = with_axes(straight_samples(p, 25));
+  const FeedPlan plan = plan_feed(p, s, &m, limits(a, j));
   expect_relative(plan.block_time_s[0], full_limits_time(50, 5 / 0.8, 200 / 0.8, j), kClosedForm, "Y-limited block");
   expect_relative(plan.block_time_s[1], full_limits_time(100, 20, a, j), kClosedForm, "free block");
   std::vector<int> expected;
@@ -378,16 +376,15 @@ TEST(FeedAxisLimits, RapidsRunAtTheAxesSpeed) {
   Program p = polyline({{0, 0, 0}, {100, 100, 0}}, 0);
   p.blocks[0].kind = MotionKind::Rapid;
   const Machine m = xyz_machine(100.0, 50.0, 0.0);
-  const std::vector<PoseSample> s = straight_samples(p, 10);
-  const std::vector<AxisValues> q = axes_of(s);
+  const std::vector<PoseSample> s = with_axes(straight_samples(p, 10));
   const double L = 100 * std::sqrt(2.0);
   FeedSettings fs = limits(a, j);
-  expect_relative(plan_feed(p, s, &q, &m, fs).cycle_time_s, full_limits_time(L, 50 * std::sqrt(2.0), a, j), kClosedForm,
+  expect_relative(plan_feed(p, s, &m, fs).cycle_time_s, full_limits_time(L, 50 * std::sqrt(2.0), a, j), kClosedForm,
                   "axis speed");
   fs.rapid_mm_per_min = 3000;
-  expect_relative(plan_feed(p, s, nullptr, nullptr, fs).cycle_time_s, full_limits_time(L, 50, a, j), kClosedForm,
+  expect_relative(plan_feed(p, s, nullptr, fs).cycle_time_s, full_limits_time(L, 50, a, j), kClosedForm,
                   "settings' rapid");
-  EXPECT_TRUE(plan_feed(p, s, &q, &m, fs).axis_limited_samples.empty());  // rapids are axis-speed by definition
+  EXPECT_TRUE(plan_feed(p, s, &m, fs).axis_limited_samples.empty());  // rapids are axis-speed by definition
 }
 
 TEST(FeedRotation, PureRotationIsTimedInDegreesPerMinute) {
@@ -403,7 +400,7 @@ TEST(FeedRotation, PureRotationIsTimedInDegreesPerMinute) {
     const double phi = k * M_PI / 180;
     s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(std::sin(phi), 0, std::cos(phi)), k == 0 ? -1 : 0));
   }
-  const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, s, nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, 9 + 2 * std::sqrt(10 / j), kClosedForm, "rotation time");
   expect_relative(plan.t_s[45], plan.cycle_time_s / 2, kClosedForm, "symmetric");
   for (double v : plan.speed_mm_per_s) EXPECT_EQ(v, 0.0);  // the tip does not move
@@ -431,15 +428,13 @@ TEST(FeedRotation, RotaryAxisLimitBoundsARotation) {
   p.files = {"r.ngc"};
   p.blocks.push_back(line(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 600));
   std::vector<PoseSample> s;
-  std::vector<AxisValues> q;
   for (int k = 0; k <= 90; ++k) {
     const double phi = k * M_PI / 180;
     s.push_back(sample(Eigen::Vector3d::Zero(), Eigen::Vector3d(0, -std::sin(phi), std::cos(phi)), k == 0 ? -1 : 0));
-    AxisValues v(4);
-    v << 0, 0, 0, phi;
-    q.push_back(v);
+    s.back().axes = AxisValues(4);
+    s.back().axes << 0, 0, 0, phi;
   }
-  const FeedPlan plan = plan_feed(p, s, &q, &m, limits(a, j));
+  const FeedPlan plan = plan_feed(p, s, &m, limits(a, j));
   expect_relative(plan.cycle_time_s, 90.0 / 5 + 2 * std::sqrt(5 / j), kClosedForm, "A-limited rotation");
   EXPECT_EQ(plan.axis_limited_samples.size(), 90u);
 }
@@ -463,7 +458,7 @@ TEST(FeedArc, CentripetalAccelerationBoundsTheSpeed) {
     s.push_back(sample({R * std::cos(phi), R * std::sin(phi), 0}, Eigen::Vector3d::UnitZ(), k == 0 ? -1 : 0));
     if (k > 0) L += (s[k].pose.tip_mm - s[k - 1].pose.tip_mm).norm();
   }
-  const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, s, nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, full_limits_time(L, std::sqrt(a * R), a, j), kClosedForm, "arc");
 }
 
@@ -474,7 +469,7 @@ TEST(FeedLookahead, ShortCollinearBlocksReachCruise) {
   std::vector<Eigen::Vector3d> pts;
   for (int k = 0; k <= 2000; ++k) pts.push_back(Eigen::Vector3d(0.05 * k, 0, 0));
   const Program p = polyline(pts, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 2), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 2), nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, full_limits_time(100, v, a, j), kClosedForm, "as one block");
   expect_relative(plan.speed_mm_per_s[2000], v, kClosedForm, "cruise in the middle");
 }
@@ -490,7 +485,7 @@ TEST(FeedLookahead, GentleCornersDoNotSlowThePath) {
     pts.push_back(pts.back() + 0.2 * Eigen::Vector3d(std::cos(h), std::sin(h), 0));
   }
   const Program p = polyline(pts, v * 60);
-  const FeedPlan plan = plan_feed(p, straight_samples(p, 1), nullptr, nullptr, limits(a, j));
+  const FeedPlan plan = plan_feed(p, straight_samples(p, 1), nullptr, limits(a, j));
   expect_relative(plan.cycle_time_s, full_limits_time(100, v, a, j), kClosedForm, "as one block");
 }
 
@@ -513,7 +508,7 @@ TEST(FeedLookahead, LongerWindowsAreNeverSlower) {
   for (int w : {1, 2, 4, 16, 64, 400, 100000}) {
     FeedSettings fs = limits(a, j);
     fs.lookahead_blocks = w;
-    const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, fs);
+    const FeedPlan plan = plan_feed(p, s, nullptr, fs);
     if (!times.empty()) {
       EXPECT_LE(plan.cycle_time_s, times.back() * (1 + kClosedForm)) << "window " << w;
     }
@@ -544,7 +539,7 @@ TEST(PathCursor, FollowsTheSCurveBetweenSamples) {
   FeedSettings settings;
   settings.path_acceleration_mm_per_s2 = 1000.0;
   settings.path_jerk_mm_per_s3 = 1e5;
-  const FeedPlan plan = plan_feed(p, s, nullptr, nullptr, settings);
+  const FeedPlan plan = plan_feed(p, s, nullptr, settings);
   PathCursor cursor(plan);
   const auto s_at = [&](double t) {
     const PathPosition at = cursor.at(t);

@@ -45,9 +45,7 @@ struct Timed {
     DensifyMachine dm;
     dm.machine = &m;
     densified = densify(program, settings, dm);
-    std::vector<AxisValues> axes;
-    for (const PoseSample& s : densified.samples) axes.push_back(s.axes);
-    plan = plan_feed(program, densified.samples, &axes, &m, FeedSettings{});
+    plan = plan_feed(program, densified.samples, &m, FeedSettings{});
     lengths.assign(densified.samples.size(), 0.0);
     input.program = &program;
     input.samples = &densified.samples;

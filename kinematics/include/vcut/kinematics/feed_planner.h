@@ -28,6 +28,9 @@ struct FeedSettings {
   // stays the tip's arc length; the block's cruise is set so that it lasts L / F, L the
   // length F applies to.
   FeedInterpretation axis_feed = FeedInterpretation::LinuxCnc;
+  // Keep FeedPlan::path_s and spans, the timing between the samples that the interpolator's
+  // periods need (servo); without it the plan holds the samples' times and speeds only.
+  bool timing = true;
 };
 
 // One piece of the path parameter's motion at constant jerk: s(tau) = s0 + v0 tau + a0 tau^2/2
@@ -54,7 +57,8 @@ struct FeedPlan {
   std::vector<int> axis_limited_samples;
   // The timing between the samples: the path parameter at each sample (cumulative over the
   // program, mm or deg) and each span's jerk phases, so that the path can be evaluated at any
-  // instant (the interpolator's periods), not only at the samples.
+  // instant (the interpolator's periods), not only at the samples. Empty without
+  // FeedSettings::timing.
   std::vector<double> path_s;
   std::vector<SpanTiming> spans;
 };
@@ -78,12 +82,12 @@ class PathCursor {
   double last_t_s_ = 0.0;
 };
 
-// `samples` from densify(); `axes` (may be null) the machine axis values of each sample (same
-// length) and `machine` (may be null) their limits: then every segment's path speed is also
-// bounded so that each axis stays within its velocity, acceleration and jerk. Blocks whose
+// `samples` from densify(); with a `machine` (may be null) their axis values and its limits
+// count: every segment's path speed is then also bounded so that each axis stays within its
+// velocity, acceleration and jerk. Blocks whose
 // tip stands still while the tool turns are timed on the rotary motion (LinuxCNC: F in
 // deg/min; the path limits then read deg/s^2 and deg/s^3); their tip speed is 0.
-FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const std::vector<AxisValues>* axes,
-                   const Machine* machine, const FeedSettings& settings);
+FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const Machine* machine,
+                   const FeedSettings& settings);
 
 }  // namespace vcut::kinematics
