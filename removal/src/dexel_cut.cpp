@@ -282,7 +282,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   const std::size_t total = source.size_hint();
   const std::vector<Cutter>& cutters = source.cutters();
   // Rays' endpoints hold move ids that count across calls: remember every move.
-  const int id_base = static_cast<int>(m.moves.size());
+  const int id_base = m.moves.next_id();
   const int cutter_base = detail::remember_cutters(cutters, m.cutters);
   // Per rapid: the longest overlap with material seen along each family.
   std::map<int, std::array<Probe, 3>> probes;
@@ -425,7 +425,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         batches.held().begin() + static_cast<std::ptrdiff_t>(std::min(ahead + 1, batches.held().size())));
     handover = handovers(window);
     const Move* const batch = window.moves.data() + off;
-    detail::remember_moves(batch, count, cutter_base, m.moves);
+    m.moves.append(batch, count, cutter_base);
     std::vector<std::optional<detail::RaySweep>> sweeps(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 256), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i)
@@ -617,6 +617,20 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
       if (!batch[i].rapid) last_cutting = batch[i];
     batches.drop(count);
     first = last;
+    // Moves no endpoint names any more leave the record (the mesher projects onto the moves
+    // the endpoints name): it then grows with the machined surface, not with the program.
+    if (m.moves.kept() >= 2 * m.kept_after_pruning + kPruneMoves) {
+      std::vector<bool> named(static_cast<std::size_t>(m.moves.next_id()), false);
+      for (const Family& f : m.families)
+        for (const SegmentList& ray : f.rays)
+          for (std::uint32_t k = 0; k < ray.size(); ++k) {
+            const DexelSegment& seg = ray.data()[k];
+            if (seg.lo_move != kNoMove) named[static_cast<std::size_t>(seg.lo_move)] = true;
+            if (seg.hi_move != kNoMove) named[static_cast<std::size_t>(seg.hi_move)] = true;
+          }
+      m.moves.keep_only(named);
+      m.kept_after_pruning = m.moves.kept();
+    }
     if (options.progress) options.progress(last, std::max(total, last));
   }
   double removed = 0.0;

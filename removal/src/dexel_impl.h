@@ -18,6 +18,7 @@
 
 #include "vcut/removal/compare.h"
 #include "vcut/removal/dexel_stock.h"
+#include "surface_projection.h"
 
 namespace vcut::removal {
 namespace dexel {
@@ -32,6 +33,8 @@ constexpr int kNoMove = -1;
 constexpr int kTileU = 512, kTileW = 16;
 static_assert(kTileU % 64 == 0, "a tile row's occupied rays are whole 64-bit words");
 constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
+// The move record is pruned when it has grown by this many moves and doubled since the last time.
+constexpr std::size_t kPruneMoves = 65536;
 // Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.
 constexpr float kMinSegment_mm = 1e-6f;
 
@@ -158,7 +161,8 @@ struct DexelStock::Impl {
   Eigen::AlignedBox3d shape_bounds;
   std::function<double(const Eigen::Vector3d&)> initial_distance;
   std::shared_ptr<const DesignDistance> initial_mesh;
-  std::vector<Move> moves;
+  detail::MoveRecord moves;  // the moves some ray endpoint names, by id
+  std::size_t kept_after_pruning = 0;
   std::vector<Cutter> cutters;
   bool flat_merging = true;
 

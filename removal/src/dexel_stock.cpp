@@ -154,7 +154,7 @@ double DexelStock::volume_mm3() const {
 }
 
 std::size_t DexelStock::memory_bytes() const {
-  std::size_t bytes = sizeof(Impl) + impl_->moves.size() * sizeof(Move);
+  std::size_t bytes = sizeof(Impl) + impl_->moves.memory_bytes();
   for (const Family& f : impl_->families) {
     bytes += f.rays.size() * sizeof(SegmentList);
     for (const SegmentList& ray : f.rays) bytes += ray.heap_bytes();

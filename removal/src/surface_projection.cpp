@@ -3,6 +3,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cassert>
 #include <cmath>
 
 #include "vcut/removal/compare.h"
@@ -31,12 +33,34 @@ int remember_cutters(const std::vector<Cutter>& from, std::vector<Cutter>& cutte
   return cutter_base;
 }
 
-void remember_moves(const Move* first, std::size_t count, int cutter_base, std::vector<Move>& moves) {
+void MoveRecord::append(const Move* first, std::size_t count, int cutter_base) {
   for (std::size_t i = 0; i < count; ++i) {
     Move move = first[i];
     move.cutter += cutter_base;
-    moves.push_back(move);
+    ids_.push_back(next_id_++);
+    moves_.push_back(move);
   }
+}
+
+const Move& MoveRecord::at(int id) const {
+  const auto it = std::lower_bound(ids_.begin(), ids_.end(), id);
+  assert(it != ids_.end() && *it == id);
+  return moves_[static_cast<std::size_t>(it - ids_.begin())];
+}
+
+void MoveRecord::keep_only(const std::vector<bool>& named) {
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < ids_.size(); ++i) {
+    const auto id = static_cast<std::size_t>(ids_[i]);
+    if (id >= named.size() || !named[id]) continue;
+    ids_[kept] = ids_[i];
+    moves_[kept] = moves_[i];
+    ++kept;
+  }
+  ids_.resize(kept);
+  moves_.resize(kept);
+  ids_.shrink_to_fit();
+  moves_.shrink_to_fit();
 }
 
 SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const std::vector<openvdb::Vec3I>& triangles,
@@ -54,7 +78,7 @@ SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const 
   return mesh;
 }
 
-void project_onto_machined_surface(const std::vector<Move>& moves, const std::vector<Cutter>& cutters,
+void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cutter>& cutters,
                                    const std::function<double(const Eigen::Vector3d&)>& initial,
                                    const std::vector<std::vector<int>>& nearby, double max_travel_mm,
                                    SurfaceMesh& mesh) {
@@ -65,7 +89,7 @@ void project_onto_machined_surface(const std::vector<Move>& moves, const std::ve
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
       sweeps.clear();
       for (int id : nearby[v]) {
-        const Move& move = moves[static_cast<std::size_t>(id)];
+        const Move& move = moves.at(id);
         sweeps.emplace_back(cutters[static_cast<std::size_t>(move.cutter)], move);
       }
       int active = -1;

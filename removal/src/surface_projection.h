@@ -13,11 +13,29 @@
 
 namespace vcut::removal::detail {
 
-// An engine's record of every move cut so far, whose indices are the move ids the stock
-// stores: a cut's cutters are appended first (returns the index of the first), then its
-// moves a batch at a time (cutter indices shifted by that).
+// An engine's record of every move cut so far, by id (the ids the stock stores; they count
+// across cuts). A cut's cutters are appended first (remember_cutters returns the index of
+// the first), then its moves a batch at a time (cutter indices shifted by that). Only moves
+// the stock still names need their geometry, for the mesher's projection: a stock may drop
+// the others (keep_only), and the record then grows with the machined surface, not with
+// the program.
 int remember_cutters(const std::vector<Cutter>& from, std::vector<Cutter>& cutters);
-void remember_moves(const Move* first, std::size_t count, int cutter_base, std::vector<Move>& moves);
+class MoveRecord {
+ public:
+  int next_id() const { return next_id_; }
+  void append(const Move* first, std::size_t count, int cutter_base);
+  // The move with this id, which must be kept.
+  const Move& at(int id) const;
+  // Keeps the moves whose ids are marked (named[id]) and drops the rest.
+  void keep_only(const std::vector<bool>& named);
+  std::size_t kept() const { return moves_.size(); }
+  std::size_t memory_bytes() const { return ids_.capacity() * sizeof(int) + moves_.capacity() * sizeof(Move); }
+
+ private:
+  std::vector<int> ids_;  // ascending, of the moves kept
+  std::vector<Move> moves_;
+  int next_id_ = 0;
+};
 
 // volumeToMesh's polygons as an outward, counter-clockwise triangle mesh (OpenVDB winds
 // level-set polygons clockwise seen from outside; quads are split in two).
@@ -26,10 +44,10 @@ SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const 
 
 // Moves every vertex onto the exact machined surface F(x) = max(initial(x), -s_m(x)) = 0
 // by Newton steps, where the moves m are `nearby[v]` (those that shaped the stock around
-// vertex v, indices into `moves`); each vertex takes the id of the move whose sweep is its
+// vertex v, ids in `moves`); each vertex takes the id of the move whose sweep is its
 // surface (-1: the initial stock). A vertex that would travel farther than max_travel_mm
 // found no surface nearby and stays where it is.
-void project_onto_machined_surface(const std::vector<Move>& moves, const std::vector<Cutter>& cutters,
+void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cutter>& cutters,
                                    const std::function<double(const Eigen::Vector3d&)>& initial_distance,
                                    const std::vector<std::vector<int>>& nearby, double max_travel_mm,
                                    SurfaceMesh& mesh);

@@ -132,7 +132,7 @@ struct VdbStock::Impl {
   // every move cut so far (the move ids in block_ids index `moves`).
   std::function<double(const Eigen::Vector3d&)> initial_distance;
   std::shared_ptr<const DesignDistance> initial_mesh;
-  std::vector<Move> moves;
+  detail::MoveRecord moves;
   std::vector<Cutter> cutters;
 
   std::int64_t leaf_index(int i, int j, int k) const {
@@ -490,7 +490,7 @@ CutResult VdbStock::cut(MoveSource& source, const CutOptions& options) {
   std::map<int, Collision> collisions;
   double removed_voxels = 0.0;
   // Move ids count across calls: remember every move with its cutter.
-  const int id_base = static_cast<int>(m.moves.size());
+  const int id_base = m.moves.next_id();
   const int cutter_base = detail::remember_cutters(cutters, m.cutters);
   // Moves that follow on from the cutter's previous cutting move (rapids and probes cut
   // nothing in between): where their start cutter is the nearest, the previous move has
@@ -504,7 +504,7 @@ CutResult VdbStock::cut(MoveSource& source, const CutOptions& options) {
     batch.assign(batches.held().begin(), batches.held().begin() + static_cast<std::ptrdiff_t>(count));
     batches.drop(count);
     const std::size_t last = first + count;
-    detail::remember_moves(batch.data(), batch.size(), cutter_base, m.moves);
+    m.moves.append(batch.data(), batch.size(), cutter_base);
     std::vector<std::uint8_t> batch_follows(batch.size(), 0);
     for (std::size_t i = 0; i < batch.size(); ++i) {
       const Move& move = batch[i];
