@@ -52,6 +52,7 @@ bench: build
 	scripts/bench-demo $(BUILD)/cli/vcut
 	scripts/bench-peers $(BUILD)/cli/vcut
 	scripts/bench-features $(BUILD)/cli/vcut
+	scripts/bench-memory $(BUILD)/cli/vcut
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz $(BUILD).configure.log $(BUILD_SAN).configure.log

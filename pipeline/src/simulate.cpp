@@ -326,6 +326,88 @@ std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::St
   return dexel;
 }
 
+DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceMesh& machined,
+                                     const removal::TriangleMesh& design, const removal::Stock& stock,
+                                     const Eigen::AlignedBox3d& stock_box, double resolution_mm,
+                                     const kinematics::Program& program, const std::vector<int>& move_blocks) {
+  const double v = resolution_mm;
+  DesignComparison out;
+  auto block_of = [&](int move) -> const kinematics::Block& {
+    return program.blocks[static_cast<std::size_t>(move_blocks[static_cast<std::size_t>(move)])];
+  };
+  const removal::DesignDistance distance(design);
+  if (!distance.closed())
+    out.warnings.push_back(io::display_name(job.design->file, job.file) +
+                           ": design mesh is not closed; compared anyway (signs near its holes may be wrong)");
+  removal::CompareSettings settings{job.gouge_tolerance_mm, job.excess_tolerance_mm};
+  removal::Comparison cmp = removal::compare(machined, distance, settings);
+  out.max_gouge_mm = cmp.max_gouge_mm;
+  out.max_excess_mm = cmp.max_excess_mm;
+  if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
+    // Every dexel endpoint against the design, exactly: the summary's figures then do not
+    // depend on meshing (the mesh's regions still give areas and outlines).
+    const removal::EndpointDeviation found =
+        removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
+    EndpointCheck& e = out.endpoints;
+    e.done = true;
+    e.points = found.points;
+    e.max_gouge_mm = found.max_gouge_mm;
+    e.max_excess_mm = found.max_excess_mm;
+    e.gouge_points = found.gouge_points;
+    e.excess_points = found.excess_points;
+    if (found.max_gouge_mm > 0.0) {
+      e.deepest_mm = found.deepest_mm;
+      if (found.deepest_move >= 0) e.deepest_line = program.where(block_of(found.deepest_move).source);
+    }
+    out.max_gouge_mm = e.max_gouge_mm;
+    out.max_excess_mm = e.max_excess_mm;
+  }
+  auto record = [&](const removal::Region& r) {
+    RegionRecord rec;
+    rec.depth_mm = r.depth_mm;
+    rec.area_mm2 = r.area_mm2;
+    rec.centroid_mm = r.centroid_mm;
+    rec.deepest_mm = r.deepest_mm;
+    std::vector<kinematics::SourceRef> refs;
+    std::set<int> tools;
+    for (int move : r.moves) {
+      if (move < 0) {
+        rec.initial_stock = true;
+        continue;
+      }
+      const auto& b = block_of(move);
+      refs.push_back(b.source);
+      tools.insert(b.tool);
+    }
+    rec.spans = merge_lines(program, std::move(refs));
+    for (const kinematics::SourceSpan& s : rec.spans) rec.lines.push_back(program.where(s));
+    rec.tools.assign(tools.begin(), tools.end());
+    return rec;
+  };
+  for (const auto& r : cmp.gouges) out.gouges.push_back(record(r));
+  for (const auto& r : cmp.excess) out.excess.push_back(record(r));
+  // Histogram: 41 bins over +-4 tolerances plus two overflow bins, by vertex and area.
+  const double span = 4.0 * std::max({job.gouge_tolerance_mm, job.excess_tolerance_mm, v});
+  const int bins = 41;
+  out.histogram_edges_mm.push_back(-std::numeric_limits<double>::infinity());
+  for (int i = 0; i <= bins; ++i) out.histogram_edges_mm.push_back(-span + 2.0 * span * i / bins);
+  out.histogram_edges_mm.push_back(std::numeric_limits<double>::infinity());
+  out.histogram_counts.assign(bins + 2, 0);
+  out.histogram_area_mm2.assign(bins + 2, 0.0);
+  const std::vector<double> area = removal::vertex_areas_mm2(machined.mesh);
+  for (std::size_t i = 0; i < cmp.deviation_mm.size(); ++i) {
+    const double d = cmp.deviation_mm[i];
+    const std::size_t bin =
+        d < -span   ? 0
+        : d >= span ? bins + 1
+                    : 1 + std::min<std::size_t>(bins - 1, static_cast<std::size_t>((d + span) / (2.0 * span) * bins));
+    ++out.histogram_counts[bin];
+    out.histogram_area_mm2[bin] += area[i];
+  }
+  out.deviation_mm = std::move(cmp.deviation_mm);
+  return out;
+}
+
 SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const auto t_start = Clock::now();
   auto t_stage = t_start;
@@ -450,78 +532,19 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   std::vector<double> deviation;
   if (design_mesh) {
     progress("compare", 0, 1);
-    const removal::TriangleMesh& design = *design_mesh;
-    const removal::DesignDistance distance(design);
-    if (!distance.closed())
-      result.warnings.push_back(io::display_name(job.design->file, job.file) +
-                                ": design mesh is not closed; compared anyway (signs near its holes may be wrong)");
-    removal::CompareSettings settings{job.gouge_tolerance_mm, job.excess_tolerance_mm};
-    const removal::Comparison cmp = removal::compare(machined, distance, settings);
+    DesignComparison cmp =
+        compare_with_design(job, machined, *design_mesh, stock, stock_box, v, program, moves.blocks());
+    result.warnings.insert(result.warnings.end(), cmp.warnings.begin(), cmp.warnings.end());
     result.compared = true;
     result.max_gouge_mm = cmp.max_gouge_mm;
     result.max_excess_mm = cmp.max_excess_mm;
-    if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
-      // Every dexel endpoint against the design, exactly: the summary's figures then do not
-      // depend on meshing (the mesh's regions still give areas and outlines).
-      const removal::EndpointDeviation found =
-          removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
-      EndpointCheck& e = result.endpoints;
-      e.done = true;
-      e.points = found.points;
-      e.max_gouge_mm = found.max_gouge_mm;
-      e.max_excess_mm = found.max_excess_mm;
-      e.gouge_points = found.gouge_points;
-      e.excess_points = found.excess_points;
-      if (found.max_gouge_mm > 0.0) {
-        e.deepest_mm = found.deepest_mm;
-        if (found.deepest_move >= 0) e.deepest_line = program.where(block_of(found.deepest_move).source);
-      }
-      result.max_gouge_mm = e.max_gouge_mm;
-      result.max_excess_mm = e.max_excess_mm;
-    }
-    deviation = cmp.deviation_mm;
-    auto record = [&](const removal::Region& r) {
-      RegionRecord rec;
-      rec.depth_mm = r.depth_mm;
-      rec.area_mm2 = r.area_mm2;
-      rec.centroid_mm = r.centroid_mm;
-      rec.deepest_mm = r.deepest_mm;
-      std::vector<kinematics::SourceRef> refs;
-      std::set<int> tools;
-      for (int move : r.moves) {
-        if (move < 0) {
-          rec.initial_stock = true;
-          continue;
-        }
-        const auto& b = block_of(move);
-        refs.push_back(b.source);
-        tools.insert(b.tool);
-      }
-      rec.spans = merge_lines(program, std::move(refs));
-      for (const kinematics::SourceSpan& s : rec.spans) rec.lines.push_back(program.where(s));
-      rec.tools.assign(tools.begin(), tools.end());
-      return rec;
-    };
-    for (const auto& r : cmp.gouges) result.gouges.push_back(record(r));
-    for (const auto& r : cmp.excess) result.excess.push_back(record(r));
-    // Histogram: 41 bins over +-4 tolerances plus two overflow bins, by vertex and area.
-    const double span = 4.0 * std::max({job.gouge_tolerance_mm, job.excess_tolerance_mm, v});
-    const int bins = 41;
-    result.histogram_edges_mm.push_back(-std::numeric_limits<double>::infinity());
-    for (int i = 0; i <= bins; ++i) result.histogram_edges_mm.push_back(-span + 2.0 * span * i / bins);
-    result.histogram_edges_mm.push_back(std::numeric_limits<double>::infinity());
-    result.histogram_counts.assign(bins + 2, 0);
-    result.histogram_area_mm2.assign(bins + 2, 0.0);
-    const std::vector<double> area = removal::vertex_areas_mm2(machined.mesh);
-    for (std::size_t i = 0; i < deviation.size(); ++i) {
-      const double d = deviation[i];
-      const std::size_t bin =
-          d < -span   ? 0
-          : d >= span ? bins + 1
-                      : 1 + std::min<std::size_t>(bins - 1, static_cast<std::size_t>((d + span) / (2.0 * span) * bins));
-      ++result.histogram_counts[bin];
-      result.histogram_area_mm2[bin] += area[i];
-    }
+    result.gouges = std::move(cmp.gouges);
+    result.excess = std::move(cmp.excess);
+    result.histogram_edges_mm = std::move(cmp.histogram_edges_mm);
+    result.histogram_counts = std::move(cmp.histogram_counts);
+    result.histogram_area_mm2 = std::move(cmp.histogram_area_mm2);
+    result.endpoints = cmp.endpoints;
+    deviation = std::move(cmp.deviation_mm);
     stage_done("compare");
   }
 

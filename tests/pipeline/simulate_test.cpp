@@ -79,6 +79,38 @@ TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
   EXPECT_EQ(actual.nominal.max_line, "slot.ngc:7");
 }
 
+// The comparison stage alone: the slot (line 7, floor at z = -2, 10 mm wide over the 60 mm
+// block) against a design whose slot is 1.97 mm deep: the whole floor, 60 x 10 = 600 mm2, is
+// cut 0.030 mm too deep and nothing else is off. The exact endpoint check finds 0.030 mm; the
+// one gouge region covers the floor (its area within a cell row of each edge: 0.1 mm x 2 x
+// 70 mm), names line 7 and T1; every vertex is in the histogram once.
+TEST_F(Stages, CompareWithDesignFindsTheFloorTooDeep) {
+  const io::Job j = job("report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n");
+  const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+  CutMoves moves(run, false, true, 0.1);
+  const removal::StockShape shape = stock_shape(j);
+  const auto stock = make_stock(j, shape, 0.1, true);
+  stock->cut(moves, {});
+  const removal::SurfaceMesh machined = stock->surface();
+  const removal::TriangleMesh design = removal::test::slotted_block(5.0, 1.97);
+  const DesignComparison c =
+      compare_with_design(j, machined, design, *stock, removal::bounds_of(shape), 0.1, run.program, moves.blocks());
+  ASSERT_TRUE(c.endpoints.done);
+  EXPECT_NEAR(c.max_gouge_mm, 0.030, 1e-5);
+  EXPECT_LT(c.max_excess_mm, 1e-5);
+  ASSERT_EQ(c.gouges.size(), 1u);
+  EXPECT_NEAR(c.gouges[0].area_mm2, 600.0, 14.0);
+  EXPECT_NEAR(c.gouges[0].depth_mm, 0.030, 1e-4);
+  EXPECT_EQ(c.gouges[0].lines, std::vector<std::string>{"slot.ngc:7"});
+  EXPECT_EQ(c.gouges[0].tools, std::vector<int>{1});
+  EXPECT_TRUE(c.excess.empty());
+  std::size_t counted = 0;
+  for (std::size_t n : c.histogram_counts) counted += n;
+  EXPECT_EQ(counted, machined.mesh.vertices_mm.size());
+  EXPECT_EQ(c.deviation_mm.size(), machined.mesh.vertices_mm.size());
+  EXPECT_TRUE(c.warnings.empty());
+}
+
 // CutMoves: a feed move with no tool is refused with its line; the stages compose as
 // simulate does (a 60 x 10 x 2 slot: 1200 mm3).
 TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {

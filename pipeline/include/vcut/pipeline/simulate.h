@@ -177,6 +177,26 @@ double require_cuttable(const io::Job& job, CutMoves& moves, const removal::Stoc
 std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::StockShape& shape, double resolution_mm,
                                            bool merge_flat);
 
+// 7. The machined surface against the design: the deviation of every vertex, the gouge and
+// excess regions with the NC lines of the moves that made them (move_blocks: each move id's
+// block), the histogram (41 bins over +-4 tolerances and two overflow bins, by vertex and
+// area), and with the dexel engine every ray endpoint checked exactly (then the maxima are
+// those, independent of meshing). stock_box: the stock shape's bounds (the rays' origin).
+struct DesignComparison {
+  double max_gouge_mm = 0.0, max_excess_mm = 0.0;
+  std::vector<RegionRecord> gouges, excess;
+  std::vector<double> histogram_edges_mm;
+  std::vector<std::size_t> histogram_counts;
+  std::vector<double> histogram_area_mm2;
+  std::vector<double> deviation_mm;  // per machined vertex
+  EndpointCheck endpoints;
+  std::vector<std::string> warnings;  // a design mesh that is not closed
+};
+DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceMesh& machined,
+                                     const removal::TriangleMesh& design, const removal::Stock& stock,
+                                     const Eigen::AlignedBox3d& stock_box, double resolution_mm,
+                                     const kinematics::Program& program, const std::vector<int>& move_blocks);
+
 // Runs the job. Bad input is a vcut::InputError.
 SimulationResult simulate(const io::Job& job, const SimulateOptions& options);
 
