@@ -493,35 +493,40 @@ bool continues(const Span& s, const Run& r) {
          corner_speed(theta, s.tolerance_mm, std::min(s.a, r.a), std::min(s.seg_out, r.seg_in)) >= std::max(s.v, r.v);
 }
 
-std::vector<Span> make_spans(const std::vector<Run>& runs) {
-  std::vector<Span> spans;
-  for (size_t k = 0; k < runs.size(); ++k) {
-    const Run& r = runs[k];
-    if (spans.empty()) {
-      spans.push_back(span_of(r, k));
-      continue;
-    }
-    Span& s = spans.back();
-    if (r.unit == Unit::None) {  // a block that does not move: part of whatever it sits in
-      s.last_run = k;
-      s.end_stop = s.end_stop || r.exact_stop;
-    } else if (s.unit == Unit::None) {  // only still blocks so far: the moving one takes over
-      const size_t first = s.first_run;
-      s = span_of(r, k);
-      s.first_run = first;
-    } else if (continues(s, r)) {
-      s.last_run = k;
-      s.length += r.length;
-      s.end_stop = r.exact_stop;
-      s.tolerance_mm = r.tolerance_mm;
-      s.dir_out = r.dir_out;
-      s.seg_out = r.seg_out;
-    } else {
-      spans.push_back(span_of(r, k));
-    }
+// Adds run k (in program order) to the spans: a new span, or the last one extended.
+void add_to_spans(std::vector<Span>& spans, const Run& r, size_t k) {
+  if (spans.empty()) {
+    spans.push_back(span_of(r, k));
+    return;
   }
-  return spans;
+  Span& s = spans.back();
+  if (r.unit == Unit::None) {  // a block that does not move: part of whatever it sits in
+    s.last_run = k;
+    s.end_stop = s.end_stop || r.exact_stop;
+  } else if (s.unit == Unit::None) {  // only still blocks so far: the moving one takes over
+    const size_t first = s.first_run;
+    s = span_of(r, k);
+    s.first_run = first;
+  } else if (continues(s, r)) {
+    s.last_run = k;
+    s.length += r.length;
+    s.end_stop = r.exact_stop;
+    s.tolerance_mm = r.tolerance_mm;
+    s.dir_out = r.dir_out;
+    s.seg_out = r.seg_out;
+  } else {
+    spans.push_back(span_of(r, k));
+  }
 }
+
+// What the later steps need of a run once its span has taken the rest (a whole Run is ~200
+// bytes a block; this is 40).
+struct RunTiming {
+  int block = -1;
+  size_t first = 0, last = 0;
+  double v_axis = kInf, v_cap = kInf;
+  bool axis_limited = false;
+};
 
 // Speed allowed at the junction between spans p and n.
 double junction_limit(const Span& p, const Span& n) {
@@ -546,25 +551,27 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   plan.block_time_s.assign(program.blocks.size(), 0.0);
   if (n < 2) return plan;
 
-  // 1. Runs of consecutive samples of one block.
+  // 1. Runs of consecutive samples of one block, and 2. spans, one S-curve each, built as
+  //    the runs are made.
   std::vector<double> seg_len(n, 0.0);
-  std::vector<Run> runs;
+  std::vector<RunTiming> runs;
+  std::vector<Span> spans;
   bool skipped = false;  // samples naming no block of the program (a caller's error)
   for (size_t i = 1; i < n;) {
     const int block = samples[i].block;
     size_t last = i;
     while (last + 1 < n && samples[last + 1].block == block) ++last;
     assert(block >= 0 && static_cast<size_t>(block) < program.blocks.size());
-    if (block >= 0 && static_cast<size_t>(block) < program.blocks.size())
-      runs.push_back(make_run(program, samples, axes, machine, settings, block, i, last, seg_len));
-    else
+    if (block >= 0 && static_cast<size_t>(block) < program.blocks.size()) {
+      const Run r = make_run(program, samples, axes, machine, settings, block, i, last, seg_len);
+      add_to_spans(spans, r, runs.size());
+      runs.push_back({r.block, r.first, r.last, r.v_axis, r.v_cap, r.axis_limited});
+    } else {
       skipped = true;
+    }
     i = last + 1;
   }
   if (runs.empty()) return plan;
-
-  // 2. Spans, one S-curve each.
-  std::vector<Span> spans = make_spans(runs);
   const size_t K = spans.size();
 
   // 3. Junction speeds: limits, then the look-ahead. The window covers W spans (each at
@@ -609,8 +616,8 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
     hi = std::max(hi, s.v);
     if (duration(hi) >= s.g93_time_s) {
       s.v = hi;  // not achievable: as fast as the limits allow
-      const Run& r = runs[s.moving_run];
-      runs[s.moving_run].axis_limited = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
+      RunTiming& r = runs[s.moving_run];
+      r.axis_limited = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
       continue;
     }
     double lo = s.v;
@@ -671,7 +678,7 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
       if (samples[i].block < 0 || static_cast<size_t>(samples[i].block) >= program.blocks.size())
         plan.t_s[i] = plan.t_s[i - 1];
 
-  for (const Run& r : runs) {
+  for (const RunTiming& r : runs) {
     plan.block_time_s[static_cast<size_t>(r.block)] += plan.t_s[r.last] - plan.t_s[r.first - 1];
     if (r.axis_limited)
       for (size_t i = r.first; i <= r.last; ++i) plan.axis_limited_samples.push_back(static_cast<int>(i));
