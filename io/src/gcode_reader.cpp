@@ -475,6 +475,37 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   double word_value(const std::string& s, size_t& i, char letter, std::string& text);
   size_t skip_comment(const std::string& s, size_t i);
   bool execute();
+  // execute()'s steps, in rs274ngc's order within a line. LineCodes: the line's codes by
+  // modal group and what they imply, shared by the steps.
+  struct LineCodes {
+    std::array<const Code*, kGroupCount> g{};
+    const Code* axis_user = nullptr;  // an ignored code that takes the axis words
+    bool axis_user_all = false;
+    const Code* non_modal = nullptr;
+    const Code* rotation = nullptr;
+    const Code* length_axes = nullptr;  // G43.1 / G43.2 take X Y Z
+    bool homes = false, stores_home = false, rotates = false, sets_offsets = false;
+    bool dwell_axis = false;          // Fanuc G4 X / U: seconds, not an axis
+    std::array<const Code*, 11> m{};  // by M group 0..10
+    bool m_code[74] = {};             // supported M codes present, by number (M2 and M30 end the program)
+    bool program_end = false;
+    const Code* flow = nullptr;  // M97, M98 or M99
+    std::string p_user;          // the code that took the P word
+    bool was_cycle = false;      // a canned cycle was the motion mode before the line
+    int previous_cycle = 0;
+    int axis_column = INT_MAX;  // the first axis word
+  };
+  bool macro_call();
+  LineCodes codes_of_line();
+  void read_m_codes(LineCodes& c);
+  void check_letters(LineCodes& c);
+  void set_feed_speed_tool(LineCodes& c);
+  void use_p(LineCodes& c, const std::string& code);
+  void set_plane_and_frames(LineCodes& c);
+  void set_modes(LineCodes& c);
+  bool run_motion(LineCodes& c);
+  bool call_or_return(const LineCodes& c);
+  void check_unused_words();
 
   double unit() const { return state_.inches ? kMmPerInch : 1.0; }
   detail::ArcTolerance arc_tolerance() const {
@@ -3235,24 +3266,10 @@ void Reader::cycle(int column, bool new_series) {
   }
 }
 
-bool Reader::execute() {
+// Fanuc G67, G65 and G66 (macro calls): true when the line was a call, its other words the
+// macro's arguments.
+bool Reader::macro_call() {
   Line& ln = line_words_;
-  used_.fill(false);
-  lenient_ = false;
-  tcp_m_code_ = -1;
-  if (o_column_ != 0) {  // a Fanuc program number alone on its line
-    if (options_.flavor == GcodeOptions::Flavor::LinuxCnc || !current_->executed) return true;
-    // The next program's number after this program's blocks: this one ends (no M30 before it).
-    if (frames_.size() > 1)
-      fail(o_column_, "a program number inside a called program (expected M99 before the next program)");
-    warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
-    return false;
-  }
-  if (!current_->executed) {  // a block with words (not a comment line) has run
-    current_->executed = !ln.g.empty() || !ln.m.empty() || !assignments_.empty() ||
-                         std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });
-  }
-
   // Fanuc G67: the end of a G66 modal call (the line's other codes go on).
   if (options_.flavor != GcodeOptions::Flavor::LinuxCnc) {
     const auto g67 = std::find_if(ln.g.begin(), ln.g.end(), [](const Code& g) { return g.number == 670; });
@@ -3304,11 +3321,15 @@ bool Reader::execute() {
                arguments);
     return true;
   }
+  return false;
+}
 
+// The line's G codes by modal group, each supported or reported, and the pairs that cannot
+// share a line.
+Reader::LineCodes Reader::codes_of_line() {
+  const Line& ln = line_words_;
+  LineCodes c;
   // --- G codes: one per modal group, supported or reported.
-  std::array<const Code*, kGroupCount> by_group{};
-  const Code* axis_user = nullptr;  // an ignored code that takes the axis words
-  bool axis_user_all = false;
   // Fanuc: G80 is the canned-cycle cancel (group 9), so "G0 G80" is a rapid that ends the
   // cycle; rs274ngc has G80 in the motion group and refuses the pair.
   const bool g80_apart =
@@ -3318,7 +3339,7 @@ bool Reader::execute() {
     if (g80_apart && g.number == 800) continue;
     const GInfo info = g_info(g.number);
     if (info.group >= 0) {
-      const Code*& slot = by_group[static_cast<size_t>(info.group)];
+      const Code*& slot = c.g[static_cast<size_t>(info.group)];
       if (slot != nullptr) {
         fail(g.column, "two G codes of the " + std::string(group_name(info.group)) + " group on one line, " +
                            slot->text + " and " + g.text + " (expected at most one)");
@@ -3331,59 +3352,59 @@ bool Reader::execute() {
     unsupported(g.column, g.text, message);
     lenient_ = true;  // warning mode: the code and the words it would use are ignored
     if (info.group == kNonModal && info.uses_axes) {
-      axis_user = &g;
-      axis_user_all = info.all_axes;
+      c.axis_user = &g;
+      c.axis_user_all = info.all_axes;
     }
   }
   // rs274ngc: two codes that both use the axis words cannot share a line (G53 modifies the
   // motion instead, so it goes with G0/G1).
-  if (axis_user != nullptr && axis_user->number != 530 && by_group[kMotion] != nullptr &&
-      by_group[kMotion]->number != 800) {
-    const Code* later = axis_user->column > by_group[kMotion]->column ? axis_user : by_group[kMotion];
-    fail(later->column, axis_user->text + " and " + by_group[kMotion]->text +
+  if (c.axis_user != nullptr && c.axis_user->number != 530 && c.g[kMotion] != nullptr && c.g[kMotion]->number != 800) {
+    const Code* later = c.axis_user->column > c.g[kMotion]->column ? c.axis_user : c.g[kMotion];
+    fail(later->column, c.axis_user->text + " and " + c.g[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
-  const Code* non_modal = by_group[kNonModal];
-  const bool homes = non_modal != nullptr && (non_modal->number == 280 || non_modal->number == 300);
-  const bool stores_home = non_modal != nullptr && (non_modal->number == 281 || non_modal->number == 301);
+  c.non_modal = c.g[kNonModal];
+  c.homes = c.non_modal != nullptr && (c.non_modal->number == 280 || c.non_modal->number == 300);
+  c.stores_home = c.non_modal != nullptr && (c.non_modal->number == 281 || c.non_modal->number == 301);
   // Fanuc G68 X Y R: X Y are the rotation's centre, not a move.
-  const Code* rotation = by_group[kRotation];
-  if (rotation != nullptr && rotation->number == 680 && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
-    fail(rotation->column, "unknown G code " + rotation->text +
-                               " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
+  c.rotation = c.g[kRotation];
+  if (c.rotation != nullptr && c.rotation->number == 680 && options_.flavor == GcodeOptions::Flavor::LinuxCnc) {
+    fail(c.rotation->column, "unknown G code " + c.rotation->text +
+                                 " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
   }
-  const bool rotates = rotation != nullptr && rotation->number != 690;  // G68 / G68.2 take X Y Z
-  const bool sets_offsets = non_modal != nullptr && (non_modal->number == 100 || non_modal->number == 920 || homes);
-  if (rotates && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
-    const Code* later = rotation->column > by_group[kMotion]->column ? rotation : by_group[kMotion];
-    fail(later->column, rotation->text + " and " + by_group[kMotion]->text +
+  c.rotates = c.rotation != nullptr && c.rotation->number != 690;  // G68 / G68.2 take X Y Z
+  c.sets_offsets = c.non_modal != nullptr && (c.non_modal->number == 100 || c.non_modal->number == 920 || c.homes);
+  if (c.rotates && c.g[kMotion] != nullptr && c.g[kMotion]->number != 800) {
+    const Code* later = c.rotation->column > c.g[kMotion]->column ? c.rotation : c.g[kMotion];
+    fail(later->column, c.rotation->text + " and " + c.g[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
-  if (sets_offsets && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
-    const Code* later = non_modal->column > by_group[kMotion]->column ? non_modal : by_group[kMotion];
-    fail(later->column, non_modal->text + " and " + by_group[kMotion]->text +
+  if (c.sets_offsets && c.g[kMotion] != nullptr && c.g[kMotion]->number != 800) {
+    const Code* later = c.non_modal->column > c.g[kMotion]->column ? c.non_modal : c.g[kMotion];
+    fail(later->column, c.non_modal->text + " and " + c.g[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
-  machine_coordinates_ = non_modal != nullptr && non_modal->number == 530;
-  const Code* length_axes =
-      by_group[kToolLength] != nullptr && (by_group[kToolLength]->number == 431 || by_group[kToolLength]->number == 432)
-          ? by_group[kToolLength]
-          : nullptr;
-  if (length_axes != nullptr && by_group[kMotion] != nullptr && by_group[kMotion]->number != 800) {
-    const Code* later = length_axes->column > by_group[kMotion]->column ? length_axes : by_group[kMotion];
-    fail(later->column, length_axes->text + " and " + by_group[kMotion]->text +
+  machine_coordinates_ = c.non_modal != nullptr && c.non_modal->number == 530;
+  c.length_axes = c.g[kToolLength] != nullptr && (c.g[kToolLength]->number == 431 || c.g[kToolLength]->number == 432)
+                      ? c.g[kToolLength]
+                      : nullptr;
+  if (c.length_axes != nullptr && c.g[kMotion] != nullptr && c.g[kMotion]->number != 800) {
+    const Code* later = c.length_axes->column > c.g[kMotion]->column ? c.length_axes : c.g[kMotion];
+    fail(later->column, c.length_axes->text + " and " + c.g[kMotion]->text +
                             " both use the axis words (expected them on separate lines)");
   }
+  return c;
+}
 
+// The line's M codes by group: supported, calls and returns, TCP switches, or the
+// machine's own.
+void Reader::read_m_codes(LineCodes& c) {
+  const Line& ln = line_words_;
   // --- M codes.
-  std::array<const Code*, 11> m_by_group{};  // by M group 0..10
-  bool m_code[74] = {};                      // supported M codes present, by number (M2 and M30 end the program)
-  bool program_end = false;
-  const Code* flow_code = nullptr;  // M97, M98 or M99
   for (const Code& m : ln.m) {
     const int group = m.number >= 0 ? m_group(m.number) : -1;
     if (group >= 0) {
-      const Code*& slot = m_by_group[static_cast<size_t>(group)];
+      const Code*& slot = c.m[static_cast<size_t>(group)];
       // LinuxCNC's rs274 refuses two M codes of one group on a line, M7 with M8 included.
       if (slot != nullptr) {
         fail(m.column, "two M codes of one modal group on one line, " + slot->text + " and " + m.text +
@@ -3397,17 +3418,17 @@ bool Reader::execute() {
     }
     if (m.number >= 0 && m_supported(m.number)) {
       if (m.number == 2 || m.number == 30) {
-        program_end = true;
+        c.program_end = true;
       } else {
-        m_code[static_cast<size_t>(m.number)] = true;
+        c.m_code[static_cast<size_t>(m.number)] = true;
       }
       continue;
     }
     if (m.number == 97 || m.number == 98 || m.number == 99) {  // calls and returns, after the motion
-      if (flow_code != nullptr)
+      if (c.flow != nullptr)
         fail(m.column,
-             "two call or return M codes on one line, " + flow_code->text + " and " + m.text + " (expected one)");
-      flow_code = &m;
+             "two call or return M codes on one line, " + c.flow->text + " and " + m.text + " (expected one)");
+      c.flow = &m;
       continue;
     }
     lenient_ = true;  // the words of an ignored code are not checked
@@ -3426,14 +3447,17 @@ bool Reader::execute() {
       warn(m.column, "M code " + m.text + " is not one the machine file declares; ignored, the motion goes on");
     }
   }
+}
 
+// Letters this reader does not move, and rotary words out of range.
+void Reader::check_letters(LineCodes& c) {
   // Fanuc: G4 X (or U) is the dwell time in seconds, not an axis.
-  const bool dwell_axis = options_.flavor != GcodeOptions::Flavor::LinuxCnc && non_modal != nullptr &&
-                          non_modal->number == 40 && !word('P').present && (word('X').present || word('U').present);
+  c.dwell_axis = options_.flavor != GcodeOptions::Flavor::LinuxCnc && c.non_modal != nullptr &&
+                 c.non_modal->number == 40 && !word('P').present && (word('X').present || word('U').present);
   // --- Letters this reader does not move.
   for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
-    if (w.present && !(dwell_axis && letter == 'U')) {
+    if (w.present && !(c.dwell_axis && letter == 'U')) {
       unsupported(
           w.column, std::string(1, letter),
           std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
@@ -3444,12 +3468,15 @@ bool Reader::execute() {
     if (w.present && !(std::abs(w.value) <= kMaxMagnitude))
       fail(w.column, std::string(1, letter) + " " + num(w.value) + " deg is out of range (expected within +-1e6 deg)");
   }
+}
 
+// Units, feed, spindle and tool, and the M codes that set modes, in rs274ngc's order.
+void Reader::set_feed_speed_tool(LineCodes& c) {
   // --- Modes, in rs274ngc's order of execution within a line: F is set before G20/G21, so an
   // F on a G20/G21 line is in the units before it (as LinuxCNC's rs274 reads it); the
   // lengths of the line are in the new units.
   const double feed_unit = unit();
-  if (const Code* g = by_group[kUnits]) state_.inches = g->number == 200;
+  if (const Code* g = c.g[kUnits]) state_.inches = g->number == 200;
 
   // Lengths beyond 1e6 mm after conversion are as absurd as before it.
   for (char letter : {'X', 'Y', 'Z', 'I', 'J', 'K', 'R'}) {
@@ -3459,7 +3486,7 @@ bool Reader::execute() {
                          " mm is out of range (expected within +-1e6 mm)");
     }
   }
-  if (const Code* g = by_group[kFeedMode]) state_.inverse_time = g->number == 930;
+  if (const Code* g = c.g[kFeedMode]) state_.inverse_time = g->number == 930;
   if (const Word& f = word('F'); f.present && state_.inverse_time) {
     // G93: F is the inverse of the move's time in minutes, on every feed move's line.
     if (!(f.value > 0.0)) fail(f.column, "F " + num(f.value) + " (expected an inverse time > 0, 1/min)");
@@ -3484,7 +3511,7 @@ bool Reader::execute() {
   }
   // M6 loads the tool selected by the last T (on this line or before); T alone only
   // selects. Without any T, M6 changes nothing (rs274ngc loads the prepared tool).
-  if (m_code[6] && state_.selected_tool >= 0) {
+  if (c.m_code[6] && state_.selected_tool >= 0) {
     // The control takes its position from the machine after a tool change (rs274ngc re-reads
     // it): after G40 that is the last compensated point, not the programmed one.
     if (state_.comp.machine_mm) {
@@ -3496,61 +3523,66 @@ bool Reader::execute() {
     state_.tool = state_.selected_tool;
     state_.position_mm += tip_offset() - before;
   }
-  if (m_code[3]) state_.spindle = SpindleState::Clockwise;
-  if (m_code[4]) state_.spindle = SpindleState::CounterClockwise;
-  if (m_code[5]) state_.spindle = SpindleState::Off;
+  if (c.m_code[3]) state_.spindle = SpindleState::Clockwise;
+  if (c.m_code[4]) state_.spindle = SpindleState::CounterClockwise;
+  if (c.m_code[5]) state_.spindle = SpindleState::Off;
   // M0/M1 (pauses), M7/M8/M9 (coolant), M48..M53 (overrides) do not change the path; nor
   // do M62..M68 (I/O), which take P, E, L and Q.
   for (int m = 62; m <= 68; ++m) {
-    if (m_code[m]) {
+    if (c.m_code[m]) {
       for (char letter : {'P', 'E', 'L', 'Q'}) used_[letter - 'A'] = true;
     }
   }
-  if (m_code[61]) {  // M61 Q: the tool in the spindle is Q, without a change
+  if (c.m_code[61]) {  // M61 Q: the tool in the spindle is Q, without a change
     const Word& q = word('Q');
     if (!q.present || q.value < 0.0 || !is_whole(q.value)) {
-      fail(q.present ? q.column : m_by_group[6]->column, "M61 needs Q, the tool number (a whole number >= 0)");
+      fail(q.present ? q.column : c.m[6]->column, "M61 needs Q, the tool number (a whole number >= 0)");
     }
     state_.tool = state_.selected_tool = static_cast<int>(q.value);
     used_['Q' - 'A'] = true;
   }
   // M70 saves the modal state, M71 forgets it, M72 restores it, M73 saves it to be restored
   // when the current subroutine returns.
-  if (m_code[70] || m_code[73]) {
+  if (c.m_code[70] || c.m_code[73]) {
     ModalState saved = save_modes();
-    if (m_code[70]) {
+    if (c.m_code[70]) {
       saved_modes_ = saved;
     } else {
-      if (frames_.size() <= 1)
-        fail(m_by_group[10]->column, "M73 outside a subroutine (expected it in a called o-word sub)");
+      if (frames_.size() <= 1) fail(c.m[10]->column, "M73 outside a subroutine (expected it in a called o-word sub)");
       frame().autorestore = saved;
     }
   }
-  if (m_code[71]) saved_modes_.reset();
-  if (m_code[72]) {
-    if (!saved_modes_) fail(m_by_group[10]->column, "M72 without a state saved by M70");
+  if (c.m_code[71]) saved_modes_.reset();
+  if (c.m_code[72]) {
+    if (!saved_modes_) fail(c.m[10]->column, "M72 without a state saved by M70");
     restore_modes(*saved_modes_);
   }
+}
 
+// The P word taken by `code`; two codes may not share it.
+void Reader::use_p(LineCodes& c, const std::string& code) {
+  if (!c.p_user.empty()) {
+    fail(word('P').column, "P word used by both " + c.p_user + " and " + code + " (expected them on separate lines)");
+  }
+  c.p_user = code;
+  used_['P' - 'A'] = true;
+}
+
+// Dwell, the plane, and rotations and tilted planes, with what compensation or a tilted
+// plane refuses.
+void Reader::set_plane_and_frames(LineCodes& c) {
+  const Line& ln = line_words_;
   const Word& p = word('P');
-  std::string p_user;  // the code that took the P word
-  auto use_p = [&](const std::string& code) {
-    if (!p_user.empty()) {
-      fail(p.column, "P word used by both " + p_user + " and " + code + " (expected them on separate lines)");
-    }
-    p_user = code;
-    used_['P' - 'A'] = true;
-  };
-  if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40 && dwell_axis) {
+  if (const Code* g = c.g[kNonModal]; g != nullptr && g->number == 40 && c.dwell_axis) {
     // Fanuc: G4 X<seconds> or U<seconds> (P in ms): no motion.
     const Word& t = word('X').present ? word('X') : word('U');
     if (t.value < 0.0)
       fail(t.column,
            "G4 " + std::string(word('X').present ? "X" : "U") + " " + num(t.value) + " (expected seconds >= 0)");
-  } else if (const Code* g = by_group[kNonModal]; g != nullptr && g->number == 40) {  // G4 dwell
+  } else if (const Code* g = c.g[kNonModal]; g != nullptr && g->number == 40) {  // G4 dwell
     if (!p.present) fail(g->column, "G4 dwell without P (expected P seconds)");
     if (p.value < 0.0) fail(p.column, "G4 P " + num(p.value) + " (expected seconds >= 0)");
-    use_p(g->text);
+    use_p(c, g->text);
   }
   if (state_.comp.side != Comp::Side::Off) {
     // What LinuxCNC refuses while cutter compensation is on.
@@ -3558,44 +3590,45 @@ bool Reader::execute() {
       if (g != nullptr) fail(g->column, g->text + " with cutter compensation on (" + what + "; expected G40 first)");
     };
     const Plane plane = state_.plane;
-    if (const Code* g = by_group[kPlane]; g != nullptr && (g->number == 170   ? Plane::XY
-                                                           : g->number == 180 ? Plane::ZX
-                                                                              : Plane::YZ) != plane) {
+    if (const Code* g = c.g[kPlane]; g != nullptr && (g->number == 170   ? Plane::XY
+                                                      : g->number == 180 ? Plane::ZX
+                                                                         : Plane::YZ) != plane) {
       refuse(g, "a plane change");
     }
-    refuse(by_group[kCoordinateSystem], "a coordinate system change");
-    refuse(by_group[kToolLength], "a tool length change");
-    if (non_modal != nullptr && (homes || stores_home || (non_modal->number >= 920 && non_modal->number <= 923))) {
-      refuse(non_modal, "a move home or an axis offset");
+    refuse(c.g[kCoordinateSystem], "a coordinate system change");
+    refuse(c.g[kToolLength], "a tool length change");
+    if (c.non_modal != nullptr &&
+        (c.homes || c.stores_home || (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
+      refuse(c.non_modal, "a move home or an axis offset");
     }
     if (state_.motion == Motion::Cycle ||
-        (by_group[kMotion] != nullptr && by_group[kMotion]->number >= 730 && by_group[kMotion]->number != 800)) {
-      refuse(by_group[kMotion] != nullptr ? by_group[kMotion] : &ln.g.front(), "a canned cycle");
+        (c.g[kMotion] != nullptr && c.g[kMotion]->number >= 730 && c.g[kMotion]->number != 800)) {
+      refuse(c.g[kMotion] != nullptr ? c.g[kMotion] : &ln.g.front(), "a canned cycle");
     }
-    if (m_code[6]) refuse(m_by_group[6], "a tool change");
+    if (c.m_code[6]) refuse(c.m[6], "a tool change");
   }
-  if (const Code* g = by_group[kPlane]; g != nullptr && g_info(g->number).supported) {
+  if (const Code* g = c.g[kPlane]; g != nullptr && g_info(g->number).supported) {
     state_.plane = g->number == 170 ? Plane::XY : g->number == 180 ? Plane::ZX : Plane::YZ;
   }
-  if (rotation != nullptr) {
+  if (c.rotation != nullptr) {
     if (state_.comp.side != Comp::Side::Off)
-      fail(rotation->column, rotation->text + " with cutter compensation on (expected G40 first)");
+      fail(c.rotation->column, c.rotation->text + " with cutter compensation on (expected G40 first)");
     if (corner_) {
-      fail(rotation->column,
+      fail(c.rotation->column,
            std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
-               " needs a G1 line next (expected the corner's second line before " + rotation->text + ")");
+               " needs a G1 line next (expected the corner's second line before " + c.rotation->text + ")");
     }
-    if (rotation->number == 690) {
+    if (c.rotation->number == 690) {
       state_.rotation_rad = 0.0;
       if (state_.twp && state_.twp_feature) twp_end();
-    } else if (rotation->number == 682) {
-      twp_begin(*rotation);
+    } else if (c.rotation->number == 682) {
+      twp_begin(*c.rotation);
     } else {
       if (state_.twp && state_.twp_feature)
-        fail(rotation->column, "G68 with a tilted work plane on (expected G69 first)");
-      if (state_.plane != Plane::XY) fail(rotation->column, "G68 outside G17 (this reader rotates in the XY plane)");
+        fail(c.rotation->column, "G68 with a tilted work plane on (expected G69 first)");
+      if (state_.plane != Plane::XY) fail(c.rotation->column, "G68 outside G17 (this reader rotates in the XY plane)");
       const Word& r = word('R');
-      if (!r.present) fail(rotation->column, "G68 without R (expected R, the rotation in degrees)");
+      if (!r.present) fail(c.rotation->column, "G68 without R (expected R, the rotation in degrees)");
       used_['R' - 'A'] = true;
       // The centre: X Y in absolute program coordinates, the current point for those not given.
       const Eigen::Vector3d here_program = to_program(state_.position_mm);
@@ -3603,7 +3636,7 @@ bool Reader::execute() {
       if (word('X').present) center.x() = word('X').value * unit();
       if (word('Y').present) center.y() = word('Y').value * unit();
       // Nested G68 (a rotation while one is on): Fanuc composes them; vcut asks for G69 first.
-      if (rotated()) fail(rotation->column, "G68 while a rotation is on (expected G69 first)");
+      if (rotated()) fail(c.rotation->column, "G68 while a rotation is on (expected G69 first)");
       state_.rotation_center_mm = center;
       state_.rotation_rad = r.value * M_PI / 180.0;
     }
@@ -3613,23 +3646,28 @@ bool Reader::execute() {
     auto refuse = [&](const Code* g, const char* what) {
       if (g != nullptr) fail(g->column, g->text + " with a tilted work plane on (" + what + "; expected G69 first)");
     };
-    if (machine_coordinates_) refuse(non_modal, "machine coordinates");
-    if (homes || stores_home) refuse(non_modal, "a reference position");
-    if (sets_offsets || (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923))
-      refuse(non_modal, "an offset change");
-    refuse(by_group[kCoordinateSystem], "a coordinate system change");
-    if (by_group[kToolLength] != nullptr && by_group[kToolLength]->number == 435)
-      refuse(by_group[kToolLength], "a tool axis vector");
-    if (m_code[6]) refuse(m_by_group[6], "a tool change");
+    if (machine_coordinates_) refuse(c.non_modal, "machine coordinates");
+    if (c.homes || c.stores_home) refuse(c.non_modal, "a reference position");
+    if (c.sets_offsets || (c.non_modal != nullptr && c.non_modal->number >= 920 && c.non_modal->number <= 923))
+      refuse(c.non_modal, "an offset change");
+    refuse(c.g[kCoordinateSystem], "a coordinate system change");
+    if (c.g[kToolLength] != nullptr && c.g[kToolLength]->number == 435) refuse(c.g[kToolLength], "a tool axis vector");
+    if (c.m_code[6]) refuse(c.m[6], "a tool change");
   }
-  if (const Code* g = by_group[kCutterComp]) {
+}
+
+// Compensation, tool length, coordinate systems, path control, distance modes, offsets
+// and the motion mode.
+void Reader::set_modes(LineCodes& c) {
+  const Word& p = word('P');
+  if (const Code* g = c.g[kCutterComp]) {
     if (g->number == 400) {
       comp_off(g->column);
     } else {
       comp_on(*g);
     }
   }
-  if (const Code* g = by_group[kToolLength]) {
+  if (const Code* g = c.g[kToolLength]) {
     state_.tcp = g->number == 434   ? GcodeState::Tcp::Angles
                  : g->number == 435 ? GcodeState::Tcp::Vector
                                     : GcodeState::Tcp::Off;
@@ -3638,22 +3676,22 @@ bool Reader::execute() {
   if (tcp_m_code_ >= 0) state_.tcp = tcp_m_code_ ? GcodeState::Tcp::Angles : GcodeState::Tcp::Off;
   // TCP takes X Y Z as the tip on the part again.
   if (state_.tcp != GcodeState::Tcp::Off && state_.twp && !state_.twp_feature) end_turned_frame();
-  if (const Code* g = by_group[kToolLength]; g != nullptr && g->number != 490) {
+  if (const Code* g = c.g[kToolLength]; g != nullptr && g->number != 490) {
     const Word& h = word('H');
     if (h.present && (h.value < 0.0 || !is_whole(h.value))) {
       fail(h.column, "H " + num(h.value) + " (expected a tool number, a whole number >= 0)");
     }
     used_['H' - 'A'] = true;
   }
-  if (const Code* g = by_group[kCoordinateSystem]; g != nullptr) {
+  if (const Code* g = c.g[kCoordinateSystem]; g != nullptr) {
     state_.work_offset = g->text;
     select_system(system_index(g->number), g->column);
   }
-  exact_stop_line_ = by_group[kNonModal] != nullptr && by_group[kNonModal]->number == 90;
-  if (const Code* g = by_group[kPathControl]; g != nullptr && g->number != 640) {
+  exact_stop_line_ = c.g[kNonModal] != nullptr && c.g[kNonModal]->number == 90;
+  if (const Code* g = c.g[kPathControl]; g != nullptr && g->number != 640) {
     state_.exact_stop = true;  // G61, G61.1
   }
-  if (const Code* g = by_group[kPathControl]; g != nullptr && g->number == 640) {
+  if (const Code* g = c.g[kPathControl]; g != nullptr && g->number == 640) {
     // G64 P (blending tolerance) and Q (naive CAM tolerance, not used): lengths >= 0.
     for (char letter : {'P', 'Q'}) {
       const Word& w = word(letter);
@@ -3663,24 +3701,24 @@ bool Reader::execute() {
     }
     state_.exact_stop = false;
     state_.blend_tolerance_mm = p.present ? p.value * unit() : -1.0;
-    if (p.present) use_p(g->text);
+    if (p.present) use_p(c, g->text);
     used_['Q' - 'A'] = true;
   }
-  if (const Code* g = by_group[kDistance]) state_.incremental = g->number == 910;
-  if (const Code* g = by_group[kArcDistance]) state_.arc_center_absolute = g->number == 901;
-  if (const Code* g = by_group[kReturnMode]) state_.retract_to_r = g->number == 990;
-  if (non_modal != nullptr && (non_modal->number == 100 || (non_modal->number >= 920 && non_modal->number <= 923))) {
-    set_offsets(*non_modal);
+  if (const Code* g = c.g[kDistance]) state_.incremental = g->number == 910;
+  if (const Code* g = c.g[kArcDistance]) state_.arc_center_absolute = g->number == 901;
+  if (const Code* g = c.g[kReturnMode]) state_.retract_to_r = g->number == 990;
+  if (c.non_modal != nullptr &&
+      (c.non_modal->number == 100 || (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
+    set_offsets(*c.non_modal);
   }
-  const bool was_cycle = state_.motion == Motion::Cycle;
-  const int previous_cycle = state_.cycle;
-  if (state_.nurbs && (by_group[kMotion] == nullptr || by_group[kMotion]->number != 53)) {
-    if (const Code* g = by_group[kMotion])
-      fail(g->column, g->text + " inside a G5.2 NURBS block (expected G5.3 first)");
+  c.was_cycle = state_.motion == Motion::Cycle;
+  c.previous_cycle = state_.cycle;
+  if (state_.nurbs && (c.g[kMotion] == nullptr || c.g[kMotion]->number != 53)) {
+    if (const Code* g = c.g[kMotion]) fail(g->column, g->text + " inside a G5.2 NURBS block (expected G5.3 first)");
   }
-  if (const Code* g = by_group[kMotion]; g != nullptr && g->number == 53) {
+  if (const Code* g = c.g[kMotion]; g != nullptr && g->number == 53) {
     nurbs_end(g->column);
-  } else if (const Code* g = by_group[kMotion]) {
+  } else if (const Code* g = c.g[kMotion]) {
     static const std::pair<int, Motion> kMotions[] = {{0, Motion::Rapid},
                                                       {10, Motion::Linear},
                                                       {20, Motion::ArcClockwise},
@@ -3708,48 +3746,54 @@ bool Reader::execute() {
     if (state_.motion == Motion::Cycle) state_.cycle = g->number;
     if (state_.motion == Motion::Probe) state_.probe = g->number;
   }
+}
 
-  // --- Motion.
-  bool line_moves = false;  // an axis move ran (G66 calls its macro after it)
+// The line's motion: home returns, probes, turned frames, or a move in the motion mode;
+// true when an axis move ran (G66 calls its macro after it).
+bool Reader::run_motion(LineCodes& c) {
+  const Line& ln = line_words_;
+  const Word& p = word('P');
+  bool line_moves = false;
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
                         word('B').present || word('C').present || ln.radius.present || ln.angle.present;
-  const Code* motion_code = by_group[kMotion];
+  const Code* motion_code = c.g[kMotion];
   const bool explicit_motion = motion_code != nullptr && motion_code->number <= 30;
-  int axis_column = INT_MAX;  // the first axis word
+  c.axis_column = INT_MAX;
   for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
-    if (word(letter).present) axis_column = std::min(axis_column, word(letter).column);
+    if (word(letter).present) c.axis_column = std::min(c.axis_column, word(letter).column);
   }
   // Motion errors point at the G0..G3 word, or at the first axis word of a modal motion.
-  const int column = explicit_motion ? motion_code->column : axis_column;
+  const int column = explicit_motion ? motion_code->column : c.axis_column;
   if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
-    fail(non_modal->column, "G53 without a G0 or G1 move on its line (expected G53 G0/G1 with axis words)");
+    fail(c.non_modal->column, "G53 without a G0 or G1 move on its line (expected G53 G0/G1 with axis words)");
   }
-  if (corner_ && (has_axis || explicit_motion || homes) && (state_.motion != Motion::Linear || homes || sets_offsets)) {
-    fail(explicit_motion ? motion_code->column : axis_column,
+  if (corner_ && (has_axis || explicit_motion || c.homes) &&
+      (state_.motion != Motion::Linear || c.homes || c.sets_offsets)) {
+    fail(explicit_motion ? motion_code->column : c.axis_column,
          std::string(corner_->round ? ",R" : ",C") + " at " + program_.where(program_.blocks[corner_->block].source) +
              " needs a G1 line next (expected the corner's second line)");
   }
   if (motion_code != nullptr && motion_code->number == 52 && !has_axis) {
     fail(motion_code->column, "G5.2 without X and Y (expected the first control point on its line)");
   }
-  if (homes || stores_home) {
-    if (stores_home && has_axis)
-      fail(axis_column, non_modal->text + " with axis words (expected " + non_modal->text +
-                            " alone: it stores the current position)");
-    home_return(*non_modal);
-  } else if (non_modal != nullptr && non_modal->number == 310) {
-    if (!has_axis) fail(non_modal->column, "G31 without axis words (expected the point the probe moves toward)");
-    probe(non_modal->column, 310);
-  } else if (non_modal != nullptr && (non_modal->number == 531 || non_modal->number == 536)) {
+  if (c.homes || c.stores_home) {
+    if (c.stores_home && has_axis)
+      fail(c.axis_column, c.non_modal->text + " with axis words (expected " + c.non_modal->text +
+                              " alone: it stores the current position)");
+    home_return(*c.non_modal);
+  } else if (c.non_modal != nullptr && c.non_modal->number == 310) {
+    if (!has_axis) fail(c.non_modal->column, "G31 without axis words (expected the point the probe moves toward)");
+    probe(c.non_modal->column, 310);
+  } else if (c.non_modal != nullptr && (c.non_modal->number == 531 || c.non_modal->number == 536)) {
     if (has_axis)
-      fail(axis_column,
-           non_modal->text + " with axis words (expected " + non_modal->text + " alone: it turns the rotary axes)");
+      fail(c.axis_column,
+           c.non_modal->text + " with axis words (expected " + c.non_modal->text + " alone: it turns the rotary axes)");
     used_['P' - 'A'] = true;
-    twp_turn(*non_modal);
-  } else if (axis_user != nullptr) {
-    forget_axes(axis_user_all);
-  } else if (sets_offsets || rotates || length_axes != nullptr || dwell_axis ||
-             (non_modal != nullptr && non_modal->number >= 920 && non_modal->number <= 923)) {
+    twp_turn(*c.non_modal);
+  } else if (c.axis_user != nullptr) {
+    forget_axes(c.axis_user_all);
+  } else if (c.sets_offsets || c.rotates || c.length_axes != nullptr || c.dwell_axis ||
+             (c.non_modal != nullptr && c.non_modal->number >= 920 && c.non_modal->number <= 923)) {
     // G10, G92 and G43.1/G43.2 took the axis words.
   } else if (has_axis || explicit_motion ||
              (state_.tcp == GcodeState::Tcp::Vector && (word('I').present || word('J').present || word('K').present))) {
@@ -3757,7 +3801,7 @@ bool Reader::execute() {
     switch (state_.motion) {
       case Motion::None:
         if (has_axis) {
-          fail(axis_column,
+          fail(c.axis_column,
                "axis word with no motion mode (expected G0, G1, G2 or G3 on this line "
                "or an earlier one)");
         }
@@ -3773,7 +3817,7 @@ bool Reader::execute() {
         break;
       case Motion::Nurbs:
         used_['P' - 'A'] = used_['L' - 'A'] = true;
-        if (p.present) p_user = "G5.2";
+        if (p.present) c.p_user = "G5.2";
         nurbs_point(column, motion_code != nullptr);
         break;
       case Motion::Probe:
@@ -3782,7 +3826,7 @@ bool Reader::execute() {
       case Motion::CubicSpline:
       case Motion::QuadraticSpline:
         for (char letter : {'I', 'J', 'P', 'Q'}) used_[letter - 'A'] = true;
-        if (p.present) p_user = "G5";
+        if (p.present) c.p_user = "G5";
         spline(column);
         break;
       case Motion::Rapid:
@@ -3818,104 +3862,133 @@ bool Reader::execute() {
         break;
       case Motion::Cycle:
         for (char letter : {'R', 'Q', 'L'}) used_[letter - 'A'] = true;
-        if (p.present) use_p(motion_code != nullptr ? motion_code->text : "the canned cycle");
-        cycle(column, !(was_cycle && previous_cycle == state_.cycle));
+        if (p.present) use_p(c, motion_code != nullptr ? motion_code->text : "the canned cycle");
+        cycle(column, !(c.was_cycle && c.previous_cycle == state_.cycle));
         break;
       case Motion::ArcClockwise:
       case Motion::ArcCounterClockwise:
         for (char letter : {'I', 'J', 'K', 'R'}) used_[letter - 'A'] = true;
-        if (p.present) use_p(state_.motion == Motion::ArcClockwise ? "G2" : "G3");
+        if (p.present) use_p(c, state_.motion == Motion::ArcClockwise ? "G2" : "G3");
         arc(column);
         break;
     }
   }
+  return line_moves;
+}
+
+// M97, M98 or M99 after the line's motion: false when the program ends here.
+bool Reader::call_or_return(const LineCodes& c) {
+  const Word& pw = word('P');
+  const Word& lw = word('L');
+  used_['P' - 'A'] = used_['L' - 'A'] = true;
+  if (lw.present && (lw.value < 0.0 || lw.value != std::floor(lw.value)))
+    fail(lw.column, c.flow->text + " L " + num(lw.value) + " (expected a whole number of passes)");
+  if (pw.present && (pw.value < 0.0 || pw.value != std::floor(pw.value) || pw.value > 99999999.0)) {
+    fail(pw.column, c.flow->text + " P " + num(pw.value) + " (expected a whole number)");
+  }
+  if (c.flow->number == 99) {
+    if (!fanuc_return()) {
+      // M99 in the main program: the control starts it again, endlessly; read once.
+      warn(c.flow->column, "M99 in the main program (the control runs it again from the top, endlessly); read once");
+      return false;
+    }
+    return true;
+  }
+  if (!pw.present) fail(c.flow->column, c.flow->text + " without P (expected " + c.flow->text + " P<number>)");
+  long long program = static_cast<long long>(pw.value), repeats = lw.present ? static_cast<long long>(lw.value) : 1;
+  if (c.flow->number == 98 && !lw.present && options_.flavor == GcodeOptions::Flavor::Fanuc && program > 9999) {
+    repeats = program / 10000;  // Fanuc: M98 P30012 runs O0012 three times
+    program %= 10000;
+  }
+  fanuc_call(Frame::Kind::Subprogram, c.flow->number == 97 ? -program : program, repeats, c.flow->column,
+             c.flow->text + " P" + num(pw.value));
+  return true;
+}
+
+// Words no code on the line used (rs274ngc: "X word with no G code that uses it").
+void Reader::check_unused_words() {
+  for (char letter : {'I', 'J', 'K', 'R', 'P', 'Q', 'H', 'D', 'L', 'E'}) {
+    const Word& w = word(letter);
+    if (!w.present || used_[letter - 'A']) continue;
+    // Fanuc and Haas keep an H or D (offset number) given without G43 or G41/G42, as in
+    // "G53 G0 H0 Z0" or "G43 H13 D13"; it does not move the tip here, where tool lengths and
+    // radii come from the tool library.
+    if ((letter == 'H' || letter == 'D') && options_.flavor != GcodeOptions::Flavor::LinuxCnc && w.value >= 0.0 &&
+        is_whole(w.value)) {
+      continue;
+    }
+    std::string users = "a G code";
+    if (letter == 'E') fail(w.column, "word letter 'E' with no M66, M67 or M68 to use it");
+    switch (letter) {
+      case 'I':
+      case 'J':
+      case 'K':
+      case 'R':
+        users = "G2/G3 arc, G10 or a canned cycle";
+        break;
+      case 'P':
+        users = "G4, G2/G3, G10, G64 or a canned cycle";
+        break;
+      case 'Q':
+        users = "G64 or G73/G83";
+        break;
+      case 'L':
+        users = "G10 or a canned cycle";
+        break;
+      case 'E':
+        users = "M66, M67 or M68";
+        break;
+      case 'H':
+        users = "G43";
+        break;
+      default:
+        break;
+    }
+    fail(w.column, std::string(1, letter) + " word with no " + users + " to use it");
+  }
+}
+
+bool Reader::execute() {
+  Line& ln = line_words_;
+  used_.fill(false);
+  lenient_ = false;
+  tcp_m_code_ = -1;
+  if (o_column_ != 0) {  // a Fanuc program number alone on its line
+    if (options_.flavor == GcodeOptions::Flavor::LinuxCnc || !current_->executed) return true;
+    // The next program's number after this program's blocks: this one ends (no M30 before it).
+    if (frames_.size() > 1)
+      fail(o_column_, "a program number inside a called program (expected M99 before the next program)");
+    warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
+    return false;
+  }
+  if (!current_->executed) {  // a block with words (not a comment line) has run
+    current_->executed = !ln.g.empty() || !ln.m.empty() || !assignments_.empty() ||
+                         std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });
+  }
+
+  if (macro_call()) return true;
+  LineCodes c = codes_of_line();
+  read_m_codes(c);
+  check_letters(c);
+  set_feed_speed_tool(c);
+  set_plane_and_frames(c);
+  set_modes(c);
+  const bool line_moves = run_motion(c);
 
   // Fanuc G66: the modal macro after a line that moves an axis (never from inside one).
   const bool modal_call =
       modal_call_ && line_moves && std::none_of(frames_.begin(), frames_.end(), [](const Frame& f) { return f.modal; });
-  if (modal_call && flow_code != nullptr) {
-    fail(flow_code->column, flow_code->text + " on a line that calls the G66 macro (expected it on a line of its own)");
+  if (modal_call && c.flow != nullptr) {
+    fail(c.flow->column, c.flow->text + " on a line that calls the G66 macro (expected it on a line of its own)");
   }
-
-  // --- Subprogram calls and returns, after the line's motion.
-  if (flow_code != nullptr) {
-    const Word& pw = word('P');
-    const Word& lw = word('L');
-    used_['P' - 'A'] = used_['L' - 'A'] = true;
-    if (lw.present && (lw.value < 0.0 || lw.value != std::floor(lw.value)))
-      fail(lw.column, flow_code->text + " L " + num(lw.value) + " (expected a whole number of passes)");
-    if (pw.present && (pw.value < 0.0 || pw.value != std::floor(pw.value) || pw.value > 99999999.0)) {
-      fail(pw.column, flow_code->text + " P " + num(pw.value) + " (expected a whole number)");
-    }
-    if (flow_code->number == 99) {
-      if (!fanuc_return()) {
-        // M99 in the main program: the control starts it again, endlessly; read once.
-        warn(flow_code->column,
-             "M99 in the main program (the control runs it again from the top, endlessly); read once");
-        return false;
-      }
-      return true;
-    }
-    if (!pw.present)
-      fail(flow_code->column, flow_code->text + " without P (expected " + flow_code->text + " P<number>)");
-    long long program = static_cast<long long>(pw.value), repeats = lw.present ? static_cast<long long>(lw.value) : 1;
-    if (flow_code->number == 98 && !lw.present && options_.flavor == GcodeOptions::Flavor::Fanuc && program > 9999) {
-      repeats = program / 10000;  // Fanuc: M98 P30012 runs O0012 three times
-      program %= 10000;
-    }
-    fanuc_call(Frame::Kind::Subprogram, flow_code->number == 97 ? -program : program, repeats, flow_code->column,
-               flow_code->text + " P" + num(pw.value));
-    return true;
-  }
-
-  // --- Words no code on the line used (rs274ngc: "X word with no G code that uses it").
-  if (!lenient_) {
-    for (char letter : {'I', 'J', 'K', 'R', 'P', 'Q', 'H', 'D', 'L', 'E'}) {
-      const Word& w = word(letter);
-      if (!w.present || used_[letter - 'A']) continue;
-      // Fanuc and Haas keep an H or D (offset number) given without G43 or G41/G42, as in
-      // "G53 G0 H0 Z0" or "G43 H13 D13"; it does not move the tip here, where tool lengths and
-      // radii come from the tool library.
-      if ((letter == 'H' || letter == 'D') && options_.flavor != GcodeOptions::Flavor::LinuxCnc && w.value >= 0.0 &&
-          is_whole(w.value)) {
-        continue;
-      }
-      std::string users = "a G code";
-      if (letter == 'E') fail(w.column, "word letter 'E' with no M66, M67 or M68 to use it");
-      switch (letter) {
-        case 'I':
-        case 'J':
-        case 'K':
-        case 'R':
-          users = "G2/G3 arc, G10 or a canned cycle";
-          break;
-        case 'P':
-          users = "G4, G2/G3, G10, G64 or a canned cycle";
-          break;
-        case 'Q':
-          users = "G64 or G73/G83";
-          break;
-        case 'L':
-          users = "G10 or a canned cycle";
-          break;
-        case 'E':
-          users = "M66, M67 or M68";
-          break;
-        case 'H':
-          users = "G43";
-          break;
-        default:
-          break;
-      }
-      fail(w.column, std::string(1, letter) + " word with no " + users + " to use it");
-    }
-  }
+  if (c.flow != nullptr) return call_or_return(c);
+  if (!lenient_) check_unused_words();
 
   // M0, M1, M60 and the program's end send a held compensated move.
-  if (m_code[0] || m_code[1] || m_code[60] || program_end) {
-    comp_stop(program_end, ln.m.empty() ? 1 : ln.m.front().column);
+  if (c.m_code[0] || c.m_code[1] || c.m_code[60] || c.program_end) {
+    comp_stop(c.program_end, ln.m.empty() ? 1 : ln.m.front().column);
   }
-  if (program_end) {
+  if (c.program_end) {
     // LinuxCNC M2/M30: G54, G17, G90, G94, G40, M5, M9 and motion mode G1; units, tool,
     // feed and position stay. Nothing after this line is read. A control's reset also ends a
     // tilted work plane (G69).
@@ -3929,7 +4002,7 @@ bool Reader::execute() {
     return false;
   }
   if (modal_call) {
-    fanuc_call(Frame::Kind::Macro, modal_call_->program, modal_call_->repeats, axis_column, modal_call_->what,
+    fanuc_call(Frame::Kind::Macro, modal_call_->program, modal_call_->repeats, c.axis_column, modal_call_->what,
                modal_call_->arguments, true);
   }
   return true;

@@ -98,41 +98,47 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
   }
   job.servo = s;
 }
-}  // namespace
+// One key of a job file being read: its node (null where absent), the job's folder.
+struct Section {
+  const YamlReader& yaml;
+  const YAML::Node& node;
+  const fs::path& base;
+  Job& job;
+};
 
-std::string display_name(const std::string& path, const std::string& job_file) {
-  const fs::path base = fs::absolute(job_file).parent_path();
-  const fs::path rel = fs::path(path).lexically_relative(base);
-  return rel.empty() || *rel.begin() == ".." ? path : rel.string();
-}
-
-Job read_job(const std::string& path) {
-  const YamlReader yaml(path);
-  const YAML::Node root = yaml.load();
-  if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
-  yaml.only_keys(root, "",
-                 {"job", "machine", "tools", "program", "offsets", "stock", "design", "engine", "report", "densify",
-                  "feed", "servo", "errors", "start"});
-  const fs::path base = fs::absolute(fs::path(path)).parent_path();
-  Job job;
-  job.file = path;
-  job.name = root["job"] ? yaml.text(root["job"], "job") : fs::path(path).stem().string();
-  if (root["machine"]) job.machine = yaml.text(root["machine"], "machine");
+// machine: a bundled machine's name or a machine file relative to the job (3axis when absent).
+void read_machine_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  if (s.node) job.machine = yaml.text(s.node, "machine");
   // A bundled machine's name or a machine file relative to the job; read and validated here
   // so that a bad machine file stops the job before anything is cut.
   job.machine_file = resolve_machine(job.machine);
   if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
   if (!fs::exists(job.machine_file))
-    yaml.fail(root["machine"], "machine",
+    yaml.fail(s.node, "machine",
               "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
               "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " +
                   job.machine_file + ")");
   job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
+}
 
-  job.tools_file = resolve(base, yaml.text(yaml.require(root, "tools", ""), "tools"));
+// tools: the tool library file.
+void read_tools_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  job.tools_file = resolve(base, yaml.text(s.node, "tools"));
   job.tools = read_tool_library(job.tools_file);
+}
 
-  const YAML::Node program = yaml.require(root, "program", "");
+// program: the program files and how to read them.
+void read_program_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  const YAML::Node& program = s.node;
   yaml.only_keys(program, "program",
                  {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes",
                   "initial_tool", "block_delete", "arc_tolerance"});
@@ -202,20 +208,31 @@ Job read_job(const std::string& path) {
     job.unsupported_as_warning = mode == "warn";
     job.unknown_m_code_as_error = mode == "error";
   }
+}
 
-  if (const YAML::Node offsets = root["offsets"]) {
-    if (!offsets.IsMap()) yaml.fail(offsets, "offsets", "a map like {G54: [x, y, z]}");
-    for (const auto& kv : offsets) {
-      const std::string name = kv.first.Scalar();
-      static const char* kNames[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
-      bool ok = false;
-      for (const char* n : kNames) ok = ok || name == n;
-      if (!ok) yaml.fail(kv.first, "offsets." + name, "a work offset name G54..G59, G59.1..G59.3");
-      job.offsets_mm[name] = yaml.vec3(kv.second, "offsets." + name);
-    }
+// offsets: work offsets by name, mm.
+void read_offsets_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& offsets = s.node;
+
+  if (!offsets.IsMap()) yaml.fail(offsets, "offsets", "a map like {G54: [x, y, z]}");
+  for (const auto& kv : offsets) {
+    const std::string name = kv.first.Scalar();
+    static const char* kNames[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
+    bool ok = false;
+    for (const char* n : kNames) ok = ok || name == n;
+    if (!ok) yaml.fail(kv.first, "offsets." + name, "a work offset name G54..G59, G59.1..G59.3");
+    job.offsets_mm[name] = yaml.vec3(kv.second, "offsets." + name);
   }
+}
 
-  const YAML::Node stock = yaml.require(root, "stock", "");
+// stock: exactly one of box, cylinder or mesh.
+void read_stock_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  const YAML::Node& stock = s.node;
   yaml.only_keys(stock, "stock", {"box", "cylinder", "mesh"});
   if (stock.size() != 1) yaml.fail(stock, "stock", "exactly one of box, cylinder or mesh");
   if (const YAML::Node box = stock["box"]) {
@@ -243,101 +260,190 @@ Job read_job(const std::string& path) {
     job.stock.mesh_file =
         resolve(base, yaml.text(mesh.IsMap() ? yaml.require(mesh, "file", "stock.mesh") : mesh, "stock.mesh"));
   }
+}
 
-  if (const YAML::Node design = root["design"]) {
-    yaml.only_keys(design, "design", {"file", "transform"});
-    DesignSpec d;
-    d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
-    if (const YAML::Node t = design["transform"]) {
-      yaml.only_keys(t, "design.transform", {"translate", "rotate_deg"});
-      if (t["translate"]) d.translate_mm = yaml.vec3(t["translate"], "design.transform.translate");
-      if (t["rotate_deg"]) d.rotate_deg = yaml.vec3(t["rotate_deg"], "design.transform.rotate_deg");
-    }
-    job.design = d;
-  }
+// design: the part to compare with, placed by its transform.
+void read_design_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  const YAML::Node& design = s.node;
 
-  if (const YAML::Node engine = root["engine"]) {
-    yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
-    if (engine["kind"]) {
-      const std::string kind = yaml.text(engine["kind"], "engine.kind");
-      if (kind == "dexel")
-        job.engine = Engine::Dexel;
-      else if (kind == "vdb")
-        job.engine = Engine::Vdb;
-      else if (kind == "both")
-        job.engine = Engine::Both;
-      else
-        yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
-    }
-    if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
-    if (const YAML::Node threads = engine["threads"]) {
-      if (threads.IsScalar() && threads.Scalar() == "auto")
-        job.threads = 0;
-      else {
-        job.threads = yaml.integer(threads, "engine.threads");
-        if (job.threads < 1) yaml.fail(threads, "engine.threads", "auto or a positive count");
-      }
-    }
+  yaml.only_keys(design, "design", {"file", "transform"});
+  DesignSpec d;
+  d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
+  if (const YAML::Node t = design["transform"]) {
+    yaml.only_keys(t, "design.transform", {"translate", "rotate_deg"});
+    if (t["translate"]) d.translate_mm = yaml.vec3(t["translate"], "design.transform.translate");
+    if (t["rotate_deg"]) d.rotate_deg = yaml.vec3(t["rotate_deg"], "design.transform.rotate_deg");
   }
+  job.design = d;
+}
 
-  job.out_dir = resolve(base, "out/" + job.name);
-  if (const YAML::Node report = root["report"]) {
-    yaml.only_keys(report, "report",
-                   {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
-    if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
-    if (report["gouge_tolerance"])
-      job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
-    if (report["excess_tolerance"])
-      job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
-    if (report["collision_tolerance"])
-      job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
-    if (const YAML::Node page = report["page_triangles"]) {
-      const int n = yaml.integer(page, "report.page_triangles");
-      if (n < 1000)
-        yaml.fail(page, "report.page_triangles", "a count of at least 1000 (the machined mesh shown in report.html)");
-      job.page_triangles = static_cast<std::size_t>(n);
+// engine: kind, resolution (mm) and threads.
+void read_engine_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& engine = s.node;
+
+  yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
+  if (engine["kind"]) {
+    const std::string kind = yaml.text(engine["kind"], "engine.kind");
+    if (kind == "dexel")
+      job.engine = Engine::Dexel;
+    else if (kind == "vdb")
+      job.engine = Engine::Vdb;
+    else if (kind == "both")
+      job.engine = Engine::Both;
+    else
+      yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
+  }
+  if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
+  if (const YAML::Node threads = engine["threads"]) {
+    if (threads.IsScalar() && threads.Scalar() == "auto")
+      job.threads = 0;
+    else {
+      job.threads = yaml.integer(threads, "engine.threads");
+      if (job.threads < 1) yaml.fail(threads, "engine.threads", "auto or a positive count");
     }
   }
-  if (const YAML::Node densify = root["densify"]) {
-    yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
-    if (densify["chord_tolerance"])
-      job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
-    if (densify["step"]) job.step_mm = yaml.positive(densify["step"], "densify.step");
-    if (densify["angle"]) job.angle_step_deg = yaml.positive(densify["angle"], "densify.angle");
-    if (densify["tolerance"]) job.densify_tolerance_mm = yaml.positive(densify["tolerance"], "densify.tolerance");
-    job.densify_given = true;
+}
+
+// report: the output folder and the tolerances (mm).
+void read_report_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const fs::path& base = s.base;
+  const YAML::Node& report = s.node;
+
+  yaml.only_keys(report, "report",
+                 {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
+  if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
+  if (report["gouge_tolerance"])
+    job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
+  if (report["excess_tolerance"])
+    job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
+  if (report["collision_tolerance"])
+    job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
+  if (const YAML::Node page = report["page_triangles"]) {
+    const int n = yaml.integer(page, "report.page_triangles");
+    if (n < 1000)
+      yaml.fail(page, "report.page_triangles", "a count of at least 1000 (the machined mesh shown in report.html)");
+    job.page_triangles = static_cast<std::size_t>(n);
   }
-  if (const YAML::Node feed = root["feed"]) {
-    yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
-    if (feed["acceleration"])
-      job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
-    if (feed["jerk"]) job.feed.path_jerk_mm_per_s3 = yaml.positive(feed["jerk"], "feed.jerk");
-    if (feed["rapid"]) job.feed.rapid_mm_per_min = yaml.positive(feed["rapid"], "feed.rapid");
-    if (feed["lookahead"]) {
-      job.feed.lookahead_blocks = yaml.integer(feed["lookahead"], "feed.lookahead");
-      if (job.feed.lookahead_blocks < 1) yaml.fail(feed["lookahead"], "feed.lookahead", "a positive number of blocks");
-    }
+}
+
+// densify: chord tolerance, step (mm), angle (deg), tolerance (mm).
+void read_densify_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& densify = s.node;
+
+  yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
+  if (densify["chord_tolerance"])
+    job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
+  if (densify["step"]) job.step_mm = yaml.positive(densify["step"], "densify.step");
+  if (densify["angle"]) job.angle_step_deg = yaml.positive(densify["angle"], "densify.angle");
+  if (densify["tolerance"]) job.densify_tolerance_mm = yaml.positive(densify["tolerance"], "densify.tolerance");
+  job.densify_given = true;
+}
+
+// feed: the path limits where the machine gives none.
+void read_feed_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& feed = s.node;
+
+  yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
+  if (feed["acceleration"])
+    job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
+  if (feed["jerk"]) job.feed.path_jerk_mm_per_s3 = yaml.positive(feed["jerk"], "feed.jerk");
+  if (feed["rapid"]) job.feed.rapid_mm_per_min = yaml.positive(feed["rapid"], "feed.rapid");
+  if (feed["lookahead"]) {
+    job.feed.lookahead_blocks = yaml.integer(feed["lookahead"], "feed.lookahead");
+    if (job.feed.lookahead_blocks < 1) yaml.fail(feed["lookahead"], "feed.lookahead", "a positive number of blocks");
   }
-  if (const YAML::Node servo = root["servo"]) read_servo(yaml, servo, job);
-  if (const YAML::Node start = root["start"]) {
-    // Where the tool's tip is when the program starts, in machine coordinates (G53: the
-    // workpiece frame without work offsets, mm); axes not named are at the machine's home.
-    if (!start.IsMap()) yaml.fail(start, "start", "a map like {X: 0, Y: 0, Z: 100} (mm, G53 coordinates)");
-    yaml.only_keys(start, "start", {"X", "Y", "Z"});
-    std::map<char, double> values;
-    for (const char* letter : {"X", "Y", "Z"}) {
-      if (!start[letter]) continue;
-      const double v = yaml.number(start[letter], std::string("start.") + letter);
-      if (std::abs(v) > 1e6) yaml.fail(start[letter], std::string("start.") + letter, "a position within +-1e6 mm");
-      values[letter[0]] = v;
-    }
-    job.start_mm = values;
+}
+
+// servo: the axes' loops.
+void read_servo_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  read_servo(yaml, s.node, job);
+}
+
+// start: the tip when the program starts (G53, mm).
+void read_start_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& start = s.node;
+
+  // Where the tool's tip is when the program starts, in machine coordinates (G53: the
+  // workpiece frame without work offsets, mm); axes not named are at the machine's home.
+  if (!start.IsMap()) yaml.fail(start, "start", "a map like {X: 0, Y: 0, Z: 100} (mm, G53 coordinates)");
+  yaml.only_keys(start, "start", {"X", "Y", "Z"});
+  std::map<char, double> values;
+  for (const char* letter : {"X", "Y", "Z"}) {
+    if (!start[letter]) continue;
+    const double v = yaml.number(start[letter], std::string("start.") + letter);
+    if (std::abs(v) > 1e6) yaml.fail(start[letter], std::string("start.") + letter, "a position within +-1e6 mm");
+    values[letter[0]] = v;
   }
-  if (const YAML::Node errors = root["errors"]) {
-    const std::string e = yaml.text(errors, "errors");
-    if (e != "machine" && e != "none")
-      yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
-    job.apply_errors = e == "machine";
+  job.start_mm = values;
+}
+
+// errors: machine or none.
+void read_errors_key(const Section& s) {
+  const YamlReader& yaml = s.yaml;
+  Job& job = s.job;
+  const YAML::Node& errors = s.node;
+
+  const std::string e = yaml.text(errors, "errors");
+  if (e != "machine" && e != "none")
+    yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
+  job.apply_errors = e == "machine";
+}
+
+// A job file's keys, read in this order: whether a job must give it, and its reader (run
+// for an absent key too where it sets a default: the machine).
+struct JobKey {
+  const char* name;
+  enum { Optional, Required, Default } presence;
+  void (*read)(const Section&);
+};
+const JobKey kJobKeys[] = {
+    {"machine", JobKey::Default, read_machine_key},  {"tools", JobKey::Required, read_tools_key},
+    {"program", JobKey::Required, read_program_key}, {"offsets", JobKey::Optional, read_offsets_key},
+    {"stock", JobKey::Required, read_stock_key},     {"design", JobKey::Optional, read_design_key},
+    {"engine", JobKey::Optional, read_engine_key},   {"report", JobKey::Optional, read_report_key},
+    {"densify", JobKey::Optional, read_densify_key}, {"feed", JobKey::Optional, read_feed_key},
+    {"servo", JobKey::Optional, read_servo_key},     {"start", JobKey::Optional, read_start_key},
+    {"errors", JobKey::Optional, read_errors_key},
+};
+
+}  // namespace
+
+std::string display_name(const std::string& path, const std::string& job_file) {
+  const fs::path base = fs::absolute(job_file).parent_path();
+  const fs::path rel = fs::path(path).lexically_relative(base);
+  return rel.empty() || *rel.begin() == ".." ? path : rel.string();
+}
+
+Job read_job(const std::string& path) {
+  const YamlReader yaml(path);
+  const YAML::Node root = yaml.load();
+  if (!root.IsMap()) yaml.fail(root, "job", "a map of job settings");
+  std::vector<std::string> keys = {"job"};
+  for (const JobKey& k : kJobKeys) keys.push_back(k.name);
+  yaml.only_keys(root, "", keys);
+  const fs::path base = fs::absolute(fs::path(path)).parent_path();
+  Job job;
+  job.file = path;
+  job.name = root["job"] ? yaml.text(root["job"], "job") : fs::path(path).stem().string();
+  job.out_dir = resolve(base, "out/" + job.name);  // report.out may move it
+  for (const JobKey& k : kJobKeys) {
+    const YAML::Node node = k.presence == JobKey::Required ? yaml.require(root, k.name, "") : root[k.name];
+    if (node || k.presence == JobKey::Default) k.read({yaml, node, base, job});
   }
   return job;
 }

@@ -37,14 +37,19 @@ void YamlReader::fail(const YAML::Node& node, const std::string& key, const std:
 
 void YamlReader::only_keys(const YAML::Node& map, const std::string& where,
                            std::initializer_list<const char*> allowed) const {
+  only_keys(map, where, std::vector<std::string>(allowed.begin(), allowed.end()));
+}
+
+void YamlReader::only_keys(const YAML::Node& map, const std::string& where,
+                           const std::vector<std::string>& allowed) const {
   if (!map.IsMap()) fail(map, where, "a map of keys");
   for (const auto& kv : map) {
     const std::string key = kv.first.as<std::string>();
     bool known = false;
     std::string list;
-    for (const char* a : allowed) {
+    for (const std::string& a : allowed) {
       known = known || key == a;
-      list += (list.empty() ? "" : ", ") + std::string(a);
+      list += (list.empty() ? "" : ", ") + a;
     }
     if (!known) fail(kv.first, where.empty() ? key : where + "." + key, "one of the keys " + list + " (unknown key)");
   }

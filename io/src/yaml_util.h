@@ -7,6 +7,7 @@
 
 #include <initializer_list>
 #include <string>
+#include <vector>
 
 #include "vcut/io/input_error.h"
 
@@ -22,6 +23,7 @@ class YamlReader {
   [[noreturn]] void fail(const YAML::Node& node, const std::string& key, const std::string& expected) const;
   // Rejects keys of a map that are not in `allowed` (typos are errors, not silence).
   void only_keys(const YAML::Node& map, const std::string& where, std::initializer_list<const char*> allowed) const;
+  void only_keys(const YAML::Node& map, const std::string& where, const std::vector<std::string>& allowed) const;
 
   const YAML::Node require(const YAML::Node& map, const std::string& key, const std::string& where) const;
   double number(const YAML::Node& node, const std::string& key) const;  // finite

@@ -63,7 +63,7 @@ class EventLog {
       CheckEvent& e = events_[o.index];
       if (block <= o.last_block + 1) {
         if (block != o.last_block && src.file == o.first.file && src.line > o.first.line)
-          e.line = program_.where(o.first) + "-" + std::to_string(src.line);
+          e.line = program_.where(kinematics::SourceSpan{o.first.file, o.first.line, src.line});
         o.last_block = block;
         if (depth_mm > e.depth_mm) {
           e.depth_mm = depth_mm;

@@ -267,11 +267,8 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     double miss = 0.0;
     while (j < blocks.size() && blocks[j].singular) miss = std::max(miss, blocks[j++].singular_miss_rad);
     const kinematics::SourceRef a = program.blocks[i].source, b = program.blocks[j - 1].source;
-    std::string where = program.where(a);
-    if (b.file == a.file && b.line != a.line)
-      where += "-" + std::to_string(b.line);
-    else if (b.file != a.file)
-      where += " to " + program.where(b);
+    std::string where = program.where(program.span_of_blocks(static_cast<int>(i), static_cast<int>(j - 1)));
+    if (b.file != a.file) where += " to " + program.where(b);
     char detail[160];
     std::snprintf(detail, sizeof detail,
                   "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "

@@ -130,7 +130,7 @@ std::vector<CollisionRecord> collision_records(const std::vector<removal::Collis
     if (block != r->last_block) {
       r->last_block = block;
       if (b.source.file == r->first_line.file && b.source.line > r->first_line.line)
-        r->line = program.where(r->first_line) + "-" + std::to_string(b.source.line);
+        r->line = program.where(kinematics::SourceSpan{r->first_line.file, r->first_line.line, b.source.line});
     }
     ++r->moves;
     if (c.depth_mm > r->depth_mm) {
