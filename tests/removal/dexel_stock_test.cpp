@@ -562,6 +562,35 @@ TEST(DexelStock, BatchBoundariesDoNotChangeTheCut) {
   same_rays(stock, 0);
 }
 
+// The stock keeps the geometry of the moves its ray endpoints name (the mesher projects onto
+// them), not of every move: a 3 mm ball's groove cut in 400,000 moves of 0.045 um leaves at
+// most 2 endpoints on each of the stock's ~2,400 rays (v = 0.5 mm), so at most ~4,800 moves
+// are named. The record is pruned whenever it has doubled and grown by 65,536 moves: at most
+// 2 x 4,800 + 65,536 moves (92 bytes each) are held, twice that with vector growth: under
+// 14 MB. Holding every move would take 400,000 x 92 bytes = 36.8 MB.
+TEST(DexelStock, MoveRecordGrowsWithTheSurfaceNotTheProgram) {
+  const BoxShape box{{0, 0, 0}, {20, 10, 10}};
+  DexelStock stock(box, 0.5);
+  const std::size_t before = stock.memory_bytes();
+  MoveList list;
+  list.cutters.push_back(make(CutterType::Ball, 3, 1.5, 12));
+  const int n = 400000;
+  Eigen::Vector3d p(1, 5, 9);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d q = p + Eigen::Vector3d(18.0 / n, 0, 0);
+    list.moves.push_back(line(p, q));
+    p = q;
+  }
+  const CutResult cut = stock.cut(list, {});
+  const std::size_t grown = stock.memory_bytes() - before;
+  EXPECT_LT(grown, std::size_t{14} << 20);
+  // The cut happened: the ball (centre 0.5 mm above the top) leaves a groove whose section is
+  // the circular segment of height h = 1, r^2 acos((r - h) / r) - (r - h) sqrt(2 r h - h^2) =
+  // 2.0626 mm2 for r = 1.5, over 18 mm, plus the spherical cap pi h^2 (3 r - h) / 3 = 3.665
+  // mm3 at the two ends together: 40.79 mm3, within 15 % at v = 0.5 mm.
+  EXPECT_NEAR(cut.removed_volume_mm3, 40.79, 0.15 * 40.79);
+}
+
 // The surface from dual contouring: closed and consistently wound (every directed edge
 // meets its reverse exactly once), enclosing the analytic volume, its vertices on the exact
 // surface; the untouched faces merged in both modes, the curved groove only with flat
