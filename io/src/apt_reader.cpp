@@ -1131,15 +1131,7 @@ void read_apt(std::istream& in, const std::string& name, const AptOptions& optio
   const int file_index = static_cast<int>(out.program.files.size());
   out.program.files.push_back(name);
   Reader reader(name, options, out, state, file_index);
-  try {
-    reader.run(in);
-  } catch (const std::bad_alloc&) {
-    throw InputError(name, 0, 0, "out of memory (too many moves)");
-  } catch (const std::length_error&) {
-    throw InputError(name, 0, 0, "out of memory (too many moves)");
-  } catch (const std::ios_base::failure&) {
-    throw InputError(name, 0, 0, "read error (expected a readable text file)");
-  }
+  detail::read_guarded(name, [&] { reader.run(in); });
   state.rapid_next = false;  // RAPID applies to the next motion of its own file only
 }
 

@@ -14,11 +14,29 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <ios>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <system_error>
 #include <vector>
 
 namespace vcut::io::detail {
+
+// Runs a reader, turning what the standard library throws on a file too big to hold or
+// unreadable into an InputError naming the file.
+template <class Read>
+void read_guarded(const std::string& name, Read&& read) {
+  try {
+    read();
+  } catch (const std::bad_alloc&) {
+    throw InputError(name, 0, 0, "out of memory (too many moves)");
+  } catch (const std::length_error&) {
+    throw InputError(name, 0, 0, "out of memory (too many moves)");
+  } catch (const std::ios_base::failure&) {
+    throw InputError(name, 0, 0, "read error (expected a readable text file)");
+  }
+}
 
 inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
 inline bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }

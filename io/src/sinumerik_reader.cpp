@@ -1367,15 +1367,7 @@ void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOp
   const int file_index = static_cast<int>(program.files.size());
   program.files.push_back(name);
   Reader reader(name, options, program, state, file_index);
-  try {
-    reader.run(in);
-  } catch (const std::bad_alloc&) {
-    throw InputError(name, 0, 0, "out of memory (too many moves)");
-  } catch (const std::length_error&) {
-    throw InputError(name, 0, 0, "out of memory (too many moves)");
-  } catch (const std::ios_base::failure&) {
-    throw InputError(name, 0, 0, "read error (expected a readable text file)");
-  }
+  detail::read_guarded(name, [&] { reader.run(in); });
   detail::warn_unprogrammed_axes(state.pending, name, program);
 }
 
