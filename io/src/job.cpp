@@ -215,7 +215,6 @@ void read_offsets_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& offsets = s.node;
-
   if (!offsets.IsMap()) yaml.fail(offsets, "offsets", "a map like {G54: [x, y, z]}");
   for (const auto& kv : offsets) {
     const std::string name = kv.first.Scalar();
@@ -268,7 +267,6 @@ void read_design_key(const Section& s) {
   Job& job = s.job;
   const fs::path& base = s.base;
   const YAML::Node& design = s.node;
-
   yaml.only_keys(design, "design", {"file", "transform"});
   DesignSpec d;
   d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
@@ -285,7 +283,6 @@ void read_engine_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& engine = s.node;
-
   yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
   if (engine["kind"]) {
     const std::string kind = yaml.text(engine["kind"], "engine.kind");
@@ -315,7 +312,6 @@ void read_report_key(const Section& s) {
   Job& job = s.job;
   const fs::path& base = s.base;
   const YAML::Node& report = s.node;
-
   yaml.only_keys(report, "report",
                  {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
   if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
@@ -338,7 +334,6 @@ void read_densify_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& densify = s.node;
-
   yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
   if (densify["chord_tolerance"])
     job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
@@ -353,7 +348,6 @@ void read_feed_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& feed = s.node;
-
   yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
   if (feed["acceleration"])
     job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
@@ -377,7 +371,6 @@ void read_start_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& start = s.node;
-
   // Where the tool's tip is when the program starts, in machine coordinates (G53: the
   // workpiece frame without work offsets, mm); axes not named are at the machine's home.
   if (!start.IsMap()) yaml.fail(start, "start", "a map like {X: 0, Y: 0, Z: 100} (mm, G53 coordinates)");
@@ -397,7 +390,6 @@ void read_errors_key(const Section& s) {
   const YamlReader& yaml = s.yaml;
   Job& job = s.job;
   const YAML::Node& errors = s.node;
-
   const std::string e = yaml.text(errors, "errors");
   if (e != "machine" && e != "none")
     yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
