@@ -98,26 +98,16 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
   }
   job.servo = s;
 }
-// One key of a job file being read: its node (null where absent), the job's folder.
-struct Section {
-  const YamlReader& yaml;
-  const YAML::Node& node;
-  const fs::path& base;
-  Job& job;
-};
 
 // machine: a bundled machine's name or a machine file relative to the job (3axis when absent).
-void read_machine_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  if (s.node) job.machine = yaml.text(s.node, "machine");
+void read_machine_key(const YamlReader& yaml, const YAML::Node& node, const fs::path& base, Job& job) {
+  if (node) job.machine = yaml.text(node, "machine");
   // A bundled machine's name or a machine file relative to the job; read and validated here
   // so that a bad machine file stops the job before anything is cut.
   job.machine_file = resolve_machine(job.machine);
   if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
   if (!fs::exists(job.machine_file))
-    yaml.fail(s.node, "machine",
+    yaml.fail(node, "machine",
               "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
               "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " +
                   job.machine_file + ")");
@@ -125,20 +115,13 @@ void read_machine_key(const Section& s) {
 }
 
 // tools: the tool library file.
-void read_tools_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  job.tools_file = resolve(base, yaml.text(s.node, "tools"));
+void read_tools_key(const YamlReader& yaml, const YAML::Node& node, const fs::path& base, Job& job) {
+  job.tools_file = resolve(base, yaml.text(node, "tools"));
   job.tools = read_tool_library(job.tools_file);
 }
 
 // program: the program files and how to read them.
-void read_program_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  const YAML::Node& program = s.node;
+void read_program_key(const YamlReader& yaml, const YAML::Node& program, const fs::path& base, Job& job) {
   yaml.only_keys(program, "program",
                  {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes",
                   "initial_tool", "block_delete", "arc_tolerance"});
@@ -211,10 +194,7 @@ void read_program_key(const Section& s) {
 }
 
 // offsets: work offsets by name, mm.
-void read_offsets_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& offsets = s.node;
+void read_offsets_key(const YamlReader& yaml, const YAML::Node& offsets, const fs::path& /*base*/, Job& job) {
   if (!offsets.IsMap()) yaml.fail(offsets, "offsets", "a map like {G54: [x, y, z]}");
   for (const auto& kv : offsets) {
     const std::string name = kv.first.Scalar();
@@ -227,11 +207,7 @@ void read_offsets_key(const Section& s) {
 }
 
 // stock: exactly one of box, cylinder or mesh.
-void read_stock_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  const YAML::Node& stock = s.node;
+void read_stock_key(const YamlReader& yaml, const YAML::Node& stock, const fs::path& base, Job& job) {
   yaml.only_keys(stock, "stock", {"box", "cylinder", "mesh"});
   if (stock.size() != 1) yaml.fail(stock, "stock", "exactly one of box, cylinder or mesh");
   if (const YAML::Node box = stock["box"]) {
@@ -262,11 +238,7 @@ void read_stock_key(const Section& s) {
 }
 
 // design: the part to compare with, placed by its transform.
-void read_design_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  const YAML::Node& design = s.node;
+void read_design_key(const YamlReader& yaml, const YAML::Node& design, const fs::path& base, Job& job) {
   yaml.only_keys(design, "design", {"file", "transform"});
   DesignSpec d;
   d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
@@ -279,10 +251,7 @@ void read_design_key(const Section& s) {
 }
 
 // engine: kind, resolution (mm) and threads.
-void read_engine_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& engine = s.node;
+void read_engine_key(const YamlReader& yaml, const YAML::Node& engine, const fs::path& /*base*/, Job& job) {
   yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
   if (engine["kind"]) {
     const std::string kind = yaml.text(engine["kind"], "engine.kind");
@@ -307,11 +276,7 @@ void read_engine_key(const Section& s) {
 }
 
 // report: the output folder and the tolerances (mm).
-void read_report_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const fs::path& base = s.base;
-  const YAML::Node& report = s.node;
+void read_report_key(const YamlReader& yaml, const YAML::Node& report, const fs::path& base, Job& job) {
   yaml.only_keys(report, "report",
                  {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
   if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
@@ -330,10 +295,7 @@ void read_report_key(const Section& s) {
 }
 
 // densify: chord tolerance, step (mm), angle (deg), tolerance (mm).
-void read_densify_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& densify = s.node;
+void read_densify_key(const YamlReader& yaml, const YAML::Node& densify, const fs::path& /*base*/, Job& job) {
   yaml.only_keys(densify, "densify", {"chord_tolerance", "step", "angle", "tolerance"});
   if (densify["chord_tolerance"])
     job.chord_tolerance_mm = yaml.positive(densify["chord_tolerance"], "densify.chord_tolerance");
@@ -344,10 +306,7 @@ void read_densify_key(const Section& s) {
 }
 
 // feed: the path limits where the machine gives none.
-void read_feed_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& feed = s.node;
+void read_feed_key(const YamlReader& yaml, const YAML::Node& feed, const fs::path& /*base*/, Job& job) {
   yaml.only_keys(feed, "feed", {"acceleration", "jerk", "lookahead", "rapid"});
   if (feed["acceleration"])
     job.feed.path_acceleration_mm_per_s2 = yaml.positive(feed["acceleration"], "feed.acceleration");
@@ -360,17 +319,12 @@ void read_feed_key(const Section& s) {
 }
 
 // servo: the axes' loops.
-void read_servo_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  read_servo(yaml, s.node, job);
+void read_servo_key(const YamlReader& yaml, const YAML::Node& node, const fs::path& /*base*/, Job& job) {
+  read_servo(yaml, node, job);
 }
 
 // start: the tip when the program starts (G53, mm).
-void read_start_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& start = s.node;
+void read_start_key(const YamlReader& yaml, const YAML::Node& start, const fs::path& /*base*/, Job& job) {
   // Where the tool's tip is when the program starts, in machine coordinates (G53: the
   // workpiece frame without work offsets, mm); axes not named are at the machine's home.
   if (!start.IsMap()) yaml.fail(start, "start", "a map like {X: 0, Y: 0, Z: 100} (mm, G53 coordinates)");
@@ -386,10 +340,7 @@ void read_start_key(const Section& s) {
 }
 
 // errors: machine or none.
-void read_errors_key(const Section& s) {
-  const YamlReader& yaml = s.yaml;
-  Job& job = s.job;
-  const YAML::Node& errors = s.node;
+void read_errors_key(const YamlReader& yaml, const YAML::Node& errors, const fs::path& /*base*/, Job& job) {
   const std::string e = yaml.text(errors, "errors");
   if (e != "machine" && e != "none")
     yaml.fail(errors, "errors", "machine (apply the machine file's geometric errors) or none");
@@ -401,7 +352,8 @@ void read_errors_key(const Section& s) {
 struct JobKey {
   const char* name;
   enum { Optional, Required, Default } presence;
-  void (*read)(const Section&);
+  // The key's node (null where absent) and the job's folder.
+  void (*read)(const YamlReader&, const YAML::Node&, const fs::path&, Job&);
 };
 const JobKey kJobKeys[] = {
     {"machine", JobKey::Default, read_machine_key},  {"tools", JobKey::Required, read_tools_key},
@@ -435,7 +387,7 @@ Job read_job(const std::string& path) {
   job.out_dir = resolve(base, "out/" + job.name);  // report.out may move it
   for (const JobKey& k : kJobKeys) {
     const YAML::Node node = k.presence == JobKey::Required ? yaml.require(root, k.name, "") : root[k.name];
-    if (node || k.presence == JobKey::Default) k.read({yaml, node, base, job});
+    if (node || k.presence == JobKey::Default) k.read(yaml, node, base, job);
   }
   return job;
 }

@@ -138,10 +138,9 @@ class CutMoves : public removal::MoveSource {
   std::size_t count = 0;           // the moves that cut or are a rapid's probe (report.json's "moves")
   std::size_t cutting_moves = 0;   // feed moves of the program path
   std::size_t rotating_moves = 0;  // of those, moves that turn the tool axis
-  // By move id (the order handed over): the program block it came from, whether it is a
-  // probe (it cuts nothing) and what for.
+  // By move id (the order handed over): the program block it came from, and for a probe
+  // (it cuts nothing) what it stands for.
   int block(std::size_t move) const { return blocks_[move]; }
-  bool probe(std::size_t move) const { return kinds_[move] != kCut; }
   removal::ProbeKind probe_kind(std::size_t move) const { return static_cast<removal::ProbeKind>(kinds_[move]); }
   const std::vector<int>& blocks() const { return blocks_; }
 
