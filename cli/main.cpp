@@ -7,6 +7,7 @@
 
 #include "check_command.h"
 #include "compensate_command.h"
+#include "job_command.h"
 #include "machine_commands.h"
 #include "poses_command.h"
 #include "program_command.h"
@@ -31,6 +32,8 @@ int main(int argc, char** argv) {
   vcut::cli::add_machine_commands(app, machine_commands);
   vcut::cli::ProgramCommand program_command;
   vcut::cli::add_program_command(app, program_command);
+  vcut::cli::JobCommand job_command;
+  vcut::cli::add_job_command(app, job_command);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -44,6 +47,7 @@ int main(int argc, char** argv) {
     if (const auto code = vcut::cli::run_study_command(study)) return *code;
     if (vcut::cli::run_machine_commands(machine_commands)) return 0;
     if (vcut::cli::run_program_command(program_command)) return 0;
+    if (vcut::cli::run_job_command(job_command)) return 0;
   } catch (const vcut::InputError& e) {
     std::fprintf(stderr, "vcut: error: %s\n", e.what());
     return 2;

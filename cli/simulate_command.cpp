@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "job_command.h"
 #include "progress.h"
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/job.h"
@@ -12,9 +13,12 @@
 namespace vcut::cli {
 namespace {
 
-int run_simulate(const std::string& job_file, const pipeline::SimulateOptions& base, const std::string& out,
-                 bool quiet) {
-  const io::Job job = io::read_job(job_file);
+int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base) {
+  const io::Job job = job_or_program(c.job, c.program);
+  const std::string& out = c.out;
+  const bool quiet = c.quiet;
+  // What vcut assumed for a program given alone, before anything else.
+  for (const auto& a : job.assumptions) std::fprintf(stderr, "vcut: assumed %s\n", a.c_str());
   pipeline::SimulateOptions options = base;
   const std::string out_dir = out.empty() ? job.out_dir : out;
   // Fail on an unwritable output folder before hours of cutting, not after.
@@ -55,7 +59,7 @@ int run_simulate(const std::string& job_file, const pipeline::SimulateOptions& b
 
 void add_simulate_command(CLI::App& app, SimulateCommand& c) {
   c.command = app.add_subcommand("simulate", "Cut the job's program into its stock and compare with the design");
-  c.command->add_option("job", c.job, "Job file (YAML)")->required();
+  c.command->add_option("job", c.job, "Job file (YAML), or an NC program alone (its job assumed)")->required();
   c.command->add_option("--resolution", c.resolution_mm, "Voxel size in mm (overrides engine.resolution)")
       ->check(CLI::PositiveNumber);
   c.command->add_option("--threads", c.threads, "Worker threads, 0 = all cores (overrides engine.threads)")
@@ -66,6 +70,7 @@ void add_simulate_command(CLI::App& app, SimulateCommand& c) {
                    "Refuse a stock needing more than this many MB (default 75% of RAM)")
       ->check(CLI::PositiveNumber);
   c.command->add_flag("--quiet,-q", c.quiet, "Print nothing but errors and warnings");
+  add_program_job_options(*c.command, c.program);
 }
 
 std::optional<int> run_simulate_command(const SimulateCommand& c) {
@@ -74,7 +79,9 @@ std::optional<int> run_simulate_command(const SimulateCommand& c) {
   if (c.resolution_mm > 0.0) options.resolution_mm = c.resolution_mm;
   if (c.threads >= 0) options.threads = c.threads;
   options.max_memory_mb = c.max_memory_mb;
-  return run_simulate(c.job, options, c.out, c.quiet);
+  SimulateCommand command = c;
+  command.program.resolution_mm = c.resolution_mm;
+  return run_simulate(command, options);
 }
 
 }  // namespace vcut::cli

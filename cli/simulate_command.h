@@ -1,11 +1,14 @@
 // `vcut simulate JOB [--resolution MM] [--threads N] [--out DIR] [--max-memory MB]`: the job's
-// program cut into its stock and compared with the design; the output folder written.
+// program cut into its stock and compared with the design; the output folder written. JOB may
+// be a program given alone (pipeline/program_job.h): its assumptions are printed first.
 #pragma once
 
 #include <CLI/CLI.hpp>
 
 #include <optional>
 #include <string>
+
+#include "vcut/pipeline/program_job.h"
 
 namespace vcut::cli {
 
@@ -16,6 +19,7 @@ struct SimulateCommand {
   int threads = -1;
   std::string out;
   bool quiet = false;
+  pipeline::ProgramJobOptions program;  // a program without a job file
 };
 
 void add_simulate_command(CLI::App& app, SimulateCommand& command);

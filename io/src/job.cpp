@@ -1,10 +1,12 @@
 #include "vcut/io/job.h"
 
 #include <cmath>
+#include <charconv>
 #include <cstdio>
 #include <filesystem>
 
 #include "vcut/io/machine_file.h"
+#include "tool_library_node.h"
 #include "yaml_util.h"
 
 namespace vcut::io {
@@ -114,8 +116,12 @@ void read_machine_key(const YamlReader& yaml, const YAML::Node& node, const fs::
   job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
 }
 
-// tools: the tool library file.
+// tools: the tool library file, or its `tools:` map written here.
 void read_tools_key(const YamlReader& yaml, const YAML::Node& node, const fs::path& base, Job& job) {
+  if (node.IsMap()) {
+    job.tools = read_tools(yaml, node);
+    return;
+  }
   job.tools_file = resolve(base, yaml.text(node, "tools"));
   job.tools = read_tool_library(job.tools_file);
 }
@@ -390,6 +396,34 @@ Job read_job(const std::string& path) {
     if (node || k.presence == JobKey::Default) k.read(yaml, node, base, job);
   }
   return job;
+}
+
+namespace {
+std::string number_text(double v) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, r.ptr);
+}
+std::string vec_text(const Eigen::Vector3d& v) {
+  return "[" + number_text(v.x()) + ", " + number_text(v.y()) + ", " + number_text(v.z()) + "]";
+}
+}  // namespace
+
+std::string job_yaml(const Job& job, const std::string& program_as_given) {
+  std::string s = "# The job vcut assumed for " + program_as_given + " (vcut job); check what it assumed:\n";
+  for (const std::string& a : job.assumptions) s += "#   " + a + "\n";
+  s += "job: " + job.name + "\n";
+  s += "machine: " + job.machine + "\n";
+  s += "program: {file: \"" + program_as_given + "\"";
+  if (job.dialect != "auto") s += ", dialect: " + job.dialect;
+  if (job.initial_tool > 0) s += ", initial_tool: " + std::to_string(job.initial_tool);
+  s += "}\n";
+  s += tool_library_yaml(job.tools);
+  if (job.stock.kind == StockSpec::Kind::Box)
+    s += "stock: {box: {min: " + vec_text(job.stock.box.min_mm) + ", max: " + vec_text(job.stock.box.max_mm) + "}}\n";
+  s += std::string("engine: {kind: ") + engine_name(job.engine) + ", resolution: " + number_text(job.resolution_mm) +
+       "}\n";
+  return s;
 }
 
 }  // namespace vcut::io

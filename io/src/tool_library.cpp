@@ -1,6 +1,8 @@
 #include "vcut/io/tool_library.h"
 
-#include "yaml_util.h"
+#include <charconv>
+
+#include "tool_library_node.h"
 
 namespace vcut::io {
 
@@ -9,7 +11,10 @@ ToolLibrary read_tool_library(const std::string& path) {
   const YAML::Node root = yaml.load();
   if (!root.IsMap()) yaml.fail(root, "tools", "a map with the key 'tools'");
   yaml.only_keys(root, "", {"tools"});
-  const YAML::Node tools = yaml.require(root, "tools", "");
+  return read_tools(yaml, yaml.require(root, "tools", ""));
+}
+
+ToolLibrary read_tools(const YamlReader& yaml, const YAML::Node& tools) {
   if (!tools.IsMap()) yaml.fail(tools, "tools", "a map from T number to tool");
   ToolLibrary library;
   for (const auto& kv : tools) {
@@ -97,6 +102,43 @@ ToolLibrary read_tool_library(const std::string& path) {
   }
   if (library.empty()) yaml.fail(tools, "tools", "at least one tool");
   return library;
+}
+
+namespace {
+std::string shortest(double v) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, r.ptr);
+}
+}  // namespace
+
+std::string tool_library_yaml(const ToolLibrary& tools, const std::string& indent) {
+  std::string s = indent + "tools:\n";
+  for (const auto& [number, c] : tools) {
+    s += indent + "  " + std::to_string(number) + ": {type: ";
+    switch (c.type) {
+      case removal::CutterType::Flat:
+        s += "flat";
+        break;
+      case removal::CutterType::Ball:
+        s += "ball";
+        break;
+      case removal::CutterType::BullNose:
+        s += "bull, corner_radius: " + shortest(c.corner_radius_mm);
+        break;
+      case removal::CutterType::VBit:
+        s += "vbit, angle: " + shortest(c.tip_angle_deg);
+        break;
+    }
+    s += ", diameter: " + shortest(c.diameter_mm) + ", flute_length: " + shortest(c.flute_length_mm);
+    if (c.shank_diameter_mm != c.diameter_mm) s += ", shank_diameter: " + shortest(c.shank_diameter_mm);
+    if (c.length_mm != c.flute_length_mm) s += ", length: " + shortest(c.length_mm);
+    if (c.holder_diameter_mm > 0.0)
+      s += ", holder_diameter: " + shortest(c.holder_diameter_mm) + ", holder_length: " + shortest(c.holder_length_mm);
+    if (c.gauge_length_mm != c.length_mm + c.holder_length_mm) s += ", gauge_length: " + shortest(c.gauge_length_mm);
+    s += "}\n";
+  }
+  return s;
 }
 
 }  // namespace vcut::io

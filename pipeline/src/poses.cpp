@@ -181,8 +181,9 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     if (b.tool == 0 || tool_length_mm.count(b.tool)) continue;
     const auto it = run.tools.find(b.tool);
     if (it == run.tools.end())
-      throw InputError(program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library " +
-                       io::display_name(job.tools_file, job.file));
+      throw InputError(
+          program.where(b.source) + ": tool T" + std::to_string(b.tool) + " is not in the tool library" +
+          (job.tools_file.empty() ? std::string(" of the job") : " " + io::display_name(job.tools_file, job.file)));
     tool_length_mm[b.tool] = it->second.gauge_length_mm;
     settings.cutter_length_mm = std::max(settings.cutter_length_mm, it->second.flute_length_mm);
     settings.cutter_radius_mm = std::max(settings.cutter_radius_mm, it->second.radius_mm());

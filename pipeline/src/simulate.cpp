@@ -451,13 +451,19 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
 
   // 4. Stock, and the design, read now, before the cut, so that a file that cannot be used
   // stops the run at once.
-  std::vector<std::string> hashed = {job.file, job.machine_file, job.tools_file};
-  hashed.insert(hashed.end(), job.program_files.begin(), job.program_files.end());
+  // Each input once: a job without a tool library file names none, a program simulated
+  // without a job file is its own job file.
+  std::vector<std::string> hashed;
+  auto hash = [&hashed](const std::string& f) {
+    if (!f.empty() && std::find(hashed.begin(), hashed.end(), f) == hashed.end()) hashed.push_back(f);
+  };
+  for (const std::string& f : {job.file, job.machine_file, job.tools_file}) hash(f);
+  for (const std::string& f : job.program_files) hash(f);
   const removal::StockShape shape = stock_shape(job);
-  if (job.stock.kind == io::StockSpec::Kind::Mesh) hashed.push_back(job.stock.mesh_file);
+  if (job.stock.kind == io::StockSpec::Kind::Mesh) hash(job.stock.mesh_file);
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
   std::optional<removal::TriangleMesh> design_mesh = design_of(job);  // kept for the report page
-  if (design_mesh) hashed.push_back(job.design->file);
+  if (design_mesh) hash(job.design->file);
   result.estimated_memory_mb = require_cuttable(job, moves, shape, v, options.max_memory_mb);
   // The primary engine makes the outputs; with engine: both the OpenVDB one checks it. A
   // machine-error run compares the actual with the nominal part (a few um): no flat merging.

@@ -171,6 +171,8 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     j["pose_engine"] = e;
   }
   j["warnings"] = r.warnings;
+  // A program simulated without a job file: the machine, stock, tools and resolution assumed.
+  if (!job.assumptions.empty()) j["assumptions"] = job.assumptions;
   ordered_json settings;
   settings["job_file"] = job.file;
   settings["machine"] = job.machine;

@@ -347,6 +347,7 @@ void write_report_page(const std::string& path, const std::string& template_path
   // What the readers and the pipeline warned about (M codes the machine does not declare,
   // nested comments, #3006 stops ...), each naming its file:line.
   j["warnings"] = r.warnings;
+  if (!job.assumptions.empty()) j["assumptions"] = job.assumptions;
 
   // Inside a <script> element neither "</script" nor "<!--" may appear (an NC comment could
   // hold either). '<' occurs only inside JSON strings, where "\u003c" is the same character.

@@ -217,8 +217,16 @@ function main() {
       warnings.length > 200 ? el('p', { text: `… and ${warnings.length - 200} more in report.json` }) : null)
     : null;
 
+  // A program simulated without a job file: what vcut assumed (machine, stock, tools), first.
+  const assumptions = Array.isArray(data.assumptions) ? data.assumptions : [];
+  const assumptionList = assumptions.length
+    ? el('section', { class: 'warnings assumptions', id: 'assumptions' },
+      el('h2', { text: `Assumed, with no job file (${assumptions.length}): check these` }),
+      el('ul', {}, ...assumptions.map((a) => el('li', { text: String(a) }))))
+    : null;
+
   const app = document.getElementById('app');
-  app.replaceChildren(...[header, cards, warningList, work].filter(Boolean));
+  app.replaceChildren(...[header, cards, assumptionList, warningList, work].filter(Boolean));
 
   // NC panel content.
   const showNc = (heading, facts, entries, emptyNote) => {

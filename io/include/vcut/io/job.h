@@ -42,7 +42,10 @@ struct Job {
   std::string machine_file;       // the machine file it names
   kinematics::MachineSpec machine_spec;
   std::vector<std::string> warnings;  // from reading the job's files
-  std::string tools_file;
+  // What vcut assumed for a program simulated without a job file (pipeline/program_job.h):
+  // the machine, stock, tools and resolution it chose, for the user to confirm. Empty for a job.
+  std::vector<std::string> assumptions;
+  std::string tools_file;  // empty: the tools are written in the job (or assumed)
   ToolLibrary tools;
   std::vector<std::string> program_files;
   // auto (io::detect_dialect per file) | gcode | linuxcnc | fanuc | apt. APT programs define
@@ -84,6 +87,10 @@ struct Job {
 
 // Throws vcut::InputError (file:line:column, key, what was expected).
 Job read_job(const std::string& path);
+
+// The job as a job file (`vcut job`): its assumptions as comments at the top, the program as
+// `program_as_given`, the tools written in it; read_job reads it back to the same job.
+std::string job_yaml(const Job& job, const std::string& program_as_given);
 
 // A path as the job's user wrote it: relative to the job file's folder when inside it.
 std::string display_name(const std::string& path, const std::string& job_file);

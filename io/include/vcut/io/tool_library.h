@@ -17,4 +17,7 @@ using ToolLibrary = std::map<int, removal::Cutter>;
 // Throws vcut::InputError naming file:line:column and the key for anything invalid.
 ToolLibrary read_tool_library(const std::string& path);
 
+// The library as YAML (`tools:` and one line per tool, the keys above), read back the same.
+std::string tool_library_yaml(const ToolLibrary& tools, const std::string& indent = "");
+
 }  // namespace vcut::io

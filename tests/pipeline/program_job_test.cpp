@@ -1,0 +1,106 @@
+// A program given without a job file (pipeline/program_job.h): the machine, stock, tools and
+// resolution assumed, each derived here by hand from the program's numbers.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "vcut/io/input_error.h"
+#include "vcut/io/job.h"
+#include "vcut/pipeline/program_job.h"
+
+namespace {
+namespace fs = std::filesystem;
+
+class ProgramJob : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir = fs::temp_directory_path() / ("vcut_program_job_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+  }
+  void TearDown() override { fs::remove_all(dir); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    return (dir / name).string();
+  }
+  vcut::io::Job job(const std::string& text, vcut::pipeline::ProgramJobOptions options = {}) {
+    options.out_dir = (dir / "out").string();
+    return vcut::pipeline::job_for_program(write("p.nc", text), options);
+  }
+  fs::path dir;
+};
+
+// A 4 mm tool cuts a rectangle X 10..50 Y 10..30 at Z-2: the stock is that box grown by the
+// radius 2 (X 8..52, Y 8..32), from Z-2 less max(1, 5 % of 2) = 1 down to Z-3, up to Z0. The
+// resolution: min(44 / 1000, 4 / 4) = 0.044 mm.
+TEST_F(ProgramJob, StockFromTheCuttingMoves) {
+  const vcut::io::Job j =
+      job("(T1 D=4 CR=0 - ZMIN=-2 - flat end mill)\nG21 G90\nT1 M6\nG0 X10 Y10 Z5\nG1 Z-2 F100\nX50\nY30\nX10\nY10\n"
+          "G0 Z5\nG0 X200 Y200\nM30\n");
+  EXPECT_EQ(j.machine, "3axis");
+  EXPECT_EQ(j.stock.kind, vcut::io::StockSpec::Kind::Box);
+  EXPECT_TRUE(j.stock.box.min_mm.isApprox(Eigen::Vector3d(8, 8, -3), 1e-12)) << j.stock.box.min_mm.transpose();
+  EXPECT_TRUE(j.stock.box.max_mm.isApprox(Eigen::Vector3d(52, 32, 0), 1e-12)) << j.stock.box.max_mm.transpose();
+  EXPECT_NEAR(j.resolution_mm, 0.044, 1e-12);
+  ASSERT_EQ(j.tools.count(1), 1u);
+  EXPECT_DOUBLE_EQ(j.tools.at(1).diameter_mm, 4.0);
+  EXPECT_DOUBLE_EQ(j.tools.at(1).flute_length_mm, 16.0);  // 4 diameters: deeper than the 2 mm cut
+  EXPECT_EQ(j.initial_tool, 1);
+  EXPECT_FALSE(j.design);
+  EXPECT_GE(j.assumptions.size(), 5u);
+}
+
+// An arc's own extent, not its circle's: G2 from (0, 0) to (20, 0) about (10, 0) clockwise
+// passes over the top, reaching Y 10; nothing goes below Y 0. With the default 6 mm tool the
+// box is X -3..23, Y -3..13.
+TEST_F(ProgramJob, ArcsByTheirOwnExtent) {
+  const vcut::io::Job j = job("G21 G90\nT3 M6\nG0 X0 Y0 Z1\nG1 Z-1 F100\nG2 X20 Y0 I10 J0\nG0 Z5\nM30\n");
+  EXPECT_NEAR(j.stock.box.min_mm.x(), -3.0, 1e-9);
+  EXPECT_NEAR(j.stock.box.max_mm.x(), 23.0, 1e-9);
+  EXPECT_NEAR(j.stock.box.min_mm.y(), -3.0, 1e-9);
+  EXPECT_NEAR(j.stock.box.max_mm.y(), 13.0, 0.01);  // the arc's top, sampled every 2 deg at most
+  ASSERT_EQ(j.tools.count(3), 1u);
+  EXPECT_DOUBLE_EQ(j.tools.at(3).diameter_mm, 6.0);  // the default diameter
+}
+
+// A declared size is placed where it holds the cutting moves: moves X 10..90 (middle 50) fit
+// a 100 mm stock from X0; Y -40..-10 (middle -25) one from Y-50 to 0; cuts below Z0 put its
+// top at Z0.
+TEST_F(ProgramJob, DeclaredSizePlaced) {
+  const vcut::io::Job j = job("(STOCK = 100 X 50 X 20)\nG21\nT1 M6\nG0 X10 Y-40 Z1\nG1 Z-5 F100\nX90 Y-10\nM30\n");
+  EXPECT_EQ(j.stock.box.min_mm, Eigen::Vector3d(0, -50, -20));
+  EXPECT_EQ(j.stock.box.max_mm, Eigen::Vector3d(100, 0, 0));
+}
+
+// A and C words: the bundled A/C trunnion; B words: the B/C table; a machine named wins.
+TEST_F(ProgramJob, MachineByTheRotaryWords) {
+  EXPECT_EQ(job("G21\nT1 M6\nG0 X0 Y0 Z5 A0 C0\nG1 Z-1 F100\nG1 X10 A10\nM30\n").machine, "xyzac-trt");
+  vcut::pipeline::ProgramJobOptions head;
+  head.machine = "head-table-bc";
+  EXPECT_EQ(job("G21\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nM30\n", head).machine, "head-table-bc");
+}
+
+// The job written out (vcut job) reads back to the same job.
+TEST_F(ProgramJob, WrittenJobReadsBack) {
+  const vcut::io::Job j =
+      job("(T2 D=3 CR=1.5 - ZMIN=-1 - ball end mill)\nG21\nT2 M6\nG0 X0 Y0 Z1\nG1 Z-1 F50\nX10\nM30\n");
+  write("job.yaml", vcut::io::job_yaml(j, "p.nc"));
+  const vcut::io::Job back = vcut::io::read_job((dir / "job.yaml").string());
+  EXPECT_EQ(back.machine, j.machine);
+  EXPECT_EQ(back.stock.box.min_mm, j.stock.box.min_mm);
+  EXPECT_EQ(back.stock.box.max_mm, j.stock.box.max_mm);
+  EXPECT_EQ(back.resolution_mm, j.resolution_mm);
+  EXPECT_EQ(back.initial_tool, 2);
+  ASSERT_EQ(back.tools.size(), 1u);
+  const vcut::removal::Cutter& c = back.tools.at(2);
+  EXPECT_EQ(c.type, vcut::removal::CutterType::Ball);
+  EXPECT_EQ(c.diameter_mm, 3.0);
+  EXPECT_EQ(c.flute_length_mm, j.tools.at(2).flute_length_mm);
+  EXPECT_EQ(c.gauge_length_mm, j.tools.at(2).gauge_length_mm);
+  EXPECT_EQ(back.program_files, std::vector<std::string>{(dir / "p.nc").string()});
+}
+
+// Nothing that cuts: an error naming the file.
+TEST_F(ProgramJob, NoCuttingMoveIsAnError) { EXPECT_THROW(job("G21\nG0 X10 Y10\nM30\n"), vcut::InputError); }
+
+}  // namespace
