@@ -6,6 +6,10 @@
 #include <vcut/io/apt_reader.h>
 #include <vcut/io/input_error.h>
 
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
 #include <algorithm>
 #include <charconv>
 #include <climits>
@@ -62,6 +66,9 @@ constexpr double kZeroAngleDeg = 1e-6;
 // above which a real tool's shank would take over. Documented in apt_reader.h.
 constexpr double kDefaultHeightPerDiameter = 4.0;
 constexpr int kMaxToolNumber = 99999;  // as the tool library
+// CSYS/ and MSYS/ print their matrices with 6 decimals: a rotation's entries are off by up to
+// 5e-7 and R^T R and det by a few 1e-6; a matrix off by more is not a rotation.
+constexpr double kFrameTolerance = 1e-5;
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
 using detail::describe;
@@ -104,6 +111,10 @@ struct Segment {
 enum class Word {
   kUnknown,
   kCutcom,
+  kCsys,
+  kMsys,
+  kCycle,
+  kTldata,
   kGoto,
   kFrom,
   kGodlta,
@@ -128,12 +139,15 @@ Word lookup(const std::string& w) {
       break;
     case 4:
       if (w == "GOTO") return Word::kGoto;
+      if (w == "CSYS") return Word::kCsys;
+      if (w == "MSYS") return Word::kMsys;
       if (w == "FROM") return Word::kFrom;
       if (w == "FINI") return Word::kFini;
       if (w == "LOAD") return Word::kLoad;
       break;
     case 5:
       if (w == "RAPID") return Word::kRapid;
+      if (w == "CYCLE") return Word::kCycle;
       if (w == "UNITS") return Word::kUnits;
       break;
     case 6:
@@ -146,6 +160,7 @@ Word lookup(const std::string& w) {
       if (w == "CIRCLE") return Word::kCircle;
       if (w == "SPINDL") return Word::kSpindl;
       if (w == "CUTCOM") return Word::kCutcom;
+      if (w == "TLDATA") return Word::kTldata;
       break;
     default:
       break;
@@ -156,7 +171,7 @@ Word lookup(const std::string& w) {
 // Statements whose remainder is free text: not parsed, no `$` continuation.
 bool free_text(const char* w, size_t n, bool& silent) {
   auto is = [&](const char* k) { return std::strlen(k) == n && std::memcmp(w, k, n) == 0; };
-  silent = is("PPRINT");
+  silent = is("PPRINT") || is("INSERT");  // operator messages and post text: comments
   return silent || is("PARTNO") || is("INSERT") || is("REMARK") || is("TPRINT");
 }
 
@@ -222,6 +237,17 @@ class Reader : public detail::CompHost {
   void do_spindl();
   void do_units();
   void do_cutcom();
+  void do_csys();
+  void do_msys();
+  void do_cycle();
+  void do_tldata();
+  void cycle_point(const Eigen::Vector3d& point, const Eigen::Vector3d& axis);
+  Eigen::Matrix3d checked_rotation(const Eigen::Matrix3d& r, const char* what) const;
+  // A point, a direction as written, in the workpiece frame (CSYS/, MSYS/).
+  Eigen::Vector3d placed(const Eigen::Vector3d& p) const {
+    return state_.frame_rotation * p + state_.frame_translation_mm;
+  }
+  Eigen::Vector3d turned(const Eigen::Vector3d& v) const { return state_.frame_rotation * v; }
   bool compensating() const { return state_.comp.side != Comp::Side::Off && state_.comp.radius_mm > 0.0; }
   void comp_end(size_t pos);  // sends the held moves to where the tool is
   // What the G-code reader refuses with G41/G42 on (a new position, a tool change, five axes).
@@ -239,7 +265,9 @@ class Reader : public detail::CompHost {
                    double sweep_rad) override;
   std::vector<Block>& comp_blocks() override { return out_.program.blocks; }
   [[noreturn]] void comp_fail(int column, const std::string& message) const override {
-    fail(static_cast<size_t>(column), message);
+    fail(static_cast<size_t>(column), message +
+                                          "; if the CL points are the tool's centre (control compensation for wear), "
+                                          "set program.cutcom: centre in the job");
   }
   // Where the program is (CL points count from it): with compensation on, the last programmed
   // point in XY, not the tool's.
@@ -260,8 +288,11 @@ class Reader : public detail::CompHost {
   const int file_index_;
 
   int line_ = 0;
-  bool continuing_ = false;  // the last line ended in '$'
-  std::string stmt_;         // the statement's text, continuation lines joined
+  bool continuing_ = false;         // the last line ended in '$'
+  bool comment_continues_ = false;  // a `$$` comment line ended in '$'
+  bool seen_statement_ = false;     // a line other than blanks has been read
+  bool in_listing_header_ = false;  // in NX's "Information listing" header
+  std::string stmt_;                // the statement's text, continuation lines joined
   std::vector<Segment> segments_;
   int statement_line_ = 0;  // its first line
   std::string major_;
@@ -331,9 +362,37 @@ bool Reader::line(std::string& text, int number) {
     fail_at(number, clamp_int(k + 1),
             "not a text file: control byte " + describe(text[k]) + " (expected an APT CL file of text statements)");
   }
+  if (comment_continues_) {
+    // A `$$` comment line that ended in '$' (Creo's "$$-> CSYS / ... $"): this line is the
+    // comment's too.
+    const std::string_view rest(text.data() + i, n - i);
+    const size_t last = rest.find_last_not_of(" \t");
+    comment_continues_ = last != std::string_view::npos && rest[last] == '$';
+    return true;
+  }
   if (!continuing_) {
     while (i < n && is_blank(text[i])) ++i;
+    if (in_listing_header_) {  // NX's information listing: its header ends at a blank line
+      in_listing_header_ = i < n;
+      return true;
+    }
     if (i == n) return true;
+    const std::string_view rest(text.data() + i, n - i);
+    if (!seen_statement_ && rest.rfind("Information listing created by", 0) == 0) {
+      in_listing_header_ = true;
+      return true;
+    }
+    if (rest.rfind("Tool Path Listing has ", 0) == 0) return true;  // the listing's last line
+    seen_statement_ = true;
+    if (rest.rfind("$$", 0) == 0) {
+      const size_t last = rest.find_last_not_of(" \t");
+      comment_continues_ = last > 2 && rest[last] == '$' && rest[last - 1] != '$';
+      if (comment_continues_) return true;
+      // NX marks tool-centre output so; its CUTCOM/ then asks the control for wear only.
+      std::string words(rest.substr(2, last - 1));
+      for (char& ch : words) ch = upper(ch);
+      if (words.find("CENTERLINE DATA") != std::string::npos) state_.centre_path = "NX's \"$$ centerline data\"";
+    }
     size_t j = i;
     while (j < n && is_word_char(text[j])) ++j;
     char word[8];
@@ -429,7 +488,7 @@ void Reader::parse_args(size_t i) {
   const size_t n = s.size();
   nargs_ = 0;
   i = skip_blanks(s, i);
-  if (i >= n) fail(i, "nothing after " + major_ + "/ (expected its parameters)");
+  if (i >= n) return;  // WORD/ alone (SolidWorks CAM's RAPID/): each statement checks its count
   while (true) {
     i = skip_blanks(s, i);
     if (nargs_ == kMaxParameters) {
@@ -437,13 +496,21 @@ void Reader::parse_args(size_t i) {
     }
     if (nargs_ == args_.size()) args_.emplace_back();
     Arg& arg = args_[nargs_];
+    // A comma that ends the statement (CAMWorks' CUTTER/): nothing more follows.
+    if (i >= n && nargs_ > 0) return;
     if (i >= n || s[i] == ',') {
       fail(i, "empty parameter in " + major_ + "/ (expected a number or a word)");
     }
     const char c = s[i];
-    if (is_digit(c) || c == '+' || c == '-' || c == '.') {
+    // A word that starts with digits (SolidWorks CAM's CYCLE/ ... 1STPECK): a word.
+    size_t d = i;
+    while (d < n && is_digit(s[d])) ++d;
+    const bool exponent = d < n && (s[d] == 'e' || s[d] == 'E') && d + 1 < n &&
+                          (is_digit(s[d + 1]) || s[d + 1] == '+' || s[d + 1] == '-');
+    const bool digit_word = d > i && d < n && is_letter(s[d]) && !exponent;
+    if (!digit_word && (is_digit(c) || c == '+' || c == '-' || c == '.')) {
       i = parse_number(i, arg);
-    } else if (is_letter(c)) {
+    } else if (is_letter(c) || digit_word) {
       arg.is_number = false;
       arg.value = 0.0;
       arg.pos = i;
@@ -498,6 +565,10 @@ bool Reader::statement() {
                 " (expected '/' and its parameters, or the end of the statement)");
   }
   if (word == Word::kUnknown) {
+    // SolidWorks CAM (CAMWorks) writes its CSI_ statements, and the tool's centre with CUTCOM/
+    // (its lead-in arcs are a fifth of the tool's radius: no contour for the tool to follow).
+    if (major_.rfind("CSI_", 0) == 0 && state_.centre_path.empty())
+      state_.centre_path = "SolidWorks CAM's CSI_ statements";
     warn_once(major_, [&] {
       return where(major_pos_) + ": statement " + major_ + " is not supported; ignored (and so is every later " +
              major_ + ")";
@@ -553,6 +624,18 @@ bool Reader::statement() {
     case Word::kCutcom:
       do_cutcom();
       break;
+    case Word::kCsys:
+      do_csys();
+      break;
+    case Word::kMsys:
+      do_msys();
+      break;
+    case Word::kCycle:
+      do_cycle();
+      break;
+    case Word::kTldata:
+      do_tldata();
+      break;
     case Word::kEnd:
       // APT END: the end of a machining section (the machine stops); reading goes on.
       no_circle_pending("END");
@@ -574,8 +657,11 @@ void Reader::count(size_t low, size_t high, const char* form) const {
 
 void Reader::count_of(std::initializer_list<size_t> allowed, const char* form) const {
   if (std::find(allowed.begin(), allowed.end(), nargs_) != allowed.end()) return;
-  const size_t high = *std::max_element(allowed.begin(), allowed.end());
-  const size_t pos = nargs_ > high ? args_[high].pos : args_pos_;
+  // At the first parameter past the largest count allowed below the given one.
+  size_t below = 0;
+  for (size_t a : allowed)
+    if (a < nargs_) below = std::max(below, a);
+  const size_t pos = below > 0 ? args_[below].pos : args_pos_;
   fail(pos, major_ + "/ with " + std::to_string(nargs_) + " parameter(s) (expected " + form + ")");
 }
 
@@ -683,7 +769,7 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
     const Eigen::Vector3d n = state_.circle_normal;
     block.normal = n;
     block.center_mm = state_.circle_center_mm + n * n.dot(block.start_mm - state_.circle_center_mm);
-    block.turns = 1;
+    block.turns = state_.circle_turns;
   }
   Comp& comp = state_.comp;
   if (compensating()) {
@@ -717,18 +803,17 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
   state_.pose_axis = state_.axis = end_axis;
 }
 
+// GOTO/x,y,z[,i,j,k]. NX and SolidWorks CAM write the tool axis without MULTAX/ON (their
+// three-axis and 3+2 operations alike): it is read either way.
 void Reader::do_goto() {
-  if (state_.multax) {
-    count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
-  } else if (nargs_ == 6) {
-    fail(args_[3].pos,
-         "GOTO/ with a tool axis i,j,k without MULTAX/ON (expected x,y,z, or MULTAX/ON before "
-         "five-axis motions)");
-  } else {
-    count(3, 3, "x,y,z (MULTAX is off)");
+  count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
+  Eigen::Vector3d end = placed(Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z")));
+  const Eigen::Vector3d end_axis = nargs_ == 6 ? turned(unit_vector(3, "tool axis")) : state_.axis;
+  if (state_.cycle.on) {
+    state_.rapid_next = false;
+    cycle_point(end, end_axis);
+    return;
   }
-  Eigen::Vector3d end(length(0, "x"), length(1, "y"), length(2, "z"));
-  const Eigen::Vector3d end_axis = nargs_ == 6 ? unit_vector(3, "tool axis") : state_.axis;
   if (!state_.circle_pending) {
     motion(state_.rapid_next ? MotionKind::Rapid : MotionKind::Linear, end, end_axis);
     return;
@@ -755,8 +840,8 @@ void Reader::do_from() {
   no_circle_pending("FROM/");
   no_cutcom("FROM/");
   count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
-  state_.position_mm = Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z"));
-  if (nargs_ == 6) state_.pose_axis = state_.axis = unit_vector(3, "tool axis");
+  state_.position_mm = placed(Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z")));
+  if (nargs_ == 6) state_.pose_axis = state_.axis = turned(unit_vector(3, "tool axis"));
   state_.known = true;
 }
 
@@ -770,7 +855,7 @@ void Reader::do_godlta() {
   if (nargs_ == 1) {
     delta = length(0, "d") * state_.axis;
   } else {
-    delta = Eigen::Vector3d(length(0, "dx"), length(1, "dy"), length(2, "dz"));
+    delta = turned(Eigen::Vector3d(length(0, "dx"), length(1, "dy"), length(2, "dz")));
   }
   const Eigen::Vector3d end = programmed_point() + delta;
   if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
@@ -918,6 +1003,14 @@ void Reader::do_loadtl(bool load_tool) {
   }
   if (nargs_ <= k) fail(args_pos_, major_ + "/ without a tool number (expected a number)");
   const double t = number(k, "the tool number");
+  if (t == 0.0 && !state_.loadtl_seen) {
+    // NX's LOAD/TOOL,0: a tool the CAM model gave no number: numbered by its cutter, as in a
+    // program without LOADTL/.
+    warn_once(major_ + "/0", [&] {
+      return where(args_[k].pos) + ": " + major_ + "/ tool 0 (no number): each different cutter is numbered in turn";
+    });
+    return;
+  }
   if (!(t >= 1.0 && t <= kMaxToolNumber) || t != std::floor(t)) {
     fail(args_[k].pos, "tool number " + num(t) + " (expected a whole number from 1 to 99999)");
   }
@@ -927,6 +1020,7 @@ void Reader::do_loadtl(bool load_tool) {
     });
   }
   const int tool = static_cast<int>(t);
+  state_.cycle.on = false;  // a tool change ends a drilling cycle (SolidWorks CAM omits CYCLE/OFF)
   state_.tool = tool;
   state_.loadtl_seen = true;
   const auto it = out_.cutters.find(tool);
@@ -961,20 +1055,38 @@ void Reader::do_multax() {
 
 void Reader::do_tlaxis() {
   count(3, 3, "i,j,k");
-  state_.axis = unit_vector(0, "tool axis");
+  state_.axis = turned(unit_vector(0, "tool axis"));
 }
 
+// CIRCLE/cx,cy,cz,i,j,k,r[,tolerances...][,TIMES,n]: NX's TIMES,n goes round n times, as
+// G2/G3 with P n (the turns beyond the first are full circles).
 void Reader::do_circle() {
-  count(7, 11, "cx,cy,cz,i,j,k,r and up to 4 tolerances");
-  const Eigen::Vector3d c(length(0, "cx"), length(1, "cy"), length(2, "cz"));
-  const Eigen::Vector3d n = unit_vector(3, "circle axis");
-  const double r = length(6, "radius r");
-  for (size_t k = 7; k < nargs_; ++k) number(k, "a tolerance");
+  count(6, 13, "cx,cy,cz,i,j,k[,r, up to 4 tolerances and TIMES,n]");
+  if (state_.cycle.on) fail(major_pos_, "CIRCLE/ in a CYCLE/ (expected CYCLE/OFF first)");
+  const Eigen::Vector3d c = placed(Eigen::Vector3d(length(0, "cx"), length(1, "cy"), length(2, "cz")));
+  const Eigen::Vector3d n = turned(unit_vector(3, "circle axis"));
+  // Without r (SolidWorks CAM): the current point's distance from the axis.
+  Eigen::Vector3d from_axis = programmed_point() - c;
+  from_axis -= n * n.dot(from_axis);
+  const double r = nargs_ > 6 ? length(6, "radius r") : from_axis.norm();
+  int turns = 1;
+  for (size_t k = 7; k < nargs_; ++k) {
+    if (!args_[k].is_number && args_[k].word == "TIMES" && k + 2 == nargs_) {
+      const double t = number(k + 1, "the number of times round");
+      if (!(t >= 1.0 && t <= 1000.0) || t != std::floor(t))
+        fail(args_[k + 1].pos, "TIMES " + num(t) + " (expected a whole number of turns from 1 to 1000)");
+      turns = static_cast<int>(t);
+      break;
+    }
+    if (k > 10) fail(args_[k].pos, "CIRCLE/ with more than 4 tolerances (expected TIMES,n at most after them)");
+    number(k, "a tolerance");
+  }
   if (state_.circle_pending) {
     fail(major_pos_, "second CIRCLE/ before the GOTO/ of the CIRCLE/ at " + state_.circle_where +
                          " (expected a GOTO/ after each CIRCLE/)");
   }
-  if (!(r > kSamePointMm)) fail(args_[6].pos, "circle radius " + num(r) + " mm (expected r > 0)");
+  if (!(r > kSamePointMm))
+    fail(args_[std::min<size_t>(6, nargs_ - 1)].pos, "circle radius " + num(r) + " mm (expected r > 0)");
   if (state_.rapid_next) {
     fail(major_pos_, "CIRCLE/ after RAPID (expected RAPID only before a straight motion)");
   }
@@ -986,11 +1098,13 @@ void Reader::do_circle() {
   const double r_start = d.norm();
   const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * r);
   if (!(std::abs(r_start - r) <= allowed) || r_start <= kSamePointMm) {
-    fail(args_[6].pos, "the arc's start, the current point " + point(programmed_point()) + ", is " + num(r_start) +
-                           " mm from the circle's axis (expected a point on the circle: radius " + num(r) +
-                           " mm within " + num(allowed) + " mm)");
+    fail(args_[std::min<size_t>(6, nargs_ - 1)].pos,
+         "the arc's start, the current point " + point(programmed_point()) + ", is " + num(r_start) +
+             " mm from the circle's axis (expected a point on the circle: radius " + num(r) + " mm within " +
+             num(allowed) + " mm)");
   }
   state_.circle_pending = true;
+  state_.circle_turns = turns;
   state_.circle_center_mm = c;
   state_.circle_normal = n;
   state_.circle_radius_mm = r;
@@ -998,43 +1112,40 @@ void Reader::do_circle() {
   std::tie(state_.circle_line, state_.circle_column) = locate(major_pos_);
 }
 
+// SPINDL/ in the orders CAM systems write it: n[,RPM][,CLW|CCLW] (SolidWorks CAM, CATIA),
+// RPM,n[,CLW|CCLW] (APT, Creo, NX), ON, OFF; RANGE,n and MAXRPM,n do not change the path.
 void Reader::do_spindl() {
-  count(1, 8, "rpm,CLW|CCLW, RPM,rpm,CLW|CCLW, ON or OFF");
+  count(1, 8, "rpm[,RPM][,CLW|CCLW], RPM,rpm[,CLW|CCLW], ON or OFF");
   if (nargs_ == 1 && !args_[0].is_number && (args_[0].word == "OFF" || args_[0].word == "ON")) {
     state_.spindle = args_[0].word == "OFF" ? SpindleState::Off : state_.spindle_direction;
     return;
   }
-  size_t k = 0;
-  if (!args_[0].is_number) {
-    if (args_[0].word == "SFM" || args_[0].word == "SMM") {
-      fail(args_[0].pos, "constant surface speed (" + args_[0].word + ") is not supported (expected RPM)");
-    }
-    if (args_[0].word != "RPM") {
-      fail(args_[0].pos, "unexpected '" + args_[0].word + "' in SPINDL/ (expected rpm, RPM,rpm, ON or OFF)");
-    }
-    k = 1;
-  }
-  if (k >= nargs_) fail(args_pos_, "SPINDL/ without a speed (expected a number of rpm)");
-  const double rpm = number(k, "the spindle speed");
-  if (!(rpm >= 0.0 && rpm <= kMaxMagnitude)) {
-    fail(args_[k].pos, "spindle speed " + num(rpm) + " rpm (expected 0 to 1e6 rpm)");
-  }
+  int speed = -1;
   SpindleState direction = SpindleState::Clockwise;  // APT's default
-  for (++k; k < nargs_; ++k) {
+  for (size_t k = 0; k < nargs_; ++k) {
     const Arg& a = args_[k];
-    if (a.is_number) fail(a.pos, "unexpected number in SPINDL/ (expected CLW or CCLW)");
-    if (a.word == "CLW") {
+    if (a.is_number) {
+      if (speed >= 0) fail(a.pos, "two speeds in SPINDL/ (expected one number of rpm)");
+      speed = static_cast<int>(k);
+    } else if (a.word == "RPM") {
+      continue;
+    } else if (a.word == "SFM" || a.word == "SMM") {
+      fail(a.pos, "constant surface speed (" + a.word + ") is not supported (expected RPM)");
+    } else if (a.word == "CLW") {
       direction = SpindleState::Clockwise;
     } else if (a.word == "CCLW") {
       direction = SpindleState::CounterClockwise;
     } else if (a.word == "RANGE" || a.word == "MAXRPM") {
       ++k;  // gear range / speed limit: its number does not change the path
-      if (k >= nargs_ || !args_[k].is_number) {
-        fail(a.pos, a.word + " without its number in SPINDL/");
-      }
+      if (k >= nargs_ || !args_[k].is_number) fail(a.pos, a.word + " without its number in SPINDL/");
     } else {
-      fail(a.pos, "unexpected '" + a.word + "' in SPINDL/ (expected CLW or CCLW)");
+      fail(a.pos, "unexpected '" + a.word + "' in SPINDL/ (expected rpm, RPM, CLW, CCLW, RANGE or MAXRPM)");
     }
+  }
+  if (speed < 0) fail(args_pos_, "SPINDL/ without a speed (expected a number of rpm)");
+  const double rpm = number(static_cast<size_t>(speed), "the spindle speed");
+  if (!(rpm >= 0.0 && rpm <= kMaxMagnitude)) {
+    fail(args_[static_cast<size_t>(speed)].pos, "spindle speed " + num(rpm) + " rpm (expected 0 to 1e6 rpm)");
   }
   state_.spindle_rpm = rpm;
   state_.spindle_direction = direction;
@@ -1070,6 +1181,16 @@ void Reader::do_cutcom() {
   }
   if (comp.side != Comp::Side::Off)
     fail(a.pos, "CUTCOM/" + a.word + " with compensation already on (expected CUTCOM/OFF first)");
+  if (!state_.centre_path.empty() || options_.cutcom_on_centre) {
+    // The points are the tool's centre already (NX "$$ centerline data", program.cutcom:
+    // centre): the control's compensation holds the wear only, zero here.
+    warn_once("CUTCOM/centre", [&] {
+      return where(a.pos) + ": CUTCOM/ on " +
+             (state_.centre_path.empty() ? std::string("program.cutcom: centre") : state_.centre_path) +
+             " (the points are the tool's centre): no offset";
+    });
+    return;
+  }
   if (state_.multax)
     fail(a.pos,
          "CUTCOM/" + a.word + " with MULTAX/ON (expected three-axis CL data: compensation works in the XY plane)");
@@ -1106,6 +1227,223 @@ void Reader::comp_append(Block block, const std::array<bool, 3>&, bool held, con
   } else {
     out_.program.blocks.push_back(block);
   }
+}
+
+// CSYS/r11,r12,r13,tx,r21,r22,r23,ty,r31,r32,r33,tz (SolidWorks CAM): the setup's frame in the
+// part frame, part = R setup + t (the columns of R are the setup's axes; its post takes the
+// third as the tool axis). What it places, as found in its output (41 files): in a setup turned
+// about Z or moved (3 values per GOTO/) the motions are written in the setup's frame, so they
+// are placed by R and t (two copies of a part 150 mm apart give the same hole 150 mm apart in
+// the part frame); in a tilted setup the motions are written in the part frame with their tool
+// axis (the approaches run along that axis), so they are read as written.
+void Reader::do_csys() {
+  no_circle_pending("CSYS/");
+  no_cutcom("CSYS/");
+  count(12, 12, "r11,r12,r13,tx,r21,r22,r23,ty,r31,r32,r33,tz");
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) r(row, col) = number(static_cast<size_t>(4 * row + col), "a matrix entry");
+    t[row] = length(static_cast<size_t>(4 * row + 3), "a translation");
+  }
+  const Eigen::Matrix3d rotation = checked_rotation(r, "CSYS/");
+  const bool tilted = (rotation.col(2) - Eigen::Vector3d::UnitZ()).norm() > kFrameTolerance;
+  state_.frame_rotation = tilted ? Eigen::Matrix3d::Identity() : rotation;
+  state_.frame_translation_mm = tilted ? Eigen::Vector3d::Zero() : t;
+}
+
+// MSYS/x,y,z,xi,xj,xk,yi,yj,yk (NX): the machine coordinate system, its origin and X and Y
+// axes in NX's absolute frame; the motions after it are written in it. The first MSYS/ is
+// the workpiece frame (what the machine runs as its work offset); a later, different one
+// (another setup of a 3+2 program) places its motions in the first: p = M1^-1 M2 p'.
+void Reader::do_msys() {
+  no_circle_pending("MSYS/");
+  no_cutcom("MSYS/");
+  count(9, 9, "x,y,z, the X axis i,j,k and the Y axis i,j,k");
+  const Eigen::Vector3d origin(length(0, "x"), length(1, "y"), length(2, "z"));
+  Eigen::Matrix3d r;
+  r.col(0) = Eigen::Vector3d(number(3, "the X axis"), number(4, "the X axis"), number(5, "the X axis"));
+  r.col(1) = Eigen::Vector3d(number(6, "the Y axis"), number(7, "the Y axis"), number(8, "the Y axis"));
+  r.col(2) = r.col(0).cross(r.col(1));
+  const Eigen::Matrix3d rotation = checked_rotation(r, "MSYS/");
+  if (!state_.msys_seen) {
+    state_.msys_seen = true;
+    state_.msys_rotation = rotation;
+    state_.msys_origin_mm = origin;
+  }
+  state_.frame_rotation = state_.msys_rotation.transpose() * rotation;
+  state_.frame_translation_mm = state_.msys_rotation.transpose() * (origin - state_.msys_origin_mm);
+}
+
+// A frame's rotation as printed (6 decimals: entries off by 5e-7, products by ~2e-6): checked
+// to be one within kFrameTolerance, then made exactly orthonormal (the nearest rotation).
+Eigen::Matrix3d Reader::checked_rotation(const Eigen::Matrix3d& r, const char* what) const {
+  const double off = (r.transpose() * r - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  const double det = r.determinant();
+  if (!(off <= kFrameTolerance) || !(std::abs(det - 1.0) <= kFrameTolerance)) {
+    fail(args_pos_, std::string(what) + " matrix is not a rotation: |R^T R - I| = " + num(off) + ", det = " + num(det) +
+                        " (expected orthonormal rows with determinant 1 within " + num(kFrameTolerance) + ")");
+  }
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd(r, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
+// TLDATA/MILL,d,r,h,taper,tip (NX): the milling tool's diameter, lower radius, length, taper
+// and tip angle, read as CUTTER/d,r,e,f,tip,taper,h (tip angle as alpha, taper as beta).
+void Reader::do_tldata() {
+  if (nargs_ == 0 || args_[0].is_number || args_[0].word != "MILL") {
+    warn_once("TLDATA", [&] {
+      return where(major_pos_) + ": TLDATA/ other than MILL is not read; the tool library gives its shape";
+    });
+    return;
+  }
+  count(2, 6, "MILL,d[,r[,h[,taper[,tip angle]]]]");
+  const double d = number(1, "diameter d");
+  const double r = nargs_ > 2 ? number(2, "lower radius r") : 0.0;
+  const double alpha = nargs_ > 5 ? number(5, "tip angle") : 0.0;
+  const bool pointed = std::abs(alpha) > kZeroAngleDeg;
+  const double e = pointed ? d / 2.0 : d / 2.0 - r;
+  const double f = pointed ? d / 2.0 * std::tan(alpha * M_PI / 180.0) : r;
+  // In CUTTER/'s order, each value at its TLDATA/ position for messages.
+  std::vector<Arg> as_cutter(7);
+  const size_t from[7] = {1, 2, 2, 2, 5, 4, 3};
+  const double value[7] = {d,
+                           r,
+                           e,
+                           f,
+                           alpha,
+                           nargs_ > 4 ? number(4, "taper") : 0.0,
+                           nargs_ > 3 ? number(3, "length h") : kDefaultHeightPerDiameter * d};
+  for (size_t k = 0; k < 7; ++k) {
+    as_cutter[k].is_number = true;
+    as_cutter[k].value = value[k];
+    as_cutter[k].pos = args_[std::min(from[k], nargs_ - 1)].pos;
+  }
+  args_ = std::move(as_cutter);
+  nargs_ = 7;
+  do_cutter();
+}
+
+// CYCLE/kind[,modifiers][,WORD,value ...] ... CYCLE/OFF: the drilling cycles of SolidWorks CAM
+// (DRILL, DEEP, DEEP2 with FEDTO, RAPTO, RTRCTO, MMPM|IPM, DWELL, INCR, 1STPECK, SUBPECK), NX
+// (DRILL[,DEEP|BRKCHP] with RAPTO, FEDTO, MMPM) and Creo (DEEP with DEPTH, STEP, CLEAR). Each
+// GOTO/ while it is on is a hole at that point of the surface, drilled along the tool axis:
+// rapid across at the current level (at least the clearance) to above the point, rapid to
+// RAPTO above it, feed to FEDTO below it (DEEP, BRKCHP: in pecks of INCR, back to RAPTO after
+// each), back to RTRCTO above it (else the level it came at) at rapid, or at feed for TAP,
+// BORE and REAM. CYCLE/INIT and CYCLE/CLEAR change nothing; CYCLE/ON takes up the last cycle.
+void Reader::do_cycle() {
+  no_circle_pending("CYCLE/");
+  no_cutcom("CYCLE/");
+  if (nargs_ == 0) fail(args_pos_, "CYCLE without its kind (expected CYCLE/DRILL, DEEP, ... or OFF)");
+  const Arg& first = args_[0];
+  if (first.is_number) fail(first.pos, "expected a cycle kind (DRILL, DEEP, BRKCHP, TAP, BORE, REAM) or OFF");
+  if (nargs_ == 1 && (first.word == "INIT" || first.word == "CLEAR")) return;
+  if (nargs_ == 1 && first.word == "OFF") {
+    state_.cycle.on = false;
+    return;
+  }
+  if (nargs_ == 1 && first.word == "ON") {
+    if (state_.cycle.kind.empty()) fail(first.pos, "CYCLE/ON before any cycle (expected CYCLE/DRILL, ... first)");
+    state_.cycle.on = true;
+    return;
+  }
+  AptState::Cycle c;
+  c.where = where(major_pos_);
+  static const char* const kKinds[] = {"DRILL", "DEEP", "DEEP2", "BRKCHP", "TAP", "BORE", "REAM"};
+  auto known = [](const std::string& w) {
+    return std::find(std::begin(kKinds), std::end(kKinds), w) != std::end(kKinds);
+  };
+  if (!known(first.word)) {
+    fail(first.pos, "cycle " + first.word + " is not supported (expected DRILL, DEEP, DEEP2, BRKCHP, TAP, BORE, REAM)");
+  }
+  c.kind = first.word == "DEEP2" ? "DEEP" : first.word;
+  bool depth = false;
+  for (size_t k = 1; k < nargs_; ++k) {
+    const Arg& a = args_[k];
+    if (a.is_number) fail(a.pos, "a number without its word in CYCLE/ (expected FEDTO, RAPTO, RTRCTO, MMPM, ...)");
+    if (known(a.word)) {  // NX: CYCLE/DRILL,DEEP
+      if (a.word != "DRILL") c.kind = a.word == "DEEP2" ? "DEEP" : a.word;
+      continue;
+    }
+    if (a.word == "G98" || a.word == "G99") continue;
+    if (k + 1 >= nargs_ || !args_[k + 1].is_number) fail(a.pos, a.word + " without its number in CYCLE/");
+    const double v = args_[k + 1].value;
+    if (a.word == "FEDTO" || a.word == "DEPTH") {
+      c.depth_mm = length(k + 1, "the depth");
+      depth = true;
+    } else if (a.word == "RAPTO" || a.word == "CLEAR") {
+      c.clearance_mm = length(k + 1, "the clearance");
+    } else if (a.word == "RTRCTO") {
+      c.retract_mm = length(k + 1, "the retract");
+    } else if (a.word == "MMPM" || a.word == "IPM") {
+      c.feed_mm_per_min = v * (a.word == "IPM" ? kMmPerInch : 1.0);
+      if (!(c.feed_mm_per_min > 0.0 && c.feed_mm_per_min <= kMaxMagnitude))
+        fail(args_[k + 1].pos, "cycle feed " + num(v) + " (expected > 0 and <= 1e6 mm/min)");
+    } else if (a.word == "INCR" || a.word == "1STPECK" || a.word == "STEP") {
+      c.first_peck_mm = length(k + 1, "the peck");
+      if (c.peck_mm <= 0.0) c.peck_mm = c.first_peck_mm;
+    } else if (a.word == "SUBPECK") {
+      c.peck_mm = length(k + 1, "the peck");
+    } else if (a.word == "DWELL" || a.word == "REV" || a.word == "MMPR" || a.word == "IPR") {
+      if (a.word == "MMPR" || a.word == "IPR") {
+        const double rpm = state_.spindle_rpm;
+        if (!(rpm > 0.0))
+          fail(a.pos, "cycle feed per revolution with the spindle's speed unknown (expected SPINDL/ first)");
+        c.feed_mm_per_min = v * rpm * (a.word == "IPR" ? kMmPerInch : 1.0);
+      }
+    } else {
+      fail(a.pos,
+           "unknown CYCLE/ parameter " + a.word +
+               " (expected FEDTO, DEPTH, RAPTO, CLEAR, RTRCTO, MMPM, IPM, MMPR, IPR, DWELL, INCR, STEP, 1STPECK, "
+               "SUBPECK)");
+    }
+    ++k;
+  }
+  if (!depth) fail(args_pos_, "CYCLE/" + first.word + " without its depth (expected FEDTO,d or DEPTH,d)");
+  if (c.depth_mm < 0.0) fail(args_pos_, "cycle depth " + num(c.depth_mm) + " mm (expected >= 0: below the point)");
+  if ((c.kind == "DEEP" || c.kind == "BRKCHP") && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.peck_mm = c.depth_mm;
+  if (c.peck_mm < 0.0 || c.first_peck_mm < 0.0) fail(args_pos_, "a negative peck in CYCLE/ (expected > 0)");
+  c.on = true;
+  state_.cycle = c;
+}
+
+void Reader::cycle_point(const Eigen::Vector3d& point, const Eigen::Vector3d& axis) {
+  const AptState::Cycle& c = state_.cycle;
+  if (!state_.known) {
+    // The program's first motion is a hole (NX): it starts above it, at the clearance.
+    state_.known = true;
+    state_.position_mm = point + c.clearance_mm * axis;
+    state_.pose_axis = state_.axis = axis;
+  }
+  const double saved_feed = state_.feed_mm_per_min;
+  if (c.feed_mm_per_min > 0.0) state_.feed_mm_per_min = c.feed_mm_per_min;
+  const double level = (state_.position_mm - point).dot(axis);  // where the tool comes from
+  const double across = std::max(level, c.clearance_mm);
+  const double retract = c.retract_mm >= 0.0 ? c.retract_mm : across;
+  const Eigen::Vector3d bottom = point - c.depth_mm * axis;
+  if (level < across) motion(MotionKind::Rapid, state_.position_mm + (across - level) * axis, axis);
+  motion(MotionKind::Rapid, point + across * axis, axis);
+  motion(MotionKind::Rapid, point + c.clearance_mm * axis, axis);
+  if (c.kind == "DEEP" || c.kind == "BRKCHP") {
+    // Pecks: each feeds from where the last stopped (rapid back to it) down one peck more.
+    double reached = -c.clearance_mm;  // below the point
+    double peck = c.first_peck_mm;
+    while (reached < c.depth_mm) {
+      const double next = std::min(c.depth_mm, std::max(reached, 0.0) + peck);
+      if (reached > 0.0) motion(MotionKind::Rapid, point - reached * axis, axis);
+      motion(MotionKind::Linear, point - next * axis, axis);
+      reached = next;
+      peck = c.peck_mm > 0.0 ? c.peck_mm : c.first_peck_mm;
+      if (reached < c.depth_mm) motion(MotionKind::Rapid, point + c.clearance_mm * axis, axis);
+    }
+  } else {
+    motion(MotionKind::Linear, bottom, axis);
+  }
+  const bool feed_out = c.kind == "TAP" || c.kind == "BORE" || c.kind == "REAM";
+  if (feed_out) motion(MotionKind::Linear, point + c.clearance_mm * axis, axis);
+  motion(MotionKind::Rapid, point + retract * axis, axis);
+  state_.feed_mm_per_min = saved_feed;
 }
 
 void Reader::do_units() {

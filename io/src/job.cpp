@@ -130,7 +130,7 @@ void read_tools_key(const YamlReader& yaml, const YAML::Node& node, const fs::pa
 void read_program_key(const YamlReader& yaml, const YAML::Node& program, const fs::path& base, Job& job) {
   yaml.only_keys(program, "program",
                  {"file", "files", "dialect", "unsupported", "subroutine_path", "max_lines", "tcp_m_codes",
-                  "initial_tool", "block_delete", "arc_tolerance"});
+                  "initial_tool", "block_delete", "arc_tolerance", "cutcom"});
   if (program["file"] && program["files"]) yaml.fail(program, "program", "either 'file' or 'files', not both");
   if (program["file"]) {
     job.program_files.push_back(resolve(base, yaml.text(program["file"], "program.file")));
@@ -173,6 +173,14 @@ void read_program_key(const YamlReader& yaml, const YAML::Node& program, const f
     if (t != std::floor(t) || t > 99999)
       yaml.fail(program["initial_tool"], "program.initial_tool", "a T number from 1 to 99999");
     job.initial_tool = static_cast<int>(t);
+  }
+  if (program["cutcom"]) {
+    const std::string mode = yaml.text(program["cutcom"], "program.cutcom");
+    if (mode != "contour" && mode != "centre" && mode != "center")
+      yaml.fail(program["cutcom"], "program.cutcom",
+                "contour (APT CUTCOM/: the CL points are the part's contour) or centre (they are the tool's centre; "
+                "the control compensates wear only)");
+    job.apt_cutcom_on_centre = mode != "contour";
   }
   if (program["max_lines"]) {
     const double n = yaml.positive(program["max_lines"], "program.max_lines");

@@ -61,7 +61,8 @@ std::string upper(std::string s) {
 
 class Scanner {
  public:
-  explicit Scanner(const std::string& path) : path_(path), sinumerik_(detect_dialect(path) == "sinumerik") {}
+  explicit Scanner(const std::string& path)
+      : path_(path), sinumerik_(detect_dialect(path) == "sinumerik"), apt_(detect_dialect(path) == "apt") {}
 
   ProgramHeader run() {
     std::ifstream in(path_, std::ios::binary);
@@ -81,7 +82,29 @@ class Scanner {
     int column = 0;    // 1-based, of its first character
   };
 
+  // CL data: `$$` comments and INSERT/ PPRINT/ texts are comments; UNITS/ sets the units.
+  void scan_apt_line(const std::string& line) {
+    const std::size_t first = line.find_first_not_of(" \t");
+    if (first == std::string::npos) return;
+    const std::string u = upper(line.substr(first));
+    if (!units_known_ && (u.rfind("UNITS/", 0) == 0 || u.rfind("UNIT/", 0) == 0)) {
+      units_known_ = true;
+      header_.inch = u.find("INCH") != std::string::npos;
+    }
+    for (const char* lead : {"$$", "INSERT/", "INSERT", "PPRINT/", "PPRINT"}) {
+      if (u.rfind(lead, 0) == 0) {
+        const std::size_t n = std::string(lead).size();
+        scan_comment({u.substr(n), static_cast<int>(first + n + 1)}, 0);
+        return;
+      }
+    }
+  }
+
   void scan_line(const std::string& line) {
+    if (apt_) {
+      scan_apt_line(line);
+      return;
+    }
     std::string code;
     std::vector<Comment> comments;
     for (std::size_t i = 0; i < line.size(); ++i) {
@@ -211,6 +234,15 @@ class Scanner {
     if (t.find("LEAVE") != std::string::npos) return;  // "XY STOCK TO LEAVE": an allowance
     static const std::regex deltas(std::string(R"(\bDX\s*[=:]?\s*)") + kNum + kUnit + R"(\s*,?\s*DY\s*[=:]?\s*)" +
                                    kNum + kUnit + R"(\s*,?\s*DZ\s*[=:]?\s*)" + kNum + kUnit);
+    // SolidWorks CAM: INSERT/Stock Size X465.40922 Y243.942457 Z6.
+    static const std::regex letters(std::string(R"(\bSTOCK\s+SIZE\s*:?\s*X\s*=?\s*)") + kNum + kUnit +
+                                    R"(\s*,?\s*Y\s*=?\s*)" + kNum + kUnit + R"(\s*,?\s*Z\s*=?\s*)" + kNum + kUnit);
+    if (std::regex_search(t, m, letters)) {
+      PendingStock s;
+      for (int k = 0; k < 3; ++k) s.size[k] = length_of(m, 1 + 2 * k, 2 + 2 * k);
+      declare_stock(std::move(s), "comment", c);
+      return;
+    }
     static const std::regex times(std::string(R"(\bSTOCK\b(?:\s*SIZE)?\s*[:=]?\s*)") + kNum + kUnit + R"(\s*X\s*)" +
                                   kNum + kUnit + R"(\s*X\s*)" + kNum + kUnit);
     if (std::regex_search(t, m, deltas) || std::regex_search(t, m, times)) {
@@ -416,7 +448,7 @@ class Scanner {
   }
 
   const std::string path_;
-  const bool sinumerik_;
+  const bool sinumerik_, apt_;
   int line_ = 0;
   ProgramHeader header_;
   bool units_known_ = false;

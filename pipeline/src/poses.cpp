@@ -96,6 +96,7 @@ JobProgram read_job_program(const io::Job& job) {
   reading.gcode.unknown_m_code_as_error = job.unknown_m_code_as_error;
   reading.gcode.block_delete = job.block_delete;
   if (job.arc_tolerance_mm) reading.gcode.arc_tolerance_mm = *job.arc_tolerance_mm;
+  reading.apt.cutcom_on_centre = job.apt_cutcom_on_centre;
   reading.gcode.subroutine_path = job.subroutine_path;
   reading.gcode.max_lines = job.max_lines;
   reading.gcode.tcp_m_codes = job.tcp_m_codes;

@@ -183,7 +183,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   job.program_files = {absolute.string()};
   job.dialect = options.dialect;
   const std::string dialect = options.dialect == "auto" ? io::detect_dialect(absolute.string()) : options.dialect;
-  const io::ProgramHeader header = dialect == "apt" ? io::ProgramHeader{} : io::read_program_header(program_path);
+  const io::ProgramHeader header = io::read_program_header(program_path);
   const double unit_mm = header.inch ? 25.4 : 1.0;
 
   // Machine: as named, else by the rotary words (a tilting tool axis is found after reading).
@@ -279,9 +279,11 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   for (const auto& [number, c] : job.tools) {
     if (!depth.count(number) && !used.count(number)) continue;
     smallest_mm = std::min(smallest_mm, c.diameter_mm);
-    job.assumptions.push_back("T" + std::to_string(number) + ": " + describe(c) + " from " + origin[number] +
-                              "; flutes " + mm(c.flute_length_mm) + " mm, gauge length " + mm(c.gauge_length_mm) +
-                              " mm assumed (no holder checked)");
+    const bool cl = origin[number] == "the program's CUTTER/";  // its height is the CL file's
+    job.assumptions.push_back(
+        "T" + std::to_string(number) + ": " + describe(c) + " from " + origin[number] + "; flutes " +
+        mm(c.flute_length_mm) + " mm, gauge length " + mm(c.gauge_length_mm) +
+        (cl ? std::string(" mm (no holder checked)") : std::string(" mm assumed (no holder checked)")));
   }
   if (job.initial_tool > 0)
     job.assumptions.push_back("T" + std::to_string(job.initial_tool) +

@@ -496,7 +496,6 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("FROM/0,0,0\nGOTO/1,2,3\n", 2, 1, "before any FEDRAT/");
   EXPECT_APT_ERROR("FROM/0,0,0\nFEDRAT/10\nGOTO/1,2\n", 3, 6, "expected x,y,z");
   EXPECT_APT_ERROR("FROM/0,0,0\nFEDRAT/10\nGOTO/1,2,3,4\n", 3, 12, "expected x,y,z");
-  EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1,2,3,0,0,1\n", 2, 12, "without MULTAX/ON");
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1,abc,3\n", 2, 8, "expected a number for y");
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1,NaN,3\n", 2, 8, "expected a number");
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1,inf,3\n", 2, 8, "expected a number");
@@ -506,7 +505,7 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1,,3\n", 2, 8, "empty parameter");
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO/1 2,3\n", 2, 8, "expected ','");
   EXPECT_APT_ERROR("FEDRAT/10\nGOTO 1,2,3\n", 2, 6, "expected '/'");
-  EXPECT_APT_ERROR("FEDRAT/10\nGOTO/\n", 2, 6, "expected its parameters");
+  EXPECT_APT_ERROR("FEDRAT/10\nGOTO/\n", 2, 6, "GOTO/ with 0 parameter(s) (expected x,y,z or x,y,z,i,j,k)");
   EXPECT_APT_ERROR("1.0,2.0,3.0\n", 1, 1, "expected a statement word");
   // Not CL data: G-code, APT source geometry.
   EXPECT_APT_ERROR("G0 X1 Y2\n", 1, 4, "unexpected 'X' after G0");
@@ -535,10 +534,11 @@ TEST(AptReader, BadInputNamesLineAndColumn) {
   const AptProgram off = read("CUTCOM/OFF\nFROM/0,0,10\nFEDRAT/100\nGOTO/10,0,0\n");
   EXPECT_TRUE(off.program.warnings.empty());
   EXPECT_EQ(off.program.blocks.size(), 1u);
-  EXPECT_APT_ERROR("LOADTL/0\n", 1, 8, "from 1 to 99999");
+  EXPECT_APT_ERROR("LOADTL/1\nLOADTL/0\n", 2, 8, "from 1 to 99999");
   EXPECT_APT_ERROR("LOADTL/2.5\n", 1, 8, "whole number");
   EXPECT_APT_ERROR("MULTAX/MAYBE\n", 1, 8, "ON or OFF");
-  EXPECT_APT_ERROR("SPINDL/1000,SIDEWAYS\n", 1, 13, "expected CLW or CCLW");
+  EXPECT_APT_ERROR("SPINDL/1000,SIDEWAYS\n", 1, 13, "expected rpm, RPM, CLW, CCLW");
+  EXPECT_APT_ERROR("SPINDL/1000,RPM,2000\n", 1, 17, "two speeds");
   EXPECT_APT_ERROR("RAPID/5\n", 1, 7, "no parameters");
   EXPECT_APT_ERROR("FEDRAT/1\nGODLTA/1,2,3\n", 2, 1, "unknown position");
   // A 180-degree turn of the tool axis has no single great circle.
@@ -559,7 +559,9 @@ TEST(AptReader, CircleErrors) {
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10\nFINI\n", 4, 1, "expected the GOTO/");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,0,10\n", 3, 14, "zero circle axis");
   EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,0\n", 3, 20, "expected r > 0");
-  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1\n", 3, 8, "cx,cy,cz,i,j,k,r");
+  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0\n", 3, 8, "cx,cy,cz,i,j,k");
+  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10,0.1,0.1,0.1,0.1,0.1\n", 3, 39, "more than 4 tolerances");
+  EXPECT_APT_ERROR(head + "CIRCLE/0,0,0,0,0,1,10,TIMES,0\nGOTO/10,0,0\n", 3, 29, "whole number of turns");
   EXPECT_APT_ERROR("FEDRAT/1\nCIRCLE/0,0,0,0,0,1,10\n", 2, 1, "unknown position");
   EXPECT_APT_ERROR(head + "RAPID\nCIRCLE/0,0,0,0,0,1,10\nGOTO/0,10,0\n", 4, 1, "after RAPID");
 }
@@ -726,6 +728,185 @@ TEST(AptReader, CutcomOffsetsTheContourAsG42) {
       EXPECT_LT((gcode.blocks[k].center_mm - b[k].center_mm).norm(), 1e-9) << k;
     }
   }
+}
+
+// ---------------------------------------------------------------- CAM output as written
+// The forms below are copied in shape (not in content) from CL files of SolidWorks CAM, NX,
+// CATIA and Creo in public repositories (docs/PROGRAMS.md lists them); expected values are
+// worked by hand.
+
+// SPINDL/ in the three orders CAM systems write.
+TEST(AptReader, SpindleAsCamSystemsWriteIt) {
+  auto spindle_of = [](const std::string& spindl) {
+    const AptProgram p = read(spindl + "\nFROM/0,0,0\nFEDRAT/100\nGOTO/1,0,0\n");
+    return std::make_pair(p.program.blocks.at(0).spindle, p.program.blocks.at(0).spindle_rpm);
+  };
+  EXPECT_EQ(spindle_of("SPINDL/3500,RPM,CLW"), std::make_pair(SpindleState::Clockwise, 3500.0));
+  EXPECT_EQ(spindle_of("SPINDL / RPM, 9000.000000,  CCLW"), std::make_pair(SpindleState::CounterClockwise, 9000.0));
+  EXPECT_EQ(spindle_of("SPINDL/400,CLW"), std::make_pair(SpindleState::Clockwise, 400.0));
+  EXPECT_EQ(spindle_of("SPINDL/1200"), std::make_pair(SpindleState::Clockwise, 1200.0));
+}
+
+// NX and SolidWorks CAM give GOTO/ its tool axis without MULTAX/ON; RAPID/ with its slash;
+// a CUTTER/ that ends in a comma (CAMWorks).
+TEST(AptReader, GotoAxisWithoutMultaxRapidSlashTrailingComma) {
+  const AptProgram p =
+      read("CUTTER/10.,0,5.,0,0,0,50.,\nFROM/0,0,10\nRAPID/\nGOTO/0,0,5,0,0.6,0.8\nFEDRAT/100\nGOTO/1,0,5\n");
+  ASSERT_EQ(p.program.blocks.size(), 2u);
+  EXPECT_EQ(p.program.blocks[0].kind, MotionKind::Rapid);
+  expect_vec(p.program.blocks[0].end_axis, Eigen::Vector3d(0, 0.6, 0.8));
+  expect_vec(p.program.blocks[1].end_axis, Eigen::Vector3d(0, 0.6, 0.8));  // kept
+  EXPECT_DOUBLE_EQ(p.cutters.at(1).flute_length_mm, 50.0);
+}
+
+// CIRCLE/ without its radius (SolidWorks CAM): the start's distance from the axis; NX's
+// TIMES,2 goes round twice: a quarter from (10, 0) to (0, 10) then a whole turn, 5 pi / 2.
+TEST(AptReader, CircleWithoutRadiusAndTimes) {
+  const std::string head = "FROM/10,0,0\nFEDRAT/100\n";
+  const AptProgram p = read(head + "CIRCLE/0,0,0,0,0,1.\nGOTO/0,10,0\n");
+  ASSERT_EQ(p.program.blocks.size(), 1u);
+  EXPECT_EQ(p.program.blocks[0].kind, MotionKind::Arc);
+  EXPECT_NEAR(swept_angle(p.program.blocks[0]), kPi / 2.0, kTol);
+  const AptProgram twice = read(head + "CIRCLE/0,0,0,0,0,1,10,0.06,0.5,125,1,TIMES,2\nGOTO/0,10,0\n");
+  ASSERT_EQ(twice.program.blocks.size(), 1u);
+  EXPECT_EQ(twice.program.blocks[0].turns, 2);
+  EXPECT_NEAR(swept_angle(twice.program.blocks[0]), 2.5 * kPi, kTol);
+}
+
+// CSYS/ (SolidWorks CAM): a setup turned about Z or moved writes its motions in its own frame,
+// part = R setup + t. With t = (-59.5, -59.5, 19) the point (59.5, 99.5, -24) is (0, 40, -5);
+// turned 180 deg about Z and moved by (456.34944, 197.0266, 0), (295.42522, 106.3578, 0) is
+// (160.92422, 90.6688, 0). A tilted setup's motions are in the part frame already.
+TEST(AptReader, CsysPlacesASetupsMotions) {
+  const AptProgram moved =
+      read("CSYS/1.,0,0,-59.5,0,1.,0,-59.5,0,0,1.,19.\nFROM/59.5,99.5,25.\nFEDRAT/100\nGOTO/59.5,99.5,-24.\n");
+  ASSERT_EQ(moved.program.blocks.size(), 1u);
+  expect_vec(moved.program.blocks[0].start_mm, Eigen::Vector3d(0, 40, 44));
+  expect_vec(moved.program.blocks[0].end_mm, Eigen::Vector3d(0, 40, -5));
+  const AptProgram turned = read(
+      "CSYS/-1.,0,0,456.34944,0,-1.,0,197.0266,0,0,1.,0\nFROM/295.42522,106.3578,25\nFEDRAT/100\n"
+      "GOTO/295.42522,106.3578,0\n");
+  expect_vec(turned.program.blocks.at(0).end_mm, Eigen::Vector3d(160.92422, 90.6688, 0), 1e-9);
+  const AptProgram tilted = read(
+      "CSYS/0,0,-1.,0,-1.,0,0,0,0,1.,0,0\nFROM/-25.,101.4375,-47.085194,-1.,0,0\nFEDRAT/100\n"
+      "GOTO/3.,101.4375,-47.085194,-1.,0,0\n");
+  expect_vec(tilted.program.blocks.at(0).end_mm, Eigen::Vector3d(3, 101.4375, -47.085194));
+  expect_vec(tilted.program.blocks.at(0).end_axis, Eigen::Vector3d(-1, 0, 0));
+  EXPECT_APT_ERROR("CSYS/1.,0,0,0,0,2.,0,0,0,0,1.,0\n", 1, 6, "not a rotation");
+  EXPECT_APT_ERROR("CSYS/-1.,0,0,0,0,1.,0,0,0,0,1.,0\n", 1, 6, "not a rotation");  // a mirror: det -1
+  EXPECT_APT_ERROR("CSYS/1.,0,0,0,0,1.,0,0,0,0,1.\n", 1, 6, "expected r11");
+}
+
+// MSYS/ (NX): the first is the workpiece frame, its motions read as written. The first has
+// o1 = (393, -297.5, 3), X1 = (0, 1, 0), Y1 = (1, 0, 0), Z1 = X1 x Y1 = (0, 0, -1); the second
+// o2 = (493, -297.5, 3), X2 = (1, 0, 0), Y2 = (0, -1, 0), Z2 = (0, 0, -1). Its (10, 0, 0) is
+// o2 + (10, 0, 0) absolute, (110, 0, 0) from o1: along X1, Y1, Z1 that is (0, 110, 0); its
+// (10, 1, 0) is (110, -1, 0) from o1: (-1, 110, 0); its tool axis Z2 is Z1's own: (0, 0, 1).
+TEST(AptReader, MsysLaterSetupsPlacedInTheFirst) {
+  const AptProgram p = read(
+      "MSYS/393.0000,-297.5000,3.0000,0.0000000,1.0000000,0.0000000,1.0000000,0.0000000,0.0000000\n"
+      "FROM/0,0,50\nFEDRAT/100\nGOTO/1,2,3\n"
+      "MSYS/493.0000,-297.5000,3.0000,1.0000000,0.0000000,0.0000000,0.0000000,-1.0000000,0.0000000\n"
+      "GOTO/10,0,0\nGOTO/10,1,0\n");
+  ASSERT_EQ(p.program.blocks.size(), 3u);
+  expect_vec(p.program.blocks[0].end_mm, Eigen::Vector3d(1, 2, 3));  // the first MSYS/: as written
+  expect_vec(p.program.blocks[1].end_mm, Eigen::Vector3d(0, 110, 0));
+  expect_vec(p.program.blocks[2].end_mm, Eigen::Vector3d(-1, 110, 0));
+  expect_vec(p.program.blocks[2].end_axis, Eigen::Vector3d(0, 0, 1));
+  EXPECT_APT_ERROR("MSYS/0,0,0,1,0,0,1,0,0\n", 1, 6, "not a rotation");
+}
+
+// CYCLE/DRILL (SolidWorks CAM's form): from (0, 0, 25), the hole at (25, 50, 0): rapid across
+// at 25, down to RAPTO 3, feed 5 below at 100 mm/min, rapid back to RTRCTO 25.
+TEST(AptReader, CycleDrillMakesTheHolesMotions) {
+  const AptProgram p = read(
+      "FROM/0,0,25\nCYCLE/INIT\nCYCLE/DRILL,FEDTO,5.,MMPM,100.,RAPTO,3.,RTRCTO,25.,DWELL,0\nGOTO/25,50,0\nCYCLE/OFF\n");
+  ASSERT_EQ(p.program.blocks.size(), 4u);
+  const MotionKind kinds[4] = {MotionKind::Rapid, MotionKind::Rapid, MotionKind::Linear, MotionKind::Rapid};
+  const Eigen::Vector3d ends[4] = {{25, 50, 25}, {25, 50, 3}, {25, 50, -5}, {25, 50, 25}};
+  for (int k = 0; k < 4; ++k) {
+    EXPECT_EQ(p.program.blocks[k].kind, kinds[k]) << k;
+    expect_vec(p.program.blocks[k].end_mm, ends[k]);
+    EXPECT_EQ(p.program.blocks[k].source.line, 4) << k;
+  }
+  EXPECT_DOUBLE_EQ(p.program.blocks[2].feed_mm_per_min, 100.0);
+}
+
+// CYCLE/DEEP pecks of INCR 3 to FEDTO 7 from RAPTO 2, back to RAPTO after each and rapid down
+// to where the last stopped: feeds end at -3, -6, -7. The FEDRAT/ is back after CYCLE/OFF.
+TEST(AptReader, CycleDeepPecks) {
+  const AptProgram p = read(
+      "FROM/0,0,10\nFEDRAT/50\nCYCLE/DEEP,FEDTO,7,INCR,3,MMPM,100,RAPTO,2,RTRCTO,10\nGOTO/0,0,0\nCYCLE/OFF\n"
+      "GOTO/5,0,10\n");
+  const double z[] = {2, -3, 2, -3, -6, 2, -6, -7, 10, 10};
+  const MotionKind R = MotionKind::Rapid, L = MotionKind::Linear;
+  const MotionKind kinds[] = {R, L, R, R, L, R, R, L, R, L};
+  ASSERT_EQ(p.program.blocks.size(), 10u);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_EQ(p.program.blocks[k].kind, kinds[k]) << k;
+    EXPECT_NEAR(p.program.blocks[k].end_mm.z(), z[k], kTol) << k;
+  }
+  EXPECT_DOUBLE_EQ(p.program.blocks[9].feed_mm_per_min, 50.0);
+  // SolidWorks CAM's DEEP2: a first peck of 5, then 2: feeds end at -5, -7, -9, -10.
+  const AptProgram deep2 = read(
+      "FROM/0,0,30\nCYCLE/DEEP2,FEDTO,10,1STPECK,5.,SUBPECK,2.,MMPM,382.27,RAPTO,3.,RTRCTO,27.5\nGOTO/0,0,0\n"
+      "LOADTL/2\nFEDRAT/10\nGOTO/1,0,0\n");
+  std::vector<double> feeds;
+  for (const Block& b : deep2.program.blocks)
+    if (b.kind == MotionKind::Linear) feeds.push_back(b.end_mm.z());
+  EXPECT_EQ(feeds, (std::vector<double>{-5, -7, -9, -10, 0}));  // the tool change ended the cycle
+  EXPECT_APT_ERROR("CYCLE/DRILL,RAPTO,3\n", 1, 7, "without its depth");
+  EXPECT_APT_ERROR("CYCLE/SPIRAL,FEDTO,1\n", 1, 7, "not supported");
+  EXPECT_APT_ERROR("CYCLE/DRILL,FEDTO\n", 1, 13, "FEDTO without its number");
+  EXPECT_APT_ERROR("CYCLE/DRILL,FEDTO,1,SPEEDY,2\n", 1, 21, "unknown CYCLE/ parameter SPEEDY");
+}
+
+// NX's TLDATA/MILL (diameter, lower radius, length, taper, tip angle) and LOAD/TOOL,0.
+TEST(AptReader, NxTldataAndToolZero) {
+  const AptProgram p = read(
+      "TOOL PATH/CAVITY_MILL,TOOL,MILL_10\nTLDATA/MILL,10.0000,2.0000,50.0000,0.0000,0.0000\nLOAD/TOOL,0,ADJUST,1\n"
+      "FROM/0,0,0\nFEDRAT/MMPM,250\nGOTO/1,0,0\nEND-OF-PATH\n");
+  ASSERT_EQ(p.cutters.count(1), 1u);
+  const removal::Cutter& c = p.cutters.at(1);
+  EXPECT_EQ(c.type, CutterType::BullNose);
+  EXPECT_DOUBLE_EQ(c.diameter_mm, 10.0);
+  EXPECT_DOUBLE_EQ(c.corner_radius_mm, 2.0);
+  EXPECT_DOUBLE_EQ(c.flute_length_mm, 50.0);
+  EXPECT_EQ(p.program.blocks.at(0).tool, 1);
+  EXPECT_APT_ERROR("TLDATA/MILL,10,0,50,5,0\n", 1, 21, "tapered cutter");
+}
+
+// CUTCOM/ on the tool's centre path (NX's "$$ centerline data", SolidWorks CAM's CSI_
+// statements, program.cutcom: centre): no offset, one warning. Without either, APT's contour.
+TEST(AptReader, CutcomOnACentrePath) {
+  const std::string path = "CUTTER/14\nFROM/0,0,0\nFEDRAT/100\nCUTCOM/LEFT\nGOTO/1,0,0\nGOTO/20,0,0\nCUTCOM/OFF\n";
+  for (const std::string& marker : {std::string("$$ centerline data\n"), std::string("CSI_SET_FLUTE_LENGTH/4.\n")}) {
+    const AptProgram p = read(marker + path);
+    ASSERT_EQ(p.program.blocks.size(), 2u) << marker;
+    expect_vec(p.program.blocks[1].end_mm, Eigen::Vector3d(20, 0, 0));
+    bool warned = false;
+    for (const auto& w : p.program.warnings) warned = warned || w.find("CUTCOM/ on") != std::string::npos;
+    EXPECT_TRUE(warned) << marker;
+  }
+  AptOptions centre;
+  centre.cutcom_on_centre = true;
+  EXPECT_EQ(read(path, centre).program.blocks.size(), 2u);
+  EXPECT_APT_ERROR(path, 5, 1, "set program.cutcom: centre");  // a 1 mm entry for a 7 mm radius
+}
+
+// Creo's commented-out statements continue with '$'; NX's information listing has a header
+// and a last line that are not CL data.
+TEST(AptReader, CreoCommentsAndNxListing) {
+  const AptProgram creo = read(
+      "$$-> CSYS / 1.0000000000, 0.0000000000, 0.0000000000, 0.0000000000,  $\n"
+      "            0.0000000000, 1.0000000000, 0.0000000000, 0.0000000000,  $\n"
+      "            0.0000000000, 0.0000000000, 1.0000000000, 0.0000000000\n"
+      "LOADTL / 1\nFROM / 0, 0, 0\nFEDRAT / 400.000000,  MMPM\nGOTO / 1, 0, 0\n");
+  EXPECT_EQ(creo.program.blocks.size(), 1u);
+  const AptProgram nx = read(
+      "\nInformation listing created by\tphill\nDate\t18-Dec-2021 21:07:42\nNode name\tlaptop\n\n"
+      "TOOL PATH/CAVITY_MILL,TOOL,MILL\nFROM/0,0,0\nFEDRAT/MMPM,530\nGOTO/1,0,0\nTool Path Listing has 350 lines.\n");
+  EXPECT_EQ(nx.program.blocks.size(), 1u);
 }
 
 }  // namespace

@@ -113,6 +113,19 @@ TEST(ProgramHeader, VectricCamBamAndToolChangeComments) {
   EXPECT_EQ(h.tool_numbers, (std::set<int>{5, 6}));
 }
 
+// SolidWorks CAM's CL data declares its stock in an INSERT/; UNITS/INCHES makes it inches.
+TEST(ProgramHeader, AptInsertStockSize) {
+  const auto mm = header_of("PARTNO/1\nUNIT/MM\nINSERT/Stock Size X465.40922 Y243.942457 Z6.\nGOTO/1,2,3\n", "p.apt");
+  ASSERT_TRUE(mm.stock);
+  EXPECT_FALSE(mm.stock->placed);
+  EXPECT_NEAR(mm.stock->size_mm.x(), 465.40922, 1e-9);
+  EXPECT_NEAR(mm.stock->size_mm.y(), 243.942457, 1e-9);
+  EXPECT_NEAR(mm.stock->size_mm.z(), 6.0, 1e-9);
+  const auto inch = header_of("UNITS/INCHES\n$$ STOCK SIZE X 4 Y 2 Z 1\n", "q.apt");
+  ASSERT_TRUE(inch.stock);
+  EXPECT_NEAR(inch.stock->size_mm.x(), 101.6, 1e-9);
+}
+
 // Rotary words in the code, not in comments or inside function names.
 TEST(ProgramHeader, RotaryLetters) {
   EXPECT_EQ(header_of("(A90 in a comment)\nG1 X1 A90 F100\n#1=ABS[-2]\nG1 X[ATAN[1]/[1]]\n").rotary_letters,

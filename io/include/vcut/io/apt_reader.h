@@ -57,6 +57,11 @@ struct AptOptions {
   // How far a CIRCLE/'s start or end point may lie off its circle (mm): CL files print 4 to 6
   // decimals, inches included (0.00005 in = 0.0013 mm).
   double arc_tolerance_mm = 0.002;
+  // CUTCOM/ on CL points that are the tool's centre already (program.cutcom: centre): CAM
+  // systems write the centre path with control compensation for wear only (SolidWorks CAM's
+  // lead-in arcs are smaller than the tool); false: APT's meaning, the points are the part's
+  // contour and the tool runs its radius beside them. NX's "$$ centerline data" says so itself.
+  bool cutcom_on_centre = false;
 };
 
 struct AptProgram {
@@ -95,6 +100,28 @@ struct AptState {
   // CUTCOM/LEFT | RIGHT (the CL points are the part's contour; the control offsets the tool by
   // the CUTTER/'s radius) as G41/G42 in the XY plane, LinuxCNC's algorithm; CUTCOM/OFF as G40.
   GcodeState::CutterComp comp;
+  // The frame the coordinates that follow are written in, in the workpiece frame:
+  // workpiece = frame_rotation * written + frame_translation_mm (CSYS/, MSYS/).
+  Eigen::Matrix3d frame_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d frame_translation_mm = Eigen::Vector3d::Zero();
+  bool msys_seen = false;  // the first MSYS/ is the workpiece frame
+  Eigen::Matrix3d msys_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d msys_origin_mm = Eigen::Vector3d::Zero();
+  int circle_turns = 1;  // CIRCLE/ ... TIMES,n
+  // Why the CL points are the tool's centre, so that CUTCOM/ offsets nothing (empty: not known
+  // to be): NX's "$$ centerline data", SolidWorks CAM's CSI_ statements.
+  std::string centre_path;
+  // CYCLE/ (drilling): each GOTO/ while it is on is a hole, its point on the surface.
+  struct Cycle {
+    bool on = false;
+    std::string kind;                           // DRILL, DEEP, BRKCHP, TAP, BORE, REAM
+    double depth_mm = 0.0;                      // FEDTO / DEPTH: below the point along the tool axis
+    double clearance_mm = 0.0;                  // RAPTO / CLEAR: above the point, where the feed starts
+    double retract_mm = -1.0;                   // RTRCTO: above the point after the hole; < 0: the start level
+    double feed_mm_per_min = 0.0;               // MMPM / IPM; 0: the FEDRAT/
+    double first_peck_mm = 0.0, peck_mm = 0.0;  // DEEP, BRKCHP: INCR / 1STPECK, SUBPECK / STEP
+    std::string where;
+  } cycle;
 };
 
 // Reads one CL file. Errors are vcut::InputError naming file:line:column.

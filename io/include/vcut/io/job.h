@@ -61,6 +61,7 @@ struct Job {
   long long max_lines = 100'000'000;         // G-code: lines read before a loop is taken to be endless
   std::map<int, bool> tcp_m_codes;           // G-code: M codes switching TCP on (true) / off
   int initial_tool = 0;                      // G-code: the tool in the spindle at the start (0: none)
+  bool apt_cutcom_on_centre = false;         // APT: program.cutcom: centre (else contour)
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;

@@ -1,4 +1,4 @@
-// What a G-code or SINUMERIK program says about itself in its comments, for simulating it
+// What an NC program (G-code, SINUMERIK, APT) says about itself in its comments, for simulating it
 // without a job file (`vcut simulate part.nc`): the stock its CAM system declared, the tools
 // it lists, its units and the rotary axes it moves. Comments only; the motions are the
 // readers' (io/program_reader.h).
@@ -11,6 +11,8 @@
 //   ( Material Size) then ( X= dx, Y= dy, Z= dz)  Vectric
 //   (STOCK ... DX a DY b DZ c)  (STOCK = a X b X c)  people and shop posts; a value may carry
 //                                               IN, MM or " after it
+//   INSERT/Stock Size X a Y b Z c               SolidWorks CAM's CL data (APT: `$$` comments,
+//                                               INSERT/ and PPRINT/ texts; UNITS/ for units)
 // The last three give the size only: the pipeline places it around the cutting moves
 // (pipeline/program_job.h). A size that is not positive is an error naming file:line:column.
 //
