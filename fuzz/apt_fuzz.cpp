@@ -44,7 +44,7 @@ void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options)
       require(b.start_mm != b.end_mm || b.start_axis != b.end_axis);  // still moves are dropped
       continue;
     }
-    require(b.turns == 1 && unit(b.normal));
+    require(b.turns >= 1 && b.turns <= 1000 && unit(b.normal));  // CIRCLE/ ... TIMES,n
     const Eigen::Vector3d n = b.normal;
     // The centre lies in the start's plane; start and end are (nearly) equally far from it.
     require(std::abs(n.dot(b.center_mm - b.start_mm)) <= 1e-6);

@@ -729,6 +729,11 @@ int Reader::motion_tool() {
 
 void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Vector3d& end_axis) {
   const bool rapid = kind == MotionKind::Rapid;
+  // A point within range as written can leave it once a CSYS/ or MSYS/ frame places it, or a
+  // CYCLE/ adds its depth.
+  if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
+    fail(major_pos_, "motion to " + point(end) + " mm in the workpiece frame, out of range (expected within +-1e6 mm)");
+  }
   if (!rapid && state_.feed_mm_per_min <= 0.0) {
     fail(major_pos_,
          "feed motion before any FEDRAT/ (expected FEDRAT/ before it, or RAPID for a rapid "
@@ -747,10 +752,17 @@ void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Ve
     return;  // no motion: no Block (as the G-code reader)
   }
   if (state_.pose_axis.dot(end_axis) < kOppositeAxisCosine) {
+    // After a CSYS/ that turns the part over, this is a second clamping, not a motion.
+    const std::string setup = state_.setup_where.empty()
+                                  ? std::string()
+                                  : "; the CSYS/ at " + state_.setup_where +
+                                        " turns the part over: a new clamping, to simulate as a job of its own";
     fail(major_pos_, "the tool axis turns from " + point(state_.pose_axis) + " to its opposite " + point(end_axis) +
                          " in one motion (expected an intermediate axis: no single great circle "
-                         "joins opposite axes)");
+                         "joins opposite axes)" +
+                         setup);
   }
+  state_.setup_where.clear();
   Block block;
   block.kind = kind;
   block.start_mm = state_.position_mm;
@@ -841,6 +853,10 @@ void Reader::do_from() {
   no_cutcom("FROM/");
   count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
   state_.position_mm = placed(Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z")));
+  if (!(state_.position_mm.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
+    fail(major_pos_,
+         "FROM/ " + point(state_.position_mm) + " mm in the workpiece frame, out of range (expected within +-1e6 mm)");
+  }
   if (nargs_ == 6) state_.pose_axis = state_.axis = turned(unit_vector(3, "tool axis"));
   state_.known = true;
 }
@@ -1248,6 +1264,7 @@ void Reader::do_csys() {
   }
   const Eigen::Matrix3d rotation = checked_rotation(r, "CSYS/");
   const bool tilted = (rotation.col(2) - Eigen::Vector3d::UnitZ()).norm() > kFrameTolerance;
+  state_.setup_where = where_line();
   state_.frame_rotation = tilted ? Eigen::Matrix3d::Identity() : rotation;
   state_.frame_translation_mm = tilted ? Eigen::Vector3d::Zero() : t;
 }

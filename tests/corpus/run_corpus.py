@@ -52,6 +52,7 @@ def main():
     ap.add_argument("--timeout", type=int, default=120)
     args = ap.parse_args()
     expected = {}
+    unlisted = []
     if args.expected:
         with open(args.expected) as f:
             for line in f:
@@ -60,6 +61,11 @@ def main():
                 parts = line.rstrip("\n").split("\t")
                 expected[parts[0]] = (parts[1], parts[2] if len(parts) > 2 else "", parts[3] if len(parts) > 3 else "")
         names = sorted(expected)
+        # Every program kept in the folder is listed: one added without its expectation fails.
+        unlisted = sorted(n for n in os.listdir(args.folder)
+                          if os.path.isfile(os.path.join(args.folder, n)) and n not in expected)
+        for n in unlisted:
+            print("%-70s not in %s: FAIL" % (n, args.expected))
     else:
         names = sorted(n for n in os.listdir(args.folder) if os.path.isfile(os.path.join(args.folder, n)))
     with concurrent.futures.ThreadPoolExecutor(max_workers=args.jobs) as pool:
@@ -83,7 +89,7 @@ def main():
           "file:line:column and the feature, %d other; %d differ from the expectations"
           % (total, counts.get("still", 0), counts.get("ok", 0), 100.0 * counts.get("ok", 0) / max(total, 1),
              counts.get("refused", 0), counts.get("other", 0), bad))
-    return 1 if bad else 0
+    return 1 if bad or (args.expected and unlisted) else 0
 
 
 if __name__ == "__main__":

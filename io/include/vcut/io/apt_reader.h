@@ -104,7 +104,8 @@ struct AptState {
   // workpiece = frame_rotation * written + frame_translation_mm (CSYS/, MSYS/).
   Eigen::Matrix3d frame_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d frame_translation_mm = Eigen::Vector3d::Zero();
-  bool msys_seen = false;  // the first MSYS/ is the workpiece frame
+  bool msys_seen = false;   // the first MSYS/ is the workpiece frame
+  std::string setup_where;  // "file:line" of a CSYS/ no motion has followed yet
   Eigen::Matrix3d msys_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d msys_origin_mm = Eigen::Vector3d::Zero();
   int circle_turns = 1;  // CIRCLE/ ... TIMES,n
