@@ -1408,6 +1408,8 @@ void Reader::do_cycle() {
         if (!(rpm > 0.0))
           fail(a.pos, "cycle feed per revolution with the spindle's speed unknown (expected SPINDL/ first)");
         c.feed_mm_per_min = v * rpm * (a.word == "IPR" ? kMmPerInch : 1.0);
+        if (!(c.feed_mm_per_min > 0.0 && c.feed_mm_per_min <= kMaxMagnitude))
+          fail(args_[k + 1].pos, "cycle feed " + num(c.feed_mm_per_min) + " mm/min (expected > 0 and <= 1e6 mm/min)");
       }
     } else {
       fail(a.pos,

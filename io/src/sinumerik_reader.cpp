@@ -19,6 +19,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <filesystem>
 #include <fstream>
 #include <istream>
@@ -93,6 +94,16 @@ struct Line {
   int m6_column = 0;
   int spindle = -1, spindle_column = 0;  // M3 M4 M5
   int first_column = 0;                  // of the block's first word
+  // A frame statement (its X Y Z are its values, not a move) and RPL=.
+  enum class Frame { None, Trans, ATrans, Rot, ARot, Scale, AScale, Mirror, AMirror } frame = Frame::None;
+  int frame_column = 0;
+  std::string frame_name;
+  Value rpl;
+  // A drilling cycle called in this block (CYCLE81(...)), or MCALL (modal call / its end).
+  std::string cycle;
+  std::vector<std::optional<double>> cycle_args;
+  int cycle_column = 0;
+  bool mcall = false;
 };
 
 class Reader {
@@ -181,6 +192,17 @@ class Reader {
     return 0;
   }
   void motion();
+  void apply_frame();
+  void cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column);
+  void cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column);
+  bool frame_turns() const { return !state_.frame_linear.isIdentity(0.0); }
+  Eigen::Vector3d placed(const Eigen::Vector3d& frame_point) const {
+    return offset() + state_.frame_translation_mm + state_.frame_linear * frame_point;
+  }
+  Eigen::Vector3d in_frame(const Eigen::Vector3d& workpiece_point) const {
+    return state_.frame_linear.inverse() * (workpiece_point - offset() - state_.frame_translation_mm);
+  }
+  void arc_in_plane(Block& block, bool clockwise, const Eigen::Vector3d& centre_origin);
   double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
   Eigen::Vector3d offset() const {
     const auto it = options_.work_offsets_mm.find(state_.work_offset);
@@ -537,6 +559,7 @@ void Reader::assignment(const std::string& address, int col) {
     return;
   }
   if (address == "CR") return set(l_.cr, "CR", expression(0), col);
+  if (address == "RPL") return set(l_.rpl, "RPL", expression(0), col);
   if (address == "ADIS") return set(l_.adis, "ADIS", expression(0), col);
   if (address == "ADISPOS") return set(l_.adispos, "ADISPOS", expression(0), col);
   static const char* const kVector[3] = {"A3", "B3", "C3"};
@@ -729,9 +752,9 @@ void Reader::code(char letter, int col) {
 }
 
 void Reader::keyword(const std::string& name, int col) {
-  static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",   "ENDFOR",  "LOOP",
-                                      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB", "GOTOC",   "CASE",
-                                      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "MCALL", "EXTCALL", "REPEATB"};
+  static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",     "ENDFOR", "LOOP",
+                                      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB",   "GOTOC",  "CASE",
+                                      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "EXTCALL", "REPEATB"};
   for (const char* w : kFlow) {
     if (name == w) {
       fail(col, name +
@@ -740,10 +763,9 @@ void Reader::keyword(const std::string& name, int col) {
     }
   }
   // Frames and motion types whose axis words would otherwise be read as a plain move.
-  static const char* const kNotMoves[] = {"TRANS",  "ATRANS",  "ROT",     "AROT",     "SCALE",   "ASCALE",
-                                          "MIRROR", "AMIRROR", "ROTS",    "AROTS",    "CROTS",   "SUPA",
-                                          "CIP",    "CT",      "ASPLINE", "BSPLINE",  "CSPLINE", "POLY",
-                                          "INVCW",  "INVCCW",  "TRACYL",  "TRANSMIT", "TRAANG",  "OFFN"};
+  static const char* const kNotMoves[] = {"ROTS",    "AROTS",    "CROTS",   "SUPA", "CIP",     "CT",
+                                          "ASPLINE", "BSPLINE",  "CSPLINE", "POLY", "INVCW",   "INVCCW",
+                                          "TRACYL",  "TRANSMIT", "TRAANG",  "OFFN", "CYCLE800"};
   for (const char* w : kNotMoves) {
     if (name == w) {
       fail(col, name +
@@ -751,6 +773,44 @@ void Reader::keyword(const std::string& name, int col) {
                     "block's axis words cannot be read as a plain move (expected G0 G1 G2 G3 "
                     "in the workpiece frame)");
     }
+  }
+  // Programmable frames: the block's X Y Z are the frame's values (Line::frame).
+  static const std::pair<const char*, Line::Frame> kFrames[] = {
+      {"TRANS", Line::Frame::Trans},   {"ATRANS", Line::Frame::ATrans},  {"ROT", Line::Frame::Rot},
+      {"AROT", Line::Frame::ARot},     {"SCALE", Line::Frame::Scale},    {"ASCALE", Line::Frame::AScale},
+      {"MIRROR", Line::Frame::Mirror}, {"AMIRROR", Line::Frame::AMirror}};
+  for (const auto& [word, op] : kFrames) {
+    if (name != word) continue;
+    if (l_.frame != Line::Frame::None)
+      fail(col, name + " after " + l_.frame_name + " in one block (expected one frame statement per block)");
+    l_.frame = op;
+    l_.frame_column = col;
+    l_.frame_name = name;
+    return;
+  }
+  if (name == "MCALL") {
+    l_.mcall = true;  // alone: the modal call ends; with a cycle: it becomes the modal call
+    return;
+  }
+  if (name == "CYCLE81" || name == "CYCLE82" || name == "CYCLE83") {
+    if (!l_.cycle.empty()) fail(col, name + " after " + l_.cycle + " in one block (expected one cycle call)");
+    l_.cycle = name;
+    l_.cycle_column = col;
+    expect('(', name + " without its parameters (expected " + name + "(RTP, RFP, SDIS, DP, DPR, ...))");
+    // Positional parameters; an empty one is left out (Siemens' default).
+    while (true) {
+      skip_blanks();
+      if (at(',') || at(')')) {
+        l_.cycle_args.emplace_back();
+      } else {
+        l_.cycle_args.emplace_back(expression(1));
+      }
+      if (at(')')) break;
+      expect(',', name + "( with a parameter list that does not end with ')'");
+      if (l_.cycle_args.size() > 32) fail(col, name + " with more than 32 parameters");
+    }
+    ++i_;
+    return;
   }
   if (name == "TRAORI") {
     if (at('(')) {
@@ -860,6 +920,10 @@ void Reader::execute() {
                     : l.motion == 2 ? Motion::ArcClockwise
                                     : Motion::ArcCounterClockwise;
   }
+  if (l.frame != Line::Frame::None) {
+    apply_frame();  // its X Y Z are the frame's values: no move
+    return;
+  }
   bool moves = false;
   for (int k = 0; k < 3; ++k) moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
   if (l.dwell_column > 0) {
@@ -886,7 +950,7 @@ void Reader::execute() {
         fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " + num(c.z()) +
                                    ") (expected a vector of nonzero length)");
       }
-      state_.cone_axis = c.normalized();
+      state_.cone_axis = (state_.frame_linear * c).normalized();
       break;
     }
   }
@@ -928,7 +992,17 @@ void Reader::execute() {
     if (l.cr.present) fail(l.cr.column, "CR= outside an arc (expected G2 or G3)");
   }
   const bool centre = l.center[0].present || l.center[1].present || l.center[2].present;
-  if (moves || (arc && (centre || l.cr.present))) motion();
+  const bool positions = moves || (arc && (centre || l.cr.present));
+  if (positions) motion();
+  if (l.mcall) {
+    // MCALL CYCLE8x(...): every later positioning block ends with it; MCALL alone: no more.
+    state_.modal_cycle = l.cycle;
+    state_.modal_cycle_args = l.cycle_args;
+  } else if (!l.cycle.empty()) {
+    cycle(l.cycle, l.cycle_args, l.cycle_column);
+  } else if (positions && !state_.modal_cycle.empty()) {
+    cycle(state_.modal_cycle, state_.modal_cycle_args, l.first_column);
+  }
   if (l.end) {
     // M30/M2/M17: nothing after this line is read; the end resets G91 and the feed mode as
     // Siemens' reset values do (the tool and the position stay).
@@ -939,7 +1013,32 @@ void Reader::execute() {
 // The block's end point (workpiece frame, mm): programmed axes in G90/G91 or AC/IC, others stay.
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   Eigen::Vector3d end = state_.position_mm;
-  const Eigen::Vector3d off = offset();
+  if (frame_turns()) {
+    // A turned, scaled or mirrored frame mixes the axes: the point in the frame, then placed.
+    Eigen::Vector3d q = in_frame(state_.position_mm);
+    for (int a = 0; a < 3; ++a) {
+      const Value& w = l_.axis[a];
+      if (!w.present) continue;
+      for (int k = 0; k < 3; ++k) {
+        if (!state_.known[static_cast<std::size_t>(k)]) {
+          fail(w.column, std::string("a move in a turned, scaled or mirrored frame (ROT, SCALE, MIRROR) from an "
+                                     "unknown ") +
+                             kAxisLetter[k] + " position (expected X, Y and Z programmed before the frame)");
+        }
+      }
+      programmed[static_cast<std::size_t>(a)] = true;
+      const bool incremental =
+          w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental);
+      q[a] = (incremental ? q[a] : 0.0) + length_mm(w);
+    }
+    end = placed(q);
+    if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
+      fail(first_column(l_.axis), "position " + num(end.x()) + ", " + num(end.y()) + ", " + num(end.z()) +
+                                      " mm in the workpiece frame is out of range (expected within +-1e6 mm)");
+    }
+    return end;
+  }
+  const Eigen::Vector3d off = offset() + state_.frame_translation_mm;
   for (int a = 0; a < 3; ++a) {
     const Value& w = l_.axis[a];
     if (!w.present) continue;
@@ -1086,7 +1185,9 @@ bool Reader::orient(Block& block) {
   }
   // Components not programmed are 0 (Siemens: "vector components that have not been programmed
   // are set to zero"); the length does not matter.
-  const Eigen::Vector3d v(l.vector[0].value, l.vector[1].value, l.vector[2].value);
+  // In the workpiece frame: the programmable frame turns the vector too (ORIWKS).
+  const Eigen::Vector3d v =
+      state_.frame_linear * Eigen::Vector3d(l.vector[0].value, l.vector[1].value, l.vector[2].value);
   if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxMagnitude || v.norm() < kMinVectorNorm) {
     fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) +
                             ") (expected a vector of nonzero length)");
@@ -1191,6 +1292,50 @@ bool Reader::orient(Block& block) {
 }
 
 void Reader::arc(Block& block, bool clockwise) {
+  if (!frame_turns()) {
+    arc_in_plane(block, clockwise, offset() + state_.frame_translation_mm);
+    return;
+  }
+  // In a turned, scaled or mirrored frame: the arc in the frame's plane, then placed. A scale
+  // that differs between the plane's two axes would make it an ellipse.
+  const Eigen::Matrix3d& m = state_.frame_linear;
+  const int a = state_.plane == Plane::XY ? 0 : state_.plane == Plane::ZX ? 2 : 1;
+  const int b = state_.plane == Plane::XY ? 1 : state_.plane == Plane::ZX ? 0 : 2;
+  const int c = 3 - a - b;
+  const Eigen::Vector3d ca = m.col(a), cb = m.col(b), cc = m.col(c);
+  const double tol = 1e-9 * ca.squaredNorm();
+  if (!(std::abs(ca.squaredNorm() - cb.squaredNorm()) <= tol && std::abs(ca.dot(cb)) <= tol &&
+        std::abs(ca.dot(cc)) <= tol && std::abs(cb.dot(cc)) <= tol)) {
+    fail(l_.motion_column > 0 ? l_.motion_column : l_.first_column,
+         std::string(clockwise ? "G2" : "G3") +
+             " arc in a frame scaled differently along its axes (SCALE/ASCALE): an ellipse, not an arc (expected "
+             "equal scale factors)");
+  }
+  Block local = block;
+  local.start_mm = in_frame(block.start_mm);
+  local.end_mm = in_frame(block.end_mm);
+  arc_in_plane(local, clockwise, Eigen::Vector3d::Zero());
+  block.kind = local.kind;
+  block.end_mm = placed(local.end_mm);
+  block.center_mm = placed(local.center_mm);
+  // A mirror (det < 0) turns the arc the other way about the placed normal.
+  block.normal = (m.determinant() < 0.0 ? -1.0 : 1.0) * (m * local.normal).normalized();
+  block.turns = local.turns;
+  // A scale > 1 scales the end's mismatch with the start's radius too: within the tolerance again.
+  auto radius = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d d = p - block.center_mm;
+    return (d - block.normal * block.normal.dot(d)).norm();
+  };
+  const double r1 = radius(block.start_mm), r2 = radius(block.end_mm);
+  if (!(std::abs(r1 - r2) <= std::max(options_.arc_tolerance_mm, 0.001 * std::max(r1, r2)))) {
+    fail(l_.motion_column > 0 ? l_.motion_column : l_.first_column,
+         "arc end " + num(std::abs(r1 - r2)) +
+             " mm off its circle once the frame's SCALE is applied (expected within " +
+             num(std::max(options_.arc_tolerance_mm, 0.001 * std::max(r1, r2))) + " mm)");
+  }
+}
+
+void Reader::arc_in_plane(Block& block, bool clockwise, const Eigen::Vector3d& centre_origin) {
   const char* code = clockwise ? "G2" : "G3";
   int a = 0, b = 1, c = 2;  // the plane's first and second axes and its normal, as in G-code
   const char* plane_name = "XY";
@@ -1225,7 +1370,7 @@ void Reader::arc(Block& block, bool clockwise) {
       fail(normal_word.column, std::string(1, kCenterLetter[c]) + " in a " + plane_name + "-plane arc (expected " +
                                    kCenterLetter[a] + " and " + kCenterLetter[b] + ")");
     }
-    const Eigen::Vector3d off = offset();
+    const Eigen::Vector3d& off = centre_origin;
     for (int k = 0; k < 2; ++k) {
       const int axis = k == 0 ? a : b;
       const Value& w = l_.center[axis];
@@ -1300,6 +1445,157 @@ void Reader::motion() {
     block.blend_tolerance_mm = m == Motion::Rapid ? state_.adispos_mm : state_.adis_mm;
   }
   append(block, programmed, reorients);
+}
+
+// TRANS ATRANS ROT AROT SCALE ASCALE MIRROR AMIRROR (Siemens, Programming Manual Fundamentals,
+// "Coordinate transformations (frames)"): the plain forms replace the whole programmable frame
+// (TRANS alone clears it), the A-forms add to it in its current axes: ATRANS moves by L t,
+// AROT turns by L R, ASCALE and AMIRROR scale and mirror by L S and L M. ROT X a Y b Z c turns
+// about Z, then the new Y, then the new X (R = Rz(c) Ry(b) Rx(a), Siemens' default RPY
+// order); ROT RPL=a turns in the active plane (about Z in G17, Y in G18, X in G19). MIRROR X0
+// mirrors X (the value is not used); SCALE factors must be > 0.
+void Reader::apply_frame() {
+  const Line& l = l_;
+  Eigen::Matrix3d& m = state_.frame_linear;
+  Eigen::Vector3d& t = state_.frame_translation_mm;
+  using F = Line::Frame;
+  const bool additive = l.frame == F::ATrans || l.frame == F::ARot || l.frame == F::AScale || l.frame == F::AMirror;
+  for (int k = 0; k < 3; ++k) {
+    const Value& w = l.axis[k];
+    if (w.present && (w.mode != Value::Mode::Modal || !(std::abs(w.value) <= kMaxMagnitude)))
+      fail(w.column, l.frame_name + " " + kAxisLetter[k] + " " + num(w.value) +
+                         " (expected a plain value within +-1e6, no AC or IC)");
+  }
+  if (l.rpl.present && l.frame != F::Rot && l.frame != F::ARot)
+    fail(l.rpl.column, "RPL= with " + l.frame_name + " (expected ROT or AROT)");
+  Eigen::Matrix3d change = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d move = Eigen::Vector3d::Zero();
+  switch (l.frame) {
+    case F::Trans:
+    case F::ATrans:
+      for (int k = 0; k < 3; ++k)
+        if (l.axis[k].present) move[k] = length_mm(l.axis[k]);
+      break;
+    case F::Rot:
+    case F::ARot: {
+      auto deg = [&](int k) { return l.axis[k].present ? l.axis[k].value * kDegToRad : 0.0; };
+      change =
+          (Eigen::AngleAxisd(deg(2), Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(deg(1), Eigen::Vector3d::UnitY()) *
+           Eigen::AngleAxisd(deg(0), Eigen::Vector3d::UnitX()))
+              .toRotationMatrix();
+      if (l.rpl.present) {
+        const Eigen::Vector3d normal = state_.plane == Plane::XY   ? Eigen::Vector3d::UnitZ()
+                                       : state_.plane == Plane::ZX ? Eigen::Vector3d::UnitY()
+                                                                   : Eigen::Vector3d::UnitX();
+        change = change * Eigen::AngleAxisd(l.rpl.value * kDegToRad, normal).toRotationMatrix();
+      }
+      break;
+    }
+    case F::Scale:
+    case F::AScale:
+      for (int k = 0; k < 3; ++k) {
+        if (!l.axis[k].present) continue;
+        if (!(l.axis[k].value > 0.0 && l.axis[k].value <= 1000.0))
+          fail(l.axis[k].column, l.frame_name + " factor " + num(l.axis[k].value) + " (expected > 0 and at most 1000)");
+        change(k, k) = l.axis[k].value;
+      }
+      break;
+    case F::Mirror:
+    case F::AMirror:
+      for (int k = 0; k < 3; ++k)
+        if (l.axis[k].present) change(k, k) = -1.0;
+      break;
+    case F::None:
+      return;
+  }
+  if (!additive) {
+    m = Eigen::Matrix3d::Identity();
+    t = Eigen::Vector3d::Zero();
+  }
+  t += m * move;
+  m = m * change;
+}
+
+// A straight move of a drilling cycle to a point of the frame, as a G0 or G1 block would make it.
+void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column) {
+  Block block;
+  block.kind = rapid ? MotionKind::Rapid : MotionKind::Linear;
+  block.start_mm = state_.position_mm;
+  block.end_mm = placed(frame_point);
+  if (!(block.end_mm.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+    fail(column, "a drilling cycle's move out of range (expected within +-1e6 mm)");
+  block.tool_pose = !state_.rotary_program;
+  block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
+  block.start_axis = block.end_axis = state_.tool_axis;
+  block.start_rotary = block.end_rotary = state_.rotary;
+  if (!rapid) {
+    if (!(state_.feed_mm_per_min > 0.0))
+      fail(column, "drilling cycle without a feed (expected F in mm/min before the cycle)");
+    if (state_.inverse_time) fail(column, "drilling cycle under G93 (expected G94: a feed in mm/min)");
+    block.feed_mm_per_min = state_.feed_mm_per_min * feed_factor;
+  }
+  block.exact_stop = true;
+  append(block, {true, true, true}, false);
+}
+
+// CYCLE81(RTP, RFP, SDIS, DP, DPR) drilling, CYCLE82(..., DTB) with a dwell at the bottom,
+// CYCLE83(RTP, RFP, SDIS, DP, DPR, FDEP, FDPR, DAM, DTB, DTS, FRF, VARI) deep-hole drilling
+// (Siemens, Programming Manual Cycles), at the current X Y along the frame's Z (G17):
+// rapid to RFP + SDIS, feed to the final depth (DPR below RFP when given, else DP), rapid to
+// RTP. CYCLE83 pecks: the first to FDPR below RFP (else FDEP), each next one DAM less deep
+// than the last but at least DAM (DAM 0: as deep as the first); VARI 1 (swarf removal) goes
+// back to RFP + SDIS after each peck and rapid down again to where it stopped, VARI 0 (chip
+// breaking) backs off 1 mm; the first peck's feed is F x FRF. Dwells (DTB, DTS) take no path.
+void Reader::cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column) {
+  if (state_.plane != Plane::XY) fail(column, name + " outside G17 (expected G17: drilling along Z)");
+  for (int k = 0; k < 3; ++k) {
+    if (!state_.known[static_cast<std::size_t>(k)])
+      fail(column,
+           name + " from an unknown " + kAxisLetter[k] + " position (expected X, Y and Z programmed before it)");
+  }
+  auto arg = [&](std::size_t k) -> std::optional<double> {
+    if (k >= args.size() || !args[k]) return std::nullopt;
+    const double v = *args[k];
+    if (!(std::abs(v) <= kMaxMagnitude)) fail(column, name + " parameter " + std::to_string(k + 1) + " out of range");
+    return v;
+  };
+  const double unit = state_.inch ? kMmPerInch : 1.0;
+  const auto rtp = arg(0), rfp = arg(1), dp = arg(3), dpr = arg(4);
+  if (!rtp || !rfp) fail(column, name + " without RTP and RFP (expected " + name + "(RTP, RFP, SDIS, DP, DPR, ...))");
+  const double sdis = std::abs(arg(2).value_or(0.0));
+  if (!dp && !dpr) fail(column, name + " without its depth (expected DP or DPR)");
+  const double top = *rfp * unit, clear = top + sdis * unit, retract = *rtp * unit;
+  const double bottom = dpr ? top - std::abs(*dpr) * unit : *dp * unit;
+  if (!(bottom < clear))
+    fail(column, name + " depth at or above RFP + SDIS (expected the hole below the reference plane)");
+  const Eigen::Vector3d here = in_frame(state_.position_mm);
+  auto at_z = [&](double z) { return Eigen::Vector3d(here.x(), here.y(), z); };
+  cycle_move(at_z(std::max(here.z(), clear)), true, 1.0, column);
+  cycle_move(at_z(clear), true, 1.0, column);
+  if (name != "CYCLE83") {
+    cycle_move(at_z(bottom), false, 1.0, column);
+  } else {
+    const auto fdep = arg(5), fdpr = arg(6), dam = arg(7), frf = arg(10), vari = arg(11);
+    double first = fdpr ? std::abs(*fdpr) * unit : fdep ? top - *fdep * unit : top - bottom;
+    if (!(first > 0.0)) first = top - bottom;
+    const double degression = std::abs(dam.value_or(0.0)) * unit;
+    if (frf && !(*frf > 0.0 && *frf <= 1.0))
+      fail(column, "CYCLE83 FRF " + num(*frf) + " (expected a feed factor over 0, at most 1)");
+    const double factor = frf ? *frf : 1.0;
+    const bool swarf = vari.value_or(1.0) != 0.0;
+    double reached = top, peck = first;
+    bool first_peck = true;
+    while (reached > bottom) {
+      const double next = std::max(bottom, reached - peck);
+      if (!first_peck && swarf) cycle_move(at_z(reached), true, 1.0, column);
+      cycle_move(at_z(next), false, first_peck ? factor : 1.0, column);
+      reached = next;
+      first_peck = false;
+      peck = degression > 0.0 ? std::max(peck - degression, degression) : first;
+      if (reached > bottom) cycle_move(at_z(swarf ? clear : reached + 1.0), true, 1.0, column);
+    }
+  }
+  cycle_move(at_z(retract), true, 1.0, column);
 }
 
 // Appends a block (unless it does not move) and brings the position and the unknown axes up

@@ -570,7 +570,7 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_DOUBLE_EQ(held.blocks[1].end_rotary.angle_rad[0], 10.0 * M_PI / 180.0);
   EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
   EXPECT_MPF_ERROR("N10 IF R1>0 GOTOF END\n", 1, 5, "IF (program flow");
-  EXPECT_MPF_ERROR("N10 TRANS X10\n", 1, 5, "TRANS is not supported: it changes the frame");
+  EXPECT_MPF_ERROR("N10 ROTS X10\n", 1, 5, "ROTS is not supported: it changes the frame");
   EXPECT_MPF_ERROR("N10 G53 X10\n", 1, 5, "G53 is not supported");
   EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
   EXPECT_MPF_ERROR("N10 M123\n", 1, 5, "M123 is not supported");
@@ -639,6 +639,76 @@ TEST(SinumerikReader, StateAcrossFiles) {
   ASSERT_EQ(program.blocks.size(), 1u);
   expect_vec(program.blocks[0].end_mm, {3, 0, 0});  // M30 reset G91 to G90
   EXPECT_EQ(program.where(program.blocks[0].source), "b.spf:1");
+}
+
+// Programmable frames (Siemens, Programming Manual Fundamentals, "Frames"), worked by hand:
+// TRANS X10 Y20 moves program zero to (10, 20, 0); AROT Z90 then turns the axes a quarter
+// about Z, so a programmed (5, 0, 0) is (10, 20) + Rz(90) (5, 0) = (10, 25, 0); ATRANS X1
+// after it moves along the turned X, the new zero at (10, 21); TRANS alone clears it all.
+TEST(SinumerikReader, FramesPlaceTheProgrammedPoints) {
+  const Program p =
+      read("G0 X0 Y0 Z5\nTRANS X10 Y20\nG1 F100 X5 Y0 Z0\nAROT Z90\nX5 Y0\nATRANS X1\nX0 Y0\nTRANS\nX0 Y0\n");
+  // (The first G0 only sets the position: no block.)
+  ASSERT_EQ(p.blocks.size(), 4u);
+  expect_vec(p.blocks[0].end_mm, {15, 20, 0});
+  expect_vec(p.blocks[1].end_mm, {10, 25, 0});
+  expect_vec(p.blocks[2].end_mm, {10, 21, 0});
+  expect_vec(p.blocks[3].end_mm, {0, 0, 0});
+  // MIRROR X: the tool at (-10, 0) is at (10, 0) in the mirrored frame; G2 there from (10, 0)
+  // about (0, 0) to (0, -10) is a clockwise quarter; mirrored back it runs from (-10, 0) to
+  // (0, -10), from 180 to 270 deg: counterclockwise about +Z.
+  const Program m = read("G0 X-10 Y0 Z0\nMIRROR X0\nG2 F100 X0 Y-10 I-10 J0\n");
+  ASSERT_EQ(m.blocks.size(), 1u);
+  expect_vec(m.blocks[0].end_mm, {0, -10, 0});
+  expect_vec(m.blocks[0].center_mm, {0, 0, 0});
+  expect_vec(m.blocks[0].normal, {0, 0, 1});
+  // SCALE X2 Y2: (5, 5) is (10, 10); CR=5 becomes a 10 mm radius; unequal factors make an
+  // arc an ellipse: refused.
+  const Program s = read("G0 X0 Y0 Z0\nSCALE X2 Y2\nG1 F100 X5 Y5\nG3 X0 Y10 CR=5\n");
+  ASSERT_EQ(s.blocks.size(), 2u);
+  expect_vec(s.blocks[0].end_mm, {10, 10, 0});
+  expect_vec(s.blocks[1].end_mm, {0, 20, 0});
+  EXPECT_NEAR((s.blocks[1].end_mm - s.blocks[1].center_mm).norm(), 10.0, 1e-9);
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nSCALE X2 Y3\nG2 F100 X1 Y1 CR=1\n", 3, 1, "ellipse");
+  // ROT Y90 tilts: a programmed (0, 0, 10) is Ry(90) (0, 0, 10) = (10, 0, 0); the tool vector
+  // C3=1 turns with it to +X.
+  const Program t = read("G0 X0 Y0 Z0\nROT Y90\nTRAORI\nG1 F100 Z10 C3=1\n");
+  ASSERT_EQ(t.blocks.size(), 1u);
+  expect_vec(t.blocks[0].end_mm, {10, 0, 0});
+  expect_vec(t.blocks[0].end_axis, {1, 0, 0});
+  // ROT RPL=30 in G17: about Z.
+  const Program r = read("G0 X0 Y0 Z0\nROT RPL=30\nG1 F100 X10\n");
+  expect_vec(r.blocks.at(0).end_mm, {10 * std::cos(30 * kDeg), 10 * std::sin(30 * kDeg), 0});
+  EXPECT_MPF_ERROR("ROT X10\nG1 F1 X1\n", 2, 7, "unknown X position");
+  EXPECT_MPF_ERROR("SCALE X0\n", 1, 7, "expected > 0");
+  EXPECT_MPF_ERROR("TRANS RPL=3\n", 1, 7, "expected ROT or AROT");
+}
+
+// CYCLE81 at the current X Y (G17): rapid to RFP + SDIS = 2, feed to DP = -10, rapid to RTP
+// = 10; MCALL makes it end every positioning block until MCALL alone. CYCLE83 pecks: the first
+// FDPR = 4 below RFP 0, then DAM = 1 less each time but at least 1: -4, -7, -9, -10, back to
+// RFP + SDIS = 1 after each (VARI = 1) and rapid down again to where it stopped.
+TEST(SinumerikReader, DrillingCycles) {
+  const Program p = read("G0 X5 Y5 Z20\nF100\nCYCLE81(10, 0, 2, -10)\nMCALL CYCLE81(10, 0, 2, , 3)\nX8\nMCALL\nX9\n");
+  std::vector<std::pair<MotionKind, double>> z;
+  for (const Block& b : p.blocks) z.emplace_back(b.kind, b.end_mm.z());
+  const MotionKind R = MotionKind::Rapid, L = MotionKind::Linear;
+  // (The first G0 only sets the position: no block.)
+  const std::vector<std::pair<MotionKind, double>> want = {
+      {R, 2},  {L, -10}, {R, 10},                     // CYCLE81 at (5, 5)
+      {R, 10}, {R, 2},   {L, -3}, {R, 10}, {R, 10}};  // X8, then its cycle (DPR 3 below RFP), X9
+  EXPECT_EQ(z, want);
+  expect_vec(p.blocks[3].end_mm, {8, 5, 10});
+  expect_vec(p.blocks[7].end_mm, {9, 5, 10});
+  const Program deep = read("G0 X0 Y0 Z5\nF100\nCYCLE83(5, 0, 1, -10, , , 4, 1, 0, 0, 0.5, 1)\n");
+  std::vector<double> feeds, rapids;
+  for (const Block& b : deep.blocks) (b.kind == L ? feeds : rapids).push_back(b.end_mm.z());
+  EXPECT_EQ(feeds, (std::vector<double>{-4, -7, -9, -10}));
+  EXPECT_EQ(rapids, (std::vector<double>{1, 1, -4, 1, -7, 1, -9, 5}));
+  EXPECT_DOUBLE_EQ(deep.blocks.at(1).feed_mm_per_min, 50.0);  // the first peck at F x FRF
+  EXPECT_MPF_ERROR("G0 X0 Y0\nCYCLE81(10, 0, 2, -10)\n", 2, 1, "unknown Z position");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10)\n", 2, 1, "without RTP and RFP");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10, 0, 2)\n", 2, 1, "without its depth");
 }
 
 }  // namespace

@@ -37,9 +37,21 @@
 //       direction of motion at the end of the previous motion block (which must have turned it
 //       under ORIVECT/ORIPLANE or a cone mode), through the end.
 //   MSG("...") (ignored).
+//   Programmable frames: TRANS ATRANS (X Y Z: the new zero), ROT AROT (X Y Z: angles, turned
+//   about Z, the new Y, the new X; RPL=: in the active plane), SCALE ASCALE (factors > 0),
+//   MIRROR AMIRROR (the axes named). The plain forms replace the whole programmable frame
+//   (TRANS alone clears it), the A-forms add to it in its own axes; in a block of their own
+//   their X Y Z are the frame's values. Points, arc centres and tool vectors A3 B3 C3 and cone
+//   axes go through it; a mirror reverses G2/G3; an arc in a plane scaled unequally is an
+//   error. A turned frame needs X Y Z known before its first move.
+//   CYCLE81(RTP, RFP, SDIS, DP, DPR), CYCLE82(..., DTB), CYCLE83(RTP, RFP, SDIS, DP, DPR, FDEP,
+//   FDPR, DAM, DTB, DTS, FRF, VARI) in G17, at the current X Y (Reader::cycle has the motions),
+//   called directly or by MCALL (each later positioning block ends with it; MCALL alone ends
+//   it).
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
-// ORICONTO, A7 B7 C7 outside ORICONIO, program flow and definitions (IF, GOTOF, WHILE, DEF ...),
+// ORICONTO, A7 B7 C7 outside ORICONIO, program flow and definitions (IF, GOTOF, WHILE, DEF,
+// subprogram calls ...), CYCLE800 (swivelling) and other cycles,
 // T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
@@ -52,6 +64,7 @@
 #include <cstddef>
 #include <iosfwd>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -115,9 +128,16 @@ struct SinumerikState {
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;
-  int tool = 0;                  // in the spindle (after M6)
-  int selected_tool = -1;        // last T, -1 if none
-  std::vector<double> r;         // R0..R999 (sized when the first file starts)
+  int tool = 0;            // in the spindle (after M6)
+  int selected_tool = -1;  // last T, -1 if none
+  std::vector<double> r;   // R0..R999 (sized when the first file starts)
+  // The programmable frame (TRANS ROT SCALE MIRROR and their additive A-forms): a programmed
+  // point p lies at work offset + frame_translation_mm + frame_linear * p in the workpiece frame.
+  Eigen::Matrix3d frame_linear = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d frame_translation_mm = Eigen::Vector3d::Zero();
+  // MCALL CYCLE81/82/83(...): the drilling cycle every positioning block ends with; empty: none.
+  std::string modal_cycle;
+  std::vector<std::optional<double>> modal_cycle_args;
   std::set<std::string> warned;  // unsupported words already warned about
 };
 
