@@ -3,6 +3,8 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "vcut/io/camotics_project.h"
+
 namespace vcut::cli {
 
 void add_program_job_options(CLI::App& command, pipeline::ProgramJobOptions& options) {
@@ -10,7 +12,9 @@ void add_program_job_options(CLI::App& command, pipeline::ProgramJobOptions& opt
       .add_option("--machine", options.machine,
                   "A program without a job file: the machine (a bundled name or a machine file; default by its axes)")
       ->group("Program without a job file");
-  command.add_option("--tool-table", options.tool_table, "A LinuxCNC tool table (.tbl) for the program's tools")
+  command
+      .add_option("--tool-table", options.tool_table,
+                  "The program's tools: a LinuxCNC tool table (.tbl) or a CAMotics tool table (.json)")
       ->group("Program without a job file");
   command
       .add_option("--tool-diameter", options.default_tool_diameter_mm,
@@ -23,6 +27,7 @@ io::Job job_or_program(const std::string& file, const pipeline::ProgramJobOption
   std::string ext = std::filesystem::path(file).extension().string();
   for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   if (ext == ".yaml" || ext == ".yml") return io::read_job(file);
+  if (ext == ".camotics") return io::read_camotics_project(file);
   return pipeline::job_for_program(file, options);
 }
 

@@ -14,7 +14,7 @@ namespace vcut::cli {
 
 // The options of a program given without a job file, on `command`.
 void add_program_job_options(CLI::App& command, pipeline::ProgramJobOptions& options);
-// A job file (.yaml, .yml) read, or a program's assumed job.
+// A job file (.yaml, .yml) or a CAMotics project (.camotics) read, or a program's assumed job.
 io::Job job_or_program(const std::string& file, const pipeline::ProgramJobOptions& options);
 
 struct JobCommand {

@@ -7,6 +7,7 @@
 #include <limits>
 #include <set>
 
+#include "vcut/io/camotics_project.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/machine_file.h"
 #include "vcut/io/program_header.h"
@@ -196,7 +197,16 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
 
   // Tools: the table, else the comments; each with an assumed length.
   std::map<int, std::string> origin;  // T number -> where its shape comes from
-  if (!options.tool_table.empty()) {
+  std::string table_ext = fs::path(options.tool_table).extension().string();
+  for (char& ch : table_ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  if (!options.tool_table.empty() && table_ext == ".json") {
+    // A CAMotics tool table: shapes and lengths given.
+    job.tools_file = fs::absolute(options.tool_table).lexically_normal().string();
+    for (const auto& [number, c] : io::read_camotics_tools(options.tool_table)) {
+      job.tools[number] = c;
+      origin[number] = "the CAMotics tool table " + options.tool_table;
+    }
+  } else if (!options.tool_table.empty()) {
     job.tools_file = fs::absolute(options.tool_table).lexically_normal().string();
     for (const auto& [number, t] : io::read_tool_table(options.tool_table, unit_mm)) {
       removal::Cutter c = t.cutter;

@@ -58,4 +58,25 @@ TEST(ProgramAlone, JobWrittenAndBadStock) {
   fs::remove_all(dir);
 }
 
+// A CAMotics project runs as a job: its 1/8 in flat end mill (3.175 mm) cuts a 20 mm slot 1 mm
+// deep from X10 to X30 in its 40 x 20 x 5 mm workpiece: 20 x 3.175 x 1 + pi 1.5875^2 x 1 =
+// 71.42 mm3.
+TEST(ProgramAlone, CamoticsProject) {
+  const fs::path dir = fresh_test_dir("vcut_camotics_");
+  write(dir / "slot.nc", "G21 G90\nT1 M6\nS10000 M3\nG0 X10 Y10 Z5\nG1 Z-1 F200\nX30\nG0 Z5\nM30\n");
+  write(dir / "p.camotics",
+        R"({"units": "metric", "resolution": 0.05, "tools": {"1": {"units": "imperial", "shape": "cylindrical",
+        "length": 0.5, "diameter": 0.125}}, "workpiece": {"automatic": false, "bounds": {"min": [0, 0, -5],
+        "max": [40, 20, 0]}}, "files": ["slot.nc"]})");
+  const CommandResult r = run_vcut("simulate " + (dir / "p.camotics").string() + " -q --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream in(dir / "out" / "report.json");
+  const auto j = nlohmann::json::parse(in);
+  const double slot_mm3 = 20.0 * 3.175 + M_PI * 1.5875 * 1.5875;
+  EXPECT_NEAR(j["summary"]["removed_volume_mm3"].get<double>(), slot_mm3, 0.02 * slot_mm3);
+  EXPECT_NEAR(j["summary"]["initial_volume_mm3"].get<double>(), 4000.0, 40.0);
+  EXPECT_TRUE(j.contains("assumptions"));
+  fs::remove_all(dir);
+}
+
 }  // namespace

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "vcut/io/camotics_project.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/program_header.h"
 #include "vcut/io/tool_table.h"
@@ -173,6 +174,57 @@ TEST(ToolTable, LinuxCncTbl) {
     EXPECT_EQ(e.column(), 7);
   }
   fs::remove(bad);
+}
+
+// A CAMotics project read as a job: each tool in its own units (0.125 in ball = 3.175 mm; a
+// conical tool of diameter 10 and length 12.071068 has 2 atan(5 / 12.071068) = 45 deg
+// included), the workpiece bounds and the resolution in mm, files beside the project.
+TEST(CamoticsProject, ReadAsAJob) {
+  const std::string path = write_temp("p.camotics",
+                                      R"({"units": "imperial", "resolution-mode": "manual", "resolution": 0.5,
+  "tools": {"1": {"units": "imperial", "shape": "ballnose", "length": 1, "diameter": 0.125, "description": ""},
+            "30": {"units": "metric", "shape": "conical", "length": 12.071068, "diameter": 10}},
+  "workpiece": {"automatic": true, "margin": 5, "bounds": {"min": [-227.8, -228.2, -13.5], "max": [227.5, 228, 0]}},
+  "files": ["aztec.nc"]})");
+  const vcut::io::Job job = vcut::io::read_camotics_project(path);
+  EXPECT_EQ(job.machine, "3axis");
+  ASSERT_EQ(job.tools.size(), 2u);
+  EXPECT_EQ(job.tools.at(1).type, CutterType::Ball);
+  EXPECT_NEAR(job.tools.at(1).diameter_mm, 3.175, 1e-12);
+  EXPECT_NEAR(job.tools.at(1).flute_length_mm, 25.4, 1e-12);
+  EXPECT_EQ(job.tools.at(30).type, CutterType::VBit);
+  EXPECT_NEAR(job.tools.at(30).tip_angle_deg, 45.0, 1e-5);
+  EXPECT_EQ(job.stock.box.min_mm, Eigen::Vector3d(-227.8, -228.2, -13.5));
+  EXPECT_EQ(job.stock.box.max_mm, Eigen::Vector3d(227.5, 228, 0));
+  EXPECT_DOUBLE_EQ(job.resolution_mm, 0.5);
+  ASSERT_EQ(job.program_files.size(), 1u);
+  EXPECT_EQ(fs::path(job.program_files[0]), fs::path(path).parent_path() / "aztec.nc");
+  EXPECT_FALSE(job.assumptions.empty());
+  fs::remove(path);
+}
+
+// Not JSON: the line and column where parsing stopped; shapes vcut has no cutter for.
+TEST(CamoticsProject, BadInput) {
+  const std::string broken = write_temp("broken.camotics", "{\n  \"files\": [\"a.nc\"],\n  \"tools\": {,}\n}\n");
+  try {
+    vcut::io::read_camotics_project(broken);
+    FAIL() << "broken JSON was accepted";
+  } catch (const vcut::InputError& e) {
+    EXPECT_EQ(e.line(), 3);
+    EXPECT_EQ(e.column(), 13);
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
+  }
+  const std::string snub = write_temp(
+      "snub.camotics",
+      R"({"files": ["a.nc"], "tools": {"1": {"shape": "snubnose", "diameter": 3, "length": 5}}, "workpiece": {"bounds": {"min": [0,0,-1], "max": [1,1,0]}}})");
+  EXPECT_THROW(vcut::io::read_camotics_project(snub), vcut::InputError);
+  const std::string tpl =
+      write_temp("tpl.camotics",
+                 R"({"files": ["box.tpl"], "tools": {}, "workpiece": {"bounds": {"min": [0,0,-1], "max": [1,1,0]}}})");
+  EXPECT_THROW(vcut::io::read_camotics_project(tpl), vcut::InputError);
+  fs::remove(broken);
+  fs::remove(snub);
+  fs::remove(tpl);
 }
 
 }  // namespace

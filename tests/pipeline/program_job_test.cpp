@@ -103,4 +103,24 @@ TEST_F(ProgramJob, WrittenJobReadsBack) {
 // Nothing that cuts: an error naming the file.
 TEST_F(ProgramJob, NoCuttingMoveIsAnError) { EXPECT_THROW(job("G21\nG0 X10 Y10\nM30\n"), vcut::InputError); }
 
+// Tools from a CAMotics tool table (--tool-table x.json) and a LinuxCNC one (x.tbl): they win
+// over the program's comment; T1's 0.25 in ball is 6.35 mm, T2's D3 flat 3 mm (mm machine).
+TEST_F(ProgramJob, ToolTables) {
+  const std::string program =
+      "(T1 D=10 CR=0 - ZMIN=-1 - flat end mill)\nG21\nT1 M6\nG0 X0 Y0 Z1\nG1 Z-1 F100\nX10\nT2 M6\nX20\nM30\n";
+  vcut::pipeline::ProgramJobOptions json;
+  json.tool_table =
+      write("tools.json", R"({"1": {"units": "imperial", "shape": "ballnose", "length": 1, "diameter": 0.25}})");
+  const vcut::io::Job a = job(program, json);
+  EXPECT_EQ(a.tools.at(1).type, vcut::removal::CutterType::Ball);
+  EXPECT_NEAR(a.tools.at(1).diameter_mm, 6.35, 1e-12);
+  EXPECT_DOUBLE_EQ(a.tools.at(2).diameter_mm, 6.0);  // not in the table: the default
+  vcut::pipeline::ProgramJobOptions tbl;
+  tbl.tool_table = write("tools.tbl", "T1 P1 D6.35 Z50 ;ball\nT2 P2 D3 Z40 ;end mill\n");
+  const vcut::io::Job b = job(program, tbl);
+  EXPECT_EQ(b.tools.at(1).type, vcut::removal::CutterType::Ball);
+  EXPECT_DOUBLE_EQ(b.tools.at(2).diameter_mm, 3.0);
+  EXPECT_EQ(b.tools.at(2).type, vcut::removal::CutterType::Flat);
+}
+
 }  // namespace

@@ -27,7 +27,7 @@ namespace vcut::pipeline {
 
 struct ProgramJobOptions {
   std::string machine;     // a bundled machine's name or a machine file; empty: by the program
-  std::string tool_table;  // a LinuxCNC tool table (.tbl); empty: none
+  std::string tool_table;  // a LinuxCNC tool table (.tbl) or a CAMotics one (.json); empty: none
   double default_tool_diameter_mm = 6.0;
   double resolution_mm = 0.0;  // 0: by the stock's size and the tools
   std::string dialect = "auto";
