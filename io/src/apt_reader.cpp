@@ -129,6 +129,7 @@ enum class Word {
   kSpindl,
   kUnits,
   kEnd,
+  kGohome,
   kFini,
 };
 
@@ -152,6 +153,7 @@ Word lookup(const std::string& w) {
       break;
     case 6:
       if (w == "GODLTA") return Word::kGodlta;
+      if (w == "GOHOME") return Word::kGohome;
       if (w == "FEDRAT") return Word::kFedrat;
       if (w == "CUTTER") return Word::kCutter;
       if (w == "LOADTL") return Word::kLoadtl;
@@ -636,6 +638,21 @@ bool Reader::statement() {
     case Word::kTldata:
       do_tldata();
       break;
+    case Word::kGohome: {
+      // GOHOME[/x,y,z[,i,j,k]] (NX): a rapid to the home point, the FROM/ point when none is
+      // given.
+      no_circle_pending("GOHOME");
+      no_cutcom("GOHOME");
+      if (nargs_ == 0) {
+        if (!state_.home_known) fail(major_pos_, "GOHOME without a point before any FROM/ (expected GOHOME/x,y,z)");
+        motion(MotionKind::Rapid, state_.home_mm, state_.home_axis);
+        break;
+      }
+      count_of({3, 6}, "x,y,z or x,y,z,i,j,k");
+      const Eigen::Vector3d p = placed(Eigen::Vector3d(length(0, "x"), length(1, "y"), length(2, "z")));
+      motion(MotionKind::Rapid, p, nargs_ == 6 ? turned(unit_vector(3, "tool axis")) : state_.axis);
+      break;
+    }
     case Word::kEnd:
       // APT END: the end of a machining section (the machine stops); reading goes on.
       no_circle_pending("END");
@@ -859,6 +876,9 @@ void Reader::do_from() {
   }
   if (nargs_ == 6) state_.pose_axis = state_.axis = turned(unit_vector(3, "tool axis"));
   state_.known = true;
+  state_.home_known = true;  // GOHOME goes back here
+  state_.home_mm = state_.position_mm;
+  state_.home_axis = state_.axis;
 }
 
 void Reader::do_godlta() {

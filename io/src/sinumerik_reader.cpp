@@ -788,6 +788,16 @@ void Reader::keyword(const std::string& name, int col) {
     l_.frame_name = name;
     return;
   }
+  if (name == "CYCLE832") {
+    // High-speed settings (tolerance, smoothing): the control's path within the tolerance,
+    // not a different one. One note per program.
+    if (state_.warned.insert("CYCLE832").second)
+      warn(col,
+           "CYCLE832 (high-speed settings) read as a note: its tolerance is the control's, the path is the programmed "
+           "one");
+    if (at('(')) skip_argument();
+    return;
+  }
   if (name == "MCALL") {
     l_.mcall = true;  // alone: the modal call ends; with a cycle: it becomes the modal call
     return;

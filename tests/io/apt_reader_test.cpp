@@ -894,6 +894,17 @@ TEST(AptReader, CutcomOnACentrePath) {
   EXPECT_APT_ERROR(path, 5, 1, "set program.cutcom: centre");  // a 1 mm entry for a 7 mm radius
 }
 
+// GOHOME (NX): a rapid to the point given, else back to the FROM/ point.
+TEST(AptReader, Gohome) {
+  const AptProgram p = read("FROM/0,0,100\nFEDRAT/100\nGOTO/10,0,0\nGOHOME\nGOTO/5,5,5\nGOHOME/650,-393,964\n");
+  ASSERT_EQ(p.program.blocks.size(), 4u);
+  EXPECT_EQ(p.program.blocks[1].kind, MotionKind::Rapid);
+  expect_vec(p.program.blocks[1].end_mm, Eigen::Vector3d(0, 0, 100));
+  EXPECT_EQ(p.program.blocks[3].kind, MotionKind::Rapid);
+  expect_vec(p.program.blocks[3].end_mm, Eigen::Vector3d(650, -393, 964));
+  EXPECT_APT_ERROR("GOHOME\n", 1, 1, "before any FROM/");
+}
+
 // Creo's commented-out statements continue with '$'; NX's information listing has a header
 // and a last line that are not CL data.
 TEST(AptReader, CreoCommentsAndNxListing) {

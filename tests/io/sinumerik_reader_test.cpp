@@ -595,7 +595,7 @@ TEST(SinumerikReader, UnsupportedAsWarning) {
   expect_vec(p.blocks[1].end_mm, {2, 0, 0});
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.mpf:1:17: SOFT is not supported", 0), 0u) << p.warnings[0];
-  EXPECT_EQ(p.warnings[1].rfind("test.mpf:2:5: CYCLE832 is not supported", 0), 0u) << p.warnings[1];
+  EXPECT_EQ(p.warnings[1].rfind("test.mpf:2:5: CYCLE832 (high-speed settings) read as a note", 0), 0u) << p.warnings[1];
   EXPECT_EQ(p.warnings[2].rfind("test.mpf:3:5: G95 is not supported", 0), 0u) << p.warnings[2];
   EXPECT_EQ(p.warnings[3].rfind("test.mpf:3:9: H1= is not supported", 0), 0u) << p.warnings[3];
   // The refused words stay errors.

@@ -4,21 +4,29 @@
 // and the cutters that the file's CUTTER/ statements describe.
 // Bad input is a vcut::InputError naming file:line:column; nothing else is ever thrown.
 //
-// Statements read (case-insensitive; blanks anywhere between items):
-//   GOTO/x,y,z[,i,j,k]  FROM/x,y,z[,i,j,k]  GODLTA/dx,dy,dz | GODLTA/d (along the tool axis)
-//   RAPID (the next motion only)  FEDRAT/f[,MMPM|IPM] | FEDRAT/MMPM|IPM,f
-//   CUTTER/d[,r[,e[,f[,alpha[,beta[,h]]]]]]  LOADTL/n[,...] (and NX's LOAD/TOOL,n[,...])
+// Statements read (case-insensitive; blanks anywhere between items), as SolidWorks CAM, NX,
+// Creo and CATIA write them (docs/PROGRAMS.md has the details and the files they came from):
+//   GOTO/x,y,z[,i,j,k] (the axis with or without MULTAX)  FROM/x,y,z[,i,j,k]
+//   GODLTA/dx,dy,dz | GODLTA/d (along the tool axis)  GOHOME[/x,y,z[,i,j,k]] (a rapid; to FROM/)
+//   RAPID | RAPID/ (the next motion only)  FEDRAT/f[,MMPM|IPM] | FEDRAT/MMPM|IPM,f
+//   CUTTER/d[,r[,e[,f[,alpha[,beta[,h]]]]]][,]  TLDATA/MILL,d,r,h,taper,tip (NX)
+//   LOADTL/n[,...]  LOAD/TOOL,n[,...] (NX; n = 0: numbered by its cutter)
 //   MULTAX[/ON|OFF]  TLAXIS/i,j,k
-//   CIRCLE/cx,cy,cz,i,j,k,r[,...] then its GOTO/  SPINDL/[RPM,]n[,CLW|CCLW] | /ON | /OFF
-//   UNITS/INCHES|MM  PPRINT text  END (a section end: reading goes on)
+//   CIRCLE/cx,cy,cz,i,j,k[,r[,tolerances]][,TIMES,n] then its GOTO/
+//   SPINDL/n[,RPM][,CLW|CCLW] | /RPM,n[,...] | /ON | /OFF
+//   CSYS/ 3x4 matrix (SolidWorks CAM setups)  MSYS/origin,X axis,Y axis (NX)
+//   CYCLE/DRILL|DEEP|DEEP2|BRKCHP|TAP|BORE|REAM,... | /OFF | /ON | /INIT: drilling cycles
+//   UNITS/INCHES|MM  PPRINT, INSERT (comments)  END (a section end: reading goes on)
 //   CUTCOM/LEFT|RIGHT[,XYPLAN][,n] ... CUTCOM/OFF (compensation in the XY plane, as G41/G42
-//   and G40 with the CUTTER/'s radius; three-axis CL data only)
+//   and G40 with the CUTTER/'s radius; none on a centre path: NX's "$$ centerline data",
+//   SolidWorks CAM's CSI_ statements, AptOptions::cutcom_on_centre)
 //   FINI (the end: nothing after it is read)
 //   `$` continues a statement on the next line (the rest of the line is a comment);
-//   `$$` starts a comment.
+//   `$$` starts a comment (one that ends in '$' goes on, as Creo writes them); NX's
+//   information listing's header and last line are skipped.
 // Any other statement is ignored with one warning per distinct statement word (PARTNO,
-// INSERT, REMARK and TPRINT take the rest of their line as text). A line that is not
-// WORD or WORD/parameters (G-code, APT source geometry "P1=POINT/...") is an error.
+// REMARK and TPRINT take the rest of their line as text). A line that is not WORD or
+// WORD/parameters (G-code, APT source geometry "P1=POINT/...") is an error.
 //
 // Conventions:
 // - The tool tip is the GOTO point (APT's control point: the lowest point on the tool axis)
@@ -72,7 +80,10 @@ struct AptProgram {
 // The modal state between statements and between files: pass the same one, with the same
 // AptProgram, for each file in sequence.
 struct AptState {
-  bool known = false;  // position known (after FROM/ or a first GOTO/)
+  bool known = false;       // position known (after FROM/ or a first GOTO/)
+  bool home_known = false;  // the FROM/ point, where GOHOME goes
+  Eigen::Vector3d home_mm = Eigen::Vector3d::Zero();
+  Eigen::Vector3d home_axis = Eigen::Vector3d::UnitZ();
   Eigen::Vector3d position_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d pose_axis = Eigen::Vector3d::UnitZ();  // the tool axis at position_mm
   Eigen::Vector3d axis = Eigen::Vector3d::UnitZ();       // the axis a motion without i,j,k ends with
