@@ -66,6 +66,7 @@ void check(const vcut::kinematics::Program& program, const vcut::io::SinumerikOp
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   vcut::io::SinumerikOptions options;
+  options.max_lines = 10000;  // a loop that never ends stops here, not at the default 1e8
   // The first byte also picks the arc tolerance and the warning mode, so that both are fuzzed.
   if (size > 0 && (data[0] & 1) != 0) options.arc_tolerance_mm = 0.5;
   if (size > 0 && (data[0] & 2) != 0) options.unsupported_as_warning = true;

@@ -69,6 +69,7 @@ constexpr int kMaxToolNumber = 99999;  // as the tool library
 // CSYS/ and MSYS/ print their matrices with 6 decimals: a rotation's entries are off by up to
 // 5e-7 and R^T R and det by a few 1e-6; a matrix off by more is not a rotation.
 constexpr double kFrameTolerance = 1e-5;
+constexpr double kMaxPecks = 10000.0;  // pecks per hole of a CYCLE/DEEP or BRKCHP
 
 bool is_blank(char c) { return c == ' ' || c == '\t' || c == '\f' || c == '\v'; }
 using detail::describe;
@@ -1443,6 +1444,11 @@ void Reader::do_cycle() {
   if (c.depth_mm < 0.0) fail(args_pos_, "cycle depth " + num(c.depth_mm) + " mm (expected >= 0: below the point)");
   if ((c.kind == "DEEP" || c.kind == "BRKCHP") && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.peck_mm = c.depth_mm;
   if (c.peck_mm < 0.0 || c.first_peck_mm < 0.0) fail(args_pos_, "a negative peck in CYCLE/ (expected > 0)");
+  // Bounded work: a peck too small for its depth is a typo (and a million blocks per hole).
+  if ((c.kind == "DEEP" || c.kind == "BRKCHP") && c.depth_mm > 0.0 &&
+      c.depth_mm > kMaxPecks * std::min(c.first_peck_mm, c.peck_mm))
+    fail(args_pos_, "a peck of " + num(std::min(c.first_peck_mm, c.peck_mm)) + " mm for a hole " + num(c.depth_mm) +
+                        " mm deep: more than 10000 pecks (expected a larger INCR, STEP or SUBPECK)");
   c.on = true;
   state_.cycle = c;
 }

@@ -22,6 +22,8 @@
 #include <optional>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
 #include <istream>
 #include <new>
 #include <stdexcept>
@@ -112,6 +114,7 @@ class Reader {
          int file_index)
       : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
 
+  // The file's lines are kept (jumps and loops go back), then run from the first.
   void run(std::istream& in) {
     detail::LineSource source(in);
     std::string text;
@@ -130,9 +133,26 @@ class Reader {
       ++number;
       line_ = number;
       if (r == detail::LineSource::kTooLong) fail(0, "line longer than 1 MiB (expected a text file of NC blocks)");
-      if (!block(text)) break;
+      lines_.push_back(text);
     }
     if (in.bad()) fail_at(number + 1, 0, "read error (expected a readable text file)");
+    prescan();
+    long long executed = 0;
+    for (std::size_t pc = 0; pc < lines_.size();) {
+      line_ = static_cast<int>(pc + 1);
+      if (++executed > options_.max_lines) {
+        fail(0, "more than " + std::to_string(options_.max_lines) +
+                    " blocks run (a loop that never ends? expected program.max_lines to be larger)");
+      }
+      std::size_t next = pc + 1;
+      prepare(lines_[pc]);
+      if (flow(pc, next)) {
+        pc = next;
+        continue;
+      }
+      if (!block()) break;
+      pc = next;
+    }
   }
 
  private:
@@ -154,7 +174,16 @@ class Reader {
     }
   }
 
-  bool block(std::string& text);
+  void prepare(const std::string& text);  // s_ from a line: upper case, checked
+  bool block();                           // s_ read and run; false after M30
+  // Program flow: the structures' partners, labels and block numbers of every line.
+  void prescan();
+  bool flow(std::size_t pc, std::size_t& next);  // a flow statement run (true), else false
+  std::size_t jump_target(std::size_t pc, const std::string& how, int column);
+  bool condition(int depth);
+  double relation(int depth);
+  void define();
+  std::size_t body(std::string* label, long long* number);  // after N and a label: the first word
   void word();
   void assignment(const std::string& address, int column);
   void skip_argument();
@@ -221,13 +250,20 @@ class Reader {
   int line_ = 0;
   std::string s_;  // the block, upper case outside strings
   std::size_t i_ = 0;
+  std::size_t begin_ = 0;               // after a byte order mark
+  std::vector<std::string> lines_;      // the file
+  std::vector<long> partner_;           // IF -> ELSE/ENDIF, ELSE -> ENDIF, WHILE <-> ENDWHILE, ... (-1: none)
+  std::vector<std::string> label_;      // "NAME" of "NAME:" on each line
+  std::vector<long long> number_;       // its N number, -1: none
+  std::map<std::string, double> vars_;  // DEF REAL/INT/BOOL variables
+  std::map<std::size_t, std::pair<std::string, double>> for_;  // FOR line -> variable, end value
   Line l_;
 };
 
 // ---------------------------------------------------------------------------------------------
 // Parsing
 
-bool Reader::block(std::string& text) {
+void Reader::prepare(const std::string& text) {
   std::size_t n = text.size();
   if (n > 0 && text[n - 1] == '\r') --n;  // CRLF files
   std::size_t begin = 0;
@@ -246,8 +282,15 @@ bool Reader::block(std::string& text) {
     if (!quoted) s_[k] = upper(c);
   }
   i_ = begin;
+  begin_ = begin;
+}
+
+bool Reader::block() {
+  const std::size_t n = s_.size();
+  i_ = begin_;
   skip_blanks();
   if (i_ < n && s_[i_] == '%') return true;  // %_N_NAME_MPF, %MPF100: a header
+  i_ = body(nullptr, nullptr);               // past N and a label
   l_ = Line{};
   while (true) {
     skip_blanks();
@@ -257,6 +300,296 @@ bool Reader::block(std::string& text) {
   }
   execute();
   return !l_.end;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Program flow (Siemens, Programming Manual Job Planning, "Flexible NC programming"): labels
+// NAME: and block numbers as jump targets; GOTOF (forward), GOTOB (backward), GOTO (forward,
+// then backward), GOTOC (GOTO that goes on when the target is missing); IF cond GOTOx target;
+// IF cond / ELSE / ENDIF; WHILE cond / ENDWHILE; FOR var = a TO b / ENDFOR; REPEAT / UNTIL
+// cond; LOOP / ENDLOOP; DEF REAL | INT | BOOL name[=value], ... Conditions: == <> < > <= >=,
+// AND OR XOR NOT, TRUE FALSE. A loop that runs more than SinumerikOptions::max_lines blocks
+// is an error.
+
+std::size_t Reader::body(std::string* label, long long* number) {
+  std::size_t i = begin_;
+  auto blanks = [&] {
+    while (i < s_.size() && is_blank(s_[i])) ++i;
+  };
+  auto block_number = [&] {
+    if (i < s_.size() && s_[i] == 'N' && i + 1 < s_.size() && is_digit(s_[i + 1])) {
+      std::size_t k = i + 1;
+      while (k < s_.size() && is_digit(s_[k])) ++k;
+      if (k < s_.size() && (s_[k] == '.' || is_upper(s_[k]))) return;  // not a plain N number
+      if (number && k - i - 1 <= 15) *number = std::stoll(s_.substr(i + 1, k - i - 1));
+      i = k;
+      blanks();
+    }
+  };
+  blanks();
+  block_number();
+  // A label: a name of letters, digits and _ starting with a letter or _, then ':'.
+  if (i < s_.size() && is_upper(s_[i])) {
+    std::size_t k = i;
+    while (k < s_.size() && (is_upper(s_[k]) || is_digit(s_[k]))) ++k;
+    std::size_t c = k;
+    while (c < s_.size() && is_blank(s_[c])) ++c;
+    if (c < s_.size() && s_[c] == ':' && k - i >= 2) {
+      if (label) *label = s_.substr(i, k - i);
+      i = c + 1;
+      blanks();
+      block_number();
+    }
+  }
+  return i;
+}
+
+void Reader::prescan() {
+  const std::size_t n = lines_.size();
+  partner_.assign(n, -1);
+  label_.assign(n, std::string());
+  number_.assign(n, -1);
+  struct Open {
+    std::string word;
+    std::size_t line;
+    int column;
+  };
+  std::vector<Open> open;
+  const int saved = line_;
+  for (std::size_t k = 0; k < n; ++k) {
+    line_ = static_cast<int>(k + 1);
+    prepare(lines_[k]);
+    i_ = body(&label_[k], &number_[k]);
+    const std::size_t start = i_;
+    const std::string word = letters();
+    const int col = column(start);
+    auto close = [&](const char* opener, const char* alt) {
+      if (open.empty() || (open.back().word != opener && (alt == nullptr || open.back().word != alt)))
+        fail(col,
+             word + " without its " + opener + (open.empty() ? "" : " (the open one is " + open.back().word + ")"));
+      return open.back().line;
+    };
+    if (word == "IF") {
+      if (s_.find("GOTO", i_) == std::string::npos) open.push_back({word, k, col});  // IF cond GOTOx: one line
+    } else if (word == "ELSE") {
+      const std::size_t at = close("IF", nullptr);
+      partner_[at] = static_cast<long>(k);
+      open.back() = {"ELSE", k, col};
+    } else if (word == "ENDIF") {
+      const std::size_t at = close("IF", "ELSE");
+      partner_[at] = static_cast<long>(k);
+      open.pop_back();
+    } else if (word == "WHILE" || word == "FOR" || word == "REPEAT" || word == "LOOP") {
+      open.push_back({word, k, col});
+    } else if (word == "ENDWHILE" || word == "ENDFOR" || word == "UNTIL" || word == "ENDLOOP") {
+      const char* opener = word == "ENDWHILE" ? "WHILE"
+                           : word == "ENDFOR" ? "FOR"
+                           : word == "UNTIL"  ? "REPEAT"
+                                              : "LOOP";
+      const std::size_t at = close(opener, nullptr);
+      partner_[at] = static_cast<long>(k);
+      partner_[k] = static_cast<long>(at);
+      open.pop_back();
+    }
+  }
+  if (!open.empty()) {
+    line_ = static_cast<int>(open.back().line + 1);
+    const std::string& w = open.back().word;
+    fail(open.back().column, w + " without its " +
+                                 (w == "IF" || w == "ELSE" ? "ENDIF"
+                                  : w == "WHILE"           ? "ENDWHILE"
+                                  : w == "FOR"             ? "ENDFOR"
+                                  : w == "REPEAT"          ? "UNTIL"
+                                                           : "ENDLOOP") +
+                                 " before the end of the file");
+  }
+  line_ = saved;
+}
+
+std::size_t Reader::jump_target(std::size_t pc, const std::string& how, int how_column) {
+  skip_blanks();
+  const std::size_t start = i_;
+  std::string target;
+  while (i_ < s_.size() && (is_upper(s_[i_]) || is_digit(s_[i_]))) target.push_back(s_[i_++]);
+  if (target.empty()) fail(how_column, how + " without its target (expected a label or a block number N..)");
+  long long number = -1;
+  if (target.size() > 1 && target[0] == 'N' && std::all_of(target.begin() + 1, target.end(), is_digit) &&
+      target.size() <= 16)
+    number = std::stoll(target.substr(1));
+  auto matches = [&](std::size_t k) { return label_[k] == target || (number >= 0 && number_[k] == number); };
+  const bool forward = how != "GOTOB", backward = how != "GOTOF";
+  if (forward)
+    for (std::size_t k = pc + 1; k < lines_.size(); ++k)
+      if (matches(k)) return k;
+  if (backward)
+    for (std::size_t k = pc + 1; k-- > 0;)
+      if (matches(k)) return k;
+  if (how == "GOTOC") return pc + 1;
+  fail(column(start), how + " " + target + ": no such label or block number " +
+                          (forward && backward ? "in the program"
+                           : forward           ? "after this line"
+                                               : "before this line"));
+}
+
+// A condition: OR of AND of [NOT] relations (a relation: an expression, or two compared).
+bool Reader::condition(int depth) {
+  if (depth > kMaxExpressionDepth) fail_here("condition nested more than 64 deep");
+  auto word_is = [&](const char* w) {
+    skip_blanks();
+    const std::size_t n = std::strlen(w);
+    if (s_.compare(i_, n, w) != 0) return false;
+    if (i_ + n < s_.size() && (is_upper(s_[i_ + n]) || is_digit(s_[i_ + n]))) return false;
+    i_ += n;
+    return true;
+  };
+  std::function<bool(int)> unary = [&](int d) -> bool {
+    if (word_is("NOT")) return !unary(d + 1);
+    return relation(d) != 0.0;
+  };
+  auto conjunction = [&](int d) {
+    bool v = unary(d);
+    while (word_is("AND")) v = unary(d) && v;
+    return v;
+  };
+  bool v = conjunction(depth);
+  while (true) {
+    if (word_is("OR")) {
+      v = conjunction(depth) || v;
+    } else if (word_is("XOR")) {
+      v = conjunction(depth) != v;
+    } else {
+      return v;
+    }
+  }
+}
+
+double Reader::relation(int depth) {
+  const double a = expression(depth);
+  skip_blanks();
+  static const char* const kOps[] = {"==", "<>", "<=", ">=", "<", ">"};
+  for (const char* op : kOps) {
+    const std::size_t n = std::strlen(op);
+    if (s_.compare(i_, n, op) != 0) continue;
+    i_ += n;
+    const double b = expression(depth);
+    const std::string o(op);
+    return (o == "=="   ? a == b
+            : o == "<>" ? a != b
+            : o == "<=" ? a <= b
+            : o == ">=" ? a >= b
+            : o == "<"  ? a < b
+                        : a > b)
+               ? 1.0
+               : 0.0;
+  }
+  return a;
+}
+
+// DEF REAL | INT | BOOL name[=value][, name[=value] ...]: variables of this program, 0 at first.
+void Reader::define() {
+  const int col = column(i_);
+  skip_blanks();
+  const std::string type = letters();
+  if (type != "REAL" && type != "INT" && type != "BOOL")
+    fail(col, "DEF " + type + " is not supported (expected DEF REAL, INT or BOOL)");
+  while (true) {
+    skip_blanks();
+    const std::size_t start = i_;
+    std::string name;
+    while (i_ < s_.size() && (is_upper(s_[i_]) || is_digit(s_[i_]))) name.push_back(s_[i_++]);
+    if (name.empty()) fail(column(start), "DEF " + type + " without a name");
+    if (name.size() < 2 || (name[0] == 'R' && std::all_of(name.begin() + 1, name.end(), is_digit)))
+      fail(column(start), "DEF " + name + " (expected a name of 2 or more characters, not an address or R parameter)");
+    double value = 0.0;
+    if (at('=')) {
+      ++i_;
+      value = expression(0);
+    }
+    if (type == "INT") value = std::round(value);
+    if (type == "BOOL") value = value != 0.0 ? 1.0 : 0.0;
+    vars_[name] = value;
+    if (!at(',')) break;
+    ++i_;
+  }
+  skip_blanks();
+  if (i_ < s_.size() && s_[i_] != ';')
+    fail_here("unexpected text after DEF (expected a comment or the end of the block)");
+}
+
+bool Reader::flow(std::size_t pc, std::size_t& next) {
+  i_ = body(nullptr, nullptr);
+  const std::size_t start = i_;
+  const std::string word = letters();
+  const int col = column(start);
+  auto finish = [&] {
+    skip_blanks();
+    if (i_ < s_.size() && s_[i_] != ';')
+      fail_here("unexpected text after " + word + " (expected the end of the block)");
+  };
+  const long partner = partner_[pc];
+  if (word == "DEF") {
+    define();
+  } else if (word == "GOTOF" || word == "GOTOB" || word == "GOTO" || word == "GOTOC") {
+    next = jump_target(pc, word, col);
+    finish();
+  } else if (word == "IF") {
+    const bool holds = condition(0);
+    skip_blanks();
+    const std::size_t jump_at = i_;
+    const std::string go = letters();
+    if (go == "GOTOF" || go == "GOTOB" || go == "GOTO" || go == "GOTOC") {
+      const std::size_t to = jump_target(pc, go, column(jump_at));
+      if (holds) next = to;
+    } else {
+      if (!go.empty())
+        fail(column(jump_at),
+             "unexpected " + go + " after IF's condition (expected GOTOF, GOTOB, GOTO or the end of the block)");
+      if (!holds) next = static_cast<std::size_t>(partner) + 1;  // after ELSE, or after ENDIF
+    }
+    finish();
+  } else if (word == "ELSE") {
+    next = static_cast<std::size_t>(partner) + 1;  // the true branch ends here
+  } else if (word == "ENDIF" || word == "REPEAT" || word == "LOOP") {
+    finish();
+  } else if (word == "WHILE") {
+    if (!condition(0)) next = static_cast<std::size_t>(partner) + 1;
+    finish();
+  } else if (word == "ENDWHILE") {
+    next = static_cast<std::size_t>(partner);
+  } else if (word == "ENDLOOP") {
+    next = static_cast<std::size_t>(partner) + 1;
+  } else if (word == "UNTIL") {
+    if (!condition(0)) next = static_cast<std::size_t>(partner) + 1;
+    finish();
+  } else if (word == "FOR") {
+    skip_blanks();
+    const std::size_t at_var = i_;
+    std::string name;
+    while (i_ < s_.size() && (is_upper(s_[i_]) || is_digit(s_[i_]))) name.push_back(s_[i_++]);
+    const bool r =
+        name.size() > 1 && name[0] == 'R' && std::all_of(name.begin() + 1, name.end(), is_digit) && name.size() <= 4;
+    if (!r && !vars_.count(name))
+      fail(column(at_var), "FOR " + name + " (expected an R parameter or a DEF INT variable)");
+    expect('=', "FOR without '=' (expected FOR var = start TO end)");
+    const double from = expression(0);
+    skip_blanks();
+    if (letters() != "TO") fail_here("FOR without TO (expected FOR var = start TO end)");
+    const double to = expression(0);
+    finish();
+    (r ? state_.r[static_cast<std::size_t>(std::stoi(name.substr(1)))] : vars_[name]) = from;
+    for_[pc] = {name, to};
+    if (from > to) next = static_cast<std::size_t>(partner) + 1;
+  } else if (word == "ENDFOR") {
+    const std::size_t head = static_cast<std::size_t>(partner);
+    const auto& [name, to] = for_.at(head);
+    const bool r = name[0] == 'R' && vars_.count(name) == 0;
+    double& v = r ? state_.r[static_cast<std::size_t>(std::stoi(name.substr(1)))] : vars_[name];
+    v += 1.0;
+    if (v <= to) next = head + 1;
+  } else {
+    return false;
+  }
+  return true;
 }
 
 void Reader::word() {
@@ -417,6 +750,8 @@ double Reader::primary(int depth) {
     if (name.size() > 4) fail(col, name + " (expected R0..R999)");
     return state_.r[static_cast<std::size_t>(std::stoi(name.substr(1)))];
   }
+  if (const auto var = vars_.find(name); var != vars_.end()) return var->second;
+  if (name == "TRUE" || name == "FALSE") return name == "TRUE" ? 1.0 : 0.0;
   if (at('(')) {
     if (name == "AC" || name == "IC") {
       fail(col,
@@ -425,7 +760,7 @@ double Reader::primary(int depth) {
     ++i_;
     return function(name, col, depth + 1);
   }
-  fail(col, "unknown name " + name + " in an expression (expected a number, R0..R999 or a function)");
+  fail(col, "unknown name " + name + " in an expression (expected a number, R0..R999, a DEF variable or a function)");
 }
 
 double Reader::function(const std::string& name, int col, int depth) {
@@ -556,6 +891,10 @@ void Reader::assignment(const std::string& address, int col) {
     if (digits.size() > 3) fail(col, address + " (expected R0..R999)");
     const double v = expression(0);
     state_.r[static_cast<std::size_t>(std::stoi(digits))] = v;
+    return;
+  }
+  if (const auto var = vars_.find(address); var != vars_.end()) {
+    var->second = expression(0);  // a DEF variable
     return;
   }
   if (address == "CR") return set(l_.cr, "CR", expression(0), col);
@@ -752,6 +1091,7 @@ void Reader::code(char letter, int col) {
 }
 
 void Reader::keyword(const std::string& name, int col) {
+  // Flow statements start their block (Reader::flow); here they are inside one, or not read.
   static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",     "ENDFOR", "LOOP",
                                       "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB",   "GOTOC",  "CASE",
                                       "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "EXTCALL", "REPEATB"};
@@ -1589,6 +1929,11 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
     double first = fdpr ? std::abs(*fdpr) * unit : fdep ? top - *fdep * unit : top - bottom;
     if (!(first > 0.0)) first = top - bottom;
     const double degression = std::abs(dam.value_or(0.0)) * unit;
+    // Bounded work: a peck too small for its depth is a typo (and a million blocks per hole).
+    const double smallest = degression > 0.0 ? std::min(first, degression) : first;
+    if (top - bottom > 10000.0 * smallest)
+      fail(column, "CYCLE83 pecks of " + num(smallest) + " mm for a hole " + num(top - bottom) +
+                       " mm deep: more than 10000 pecks (expected a larger FDPR or DAM)");
     if (frf && !(*frf > 0.0 && *frf <= 1.0))
       fail(column, "CYCLE83 FRF " + num(*frf) + " (expected a feed factor over 0, at most 1)");
     const double factor = frf ? *frf : 1.0;

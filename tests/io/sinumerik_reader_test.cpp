@@ -569,7 +569,7 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_TRUE(held.blocks[1].start_rotary.angle_rad == held.blocks[1].end_rotary.angle_rad);
   EXPECT_DOUBLE_EQ(held.blocks[1].end_rotary.angle_rad[0], 10.0 * M_PI / 180.0);
   EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
-  EXPECT_MPF_ERROR("N10 IF R1>0 GOTOF END\n", 1, 5, "IF (program flow");
+  EXPECT_MPF_ERROR("N10 CASE(R1) OF 1 GOTOF A\n", 1, 5, "CASE (program flow");
   EXPECT_MPF_ERROR("N10 ROTS X10\n", 1, 5, "ROTS is not supported: it changes the frame");
   EXPECT_MPF_ERROR("N10 G53 X10\n", 1, 5, "G53 is not supported");
   EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
@@ -709,6 +709,36 @@ TEST(SinumerikReader, DrillingCycles) {
   EXPECT_MPF_ERROR("G0 X0 Y0\nCYCLE81(10, 0, 2, -10)\n", 2, 1, "unknown Z position");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10)\n", 2, 1, "without RTP and RFP");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10, 0, 2)\n", 2, 1, "without its depth");
+}
+
+// Program flow, worked by hand: FOR runs PASS 1, 2, 3 (Z -0.5, -1, -1.5); WHILE twice (Y 5, 10);
+// IF ... GOTOF jumps over X100 to the label; the IF block takes its first branch (X20, not
+// X30); REPEAT runs until R2 = 3; GOTOB goes back to a block number.
+TEST(SinumerikReader, ProgramFlow) {
+  const Program p = read(
+      "DEF REAL DEPTH=2, STEP\nDEF INT PASS\nN10 G0 X0 Y0 Z5\nF500\nSTEP = 0.5\nFOR PASS = 1 TO 3\n"
+      "  G1 Z=-PASS*STEP\nENDFOR\nR1 = 0\nWHILE R1 < 2\n  R1 = R1 + 1\n  G1 Y=R1*5\nENDWHILE\n"
+      "IF R1 == 2 GOTOF SKIP\nG1 X100\nSKIP: G0 Z5\nIF DEPTH > 1 AND NOT STEP == 1\n  G1 X20\nELSE\n  G1 X30\nENDIF\n"
+      "REPEAT\n  R2 = R2 + 1\nUNTIL R2 >= 3\nG1 X=R2\nN90 R3 = R3 + 1\nIF R3 < 2 GOTOB N90\nG1 X=R3\nM30\n");
+  std::vector<double> x, y, z;
+  for (const Block& b : p.blocks) {
+    x.push_back(b.end_mm.x());
+    y.push_back(b.end_mm.y());
+    z.push_back(b.end_mm.z());
+  }
+  EXPECT_EQ(z, (std::vector<double>{-0.5, -1, -1.5, -1.5, -1.5, 5, 5, 5, 5}));
+  EXPECT_EQ(y, (std::vector<double>{0, 0, 0, 5, 10, 10, 10, 10, 10}));
+  EXPECT_EQ(x, (std::vector<double>{0, 0, 0, 0, 0, 0, 20, 3, 2}));
+  EXPECT_EQ(p.blocks[5].source.line, 16);  // the labelled block
+  // A loop that never ends stops at max_lines; structures must close; jumps must land.
+  SinumerikOptions few;
+  few.max_lines = 1000;
+  const InputError endless = error_of("LOOP\nG1 X1 F1\nENDLOOP\n", few);
+  EXPECT_NE(std::string(endless.what()).find("more than 1000 blocks run"), std::string::npos) << endless.what();
+  EXPECT_MPF_ERROR("WHILE 1\nG1 X1 F1\n", 1, 1, "WHILE without its ENDWHILE");
+  EXPECT_MPF_ERROR("G1 X1 F1\nENDIF\n", 2, 1, "ENDIF without its IF");
+  EXPECT_MPF_ERROR("GOTOF NOWHERE\n", 1, 7, "no such label");
+  EXPECT_MPF_ERROR("DEF STRING[8] NAME\n", 1, 4, "DEF STRING is not supported");
 }
 
 }  // namespace

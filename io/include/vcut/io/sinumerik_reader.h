@@ -44,14 +44,18 @@
 //   their X Y Z are the frame's values. Points, arc centres and tool vectors A3 B3 C3 and cone
 //   axes go through it; a mirror reverses G2/G3; an arc in a plane scaled unequally is an
 //   error. A turned frame needs X Y Z known before its first move.
+//   Program flow: labels NAME: and block numbers as targets of GOTOF GOTOB GOTO GOTOC; IF cond
+//   GOTOx; IF / ELSE / ENDIF; WHILE / ENDWHILE; FOR var = a TO b / ENDFOR; REPEAT / UNTIL;
+//   LOOP / ENDLOOP; DEF REAL | INT | BOOL name[=value], ...; conditions with == <> < > <= >=
+//   AND OR XOR NOT TRUE FALSE. A loop runs at most SinumerikOptions::max_lines blocks.
 //   CYCLE81(RTP, RFP, SDIS, DP, DPR), CYCLE82(..., DTB), CYCLE83(RTP, RFP, SDIS, DP, DPR, FDEP,
 //   FDPR, DAM, DTB, DTS, FRF, VARI) in G17, at the current X Y (Reader::cycle has the motions),
 //   called directly or by MCALL (each later positioning block ends with it; MCALL alone ends
 //   it).
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
-// ORICONTO, A7 B7 C7 outside ORICONIO, program flow and definitions (IF, GOTOF, WHILE, DEF,
-// subprogram calls ...), CYCLE800 (swivelling) and other cycles,
+// ORICONTO, A7 B7 C7 outside ORICONIO, CASE, subprogram calls (L, CALL, PROC), DEF of other
+// types than REAL, INT and BOOL, CYCLE800 (swivelling) and other cycles,
 // T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
@@ -81,6 +85,8 @@ struct SinumerikOptions {
   // and 0.1 % of the radius (the control's $MN_CIRCLE_ERROR_CONST, 0.01 mm, and
   // $MN_CIRCLE_ERROR_FACTOR, 0.001, as shipped).
   double arc_tolerance_mm = 0.01;
+  // Blocks executed before a loop is taken to be endless (an error naming the line).
+  long long max_lines = 100'000'000;
 };
 
 // The modal state between lines and between files. Start from a default-constructed one
@@ -144,7 +150,7 @@ struct SinumerikState {
 // Reads one program file; errors are vcut::InputError naming file:line:column.
 kinematics::Program read_sinumerik(const std::string& path, const SinumerikOptions& options = {});
 // Appends one program read from `in` (named `name` in errors and sources) to `program`.
-// Memory: one line at a time (lines up to 1 MiB), plus the output.
+// Memory: the file's lines (jumps and loops go back to them; lines up to 1 MiB), plus the output.
 void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOptions& options,
                     kinematics::Program& program, SinumerikState& state);
 
