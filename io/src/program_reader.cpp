@@ -393,6 +393,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       sinumerik.unsupported_as_warning = options.gcode.unsupported_as_warning;
       if (options.gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
       sinumerik.max_lines = options.gcode.max_lines;
+      sinumerik.subroutine_path = options.gcode.subroutine_path;
       read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
     } else if (reader == ProgramReader::Gcode) {
       GcodeOptions gcode = options.gcode;

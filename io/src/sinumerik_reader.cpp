@@ -56,6 +56,7 @@ constexpr double kConeAngleToleranceRad = 1e-4;
 // fix a circle; 1e-4 is a vector printed with 4 decimals, as above.
 constexpr double kMinConeChord = 1e-4;
 constexpr int kMaxExpressionDepth = 64;  // nesting of ( ) and unary signs
+constexpr int kMaxCallDepth = 16;        // subprograms within subprograms
 constexpr int kRParameters = 1000;       // R0..R999
 constexpr int kMaxToolNumber = 99999;    // as the tool library
 constexpr double kDegToRad = M_PI / 180.0;
@@ -106,13 +107,20 @@ struct Line {
   std::vector<std::optional<double>> cycle_args;
   int cycle_column = 0;
   bool mcall = false;
+  // A subprogram called (L123, CALL "NAME", NAME(args)), P times.
+  std::string call;
+  std::vector<double> call_args;
+  int call_column = 0;
+  Value p;
 };
 
 class Reader {
  public:
   Reader(const std::string& name, const SinumerikOptions& options, kinematics::Program& program, SinumerikState& state,
-         int file_index)
-      : name_(name), options_(options), program_(program), state_(state), file_index_(file_index) {}
+         int file_index, int depth = 0)
+      : name_(name), options_(options), program_(program), state_(state), file_index_(file_index), depth_(depth) {}
+  // A subprogram's parameters (PROC NAME(REAL A, INT B)), bound from its call's values.
+  std::vector<double> arguments;
 
   // The file's lines are kept (jumps and loops go back), then run from the first.
   void run(std::istream& in) {
@@ -183,6 +191,10 @@ class Reader {
   bool condition(int depth);
   double relation(int depth);
   void define();
+  void call(const std::string& name, const std::vector<double>& args, int repeat, int column);
+  void proc();                                                 // PROC NAME(type name, ...): the parameters bound
+  std::string subprogram_file(const std::string& name) const;  // "" when not found
+  std::vector<std::string> subprogram_folders() const;
   std::size_t body(std::string* label, long long* number);  // after N and a label: the first word
   void word();
   void assignment(const std::string& address, int column);
@@ -247,6 +259,7 @@ class Reader {
   kinematics::Program& program_;
   SinumerikState& state_;
   int file_index_;
+  int depth_;  // subprogram nesting
   int line_ = 0;
   std::string s_;  // the block, upper case outside strings
   std::size_t i_ = 0;
@@ -527,7 +540,11 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
       fail_here("unexpected text after " + word + " (expected the end of the block)");
   };
   const long partner = partner_[pc];
-  if (word == "DEF") {
+  if (word == "PROC") {
+    proc();
+  } else if (word == "RET") {
+    next = lines_.size();  // back to the caller
+  } else if (word == "DEF") {
     define();
   } else if (word == "GOTOF" || word == "GOTOB" || word == "GOTO" || word == "GOTOC") {
     next = jump_target(pc, word, col);
@@ -590,6 +607,95 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
     return false;
   }
   return true;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subprograms: L123, CALL "NAME", NAME or NAME(values), P times, from NAME.SPF (or .MPF) in the
+// calling program's folder, then SinumerikOptions::subroutine_path. They share the modal state
+// and the R parameters; PROC NAME(REAL A, INT B) binds the call's values; M17, RET, M2 or M30
+// go back.
+
+std::vector<std::string> Reader::subprogram_folders() const {
+  std::vector<std::string> folders;
+  const std::filesystem::path own = std::filesystem::path(name_).parent_path();
+  folders.push_back(own.empty() ? std::string(".") : own.string());
+  for (const std::string& f : options_.subroutine_path) folders.push_back(f);
+  return folders;
+}
+
+std::string Reader::subprogram_file(const std::string& name) const {
+  std::string lower = name;
+  for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  for (const std::string& folder : subprogram_folders()) {
+    for (const std::string& base : {name, lower}) {
+      for (const char* ext : {".SPF", ".spf", ".MPF", ".mpf"}) {
+        const std::filesystem::path p = std::filesystem::path(folder) / (base + ext);
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(p, ec)) return p.lexically_normal().string();
+      }
+    }
+  }
+  return {};
+}
+
+void Reader::call(const std::string& name, const std::vector<double>& args, int repeat, int column) {
+  if (depth_ >= kMaxCallDepth)
+    fail(column,
+         name + ": subprograms nested more than " + std::to_string(kMaxCallDepth) + " deep (one calling itself?)");
+  const std::string path = subprogram_file(name);
+  if (path.empty()) {
+    std::string searched;
+    for (const std::string& f : subprogram_folders()) searched += (searched.empty() ? "" : ", ") + f;
+    fail(column, "subprogram " + name + " not found (expected " + name + ".SPF or .MPF in " + searched + ")");
+  }
+  int index = -1;
+  for (std::size_t k = 0; k < program_.files.size(); ++k)
+    if (program_.files[k] == path) index = static_cast<int>(k);
+  if (index < 0) {
+    index = static_cast<int>(program_.files.size());
+    program_.files.push_back(path);
+  }
+  for (int k = 0; k < repeat; ++k) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) fail(column, "subprogram " + path + " cannot be read");
+    Reader sub(program_.files[static_cast<std::size_t>(index)], options_, program_, state_, index, depth_ + 1);
+    sub.arguments = args;
+    sub.run(in);
+  }
+}
+
+void Reader::proc() {
+  skip_blanks();
+  const std::string name = letters();
+  if (name.empty()) fail_here("PROC without its name");
+  if (!at('(')) return;
+  ++i_;
+  std::size_t k = 0;
+  while (!at(')')) {
+    const int col = column(i_);
+    const std::string type = letters();
+    if (type != "REAL" && type != "INT" && type != "BOOL")
+      fail(col, "PROC parameter of type " + (type.empty() ? std::string("?") : type) +
+                    " (expected REAL, INT or BOOL; VAR and other types are not supported)");
+    skip_blanks();
+    std::string param;
+    while (i_ < s_.size() && (is_upper(s_[i_]) || is_digit(s_[i_]))) param.push_back(s_[i_++]);
+    if (param.size() < 2) fail(col, "PROC parameter without a name of 2 or more characters");
+    double value = k < arguments.size() ? arguments[k] : 0.0;
+    if (type == "INT") value = std::round(value);
+    if (type == "BOOL") value = value != 0.0 ? 1.0 : 0.0;
+    vars_[param] = value;
+    ++k;
+    if (at(')')) break;
+    expect(',', "PROC parameters not separated by ','");
+  }
+  ++i_;
+  if (arguments.size() > k)
+    fail(column(i_), "PROC " + name + " takes " + std::to_string(k) + " parameter(s), the call gave " +
+                         std::to_string(arguments.size()));
+  // SAVE, DISPLOF, SBLOF and the like: how the control shows and restores it, not the path.
+  skip_blanks();
+  i_ = s_.size();
 }
 
 void Reader::word() {
@@ -947,6 +1053,18 @@ void Reader::code(char letter, int col) {
       return set(l_.d, "D", literal(), col);
     case 'R':
       fail(col, "R parameter without '=' (expected an assignment such as R1=10)");
+    case 'L': {
+      // L123: the subprogram L123 (L123.SPF).
+      const double v = literal();
+      if (!(v >= 0.0 && v <= 99999999.0 && v == std::floor(v)))
+        fail(col, "L" + num(v) + " (expected L and a whole number)");
+      if (!l_.call.empty()) fail(col, "a second subprogram call in one block (expected one)");
+      l_.call = "L" + std::to_string(static_cast<long long>(v));
+      l_.call_column = col;
+      return;
+    }
+    case 'P':
+      return set(l_.p, "P", literal(), col);
     case 'N': {
       const double v = literal();
       if (v < 0.0 || v != std::floor(v)) fail(col, "block number N" + num(v) + " (expected a whole number)");
@@ -1092,9 +1210,9 @@ void Reader::code(char letter, int col) {
 
 void Reader::keyword(const std::string& name, int col) {
   // Flow statements start their block (Reader::flow); here they are inside one, or not read.
-  static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",     "ENDFOR", "LOOP",
-                                      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB",   "GOTOC",  "CASE",
-                                      "PROC",    "RET",    "DEF",   "CALL",  "PCALL",    "EXTCALL", "REPEATB"};
+  static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",    "ENDFOR", "LOOP",
+                                      "ENDLOOP", "REPEAT", "UNTIL", "GOTO",  "GOTOF",    "GOTOB",  "GOTOC",  "CASE",
+                                      "PROC",    "RET",    "DEF",   "PCALL", "EXTCALL",  "REPEATB"};
   for (const char* w : kFlow) {
     if (name == w) {
       fail(col, name +
@@ -1126,6 +1244,20 @@ void Reader::keyword(const std::string& name, int col) {
     l_.frame = op;
     l_.frame_column = col;
     l_.frame_name = name;
+    return;
+  }
+  if (name == "CALL") {
+    // CALL "NAME": the subprogram by its name in a string.
+    skip_blanks();
+    if (!at('"')) fail(col, "CALL without the subprogram's name (expected CALL \"NAME\")");
+    const std::size_t open = i_++;
+    const std::size_t close = s_.find('"', i_);
+    if (close == std::string::npos) fail(column(open), "string without its closing '\"'");
+    std::string called = s_.substr(i_, close - i_);
+    for (char& ch : called) ch = upper(ch);
+    i_ = close + 1;
+    l_.call = called;
+    l_.call_column = col;
     return;
   }
   if (name == "CYCLE832") {
@@ -1214,6 +1346,21 @@ void Reader::keyword(const std::string& name, int col) {
   }
   if (name == "MSG") {
     if (at('(')) skip_argument();
+    return;
+  }
+  // A subprogram by its name, NAME or NAME(values), when one is found on the path.
+  if (l_.call.empty() && (!subprogram_file(name).empty())) {
+    l_.call = name;
+    l_.call_column = col;
+    if (at('(')) {
+      ++i_;
+      while (!at(')')) {
+        l_.call_args.push_back(expression(1));
+        if (at(')')) break;
+        expect(',', name + "( with values not separated by ',' (expected NAME(value, value, ...))");
+      }
+      ++i_;
+    }
     return;
   }
   unsupported(name, col);
@@ -1352,6 +1499,13 @@ void Reader::execute() {
     cycle(l.cycle, l.cycle_args, l.cycle_column);
   } else if (positions && !state_.modal_cycle.empty()) {
     cycle(state_.modal_cycle, state_.modal_cycle_args, l.first_column);
+  }
+  if (l.p.present && l.call.empty()) fail(l.p.column, "P without a subprogram call (expected L.. P.. or NAME P..)");
+  if (!l.call.empty()) {
+    const double times = l.p.present ? l.p.value : 1.0;
+    if (!(times >= 1.0 && times <= 9999.0 && times == std::floor(times)))
+      fail(l.p.column, "P" + num(times) + " (expected the number of runs, 1..9999)");
+    call(l.call, l.call_args, static_cast<int>(times), l.call_column);
   }
   if (l.end) {
     // M30/M2/M17: nothing after this line is read; the end resets G91 and the feed mode as

@@ -576,7 +576,7 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("N10 M123\n", 1, 5, "M123 is not supported");
   EXPECT_MPF_ERROR("N10 CYCLE800(1,\"TC\")\n", 1, 5, "CYCLE800 is not supported");
   EXPECT_MPF_ERROR("N10 H1=5\n", 1, 5, "H1= is not supported");
-  EXPECT_MPF_ERROR("N10 L100\n", 1, 5, "L is not supported");
+  EXPECT_MPF_ERROR("N10 L100\n", 1, 5, "subprogram L100 not found");
   EXPECT_MPF_ERROR("N10 G1 X=$AA_IM[X]\n", 1, 10, "system variables");
   // Accepted and ignored: MSG, G40, G601, coolant.
   EXPECT_NO_THROW(read("N10 MSG(\"roughing; pass 1\") G40 G601 M8 M9 D1\n"));
@@ -739,6 +739,47 @@ TEST(SinumerikReader, ProgramFlow) {
   EXPECT_MPF_ERROR("G1 X1 F1\nENDIF\n", 2, 1, "ENDIF without its IF");
   EXPECT_MPF_ERROR("GOTOF NOWHERE\n", 1, 7, "no such label");
   EXPECT_MPF_ERROR("DEF STRING[8] NAME\n", 1, 4, "DEF STRING is not supported");
+}
+
+// Subprograms, worked by hand: POCKET(3, 3) runs its FOR with DEPTH 3 and PASSES 3 (Z -1, -2,
+// -3, X 10 and back) in the caller's TRANS X20 frame; L10 P2 runs L10.SPF twice (its second
+// run does not move); a subprogram found on subroutine_path; one that is not found names the
+// folders searched.
+TEST(SinumerikReader, Subprograms) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("vcut_spf_" + std::to_string(::getpid()));
+  const fs::path lib = dir / "lib";
+  fs::create_directories(lib);
+  auto write = [](const fs::path& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; };
+  write(dir / "POCKET.SPF",
+        "PROC POCKET(REAL DEPTH, INT PASSES) SAVE\nDEF INT KK\nFOR KK = 1 TO PASSES\n  G1 Z=-KK*DEPTH/PASSES\n  X10\n"
+        "  X0\nENDFOR\nG0 Z5\nM17\n");
+  write(lib / "l10.spf", "G1 X5 F100\nRET\n");
+  write(dir / "main.mpf", "G0 X0 Y0 Z5\nF200\nTRANS X20\nPOCKET(3, 3)\nTRANS\nL10 P2\nM30\n");
+  SinumerikOptions options;
+  options.subroutine_path = {lib.string()};
+  const Program p = read_sinumerik((dir / "main.mpf").string(), options);
+  std::vector<Eigen::Vector3d> ends;
+  for (const Block& b : p.blocks) ends.push_back(b.end_mm);
+  const std::vector<Eigen::Vector3d> want = {{0, 0, -1},  {30, 0, -1}, {20, 0, -1}, {20, 0, -2},
+                                             {30, 0, -2}, {20, 0, -2}, {20, 0, -3}, {30, 0, -3},
+                                             {20, 0, -3}, {20, 0, 5},  {5, 0, 5}};
+  ASSERT_EQ(ends.size(), want.size());
+  for (std::size_t k = 0; k < want.size(); ++k) expect_vec(ends[k], want[k]);
+  EXPECT_EQ(p.where(p.blocks[0].source), (dir / "POCKET.SPF").string() + ":4");
+  EXPECT_EQ(p.where(p.blocks[10].source), (lib / "l10.spf").string() + ":1");
+  write(dir / "missing.mpf", "G0 X0 Y0 Z0\nL77\n");
+  try {
+    read_sinumerik((dir / "missing.mpf").string(), options);
+    ADD_FAILURE() << "a missing subprogram was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("missing.mpf:2:1: subprogram L77 not found"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(lib.string()), std::string::npos) << e.what();
+  }
+  write(dir / "self.mpf", "G0 X0 Y0 Z0\nSELF\n");
+  write(dir / "SELF.SPF", "SELF\n");
+  EXPECT_THROW(read_sinumerik((dir / "self.mpf").string(), options), InputError);  // nested 16 deep
+  fs::remove_all(dir);
 }
 
 }  // namespace

@@ -48,14 +48,17 @@
 //   GOTOx; IF / ELSE / ENDIF; WHILE / ENDWHILE; FOR var = a TO b / ENDFOR; REPEAT / UNTIL;
 //   LOOP / ENDLOOP; DEF REAL | INT | BOOL name[=value], ...; conditions with == <> < > <= >=
 //   AND OR XOR NOT TRUE FALSE. A loop runs at most SinumerikOptions::max_lines blocks.
+//   Subprograms: L123 [P n], CALL "NAME", NAME or NAME(values) [P n], from NAME.SPF / .MPF in
+//   the calling file's folder, then SinumerikOptions::subroutine_path; PROC NAME(REAL A, INT
+//   B) binds the values; M17, RET, M2, M30 return; nested at most 16 deep.
 //   CYCLE81(RTP, RFP, SDIS, DP, DPR), CYCLE82(..., DTB), CYCLE83(RTP, RFP, SDIS, DP, DPR, FDEP,
 //   FDPR, DAM, DTB, DTS, FRF, VARI) in G17, at the current X Y (Reader::cycle has the motions),
 //   called directly or by MCALL (each later positioning block ends with it; MCALL alone ends
 //   it).
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
-// ORICONTO, A7 B7 C7 outside ORICONIO, CASE, subprogram calls (L, CALL, PROC), DEF of other
-// types than REAL, INT and BOOL, CYCLE800 (swivelling) and other cycles,
+// ORICONTO, A7 B7 C7 outside ORICONIO, CASE, PCALL/EXTCALL, VAR parameters, DEF of other types
+// than REAL, INT and BOOL, CYCLE800 (swivelling) and other cycles,
 // T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
@@ -87,6 +90,9 @@ struct SinumerikOptions {
   double arc_tolerance_mm = 0.01;
   // Blocks executed before a loop is taken to be endless (an error naming the line).
   long long max_lines = 100'000'000;
+  // Folders searched, after the calling program's own, for a called subprogram NAME (NAME.SPF,
+  // NAME.MPF, either case; L123: L123.SPF).
+  std::vector<std::string> subroutine_path;
 };
 
 // The modal state between lines and between files. Start from a default-constructed one
