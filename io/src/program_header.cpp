@@ -309,34 +309,30 @@ class Scanner {
       pending_cutviewer_ = std::move(tool);
       return;
     }
-    static const std::regex listed(std::string(R"(^\s*T([0-9]+)\s*[-=:|]\s*)") + kNum + kUnit + R"(\s+(.*)$)");
-    static const std::regex vectric(std::string(R"(^\s*T([0-9]+)\s*=\s*(.*)\{\s*)") + kNum +
-                                    R"(\s*(MM|INCHES|INCH|IN)\s*\})");
-    if (std::regex_search(t, m, vectric)) {
+    // The forms that name a T number and a diameter: the groups of each, in order of trust.
+    struct NumberedForm {
+      std::regex pattern;
+      int diameter_group, words_group;  // the unit follows the diameter; words_group 0: none
+      const char* form;
+      bool needs_cutter_words;  // "(T1 - 3 FLUTES)" is no tool: the words must name one
+    };
+    static const NumberedForm kForms[] = {
+        {std::regex(std::string(R"(^\s*T([0-9]+)\s*=\s*(.*)\{\s*)") + kNum + R"(\s*(MM|INCHES|INCH|IN)\s*\})"), 3, 2,
+         "Vectric", false},
+        // CamBam's tool list: "T1 : 3.175" (the diameter alone).
+        {std::regex(std::string(R"(^\s*T([0-9]+)\s*:\s*)") + kNum + kUnit + R"(\s*$)"), 2, 0, "CamBam", false},
+        {std::regex(std::string(R"(^\s*T([0-9]+)\s*[-=:|]\s*)") + kNum + kUnit + R"(\s+(.*)$)"), 2, 4, "comment", true},
+    };
+    for (const NumberedForm& f : kForms) {
+      if (!std::regex_search(t, m, f.pattern)) continue;
+      const std::string words = f.words_group > 0 ? m[static_cast<std::size_t>(f.words_group)].str() : std::string();
+      if (f.needs_cutter_words && !names_cutter(words)) continue;
       PendingTool tool;
       tool.number = std::stoi(m[1].str());
-      tool.diameter = length_of(m, 3, 4);
-      tool.words = m[2].str();
-      tool.form = "Vectric";
-      add_comment_tool(std::move(tool), c);
-      return;
-    }
-    // CamBam's tool list: "T1 : 3.175" (the diameter alone).
-    static const std::regex cambam(std::string(R"(^\s*T([0-9]+)\s*:\s*)") + kNum + kUnit + R"(\s*$)");
-    if (std::regex_search(t, m, cambam)) {
-      PendingTool tool;
-      tool.number = std::stoi(m[1].str());
-      tool.diameter = length_of(m, 2, 3);
-      tool.form = "CamBam";
-      add_comment_tool(std::move(tool), c);
-      return;
-    }
-    if (std::regex_search(t, m, listed) && names_cutter(m[4].str())) {
-      PendingTool tool;
-      tool.number = std::stoi(m[1].str());
-      tool.diameter = length_of(m, 2, 3);
-      tool.words = m[4].str();
-      tool.form = "comment";
+      tool.diameter =
+          length_of(m, static_cast<std::size_t>(f.diameter_group), static_cast<std::size_t>(f.diameter_group + 1));
+      tool.words = words;
+      tool.form = f.form;
       add_comment_tool(std::move(tool), c);
       return;
     }
