@@ -371,8 +371,17 @@ void Reader::prescan() {
   const int saved = line_;
   for (std::size_t k = 0; k < n; ++k) {
     line_ = static_cast<int>(k + 1);
-    prepare(lines_[k]);
+    // Only the block's start matters here (N, a label, the first word): its first 80 bytes,
+    // in upper case (the whole line is checked when it runs); an IF line whole, for its GOTO.
+    const std::string& raw = lines_[k];
+    begin_ = k == 0 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+    s_.assign(raw, 0, std::min<std::size_t>(raw.size(), begin_ + 80));
+    for (char& ch : s_) ch = upper(ch);
     i_ = body(&label_[k], &number_[k]);
+    if (s_.compare(i_, 2, "IF") == 0 && s_.size() < raw.size()) {
+      s_.assign(raw);
+      for (char& ch : s_) ch = upper(ch);
+    }
     const std::size_t start = i_;
     const std::string word = letters();
     const int col = column(start);
@@ -533,6 +542,7 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
   i_ = body(nullptr, nullptr);
   const std::size_t start = i_;
   const std::string word = letters();
+  if (word.size() < 2) return false;  // an address (X10, G1, N...): most blocks, no flow word
   const int col = column(start);
   auto finish = [&] {
     skip_blanks();
