@@ -571,6 +571,9 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
       if (!go.empty())
         fail(column(jump_at),
              "unexpected " + go + " after IF's condition (expected GOTOF, GOTOB, GOTO or the end of the block)");
+      // (The scan took an IF whose comment says GOTO for a one-line IF: no ENDIF is known.)
+      if (partner < 0)
+        fail(col, "IF without GOTO and without its ENDIF (expected IF cond GOTOF label, or IF ... ENDIF)");
       if (!holds) next = static_cast<std::size_t>(partner) + 1;  // after ELSE, or after ENDIF
     }
     finish();

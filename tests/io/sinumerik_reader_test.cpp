@@ -738,6 +738,8 @@ TEST(SinumerikReader, ProgramFlow) {
   EXPECT_MPF_ERROR("WHILE 1\nG1 X1 F1\n", 1, 1, "WHILE without its ENDWHILE");
   EXPECT_MPF_ERROR("G1 X1 F1\nENDIF\n", 2, 1, "ENDIF without its IF");
   EXPECT_MPF_ERROR("GOTOF NOWHERE\n", 1, 7, "no such label");
+  EXPECT_MPF_ERROR("IF R1 == 0 ; GOTO in a comment\nG1 X1 F1\nENDIF\n", 3, 1, "ENDIF without its IF");
+  EXPECT_MPF_ERROR("IF R1 == 0 ; GOTO in a comment\nG1 X1 F1\n", 1, 1, "without its ENDIF");
   EXPECT_MPF_ERROR("DEF STRING[8] NAME\n", 1, 4, "DEF STRING is not supported");
 }
 
