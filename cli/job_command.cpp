@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "vcut/io/camotics_project.h"
+#include "vcut/io/program_reader.h"
 
 namespace vcut::cli {
 
@@ -24,8 +25,7 @@ void add_program_job_options(CLI::App& command, pipeline::ProgramJobOptions& opt
 }
 
 io::Job job_or_program(const std::string& file, const pipeline::ProgramJobOptions& options) {
-  std::string ext = std::filesystem::path(file).extension().string();
-  for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  const std::string ext = io::lower_extension(file);
   if (ext == ".yaml" || ext == ".yml") return io::read_job(file);
   if (ext == ".camotics") return io::read_camotics_project(file);
   return pipeline::job_for_program(file, options);

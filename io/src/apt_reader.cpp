@@ -41,7 +41,7 @@ using kinematics::SpindleState;
 using removal::Cutter;
 using removal::CutterType;
 
-constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inch
+using detail::kMmPerInch;
 // Any length beyond this (mm), feed (mm/min) or speed (rpm) is a typo or garbage: a 1 km
 // stroke or a 1000 m/min feed exists on no milling machine.
 constexpr double kMaxMagnitude = 1e6;
@@ -1382,26 +1382,32 @@ void Reader::do_cycle() {
     return;
   }
   if (nargs_ == 1 && first.word == "ON") {
-    if (state_.cycle.kind.empty()) fail(first.pos, "CYCLE/ON before any cycle (expected CYCLE/DRILL, ... first)");
+    if (state_.cycle.kind == AptState::Cycle::Kind::None)
+      fail(first.pos, "CYCLE/ON before any cycle (expected CYCLE/DRILL, ... first)");
     state_.cycle.on = true;
     return;
   }
   AptState::Cycle c;
   c.where = where(major_pos_);
-  static const char* const kKinds[] = {"DRILL", "DEEP", "DEEP2", "BRKCHP", "TAP", "BORE", "REAM"};
-  auto known = [](const std::string& w) {
-    return std::find(std::begin(kKinds), std::end(kKinds), w) != std::end(kKinds);
+  using Kind = AptState::Cycle::Kind;
+  static const std::pair<const char*, Kind> kKinds[] = {
+      {"DRILL", Kind::Drill}, {"DEEP", Kind::Peck},    {"DEEP2", Kind::Peck},  {"BRKCHP", Kind::Peck},
+      {"TAP", Kind::FeedOut}, {"BORE", Kind::FeedOut}, {"REAM", Kind::FeedOut}};
+  auto kind_of = [](const std::string& w) {
+    for (const auto& [word, kind] : kKinds)
+      if (w == word) return kind;
+    return Kind::None;
   };
-  if (!known(first.word)) {
+  c.kind = kind_of(first.word);
+  if (c.kind == Kind::None) {
     fail(first.pos, "cycle " + first.word + " is not supported (expected DRILL, DEEP, DEEP2, BRKCHP, TAP, BORE, REAM)");
   }
-  c.kind = first.word == "DEEP2" ? "DEEP" : first.word;
   bool depth = false;
   for (size_t k = 1; k < nargs_; ++k) {
     const Arg& a = args_[k];
     if (a.is_number) fail(a.pos, "a number without its word in CYCLE/ (expected FEDTO, RAPTO, RTRCTO, MMPM, ...)");
-    if (known(a.word)) {  // NX: CYCLE/DRILL,DEEP
-      if (a.word != "DRILL") c.kind = a.word == "DEEP2" ? "DEEP" : a.word;
+    if (const Kind kind = kind_of(a.word); kind != Kind::None) {  // NX: CYCLE/DRILL,DEEP
+      if (kind != Kind::Drill) c.kind = kind;
       continue;
     }
     if (a.word == "G98" || a.word == "G99") continue;
@@ -1442,11 +1448,10 @@ void Reader::do_cycle() {
   }
   if (!depth) fail(args_pos_, "CYCLE/" + first.word + " without its depth (expected FEDTO,d or DEPTH,d)");
   if (c.depth_mm < 0.0) fail(args_pos_, "cycle depth " + num(c.depth_mm) + " mm (expected >= 0: below the point)");
-  if ((c.kind == "DEEP" || c.kind == "BRKCHP") && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.peck_mm = c.depth_mm;
+  if (c.kind == Kind::Peck && !(c.first_peck_mm > 0.0)) c.first_peck_mm = c.peck_mm = c.depth_mm;
   if (c.peck_mm < 0.0 || c.first_peck_mm < 0.0) fail(args_pos_, "a negative peck in CYCLE/ (expected > 0)");
   // Bounded work: a peck too small for its depth is a typo (and a million blocks per hole).
-  if ((c.kind == "DEEP" || c.kind == "BRKCHP") && c.depth_mm > 0.0 &&
-      c.depth_mm > kMaxPecks * std::min(c.first_peck_mm, c.peck_mm))
+  if (c.kind == Kind::Peck && c.depth_mm > 0.0 && c.depth_mm > kMaxPecks * std::min(c.first_peck_mm, c.peck_mm))
     fail(args_pos_, "a peck of " + num(std::min(c.first_peck_mm, c.peck_mm)) + " mm for a hole " + num(c.depth_mm) +
                         " mm deep: more than 10000 pecks (expected a larger INCR, STEP or SUBPECK)");
   c.on = true;
@@ -1470,7 +1475,7 @@ void Reader::cycle_point(const Eigen::Vector3d& point, const Eigen::Vector3d& ax
   if (level < across) motion(MotionKind::Rapid, state_.position_mm + (across - level) * axis, axis);
   motion(MotionKind::Rapid, point + across * axis, axis);
   motion(MotionKind::Rapid, point + c.clearance_mm * axis, axis);
-  if (c.kind == "DEEP" || c.kind == "BRKCHP") {
+  if (c.kind == AptState::Cycle::Kind::Peck) {
     // Pecks: each feeds from where the last stopped (rapid back to it) down one peck more.
     double reached = -c.clearance_mm;  // below the point
     double peck = c.first_peck_mm;
@@ -1485,7 +1490,7 @@ void Reader::cycle_point(const Eigen::Vector3d& point, const Eigen::Vector3d& ax
   } else {
     motion(MotionKind::Linear, bottom, axis);
   }
-  const bool feed_out = c.kind == "TAP" || c.kind == "BORE" || c.kind == "REAM";
+  const bool feed_out = c.kind == AptState::Cycle::Kind::FeedOut;
   if (feed_out) motion(MotionKind::Linear, point + c.clearance_mm * axis, axis);
   motion(MotionKind::Rapid, point + retract * axis, axis);
   state_.feed_mm_per_min = saved_feed;

@@ -7,8 +7,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "reader_util.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/machine_file.h"
+#include "vcut/io/program_reader.h"
 
 namespace vcut::io {
 namespace {
@@ -16,8 +18,7 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 
-constexpr double kMmPerInch = 25.4;
-constexpr double kGaugeLengthMm = 100.0;  // spindle nose to tip: a project does not say
+using detail::kMmPerInch;
 
 // The file parsed, a syntax error named by line and column.
 json parse(const std::string& path) {
@@ -93,11 +94,7 @@ ToolLibrary tools_of(const std::string& path, const json& tools) {
     } else {
       fail(path, where + ".shape", "cylindrical, ballnose or conical");
     }
-    c.flute_length_mm = std::max({length, c.corner_radius_mm, c.type == removal::CutterType::VBit ? length : 0.0});
-    if (!(c.flute_length_mm > 0.0)) c.flute_length_mm = 4.0 * c.diameter_mm;
-    c.shank_diameter_mm = c.diameter_mm;
-    c.length_mm = c.flute_length_mm;
-    c.gauge_length_mm = std::max(kGaugeLengthMm, c.length_mm);
+    assume_lengths(c, std::max(length, c.corner_radius_mm));
     library[number_] = c;
   }
   return library;
@@ -123,18 +120,14 @@ Job read_camotics_project(const std::string& path) {
   job.file = path;
   job.name = fs::path(path).stem().string();
   job.out_dir = (base / "out" / job.name).lexically_normal().string();
-  job.machine = "3axis";
-  job.machine_file = resolve_machine(job.machine);
-  job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
+  load_machine(job, "3axis", base.string());  // bundled: always there
   job.assumptions.push_back("machine: 3axis (a CAMotics project is three-axis)");
   if (!root.contains("files") || !root["files"].is_array() || root["files"].empty())
     fail(path, "files", "a list of the project's program files");
   for (const auto& f : root["files"]) {
     if (!f.is_string()) fail(path, "files", "file names");
     const fs::path p = fs::path(f.get<std::string>());
-    std::string ext = p.extension().string();
-    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    if (ext == ".tpl")
+    if (lower_extension(p.string()) == ".tpl")
       fail(path, "files",
            "G-code files (" + p.string() + " is a CAMotics TPL program, JavaScript that vcut does not run)");
     job.program_files.push_back((p.is_absolute() ? p : base / p).lexically_normal().string());

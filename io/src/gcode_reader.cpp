@@ -39,7 +39,7 @@ using kinematics::SpindleState;
 using Motion = GcodeState::Motion;
 using Plane = GcodeState::Plane;
 
-constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inch
+using detail::kMmPerInch;
 // Any number beyond this (mm, mm/min, rpm, s, turns, tool numbers) is a typo or garbage:
 // a 1 km stroke or a 1000 m/min feed exists on no milling machine.
 constexpr double kMaxMagnitude = 1e6;

@@ -1,7 +1,6 @@
 #include "vcut/io/job.h"
 
 #include <cmath>
-#include <charconv>
 #include <cstdio>
 #include <filesystem>
 
@@ -103,17 +102,11 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
 
 // machine: a bundled machine's name or a machine file relative to the job (3axis when absent).
 void read_machine_key(const YamlReader& yaml, const YAML::Node& node, const fs::path& base, Job& job) {
-  if (node) job.machine = yaml.text(node, "machine");
-  // A bundled machine's name or a machine file relative to the job; read and validated here
-  // so that a bad machine file stops the job before anything is cut.
-  job.machine_file = resolve_machine(job.machine);
-  if (job.machine_file == job.machine) job.machine_file = resolve(base, job.machine);
-  if (!fs::exists(job.machine_file))
+  // Read and validated here so that a bad machine file stops the job before anything is cut.
+  if (!load_machine(job, node ? yaml.text(node, "machine") : job.machine, base.string()))
     yaml.fail(node, "machine",
-              "a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, "
-              "head-head-ac, gantry-wyxzcat, xyzac-trt) or a machine file (not found: " +
-                  job.machine_file + ")");
-  job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
+              std::string("a bundled machine (") + kBundledMachines +
+                  ") or a machine file (not found: " + job.machine_file + ")");
 }
 
 // tools: the tool library file, or its `tools:` map written here.
@@ -381,6 +374,18 @@ const JobKey kJobKeys[] = {
 
 }  // namespace
 
+const char* const kBundledMachines =
+    "3axis, table-table-ac, table-table-bc, head-table-bc, head-head-ac, gantry-wyxzcat, xyzac-trt";
+
+bool load_machine(Job& job, const std::string& name_or_path, const std::string& base_folder) {
+  job.machine = name_or_path;
+  job.machine_file = resolve_machine(name_or_path);
+  if (job.machine_file == name_or_path) job.machine_file = resolve(base_folder, name_or_path);
+  if (!fs::exists(job.machine_file)) return false;
+  job.machine_spec = read_machine_file(job.machine_file, &job.warnings);
+  return true;
+}
+
 std::string display_name(const std::string& path, const std::string& job_file) {
   const fs::path base = fs::absolute(job_file).parent_path();
   const fs::path rel = fs::path(path).lexically_relative(base);
@@ -407,13 +412,8 @@ Job read_job(const std::string& path) {
 }
 
 namespace {
-std::string number_text(double v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return std::string(buffer, r.ptr);
-}
 std::string vec_text(const Eigen::Vector3d& v) {
-  return "[" + number_text(v.x()) + ", " + number_text(v.y()) + ", " + number_text(v.z()) + "]";
+  return "[" + yaml_number(v.x()) + ", " + yaml_number(v.y()) + ", " + yaml_number(v.z()) + "]";
 }
 }  // namespace
 
@@ -429,7 +429,7 @@ std::string job_yaml(const Job& job, const std::string& program_as_given) {
   s += tool_library_yaml(job.tools);
   if (job.stock.kind == StockSpec::Kind::Box)
     s += "stock: {box: {min: " + vec_text(job.stock.box.min_mm) + ", max: " + vec_text(job.stock.box.max_mm) + "}}\n";
-  s += std::string("engine: {kind: ") + engine_name(job.engine) + ", resolution: " + number_text(job.resolution_mm) +
+  s += std::string("engine: {kind: ") + engine_name(job.engine) + ", resolution: " + yaml_number(job.resolution_mm) +
        "}\n";
   return s;
 }

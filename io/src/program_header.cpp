@@ -8,13 +8,14 @@
 #include <vector>
 
 #include "program_header_words.h"
+#include "reader_util.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/program_reader.h"
 
 namespace vcut::io {
 namespace {
 
-constexpr double kMmPerInch = 25.4;
+using detail::kMmPerInch;
 
 // A number's text: digits with an optional point, optional sign.
 const char* const kNum = R"(([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)))";

@@ -168,8 +168,10 @@ void check_text(const std::string& path, const std::string& head) {
 
 }  // namespace
 
+std::string lower_extension(const std::string& path) { return lower(fs::path(path).extension().string()); }
+
 std::string detect_dialect(const std::string& path) {
-  const std::string ext = lower(fs::path(path).extension().string());
+  const std::string ext = lower_extension(path);
   if (ext == ".apt" || ext == ".cl" || ext == ".cls" || ext == ".aptsource") return "apt";
   if (ext == ".mpf" || ext == ".spf") return "sinumerik";
   if (ext == ".ngc" || ext == ".nc" || ext == ".tap" || ext == ".gcode") return "gcode";

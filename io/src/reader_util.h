@@ -38,6 +38,8 @@ void read_guarded(const std::string& name, Read&& read) {
   }
 }
 
+constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inch
+
 inline bool is_digit(char c) { return c >= '0' && c <= '9'; }
 inline bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z'); }
 inline char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }

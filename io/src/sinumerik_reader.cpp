@@ -40,7 +40,7 @@ using kinematics::SpindleState;
 using Motion = SinumerikState::Motion;
 using Plane = SinumerikState::Plane;
 
-constexpr double kMmPerInch = 25.4;  // exact, by the 1959 definition of the inch
+using detail::kMmPerInch;
 // Any length (mm), feed (mm/min), speed (rpm) or angle (deg) beyond this is a typo or garbage:
 // a 1 km stroke or a 1000 m/min feed exists on no milling machine.
 constexpr double kMaxMagnitude = 1e6;
@@ -269,6 +269,7 @@ class Reader {
   std::vector<std::string> label_;      // "NAME" of "NAME:" on each line
   std::vector<long long> number_;       // its N number, -1: none
   std::map<std::string, double> vars_;  // DEF REAL/INT/BOOL variables
+  mutable std::map<std::string, std::string> found_;           // subprogram name -> its file ("" none)
   std::map<std::size_t, std::pair<std::string, double>> for_;  // FOR line -> variable, end value
   Line l_;
 };
@@ -637,6 +638,9 @@ std::vector<std::string> Reader::subprogram_folders() const {
 }
 
 std::string Reader::subprogram_file(const std::string& name) const {
+  // Asked for every word the reader does not know: each name is looked up on disk once.
+  if (const auto known = found_.find(name); known != found_.end()) return known->second;
+  std::string& found = found_[name];
   std::string lower = name;
   for (char& ch : lower) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
   for (const std::string& folder : subprogram_folders()) {
@@ -644,11 +648,11 @@ std::string Reader::subprogram_file(const std::string& name) const {
       for (const char* ext : {".SPF", ".spf", ".MPF", ".mpf"}) {
         const std::filesystem::path p = std::filesystem::path(folder) / (base + ext);
         std::error_code ec;
-        if (std::filesystem::is_regular_file(p, ec)) return p.lexically_normal().string();
+        if (std::filesystem::is_regular_file(p, ec)) return found = p.lexically_normal().string();
       }
     }
   }
-  return {};
+  return found;
 }
 
 void Reader::call(const std::string& name, const std::vector<double>& args, int repeat, int column) {

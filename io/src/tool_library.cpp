@@ -1,7 +1,5 @@
 #include "vcut/io/tool_library.h"
 
-#include <charconv>
-
 #include "tool_library_node.h"
 
 namespace vcut::io {
@@ -104,13 +102,12 @@ ToolLibrary read_tools(const YamlReader& yaml, const YAML::Node& tools) {
   return library;
 }
 
-namespace {
-std::string shortest(double v) {
-  char buffer[32];
-  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
-  return std::string(buffer, r.ptr);
+void assume_lengths(removal::Cutter& c, double flute_mm) {
+  c.flute_length_mm = std::max(flute_mm > 0.0 ? flute_mm : 4.0 * c.diameter_mm, c.corner_radius_mm);
+  c.shank_diameter_mm = c.diameter_mm;
+  c.length_mm = c.flute_length_mm;
+  c.gauge_length_mm = std::max(kAssumedGaugeLengthMm, c.length_mm);
 }
-}  // namespace
 
 std::string tool_library_yaml(const ToolLibrary& tools, const std::string& indent) {
   std::string s = indent + "tools:\n";
@@ -124,18 +121,19 @@ std::string tool_library_yaml(const ToolLibrary& tools, const std::string& inden
         s += "ball";
         break;
       case removal::CutterType::BullNose:
-        s += "bull, corner_radius: " + shortest(c.corner_radius_mm);
+        s += "bull, corner_radius: " + yaml_number(c.corner_radius_mm);
         break;
       case removal::CutterType::VBit:
-        s += "vbit, angle: " + shortest(c.tip_angle_deg);
+        s += "vbit, angle: " + yaml_number(c.tip_angle_deg);
         break;
     }
-    s += ", diameter: " + shortest(c.diameter_mm) + ", flute_length: " + shortest(c.flute_length_mm);
-    if (c.shank_diameter_mm != c.diameter_mm) s += ", shank_diameter: " + shortest(c.shank_diameter_mm);
-    if (c.length_mm != c.flute_length_mm) s += ", length: " + shortest(c.length_mm);
+    s += ", diameter: " + yaml_number(c.diameter_mm) + ", flute_length: " + yaml_number(c.flute_length_mm);
+    if (c.shank_diameter_mm != c.diameter_mm) s += ", shank_diameter: " + yaml_number(c.shank_diameter_mm);
+    if (c.length_mm != c.flute_length_mm) s += ", length: " + yaml_number(c.length_mm);
     if (c.holder_diameter_mm > 0.0)
-      s += ", holder_diameter: " + shortest(c.holder_diameter_mm) + ", holder_length: " + shortest(c.holder_length_mm);
-    if (c.gauge_length_mm != c.length_mm + c.holder_length_mm) s += ", gauge_length: " + shortest(c.gauge_length_mm);
+      s += ", holder_diameter: " + yaml_number(c.holder_diameter_mm) +
+           ", holder_length: " + yaml_number(c.holder_length_mm);
+    if (c.gauge_length_mm != c.length_mm + c.holder_length_mm) s += ", gauge_length: " + yaml_number(c.gauge_length_mm);
     s += "}\n";
   }
   return s;

@@ -1,5 +1,7 @@
 #include "yaml_util.h"
 
+#include <charconv>
+
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -111,6 +113,12 @@ bool YamlReader::boolean(const YAML::Node& node, const std::string& key) const {
 Eigen::Vector3d YamlReader::vec3(const YAML::Node& node, const std::string& key) const {
   if (!node.IsSequence() || node.size() != 3) fail(node, key, "a list of three numbers [x, y, z]");
   return {number(node[0], key), number(node[1], key), number(node[2], key)};
+}
+
+std::string yaml_number(double v) {
+  char buffer[32];
+  const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);
+  return std::string(buffer, r.ptr);
 }
 
 }  // namespace vcut::io

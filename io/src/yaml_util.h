@@ -13,6 +13,9 @@
 
 namespace vcut::io {
 
+// A number as YAML writes it back exactly: the shortest text that reads as the same double.
+std::string yaml_number(double v);
+
 class YamlReader {
  public:
   explicit YamlReader(std::string file) : file_(std::move(file)) {}

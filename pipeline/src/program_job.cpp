@@ -21,8 +21,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr double kGaugeLengthMm = 100.0;  // spindle nose to tip of an assumed tool
-
 std::string mm(double v) {
   char b[32];
   std::snprintf(b, sizeof b, "%.4g", std::abs(v) < 5e-5 ? 0.0 : v);
@@ -44,24 +42,13 @@ std::string describe(const removal::Cutter& c) {
   return s;
 }
 
-// The flutes as declared, else 4 diameters (job_for_program lengthens them to the depth the
-// tool cuts: no false shank collision for an assumed length).
-void set_lengths(removal::Cutter& c, double flute_mm) {
-  c.flute_length_mm = std::max(flute_mm > 0.0 ? flute_mm : 4.0 * c.diameter_mm, c.corner_radius_mm);
-  c.shank_diameter_mm = c.diameter_mm;
-  c.length_mm = c.flute_length_mm;
-  c.gauge_length_mm = std::max(kGaugeLengthMm, c.length_mm);
-}
+// (io::assume_lengths gives the flutes as declared, else 4 diameters; job_for_program lengthens
+// them to the depth the tool cuts: no false shank collision for an assumed length.)
 
 void set_machine(io::Job& job, const std::string& name) {
-  job.machine = name;
-  job.machine_file = io::resolve_machine(name);
-  if (!fs::exists(job.machine_file))
-    throw InputError(
-        "--machine " + name +
-        ": expected a bundled machine (3axis, table-table-ac, table-table-bc, head-table-bc, head-head-ac, "
-        "gantry-wyxzcat, xyzac-trt) or a machine file (not found)");
-  job.machine_spec = io::read_machine_file(job.machine_file, &job.warnings);
+  if (!io::load_machine(job, name, fs::current_path().string()))
+    throw InputError("--machine " + name + ": expected a bundled machine (" + io::kBundledMachines +
+                     ") or a machine file (not found)");
 }
 
 // Two significant digits, rounded down (a finer grid, never a coarser one).
@@ -197,9 +184,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
 
   // Tools: the table, else the comments; each with an assumed length.
   std::map<int, std::string> origin;  // T number -> where its shape comes from
-  std::string table_ext = fs::path(options.tool_table).extension().string();
-  for (char& ch : table_ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-  if (!options.tool_table.empty() && table_ext == ".json") {
+  if (!options.tool_table.empty() && io::lower_extension(options.tool_table) == ".json") {
     // A CAMotics tool table: shapes and lengths given.
     job.tools_file = fs::absolute(options.tool_table).lexically_normal().string();
     for (const auto& [number, c] : io::read_camotics_tools(options.tool_table)) {
@@ -210,7 +195,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
     job.tools_file = fs::absolute(options.tool_table).lexically_normal().string();
     for (const auto& [number, t] : io::read_tool_table(options.tool_table, unit_mm)) {
       removal::Cutter c = t.cutter;
-      set_lengths(c, 0.0);
+      io::assume_lengths(c, 0.0);
       if (t.z_offset_mm > c.length_mm) c.gauge_length_mm = t.z_offset_mm;
       job.tools[number] = c;
       origin[number] = "the tool table " + t.where;
@@ -219,7 +204,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   for (const auto& [number, t] : header.tools) {
     if (job.tools.count(number)) continue;
     removal::Cutter c = t.cutter;
-    set_lengths(c, t.flute_length_mm);
+    io::assume_lengths(c, t.flute_length_mm);
     job.tools[number] = c;
     origin[number] = "the " + t.form + " comment at " + t.where;
   }
@@ -232,7 +217,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   auto assume_default = [&](int number) {
     removal::Cutter c;
     c.diameter_mm = options.default_tool_diameter_mm;
-    set_lengths(c, 0.0);
+    io::assume_lengths(c, 0.0);
     job.tools[number] = c;
     origin[number] = "nothing in the program (the default diameter; --tool-diameter to change)";
   };
@@ -252,11 +237,13 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
       read = read_job_program(job);
     }
   }
+  std::set<int> from_cl;  // tools whose lengths the CL file's CUTTER/ gives
   for (const kinematics::Block& b : read.program.blocks) {
     if (b.tool == 0 || job.tools.count(b.tool)) continue;
     const auto cl = read.tools.find(b.tool);
     if (cl != read.tools.end()) {
       origin[b.tool] = "the program's CUTTER/";
+      from_cl.insert(b.tool);
       continue;
     }
     assume_default(b.tool);
@@ -289,7 +276,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   for (const auto& [number, c] : job.tools) {
     if (!depth.count(number) && !used.count(number)) continue;
     smallest_mm = std::min(smallest_mm, c.diameter_mm);
-    const bool cl = origin[number] == "the program's CUTTER/";  // its height is the CL file's
+    const bool cl = from_cl.count(number) != 0;
     job.assumptions.push_back(
         "T" + std::to_string(number) + ": " + describe(c) + " from " + origin[number] + "; flutes " +
         mm(c.flute_length_mm) + " mm, gauge length " + mm(c.gauge_length_mm) +

@@ -126,7 +126,8 @@ struct AptState {
   // CYCLE/ (drilling): each GOTO/ while it is on is a hole, its point on the surface.
   struct Cycle {
     bool on = false;
-    std::string kind;                           // DRILL, DEEP, BRKCHP, TAP, BORE, REAM
+    // How the hole is made: DRILL; DEEP, DEEP2, BRKCHP in pecks; TAP, BORE, REAM out at feed.
+    enum class Kind { None, Drill, Peck, FeedOut } kind = Kind::None;
     double depth_mm = 0.0;                      // FEDTO / DEPTH: below the point along the tool axis
     double clearance_mm = 0.0;                  // RAPTO / CLEAR: above the point, where the feed starts
     double retract_mm = -1.0;                   // RTRCTO: above the point after the hole; < 0: the start level

@@ -89,6 +89,13 @@ struct Job {
 // Throws vcut::InputError (file:line:column, key, what was expected).
 Job read_job(const std::string& path);
 
+// The bundled machines' names, for messages: "3axis, table-table-ac, ...".
+extern const char* const kBundledMachines;
+// The job's machine: a bundled machine's name, else a machine file relative to `base_folder`;
+// sets machine, machine_file and machine_spec (read and validated: a bad file is an
+// InputError). False, and nothing read, when no such file exists.
+bool load_machine(Job& job, const std::string& name_or_path, const std::string& base_folder);
+
 // The job as a job file (`vcut job`): its assumptions as comments at the top, the program as
 // `program_as_given`, the tools written in it; read_job reads it back to the same job.
 std::string job_yaml(const Job& job, const std::string& program_as_given);

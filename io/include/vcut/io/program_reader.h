@@ -23,6 +23,9 @@ namespace vcut::io {
 // cannot be read, which its reader then reports) -> gcode.
 std::string detect_dialect(const std::string& path);
 
+// A path's extension in lower case, with its dot (".nc"; "" for none).
+std::string lower_extension(const std::string& path);
+
 // The machine's part in reading G-code, as its control runs a program: the start position and
 // the G28 / G30 references (its home and second_home: the spindle's gauge point there, by
 // forward kinematics, in the workpiece frame without work offsets), the M codes it declares,
