@@ -59,6 +59,8 @@ using detail::describe;
 using detail::is_digit;
 using detail::is_letter;
 using detail::num;
+using detail::rotary_step;
+using detail::rotary_steps;
 using detail::upper;
 
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
@@ -2787,22 +2789,6 @@ void Reader::set_offsets(const Code& g) {
     for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG92Parameter + a)] = state_.g92_mm[a];
     state_.parameters[5210] = g.number == 920 || g.number == 923 ? 1.0 : 0.0;
   }
-}
-
-// A turn of the rotaries from `from` to `to` in steps of at most 1 deg (the largest axis
-// turn decides), and the rotary values after step n of them.
-int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
-  double turn_deg = 0.0;
-  for (size_t a = 0; a < 3; ++a)
-    turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
-  return std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
-}
-kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to, int n,
-                                    int steps) {
-  kinematics::RotaryWords step = to;
-  for (size_t a = 0; a < 3; ++a)
-    step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
-  return step;
 }
 
 constexpr double kProbeBackoffMm = 0.254;

@@ -1,5 +1,6 @@
 #include "vcut/io/job.h"
 
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -208,7 +209,11 @@ void read_offsets_key(const YamlReader& yaml, const YAML::Node& offsets, const f
     static const char* kNames[] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
     bool ok = false;
     for (const char* n : kNames) ok = ok || name == n;
-    if (!ok) yaml.fail(kv.first, "offsets." + name, "a work offset name G54..G59, G59.1..G59.3");
+    // SINUMERIK's settable offsets beyond G57: G505..G599.
+    ok =
+        ok || (name.size() == 4 && name.compare(0, 2, "G5") == 0 && std::isdigit(static_cast<unsigned char>(name[2])) &&
+               std::isdigit(static_cast<unsigned char>(name[3])) && name >= "G505");
+    if (!ok) yaml.fail(kv.first, "offsets." + name, "a work offset name G54..G59, G59.1..G59.3 or G505..G599");
     job.offsets_mm[name] = yaml.vec3(kv.second, "offsets." + name);
   }
 }

@@ -6,6 +6,7 @@
 #include <vcut/kinematics/inverse_kinematics.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -333,6 +334,17 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     }
     return std::string();
   };
+  // Rotary axis 1 the one nearer the base (F) in the chain, as Siemens counts them.
+  options.rotary_axes.clear();
+  std::vector<std::pair<long, char>> rotaries;
+  const std::string& chain = spec.topology;
+  const auto base = static_cast<long>(chain.find('F'));
+  for (int k = 0; k < shared->rotary_count(); ++k) {
+    const char letter = shared->axis(shared->rotary_axis(k)).letter;
+    rotaries.emplace_back(std::labs(static_cast<long>(chain.find(letter)) - base), letter);
+  }
+  std::sort(rotaries.begin(), rotaries.end());
+  for (const auto& r : rotaries) options.rotary_axes += r.second;
   options.tip_after_turn = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip,
                                                             const kinematics::RotaryWords& from,
                                                             const kinematics::RotaryWords& to) {
@@ -357,6 +369,25 @@ const char* reader_name(ProgramReader reader) {
       return "sinumerik";
   }
   return "gcode";
+}
+
+// The SINUMERIK reader takes the G-code options that apply to it: the job's work offsets
+// (G54..G57, G505..), unsupported words as warnings, the arc tolerance, the loop limit, the
+// subprogram folders and the machine where one is known (set_machine was called).
+SinumerikOptions sinumerik_options(const GcodeOptions& gcode) {
+  SinumerikOptions sinumerik;
+  sinumerik.work_offsets_mm = gcode.work_offsets_mm;
+  sinumerik.unsupported_as_warning = gcode.unsupported_as_warning;
+  if (gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = gcode.arc_tolerance_mm;
+  sinumerik.max_lines = gcode.max_lines;
+  sinumerik.subroutine_path = gcode.subroutine_path;
+  sinumerik.orient = gcode.orient;
+  sinumerik.tip_after_turn = gcode.tip_after_turn;
+  if (gcode.orient) sinumerik.reference_mm = gcode.reference_mm;  // set_machine sets both
+  sinumerik.tool_length_mm = gcode.tool_length_mm;
+  sinumerik.spindle_axis = gcode.spindle_axis;
+  sinumerik.rotary_axes = gcode.rotary_axes;
+  return sinumerik;
 }
 
 LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
@@ -388,14 +419,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
                            describe_dialect(out.reader) + " (expected one dialect for all program files)");
     }
     if (reader == ProgramReader::Sinumerik) {
-      // The SINUMERIK reader takes the G-code options that apply to it: the job's work offsets
-      // (G54..G57), unsupported words as warnings and the arc tolerance.
-      SinumerikOptions sinumerik;
-      sinumerik.work_offsets_mm = options.gcode.work_offsets_mm;
-      sinumerik.unsupported_as_warning = options.gcode.unsupported_as_warning;
-      if (options.gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = options.gcode.arc_tolerance_mm;
-      sinumerik.max_lines = options.gcode.max_lines;
-      sinumerik.subroutine_path = options.gcode.subroutine_path;
+      const SinumerikOptions sinumerik = sinumerik_options(options.gcode);
       read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
     } else if (reader == ProgramReader::Gcode) {
       GcodeOptions gcode = options.gcode;

@@ -9,6 +9,8 @@
 #include <array>
 #include <cerrno>
 #include <climits>
+#include <cmath>
+#include <algorithm>
 #include <cstddef>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +24,22 @@
 #include <vector>
 
 namespace vcut::io::detail {
+
+// A turn of the rotaries from `from` to `to` in steps of at most 1 deg (the largest axis
+// turn decides), and the rotary values after step n of them.
+inline int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
+  double turn_deg = 0.0;
+  for (size_t a = 0; a < 3; ++a)
+    turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
+  return std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+}
+inline kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to,
+                                           int n, int steps) {
+  kinematics::RotaryWords step = to;
+  for (size_t a = 0; a < 3; ++a)
+    step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
+  return step;
+}
 
 // Runs a reader, turning what the standard library throws on a file too big to hold or
 // unreadable into an InputError naming the file.

@@ -105,6 +105,7 @@ struct Line {
   // A drilling cycle called in this block (CYCLE81(...)), or MCALL (modal call / its end).
   std::string cycle;
   std::vector<std::optional<double>> cycle_args;
+  std::vector<std::string> cycle_texts;  // "..." parameters by position (CYCLE800's _TC), else ""
   int cycle_column = 0;
   bool mcall = false;
   // A subprogram called (L123, CALL "NAME", NAME(args)), P times.
@@ -112,6 +113,13 @@ struct Line {
   std::vector<double> call_args;
   int call_column = 0;
   Value p;
+  // SUPA / G53 / G153: this block's X Y Z in machine coordinates (no offset, no frame).
+  int machine_column = 0;
+  // G74 / G75 (74, 75): the named axes (X1= or X) to the reference or fixed point FP=.
+  int home = 0, home_column = 0;
+  Value fp;
+  bool machine_axis[3] = {false, false, false};  // X1= Y1= Z1=
+  int machine_axis_column = 0;
 };
 
 class Reader {
@@ -236,18 +244,43 @@ class Reader {
   void apply_frame();
   void cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column);
   void cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column);
-  bool frame_turns() const { return !state_.frame_linear.isIdentity(0.0); }
+  void swivel(const std::vector<std::optional<double>>& args, const std::vector<std::string>& texts, int column);
+  Eigen::Matrix3d swivel_turn(int mode, double a_deg, double b_deg, double c_deg, int column) const;
+  // The rigid motion that turning the rotary axes from zero to `rotary` gives a point held by
+  // the linear axes (identity without the machine or with the rotaries at zero): the tip of
+  // machine-coordinate point p lies at turned.first * p + turned.second.
+  std::pair<Eigen::Matrix3d, Eigen::Vector3d> turned(const kinematics::RotaryWords& rotary) const;
+  // The tip's straight move to `to` (workpiece frame), a rapid unless `feed` (mm/min) > 0.
+  void straight_to(const Eigen::Vector3d& to, int column);
+  void retract(double fr, double fr_i_mm, int column);  // CYCLE800's _FR
+  void home();                                          // G74 / G75
+  // The rotaries turn from where they stand to `to`, the linear axes held, in steps of 1 deg.
+  void turn_rotaries(const kinematics::RotaryWords& to);
+  double tool_length_mm() const {
+    const auto it = options_.tool_length_mm.find(state_.tool);
+    return it == options_.tool_length_mm.end() ? 0.0 : it->second;
+  }
+  // The whole frame, swivel (CYCLE800) and programmable: a programmed point p lies at
+  // frame_origin() + frame_linear() * p in the workpiece frame.
+  Eigen::Matrix3d frame_linear() const { return state_.swivel_rotation * state_.frame_linear; }
+  Eigen::Vector3d frame_origin() const {
+    return offset() + state_.swivel_translation_mm + state_.swivel_rotation * state_.frame_translation_mm;
+  }
+  bool frame_turns() const { return !frame_linear().isIdentity(0.0); }
   Eigen::Vector3d placed(const Eigen::Vector3d& frame_point) const {
-    return offset() + state_.frame_translation_mm + state_.frame_linear * frame_point;
+    return frame_origin() + frame_linear() * frame_point;
   }
   Eigen::Vector3d in_frame(const Eigen::Vector3d& workpiece_point) const {
-    return state_.frame_linear.inverse() * (workpiece_point - offset() - state_.frame_translation_mm);
+    return frame_linear().inverse() * (workpiece_point - frame_origin());
   }
   void arc_in_plane(Block& block, bool clockwise, const Eigen::Vector3d& centre_origin);
   double length_mm(const Value& v) const { return v.value * (state_.inch ? kMmPerInch : 1.0); }
+  // The work offset, and under D0 the tool's length: X Y Z then place the gauge point.
   Eigen::Vector3d offset() const {
     const auto it = options_.work_offsets_mm.find(state_.work_offset);
-    return state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero() : it->second;
+    const Eigen::Vector3d work =
+        state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero() : it->second;
+    return state_.tool_offset_off ? Eigen::Vector3d(work - tool_length_mm() * state_.tool_axis) : work;
   }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   bool orient(Block& block);
@@ -997,9 +1030,16 @@ void Reader::assignment(const std::string& address, int col) {
       const bool numeric = !text.empty() && text.size() <= 5 &&
                            std::all_of(text.begin(), text.end(), [](char ch) { return is_digit(ch); });
       if (!numeric) {
-        fail(col, "tool name T=\"" + text.substr(0, 64) +
-                      "\" (expected a tool number, T1 or T=\"1\": tools are numbered in the tool "
-                      "library)");
+        // A tool by its name: numbered in the order the program names them (the tool library
+        // numbers its tools), with a note the first time.
+        if (text.empty() || text.size() > 64)
+          fail(col, "tool name T=\"" + text.substr(0, 64) + "\" (expected 1..64 characters)");
+        auto [it, added] = state_.tool_names.emplace(text, static_cast<int>(state_.tool_names.size()) + 1);
+        if (added)
+          warn(col, "tool T=\"" + text + "\" taken as tool " + std::to_string(it->second) +
+                        " (tools named in the program are numbered in the order they are named)");
+        set(l_.t, "T", it->second, col);
+        return;
       }
       set(l_.t, "T", std::stod(text), col);
       return;
@@ -1021,6 +1061,14 @@ void Reader::assignment(const std::string& address, int col) {
     return;
   }
   if (address == "CR") return set(l_.cr, "CR", expression(0), col);
+  if (address == "FP") return set(l_.fp, "FP", expression(0), col);
+  if (address == "X1" || address == "Y1" || address == "Z1") {
+    // A machine axis by its name, in G74 / G75 (its value is not used).
+    l_.machine_axis[address[0] - 'X'] = true;
+    if (l_.machine_axis_column == 0) l_.machine_axis_column = col;
+    expression(0);
+    return;
+  }
   if (address == "RPL") return set(l_.rpl, "RPL", expression(0), col);
   if (address == "ADIS") return set(l_.adis, "ADIS", expression(0), col);
   if (address == "ADISPOS") return set(l_.adispos, "ADISPOS", expression(0), col);
@@ -1170,6 +1218,16 @@ void Reader::code(char letter, int col) {
     case 500:
       state_.work_offset = word;
       return;
+    case 53:
+    case 153:
+      l_.machine_column = col;
+      return;
+    case 74:
+    case 75:
+      if (l_.home != 0) fail(col, word + " after G" + std::to_string(l_.home) + " in one block (expected one)");
+      l_.home = n;
+      l_.home_column = col;
+      return;
     case 60:
       state_.exact_stop = true;
       return;
@@ -1202,15 +1260,11 @@ void Reader::code(char letter, int col) {
       return;
     case 25:
     case 26:
-    case 53:
     case 58:
     case 59:
-    case 74:
-    case 75:
     case 110:
     case 111:
     case 112:
-    case 153:
       fail(col, word +
                     " is not supported: its axis words are not a motion to the programmed point "
                     "(expected G0 G1 G2 G3 moves in the workpiece frame)");
@@ -1221,6 +1275,10 @@ void Reader::code(char letter, int col) {
     case 332:
       fail(col, word + " (thread cutting) is not supported (expected G0 G1 G2 G3)");
     default:
+      if (n >= 505 && n <= 599) {  // the settable offsets beyond G57 (SinumerikOptions::work_offsets_mm)
+        state_.work_offset = word;
+        return;
+      }
       return unsupported(word, col);
   }
 }
@@ -1238,9 +1296,9 @@ void Reader::keyword(const std::string& name, int col) {
     }
   }
   // Frames and motion types whose axis words would otherwise be read as a plain move.
-  static const char* const kNotMoves[] = {"ROTS",    "AROTS",    "CROTS",   "SUPA", "CIP",     "CT",
-                                          "ASPLINE", "BSPLINE",  "CSPLINE", "POLY", "INVCW",   "INVCCW",
-                                          "TRACYL",  "TRANSMIT", "TRAANG",  "OFFN", "CYCLE800"};
+  static const char* const kNotMoves[] = {"ROTS",    "AROTS",   "CROTS",    "CIP",    "CT",
+                                          "ASPLINE", "BSPLINE", "CSPLINE",  "POLY",   "INVCW",
+                                          "INVCCW",  "TRACYL",  "TRANSMIT", "TRAANG", "OFFN"};
   for (const char* w : kNotMoves) {
     if (name == w) {
       fail(col, name +
@@ -1287,20 +1345,45 @@ void Reader::keyword(const std::string& name, int col) {
     if (at('(')) skip_argument();
     return;
   }
+  if (name == "SUPA") {
+    l_.machine_column = col;
+    return;
+  }
+  if (name == "FNORM") return;  // the feed as programmed over the block (FLIN and FCUB vary it)
+  if (name == "SETMS") {        // the master spindle: one spindle here
+    if (at('(')) skip_argument();
+    return;
+  }
   if (name == "MCALL") {
     l_.mcall = true;  // alone: the modal call ends; with a cycle: it becomes the modal call
     return;
   }
-  if (name == "CYCLE81" || name == "CYCLE82" || name == "CYCLE83") {
+  if (name == "CYCLE81" || name == "CYCLE82" || name == "CYCLE83" || name == "CYCLE800") {
     if (!l_.cycle.empty()) fail(col, name + " after " + l_.cycle + " in one block (expected one cycle call)");
     l_.cycle = name;
     l_.cycle_column = col;
-    expect('(', name + " without its parameters (expected " + name + "(RTP, RFP, SDIS, DP, DPR, ...))");
-    // Positional parameters; an empty one is left out (Siemens' default).
+    expect('(',
+           name + " without its parameters (expected " + name +
+               (name == "CYCLE800" ? "(_FR, _TC, _ST, _MODE, ...) or CYCLE800()" : "(RTP, RFP, SDIS, DP, DPR, ...)") +
+               ")");
+    // Positional parameters; an empty one is left out (Siemens' default). CYCLE800() has none.
+    if (name == "CYCLE800" && at(')')) {
+      ++i_;
+      return;
+    }
     while (true) {
       skip_blanks();
+      l_.cycle_texts.emplace_back();
       if (at(',') || at(')')) {
         l_.cycle_args.emplace_back();
+      } else if (at('"')) {
+        const std::size_t open = i_++;
+        const std::size_t close = s_.find('"', i_);
+        if (close == std::string::npos) fail(column(open), "string without its closing '\"'");
+        l_.cycle_texts.back() = s_.substr(i_, close - i_);
+        i_ = close + 1;
+        l_.cycle_args.emplace_back();
+        skip_blanks();
       } else {
         l_.cycle_args.emplace_back(expression(1));
       }
@@ -1407,6 +1490,7 @@ void Reader::execute() {
     if (!(d >= 0.0 && d <= kMaxToolNumber && d == std::floor(d))) {
       fail(l.d.column, "tool offset D" + num(d) + " (expected a whole number 0..99999)");
     }
+    state_.tool_offset_off = d == 0.0;
   }
   if (l.s.present) {
     if (!(l.s.value >= 0.0 && l.s.value <= kMaxMagnitude)) {
@@ -1438,6 +1522,13 @@ void Reader::execute() {
     apply_frame();  // its X Y Z are the frame's values: no move
     return;
   }
+  if (l.machine_axis_column > 0 && l.home == 0)
+    fail(l.machine_axis_column, "a machine axis X1= Y1= Z1= outside G74 / G75 (expected X Y Z)");
+  if (l.fp.present && l.home != 75) fail(l.fp.column, "FP= without G75 (expected G75 FP=1 or FP=2)");
+  if (l.home != 0) {
+    home();
+    return;
+  }
   bool moves = false;
   for (int k = 0; k < 3; ++k) moves = moves || l.axis[k].present || l.rotary[k].present || l.vector[k].present;
   if (l.dwell_column > 0) {
@@ -1464,7 +1555,7 @@ void Reader::execute() {
         fail(l.cone[k].column, "cone axis A6 B6 C6 (" + num(c.x()) + ", " + num(c.y()) + ", " + num(c.z()) +
                                    ") (expected a vector of nonzero length)");
       }
-      state_.cone_axis = (state_.frame_linear * c).normalized();
+      state_.cone_axis = (frame_linear() * c).normalized();
       break;
     }
   }
@@ -1507,6 +1598,12 @@ void Reader::execute() {
   }
   const bool centre = l.center[0].present || l.center[1].present || l.center[2].present;
   const bool positions = moves || (arc && (centre || l.cr.present));
+  if (l.cycle == "CYCLE800") {
+    if (positions) fail(l.cycle_column, "CYCLE800 with axis words in its block (expected it in a block of its own)");
+    if (l.mcall) fail(l.cycle_column, "MCALL CYCLE800 (expected CYCLE800 called directly: it is not a modal cycle)");
+    swivel(l.cycle_args, l.cycle_texts, l.cycle_column);
+    l.cycle.clear();
+  }
   if (positions) motion();
   if (l.mcall) {
     // MCALL CYCLE8x(...): every later positioning block ends with it; MCALL alone: no more.
@@ -1534,6 +1631,27 @@ void Reader::execute() {
 // The block's end point (workpiece frame, mm): programmed axes in G90/G91 or AC/IC, others stay.
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   Eigen::Vector3d end = state_.position_mm;
+  if (l_.machine_column > 0) {
+    // SUPA / G53 / G153: the linear axes' point, the tip where they stand with the rotaries at
+    // zero (less the tool's length along the spindle under D0), turned with the rotaries.
+    const auto [r, t] = turned(state_.rotary);
+    Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);
+    const Eigen::Vector3d shift =
+        state_.tool_offset_off ? Eigen::Vector3d(tool_length_mm() * options_.spindle_axis) : Eigen::Vector3d::Zero();
+    for (int a = 0; a < 3; ++a) {
+      const Value& w = l_.axis[a];
+      if (!w.present) continue;
+      if (w.mode == Value::Mode::Incremental || (w.mode == Value::Mode::Modal && state_.incremental))
+        fail(w.column, std::string("incremental ") + kAxisLetter[a] +
+                           " in machine coordinates (SUPA, G53, G153) (expected absolute)");
+      programmed[static_cast<std::size_t>(a)] = true;
+      axes[a] = length_mm(w) - shift[a];
+      if (!(std::abs(axes[a]) <= kMaxMagnitude))
+        fail(w.column, std::string(1, kAxisLetter[a]) + " position " + num(axes[a]) +
+                           " mm is out of range (expected within +-1e6 mm)");
+    }
+    return r * axes + t;
+  }
   if (frame_turns()) {
     // A turned, scaled or mirrored frame mixes the axes: the point in the frame, then placed.
     Eigen::Vector3d q = in_frame(state_.position_mm);
@@ -1559,7 +1677,7 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     }
     return end;
   }
-  const Eigen::Vector3d off = offset() + state_.frame_translation_mm;
+  const Eigen::Vector3d off = frame_origin();
   for (int a = 0; a < 3; ++a) {
     const Value& w = l_.axis[a];
     if (!w.present) continue;
@@ -1707,8 +1825,7 @@ bool Reader::orient(Block& block) {
   // Components not programmed are 0 (Siemens: "vector components that have not been programmed
   // are set to zero"); the length does not matter.
   // In the workpiece frame: the programmable frame turns the vector too (ORIWKS).
-  const Eigen::Vector3d v =
-      state_.frame_linear * Eigen::Vector3d(l.vector[0].value, l.vector[1].value, l.vector[2].value);
+  const Eigen::Vector3d v = frame_linear() * Eigen::Vector3d(l.vector[0].value, l.vector[1].value, l.vector[2].value);
   if (!v.allFinite() || v.cwiseAbs().maxCoeff() > kMaxMagnitude || v.norm() < kMinVectorNorm) {
     fail(vector_column, "tool vector A3 B3 C3 (" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) +
                             ") (expected a vector of nonzero length)");
@@ -1814,12 +1931,12 @@ bool Reader::orient(Block& block) {
 
 void Reader::arc(Block& block, bool clockwise) {
   if (!frame_turns()) {
-    arc_in_plane(block, clockwise, offset() + state_.frame_translation_mm);
+    arc_in_plane(block, clockwise, frame_origin());
     return;
   }
   // In a turned, scaled or mirrored frame: the arc in the frame's plane, then placed. A scale
   // that differs between the plane's two axes would make it an ellipse.
-  const Eigen::Matrix3d& m = state_.frame_linear;
+  const Eigen::Matrix3d m = frame_linear();
   const int a = state_.plane == Plane::XY ? 0 : state_.plane == Plane::ZX ? 2 : 1;
   const int b = state_.plane == Plane::XY ? 1 : state_.plane == Plane::ZX ? 0 : 2;
   const int c = 3 - a - b;
@@ -1932,6 +2049,16 @@ void Reader::arc_in_plane(Block& block, bool clockwise, const Eigen::Vector3d& c
 
 void Reader::motion() {
   const Motion m = state_.motion;
+  const int rotary_column = first_column(l_.rotary);
+  if (rotary_column > 0 && !state_.traori && !state_.rotary_program) {
+    // A B C words without TRAORI: from here X Y Z are the machine's axes (an axis program).
+    if (state_.swivel_plane)
+      fail(rotary_column, "rotary axis words with CYCLE800's plane on (expected CYCLE800() first, or TRAORI)");
+    const auto [r, t] = turned(state_.rotary);
+    state_.position_mm = r.transpose() * (state_.position_mm - t);
+    state_.swivel_rotation.setIdentity();
+    state_.swivel_translation_mm.setZero();
+  }
   Block block;
   block.kind = m == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear;
   std::array<bool, 3> programmed{};
@@ -2122,6 +2249,275 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
     }
   }
   cycle_move(at_z(retract), true, 1.0, column);
+}
+
+// --- CYCLE800, swivelling (Siemens, Operating Manual "Swivel plane": parameters
+// CYCLE800(_FR, _TC, _ST, _MODE, _X0, _Y0, _Z0, _A, _B, _C, _X1, _Y1, _Z1, _DIR, _FR_I, _DMODE)).
+// The swivel frame S(p) = (X0 Y0 Z0) + R (p + (X1 Y1 Z1)): X0.. the reference point of the turn
+// (before it), X1.. the zero point of the turned plane (after it), in the frame chain after the
+// work offset and before TRANS / ROT (as $P_WPFRAME sits before $P_PFRAME). _ST's units digit:
+// 0 a new plane (S replaces the swivel frame), 1 additive (S follows it). _MODE bits 7-6: 00
+// axis by axis, bits 1-0, 3-2, 5-4 the axis of the 1st, 2nd, 3rd turn (01 X, 10 Y, 11 Z: 57 is
+// X Y Z, 27 Z Y X), _A _B _C the angles in that order, each about the axes the previous turns
+// left (R = R1(_A) R2(_B) R3(_C)); 11 (192) rotary axes direct: _A _B the positions of the
+// machine's rotary axes 1 and 2 (SinumerikOptions::rotary_axes), R what they turn. Solid angle
+// (64) and projection angles (128) are refused: vcut has not verified their conventions.
+// _DIR -1 / +1: the rotaries turn the tool to R z, the solution whose tilting axis is <= 0 /
+// >= 0 (the other where that one is out of reach, as the control does); 0: the frame only.
+// _FR: 0 no retraction, 1 machine Z to the machine's home, 2 Z then X Y to it, 4 along the tool
+// axis until Z is there, 5 _FR_I mm along the tool axis; the machine file has no swivel data
+// record, so its home stands in for the record's retraction positions. The rotaries then turn
+// with the linear axes held (the tip swings with them, in steps of 1 deg). CYCLE800() or _TC
+// "0" deselects: the swivel frame goes; where the rotaries stay turned, X Y Z are the machine's
+// axes again (the frame is the turn itself). Other _ST digits (direction optimisation, tool
+// tracking) and _DMODE are not read.
+void Reader::swivel(const std::vector<std::optional<double>>& args, const std::vector<std::string>& texts, int column) {
+  auto arg = [&](std::size_t k) -> double {
+    if (k >= args.size() || !args[k]) return 0.0;
+    const double v = *args[k];
+    if (!(std::abs(v) <= kMaxMagnitude))
+      fail(column, "CYCLE800 parameter " + std::to_string(k + 1) + " " + num(v) + " (expected within +-1e6)");
+    return v;
+  };
+  const bool deselect = args.empty() || (texts.size() > 1 && texts[1] == "0");
+  if (deselect) {
+    state_.swivel_plane = false;
+    if (state_.rotary_program) {  // an axis program: X Y Z are the machine's already
+      state_.swivel_rotation.setIdentity();
+      state_.swivel_translation_mm.setZero();
+      return;
+    }
+    const auto [r, t] = turned(state_.rotary);
+    // X Y Z are the machine's: p + offset is the axes' point, M(p + o) = o + S(p).
+    const Eigen::Vector3d o = offset();
+    state_.swivel_rotation = r;
+    state_.swivel_translation_mm = r * o + t - o;
+    return;
+  }
+  const double fr = arg(0), st = arg(2), mode_value = arg(3), dir = arg(13);
+  if (fr != 0.0 && fr != 1.0 && fr != 2.0 && fr != 4.0 && fr != 5.0)
+    fail(column, "CYCLE800 _FR " + num(fr) +
+                     " (expected 0 no retraction, 1 Z, 2 Z then X Y, 4 the most along the tool, 5 _FR_I along it)");
+  if (!(st >= 0.0 && st == std::floor(st)) || (static_cast<long long>(st) % 10) > 1)
+    fail(column, "CYCLE800 _ST " + num(st) + " (expected a whole number whose units digit is 0 new or 1 additive)");
+  if (!(mode_value >= 0.0 && mode_value <= 255.0 && mode_value == std::floor(mode_value)))
+    fail(column, "CYCLE800 _MODE " + num(mode_value) + " (expected 0..255: 57 X Y Z, 27 Z Y X, 192 rotary axes)");
+  if (dir != -1.0 && dir != 0.0 && dir != 1.0)
+    fail(column, "CYCLE800 _DIR " + num(dir) + " (expected -1 or +1, the direction, or 0: the frame only)");
+  const double unit = state_.inch ? kMmPerInch : 1.0;
+  const Eigen::Vector3d x0(arg(4) * unit, arg(5) * unit, arg(6) * unit);
+  const Eigen::Vector3d x1(arg(10) * unit, arg(11) * unit, arg(12) * unit);
+  const int mode = static_cast<int>(mode_value);
+  kinematics::RotaryWords direct = state_.rotary;
+  Eigen::Matrix3d turn;
+  if ((mode >> 6) == 3) {
+    if (options_.rotary_axes.empty() || !options_.tip_after_turn)
+      fail(column, "CYCLE800 _MODE " + num(mode_value) +
+                       " (rotary axes direct) needs the machine's rotary axes (expected a job, or --machine)");
+    for (std::size_t k = 0; k < 2 && k < options_.rotary_axes.size(); ++k) {
+      const auto r = static_cast<std::size_t>(options_.rotary_axes[k] - 'A');
+      direct.angle_rad[r] = arg(7 + k) * kDegToRad;
+      direct.given[r] = true;
+    }
+    turn = turned(direct).first;
+  } else {
+    turn = swivel_turn(mode, arg(7), arg(8), arg(9), column);
+  }
+  const bool additive = static_cast<long long>(st) % 10 == 1;
+  // The new plane in the frame before it: additive, after the present swivel frame.
+  const Eigen::Matrix3d r0 = additive ? state_.swivel_rotation : Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d t0 = additive ? state_.swivel_translation_mm : Eigen::Vector3d::Zero();
+  const Eigen::Matrix3d rotation = r0 * turn;
+  const Eigen::Vector3d translation = t0 + r0 * (x0 + turn * x1);
+  if (!(translation.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+    fail(column, "CYCLE800's frame moves the zero out of range (expected within +-1e6 mm)");
+  if (fr != 0.0 || dir != 0.0) {
+    for (int k = 0; k < 3; ++k) {
+      if (!state_.known[static_cast<std::size_t>(k)])
+        fail(column, std::string("CYCLE800 from an unknown ") + kAxisLetter[k] +
+                         " position (expected X, Y and Z programmed before it: it retracts and turns from there)");
+    }
+  }
+  if (state_.rotary_program) {
+    // After A B C words without TRAORI, X Y Z were the machine's axes: from here the tip again.
+    const auto [r, t] = turned(state_.rotary);
+    state_.position_mm = r * state_.position_mm + t;
+    state_.rotary_program = false;
+  }
+  if (fr != 0.0) retract(fr, arg(14) * unit, column);
+  if (dir != 0.0) {
+    if (!options_.orient || !options_.tip_after_turn)
+      fail(column,
+           "CYCLE800 turns the rotary axes (_DIR " + num(dir) +
+               "): it needs the machine (expected a job, or vcut program --machine; _DIR 0 for the frame only)");
+    kinematics::RotaryWords to = direct;
+    if ((mode >> 6) != 3) {
+      const Eigen::Vector3d axis = rotation.col(2);
+      const int sign = dir > 0.0 ? 1 : -1;
+      std::string why = options_.orient(state_.tool, state_.position_mm, axis, state_.rotary, sign, to);
+      if (!why.empty()) why = options_.orient(state_.tool, state_.position_mm, axis, state_.rotary, 0, to);
+      if (!why.empty())
+        fail(column, "CYCLE800: the machine cannot turn the tool to the plane's Z (" + num(axis.x()) + ", " +
+                         num(axis.y()) + ", " + num(axis.z()) + "): " + why);
+    }
+    turn_rotaries(to);
+    state_.tool_axis = rotation.col(2);
+  }
+  state_.swivel_rotation = rotation;
+  state_.swivel_translation_mm = translation;
+  state_.swivel_plane = true;
+}
+
+// CYCLE800's turn for _MODE axis by axis (bits 7-6 00).
+Eigen::Matrix3d Reader::swivel_turn(int mode, double a_deg, double b_deg, double c_deg, int column) const {
+  if ((mode >> 6) != 0) {
+    fail(column,
+         "CYCLE800 _MODE " + std::to_string(mode) + " (" + ((mode >> 6) == 1 ? "solid angle" : "projection angles") +
+             ") is not supported: vcut has not verified its convention (expected axis by axis, such as 57 or 27, "
+             "or 192 rotary axes direct)");
+  }
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+  const double angles[3] = {a_deg, b_deg, c_deg};
+  for (int k = 0; k < 3; ++k) {
+    const int axis = (mode >> (2 * k)) & 3;
+    if (axis == 0) {
+      if (angles[k] != 0.0)
+        fail(column, "CYCLE800 _MODE " + std::to_string(mode) + " names no axis for turn " + std::to_string(k + 1) +
+                         " but its angle is " + num(angles[k]) + " deg (expected 57 X Y Z, 27 Z Y X or another order)");
+      continue;
+    }
+    r = r * Eigen::AngleAxisd(angles[k] * kDegToRad, Eigen::Vector3d::Unit(axis - 1)).toRotationMatrix();
+  }
+  return r;
+}
+
+std::pair<Eigen::Matrix3d, Eigen::Vector3d> Reader::turned(const kinematics::RotaryWords& rotary) const {
+  const auto& angles = rotary.angle_rad;
+  if (!options_.tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0))
+    return {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  kinematics::RotaryWords zero = rotary;
+  zero.angle_rad = {0.0, 0.0, 0.0};
+  auto image = [&](const Eigen::Vector3d& p) { return options_.tip_after_turn(state_.tool, p, zero, rotary); };
+  const Eigen::Vector3d t = image(Eigen::Vector3d::Zero());
+  Eigen::Matrix3d r;
+  for (int a = 0; a < 3; ++a) r.col(a) = image(Eigen::Vector3d::Unit(a)) - t;
+  return {r, t};
+}
+
+void Reader::straight_to(const Eigen::Vector3d& to, int column) {
+  if (!(to.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+    fail(column, "a move out of range (expected within +-1e6 mm of the workpiece zero)");
+  Block block;
+  block.kind = MotionKind::Rapid;
+  block.start_mm = state_.position_mm;
+  block.end_mm = to;
+  block.tool_pose = !state_.rotary_program;
+  block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
+  block.start_axis = block.end_axis = state_.tool_axis;
+  block.start_rotary = block.end_rotary = state_.rotary;
+  block.exact_stop = true;
+  append(block, {true, true, true}, false);
+}
+
+// CYCLE800's retraction (_FR 1, 2, 4, 5), in the machine's axes: the tip's point p with the
+// rotaries at zero is where the linear axes stand (as in an axis program); the home's gauge
+// point less the tool's length along the spindle is the retracted tip there.
+void Reader::retract(double fr, double fr_i_mm, int column) {
+  const Eigen::Vector3d tool = state_.tool_axis;
+  if (fr == 5.0) {
+    if (!(fr_i_mm >= 0.0)) fail(column, "CYCLE800 _FR 5 with _FR_I " + num(fr_i_mm) + " (expected a distance >= 0 mm)");
+    straight_to(state_.position_mm + fr_i_mm * tool, column);
+    return;
+  }
+  if (!options_.reference_mm)
+    fail(column, "CYCLE800 _FR " + num(fr) +
+                     " retracts to the machine's home: it needs the machine (expected a job, or --machine; _FR 0 or 5 "
+                     "without one)");
+  const auto [r, t] = turned(state_.rotary);
+  const Eigen::Vector3d home = (*options_.reference_mm)[0] - tool_length_mm() * options_.spindle_axis;
+  const Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);  // the linear axes' point
+  if (fr == 4.0) {
+    // Along the tool until the Z axis reaches its home: the tool direction in the axes' frame.
+    const Eigen::Vector3d d = r.transpose() * tool;
+    if (d.z() > 1e-6 && axes.z() < home.z()) {
+      straight_to(state_.position_mm + (home.z() - axes.z()) / d.z() * tool, column);
+      return;
+    }
+  }
+  Eigen::Vector3d up = axes;
+  up.z() = std::max(axes.z(), home.z());
+  straight_to(r * up + t, column);
+  if (fr == 2.0) straight_to(r * Eigen::Vector3d(home.x(), home.y(), up.z()) + t, column);
+}
+
+void Reader::turn_rotaries(const kinematics::RotaryWords& to) {
+  const kinematics::RotaryWords from = state_.rotary;
+  const Eigen::Vector3d tip = state_.position_mm;
+  const int steps = detail::rotary_steps(from, to);
+  for (int n = 1; n <= steps; ++n) {
+    const kinematics::RotaryWords step = detail::rotary_step(from, to, n, steps);
+    Block block;
+    block.kind = MotionKind::Rapid;
+    block.start_mm = state_.position_mm;
+    block.end_mm = options_.tip_after_turn(state_.tool, tip, from, step);
+    block.tool_pose = true;
+    block.start_rotary = state_.rotary;
+    block.end_rotary = step;
+    block.start_axis = block.end_axis = state_.tool_axis;
+    block.exact_stop = true;
+    append(block, {true, true, true}, true);
+    state_.rotary = step;
+  }
+  state_.rotary = to;
+}
+
+// G74 (reference point approach) and G75 FP=1 / FP=2 (fixed point 1, 2): the named axes (X1=
+// Y1= Z1= as the manual writes them, or X Y Z; their values are not used) rapid to the
+// machine's home or second home (SinumerikOptions::reference_mm), the others stay; the tip a
+// tool's length below the gauge point.
+void Reader::home() {
+  const Line& l = l_;
+  const std::string name = "G" + std::to_string(l.home);
+  int fp = 1;
+  if (l.home == 75) {
+    if (!l.fp.present) fail(l.home_column, "G75 without FP= (expected FP=1 or FP=2, the fixed point)");
+    if (l.fp.value != 1.0 && l.fp.value != 2.0)
+      fail(l.fp.column, "G75 FP=" + num(l.fp.value) +
+                            " (expected FP=1 or FP=2: the machine file has two fixed points, home and second home)");
+    fp = static_cast<int>(l.fp.value);
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (l.rotary[k].present)
+      fail(l.rotary[k].column, name + " with a rotary axis (expected X Y Z: vcut moves the linear axes there)");
+  }
+  std::array<bool, 3> named{};
+  bool any = false;
+  for (std::size_t k = 0; k < 3; ++k) {
+    named[k] = l.machine_axis[k] || l.axis[k].present;
+    any = any || named[k];
+  }
+  if (!any) fail(l.home_column, name + " without an axis (expected " + name + " X1=0 Y1=0 Z1=0 naming the axes)");
+  if (!options_.reference_mm)
+    fail(l.home_column, name + " goes to a point of the machine: it needs the machine (expected a job, or --machine)");
+  const auto [r, t] = turned(state_.rotary);
+  Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);
+  const Eigen::Vector3d point =
+      (*options_.reference_mm)[static_cast<std::size_t>(fp - 1)] - tool_length_mm() * options_.spindle_axis;
+  for (int k = 0; k < 3; ++k)
+    if (named[static_cast<std::size_t>(k)]) axes[k] = point[k];
+  Block block;
+  block.kind = MotionKind::Rapid;
+  block.end_mm = r * axes + t;
+  block.start_mm = state_.position_mm;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!state_.known[k]) block.start_mm[static_cast<int>(k)] = block.end_mm[static_cast<int>(k)];
+  }
+  block.tool_pose = !state_.rotary_program;
+  block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
+  block.start_axis = block.end_axis = state_.tool_axis;
+  block.start_rotary = block.end_rotary = state_.rotary;
+  block.exact_stop = true;
+  append(block, named, false);
 }
 
 // Appends a block (unless it does not move) and brings the position and the unknown axes up

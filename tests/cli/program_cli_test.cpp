@@ -152,8 +152,8 @@ TEST_F(ProgramCli, Errors) {
   expect_error(run_vcut("program " + good + " --dialect heidenhain"), "unknown program dialect");
   expect_error(run_vcut("program " + good + " --machine " + (dir / "none.yaml").string()), "none.yaml");
   const std::string mpf = (dir / "five.mpf").string();
-  write(mpf, "N10 TRAORI\nN20 CYCLE800()\n");
-  expect_error(run_vcut("program " + mpf), mpf + ":2:5: CYCLE800 is not supported");
+  write(mpf, "N10 TRAORI\nN20 ROTS X10\n");
+  expect_error(run_vcut("program " + mpf), mpf + ":2:5: ROTS is not supported");
   expect_error(run_vcut("program " + (dir / "missing.nc").string()), "cannot open");
 }
 

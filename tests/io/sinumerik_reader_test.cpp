@@ -549,7 +549,7 @@ TEST(SinumerikReader, TechnologyAndBlending) {
   EXPECT_EQ(p.blocks[5].feed_mode, FeedMode::UnitsPerMinute);
   EXPECT_DOUBLE_EQ(p.blocks[5].feed_mm_per_min, 2000.0);
   EXPECT_EQ(p.blocks[5].source.line, 10);
-  EXPECT_MPF_ERROR("T=\"DRILL_10\" M6\n", 1, 1, "tool name T=\"DRILL_10\"");
+  EXPECT_MPF_ERROR("T=\"\" M6\n", 1, 1, "tool name T=\"\" (expected 1..64 characters)");
   EXPECT_MPF_ERROR("M6\n", 1, 1, "M6 without a tool selected");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG93 G1 X1\n", 2, 5, "G93 (inverse time) motion without F");
   EXPECT_MPF_ERROR("G4 F1 X2\n", 1, 1, "G4 (dwell) with axis words");
@@ -571,10 +571,11 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
   EXPECT_MPF_ERROR("N10 CASE(R1) OF 1 GOTOF A\n", 1, 5, "CASE (program flow");
   EXPECT_MPF_ERROR("N10 ROTS X10\n", 1, 5, "ROTS is not supported: it changes the frame");
-  EXPECT_MPF_ERROR("N10 G53 X10\n", 1, 5, "G53 is not supported");
+  EXPECT_MPF_ERROR("N10 G110 X10\n", 1, 5, "G110 is not supported");
   EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
   EXPECT_MPF_ERROR("N10 M123\n", 1, 5, "M123 is not supported");
-  EXPECT_MPF_ERROR("N10 CYCLE800(1,\"TC\")\n", 1, 5, "CYCLE800 is not supported");
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nN10 CYCLE800(1,\"TC\")\n", 2, 5,
+                   "CYCLE800 _FR 1 retracts to the machine's home: it needs the machine");
   EXPECT_MPF_ERROR("N10 H1=5\n", 1, 5, "H1= is not supported");
   EXPECT_MPF_ERROR("N10 L100\n", 1, 5, "subprogram L100 not found");
   EXPECT_MPF_ERROR("N10 G1 X=$AA_IM[X]\n", 1, 10, "system variables");

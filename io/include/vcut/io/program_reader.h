@@ -5,6 +5,7 @@
 
 #include <vcut/io/apt_reader.h>
 #include <vcut/io/gcode_reader.h>
+#include <vcut/io/sinumerik_reader.h>
 #include <vcut/kinematics/machine.h>
 #include <vcut/kinematics/program.h>
 #include <vcut/removal/cutter.h>
@@ -34,6 +35,9 @@ std::string lower_extension(const std::string& path);
 // X Y Z are axis values and the start is the home's axis values.
 void set_machine(GcodeOptions& options, const kinematics::MachineSpec& machine,
                  const std::map<int, removal::Cutter>& tools, bool axis_program = false);
+// The SINUMERIK reader's options from the G-code reader's (the job's offsets, limits, folders
+// and, after set_machine, the machine).
+SinumerikOptions sinumerik_options(const GcodeOptions& gcode);
 
 struct ProgramOptions {
   GcodeOptions gcode;

@@ -55,15 +55,23 @@
 //   FDPR, DAM, DTB, DTS, FRF, VARI) in G17, at the current X Y (Reader::cycle has the motions),
 //   called directly or by MCALL (each later positioning block ends with it; MCALL alone ends
 //   it).
+//   CYCLE800(_FR, _TC, _ST, _MODE, _X0.._Z0, _A, _B, _C, _X1.._Z1, _DIR, _FR_I): the swivel
+//   frame and the rotaries' turn (Reader::swivel has the rules); CYCLE800() deselects.
+//   SUPA G53 G153 (X Y Z in machine coordinates this block), D0 (the tool's length off: X Y Z
+//   place the gauge point) and D1.. (on), G74 and G75 FP=1 / FP=2 with X1= Y1= Z1= (the
+//   machine's home / second home); these, and CYCLE800 turning or retracting, need the machine
+//   (SinumerikOptions). G505..G599 offsets; T="NAME" (numbered in the order named); FNORM,
+//   SETMS (no effect on the path).
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
 // ORICONTO, A7 B7 C7 outside ORICONIO, CASE, PCALL/EXTCALL, VAR parameters, DEF of other types
-// than REAL, INT and BOOL, CYCLE800 (swivelling) and other cycles,
-// T="NAME", tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
+// than REAL, INT and BOOL, CYCLE800's solid-angle and projection-angle modes, other cycles,
+// tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
 #pragma once
 
+#include <vcut/io/gcode_reader.h>
 #include <vcut/kinematics/program.h>
 
 #include <Eigen/Core>
@@ -93,6 +101,19 @@ struct SinumerikOptions {
   // Folders searched, after the calling program's own, for a called subprogram NAME (NAME.SPF,
   // NAME.MPF, either case; L123: L123.SPF).
   std::vector<std::string> subroutine_path;
+  // The machine, from a job (unset for `vcut program` without --machine), as the G-code reader
+  // has it (GcodeOptions): `orient` and `tip_after_turn` turn the rotary axes for CYCLE800;
+  // reference_mm are the gauge point's positions (workpiece frame, mm) at the machine's home
+  // and second home, for G74, G75 FP=1 / FP=2 and CYCLE800's retraction; tool lengths (mm, by
+  // T number) place the tip below the gauge point along spindle_axis.
+  decltype(GcodeOptions::orient) orient;
+  decltype(GcodeOptions::tip_after_turn) tip_after_turn;
+  std::optional<std::array<Eigen::Vector3d, 2>> reference_mm;
+  std::map<int, double> tool_length_mm;
+  Eigen::Vector3d spindle_axis = Eigen::Vector3d::UnitZ();  // tip -> spindle, unit
+  // The machine's rotary axis letters, rotary axis 1 first (the one nearer the machine's base in
+  // its chain, as a Siemens swivel data record counts them): CYCLE800 _MODE 192's _A and _B.
+  std::string rotary_axes;
 };
 
 // The modal state between lines and between files. Start from a default-constructed one
@@ -140,13 +161,21 @@ struct SinumerikState {
   double feed_mm_per_min = 0.0;  // 0: no F yet
   double spindle_rpm = 0.0;
   kinematics::SpindleState spindle = kinematics::SpindleState::Off;
-  int tool = 0;            // in the spindle (after M6)
-  int selected_tool = -1;  // last T, -1 if none
-  std::vector<double> r;   // R0..R999 (sized when the first file starts)
+  bool tool_offset_off = false;           // D0: X Y Z place the gauge point, the tip a tool length below
+  std::map<std::string, int> tool_names;  // T="NAME": numbered 1, 2, ... in the order named
+  int tool = 0;                           // in the spindle (after M6)
+  int selected_tool = -1;                 // last T, -1 if none
+  std::vector<double> r;                  // R0..R999 (sized when the first file starts)
   // The programmable frame (TRANS ROT SCALE MIRROR and their additive A-forms): a programmed
   // point p lies at work offset + frame_translation_mm + frame_linear * p in the workpiece frame.
   Eigen::Matrix3d frame_linear = Eigen::Matrix3d::Identity();
   Eigen::Vector3d frame_translation_mm = Eigen::Vector3d::Zero();
+  // CYCLE800's swivel frame, between the work offset and the programmable frame: a point p of
+  // the programmable frame lies at work offset + swivel_translation_mm + swivel_rotation *
+  // (frame_translation_mm + frame_linear * p).
+  Eigen::Matrix3d swivel_rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d swivel_translation_mm = Eigen::Vector3d::Zero();
+  bool swivel_plane = false;  // a CYCLE800 plane is on (not deselected)
   // MCALL CYCLE81/82/83(...): the drilling cycle every positioning block ends with; empty: none.
   std::string modal_cycle;
   std::vector<std::optional<double>> modal_cycle_args;
