@@ -5,6 +5,7 @@
 #include <vcut/io/sinumerik_reader.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -70,6 +71,34 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   // The first byte also picks the arc tolerance and the warning mode, so that both are fuzzed.
   if (size > 0 && (data[0] & 1) != 0) options.arc_tolerance_mm = 0.5;
   if (size > 0 && (data[0] & 2) != 0) options.unsupported_as_warning = true;
+  if (size > 0 && (data[0] & 4) != 0) {
+    // A machine (CYCLE800, SUPA, G74/G75, D0): a table-table A C machine with both axes through
+    // the origin (tool axis on the part (sin A sin C, sin A cos C, cos A); the table turns the
+    // part by Rx(A) Rz(C)), A within [-120, 30] deg, homes and tool lengths as a job has them.
+    auto table = [](const vcut::kinematics::RotaryWords& r) {
+      return Eigen::Matrix3d(Eigen::AngleAxisd(r.angle_rad[0], Eigen::Vector3d::UnitX()) *
+                             Eigen::AngleAxisd(r.angle_rad[2], Eigen::Vector3d::UnitZ()));
+    };
+    options.orient = [](int, const Eigen::Vector3d&, const Eigen::Vector3d& axis, const vcut::kinematics::RotaryWords&,
+                        int tilt_sign, vcut::kinematics::RotaryWords& to) {
+      const double a = (tilt_sign > 0 ? 1.0 : -1.0) * std::acos(std::clamp(axis.z(), -1.0, 1.0));
+      if (a < -120.0 * M_PI / 180.0 || a > 30.0 * M_PI / 180.0) return std::string("axis A out of [-120, 30] deg");
+      to = {};
+      to.angle_rad = {a, 0.0, std::atan2(-axis.x(), -axis.y())};
+      to.given = {true, false, true};
+      return std::string();
+    };
+    options.tip_after_turn = [table](int, const Eigen::Vector3d& tip, const vcut::kinematics::RotaryWords& from,
+                                     const vcut::kinematics::RotaryWords& to) {
+      return Eigen::Vector3d(table(to).transpose() * (table(from) * tip));
+    };
+    options.frame_rotation = [table](const vcut::kinematics::RotaryWords& r) {
+      return Eigen::Matrix3d(table(r).transpose());
+    };
+    options.rotary_axes = "AC";
+    options.reference_mm = {Eigen::Vector3d(0.0, 0.0, 400.0), Eigen::Vector3d(-100.0, 50.0, 300.0)};
+    options.tool_length_mm = {{1, 90.0}, {2, 120.5}};
+  }
   std::istringstream in(std::string(reinterpret_cast<const char*>(data), size));
   vcut::kinematics::Program program;
   vcut::io::SinumerikState state;

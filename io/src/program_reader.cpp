@@ -5,6 +5,7 @@
 #include <vcut/kinematics/forward_kinematics.h>
 #include <vcut/kinematics/inverse_kinematics.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cstdlib>
 #include <cerrno>
@@ -12,7 +13,9 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <tuple>
 #include <utility>
+#include <vector>
 
 #include "reader_util.h"
 
@@ -242,6 +245,8 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     point = pose.tip_mm;
     options.spindle_axis = pose.axis;
   };
+  std::array<double, 3> unused_deg{};
+  gauge_at({}, options.machine_zero_mm, unused_deg);
   Eigen::Vector3d start;
   gauge_at(spec.home, start, options.reference_rotary_deg[0]);
   options.start_mm = start;
@@ -334,17 +339,29 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
     }
     return std::string();
   };
-  // Rotary axis 1 the one nearer the base (F) in the chain, as Siemens counts them.
+  // Rotary axes numbered as a Siemens swivel data record does: the head's first (type T and
+  // M), from the base (F) outward, then the table's (type P and M), from the base inward.
   options.rotary_axes.clear();
-  std::vector<std::pair<long, char>> rotaries;
+  std::vector<std::tuple<bool, long, char>> rotaries;
   const std::string& chain = spec.topology;
   const auto base = static_cast<long>(chain.find('F'));
   for (int k = 0; k < shared->rotary_count(); ++k) {
     const char letter = shared->axis(shared->rotary_axis(k)).letter;
-    rotaries.emplace_back(std::labs(static_cast<long>(chain.find(letter)) - base), letter);
+    const auto at = static_cast<long>(chain.find(letter));
+    rotaries.emplace_back(at < base, std::labs(at - base), letter);
   }
   std::sort(rotaries.begin(), rotaries.end());
-  for (const auto& r : rotaries) options.rotary_axes += r.second;
+  for (const auto& r : rotaries) options.rotary_axes += std::get<2>(r);
+  // u_w = R(k_1, s_1 q_1) R(k_2, s_2 q_2) u_0 (Machine::rotary_axis): the whole frame turns so.
+  options.frame_rotation = [shared](const kinematics::RotaryWords& rotary) {
+    Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
+    for (int k = 0; k < shared->rotary_count(); ++k) {
+      const kinematics::AxisSpec& axis = shared->axis(shared->rotary_axis(k));
+      const double angle = rotary.angle_rad[static_cast<std::size_t>(axis.letter - 'A')];
+      r = r * Eigen::AngleAxisd(shared->rotary_sign(k) * angle, axis.direction.normalized()).toRotationMatrix();
+    }
+    return r;
+  };
   options.tip_after_turn = [shared, axis_values, length_of](int tool, const Eigen::Vector3d& tip,
                                                             const kinematics::RotaryWords& from,
                                                             const kinematics::RotaryWords& to) {
@@ -387,6 +404,9 @@ SinumerikOptions sinumerik_options(const GcodeOptions& gcode) {
   sinumerik.tool_length_mm = gcode.tool_length_mm;
   sinumerik.spindle_axis = gcode.spindle_axis;
   sinumerik.rotary_axes = gcode.rotary_axes;
+  sinumerik.frame_rotation = gcode.frame_rotation;
+  sinumerik.machine_zero_mm = gcode.machine_zero_mm;
+  sinumerik.initial_tool = gcode.initial_tool;
   return sinumerik;
 }
 

@@ -1632,8 +1632,9 @@ void Reader::execute() {
 Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
   Eigen::Vector3d end = state_.position_mm;
   if (l_.machine_column > 0) {
-    // SUPA / G53 / G153: the linear axes' point, the tip where they stand with the rotaries at
-    // zero (less the tool's length along the spindle under D0), turned with the rotaries.
+    // SUPA / G53 / G153: machine coordinates count from the gauge point at all-zero axes; the
+    // tool's length stays on (the tip is there), under D0 the gauge point is there. The point
+    // is the tip with the rotaries at zero, turned with them.
     const auto [r, t] = turned(state_.rotary);
     Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);
     const Eigen::Vector3d shift =
@@ -1645,7 +1646,7 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
         fail(w.column, std::string("incremental ") + kAxisLetter[a] +
                            " in machine coordinates (SUPA, G53, G153) (expected absolute)");
       programmed[static_cast<std::size_t>(a)] = true;
-      axes[a] = length_mm(w) - shift[a];
+      axes[a] = options_.machine_zero_mm[a] + length_mm(w) - shift[a];
       if (!(std::abs(axes[a]) <= kMaxMagnitude))
         fail(w.column, std::string(1, kAxisLetter[a]) + " position " + num(axes[a]) +
                            " mm is out of range (expected within +-1e6 mm)");
@@ -2260,7 +2261,8 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
 // axis by axis, bits 1-0, 3-2, 5-4 the axis of the 1st, 2nd, 3rd turn (01 X, 10 Y, 11 Z: 57 is
 // X Y Z, 27 Z Y X), _A _B _C the angles in that order, each about the axes the previous turns
 // left (R = R1(_A) R2(_B) R3(_C)); 11 (192) rotary axes direct: _A _B the positions of the
-// machine's rotary axes 1 and 2 (SinumerikOptions::rotary_axes), R what they turn. Solid angle
+// machine's rotary axes 1 and 2 (SinumerikOptions::rotary_axes), R the turn they give the tool's
+// frame on the workpiece (SinumerikOptions::frame_rotation). Solid angle
 // (64) and projection angles (128) are refused: vcut has not verified their conventions.
 // _DIR -1 / +1: the rotaries turn the tool to R z, the solution whose tilting axis is <= 0 /
 // >= 0 (the other where that one is out of reach, as the control does); 0: the frame only.
@@ -2311,7 +2313,7 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
   kinematics::RotaryWords direct = state_.rotary;
   Eigen::Matrix3d turn;
   if ((mode >> 6) == 3) {
-    if (options_.rotary_axes.empty() || !options_.tip_after_turn)
+    if (options_.rotary_axes.empty() || !options_.frame_rotation)
       fail(column, "CYCLE800 _MODE " + num(mode_value) +
                        " (rotary axes direct) needs the machine's rotary axes (expected a job, or --machine)");
     for (std::size_t k = 0; k < 2 && k < options_.rotary_axes.size(); ++k) {
@@ -2319,7 +2321,7 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
       direct.angle_rad[r] = arg(7 + k) * kDegToRad;
       direct.given[r] = true;
     }
-    turn = turned(direct).first;
+    turn = options_.frame_rotation(direct);
   } else {
     turn = swivel_turn(mode, arg(7), arg(8), arg(9), column);
   }
@@ -2583,6 +2585,7 @@ void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOp
   validate(name, options);
   if (state.r.size() != static_cast<std::size_t>(kRParameters)) state.r.assign(kRParameters, 0.0);
   const int file_index = static_cast<int>(program.files.size());
+  if (file_index == 0 && options.initial_tool > 0) state.tool = state.selected_tool = options.initial_tool;
   program.files.push_back(name);
   Reader reader(name, options, program, state, file_index);
   detail::read_guarded(name, [&] { reader.run(in); });

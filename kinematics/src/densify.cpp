@@ -241,7 +241,9 @@ class BlockPath {
       const char letter = static_cast<char>('A' + k);
       const int i = machine_->axis_index(letter);
       if (i < 0) {
-        if (report.unreachable.empty()) report.unreachable = std::string("the machine has no axis ") + letter;
+        // A machine without this axis holds it at 0 (a program's "A0" on a three-axis mill).
+        if (words.angle_rad[static_cast<size_t>(k)] != 0.0 && report.unreachable.empty())
+          report.unreachable = std::string("the machine has no axis ") + letter;
         continue;
       }
       q[i] = words.angle_rad[static_cast<size_t>(k)];

@@ -227,15 +227,20 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   // Read it as the job will, then what the program showed: a tilting tool axis, its tools.
   job.stock.kind = io::StockSpec::Kind::Mesh;  // no stock yet: probes trip at their ends
   JobProgram read = read_job_program(job);
-  if (options.machine.empty() && machine == "3axis") {
-    const bool tilts = std::any_of(
-        read.program.blocks.begin(), read.program.blocks.end(),
-        [](const kinematics::Block& b) { return b.start_axis.z() < 1.0 - 1e-9 || b.end_axis.z() < 1.0 - 1e-9; });
-    if (tilts) {
-      machine = "xyzac-trt";
-      set_machine(job, machine);
-      read = read_job_program(job);
-    }
+  const bool tilts =
+      std::any_of(read.program.blocks.begin(), read.program.blocks.end(), [](const kinematics::Block& b) {
+        const auto zero = [](const kinematics::RotaryWords& r) {
+          return r.angle_rad[0] == 0.0 && r.angle_rad[1] == 0.0 && r.angle_rad[2] == 0.0;
+        };
+        return b.start_axis.z() < 1.0 - 1e-9 || b.end_axis.z() < 1.0 - 1e-9 || !zero(b.start_rotary) ||
+               !zero(b.end_rotary);
+      });
+  bool held_at_zero = false;  // rotary words that only ever say 0 (a post's home line)
+  if (options.machine.empty() && (machine == "3axis") == tilts) {
+    held_at_zero = !tilts;
+    machine = tilts ? "xyzac-trt" : "3axis";
+    set_machine(job, machine);
+    read = read_job_program(job);
   }
   std::set<int> from_cl;  // tools whose lengths the CL file's CUTTER/ gives
   for (const kinematics::Block& b : read.program.blocks) {
@@ -249,11 +254,12 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
     assume_default(b.tool);
     read.tools[b.tool] = job.tools[b.tool];
   }
-  job.assumptions.push_back("machine: " + machine +
-                            (!options.machine.empty() ? std::string(" (--machine)")
-                             : machine == "3axis"
-                                 ? std::string(" (the program moves X Y Z only; --machine to choose another)")
-                                 : std::string(" (the program moves rotary axes; --machine to choose another)")));
+  job.assumptions.push_back(
+      "machine: " + machine +
+      (!options.machine.empty() ? std::string(" (--machine)")
+       : held_at_zero       ? std::string(" (the program's rotary words hold them at 0; --machine to choose another)")
+       : machine == "3axis" ? std::string(" (the program moves X Y Z only; --machine to choose another)")
+                            : std::string(" (the program moves rotary axes; --machine to choose another)")));
 
   const Extent cut = cutting_extent(read.program, read.tools);
   if (cut.box.isEmpty())

@@ -145,6 +145,34 @@ TEST(SinumerikSwivel, Cycle800RotaryAxesDirectGivesTheTablesFrame) {
   expect_vec(last_of_line(p, 3).end_axis, {0, -kS30, kC30}, 1e-9);
 }
 
+TEST(SinumerikSwivel, Cycle800TurnsTheBcHeadAboutItsPivot) {
+  // head-table-bc's header: tool axis (sin B, 0, cos B) turned by the C table; the B pivot 180
+  // mm above the spindle nose. _MODE 57, _B 30 about Y: R z = (1/2, 0, sqrt3/2), so B = 30,
+  // C = 0 for _DIR +1. No tool: the tip is the nose, at (10, 0, 5), the pivot 180 above it;
+  // B turns the nose about the pivot: (10, 0, 185) + Ry(30) (0, 0, -180) = (-80, 0, 185 - 180
+  // cos 30).
+  const SinumerikOptions bc = on_machine("head-table-bc");
+  const Program p = read(
+      "N10 G0 X10 Y0 Z5\n"
+      "N20 CYCLE800(0,\"TC1\",0,57,0,0,0,0,30,0,0,0,0,1,0,1)\n"
+      "N30 G0 X1 Y2 Z3\n",
+      bc);
+  expect_vec(last_of_line(p, 2).end_mm, {10 - 180 * kS30, 0, 185 - 180 * kC30}, 1e-9);
+  // Ry(30) (1, 2, 3) = (cos30 + 3 sin30, 2, -sin30 + 3 cos30).
+  expect_vec(last_of_line(p, 3).end_mm, {kC30 + 3 * kS30, 2, -kS30 + 3 * kC30}, 1e-9);
+  EXPECT_NEAR(last_of_line(p, 3).end_rotary.angle_rad[1], 30 * kDeg, 1e-9);
+  EXPECT_NEAR(last_of_line(p, 3).end_rotary.angle_rad[2], 0.0, 1e-9);
+  // _MODE 192 on a head-table machine: rotary axis 1 is the head's B, axis 2 the table's C
+  // (Siemens' kinematics type M); B 30 gives the same frame.
+  const Program direct = read(
+      "N10 G0 X10 Y0 Z5\n"
+      "N20 CYCLE800(0,\"TC1\",0,192,0,0,0,30,0,0,0,0,0,1,0,1)\n"
+      "N30 G0 X1 Y2 Z3\n",
+      bc);
+  expect_vec(last_of_line(direct, 3).end_mm, {kC30 + 3 * kS30, 2, -kS30 + 3 * kC30}, 1e-9);
+  EXPECT_NEAR(last_of_line(direct, 3).end_rotary.angle_rad[1], 30 * kDeg, 1e-12);
+}
+
 TEST(SinumerikSwivel, Cycle800AdditiveFollowsTheFrameAndNewReplacesIt) {
   // _DIR 0: the frame only, no machine needed. 10 deg, then 20 more (additive, _ST 1) = 30.
   const Program p = read(
@@ -195,24 +223,25 @@ TEST(SinumerikSwivel, Cycle800RetractsThenSwingsAndDeselectKeepsTheTurnedAxes) {
 }
 
 TEST(SinumerikSwivel, MachineCoordinatesAndToolOffsetOff) {
-  // 3axis: spindle nose 400 mm above the table top at all-zero axes (header); T1 100 mm.
+  // 3axis: spindle nose 400 mm above the table top at all-zero axes (header), so machine
+  // coordinates count from (0, 0, 400) on the workpiece; T1 100 mm.
   SinumerikOptions options = on_machine("3axis", {{1, 100.0}});
   options.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, -300);
   const Program p = read(
       "N10 T1 M6 D1 G0 X0 Y0 Z0\n"  // from nowhere: sets the position, no block
       "N20 G54 G0 X10 Y20 Z5\n"
-      "N30 SUPA G0 Z-10 D0\n"  // the gauge point at machine Z -10: the tip 100 below
+      "N30 SUPA G0 Z-10 D0\n"  // the gauge point at machine Z -10 (390): the tip 100 below
       "N40 G53 X5\n"           // machine X 5; Y and Z stay
       "N50 G0 Z=20 D1\n"       // the work frame again, the tip at G54 Z 20
-      "N60 G153 Z=-50\n"       // machine Z -50, D1: the tip there
+      "N60 G153 Z=-50\n"       // machine Z -50 (350), D1: the tip there
       "N70 G74 X1=0 Z1=0\n"    // reference point: home = all-zero axes, gauge at Z 400
       "N80 G75 FP=2 Y1=0\n",   // fixed point 2: no second home, so the home again
       options);
   expect_vec(last_of_line(p, 2).end_mm, {10, 20, -295});
-  expect_vec(last_of_line(p, 3).end_mm, {10, 20, -110});
-  expect_vec(last_of_line(p, 4).end_mm, {5, 20, -110});
+  expect_vec(last_of_line(p, 3).end_mm, {10, 20, 290});
+  expect_vec(last_of_line(p, 4).end_mm, {5, 20, 290});
   expect_vec(last_of_line(p, 5).end_mm, {5, 20, -280});
-  expect_vec(last_of_line(p, 6).end_mm, {5, 20, -50});
+  expect_vec(last_of_line(p, 6).end_mm, {5, 20, 350});
   expect_vec(last_of_line(p, 7).end_mm, {0, 20, 300});
   expect_vec(last_of_line(p, 8).end_mm, {0, 0, 300});
 }

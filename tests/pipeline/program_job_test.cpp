@@ -8,6 +8,7 @@
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
 #include "vcut/pipeline/program_job.h"
+#include "vcut/pipeline/poses.h"
 
 namespace {
 namespace fs = std::filesystem;
@@ -75,6 +76,21 @@ TEST_F(ProgramJob, DeclaredSizePlaced) {
 // A and C words: the bundled A/C trunnion; B words: the B/C table; a machine named wins.
 TEST_F(ProgramJob, MachineByTheRotaryWords) {
   EXPECT_EQ(job("G21\nT1 M6\nG0 X0 Y0 Z5 A0 C0\nG1 Z-1 F100\nG1 X10 A10\nM30\n").machine, "xyzac-trt");
+  // Rotary words that only hold the axes at 0 (a post's home line, here SUPA A0 C0 in a
+  // SINUMERIK program): nothing turns, so the three-axis mill, and its poses all reachable.
+  const std::string mpf = write("home.mpf",
+                                "N10 T1 M6\nN20 SUPA G0 Z-10 D0\nN30 SUPA X0 Y0 A0 C0 D1\nN40 G54 G0 X10 Y10 Z5\n"
+                                "N50 G1 Z-1 F100\nN60 X20\nN70 M30\n");
+  vcut::pipeline::ProgramJobOptions alone;
+  alone.out_dir = (dir / "out").string();
+  const vcut::io::Job held = vcut::pipeline::job_for_program(mpf, alone);
+  EXPECT_EQ(held.machine, "3axis");
+  EXPECT_NE(held.assumptions.front().find("hold them at 0"), std::string::npos) << held.assumptions.front();
+  const vcut::pipeline::JobProgram read = vcut::pipeline::read_job_program(held);
+  ASSERT_EQ(read.program.blocks.size(), 3u);  // lines 20 and 30 start from nowhere: no block
+  const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(held, read, held.resolution_mm);
+  for (const auto& e : run.events)
+    EXPECT_NE(e.kind, vcut::pipeline::PoseEventKind::Unreachable) << e.line << ": " << e.detail;
   vcut::pipeline::ProgramJobOptions head;
   head.machine = "head-table-bc";
   EXPECT_EQ(job("G21\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nM30\n", head).machine, "head-table-bc");

@@ -87,9 +87,13 @@ struct GcodeOptions {
   std::function<Eigen::Vector3d(int tool, const Eigen::Vector3d& tip_mm, const kinematics::RotaryWords& from,
                                 const kinematics::RotaryWords& to)>
       tip_after_turn;
-  // The machine's rotary axis letters, rotary axis 1 first: read by the SINUMERIK reader
-  // (SinumerikOptions::rotary_axes). set_machine fills it.
+  // For the SINUMERIK reader (SinumerikOptions), set by set_machine: the machine's rotary axis
+  // letters, rotary axis 1 first, and the rotation the rotaries at given values give the tool's
+  // frame on the workpiece (the machine's orientation equation).
   std::string rotary_axes;
+  std::function<Eigen::Matrix3d(const kinematics::RotaryWords&)> frame_rotation;
+  // Where the gauge point stands at all-zero axes (workpiece frame, mm): machine coordinate 0.
+  Eigen::Vector3d machine_zero_mm = Eigen::Vector3d::Zero();
   // Probing (G38.2..G38.5; G31, Fanuc's skip and Mach3's probe): where along the move from
   // `from` to `to` (tips, workpiece frame, mm) the probe's tip first touches the stock, as a
   // fraction in [0, 1] (0: it starts inside), or none. A job sets it from its stock; unset

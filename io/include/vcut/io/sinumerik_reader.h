@@ -111,9 +111,17 @@ struct SinumerikOptions {
   std::optional<std::array<Eigen::Vector3d, 2>> reference_mm;
   std::map<int, double> tool_length_mm;
   Eigen::Vector3d spindle_axis = Eigen::Vector3d::UnitZ();  // tip -> spindle, unit
-  // The machine's rotary axis letters, rotary axis 1 first (the one nearer the machine's base in
-  // its chain, as a Siemens swivel data record counts them): CYCLE800 _MODE 192's _A and _B.
+  // The machine's rotary axis letters, rotary axis 1 first, as a Siemens swivel data record
+  // counts them (the head's from the base outward, then the table's from the base inward):
+  // CYCLE800 _MODE 192's _A and _B, and the frame those rotary positions give (the rotation of
+  // the tool's frame on the workpiece).
   std::string rotary_axes;
+  decltype(GcodeOptions::frame_rotation) frame_rotation;
+  // The tool in the spindle when the first file starts (0: none), as GcodeOptions::initial_tool.
+  int initial_tool = 0;
+  // SUPA / G53 / G153: the gauge point at all-zero axes (workpiece frame, mm), where machine
+  // coordinate 0 lies (the workpiece zero without a machine).
+  Eigen::Vector3d machine_zero_mm = Eigen::Vector3d::Zero();
 };
 
 // The modal state between lines and between files. Start from a default-constructed one
