@@ -132,6 +132,7 @@ enum class Word {
   kEnd,
   kGohome,
   kFini,
+  kIndirv,
 };
 
 Word lookup(const std::string& w) {
@@ -164,6 +165,7 @@ Word lookup(const std::string& w) {
       if (w == "SPINDL") return Word::kSpindl;
       if (w == "CUTCOM") return Word::kCutcom;
       if (w == "TLDATA") return Word::kTldata;
+      if (w == "INDIRV") return Word::kIndirv;
       break;
     default:
       break;
@@ -244,6 +246,7 @@ class Reader : public detail::CompHost {
   void do_msys();
   void do_cycle();
   void do_tldata();
+  void do_tlon(size_t pos);  // TLON,GOFWD/...: the text from pos (after TLON)
   void cycle_point(const Eigen::Vector3d& point, const Eigen::Vector3d& axis);
   Eigen::Matrix3d checked_rotation(const Eigen::Matrix3d& r, const char* what) const;
   // A point, a direction as written, in the workpiece frame (CSYS/, MSYS/).
@@ -561,6 +564,10 @@ bool Reader::statement() {
       j = k;
     }
   }
+  if (word == Word::kUnknown && major_ == "TLON" && j < n && s[j] == ',') {
+    do_tlon(j);
+    return true;
+  }
   i = j;
   const bool slash = i < n && s[i] == '/';
   if (!slash && i < n) {
@@ -638,6 +645,10 @@ bool Reader::statement() {
       break;
     case Word::kTldata:
       do_tldata();
+      break;
+    case Word::kIndirv:
+      count(3, 3, "i,j,k");
+      state_.indirv = turned(unit_vector(0, "direction"));
       break;
     case Word::kGohome: {
       // GOHOME[/x,y,z[,i,j,k]] (NX): a rapid to the home point, the FROM/ point when none is
@@ -1147,6 +1158,132 @@ void Reader::do_circle() {
   state_.circle_radius_mm = r;
   state_.circle_where = where(major_pos_);
   std::tie(state_.circle_line, state_.circle_column) = locate(major_pos_);
+}
+
+// TLON,GOFWD/(CIRCLE/cx,cy,cz,r),ON,[n,INTOF,](LINE/x1,y1,z1,x2,y2,z2) (CATIA V5, after
+// INDIRV/): the tool centre goes forward on the circle, from the current point in the direction
+// INDIRV/ gives, until it is on the line the n-th time (n = 1 without n,INTOF). The circle's
+// plane holds the start, the centre and that direction; the line must lie in it. Parentheses
+// are optional, as some CATIA posts leave them out.
+void Reader::do_tlon(size_t pos) {
+  const std::string& s = stmt_;
+  const size_t n = s.size();
+  no_circle_pending("TLON");
+  // Tokens: words, numbers and the '/' after a word; parentheses and commas separate.
+  struct Token {
+    std::string word;  // empty: a number
+    double value = 0.0;
+    size_t pos = 0;
+  };
+  std::vector<Token> tokens;
+  for (size_t i = pos; i < n;) {
+    const char c = s[i];
+    if (c == ',' || c == '(' || c == ')' || c == '/' || c == ' ' || c == '\t') {
+      ++i;
+      continue;
+    }
+    Token t;
+    t.pos = i;
+    if (is_letter(c)) {
+      while (i < n && is_word_char(s[i])) t.word.push_back(upper(s[i++]));
+    } else if (is_digit(c) || c == '+' || c == '-' || c == '.') {
+      Arg a;
+      i = parse_number(i, a);
+      t.value = a.value;
+    } else {
+      fail(i, "unexpected " + describe(c) + " in TLON (expected TLON,GOFWD/(CIRCLE/...),ON,(LINE/...))");
+    }
+    if (tokens.size() > 64) fail(t.pos, "TLON with more than 64 values (expected CIRCLE/ and LINE/)");
+    tokens.push_back(t);
+  }
+  size_t k = 0;
+  auto expect_word = [&](const char* w, const std::string& what) {
+    if (k >= tokens.size() || tokens[k].word != w)
+      fail(k < tokens.size() ? tokens[k].pos : n, "TLON: expected " + what);
+    ++k;
+  };
+  auto value = [&](const char* what) {
+    if (k >= tokens.size() || !tokens[k].word.empty())
+      fail(k < tokens.size() ? tokens[k].pos : n, std::string("TLON: expected a number for ") + what);
+    const double v = tokens[k++].value * unit();
+    if (!(std::abs(v) <= kMaxMagnitude)) fail(tokens[k - 1].pos, std::string(what) + " out of range");
+    return v;
+  };
+  expect_word("GOFWD", "GOFWD/ (TLON,GOFWD/: forward along a circle)");
+  if (k < tokens.size() && tokens[k].word == "CYLNDR")
+    fail(tokens[k].pos, "TLON,GOFWD/ along a CYLNDR/ is not supported (expected CIRCLE/)");
+  expect_word("CIRCLE", "CIRCLE/cx,cy,cz,r after GOFWD/");
+  const double cx = value("cx"), cy = value("cy"), cz = value("cz");
+  const Eigen::Vector3d c = placed(Eigen::Vector3d(cx, cy, cz));
+  const size_t radius_pos = k < tokens.size() ? tokens[k].pos : n;
+  const double r = value("r");
+  int crossing = 1;
+  bool on = false;
+  while (k < tokens.size() && tokens[k].word != "LINE") {
+    const Token& t = tokens[k];
+    if (t.word == "ON") {
+      on = true;
+    } else if (t.word.empty() && k + 1 < tokens.size() && tokens[k + 1].word == "INTOF") {
+      if (!(t.value >= 1.0 && t.value <= 2.0) || t.value != std::floor(t.value))
+        fail(t.pos, "TLON: intersection " + num(t.value) + " (expected 1 or 2: a line crosses a circle twice)");
+      crossing = static_cast<int>(t.value);
+      ++k;
+    } else {
+      fail(t.pos, "TLON: unexpected '" + (t.word.empty() ? num(t.value) : t.word) +
+                      "' (expected ON, n,INTOF and the check line LINE/...; TO and PAST are not supported)");
+    }
+    ++k;
+  }
+  if (!on) fail(k < tokens.size() ? tokens[k].pos : n, "TLON without ON (expected ON before the LINE/)");
+  expect_word("LINE", "LINE/x1,y1,z1,x2,y2,z2, the check line");
+  Eigen::Vector3d a, b;  // one value at a time: the order of a call's arguments is not fixed
+  for (int i = 0; i < 3; ++i) a[i] = value("the line's first point");
+  for (int i = 0; i < 3; ++i) b[i] = value("the line's second point");
+  a = placed(a);
+  b = placed(b);
+  if (k < tokens.size()) fail(tokens[k].pos, "TLON: unexpected text after the LINE/ (expected the end)");
+  if (state_.cycle.on) fail(major_pos_, "TLON in a CYCLE/ (expected CYCLE/OFF first)");
+  if (!state_.known) fail(major_pos_, "TLON from an unknown position (expected FROM/ or GOTO/ before it)");
+  if (state_.indirv.isZero()) fail(major_pos_, "TLON,GOFWD/ without INDIRV/ (expected INDIRV/i,j,k before it)");
+  if (!(r > kSamePointMm)) fail(radius_pos, "circle radius " + num(r) + " mm (expected r > 0)");
+  const Eigen::Vector3d p0 = programmed_point();
+  const double allowed = std::max(options_.arc_tolerance_mm, kArcRelativeTolerance * r);
+  if (!(std::abs((p0 - c).norm() - r) <= allowed))
+    fail(radius_pos, "the current point " + point(p0) + " is " + num((p0 - c).norm()) +
+                         " mm from the circle's centre (expected a point on the circle: radius " + num(r) +
+                         " mm within " + num(allowed) + " mm)");
+  const Eigen::Vector3d normal_raw = (p0 - c).cross(state_.indirv);
+  if (!(normal_raw.norm() > 1e-6 * r))
+    fail(major_pos_, "INDIRV/ along the circle's radius at the start (expected a direction along the circle)");
+  const Eigen::Vector3d nrm = normal_raw.normalized();
+  // The line's crossings with the circle: q = a + s u, |q - c| = r, in the circle's plane.
+  const Eigen::Vector3d u = (b - a).normalized();
+  if (!((b - a).norm() > kSamePointMm) || std::abs(u.dot(nrm)) > 1e-6 || std::abs((a - c).dot(nrm)) > allowed)
+    fail(major_pos_, "TLON's LINE/ does not lie in the circle's plane (expected a line in it)");
+  const Eigen::Vector3d w = a - c;
+  const double half_b = u.dot(w), disc = half_b * half_b - (w.squaredNorm() - r * r);
+  if (!(disc > 0.0)) fail(major_pos_, "TLON's LINE/ does not cross the circle (expected a line through it)");
+  // The crossings in the order the tool meets them: by the angle from the start about nrm.
+  std::vector<std::pair<double, Eigen::Vector3d>> met;
+  for (const double sign : {-1.0, 1.0}) {
+    const Eigen::Vector3d q = a + (-half_b + sign * std::sqrt(disc)) * u;
+    double angle = std::atan2(nrm.dot((p0 - c).cross(q - c)), (p0 - c).dot(q - c));
+    if (angle <= 1e-12) angle += 2.0 * M_PI;  // forward: in (0, 2 pi]
+    met.emplace_back(angle, q);
+  }
+  std::sort(met.begin(), met.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  const Eigen::Vector3d end = met[static_cast<size_t>(crossing - 1)].second;
+  state_.circle_pending = true;
+  state_.circle_turns = 1;
+  state_.circle_center_mm = c;
+  state_.circle_normal = nrm;
+  state_.circle_radius_mm = r;
+  state_.circle_where = where(major_pos_);
+  std::tie(state_.circle_line, state_.circle_column) = locate(major_pos_);
+  motion(MotionKind::Arc, end, state_.axis);
+  state_.circle_pending = false;
+  // The direction at the end, for a next TLON without INDIRV/ (CATIA repeats INDIRV/ anyway).
+  state_.indirv = nrm.cross(end - c).normalized();
 }
 
 // SPINDL/ in the orders CAM systems write it: n[,RPM][,CLW|CCLW] (SolidWorks CAM, CATIA),

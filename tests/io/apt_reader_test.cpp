@@ -332,6 +332,54 @@ TEST(AptReader, CircleCounterclockwiseAboutPlusZ) {
   EXPECT_EQ(b.source.line, 4);  // the GOTO/ that ends the arc
 }
 
+// CATIA V5's circle: INDIRV/ the direction at the start, TLON,GOFWD/ along the circle until on
+// the check line. From (10,0,0) going +Y about the origin is counterclockwise about +Z; the
+// line X = 0 crosses the circle at (0,10,0), met after a quarter turn, and (0,-10,0), after
+// three quarters (the second intersection, 2,INTOF). Going -Y: clockwise, (0,-10,0) first.
+TEST(AptReader, CatiaTlonCircleToTheCheckLine) {
+  const AptProgram a = read(
+      "FROM/10,0,5\n"
+      "FEDRAT/100\n"
+      "GOTO/10,0,0\n"
+      "AUTOPS\n"
+      "INDIRV/ 0,1,0\n"
+      "TLON,GOFWD/ (CIRCLE/ 0,0,0,$\n"
+      "10),ON,(LINE/ 0,0,0,0,10,0)\n"
+      "INDIRV/ -1,0,0\n"
+      "TLON,GOFWD/ (CIRCLE/ 0,0,0,$\n"
+      "10),ON,2,INTOF,$\n"
+      "(LINE/ 0,0,0,10,0,0)\n"
+      "INDIRV/ 0,-1,0\n"
+      "TLON,GOFWD/ CIRCLE/ 0,0,0,10,ON,LINE/ 0,0,0,-10,-10,0\n");
+  ASSERT_EQ(a.program.blocks.size(), 4u);
+  const Block& quarter = a.program.blocks[1];
+  EXPECT_EQ(quarter.kind, MotionKind::Arc);
+  expect_vec(quarter.end_mm, {0, 10, 0});
+  expect_vec(quarter.normal, {0, 0, 1});
+  EXPECT_NEAR(swept_angle(quarter), kPi / 2, kTol);
+  EXPECT_EQ(quarter.source.line, 6);
+  // From (0,10,0) going -X: counterclockwise; the line Y = 0 is met at (-10,0,0) first, then
+  // at (10,0,0): the second is three quarters on.
+  const Block& second = a.program.blocks[2];
+  expect_vec(second.end_mm, {10, 0, 0});
+  EXPECT_NEAR(swept_angle(second), 3 * kPi / 2, kTol);
+  // From (10,0,0) going -Y: clockwise (normal -Z); the line y = x is met at (-7.07,-7.07) after
+  // 135 deg.
+  const Block& third = a.program.blocks[3];
+  expect_vec(third.normal, {0, 0, -1});
+  expect_vec(third.end_mm, {-10 / std::sqrt(2.0), -10 / std::sqrt(2.0), 0});
+  EXPECT_NEAR(swept_angle(third), 3 * kPi / 4, kTol);
+  EXPECT_APT_ERROR("FROM/10,0,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,10),ON,(LINE/ 0,0,0,0,10,0)\n", 2, 1, "without INDIRV/");
+  EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,9),ON,(LINE/ 0,0,0,0,10,0)\n", 3, 28,
+                   "mm from the circle's centre");
+  EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CYLNDR/ 0,0,0,0,0,1,10),ON\n", 3, 14,
+                   "CYLNDR/ is not supported");
+  EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,10),TO,(LINE/ 0,0,0,0,10,0)\n", 3, 32,
+                   "TO and PAST are not supported");
+  EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,10),ON,(LINE/ 0,0,1,0,10,1)\n", 3, 1,
+                   "does not lie in the circle's plane");
+}
+
 TEST(AptReader, CircleClockwiseAboutMinusZ) {
   // The same points about -Z: clockwise seen from +Z, through (0,-10,0) and (-10,0,0): 3*pi/2.
   const AptProgram a = read(

@@ -13,6 +13,9 @@
 //   LOADTL/n[,...]  LOAD/TOOL,n[,...] (NX; n = 0: numbered by its cutter)
 //   MULTAX[/ON|OFF]  TLAXIS/i,j,k
 //   CIRCLE/cx,cy,cz,i,j,k[,r[,tolerances]][,TIMES,n] then its GOTO/
+//   INDIRV/i,j,k then TLON,GOFWD/(CIRCLE/cx,cy,cz,r),ON,[n,INTOF,](LINE/x1,y1,z1,x2,y2,z2)
+//     (CATIA V5): from the current point along the circle, starting in the direction
+//     INDIRV/ gives, to the line's n-th crossing (1 by default)
 //   SPINDL/n[,RPM][,CLW|CCLW] | /RPM,n[,...] | /ON | /OFF
 //   CSYS/ 3x4 matrix (SolidWorks CAM setups)  MSYS/origin,X axis,Y axis (NX)
 //   CYCLE/DRILL|DEEP|DEEP2|BRKCHP|TAP|BORE|REAM,... | /OFF | /ON | /INIT: drilling cycles
@@ -120,6 +123,8 @@ struct AptState {
   Eigen::Matrix3d msys_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d msys_origin_mm = Eigen::Vector3d::Zero();
   int circle_turns = 1;  // CIRCLE/ ... TIMES,n
+  // INDIRV/: the direction the next TLON,GOFWD/ starts in (workpiece frame, unit); zero: none.
+  Eigen::Vector3d indirv = Eigen::Vector3d::Zero();
   // Why the CL points are the tool's centre, so that CUTCOM/ offsets nothing (empty: not known
   // to be): NX's "$$ centerline data", SolidWorks CAM's CSI_ statements.
   std::string centre_path;
