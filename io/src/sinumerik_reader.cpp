@@ -202,6 +202,11 @@ class Reader {
   void call(const std::string& name, const std::vector<double>& args, int repeat, int column);
   void proc();                                                 // PROC NAME(type name, ...): the parameters bound
   std::string subprogram_file(const std::string& name) const;  // "" when not found
+  std::string searched_for(const std::string& name) const {    // "NAME.SPF or .MPF in folders"
+    std::string searched;
+    for (const std::string& f : subprogram_folders()) searched += (searched.empty() ? "" : ", ") + f;
+    return name + ".SPF or .MPF in " + searched;
+  }
   std::vector<std::string> subprogram_folders() const;
   std::size_t body(std::string* label, long long* number);  // after N and a label: the first word
   void word();
@@ -693,11 +698,7 @@ void Reader::call(const std::string& name, const std::vector<double>& args, int 
     fail(column,
          name + ": subprograms nested more than " + std::to_string(kMaxCallDepth) + " deep (one calling itself?)");
   const std::string path = subprogram_file(name);
-  if (path.empty()) {
-    std::string searched;
-    for (const std::string& f : subprogram_folders()) searched += (searched.empty() ? "" : ", ") + f;
-    fail(column, "subprogram " + name + " not found (expected " + name + ".SPF or .MPF in " + searched + ")");
-  }
+  if (path.empty()) fail(column, "subprogram " + name + " not found (expected " + searched_for(name) + ")");
   int index = -1;
   for (std::size_t k = 0; k < program_.files.size(); ++k)
     if (program_.files[k] == path) index = static_cast<int>(k);
@@ -1463,8 +1464,12 @@ void Reader::keyword(const std::string& name, int col) {
     }
     return;
   }
-  unsupported(name, col);
   skip_blanks();
+  // NAME(values): a call of a cycle vcut does not know, or of a subprogram not found.
+  if (i_ < s_.size() && s_[i_] == '(')
+    unsupported(name, col, "not a cycle vcut reads, and no subprogram: expected " + searched_for(name));
+  else
+    unsupported(name, col);
   if (i_ < s_.size() && (s_[i_] == '(' || s_[i_] == '=')) skip_argument();
 }
 

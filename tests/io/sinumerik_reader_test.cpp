@@ -577,6 +577,9 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nN10 CYCLE800(1,\"TC\")\n", 2, 5,
                    "CYCLE800 _FR 1 retracts to the machine's home: it needs the machine");
   EXPECT_MPF_ERROR("N10 H1=5\n", 1, 5, "H1= is not supported");
+  EXPECT_MPF_ERROR(
+      "N10 POCKET4(1,2)\n", 1, 5,
+      "POCKET4 is not supported (not a cycle vcut reads, and no subprogram: expected POCKET4.SPF or .MPF in");
   EXPECT_MPF_ERROR("N10 L100\n", 1, 5, "subprogram L100 not found");
   EXPECT_MPF_ERROR("N10 G1 X=$AA_IM[X]\n", 1, 10, "system variables");
   // Accepted and ignored: MSG, G40, G601, coolant.

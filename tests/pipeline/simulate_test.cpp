@@ -84,6 +84,20 @@ TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
 // cut 0.030 mm too deep and nothing else is off. The exact endpoint check finds 0.030 mm; the
 // one gouge region covers the floor (its area within a cell row of each edge: 0.1 mm x 2 x
 // 70 mm), names line 7 and T1; every vertex is in the histogram once.
+// The bundled SINUMERIK 3+2 example (examples/sinumerik/swivel_chamfer.mpf): CYCLE800 turns
+// the AC trunnion to a frame at (0, -30, 0) turned 30 deg about X, where the 10 mm end mill
+// faces the plane 4 mm below the frame's zero across the whole block (X -40..40, frame Y -17
+// to 9 with the tool's radius). On the block (Y >= -30, Z <= 0), with v = Y + 30 and u = -Z,
+// the frame's z is -v sin30 - u cos30: the chamfer removes 0.5 v + 0.866 u < 4, a triangle
+// of legs 8 and 4 / cos30 (frame y stays within -2.4..7: inside the passes), 60 mm long:
+// 60 x 8 x 4.6188 / 2 = 1108.5 mm3. Bound: v / 10 over the cut's 591 mm2 boundary, 6 mm3.
+TEST_F(Stages, SinumerikSwivelExampleRemovesTheChamfer) {
+  io::Job j = io::read_job(std::string(VCUT_SOURCE_DIR) + "/examples/sinumerik/swivel_chamfer.yaml");
+  j.out_dir = (dir / "out").string();
+  const SimulationResult r = simulate(j, {});
+  EXPECT_NEAR(r.removed_volume_mm3, 60.0 * 8.0 * 4.0 / std::cos(M_PI / 6.0) / 2.0, 6.0);
+}
+
 TEST_F(Stages, CompareWithDesignFindsTheFloorTooDeep) {
   const io::Job j = job("report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
