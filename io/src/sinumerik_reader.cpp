@@ -2265,10 +2265,12 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
 // 0 a new plane (S replaces the swivel frame), 1 additive (S follows it). _MODE bits 7-6: 00
 // axis by axis, bits 1-0, 3-2, 5-4 the axis of the 1st, 2nd, 3rd turn (01 X, 10 Y, 11 Z: 57 is
 // X Y Z, 27 Z Y X), _A _B _C the angles in that order, each about the axes the previous turns
-// left (R = R1(_A) R2(_B) R3(_C)); 11 (192) rotary axes direct: _A _B the positions of the
+// left (R = R1(_A) R2(_B) R3(_C)); 10 (128) projection angles (Reader::swivel_turn: as ROTS
+// defines them, _A _B about the first two axes, _C about the third); 11 (192) rotary axes
+// direct: _A _B the positions of the
 // machine's rotary axes 1 and 2 (SinumerikOptions::rotary_axes), R the turn they give the tool's
-// frame on the workpiece (SinumerikOptions::frame_rotation). Solid angle
-// (64) and projection angles (128) are refused: vcut has not verified their conventions.
+// frame on the workpiece (SinumerikOptions::frame_rotation). Solid angle (64) is refused: vcut
+// has not verified its convention.
 // _DIR -1 / +1: the rotaries turn the tool to R z, the solution whose tilting axis is <= 0 /
 // >= 0 (the other where that one is out of reach, as the control does); 0: the frame only.
 // _FR: 0 no retraction, 1 machine Z to the machine's home, 2 Z then X Y to it, 4 along the tool
@@ -2377,23 +2379,52 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
 
 // CYCLE800's turn for _MODE axis by axis (bits 7-6 00).
 Eigen::Matrix3d Reader::swivel_turn(int mode, double a_deg, double b_deg, double c_deg, int column) const {
-  if ((mode >> 6) != 0) {
-    fail(column,
-         "CYCLE800 _MODE " + std::to_string(mode) + " (" + ((mode >> 6) == 1 ? "solid angle" : "projection angles") +
-             ") is not supported: vcut has not verified its convention (expected axis by axis, such as 57 or 27, "
-             "or 192 rotary axes direct)");
+  const int kind = mode >> 6;
+  if (kind == 1) {
+    fail(column, "CYCLE800 _MODE " + std::to_string(mode) +
+                     " (solid angle) is not supported: vcut has not verified its convention (expected axis by axis, "
+                     "such as 57 or 27, projection angles, or 192 rotary axes direct)");
   }
-  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
   const double angles[3] = {a_deg, b_deg, c_deg};
+  const int axes[3] = {mode & 3, (mode >> 2) & 3, (mode >> 4) & 3};  // 1 X, 2 Y, 3 Z, 0 none
+  auto turn = [](int axis, double deg) {
+    return Eigen::AngleAxisd(deg * kDegToRad, Eigen::Vector3d::Unit(axis - 1)).toRotationMatrix();
+  };
+  const std::string where = "CYCLE800 _MODE " + std::to_string(mode);
+  if (kind == 2) {
+    // Projection angles, as ROTS defines them (Function Manual K2, "frame rotations with solid
+    // angles"): the angles about the first two axes p and q are those of the plane's traces,
+    // taken in cyclic order (p, q, r) = (X, Y, Z), (Y, Z, X) or (Z, X, Y): the new p axis lies in
+    // the old r-p plane, turned by beta about q; the new q axis turned by alpha about p lies in
+    // the plane. R = Rq(beta) Rp(alpha') with tan alpha' = tan alpha cos beta, then the third
+    // angle about the new r axis.
+    const int first = axes[0], second = axes[1];
+    if (first == 0 || second == 0 || first == second || (axes[2] != 0 && axes[2] == first) ||
+        (axes[2] != 0 && axes[2] == second))
+      fail(column, where + " (projection angles) names the axes " + std::to_string(first) + ", " +
+                       std::to_string(second) + ", " + std::to_string(axes[2]) +
+                       " (expected two different axes, then the third)");
+    const bool cyclic = second == first % 3 + 1;
+    const int p = cyclic ? first : second, q = cyclic ? second : first, r = 6 - p - q;
+    const double alpha = cyclic ? a_deg : b_deg, beta = cyclic ? b_deg : a_deg;
+    if (!(std::abs(alpha) < 90.0 && std::abs(beta) < 90.0))
+      fail(column, where + " projection angles " + num(a_deg) + ", " + num(b_deg) +
+                       " deg (expected within -90..90: the plane's traces)");
+    if (axes[2] == 0 && c_deg != 0.0)
+      fail(column, where + " names no axis for the third turn but its angle is " + num(c_deg) + " deg");
+    const double alpha_turned = std::atan(std::tan(alpha * kDegToRad) * std::cos(beta * kDegToRad)) / kDegToRad;
+    return turn(q, beta) * turn(p, alpha_turned) * turn(r, c_deg);
+  }
+  // Axis by axis (kind 0); rotary axes direct (kind 3) do not come here.
+  Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
   for (int k = 0; k < 3; ++k) {
-    const int axis = (mode >> (2 * k)) & 3;
-    if (axis == 0) {
+    if (axes[k] == 0) {
       if (angles[k] != 0.0)
-        fail(column, "CYCLE800 _MODE " + std::to_string(mode) + " names no axis for turn " + std::to_string(k + 1) +
-                         " but its angle is " + num(angles[k]) + " deg (expected 57 X Y Z, 27 Z Y X or another order)");
+        fail(column, where + " names no axis for turn " + std::to_string(k + 1) + " but its angle is " +
+                         num(angles[k]) + " deg (expected 57 X Y Z, 27 Z Y X or another order)");
       continue;
     }
-    r = r * Eigen::AngleAxisd(angles[k] * kDegToRad, Eigen::Vector3d::Unit(axis - 1)).toRotationMatrix();
+    r = r * turn(axes[k], angles[k]);
   }
   return r;
 }

@@ -173,6 +173,29 @@ TEST(SinumerikSwivel, Cycle800TurnsTheBcHeadAboutItsPivot) {
   EXPECT_NEAR(last_of_line(direct, 3).end_rotary.angle_rad[1], 30 * kDeg, 1e-12);
 }
 
+// Projection angles (_MODE 128 + the axis order), as ROTS defines them (Siemens K2): alpha 30
+// about X, beta 45 about Y are the angles of the plane's traces, so its normal is along
+// (tan beta, -tan alpha, 1) (the YZ trace turned alpha about X from Z, the ZX trace beta about Y),
+// and the new X axis is the old X turned beta about Y: (cos 45, 0, -sin 45), in the old ZX
+// plane. Order X Y (185 = 128 + 57) and Y X (182 = 128 + 54, _A then about Y) give one frame.
+TEST(SinumerikSwivel, Cycle800ProjectionAnglesAsRotsDefinesThem) {
+  const Eigen::Vector3d z = Eigen::Vector3d(1.0, -std::tan(30 * kDeg), 1.0).normalized();
+  const Eigen::Vector3d x(std::sqrt(0.5), 0, -std::sqrt(0.5));
+  const Eigen::Vector3d y = z.cross(x);
+  for (const char* call :
+       {"CYCLE800(0,\"\",0,185,0,0,0,30,45,0,0,0,0,0,0,1)", "CYCLE800(0,\"\",0,182,0,0,0,45,30,0,0,0,0,0,0,1)"}) {
+    const Program p = read(std::string("N10 G0 X0 Y0 Z0\n") + call + "\nN30 G0 X1 Y0 Z0\nN40 X0 Y1\nN50 Y0 Z1\n");
+    expect_vec(last_of_line(p, 3).end_mm, x, 1e-12);
+    expect_vec(last_of_line(p, 4).end_mm, y, 1e-12);
+    expect_vec(last_of_line(p, 5).end_mm, z, 1e-12);
+  }
+  // The third angle turns about the new Z: 90 deg takes the frame's X to the plane's Y.
+  const Program third = read("N10 G0 X0 Y0 Z0\nCYCLE800(0,\"\",0,185,0,0,0,30,45,90,0,0,0,0,0,1)\nN30 G0 X1 Y0 Z0\n");
+  expect_vec(last_of_line(third, 3).end_mm, y, 1e-12);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nCYCLE800(0,\"\",0,185,0,0,0,90,45,0,0,0,0,0,0,1)\n").find("expected within -90..90"),
+            std::string::npos);
+}
+
 TEST(SinumerikSwivel, Cycle800AdditiveFollowsTheFrameAndNewReplacesIt) {
   // _DIR 0: the frame only, no machine needed. 10 deg, then 20 more (additive, _ST 1) = 30.
   const Program p = read(

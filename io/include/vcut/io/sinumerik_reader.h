@@ -65,7 +65,7 @@
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
 // ORICONTO, A7 B7 C7 outside ORICONIO, CASE, PCALL/EXTCALL, VAR parameters, DEF of other types
-// than REAL, INT and BOOL, CYCLE800's solid-angle and projection-angle modes, other cycles,
+// than REAL, INT and BOOL, CYCLE800's solid-angle mode, other cycles,
 // tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
 // distinct word, then ignored.
