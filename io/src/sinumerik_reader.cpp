@@ -616,6 +616,45 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
       if (!holds) next = static_cast<std::size_t>(partner) + 1;  // after ELSE, or after ENDIF
     }
     finish();
+  } else if (word == "CASE") {
+    // CASE (expr) OF c1 GOTOF l1 c2 GOTOB l2 ... [DEFAULT GOTOF ld]: the jump of the first
+    // constant equal to the value, else DEFAULT's, else on to the next block. Every target is
+    // checked, taken or not.
+    expect('(', "CASE without '(' (expected CASE (expression) OF constant GOTOF label ...)");
+    const double value = expression(1);
+    expect(')', "CASE ( without its closing ')'");
+    skip_blanks();
+    if (letters() != "OF") fail_here("CASE without OF (expected CASE (expression) OF constant GOTOF label ...)");
+    bool matched = false, any = false;
+    while (true) {
+      skip_blanks();
+      if (i_ >= s_.size() || s_[i_] == ';') break;
+      const std::size_t at_case = i_;
+      const bool fallback = s_.compare(i_, 7, "DEFAULT") == 0;
+      double constant = 0.0;
+      if (fallback)
+        i_ += 7;
+      else
+        constant = expression(1);
+      skip_blanks();
+      const std::size_t jump_at = i_;
+      const std::string go = letters();
+      if (go != "GOTOF" && go != "GOTOB" && go != "GOTO" && go != "GOTOC")
+        fail(column(jump_at), "CASE's " + std::string(fallback ? "DEFAULT" : num(constant)) +
+                                  " without its jump (expected GOTOF or GOTOB and a label)");
+      const std::size_t to = jump_target(pc, go, column(jump_at));
+      if (!matched && (fallback || constant == value)) {
+        next = to;
+        matched = true;
+      }
+      any = true;
+      if (fallback) {
+        skip_blanks();
+        if (i_ < s_.size() && s_[i_] != ';')
+          fail(column(at_case), "CASE's DEFAULT before another case (expected it last)");
+      }
+    }
+    if (!any) fail(col, "CASE without a case (expected constant GOTOF label after OF)");
   } else if (word == "ELSE") {
     next = static_cast<std::size_t>(partner) + 1;  // the true branch ends here
   } else if (word == "ENDIF" || word == "REPEAT" || word == "LOOP") {

@@ -569,7 +569,7 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_TRUE(held.blocks[1].start_rotary.angle_rad == held.blocks[1].end_rotary.angle_rad);
   EXPECT_DOUBLE_EQ(held.blocks[1].end_rotary.angle_rad[0], 10.0 * M_PI / 180.0);
   EXPECT_MPF_ERROR("TRAORI(2)\n", 1, 1, "expected TRAORI or TRAORI(1)");
-  EXPECT_MPF_ERROR("N10 CASE(R1) OF 1 GOTOF A\n", 1, 5, "CASE (program flow");
+  EXPECT_MPF_ERROR("N10 PCALL SUB\n", 1, 5, "PCALL (program flow");
   EXPECT_MPF_ERROR("N10 ROTS X10\n", 1, 5, "ROTS is not supported: it changes the frame");
   EXPECT_MPF_ERROR("N10 G110 X10\n", 1, 5, "G110 is not supported");
   EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
@@ -745,6 +745,19 @@ TEST(SinumerikReader, ProgramFlow) {
   EXPECT_MPF_ERROR("IF R1 == 0 ; GOTO in a comment\nG1 X1 F1\nENDIF\n", 3, 1, "ENDIF without its IF");
   EXPECT_MPF_ERROR("IF R1 == 0 ; GOTO in a comment\nG1 X1 F1\n", 1, 1, "without its ENDIF");
   EXPECT_MPF_ERROR("DEF STRING[8] NAME\n", 1, 4, "DEF STRING is not supported");
+  // CASE: the first equal constant's jump, else DEFAULT's, else the next block; R1 = 2, 7, 9.
+  for (const auto& [r1, want] : std::vector<std::pair<int, double>>{{2, 2.0}, {7, 3.0}, {1, 1.0}}) {
+    const Program c = read("R1=" + std::to_string(r1) +
+                           "\nG0 X0 Y0 Z0\nCASE (R1) OF 1 GOTOF ONE 2 GOTOF TWO DEFAULT GOTOF OTHER\n"
+                           "ONE: G1 X1 F100\nGOTOF END\nTWO: G1 X2 F100\nGOTOF END\nOTHER: G1 X3 F100\nEND: M30\n");
+    ASSERT_EQ(c.blocks.size(), 1u) << r1;
+    EXPECT_EQ(c.blocks[0].end_mm.x(), want) << r1;
+  }
+  const Program none = read("G0 X0 Y0 Z0\nCASE (5) OF 1 GOTOF ONE\nG1 X7 F1\nONE: G1 Y1\n");
+  ASSERT_EQ(none.blocks.size(), 2u);  // no case taken: on to the next block
+  EXPECT_EQ(none.blocks[0].end_mm.x(), 7.0);
+  EXPECT_MPF_ERROR("CASE (1) OF 1 GOTOF NOWHERE\n", 1, 21, "no such label");
+  EXPECT_MPF_ERROR("CASE (1) OF 1 X\n", 1, 15, "without its jump");
 }
 
 // Subprograms, worked by hand: POCKET(3, 3) runs its FOR with DEPTH 3 and PASSES 3 (Z -1, -2,

@@ -46,8 +46,9 @@
 //   error. A turned frame needs X Y Z known before its first move.
 //   Program flow: labels NAME: and block numbers as targets of GOTOF GOTOB GOTO GOTOC; IF cond
 //   GOTOx; IF / ELSE / ENDIF; WHILE / ENDWHILE; FOR var = a TO b / ENDFOR; REPEAT / UNTIL;
-//   LOOP / ENDLOOP; DEF REAL | INT | BOOL name[=value], ...; conditions with == <> < > <= >=
-//   AND OR XOR NOT TRUE FALSE. A loop runs at most SinumerikOptions::max_lines blocks.
+//   LOOP / ENDLOOP; CASE (expr) OF c GOTOF label ... [DEFAULT GOTOF label]; DEF REAL | INT |
+//   BOOL name[=value], ...; conditions with == <> < > <= >= AND OR XOR NOT TRUE FALSE. A loop
+//   runs at most SinumerikOptions::max_lines blocks.
 //   Subprograms: L123 [P n], CALL "NAME", NAME or NAME(values) [P n], from NAME.SPF / .MPF in
 //   the calling file's folder, then SinumerikOptions::subroutine_path; PROC NAME(REAL A, INT
 //   B) binds the values; M17, RET, M2, M30 return; nested at most 16 deep.
@@ -64,7 +65,7 @@
 //   SETMS (no effect on the path).
 // Refused always (the reader would otherwise approximate or change the program's flow):
 // NUT= (the manual gives its range but not which cone it selects), A6 B6 C6 under ORICONIO or
-// ORICONTO, A7 B7 C7 outside ORICONIO, CASE, PCALL/EXTCALL, VAR parameters, DEF of other types
+// ORICONTO, A7 B7 C7 outside ORICONIO, PCALL/EXTCALL, VAR parameters, DEF of other types
 // than REAL, INT and BOOL, CYCLE800's solid-angle mode, other cycles,
 // tool vectors under ORIMKS, a tool vector after the orientation was set by rotary
 // axis positions. Any other word is an error, or with unsupported_as_warning one warning per
