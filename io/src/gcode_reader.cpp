@@ -1551,7 +1551,12 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     const double v = w.value * unit();
     if (machine_coordinates_) {
       if (state_.incremental) fail(w.column, "G53 in incremental mode G91 (expected G90)");
-      end[a] = v;  // machine coordinates: no work offsets
+      // Machine coordinates, no work offsets, from the gauge point at all-zero axes. LinuxCNC
+      // applies the tool length (G43) there: the tip goes to the point; Fanuc and Haas move the
+      // spindle's gauge point there (their posts' G53 G0 Z0 with G43 on is the tool change
+      // height), as LinuxCNC does under G49: the tip a tool length below it.
+      const bool tip_there = options_.flavor == GcodeOptions::Flavor::LinuxCnc && state_.length_comp;
+      end[a] = options_.machine_zero_mm[a] + v + (tip_there ? 0.0 : tip_offset()[a]);
     } else if (state_.incremental) {
       if (!state_.known[a]) {
         fail(w.column, std::string("incremental (G91) ") + kAxisLetter[a] + " move while the " + kAxisLetter[a] +

@@ -162,6 +162,29 @@ TEST(HomeReturn, ThroughTheIntermediatePointToTheReference) {
   EXPECT_NE(error_of("G0 G28 X1\n").find("both use the axis words"), std::string::npos);
 }
 
+// G53: machine coordinates count from the gauge point at all-zero axes (machine_zero_mm, here
+// (0, 0, 400) as the bundled 3axis mill has it). Fanuc and Haas move the gauge point there, so
+// with T1 (10 mm) the tip stops 10 below, G43 or not; LinuxCNC puts the tip there under G43.
+TEST(HomeReturn, G53CountsFromTheMachineZero) {
+  GcodeOptions options;
+  options.start_mm = Eigen::Vector3d(0, 0, 400);
+  options.machine_zero_mm = Eigen::Vector3d(0, 0, 400);
+  options.tool_length_mm = {{1, 10.0}};
+  options.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, -300);
+  const std::string text = "T1 M6\nG54 G43 H1 G0 X5 Y5 Z5\nG53 G0 Z-20\nG49\nG53 G0 Z-30\nM2\n";
+  options.flavor = GcodeOptions::Flavor::Fanuc;
+  const Program fanuc = read(text, options);
+  ASSERT_EQ(fanuc.blocks.size(), 3u);
+  expect_line(fanuc.blocks[0], {0, 0, 390}, {5, 5, -295});
+  expect_line(fanuc.blocks[1], {5, 5, -295}, {5, 5, 370});  // 400 - 20 - 10
+  expect_line(fanuc.blocks[2], {5, 5, 370}, {5, 5, 360});   // 400 - 30 - 10
+  options.flavor = GcodeOptions::Flavor::LinuxCnc;
+  const Program linuxcnc = read(text, options);
+  ASSERT_EQ(linuxcnc.blocks.size(), 3u);
+  expect_line(linuxcnc.blocks[1], {5, 5, -295}, {5, 5, 380});  // G43: the tip at 400 - 20
+  expect_line(linuxcnc.blocks[2], {5, 5, 380}, {5, 5, 360});   // G49: the gauge point at 370
+}
+
 // A start position: the first moves go from it; G91 and G10 L20 work at once.
 TEST(StartPosition, MovesGoFromTheStart) {
   GcodeOptions options;
