@@ -61,14 +61,23 @@ struct Extent {
   Eigen::AlignedBox3d box;
   double highest_level_mm = -std::numeric_limits<double>::infinity();  // of a feed move at one Z
   double max_radius_mm = 0.0;
+  // The first plunge: a rapid down followed by a feed further down; a CAM system rapids to
+  // just above the stock there, so the stock's top is no higher (NaN: none).
+  Eigen::Vector3d first_plunge_mm = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 };
 
 // The cutting (feed) moves' tips, arcs by their whole circles (a bound), and the largest
 // radius of the tools that make them.
 Extent cutting_extent(const kinematics::Program& program, const io::ToolLibrary& tools) {
   Extent e;
+  const kinematics::Block* last = nullptr;
   for (const kinematics::Block& b : program.blocks) {
+    const kinematics::Block* before = last;
+    last = &b;
     if (b.kind == kinematics::MotionKind::Rapid) continue;
+    if (before != nullptr && before->kind == kinematics::MotionKind::Rapid && std::isnan(e.first_plunge_mm.z()) &&
+        before->end_mm.z() < before->start_mm.z() - 1e-9 && b.end_mm.z() < b.start_mm.z() - 1e-9)
+      e.first_plunge_mm = before->end_mm;
     e.box.extend(b.start_mm);
     e.box.extend(b.end_mm);
     if (b.kind == kinematics::MotionKind::Arc) {
@@ -128,7 +137,12 @@ void set_stock(io::Job& job, const std::optional<io::DeclaredStock>& declared, c
     return;
   }
   const bool top_at_zero = lo.z() < -1e-9;
-  const double top = top_at_zero ? 0.0 : (std::isfinite(cut.highest_level_mm) ? cut.highest_level_mm : hi.z());
+  double top = top_at_zero ? 0.0 : (std::isfinite(cut.highest_level_mm) ? cut.highest_level_mm : hi.z());
+  // No higher than the first plunge's rapid end over the cutting moves (their XY box).
+  const Eigen::Vector3d& plunge = cut.first_plunge_mm;
+  const bool lowered = plunge.allFinite() && plunge.z() < top && plunge.z() > lo.z() && plunge.x() >= lo.x() &&
+                       plunge.x() <= hi.x() && plunge.y() >= lo.y() && plunge.y() <= hi.y();
+  if (lowered) top = plunge.z();
   // No margin in X and Y: the approaches start outside the part, and a margin would put
   // their rapids into the assumed stock.
   const double margin_z = std::max(1.0, 0.05 * (top - lo.z()));
@@ -141,9 +155,11 @@ void set_stock(io::Job& job, const std::optional<io::DeclaredStock>& declared, c
   job.assumptions.push_back(
       "stock: " + name + " declares none; the cutting moves' box grown by the largest tool's radius (" +
       mm(cut.max_radius_mm) + " mm), from their lowest Z less " + mm(margin_z) + " mm up to " +
-      (top_at_zero ? "Z0 (the stock's top, where CAM systems put it)" : "their highest cutting level") + ": X " +
-      mm(box.min_mm.x()) + ".." + mm(box.max_mm.x()) + " Y " + mm(box.min_mm.y()) + ".." + mm(box.max_mm.y()) + " Z " +
-      mm(box.min_mm.z()) + ".." + mm(box.max_mm.z()));
+      (lowered ? "Z" + mm(top) + ", where the first plunge's rapid ends (CAM systems rapid to just above the stock)"
+       : top_at_zero ? "Z0 (the stock's top, where CAM systems put it)"
+                     : "their highest cutting level") +
+      ": X " + mm(box.min_mm.x()) + ".." + mm(box.max_mm.x()) + " Y " + mm(box.min_mm.y()) + ".." + mm(box.max_mm.y()) +
+      " Z " + mm(box.min_mm.z()) + ".." + mm(box.max_mm.z()));
 }
 
 // The deepest each tool cuts below the stock's top (mm; 0 where it stays above).

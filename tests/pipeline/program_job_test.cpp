@@ -51,6 +51,19 @@ TEST_F(ProgramJob, StockFromTheCuttingMoves) {
   EXPECT_GE(j.assumptions.size(), 5u);
 }
 
+// The first plunge: a rapid down to Z-2 over the cutting area, then a feed further down: the
+// stock's top is no higher than Z-2 (CAM systems rapid to just above the stock). The box then
+// runs from Z-4 less max(1, 5 % of 2) = 1 to Z-2. A rapid to depth followed by a level lead-in
+// (a profile entering from outside) lowers nothing.
+TEST_F(ProgramJob, StockTopNoHigherThanTheFirstPlunge) {
+  const vcut::io::Job j = job("G21 G90\nT1 M6\nG0 X10 Y10 Z20\nG0 Z-2\nG1 Z-4 F100\nX50\nG0 Z20\nM30\n");
+  EXPECT_NEAR(j.stock.box.max_mm.z(), -2.0, 1e-12);
+  EXPECT_NEAR(j.stock.box.min_mm.z(), -5.0, 1e-12);
+  EXPECT_NE(j.assumptions[1].find("where the first plunge's rapid ends"), std::string::npos) << j.assumptions[1];
+  const vcut::io::Job profile = job("G21 G90\nT1 M6\nG0 X10 Y10 Z20\nG0 Z-4\nG1 X50 F100\nG0 Z20\nM30\n");
+  EXPECT_NEAR(profile.stock.box.max_mm.z(), 0.0, 1e-12);
+}
+
 // An arc's own extent, not its circle's: G2 from (0, 0) to (20, 0) about (10, 0) clockwise
 // passes over the top, reaching Y 10; nothing goes below Y 0. With the default 6 mm tool the
 // box is X -3..23, Y -3..13.
