@@ -395,12 +395,17 @@ SinumerikOptions sinumerik_options(const GcodeOptions& gcode) {
   SinumerikOptions sinumerik;
   sinumerik.work_offsets_mm = gcode.work_offsets_mm;
   sinumerik.unsupported_as_warning = gcode.unsupported_as_warning;
+  sinumerik.unknown_m_code_as_error = gcode.unknown_m_code_as_error;
+  sinumerik.m_codes_ignored = gcode.m_codes_ignored;
   if (gcode.arc_tolerance_mm >= 0.0) sinumerik.arc_tolerance_mm = gcode.arc_tolerance_mm;
   sinumerik.max_lines = gcode.max_lines;
   sinumerik.subroutine_path = gcode.subroutine_path;
   sinumerik.orient = gcode.orient;
   sinumerik.tip_after_turn = gcode.tip_after_turn;
-  if (gcode.orient) sinumerik.reference_mm = gcode.reference_mm;  // set_machine sets both
+  if (gcode.orient) {  // set_machine sets these
+    sinumerik.reference_mm = gcode.reference_mm;
+    sinumerik.start_mm = gcode.start_mm;
+  }
   sinumerik.tool_length_mm = gcode.tool_length_mm;
   sinumerik.spindle_axis = gcode.spindle_axis;
   sinumerik.rotary_axes = gcode.rotary_axes;

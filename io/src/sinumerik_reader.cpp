@@ -1219,7 +1219,17 @@ void Reader::code(char letter, int col) {
         l_.m6_column = col;
         return;
       default:
-        return unsupported(word, col);
+        skip_blanks();
+        if (at('(')) skip_argument();  // a value for the machine's own code: M202(0.0024)
+        // A machine's own M code (M50 a clamp, M200 a mode...): no path effect. A warning once
+        // per code, as the G-code reader has it; none for the machine file's; an error when
+        // the job asks.
+        if (options_.m_codes_ignored.count(n) != 0) return;
+        if (options_.unknown_m_code_as_error) fail(col, word + " is not an M code vcut knows (expected M0..M9, M17, M30)");
+        if (state_.warned.insert(word).second)
+          warn(col, word + " is not an M code vcut knows: read as one that does not move the axes (the machine "
+                           "file's m_codes lists its own)");
+        return;
     }
   }
   switch (n) {
@@ -1247,6 +1257,8 @@ void Reader::code(char letter, int col) {
       state_.plane = Plane::YZ;
       return;
     case 40:
+    case 62:   // corner deceleration at inside corners (G41/G42): the speed, not the path
+    case 621:  // corner deceleration at all corners
     case 601:
     case 602:
     case 603:
@@ -1274,6 +1286,9 @@ void Reader::code(char letter, int col) {
     case 64:
     case 641:
     case 642:
+    case 643:
+    case 644:
+    case 645:
       state_.exact_stop = false;
       return;
     case 70:
@@ -1373,6 +1388,22 @@ void Reader::keyword(const std::string& name, int col) {
     i_ = close + 1;
     l_.call = called;
     l_.call_column = col;
+    return;
+  }
+  if (name == "EXTERN") {  // a subprogram's declaration: the call names the file
+    i_ = s_.size();
+    return;
+  }
+  if (name == "COMPOF" || name == "COMPON" || name == "COMPCAD" || name == "COMPCURV" || name == "COMPSURF" ||
+      name == "WORKPIECE") {
+    // The compressor (blocks joined within the control's tolerance: the path as programmed,
+    // within it) and ShopMill's blank for the control's own simulation: one note each.
+    if (state_.warned.insert(name).second)
+      warn(col, name + (name == "WORKPIECE" ? " (the blank, for the control's own display)"
+                                            : " (the control's compressor, within its tolerance)") +
+                    " read as a note: the path is the programmed one");
+    skip_blanks();
+    if (at('(')) skip_argument();
     return;
   }
   if (name == "CYCLE832") {
@@ -1527,7 +1558,10 @@ void Reader::execute() {
   }
   if (l.m6) {
     if (state_.selected_tool < 0) fail(l.m6_column, "M6 without a tool selected (expected a T word before or with it)");
+    // The spindle stays where it is: the new tool's tip is its length below the gauge point.
+    const double before = tool_length_mm();
     state_.tool = state_.selected_tool;
+    state_.position_mm -= (tool_length_mm() - before) * state_.tool_axis;
   }
   if (l.d.present) {
     const double d = l.d.value;
@@ -2661,6 +2695,13 @@ void read_sinumerik(std::istream& in, const std::string& name, const SinumerikOp
   if (state.r.size() != static_cast<std::size_t>(kRParameters)) state.r.assign(kRParameters, 0.0);
   const int file_index = static_cast<int>(program.files.size());
   if (file_index == 0 && options.initial_tool > 0) state.tool = state.selected_tool = options.initial_tool;
+  if (file_index == 0 && options.start_mm) {
+    // The machine is somewhere: its home's gauge point, the tip a tool length below it.
+    const auto length = options.tool_length_mm.find(state.tool);
+    const double l = length == options.tool_length_mm.end() ? 0.0 : length->second;
+    state.position_mm = *options.start_mm - l * options.spindle_axis;
+    state.known = {true, true, true};
+  }
   program.files.push_back(name);
   Reader reader(name, options, program, state, file_index);
   detail::read_guarded(name, [&] { reader.run(in); });

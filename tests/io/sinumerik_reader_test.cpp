@@ -573,7 +573,14 @@ TEST(SinumerikReader, RefusedWords) {
   EXPECT_MPF_ERROR("N10 ROTS X10\n", 1, 5, "ROTS is not supported: it changes the frame");
   EXPECT_MPF_ERROR("N10 G110 X10\n", 1, 5, "G110 is not supported");
   EXPECT_MPF_ERROR("N10 G95 F0.1\n", 1, 5, "G95 is not supported");
-  EXPECT_MPF_ERROR("N10 M123\n", 1, 5, "M123 is not supported");
+  // A machine's own M code: a warning once (an error when the job asks), M202(0.0024) too.
+  const Program m = read("N10 M123\nN20 M123 M202(0.0024)\n");
+  ASSERT_EQ(m.warnings.size(), 2u);
+  EXPECT_EQ(m.warnings[0].rfind("test.mpf:1:5: M123 is not an M code vcut knows", 0), 0u) << m.warnings[0];
+  SinumerikOptions strict;
+  strict.unknown_m_code_as_error = true;
+  EXPECT_NE(std::string(error_of("N10 M123\n", strict).what()).find("test.mpf:1:5: M123 is not an M code"),
+            std::string::npos);
   EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nN10 CYCLE800(1,\"TC\")\n", 2, 5,
                    "CYCLE800 _FR 1 retracts to the machine's home: it needs the machine");
   EXPECT_MPF_ERROR("N10 H1=5\n", 1, 5, "H1= is not supported");

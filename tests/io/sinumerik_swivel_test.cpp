@@ -240,9 +240,12 @@ TEST(SinumerikSwivel, Cycle800RetractsThenSwingsAndDeselectKeepsTheTurnedAxes) {
   // _FR 5: _FR_I 20 mm along the tool (still upright) before the turn.
   const Program up =
       read("N10 T1 M6\nN20 G0 X10 Y20 Z5\nN30 CYCLE800(5,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,20,1)\n", options);
-  ASSERT_FALSE(up.blocks.empty());
-  expect_vec(up.blocks.front().start_mm, {10, 20, 5});  // line 2 started from nowhere: no block
-  expect_vec(up.blocks.front().end_mm, {10, 20, 25});
+  const Block* lift = nullptr;
+  for (const Block& b : up.blocks)
+    if (b.source.line == 3 && lift == nullptr) lift = &b;
+  ASSERT_NE(lift, nullptr);
+  expect_vec(lift->start_mm, {10, 20, 5});
+  expect_vec(lift->end_mm, {10, 20, 25});
 }
 
 TEST(SinumerikSwivel, MachineCoordinatesAndToolOffsetOff) {
@@ -251,7 +254,7 @@ TEST(SinumerikSwivel, MachineCoordinatesAndToolOffsetOff) {
   SinumerikOptions options = on_machine("3axis", {{1, 100.0}});
   options.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, -300);
   const Program p = read(
-      "N10 T1 M6 D1 G0 X0 Y0 Z0\n"  // from nowhere: sets the position, no block
+      "N10 T1 M6 D1\n"
       "N20 G54 G0 X10 Y20 Z5\n"
       "N30 SUPA G0 Z-10 D0\n"  // the gauge point at machine Z -10 (390): the tip 100 below
       "N40 G53 X5\n"           // machine X 5; Y and Z stay
@@ -260,6 +263,8 @@ TEST(SinumerikSwivel, MachineCoordinatesAndToolOffsetOff) {
       "N70 G74 X1=0 Z1=0\n"    // reference point: home = all-zero axes, gauge at Z 400
       "N80 G75 FP=2 Y1=0\n",   // fixed point 2: no second home, so the home again
       options);
+  // From the machine's home (all-zero axes: the gauge point at 400, T1's tip 100 below).
+  expect_vec(last_of_line(p, 2).start_mm, {0, 0, 300});
   expect_vec(last_of_line(p, 2).end_mm, {10, 20, -295});
   expect_vec(last_of_line(p, 3).end_mm, {10, 20, 290});
   expect_vec(last_of_line(p, 4).end_mm, {5, 20, 290});
@@ -305,7 +310,7 @@ TEST(SinumerikSwivel, BadInputNamesTheLine) {
             std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nCYCLE800(3,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,0,1)\n", ac).find("CYCLE800 _FR 3"),
             std::string::npos);
-  EXPECT_NE(error_of("CYCLE800(0,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,0,1)\n", ac)
+  EXPECT_NE(error_of("CYCLE800(5,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,0,10,1)\n")
                 .find("swivel.mpf:1:1: CYCLE800 from an unknown X position"),
             std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nCYCLE800(0,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,0,1) X1\n", ac)

@@ -100,7 +100,7 @@ TEST_F(ProgramJob, MachineByTheRotaryWords) {
   EXPECT_EQ(held.machine, "3axis");
   EXPECT_NE(held.assumptions.front().find("hold them at 0"), std::string::npos) << held.assumptions.front();
   const vcut::pipeline::JobProgram read = vcut::pipeline::read_job_program(held);
-  ASSERT_EQ(read.program.blocks.size(), 3u);  // lines 20 and 30 start from nowhere: no block
+  ASSERT_EQ(read.program.blocks.size(), 4u);  // from the home: line 20 (Z), not 30 (home already)
   const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(held, read, held.resolution_mm);
   for (const auto& e : run.events)
     EXPECT_NE(e.kind, vcut::pipeline::PoseEventKind::Unreachable) << e.line << ": " << e.detail;

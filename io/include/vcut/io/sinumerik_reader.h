@@ -93,6 +93,10 @@ struct SinumerikOptions {
   // (the default) is no offset. Other names are not used.
   std::map<std::string, Eigen::Vector3d> work_offsets_mm;
   bool unsupported_as_warning = false;  // an unsupported word: one warning per word, ignored
+  // M codes other than M0..M9, M17, M30: a warning once per code (none for m_codes_ignored,
+  // the machine file's), or an error with unknown_m_code_as_error, as GcodeOptions has them.
+  bool unknown_m_code_as_error = false;
+  std::set<int> m_codes_ignored;
   // Radius mismatch allowed between the start and the end of a centre arc: the larger of this
   // and 0.1 % of the radius (the control's $MN_CIRCLE_ERROR_CONST, 0.01 mm, and
   // $MN_CIRCLE_ERROR_FACTOR, 0.001, as shipped).
@@ -120,6 +124,10 @@ struct SinumerikOptions {
   decltype(GcodeOptions::frame_rotation) frame_rotation;
   // The tool in the spindle when the first file starts (0: none), as GcodeOptions::initial_tool.
   int initial_tool = 0;
+  // Where the spindle's gauge point stands when the first file starts (a job's machine home,
+  // workpiece frame, mm); the tip is the initial tool's length below it. None: each axis is
+  // unknown until programmed.
+  std::optional<Eigen::Vector3d> start_mm;
   // SUPA / G53 / G153: the gauge point at all-zero axes (workpiece frame, mm), where machine
   // coordinate 0 lies (the workpiece zero without a machine).
   Eigen::Vector3d machine_zero_mm = Eigen::Vector3d::Zero();
