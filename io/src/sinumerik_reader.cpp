@@ -1225,10 +1225,12 @@ void Reader::code(char letter, int col) {
         // per code, as the G-code reader has it; none for the machine file's; an error when
         // the job asks.
         if (options_.m_codes_ignored.count(n) != 0) return;
-        if (options_.unknown_m_code_as_error) fail(col, word + " is not an M code vcut knows (expected M0..M9, M17, M30)");
+        if (options_.unknown_m_code_as_error)
+          fail(col, word + " is not an M code vcut knows (expected M0..M9, M17, M30)");
         if (state_.warned.insert(word).second)
-          warn(col, word + " is not an M code vcut knows: read as one that does not move the axes (the machine "
-                           "file's m_codes lists its own)");
+          warn(col, word +
+                        " is not an M code vcut knows: read as one that does not move the axes (the machine "
+                        "file's m_codes lists its own)");
         return;
     }
   }
@@ -1399,8 +1401,9 @@ void Reader::keyword(const std::string& name, int col) {
     // The compressor (blocks joined within the control's tolerance: the path as programmed,
     // within it) and ShopMill's blank for the control's own simulation: one note each.
     if (state_.warned.insert(name).second)
-      warn(col, name + (name == "WORKPIECE" ? " (the blank, for the control's own display)"
-                                            : " (the control's compressor, within its tolerance)") +
+      warn(col, name +
+                    (name == "WORKPIECE" ? " (the blank, for the control's own display)"
+                                         : " (the control's compressor, within its tolerance)") +
                     " read as a note: the path is the programmed one");
     skip_blanks();
     if (at('(')) skip_argument();
@@ -1429,7 +1432,9 @@ void Reader::keyword(const std::string& name, int col) {
     l_.mcall = true;  // alone: the modal call ends; with a cycle: it becomes the modal call
     return;
   }
-  if (name == "CYCLE81" || name == "CYCLE82" || name == "CYCLE83" || name == "CYCLE800") {
+  if (name == "CYCLE81" || name == "CYCLE82" || name == "CYCLE83" || name == "CYCLE84" || name == "CYCLE840" ||
+      name == "CYCLE85" || name == "CYCLE86" || name == "CYCLE87" || name == "CYCLE88" || name == "CYCLE89" ||
+      name == "CYCLE800") {
     if (!l_.cycle.empty()) fail(col, name + " after " + l_.cycle + " in one block (expected one cycle call)");
     l_.cycle = name;
     l_.cycle_column = col;
@@ -2273,6 +2278,11 @@ void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double f
 // than the last but at least DAM (DAM 0: as deep as the first); VARI 1 (swarf removal) goes
 // back to RFP + SDIS after each peck and rapid down again to where it stopped, VARI 0 (chip
 // breaking) backs off 1 mm; the first peck's feed is F x FRF. Dwells (DTB, DTS) take no path.
+// Tapping CYCLE84 (rigid) and CYCLE840 (compensating chuck), boring CYCLE85 and CYCLE89 feed
+// back out to RFP + SDIS, then rapid to RTP; boring CYCLE86, CYCLE87, CYCLE88 stop the spindle
+// at the depth and rapid out (CYCLE86's lift-off from the wall, RPA RPO, is a few tenths and
+// not followed). Their feeds along the hole are F (a tap's is the spindle's pitch times S: the
+// same path).
 void Reader::cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column) {
   if (state_.plane != Plane::XY) fail(column, name + " outside G17 (expected G17: drilling along Z)");
   for (int k = 0; k < 3; ++k) {
@@ -2301,6 +2311,8 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
   cycle_move(at_z(clear), true, 1.0, column);
   if (name != "CYCLE83") {
     cycle_move(at_z(bottom), false, 1.0, column);
+    if (name == "CYCLE84" || name == "CYCLE840" || name == "CYCLE85" || name == "CYCLE89")
+      cycle_move(at_z(clear), false, 1.0, column);  // feed back out of the hole
   } else {
     const auto fdep = arg(5), fdpr = arg(6), dam = arg(7), frf = arg(10), vari = arg(11);
     double first = fdpr ? std::abs(*fdpr) * unit : fdep ? top - *fdep * unit : top - bottom;

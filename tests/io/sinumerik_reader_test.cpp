@@ -717,6 +717,19 @@ TEST(SinumerikReader, DrillingCycles) {
   EXPECT_EQ(feeds, (std::vector<double>{-4, -7, -9, -10}));
   EXPECT_EQ(rapids, (std::vector<double>{1, 1, -4, 1, -7, 1, -9, 5}));
   EXPECT_DOUBLE_EQ(deep.blocks.at(1).feed_mm_per_min, 50.0);  // the first peck at F x FRF
+  // Tapping and boring (Programming Manual Cycles): CYCLE84/840/85/89 feed back out to RFP +
+  // SDIS, CYCLE86/87/88 rapid out from the depth.
+  for (const char* name : {"CYCLE84", "CYCLE840", "CYCLE85", "CYCLE89", "CYCLE86", "CYCLE87", "CYCLE88"}) {
+    const Program c = read(std::string("G0 X0 Y0 Z10\nF100\n") + name + "(10, 0, 2, -5)\n");
+    std::vector<std::pair<MotionKind, double>> steps;
+    for (const Block& b : c.blocks) steps.emplace_back(b.kind, b.end_mm.z());
+    const bool feeds_out = std::string(name) == "CYCLE84" || std::string(name) == "CYCLE840" ||
+                           std::string(name) == "CYCLE85" || std::string(name) == "CYCLE89";
+    const std::vector<std::pair<MotionKind, double>> expected =
+        feeds_out ? std::vector<std::pair<MotionKind, double>>{{R, 2}, {L, -5}, {L, 2}, {R, 10}}
+                  : std::vector<std::pair<MotionKind, double>>{{R, 2}, {L, -5}, {R, 10}};
+    EXPECT_EQ(steps, expected) << name;
+  }
   EXPECT_MPF_ERROR("G0 X0 Y0\nCYCLE81(10, 0, 2, -10)\n", 2, 1, "unknown Z position");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10)\n", 2, 1, "without RTP and RFP");
   EXPECT_MPF_ERROR("G0 X0 Y0 Z1\nCYCLE81(10, 0, 2)\n", 2, 1, "without its depth");

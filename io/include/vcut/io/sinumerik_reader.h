@@ -53,7 +53,8 @@
 //   the calling file's folder, then SinumerikOptions::subroutine_path; PROC NAME(REAL A, INT
 //   B) binds the values; M17, RET, M2, M30 return; nested at most 16 deep.
 //   CYCLE81(RTP, RFP, SDIS, DP, DPR), CYCLE82(..., DTB), CYCLE83(RTP, RFP, SDIS, DP, DPR, FDEP,
-//   FDPR, DAM, DTB, DTS, FRF, VARI) in G17, at the current X Y (Reader::cycle has the motions),
+//   FDPR, DAM, DTB, DTS, FRF, VARI), tapping CYCLE84 CYCLE840 and boring CYCLE85..CYCLE89
+//   (RTP, RFP, SDIS, DP, DPR, ...) in G17, at the current X Y (Reader::cycle has the motions),
 //   called directly or by MCALL (each later positioning block ends with it; MCALL alone ends
 //   it).
 //   CYCLE800(_FR, _TC, _ST, _MODE, _X0.._Z0, _A, _B, _C, _X1.._Z1, _DIR, _FR_I): the swivel
