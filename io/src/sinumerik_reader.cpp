@@ -89,7 +89,7 @@ struct Line {
   Value vector[3];  // A3 B3 C3
   Value cone[3];    // A6 B6 C6
   Value middle[3];  // A7 B7 C7 (ORICONIO's intermediate orientation)
-  Value cr, f, s, t, d, adis, adispos;
+  Value cr, f, s, t, d, adis, adispos, turn;
   int motion = -1, motion_column = 0;  // G0..G3 in this block
   int dwell_column = 0;                // G4
   bool exact_stop = false;             // G9
@@ -505,6 +505,20 @@ bool Reader::condition(int depth) {
   };
   std::function<bool(int)> unary = [&](int d) -> bool {
     if (word_is("NOT")) return !unary(d + 1);
+    skip_blanks();
+    if (at('(')) {
+      // A condition in parentheses, IF (A <= B) AND (C > 0); unless an operator follows the
+      // ')', when the parentheses were an expression's: (R1 + 2) > 3.
+      const std::size_t open = i_++;
+      const bool inner = condition(d + 1);
+      skip_blanks();
+      if (at(')')) {
+        ++i_;
+        skip_blanks();
+        if (i_ >= s_.size() || std::strchr("+-*/<>=", s_[i_]) == nullptr) return inner;
+      }
+      i_ = open;
+    }
     return relation(d) != 0.0;
   };
   auto conjunction = [&](int d) {
@@ -1101,6 +1115,7 @@ void Reader::assignment(const std::string& address, int col) {
     return;
   }
   if (address == "CR") return set(l_.cr, "CR", expression(0), col);
+  if (address == "TURN") return set(l_.turn, "TURN", expression(0), col);
   if (address == "FP") return set(l_.fp, "FP", expression(0), col);
   if (address == "X1" || address == "Y1" || address == "Z1") {
     // A machine axis by its name, in G74 / G75 (its value is not used).
@@ -2153,6 +2168,14 @@ void Reader::motion() {
   }
   const bool reorients = orient(block);
   if (m == Motion::ArcClockwise || m == Motion::ArcCounterClockwise) arc(block, m == Motion::ArcClockwise);
+  if (l_.turn.present) {
+    // TURN=n: n more full turns of a helix (or circle) before the programmed end.
+    const double n = l_.turn.value;
+    if (block.kind != MotionKind::Arc) fail(l_.turn.column, "TURN= outside an arc (expected G2 or G3)");
+    if (!(n >= 0.0 && n <= 999.0 && n == std::floor(n)))
+      fail(l_.turn.column, "TURN=" + num(n) + " (expected a whole number of extra turns, 0..999)");
+    block.turns += static_cast<int>(n);
+  }
   const int column = l_.motion_column > 0 ? l_.motion_column : l_.first_column;
   if (m != Motion::Rapid) {
     if (state_.inverse_time) {

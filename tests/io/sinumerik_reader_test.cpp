@@ -778,6 +778,23 @@ TEST(SinumerikReader, ProgramFlow) {
   EXPECT_EQ(none.blocks[0].end_mm.x(), 7.0);
   EXPECT_MPF_ERROR("CASE (1) OF 1 GOTOF NOWHERE\n", 1, 21, "no such label");
   EXPECT_MPF_ERROR("CASE (1) OF 1 X\n", 1, 15, "without its jump");
+  // A condition in parentheses (IF (A <= B) AND (C > 2)), and parentheses that belong to an
+  // expression ((R1 + 2) > 3 with R1 = 1: false).
+  const Program paren = read(
+      "R1=1\nR2=3\nG0 X0 Y0 Z0\nIF (R1 <= R2) AND (R2 > 2)\nG1 X1 F10\nENDIF\nIF (R1 + 2) > 3\nG1 X2\nENDIF\n"
+      "WHILE(R1 < 3)\nR1=R1+1\nG1 Y=R1\nENDWHILE\n");
+  std::vector<double> px, py;
+  for (const Block& b : paren.blocks) {
+    px.push_back(b.end_mm.x());
+    py.push_back(b.end_mm.y());
+  }
+  EXPECT_EQ(px, (std::vector<double>{1, 1, 1}));
+  EXPECT_EQ(py, (std::vector<double>{0, 2, 3}));
+  // TURN=n: n more full turns (a helix from (10, 0, 0) back over itself 3 times in all).
+  const Program helix = read("G0 X10 Y0 Z0\nG3 X10 Y0 Z-3 I-10 J0 TURN=2 F100\n");
+  ASSERT_EQ(helix.blocks.size(), 1u);
+  EXPECT_EQ(helix.blocks[0].turns, 3);
+  EXPECT_MPF_ERROR("G0 X0 Y0 Z0\nG1 X1 TURN=1 F1\n", 2, 7, "TURN= outside an arc");
 }
 
 // Subprograms, worked by hand: POCKET(3, 3) runs its FOR with DEPTH 3 and PASSES 3 (Z -1, -2,

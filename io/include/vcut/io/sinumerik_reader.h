@@ -11,18 +11,18 @@
 //   motion, its F is a time); G17 G18 G19; G90 G91 and X=AC(..) X=IC(..) on one coordinate;
 //   G54..G57 (SinumerikOptions::work_offsets_mm) and G500 (no offset, the default); G70 G71
 //   (inch/metric lengths) and G700 G710 (lengths and feed); G94 (mm/min) G93 (inverse time: F in
-//   every G1/G2/G3 block); F S M3 M4 M5 T (a number, or T="n" with a number) M6 D (ignored);
-//   G60 (exact stop, the default) G9 (exact stop in its block) G64 G641 G642 (blending) with
-//   ADIS= (G1/G2/G3) and ADISPOS= (G0) as Block::blend_tolerance_mm; G601 G602 G603 G40
-//   (accepted, no effect); M0 M1 M7 M8 M9 (ignored: no motion); M2 M17 M30 (end of the file).
-//   R0..R999 (0 at the start, kept across files): R1=10, R2=R1*2+SIN(30), with + - * / ( )
-//   SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT (square) TRUNC ROUND (angles in degrees) and
-//   numbers such as 1.5EX3; any value may be such an expression after `=`: X=R1+5.
+//   every G1/G2/G3 block); TURN=n (n more full turns of an arc); F S M3 M4 M5 T (a number, or
+//   T="n" with a number) M6 D; G60 (exact stop, the default) G9 (exact stop in its block) G64
+//   G641 G642 (blending) with ADIS= (G1/G2/G3) and ADISPOS= (G0) as Block::blend_tolerance_mm;
+//   G601 G602 G603 G40 (accepted, no effect); M0 M1 M7 M8 M9 (ignored: no motion); M2 M17 M30
+//   (end of the file). R0..R999 (0 at the start, kept across files): R1=10, R2=R1*2+SIN(30),
+//   with + - * / ( ) SIN COS TAN ASIN ACOS ATAN2 SQRT ABS POT (square) TRUNC ROUND (angles in
+//   degrees) and numbers such as 1.5EX3; any value may be such an expression after `=`: X=R1+5.
 //   TRAORI (or TRAORI(1)) / TRAFOOF: TCP on/off. Under TRAORI, X Y Z are the tool tip and the
 //   orientation is A3= B3= C3= (the tool vector in the workpiece frame, ORIWKS; components not
-//   programmed are 0; normalised) or A B C (rotary axis positions: Blocks with end_rotary, whose
-//   tool axis the pose engine solves through the machine). Without TRAORI, A B C are axis words
-//   (Blocks with tool_pose false), as in the G-code reader.
+//   programmed are 0; normalised) or A B C (rotary axis positions: Blocks with end_rotary,
+//   whose tool axis the pose engine solves through the machine). Without TRAORI, A B C are axis
+//   words (Blocks with tool_pose false), as in the G-code reader.
 //   ORIWKS ORIMKS (ORIMKS only while no vector is programmed), ORIVECT ORIPLANE (great circle),
 //   ORIAXES, and the cone modes (Job planning, "Orientation programming along the peripheral
 //   surface of a taper"), each exact, as a cone Block:
@@ -47,8 +47,8 @@
 //   Program flow: labels NAME: and block numbers as targets of GOTOF GOTOB GOTO GOTOC; IF cond
 //   GOTOx; IF / ELSE / ENDIF; WHILE / ENDWHILE; FOR var = a TO b / ENDFOR; REPEAT / UNTIL;
 //   LOOP / ENDLOOP; CASE (expr) OF c GOTOF label ... [DEFAULT GOTOF label]; DEF REAL | INT |
-//   BOOL name[=value], ...; conditions with == <> < > <= >= AND OR XOR NOT TRUE FALSE. A loop
-//   runs at most SinumerikOptions::max_lines blocks.
+//   BOOL name[=value], ...; conditions with == <> < > <= >= AND OR XOR NOT TRUE FALSE and
+//   parentheses. A loop runs at most SinumerikOptions::max_lines blocks.
 //   Subprograms: L123 [P n], CALL "NAME", NAME or NAME(values) [P n], from NAME.SPF / .MPF in
 //   the calling file's folder, then SinumerikOptions::subroutine_path; PROC NAME(REAL A, INT
 //   B) binds the values; M17, RET, M2, M30 return; nested at most 16 deep.
