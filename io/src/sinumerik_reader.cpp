@@ -210,6 +210,17 @@ class Reader {
   std::vector<std::string> subprogram_folders() const;
   std::size_t body(std::string* label, long long* number);  // after N and a label: the first word
   void word();
+  // (value, value, ...) after a subprogram's name, into Line::call_args; nothing without '('.
+  void call_arguments(const std::string& name) {
+    if (!at('(')) return;
+    ++i_;
+    while (!at(')')) {
+      l_.call_args.push_back(expression(1));
+      if (at(')')) break;
+      expect(',', name + "( with values not separated by ',' (expected NAME(value, value, ...))");
+    }
+    ++i_;
+  }
   void assignment(const std::string& address, int column);
   void skip_argument();
   void code(char letter, int column);
@@ -1181,6 +1192,8 @@ void Reader::code(char letter, int col) {
       if (!l_.call.empty()) fail(col, "a second subprogram call in one block (expected one)");
       l_.call = "L" + std::to_string(static_cast<long long>(v));
       l_.call_column = col;
+      skip_blanks();
+      call_arguments(l_.call);  // L140(2): values for its PROC
       return;
     }
     case 'P':
@@ -1407,6 +1420,7 @@ void Reader::keyword(const std::string& name, int col) {
     l_.call_column = col;
     return;
   }
+  if (name == "STOPRE") return;  // the look-ahead stops: the path is the same
   if (name == "EXTERN") {  // a subprogram's declaration: the call names the file
     i_ = s_.size();
     return;
@@ -1543,15 +1557,7 @@ void Reader::keyword(const std::string& name, int col) {
   if (l_.call.empty() && (!subprogram_file(name).empty())) {
     l_.call = name;
     l_.call_column = col;
-    if (at('(')) {
-      ++i_;
-      while (!at(')')) {
-        l_.call_args.push_back(expression(1));
-        if (at(')')) break;
-        expect(',', name + "( with values not separated by ',' (expected NAME(value, value, ...))");
-      }
-      ++i_;
-    }
+    call_arguments(name);
     return;
   }
   skip_blanks();
