@@ -758,6 +758,7 @@ int Reader::motion_tool() {
 
 void Reader::motion(MotionKind kind, const Eigen::Vector3d& end, const Eigen::Vector3d& end_axis) {
   const bool rapid = kind == MotionKind::Rapid;
+  state_.indirv = Eigen::Vector3d::Zero();  // INDIRV/ is for the next TLON only
   // A point within range as written can leave it once a CSYS/ or MSYS/ frame places it, or a
   // CYCLE/ adds its depth.
   if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude)) {
@@ -1268,7 +1269,7 @@ void Reader::do_tlon(size_t pos) {
   for (const double sign : {-1.0, 1.0}) {
     const Eigen::Vector3d q = a + (-half_b + sign * std::sqrt(disc)) * u;
     double angle = std::atan2(nrm.dot((p0 - c).cross(q - c)), (p0 - c).dot(q - c));
-    if (angle <= 1e-12) angle += 2.0 * M_PI;  // forward: in (0, 2 pi]
+    if (angle <= kSamePointMm / r) angle += 2.0 * M_PI;  // forward: in (0, 2 pi], the start not met again
     met.emplace_back(angle, q);
   }
   std::sort(met.begin(), met.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
@@ -1282,7 +1283,8 @@ void Reader::do_tlon(size_t pos) {
   std::tie(state_.circle_line, state_.circle_column) = locate(major_pos_);
   motion(MotionKind::Arc, end, state_.axis);
   state_.circle_pending = false;
-  // The direction at the end, for a next TLON without INDIRV/ (CATIA repeats INDIRV/ anyway).
+  // The direction at the end, for a next TLON without INDIRV/ (CATIA repeats INDIRV/ anyway);
+  // any other motion clears it (Reader::motion).
   state_.indirv = nrm.cross(end - c).normalized();
 }
 

@@ -135,6 +135,18 @@ class Scanner {
   int scan_code(const std::string& code) {
     int tool = 0;
     bool change = false;
+    if (sinumerik_) {
+      // CYCLE800 with parameters turns the rotaries (CYCLE800() only deselects).
+      for (std::size_t at = code.find("CYCLE800"); at != std::string::npos; at = code.find("CYCLE800", at + 8)) {
+        std::size_t k = at + 8;
+        while (k < code.size() && code[k] == ' ') ++k;
+        if (k < code.size() && code[k] == '(') {
+          ++k;
+          while (k < code.size() && code[k] == ' ') ++k;
+          if (k < code.size() && code[k] != ')') header_.swivels = true;
+        }
+      }
+    }
     for (std::size_t i = 0; i < code.size(); ++i) {
       const char ch = code[i];
       if (ch < 'A' || ch > 'Z') continue;

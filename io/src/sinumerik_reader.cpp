@@ -259,19 +259,32 @@ class Reader {
   void motion();
   void apply_frame();
   void cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column);
-  void cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column);
+  // feed_mm_per_min > 0: that feed, else F times feed_factor.
+  void cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column,
+                  double feed_mm_per_min = 0.0);
+  double coarse_pitch_mm(double size, const std::string& name, int column) const;
   void swivel(const std::vector<std::optional<double>>& args, const std::vector<std::string>& texts, int column);
   Eigen::Matrix3d swivel_turn(int mode, double a_deg, double b_deg, double c_deg, int column) const;
   // The rigid motion that turning the rotary axes from zero to `rotary` gives a point held by
   // the linear axes (identity without the machine or with the rotaries at zero): the tip of
   // machine-coordinate point p lies at turned.first * p + turned.second.
   std::pair<Eigen::Matrix3d, Eigen::Vector3d> turned(const kinematics::RotaryWords& rotary) const;
-  // The tip's straight move to `to` (workpiece frame), a rapid unless `feed` (mm/min) > 0.
+  // From the machine's axes to where X Y Z are kept: the turn, or none in an axis program
+  // (X Y Z are the machine's there already).
+  std::pair<Eigen::Matrix3d, Eigen::Vector3d> machine_turn() const {
+    if (state_.rotary_program) return {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+    return turned(state_.rotary);
+  }
+  // The tip's rapid straight move to `to` (workpiece frame).
   void straight_to(const Eigen::Vector3d& to, int column);
   void retract(double fr, double fr_i_mm, int column);  // CYCLE800's _FR
   void home();                                          // G74 / G75
+  void finish_block();                                  // the block's call and end
   // The rotaries turn from where they stand to `to`, the linear axes held, in steps of 1 deg.
   void turn_rotaries(const kinematics::RotaryWords& to);
+  // The spindle's direction (tip -> spindle) in the frame of X Y Z: the tool axis, or in an axis
+  // program (X Y Z the machine's, at zero rotaries) the machine's spindle axis.
+  Eigen::Vector3d spindle() const { return state_.rotary_program ? options_.spindle_axis : state_.tool_axis; }
   double tool_length_mm() const {
     const auto it = options_.tool_length_mm.find(state_.tool);
     return it == options_.tool_length_mm.end() ? 0.0 : it->second;
@@ -296,7 +309,7 @@ class Reader {
     const auto it = options_.work_offsets_mm.find(state_.work_offset);
     const Eigen::Vector3d work =
         state_.work_offset == "G500" || it == options_.work_offsets_mm.end() ? Eigen::Vector3d::Zero() : it->second;
-    return state_.tool_offset_off ? Eigen::Vector3d(work - tool_length_mm() * state_.tool_axis) : work;
+    return state_.tool_offset_off ? Eigen::Vector3d(work - tool_length_mm() * spindle()) : work;
   }
   Eigen::Vector3d target(std::array<bool, 3>& programmed) const;
   bool orient(Block& block);
@@ -1421,7 +1434,7 @@ void Reader::keyword(const std::string& name, int col) {
     return;
   }
   if (name == "STOPRE") return;  // the look-ahead stops: the path is the same
-  if (name == "EXTERN") {  // a subprogram's declaration: the call names the file
+  if (name == "EXTERN") {        // a subprogram's declaration: the call names the file
     i_ = s_.size();
     return;
   }
@@ -1454,6 +1467,7 @@ void Reader::keyword(const std::string& name, int col) {
   }
   if (name == "FNORM") return;  // the feed as programmed over the block (FLIN and FCUB vary it)
   if (name == "SETMS") {        // the master spindle: one spindle here
+    skip_blanks();
     if (at('(')) skip_argument();
     return;
   }
@@ -1472,6 +1486,7 @@ void Reader::keyword(const std::string& name, int col) {
                (name == "CYCLE800" ? "(_FR, _TC, _ST, _MODE, ...) or CYCLE800()" : "(RTP, RFP, SDIS, DP, DPR, ...)") +
                ")");
     // Positional parameters; an empty one is left out (Siemens' default). CYCLE800() has none.
+    skip_blanks();
     if (name == "CYCLE800" && at(')')) {
       ++i_;
       return;
@@ -1482,6 +1497,7 @@ void Reader::keyword(const std::string& name, int col) {
       if (at(',') || at(')')) {
         l_.cycle_args.emplace_back();
       } else if (at('"')) {
+        if (name != "CYCLE800") fail(column(i_), name + " with a text parameter (expected numbers)");
         const std::size_t open = i_++;
         const std::size_t close = s_.find('"', i_);
         if (close == std::string::npos) fail(column(open), "string without its closing '\"'");
@@ -1587,7 +1603,8 @@ void Reader::execute() {
     // The spindle stays where it is: the new tool's tip is its length below the gauge point.
     const double before = tool_length_mm();
     state_.tool = state_.selected_tool;
-    state_.position_mm -= (tool_length_mm() - before) * state_.tool_axis;
+    state_.position_mm -= (tool_length_mm() - before) * spindle();
+    if (!l.d.present) state_.tool_offset_off = false;  // M6 takes the new tool's first edge, D1
   }
   if (l.d.present) {
     const double d = l.d.value;
@@ -1631,6 +1648,7 @@ void Reader::execute() {
   if (l.fp.present && l.home != 75) fail(l.fp.column, "FP= without G75 (expected G75 FP=1 or FP=2)");
   if (l.home != 0) {
     home();
+    finish_block();
     return;
   }
   bool moves = false;
@@ -1702,6 +1720,8 @@ void Reader::execute() {
   }
   const bool centre = l.center[0].present || l.center[1].present || l.center[2].present;
   const bool positions = moves || (arc && (centre || l.cr.present));
+  if (l.turn.present && !(positions && arc))
+    fail(l.turn.column, "TURN= outside an arc (expected G2 or G3 with the arc's end or centre)");
   if (l.cycle == "CYCLE800") {
     if (positions) fail(l.cycle_column, "CYCLE800 with axis words in its block (expected it in a block of its own)");
     if (l.mcall) fail(l.cycle_column, "MCALL CYCLE800 (expected CYCLE800 called directly: it is not a modal cycle)");
@@ -1718,6 +1738,12 @@ void Reader::execute() {
   } else if (positions && !state_.modal_cycle.empty()) {
     cycle(state_.modal_cycle, state_.modal_cycle_args, l.first_column);
   }
+  finish_block();
+}
+
+// What follows a block's motion: its subprogram call and the program's end.
+void Reader::finish_block() {
+  const Line& l = l_;
   if (l.p.present && l.call.empty()) fail(l.p.column, "P without a subprogram call (expected L.. P.. or NAME P..)");
   if (!l.call.empty()) {
     const double times = l.p.present ? l.p.value : 1.0;
@@ -1739,7 +1765,7 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     // SUPA / G53 / G153: machine coordinates count from the gauge point at all-zero axes; the
     // tool's length stays on (the tip is there), under D0 the gauge point is there. The point
     // is the tip with the rotaries at zero, turned with them.
-    const auto [r, t] = turned(state_.rotary);
+    const auto [r, t] = machine_turn();
     Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);
     const Eigen::Vector3d shift =
         state_.tool_offset_off ? Eigen::Vector3d(tool_length_mm() * options_.spindle_axis) : Eigen::Vector3d::Zero();
@@ -2163,6 +2189,7 @@ void Reader::motion() {
     state_.position_mm = r.transpose() * (state_.position_mm - t);
     state_.swivel_rotation.setIdentity();
     state_.swivel_translation_mm.setZero();
+    state_.rotary_program = true;  // (orient() says so too): target() reads X Y Z as the axes
   }
   Block block;
   block.kind = m == Motion::Rapid ? MotionKind::Rapid : MotionKind::Linear;
@@ -2278,7 +2305,8 @@ void Reader::apply_frame() {
 }
 
 // A straight move of a drilling cycle to a point of the frame, as a G0 or G1 block would make it.
-void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column) {
+void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column,
+                        double feed_mm_per_min) {
   Block block;
   block.kind = rapid ? MotionKind::Rapid : MotionKind::Linear;
   block.start_mm = state_.position_mm;
@@ -2289,7 +2317,9 @@ void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double f
   block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
   block.start_axis = block.end_axis = state_.tool_axis;
   block.start_rotary = block.end_rotary = state_.rotary;
-  if (!rapid) {
+  if (!rapid && feed_mm_per_min > 0.0) {
+    block.feed_mm_per_min = feed_mm_per_min;
+  } else if (!rapid) {
     if (!(state_.feed_mm_per_min > 0.0))
       fail(column, "drilling cycle without a feed (expected F in mm/min before the cycle)");
     if (state_.inverse_time) fail(column, "drilling cycle under G93 (expected G94: a feed in mm/min)");
@@ -2297,6 +2327,18 @@ void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double f
   }
   block.exact_stop = true;
   append(block, {true, true, true}, false);
+}
+
+// The ISO metric coarse pitch (mm) of thread size M`size` (CYCLE84/CYCLE840 MPIT, 3..48; a
+// negative size is a left-hand thread).
+double Reader::coarse_pitch_mm(double size, const std::string& name, int column) const {
+  static const std::pair<int, double> kCoarse[] = {{3, 0.5},   {4, 0.7},  {5, 0.8},  {6, 1.0},  {8, 1.25}, {10, 1.5},
+                                                   {12, 1.75}, {14, 2.0}, {16, 2.0}, {18, 2.5}, {20, 2.5}, {22, 2.5},
+                                                   {24, 3.0},  {27, 3.0}, {30, 3.5}, {33, 3.5}, {36, 4.0}, {39, 4.0},
+                                                   {42, 4.5},  {45, 4.5}, {48, 5.0}};
+  for (const auto& [m, pitch] : kCoarse)
+    if (std::abs(size) == m) return pitch;
+  fail(column, name + " MPIT " + num(size) + " (expected a metric coarse thread size M3..M48, or PIT)");
 }
 
 // CYCLE81(RTP, RFP, SDIS, DP, DPR) drilling, CYCLE82(..., DTB) with a dwell at the bottom,
@@ -2310,8 +2352,8 @@ void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double f
 // Tapping CYCLE84 (rigid) and CYCLE840 (compensating chuck), boring CYCLE85 and CYCLE89 feed
 // back out to RFP + SDIS, then rapid to RTP; boring CYCLE86, CYCLE87, CYCLE88 stop the spindle
 // at the depth and rapid out (CYCLE86's lift-off from the wall, RPA RPO, is a few tenths and
-// not followed). Their feeds along the hole are F (a tap's is the spindle's pitch times S: the
-// same path).
+// not followed). A tap feeds at its pitch (PIT, or MPIT's coarse pitch) times the speed
+// (CYCLE84's SST in and SST1 out, else S); CYCLE85 at FFR in and RFF out; the others at F.
 void Reader::cycle(const std::string& name, const std::vector<std::optional<double>>& args, int column) {
   if (state_.plane != Plane::XY) fail(column, name + " outside G17 (expected G17: drilling along Z)");
   for (int k = 0; k < 3; ++k) {
@@ -2339,9 +2381,36 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
   cycle_move(at_z(std::max(here.z(), clear)), true, 1.0, column);
   cycle_move(at_z(clear), true, 1.0, column);
   if (name != "CYCLE83") {
-    cycle_move(at_z(bottom), false, 1.0, column);
+    double in_mm_per_min = 0.0, out_mm_per_min = 0.0;  // 0: F
+    const double feed_unit = state_.inch_feed ? kMmPerInch : 1.0;
+    if (name == "CYCLE84" || name == "CYCLE840") {
+      // A tap advances its pitch per turn: PIT (or the metric coarse pitch of thread size
+      // MPIT), times the speed (CYCLE84: SST in, SST1 out; else S).
+      const bool rigid = name == "CYCLE84";
+      const auto mpit = arg(rigid ? 7 : 9), pit = arg(rigid ? 8 : 10);
+      const auto sst = rigid ? arg(10) : std::nullopt, sst1 = rigid ? arg(11) : std::nullopt;
+      double pitch = 0.0;
+      if (pit && *pit != 0.0)
+        pitch = std::abs(*pit) * unit;
+      else if (mpit && *mpit != 0.0)
+        pitch = coarse_pitch_mm(*mpit, name, column);
+      const double speed = sst && *sst > 0.0 ? *sst : state_.spindle_rpm;
+      const double back = sst1 && *sst1 > 0.0 ? *sst1 : speed;
+      if (pitch > 0.0 && speed > 0.0) {
+        in_mm_per_min = pitch * speed;
+        out_mm_per_min = pitch * back;
+      } else if (!(state_.feed_mm_per_min > 0.0)) {
+        fail(column, name + " without its pitch and speed (expected PIT or MPIT and S, or an F before it)");
+      }
+    } else if (name == "CYCLE85") {
+      // FFR in, RFF out (mm/min).
+      const auto ffr = arg(6), rff = arg(7);
+      if (ffr && *ffr > 0.0) in_mm_per_min = *ffr * feed_unit;
+      if (rff && *rff > 0.0) out_mm_per_min = *rff * feed_unit;
+    }
+    cycle_move(at_z(bottom), false, 1.0, column, in_mm_per_min);
     if (name == "CYCLE84" || name == "CYCLE840" || name == "CYCLE85" || name == "CYCLE89")
-      cycle_move(at_z(clear), false, 1.0, column);  // feed back out of the hole
+      cycle_move(at_z(clear), false, 1.0, column, out_mm_per_min);  // feed back out of the hole
   } else {
     const auto fdep = arg(5), fdpr = arg(6), dam = arg(7), frf = arg(10), vari = arg(11);
     double first = fdpr ? std::abs(*fdpr) * unit : fdep ? top - *fdep * unit : top - bottom;
@@ -2437,9 +2506,22 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
     if (options_.rotary_axes.empty() || !options_.frame_rotation)
       fail(column, "CYCLE800 _MODE " + num(mode_value) +
                        " (rotary axes direct) needs the machine's rotary axes (expected a job, or --machine)");
-    for (std::size_t k = 0; k < 2 && k < options_.rotary_axes.size(); ++k) {
+    if (static_cast<long long>(st) % 10 == 1)
+      fail(column, "CYCLE800 _MODE 192 (rotary axes direct) with an additive plane (_ST 1; expected a new plane)");
+    for (std::size_t k = 0; k < 2; ++k) {
+      const double deg = arg(7 + k);
+      if (k >= options_.rotary_axes.size()) {
+        if (deg != 0.0)
+          fail(column, "CYCLE800 _MODE 192: the machine has no rotary axis " + std::to_string(k + 1) + " for " +
+                           num(deg) + " deg");
+        continue;
+      }
+      // A swivel is within a turn or so (the machine's limits decide the rest, as its poses are checked).
+      if (!(std::abs(deg) <= 720.0))
+        fail(column, "CYCLE800 _MODE 192: rotary axis " + std::to_string(k + 1) + " at " + num(deg) +
+                         " deg (expected within +-720 deg)");
       const auto r = static_cast<std::size_t>(options_.rotary_axes[k] - 'A');
-      direct.angle_rad[r] = arg(7 + k) * kDegToRad;
+      direct.angle_rad[r] = deg * kDegToRad;
       direct.given[r] = true;
     }
     turn = options_.frame_rotation(direct);
@@ -2488,7 +2570,8 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
   }
   state_.swivel_rotation = rotation;
   state_.swivel_translation_mm = translation;
-  state_.swivel_plane = true;
+  // A new plane of no turn and no shift (NX's CYCLE800 with zero angles) is no plane.
+  state_.swivel_plane = !(rotation.isIdentity(1e-12) && translation.isZero(0.0));
 }
 
 // CYCLE800's turn for _MODE axis by axis (bits 7-6 00).
@@ -2651,7 +2734,7 @@ void Reader::home() {
   if (!any) fail(l.home_column, name + " without an axis (expected " + name + " X1=0 Y1=0 Z1=0 naming the axes)");
   if (!options_.reference_mm)
     fail(l.home_column, name + " goes to a point of the machine: it needs the machine (expected a job, or --machine)");
-  const auto [r, t] = turned(state_.rotary);
+  const auto [r, t] = machine_turn();
   Eigen::Vector3d axes = r.transpose() * (state_.position_mm - t);
   const Eigen::Vector3d point =
       (*options_.reference_mm)[static_cast<std::size_t>(fp - 1)] - tool_length_mm() * options_.spindle_axis;

@@ -194,7 +194,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   std::string machine = options.machine;
   const std::set<char>& rotary = header.rotary_letters;
   if (machine.empty()) {
-    machine = rotary.count('B') ? "table-table-bc" : rotary.empty() ? "3axis" : "xyzac-trt";
+    machine = rotary.count('B') ? "table-table-bc" : rotary.empty() && !header.swivels ? "3axis" : "xyzac-trt";
   }
   set_machine(job, machine);
 

@@ -370,6 +370,10 @@ TEST(AptReader, CatiaTlonCircleToTheCheckLine) {
   expect_vec(third.end_mm, {-10 / std::sqrt(2.0), -10 / std::sqrt(2.0), 0});
   EXPECT_NEAR(swept_angle(third), 3 * kPi / 4, kTol);
   EXPECT_APT_ERROR("FROM/10,0,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,10),ON,(LINE/ 0,0,0,0,10,0)\n", 2, 1, "without INDIRV/");
+  // INDIRV/ is for the next TLON: a GOTO/ between them clears it.
+  EXPECT_APT_ERROR(
+      "FROM/10,0,1\nFEDRAT/100\nINDIRV/0,1,0\nGOTO/10,0,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,10),ON,(LINE/ 0,0,0,0,10,0)\n", 5,
+      1, "without INDIRV/");
   EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CIRCLE/ 0,0,0,9),ON,(LINE/ 0,0,0,0,10,0)\n", 3, 28,
                    "mm from the circle's centre");
   EXPECT_APT_ERROR("FROM/10,0,0\nINDIRV/0,1,0\nTLON,GOFWD/ (CYLNDR/ 0,0,0,0,0,1,10),ON\n", 3, 14,

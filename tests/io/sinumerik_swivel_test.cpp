@@ -14,6 +14,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace vcut::io {
 namespace {
@@ -298,6 +299,49 @@ TEST(SinumerikSwivel, ProgramsAsFusionWritesThem) {
   ASSERT_GE(p.warnings.size(), 2u);
   EXPECT_NE(p.warnings[0].find("swivel.mpf:4:5: tool T=\"DRILL 8.5\" taken as tool 1"), std::string::npos)
       << p.warnings[0];
+}
+
+// Found in review: in an axis program (A B C without TRAORI) X Y Z are the machine's already,
+// so SUPA does not turn them again; M6 takes D1 again after D0; G74 goes on to the block's
+// M30; CYCLE800( ) with a blank deselects; a new plane of zero angles is no plane, so rotary
+// words may follow it.
+TEST(SinumerikSwivel, ReviewFindings) {
+  const SinumerikOptions ac = on_machine("table-table-ac", {{1, 100.0}, {2, 50.0}});
+  const Program axes = read("N10 G0 X0 Y0 Z100 A30\nN20 G0 SUPA Z0\n", ac);
+  EXPECT_FALSE(last_of_line(axes, 2).tool_pose);
+  expect_vec(last_of_line(axes, 2).end_mm, {0, 0, 500});  // the axes' point: machine Z 0, no tool
+  const Program edge = read("N10 T1 M6 D0\nN20 G0 X0 Y0 Z50\nN30 T2 M6\nN40 G0 Z60\n", ac);
+  expect_vec(last_of_line(edge, 2).end_mm, {0, 0, -50});  // D0: the gauge point at Z50
+  expect_vec(last_of_line(edge, 4).end_mm, {0, 0, 60});   // M6: D1, the tip at Z60
+  const Program end = read("N10 G0 X0 Y0 Z5\nN20 G74 Z1=0 M30\nN30 G0 X7\n", ac);
+  EXPECT_EQ(end.blocks.back().source.line, 2);  // M30 ended the program: no line 30
+  const Program blank = read(
+      "N10 G0 X0 Y0 Z5\nN20 CYCLE800(0,\"\",0,57,0,0,0,30,0,0,0,0,0,0,0,1)\nN30 CYCLE800( )\nN40 G0 X1 Y2 Z3\n", ac);
+  expect_vec(last_of_line(blank, 4).end_mm, {1, 2, 3});
+  EXPECT_NO_THROW(read("N10 G0 X0 Y0 Z5\nN20 CYCLE800(1,\"TC1\",0,57,0,0,0,0,0,0,0,0,0,1,100,1)\nN30 G0 A0 C0\n", ac));
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nCYCLE800(0,\"T\",0,192,0,0,0,1000000,0,0,0,0,0,1)\n", ac)
+                .find("expected within +-720 deg"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nCYCLE800(0,\"T\",1,192,0,0,0,10,0,0,0,0,0,1)\n", ac).find("additive"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nCYCLE81(\"x\",0,2,-5)\n").find("CYCLE81 with a text parameter"), std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nG3 TURN=2\n").find("TURN= outside an arc"), std::string::npos);
+}
+
+// Taps feed at their pitch times the speed: PIT 1.5 at SST 500 in, SST1 250 out; MPIT 10 (M10,
+// coarse pitch 1.5 mm) at S 400; CYCLE85 at FFR in and RFF out.
+TEST(SinumerikSwivel, TapsFeedAtTheirPitch) {
+  auto feeds = [](const std::string& text) {
+    std::vector<double> f;
+    for (const Block& b : read(text).blocks)
+      if (b.kind == MotionKind::Linear) f.push_back(b.feed_mm_per_min);
+    return f;
+  };
+  EXPECT_EQ(feeds("S500 M3\nG0 X0 Y0 Z10\nCYCLE84(10,0,2,-20,,0,3,,1.5,0,500,250)\n"), (std::vector<double>{750, 375}));
+  EXPECT_EQ(feeds("S400 M3\nG0 X0 Y0 Z10\nCYCLE84(10,0,2,-20,,0,3,10)\n"), (std::vector<double>{600, 600}));
+  EXPECT_EQ(feeds("F100\nG0 X0 Y0 Z10\nCYCLE85(10,0,2,-5,,0,300,500)\n"), (std::vector<double>{300, 500}));
+  EXPECT_NE(error_of("G0 X0 Y0 Z10\nCYCLE84(10,0,2,-20)\n").find("without its pitch and speed"), std::string::npos);
+  EXPECT_NE(error_of("S400\nG0 X0 Y0 Z10\nCYCLE84(10,0,2,-20,,0,3,11)\n").find("MPIT 11"), std::string::npos);
 }
 
 TEST(SinumerikSwivel, BadInputNamesTheLine) {

@@ -104,6 +104,13 @@ TEST_F(ProgramJob, MachineByTheRotaryWords) {
   const vcut::pipeline::PoseRun run = vcut::pipeline::run_pose_engine(held, read, held.resolution_mm);
   for (const auto& e : run.events)
     EXPECT_NE(e.kind, vcut::pipeline::PoseEventKind::Unreachable) << e.line << ": " << e.detail;
+  // A SINUMERIK 3+2 program without rotary words: CYCLE800 with its parameters turns the
+  // rotaries, so the five-axis trunnion.
+  const std::string swivel =
+      write("swivel.mpf",
+            "N10 T1 M6\nN20 G0 X0 Y0 Z50\nN30 CYCLE800(1,\"TC1\",0,57,0,0,0,20,0,0,0,0,0,-1,100,1)\n"
+            "N40 G0 X10 Y0 Z5\nN50 G1 Z-1 F100\nN60 X20\nN70 M30\n");
+  EXPECT_EQ(vcut::pipeline::job_for_program(swivel, alone).machine, "xyzac-trt");
   vcut::pipeline::ProgramJobOptions head;
   head.machine = "head-table-bc";
   EXPECT_EQ(job("G21\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-1 F100\nG1 X10\nM30\n", head).machine, "head-table-bc");

@@ -56,6 +56,7 @@ struct ProgramHeader {
   std::map<int, DeclaredTool> tools;   // by T number, the first declaration of each
   bool inch = false;                   // the first G20/G21 (G70/G71 in SINUMERIK) is G20
   std::set<char> rotary_letters;       // A, B, C words in the code (not in comments)
+  bool swivels = false;                // SINUMERIK CYCLE800(...) with parameters: a five-axis machine
   std::set<int> tool_numbers;          // T words, and D and H registers, in the code
   int first_tool = 0;                  // the first T word (0: none)
 };
