@@ -2973,12 +2973,7 @@ void Reader::turned_frame(const Eigen::Vector3d& tip_mm, const Eigen::Vector3d* 
   state_.position_mm = tip_mm;
   const auto& angles = state_.rotary.angle_rad;
   if (!options_.tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0)) return;
-  kinematics::RotaryWords zero = state_.rotary;
-  zero.angle_rad = {0.0, 0.0, 0.0};
-  auto image = [&](const Eigen::Vector3d& p) { return options_.tip_after_turn(state_.tool, p, zero, state_.rotary); };
-  const Eigen::Vector3d t = image(Eigen::Vector3d::Zero());
-  Eigen::Matrix3d r;
-  for (int a = 0; a < 3; ++a) r.col(a) = image(Eigen::Vector3d::Unit(a)) - t;
+  const auto [r, t] = detail::turn_from_zero(options_.tip_after_turn, state_.tool, state_.rotary);
   state_.twp = true;
   state_.twp_feature = false;
   state_.twp_rotation = r;

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <utility>
 #include <vector>
 
 namespace vcut::io::detail {
@@ -39,6 +40,24 @@ inline kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, 
   for (size_t a = 0; a < 3; ++a)
     step.angle_rad[a] = from.angle_rad[a] + (to.angle_rad[a] - from.angle_rad[a]) * n / steps;
   return step;
+}
+
+// The rigid motion of a point the linear axes hold while the rotaries turn from zero to
+// `rotary` (GcodeOptions::tip_after_turn gives where it goes): it lands at r p + t. Identity
+// without a machine or with the rotaries at zero.
+template <class TipAfterTurn>
+std::pair<Eigen::Matrix3d, Eigen::Vector3d> turn_from_zero(const TipAfterTurn& tip_after_turn, int tool,
+                                                           const kinematics::RotaryWords& rotary) {
+  const auto& angles = rotary.angle_rad;
+  if (!tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0))
+    return {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
+  kinematics::RotaryWords zero = rotary;
+  zero.angle_rad = {0.0, 0.0, 0.0};
+  auto image = [&](const Eigen::Vector3d& p) { return tip_after_turn(tool, p, zero, rotary); };
+  const Eigen::Vector3d t = image(Eigen::Vector3d::Zero());
+  Eigen::Matrix3d r;
+  for (int a = 0; a < 3; ++a) r.col(a) = image(Eigen::Vector3d::Unit(a)) - t;
+  return {r, t};
 }
 
 // Runs a reader, turning what the standard library throws on a file too big to hold or

@@ -268,15 +268,21 @@ class Reader {
   // The rigid motion that turning the rotary axes from zero to `rotary` gives a point held by
   // the linear axes (identity without the machine or with the rotaries at zero): the tip of
   // machine-coordinate point p lies at turned.first * p + turned.second.
-  std::pair<Eigen::Matrix3d, Eigen::Vector3d> turned(const kinematics::RotaryWords& rotary) const;
+  std::pair<Eigen::Matrix3d, Eigen::Vector3d> turned(const kinematics::RotaryWords& rotary) const {
+    return detail::turn_from_zero(options_.tip_after_turn, state_.tool, rotary);
+  }
   // From the machine's axes to where X Y Z are kept: the turn, or none in an axis program
   // (X Y Z are the machine's there already).
   std::pair<Eigen::Matrix3d, Eigen::Vector3d> machine_turn() const {
     if (state_.rotary_program) return {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
     return turned(state_.rotary);
   }
-  // The tip's rapid straight move to `to` (workpiece frame).
-  void straight_to(const Eigen::Vector3d& to, int column);
+  // A straight move of the tip to `end` (workpiece frame) made by a cycle or a machine word,
+  // at `feed_mm_per_min` (0: a rapid), with the tool as it stands; an exact stop at its end.
+  // `what` names it in the range error; axes not `programmed` and still unknown hold still.
+  void straight(const Eigen::Vector3d& end, double feed_mm_per_min, const char* what, int column,
+                const std::array<bool, 3>& programmed = {true, true, true});
+  void straight_to(const Eigen::Vector3d& to, int column) { straight(to, 0.0, "a move", column); }
   void retract(double fr, double fr_i_mm, int column);  // CYCLE800's _FR
   void home();                                          // G74 / G75
   void finish_block();                                  // the block's call and end
@@ -2307,26 +2313,13 @@ void Reader::apply_frame() {
 // A straight move of a drilling cycle to a point of the frame, as a G0 or G1 block would make it.
 void Reader::cycle_move(const Eigen::Vector3d& frame_point, bool rapid, double feed_factor, int column,
                         double feed_mm_per_min) {
-  Block block;
-  block.kind = rapid ? MotionKind::Rapid : MotionKind::Linear;
-  block.start_mm = state_.position_mm;
-  block.end_mm = placed(frame_point);
-  if (!(block.end_mm.cwiseAbs().maxCoeff() <= kMaxMagnitude))
-    fail(column, "a drilling cycle's move out of range (expected within +-1e6 mm)");
-  block.tool_pose = !state_.rotary_program;
-  block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
-  block.start_axis = block.end_axis = state_.tool_axis;
-  block.start_rotary = block.end_rotary = state_.rotary;
-  if (!rapid && feed_mm_per_min > 0.0) {
-    block.feed_mm_per_min = feed_mm_per_min;
-  } else if (!rapid) {
+  if (!rapid && !(feed_mm_per_min > 0.0)) {
     if (!(state_.feed_mm_per_min > 0.0))
       fail(column, "drilling cycle without a feed (expected F in mm/min before the cycle)");
     if (state_.inverse_time) fail(column, "drilling cycle under G93 (expected G94: a feed in mm/min)");
-    block.feed_mm_per_min = state_.feed_mm_per_min * feed_factor;
+    feed_mm_per_min = state_.feed_mm_per_min * feed_factor;
   }
-  block.exact_stop = true;
-  append(block, {true, true, true}, false);
+  straight(placed(frame_point), rapid ? 0.0 : feed_mm_per_min, "a drilling cycle's move", column);
 }
 
 // The ISO metric coarse pitch (mm) of thread size M`size` (CYCLE84/CYCLE840 MPIT, 3..48; a
@@ -2387,15 +2380,11 @@ void Reader::cycle(const std::string& name, const std::vector<std::optional<doub
       // A tap advances its pitch per turn: PIT (or the metric coarse pitch of thread size
       // MPIT), times the speed (CYCLE84: SST in, SST1 out; else S).
       const bool rigid = name == "CYCLE84";
-      const auto mpit = arg(rigid ? 7 : 9), pit = arg(rigid ? 8 : 10);
-      const auto sst = rigid ? arg(10) : std::nullopt, sst1 = rigid ? arg(11) : std::nullopt;
-      double pitch = 0.0;
-      if (pit && *pit != 0.0)
-        pitch = std::abs(*pit) * unit;
-      else if (mpit && *mpit != 0.0)
-        pitch = coarse_pitch_mm(*mpit, name, column);
-      const double speed = sst && *sst > 0.0 ? *sst : state_.spindle_rpm;
-      const double back = sst1 && *sst1 > 0.0 ? *sst1 : speed;
+      const double mpit = arg(rigid ? 7 : 9).value_or(0.0), pit = arg(rigid ? 8 : 10).value_or(0.0);
+      const double sst = rigid ? arg(10).value_or(0.0) : 0.0, sst1 = rigid ? arg(11).value_or(0.0) : 0.0;
+      const double pitch = pit != 0.0 ? std::abs(pit) * unit : mpit != 0.0 ? coarse_pitch_mm(mpit, name, column) : 0.0;
+      const double speed = sst > 0.0 ? sst : state_.spindle_rpm;
+      const double back = sst1 > 0.0 ? sst1 : speed;
       if (pitch > 0.0 && speed > 0.0) {
         in_mm_per_min = pitch * speed;
         out_mm_per_min = pitch * back;
@@ -2626,32 +2615,24 @@ Eigen::Matrix3d Reader::swivel_turn(int mode, double a_deg, double b_deg, double
   return r;
 }
 
-std::pair<Eigen::Matrix3d, Eigen::Vector3d> Reader::turned(const kinematics::RotaryWords& rotary) const {
-  const auto& angles = rotary.angle_rad;
-  if (!options_.tip_after_turn || (angles[0] == 0.0 && angles[1] == 0.0 && angles[2] == 0.0))
-    return {Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero()};
-  kinematics::RotaryWords zero = rotary;
-  zero.angle_rad = {0.0, 0.0, 0.0};
-  auto image = [&](const Eigen::Vector3d& p) { return options_.tip_after_turn(state_.tool, p, zero, rotary); };
-  const Eigen::Vector3d t = image(Eigen::Vector3d::Zero());
-  Eigen::Matrix3d r;
-  for (int a = 0; a < 3; ++a) r.col(a) = image(Eigen::Vector3d::Unit(a)) - t;
-  return {r, t};
-}
-
-void Reader::straight_to(const Eigen::Vector3d& to, int column) {
-  if (!(to.cwiseAbs().maxCoeff() <= kMaxMagnitude))
-    fail(column, "a move out of range (expected within +-1e6 mm of the workpiece zero)");
+void Reader::straight(const Eigen::Vector3d& end, double feed_mm_per_min, const char* what, int column,
+                      const std::array<bool, 3>& programmed) {
+  if (!(end.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+    fail(column, std::string(what) + " out of range (expected within +-1e6 mm of the workpiece zero)");
   Block block;
-  block.kind = MotionKind::Rapid;
+  block.kind = feed_mm_per_min > 0.0 ? MotionKind::Linear : MotionKind::Rapid;
+  block.feed_mm_per_min = feed_mm_per_min;
   block.start_mm = state_.position_mm;
-  block.end_mm = to;
+  block.end_mm = end;
+  for (std::size_t k = 0; k < 3; ++k) {
+    if (!state_.known[k]) block.start_mm[static_cast<int>(k)] = end[static_cast<int>(k)];
+  }
   block.tool_pose = !state_.rotary_program;
   block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
   block.start_axis = block.end_axis = state_.tool_axis;
   block.start_rotary = block.end_rotary = state_.rotary;
   block.exact_stop = true;
-  append(block, {true, true, true}, false);
+  append(block, programmed, false);
 }
 
 // CYCLE800's retraction (_FR 1, 2, 4, 5), in the machine's axes: the tip's point p with the
@@ -2740,19 +2721,7 @@ void Reader::home() {
       (*options_.reference_mm)[static_cast<std::size_t>(fp - 1)] - tool_length_mm() * options_.spindle_axis;
   for (int k = 0; k < 3; ++k)
     if (named[static_cast<std::size_t>(k)]) axes[k] = point[k];
-  Block block;
-  block.kind = MotionKind::Rapid;
-  block.end_mm = r * axes + t;
-  block.start_mm = state_.position_mm;
-  for (std::size_t k = 0; k < 3; ++k) {
-    if (!state_.known[k]) block.start_mm[static_cast<int>(k)] = block.end_mm[static_cast<int>(k)];
-  }
-  block.tool_pose = !state_.rotary_program;
-  block.orientation = state_.rotary_program ? OrientationMode::Axes : OrientationMode::Vector;
-  block.start_axis = block.end_axis = state_.tool_axis;
-  block.start_rotary = block.end_rotary = state_.rotary;
-  block.exact_stop = true;
-  append(block, named, false);
+  straight(r * axes + t, 0.0, (name + "'s move").c_str(), l.home_column, named);
 }
 
 // Appends a block (unless it does not move) and brings the position and the unknown axes up
