@@ -19,7 +19,7 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   if (!quiet) {
     const double t = r.run.feed.cycle_time_s;
     std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(),
-                job.machine.c_str(), r.run.program.blocks.size(), r.run.densified.samples.size(), t,
+                job.machine.c_str(), r.run.program.blocks.size(), r.run.poses, t,
                 static_cast<int>(t / 3600), static_cast<int>(std::fmod(t, 3600.0) / 60),
                 static_cast<int>(std::fmod(t, 60.0)));
     for (const auto& e : r.events)

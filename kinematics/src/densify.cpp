@@ -367,68 +367,79 @@ ToolPose block_pose(const Block& block, double s) {
   return BlockPath(block, DensifyMachine{}, nullptr, unused).pose(s);
 }
 
+Densifier::Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine)
+    : program_(program), settings_(settings), dm_(machine) {
+  if (program.blocks.empty()) return;
+  // The program's start: the first block's start pose, with its axis values.
+  BlockReport start_report;
+  const Machine* m = dm_.machine;
+  BlockPath path(program.blocks.front(), dm_, nullptr, start_report);
+  start_.pose = path.pose(0.0);
+  if (m) {
+    if (path.axes_known()) {
+      start_.axes = path.axes(0.0);
+    } else {
+      const IkResult r = inverse(*m, start_.pose, path.tool_length_mm(), nullptr, dm_.ik);
+      start_.axes = r.ok() ? r.q() : m->zero();
+      start_.singular = r.status == IkStatus::Singular;
+      if (!r.ok()) start_unreachable_ = r.reason;
+    }
+  }
+  last_ = start_;
+}
+
+void Densifier::rewind() {
+  next_ = 0;
+  last_ = start_;
+}
+
+void Densifier::next_block(std::vector<PoseSample>& out, BlockReport& report) {
+  const std::size_t i = next_++;
+  const Block& b = program_.blocks[i];
+  const Machine* machine = dm_.machine;
+  report = BlockReport{};
+  if (i == 0) report.unreachable = start_unreachable_;
+  const AxisValues* start_axes = machine ? &last_.axes : nullptr;
+  const BlockPath path(b, dm_, start_axes, report);
+  path.nonlinear_error(report);
+  report.q = moves_for(b, path, settings_);
+  if (settings_.tolerance_mm <= 0.0) chord_error(b, path, report);
+  for (int k = 1; k <= report.q; ++k) {
+    const double s = static_cast<double>(k) / report.q;
+    PoseSample sample;
+    sample.block = static_cast<int>(i);
+    // The end of the block is exactly the programmed pose.
+    sample.pose =
+        (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
+    if (machine) {
+      if (path.axes_known()) {
+        sample.axes = path.axes(s);
+      } else {
+        const IkResult r = inverse(*machine, sample.pose, path.tool_length_mm(), &last_.axes, dm_.ik);
+        if (r.ok()) {
+          sample.axes = r.q();
+          sample.singular = r.status == IkStatus::Singular;
+          report.singular = report.singular || sample.singular;
+          report.singular_miss_rad = std::max(report.singular_miss_rad, r.orientation_error_rad);
+        } else {
+          sample.axes = last_.axes;
+          if (report.unreachable.empty()) report.unreachable = r.reason;
+        }
+      }
+    }
+    last_ = sample;
+    out.push_back(std::move(sample));
+  }
+}
+
 Densified densify(const Program& program, const DensifySettings& settings, const DensifyMachine& dm) {
   Densified out;
   if (program.blocks.empty()) return out;
   out.samples.reserve(program.blocks.size() + 1);
   out.blocks.resize(program.blocks.size());
-  const Machine* machine = dm.machine;
-
-  // The program's start.
-  {
-    BlockReport start_report;
-    const Block& first = program.blocks.front();
-    BlockPath path(first, dm, nullptr, start_report);
-    PoseSample s;
-    s.pose = path.pose(0.0);
-    if (machine) {
-      if (path.axes_known()) {
-        s.axes = path.axes(0.0);
-      } else {
-        const IkResult r = inverse(*machine, s.pose, path.tool_length_mm(), nullptr, dm.ik);
-        s.axes = r.ok() ? r.q() : machine->zero();
-        s.singular = r.status == IkStatus::Singular;
-        if (!r.ok()) out.blocks.front().unreachable = r.reason;
-      }
-    }
-    out.samples.push_back(s);
-  }
-
-  for (std::size_t i = 0; i < program.blocks.size(); ++i) {
-    const Block& b = program.blocks[i];
-    BlockReport& report = out.blocks[i];
-    const AxisValues* start_axes = machine ? &out.samples.back().axes : nullptr;
-    const BlockPath path(b, dm, start_axes, report);
-    path.nonlinear_error(report);
-    report.q = moves_for(b, path, settings);
-    if (settings.tolerance_mm <= 0.0) chord_error(b, path, report);
-    for (int k = 1; k <= report.q; ++k) {
-      const double s = static_cast<double>(k) / report.q;
-      PoseSample sample;
-      sample.block = static_cast<int>(i);
-      // The end of the block is exactly the programmed pose.
-      sample.pose =
-          (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
-      if (machine) {
-        if (path.axes_known()) {
-          sample.axes = path.axes(s);
-        } else {
-          const AxisValues& previous = out.samples.back().axes;
-          const IkResult r = inverse(*machine, sample.pose, path.tool_length_mm(), &previous, dm.ik);
-          if (r.ok()) {
-            sample.axes = r.q();
-            sample.singular = r.status == IkStatus::Singular;
-            report.singular = report.singular || sample.singular;
-            report.singular_miss_rad = std::max(report.singular_miss_rad, r.orientation_error_rad);
-          } else {
-            sample.axes = previous;
-            if (report.unreachable.empty()) report.unreachable = r.reason;
-          }
-        }
-      }
-      out.samples.push_back(std::move(sample));
-    }
-  }
+  Densifier densifier(program, settings, dm);
+  out.samples.push_back(densifier.start());
+  for (std::size_t i = 0; i < program.blocks.size(); ++i) densifier.next_block(out.samples, out.blocks[i]);
   return out;
 }
 

@@ -26,6 +26,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <deque>
 #include <limits>
 #include <utility>
 
@@ -494,7 +495,8 @@ bool continues(const Span& s, const Run& r) {
 }
 
 // Adds run k (in program order) to the spans: a new span, or the last one extended.
-void add_to_spans(std::vector<Span>& spans, const Run& r, size_t k) {
+template <class Spans>
+void add_to_spans(Spans& spans, const Run& r, size_t k) {
   if (spans.empty()) {
     spans.push_back(span_of(r, k));
     return;
@@ -685,6 +687,171 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   }
   plan.cycle_time_s = plan.t_s.back();
   return plan;
+}
+
+// plan_feed's steps over the program as it is densified, twice: one densifier (ahead) makes
+// the runs and spans and lets the look-ahead windows close; a second (behind) densifies the
+// blocks of each span again once its junction speeds are final and times their samples.
+// What is held is the spans between the two, at most about 3 W, whatever the program's
+// length. The arithmetic is plan_feed's, in the same order: the same bytes.
+double stream_feed(const Program& program, const DensifySettings& densify_settings, const DensifyMachine& dm,
+                   const FeedSettings& settings, const FeedStreamVisitor& visit) {
+  if (program.blocks.empty()) return 0.0;
+  const Machine* const machine = dm.machine;
+  Densifier ahead(program, densify_settings, dm), behind(program, densify_settings, dm);
+  const size_t W = static_cast<size_t>(std::max(1, settings.lookahead_blocks));
+
+  // Spans k = base, base + 1, ... with the limit (limit[k]) and speed (speed[k]) at their
+  // start; for the span whose run set its limits, that run's axis bounds (G93, step 4).
+  struct MovingRun {
+    double v_axis = kInf, v_cap = kInf;
+  };
+  std::deque<Span> spans;
+  std::deque<MovingRun> moving;
+  std::deque<double> limit, speed;
+  size_t base = 0;            // the first span still held
+  size_t limits = 0;          // limit[0 .. limits - 1] are known
+  size_t next_window = 0;     // the next look-ahead window's first span
+  size_t K = 0;               // the number of spans, once the program has ended
+  bool ended = false;
+  const auto at = [&](std::deque<double>& d, size_t k) -> double& {
+    const size_t i = k - base;
+    if (i >= d.size()) d.resize(i + 1, 0.0);
+    return d[i];
+  };
+  const auto span = [&](size_t k) -> Span& { return spans[k - base]; };
+  const auto created = [&] { return base + spans.size(); };
+
+  std::vector<PoseSample> window;
+  std::vector<double> seg_len, backward;
+  const auto densify_block = [&](Densifier& d, BlockReport& report) {
+    window.clear();
+    window.push_back(d.last());
+    d.next_block(window, report);
+    seg_len.assign(window.size(), 0.0);
+    const int block = static_cast<int>(d.next_index() - 1);
+    return make_run(program, window, machine != nullptr ? &window : nullptr, machine, settings, block, 1,
+                    window.size() - 1, seg_len);
+  };
+
+  // 3. Junction limits of the spans that are complete (a later span exists, or the end).
+  const auto close_limits = [&] {
+    const size_t complete = ended ? K : created() - 1;  // spans 0 .. complete - 1 are final
+    while (limits < (ended ? K + 1 : complete)) {
+      const size_t k = limits;
+      double l;
+      if (k == 0)
+        l = std::min(settings.start_speed_mm_per_s, span(0).v);
+      else if (k == K && ended)
+        l = std::min(settings.end_speed_mm_per_s, span(K - 1).v);
+      else
+        l = junction_limit(span(k - 1), span(k));
+      at(limit, k) = std::max(0.0, l);
+      if (k == 0) at(speed, 0) = at(limit, 0);
+      ++limits;
+    }
+  };
+  // The look-ahead windows whose 2 W spans ahead are complete (or the end).
+  const auto close_windows = [&] {
+    while (ended ? next_window < K : created() >= next_window + 2 * W + 1) {
+      const size_t c = next_window, e = ended ? std::min(K, c + 2 * W) : c + 2 * W;
+      backward.assign(e - c + 1, 0.0);
+      backward[e - c] = ended && e == K ? at(limit, K) : 0.0;
+      for (size_t k = e; k-- > c;) {
+        const Span& s = span(k);
+        backward[k - c] = reach(backward[k + 1 - c], s.length, s.a, s.j, at(limit, k));
+      }
+      at(speed, c) = std::min(at(speed, c), backward[0]);
+      const size_t f = ended ? std::min(K, c + W) : c + W;
+      for (size_t k = c; k < f; ++k) {
+        const Span& s = span(k);
+        at(speed, k + 1) = reach(at(speed, k), s.length, s.a, s.j, backward[k + 1 - c]);
+      }
+      next_window = c + W;
+    }
+  };
+
+  // 4. and 5. The spans whose speeds are final: G93, then their samples' times.
+  double t_span = 0.0, t_last = 0.0;
+  size_t sample_index = 0;
+  const auto emit = [&] {
+    while (base < created() && (base + 1 < next_window || (ended && next_window >= K))) {
+      const size_t k = base;
+      Span& s = span(k);
+      const double v_in = at(speed, k), v_out = at(speed, k + 1);
+      int axis_limited_override = -1;  // the moving run's flag as G93 decides it
+      if (s.g93_time_s > 0.0) {
+        const auto duration = [&](double v) { return make_profile(s.length, v_in, v_out, v, s.a, s.j).duration; };
+        double hi = std::min(s.v_cap, std::max(v_in, v_out) + std::sqrt(2.0 * s.a * s.length));
+        hi = std::max(hi, s.v);
+        if (duration(hi) >= s.g93_time_s) {
+          s.v = hi;
+          const MovingRun& r = moving.front();
+          axis_limited_override = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
+        } else {
+          double lo = s.v;
+          for (int it = 0; it < 200 && hi - lo > 4.0 * kEps * hi; ++it) {
+            const double mid = 0.5 * (lo + hi);
+            (duration(mid) > s.g93_time_s ? lo : hi) = mid;
+          }
+          s.v = hi;
+        }
+      }
+      if (k == 0) visit.sample(sample_index++, behind.start(), 0.0, s.unit == Unit::Tip ? v_in : 0.0);
+      const Profile p = make_profile(s.length, v_in, v_out, s.v, s.a, s.j);
+      double arc = 0.0;
+      int ph = 0;
+      for (size_t b = s.first_run; b <= s.last_run; ++b) {
+        BlockReport report;
+        const Run r = densify_block(behind, report);
+        const double t_before = t_last;
+        for (size_t i = 1; i < window.size(); ++i) {
+          arc += seg_len[i];
+          double t = p.duration, v = v_out;
+          if (p.count > 0 && arc < s.length) {
+            while (ph + 1 < p.count &&
+                   arc > p.phase[static_cast<size_t>(ph)].s0 + p.phase[static_cast<size_t>(ph)].length)
+              ++ph;
+            const Phase& phase = p.phase[static_cast<size_t>(ph)];
+            const double tau = time_in_phase(phase, arc - phase.s0);
+            t = phase.t0 + tau;
+            v = std::max(0.0, phase.speed(tau));
+          }
+          t_last = t_span + t;
+          visit.sample(sample_index++, window[i], t_last, s.unit == Unit::Tip ? v : 0.0);
+        }
+        const bool limited = b == s.moving_run && axis_limited_override >= 0 ? axis_limited_override != 0
+                                                                                : r.axis_limited;
+        visit.block(b, report, t_last - t_before, limited);
+      }
+      t_span += p.duration;
+      spans.pop_front();
+      moving.pop_front();
+      limit.pop_front();
+      speed.pop_front();
+      ++base;
+    }
+  };
+
+  // 1. and 2. Runs and spans as the ahead densifier makes them.
+  while (!ahead.done()) {
+    BlockReport report;
+    const size_t before = created();
+    const Run r = densify_block(ahead, report);
+    const size_t k = ahead.next_index() - 1;
+    add_to_spans(spans, r, k);
+    if (created() > before) moving.emplace_back();
+    if (spans.back().moving_run == k) moving.back() = {r.v_axis, r.v_cap};
+    close_limits();
+    close_windows();
+    emit();
+  }
+  ended = true;
+  K = created();
+  close_limits();
+  close_windows();
+  emit();
+  return t_last;
 }
 
 PathPosition PathCursor::at(double t_s) {

@@ -164,15 +164,106 @@ PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period) {
   return run_pose_engine(job, read_job_program(job), job.resolution_mm, every_period);
 }
 
-namespace {}  // namespace
+namespace {
 
-PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period) {
+// The findings of the blocks, visited in program order (densify's reports, then the blocks
+// an axis limit slowed): per-block events in block order, then the singular runs, then the
+// axis-limited blocks, as report.json lists them; q statistics and the largest nonlinear error.
+class Findings {
+ public:
+  Findings(const io::Job& job, PoseRun& run) : job_(job), run_(run), program_(run.program) {}
+
+  void block(std::size_t i, const kinematics::BlockReport& r) {
+    const std::string line = program_.where(program_.blocks[i].source);
+    q_sum_ += r.q;
+    run_.q_min = i == 0 ? r.q : std::min(run_.q_min, r.q);
+    run_.q_max = std::max(run_.q_max, r.q);
+    ++blocks_;
+    if (r.nonlinear_error_mm > run_.max_nonlinear_error_mm) {
+      run_.max_nonlinear_error_mm = r.nonlinear_error_mm;
+      run_.max_nonlinear_line = line;
+    }
+    const int block = static_cast<int>(i);
+    if (!r.unreachable.empty()) run_.events.push_back({PoseEventKind::Unreachable, line, r.unreachable, block, block});
+    // The user's step or angle leaves the moves off the machine's path by more than a gouge.
+    if (job_.densify_given && r.chord_error_mm > job_.gouge_tolerance_mm) {
+      char detail[240];
+      std::snprintf(detail, sizeof detail,
+                    "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
+                    "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
+                    r.chord_error_mm, job_.gouge_tolerance_mm);
+      run_.events.push_back({PoseEventKind::DensifyError, line, detail, block, block});
+      // The terminal gets the first few; every block stays in the events (report, page).
+      if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(line + ": " + detail);
+    }
+    // Singular poses, one event per run of consecutive blocks (a three-axis program on a
+    // five-axis machine sits on the pole throughout: one event, not thousands).
+    if (r.singular) {
+      if (singular_first_ < 0) singular_first_ = block, singular_miss_ = 0.0;
+      singular_miss_ = std::max(singular_miss_, r.singular_miss_rad);
+    } else {
+      close_singular(block - 1);
+    }
+  }
+  // A block whose speed a machine axis limit set (each once).
+  void axis_limited(int block) {
+    if (block < 0 || block == last_limited_) return;
+    last_limited_ = block;
+    limited_.push_back({PoseEventKind::AxisLimitedSpeed, program_.where(program_.blocks[static_cast<size_t>(block)].source),
+                        "a machine axis limit, not the programmed feed, set the speed", block, block});
+  }
+  void finish() {
+    close_singular(static_cast<int>(blocks_) - 1);
+    if (densify_warnings_ > kDensifyWarnings)
+      run_.warnings.push_back(std::to_string(densify_warnings_ - kDensifyWarnings) +
+                              " more block(s) densified beyond the gouge tolerance (events densify_error in report.json)");
+    run_.events.insert(run_.events.end(), singular_.begin(), singular_.end());
+    run_.events.insert(run_.events.end(), limited_.begin(), limited_.end());
+    run_.q_mean = blocks_ == 0 ? 0.0 : q_sum_ / static_cast<double>(blocks_);
+  }
+
+ private:
+  static constexpr int kDensifyWarnings = 10;
+  void close_singular(int last) {
+    if (singular_first_ < 0) return;
+    const int i = singular_first_;
+    singular_first_ = -1;
+    const kinematics::SourceRef a = program_.blocks[static_cast<size_t>(i)].source,
+                                b = program_.blocks[static_cast<size_t>(last)].source;
+    std::string where = program_.where(program_.span_of_blocks(i, last));
+    if (b.file != a.file) where += " to " + program_.where(b);
+    char detail[160];
+    std::snprintf(detail, sizeof detail,
+                  "%d block(s) with the tool axis in the singular cone: the free rotary angle was kept "
+                  "(largest tool-axis miss %.3g urad)",
+                  last - i + 1, singular_miss_ * 1e6);
+    singular_.push_back({PoseEventKind::Singular, where, detail, i, last});
+  }
+
+  const io::Job& job_;
+  PoseRun& run_;
+  const kinematics::Program& program_;
+  double q_sum_ = 0.0;
+  std::size_t blocks_ = 0;
+  int densify_warnings_ = 0;
+  int singular_first_ = -1, last_limited_ = -1;
+  double singular_miss_ = 0.0;
+  std::vector<PoseEvent> singular_, limited_;
+};
+
+constexpr std::size_t kTimelinePoints = 4000;
+
+}  // namespace
+
+PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period,
+                        bool stream) {
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
   run.reader = input.reader;
   const kinematics::Program& program = run.program;
-  const kinematics::Machine machine(job.machine_spec);
+  run.machine = std::make_shared<const kinematics::Machine>(job.machine_spec);
+  const kinematics::Machine& machine = *run.machine;
 
   // Tools: their gauge lengths for the kinematics, and the largest cutting part for the
   // tolerance mode (a conservative bound for every tool).
@@ -207,6 +298,44 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   chain.servo = job.servo;
   chain.geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
   chain.actual_path_tolerance_mm = default_densify_tolerance_mm(job, resolution_mm);
+  run.densify_settings = settings;
+  run.densify_machine.machine = &machine;
+  run.densify_machine.tool_length_mm = tool_length_mm;
+  Findings findings(job, run);
+
+  if (stream && !job.servo && !job.apply_errors && every_period == nullptr) {
+    // Streamed: a pass that counts the poses (the timeline's points depend on their number),
+    // then the timed pass, neither holding the samples.
+    run.streamed = true;
+    kinematics::Densifier count(program, settings, run.densify_machine);
+    std::vector<kinematics::PoseSample> block_samples;
+    run.poses = program.blocks.empty() ? 0 : 1;
+    while (!count.done()) {
+      kinematics::BlockReport report;
+      block_samples.clear();
+      count.next_block(block_samples, report);
+      run.poses += block_samples.size();
+    }
+    const std::size_t n = run.poses, points = std::min(n, kTimelinePoints);
+    std::size_t point = 0;
+    kinematics::FeedStreamVisitor visit;
+    visit.sample = [&](std::size_t i, const kinematics::PoseSample&, double t_s, double speed_mm_per_s) {
+      if (n < 2 || point >= points || i != point * n / points) return;
+      run.timeline.t_s.push_back(t_s);
+      run.timeline.speed_mm_per_s.push_back(speed_mm_per_s);
+      ++point;
+    };
+    visit.block = [&](std::size_t b, const kinematics::BlockReport& report, double, bool axis_limited) {
+      findings.block(b, report);
+      if (axis_limited) findings.axis_limited(static_cast<int>(b));
+    };
+    kinematics::FeedSettings feed = chain.feed;
+    feed.timing = false;
+    run.feed.cycle_time_s = kinematics::stream_feed(program, settings, run.densify_machine, feed, visit);
+    findings.finish();
+    return run;
+  }
+
   chain.before_servo = [&](const kinematics::FeedPlan& feed) {
     // A period far below any controller's (a unit slip) would run for hours: refused.
     constexpr double kMaxPeriods = 1e8;  // about 40 s of this loop
@@ -225,69 +354,27 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   if (run.max_contour_block >= 0)
     run.max_contour_line = program.where(program.blocks[static_cast<size_t>(run.max_contour_block)].source);
   const auto& samples = run.densified.samples;
+  run.poses = samples.size();
 
-  // Per-block findings and q statistics.
-  constexpr int kDensifyWarnings = 10;
-  int densify_warnings = 0;
-  const auto& blocks = run.densified.blocks;
-  double q_sum = 0.0;
-  for (size_t i = 0; i < blocks.size(); ++i) {
-    const auto& r = blocks[i];
-    const std::string line = program.where(program.blocks[i].source);
-    q_sum += r.q;
-    run.q_min = i == 0 ? r.q : std::min(run.q_min, r.q);
-    run.q_max = std::max(run.q_max, r.q);
-    if (r.nonlinear_error_mm > run.max_nonlinear_error_mm) {
-      run.max_nonlinear_error_mm = r.nonlinear_error_mm;
-      run.max_nonlinear_line = line;
+  for (size_t i = 0; i < run.densified.blocks.size(); ++i) findings.block(i, run.densified.blocks[i]);
+  for (int s : run.feed.axis_limited_samples) findings.axis_limited(samples[static_cast<size_t>(s)].block);
+  findings.finish();
+
+  // The timeline: each point the largest contour error of its stretch, so peaks survive.
+  const auto& t = run.feed.t_s;
+  if (t.size() > 1 && run.feed.speed_mm_per_s.size() == t.size()) {
+    const std::size_t n = t.size(), points = std::min(n, kTimelinePoints);
+    const bool contour = run.contour_error_um.size() == n;
+    for (std::size_t p = 0; p < points; ++p) {
+      const std::size_t a = p * n / points, b = std::max(a + 1, (p + 1) * n / points);
+      std::size_t pick = a;
+      if (contour)
+        for (std::size_t i = a; i < b; ++i)
+          if (run.contour_error_um[i] > run.contour_error_um[pick]) pick = i;
+      run.timeline.t_s.push_back(t[pick]);
+      run.timeline.speed_mm_per_s.push_back(run.feed.speed_mm_per_s[pick]);
+      if (contour) run.timeline.contour_error_um.push_back(run.contour_error_um[pick]);
     }
-    const int block = static_cast<int>(i);
-    if (!r.unreachable.empty()) run.events.push_back({PoseEventKind::Unreachable, line, r.unreachable, block, block});
-    // The user's step or angle leaves the moves off the machine's path by more than a gouge.
-    if (job.densify_given && r.chord_error_mm > job.gouge_tolerance_mm) {
-      char detail[240];
-      std::snprintf(detail, sizeof detail,
-                    "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
-                    "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
-                    r.chord_error_mm, job.gouge_tolerance_mm);
-      run.events.push_back({PoseEventKind::DensifyError, line, detail, block, block});
-      // The terminal gets the first few; every block stays in the events (report, page).
-      if (++densify_warnings <= kDensifyWarnings) run.warnings.push_back(line + ": " + detail);
-    }
-  }
-  if (densify_warnings > kDensifyWarnings)
-    run.warnings.push_back(std::to_string(densify_warnings - kDensifyWarnings) +
-                           " more block(s) densified beyond the gouge tolerance (events densify_error in report.json)");
-  // Singular poses, one event per run of consecutive blocks (a three-axis program on a
-  // five-axis machine sits on the pole throughout: one event, not thousands).
-  for (size_t i = 0; i < blocks.size();) {
-    if (!blocks[i].singular) {
-      ++i;
-      continue;
-    }
-    size_t j = i;
-    double miss = 0.0;
-    while (j < blocks.size() && blocks[j].singular) miss = std::max(miss, blocks[j++].singular_miss_rad);
-    const kinematics::SourceRef a = program.blocks[i].source, b = program.blocks[j - 1].source;
-    std::string where = program.where(program.span_of_blocks(static_cast<int>(i), static_cast<int>(j - 1)));
-    if (b.file != a.file) where += " to " + program.where(b);
-    char detail[160];
-    std::snprintf(detail, sizeof detail,
-                  "%zu block(s) with the tool axis in the singular cone: the free rotary angle was kept "
-                  "(largest tool-axis miss %.3g urad)",
-                  j - i, miss * 1e6);
-    run.events.push_back({PoseEventKind::Singular, where, detail, static_cast<int>(i), static_cast<int>(j - 1)});
-    i = j;
-  }
-  run.q_mean = blocks.empty() ? 0.0 : q_sum / static_cast<double>(blocks.size());
-  int last_block = -1;
-  for (int s : run.feed.axis_limited_samples) {
-    const int block = samples[static_cast<size_t>(s)].block;
-    if (block < 0 || block == last_block) continue;
-    last_block = block;
-    run.events.push_back({PoseEventKind::AxisLimitedSpeed,
-                          program.where(program.blocks[static_cast<size_t>(block)].source),
-                          "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   return run;
 }

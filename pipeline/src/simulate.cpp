@@ -208,17 +208,21 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resoluti
   // The shank and holder of every tool (their cutters follow the tools' in the list).
   bodies_ = removal::add_tool_bodies(tools);
   cutters_ = std::move(tools.cutters);
-  samples_ = actual ? run.actual_path.size() : run.densified.samples.size();
+  if (run.streamed && !actual)
+    densifier_.emplace(program, run.densify_settings, run.densify_machine);
+  else
+    samples_ = actual ? run.actual_path.size() : run.densified.samples.size();
+  rewind();
   std::vector<removal::Move> moves;
-  for (std::size_t i = 1; i < samples_; ++i) {
+  kinematics::ToolPose from, to;
+  int block = -1;
+  while (step(from, to, block)) {
     moves.clear();
-    moves_into(i, moves);
+    moves_into(from, to, block, moves);
     if (moves.empty()) continue;
     const bool rapid =
         program.blocks[static_cast<std::size_t>(moves.front().block)].kind == kinematics::MotionKind::Rapid;
     cutting_moves += !rapid;
-    const kinematics::ToolPose& from = actual ? run.actual_path[i - 1].pose : run.densified.samples[i - 1].pose;
-    const kinematics::ToolPose& to = actual ? run.actual_path[i].pose : run.densified.samples[i].pose;
     rotating_moves += (from.axis - to.axis).norm() > 1e-12;
     for (const removal::Move& m : moves) {
       blocks_.push_back(m.block);
@@ -226,15 +230,47 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resoluti
       count += !m.rapid || m.probe == removal::ProbeKind::Rapid;
     }
   }
+  rewind();
 }
 
-void CutMoves::moves_into(std::size_t i, std::vector<removal::Move>& out) const {
+void CutMoves::rewind() {
+  sample_ = 1;
+  if (!densifier_) return;
+  densifier_->rewind();
+  pending_.clear();
+  pending_next_ = 0;
+  last_ = densifier_->start().pose;
+}
+
+bool CutMoves::step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& block) {
+  if (!densifier_) {
+    if (sample_ >= samples_) return false;
+    const std::size_t i = sample_++;
+    from = actual_ ? run_.actual_path[i - 1].pose : run_.densified.samples[i - 1].pose;
+    to = actual_ ? run_.actual_path[i].pose : run_.densified.samples[i].pose;
+    block = actual_ ? run_.actual_path[i].block : run_.densified.samples[i].block;
+    return true;
+  }
+  if (pending_next_ >= pending_.size()) {
+    if (densifier_->done()) return false;
+    pending_.clear();
+    pending_next_ = 0;
+    kinematics::BlockReport report;
+    densifier_->next_block(pending_, report);
+  }
+  const kinematics::PoseSample& s = pending_[pending_next_++];
+  from = last_;
+  to = s.pose;
+  block = s.block;
+  last_ = s.pose;
+  return true;
+}
+
+void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
+                          std::vector<removal::Move>& out) const {
   const kinematics::Program& program = run_.program;
-  const int block = actual_ ? run_.actual_path[i].block : run_.densified.samples[i].block;
   const auto& b = program.blocks[static_cast<std::size_t>(block)];
   if (b.tool == 0) return;  // a rapid before the first tool change moves nothing
-  const kinematics::ToolPose& from = actual_ ? run_.actual_path[i - 1].pose : run_.densified.samples[i - 1].pose;
-  const kinematics::ToolPose& to = actual_ ? run_.actual_path[i].pose : run_.densified.samples[i].pose;
   removal::Move m;
   m.start_mm = from.tip_mm;
   m.end_mm = to.tip_mm;
@@ -269,7 +305,9 @@ void CutMoves::moves_into(std::size_t i, std::vector<removal::Move>& out) const 
 
 bool CutMoves::next(std::vector<removal::Move>& out, std::size_t wanted) {
   const std::size_t before = out.size();
-  while (sample_ < samples_ && out.size() - before < wanted) moves_into(sample_++, out);
+  kinematics::ToolPose from, to;
+  int block = -1;
+  while (out.size() - before < wanted && step(from, to, block)) moves_into(from, to, block, out);
   return out.size() > before;
 }
 
@@ -430,7 +468,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
 
   // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
   // with servo or machine errors the actual poses, which are what the machine cuts).
-  result.pose_run = run_pose_engine(job, read_job_program(job), v);
+  result.pose_run = run_pose_engine(job, read_job_program(job), v, nullptr, true);
   const PoseRun& run = result.pose_run;
   const kinematics::Program& program = run.program;
   result.blocks = program.blocks.size();
@@ -441,7 +479,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // the nominal ones as well for the nominal cut.
   const bool cut_actual = !run.actual_path.empty();
   CutMoves moves(run, cut_actual, true, v);
-  result.poses = run.densified.samples.size();
+  result.poses = run.poses;
   result.cutting_moves = moves.cutting_moves;
   result.rotating_moves = moves.rotating_moves;
   std::optional<CutMoves> nominal_moves;

@@ -148,7 +148,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     if (options.on_run) options.on_run(index, runs, row.label);
     const auto t0 = Clock::now();
     const io::Job j = with_setting(base, setting);
-    const PoseRun poses = run_pose_engine(j, read_job_program(j), resolution_mm);
+    const PoseRun poses = run_pose_engine(j, read_job_program(j), resolution_mm, nullptr, true);
     // What the machine cuts: the actual path with servo or errors.
     CutMoves cut(poses, !poses.actual_path.empty(), false, resolution_mm);
     const removal::StockShape shape = stock_shape(j);
@@ -161,7 +161,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     stock->cut(cut, cut_options);
     progress("mesh", 0, 1);
     removal::SurfaceMesh surface = stock->surface();
-    row.poses = poses.densified.samples.size();
+    row.poses = poses.poses;
     row.moves = cut.count;
     row.wall_time_s = std::chrono::duration<double>(Clock::now() - t0).count();
     for (const auto& w : warnings_of(j, poses))

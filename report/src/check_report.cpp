@@ -17,7 +17,7 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
   j["errors"] = r.errors;
   j["warnings"] = r.warnings;
   j["blocks"] = r.run.program.blocks.size();
-  j["poses"] = r.run.densified.samples.size();
+  j["poses"] = r.run.poses;
   j["cycle_time_s"] = r.run.feed.cycle_time_s;
   j["stock_box"] = {{"min", vec(r.stock_box.min())}, {"max", vec(r.stock_box.max())}};
   j["events"] = ordered_json::array();

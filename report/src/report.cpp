@@ -133,7 +133,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     const PoseRun& p = r.pose_run;
     ordered_json e;
     e["cycle_time_s"] = std::round(p.feed.cycle_time_s * 1e3) / 1e3;
-    e["poses"] = p.densified.samples.size();
+    e["poses"] = p.poses;
     e["q"] = {{"min", p.q_min}, {"max", p.q_max}, {"mean", std::round(p.q_mean * 1e3) / 1e3}};
     e["rotating_moves"] = r.rotating_moves;
     e["max_nonlinear_error_mm"] = um(p.max_nonlinear_error_mm);

@@ -286,23 +286,17 @@ void write_report_page(const std::string& path, const std::string& template_path
                       e.first_block < 0 ? std::vector<int>{}
                                         : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
 
-  // Feed and contour error over time, at most 4,000 points (each the largest contour error
-  // of its stretch, so peaks survive).
+  // Feed and contour error over time, at most 4,000 points (PoseRun::timeline: each the
+  // largest contour error of its stretch, so peaks survive).
   ordered_json timeline = nullptr;
-  const auto& t = run.feed.t_s;
-  if (t.size() > 1 && run.feed.speed_mm_per_s.size() == t.size()) {
-    const std::size_t n = t.size(), points = std::min<std::size_t>(n, 4000);
-    const bool contour = run.contour_error_um.size() == n;
+  const PoseRun::Timeline& line = run.timeline;
+  if (!line.t_s.empty()) {
+    const bool contour = line.contour_error_um.size() == line.t_s.size();
     ordered_json ts = ordered_json::array(), feed = ordered_json::array(), err = ordered_json::array();
-    for (std::size_t p = 0; p < points; ++p) {
-      const std::size_t a = p * n / points, b = std::max(a + 1, (p + 1) * n / points);
-      std::size_t pick = a;
-      if (contour)
-        for (std::size_t i = a; i < b; ++i)
-          if (run.contour_error_um[i] > run.contour_error_um[pick]) pick = i;
-      ts.push_back(std::round(t[pick] * 1e4) / 1e4);
-      feed.push_back(std::round(run.feed.speed_mm_per_s[pick] * 60.0 * 10) / 10);
-      if (contour) err.push_back(std::round(run.contour_error_um[pick] * 1e3) / 1e3);
+    for (std::size_t p = 0; p < line.t_s.size(); ++p) {
+      ts.push_back(std::round(line.t_s[p] * 1e4) / 1e4);
+      feed.push_back(std::round(line.speed_mm_per_s[p] * 60.0 * 10) / 10);
+      if (contour) err.push_back(std::round(line.contour_error_um[p] * 1e3) / 1e3);
     }
     timeline = {{"t_s", ts}, {"feed_mm_min", feed}, {"contour_error_um", contour ? err : ordered_json(nullptr)}};
   }

@@ -97,6 +97,34 @@ Eigen::Vector3d great_circle(const Eigen::Vector3d& u0, const Eigen::Vector3d& u
 // blocks and ORIAXES see densify). Exposed for tests and the tolerance search.
 ToolPose block_pose(const Block& block, double s);
 
+// Densification one block at a time, in program order, holding only the last sample (the
+// axis values the next block's inverse kinematics starts from): what densify() does, for a
+// caller that streams the samples instead of keeping them. rewind() starts again from the
+// program's start; the samples are the same bytes every time.
+class Densifier {
+ public:
+  // The program (and the machine DensifyMachine points to) must outlive the densifier.
+  Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine);
+  // Sample 0: the first block's start (block -1).
+  const PoseSample& start() const { return start_; }
+  // Block next_index()'s samples appended to out, and its report (block 0's carries the
+  // start's unreachable reason).
+  void next_block(std::vector<PoseSample>& out, BlockReport& report);
+  std::size_t next_index() const { return next_; }
+  bool done() const { return next_ >= program_.blocks.size(); }
+  // The last sample made (the start before the first block).
+  const PoseSample& last() const { return last_; }
+  void rewind();
+
+ private:
+  const Program& program_;
+  DensifySettings settings_;
+  DensifyMachine dm_;
+  PoseSample start_, last_;
+  std::string start_unreachable_;
+  std::size_t next_ = 0;
+};
+
 Densified densify(const Program& program, const DensifySettings& settings, const DensifyMachine& machine);
 
 // Three-axis convenience: no machine, poses only.

@@ -5,6 +5,8 @@
 // (G64 P); rapids at axis speed. Every pose gets a time stamp. Units: mm, s, mm/s.
 #pragma once
 
+#include <cstddef>
+#include <functional>
 #include <vector>
 
 #include "vcut/kinematics/densify.h"
@@ -89,5 +91,19 @@ class PathCursor {
 // deg/min; the path limits then read deg/s^2 and deg/s^3); their tip speed is 0.
 FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const Machine* machine,
                    const FeedSettings& settings);
+
+// plan_feed without holding the samples (the default run: no servo, so no timing between
+// them): the program is densified (densify's Densifier) and timed in one pass that holds
+// a bounded look-ahead, whatever its length. Every sample is visited in order with its time
+// and tip speed (plan_feed's t_s and speed_mm_per_s, the same bytes), and after its samples
+// each block with densify's report, its time (block_time_s) and whether a machine axis set
+// its speed (axis_limited_samples). The feed machine is the densify machine's. Returns the
+// cycle time (s).
+struct FeedStreamVisitor {
+  std::function<void(std::size_t index, const PoseSample& sample, double t_s, double speed_mm_per_s)> sample;
+  std::function<void(std::size_t block, const BlockReport& report, double time_s, bool axis_limited)> block;
+};
+double stream_feed(const Program& program, const DensifySettings& densify_settings, const DensifyMachine& machine,
+                   const FeedSettings& settings, const FeedStreamVisitor& visit);
 
 }  // namespace vcut::kinematics

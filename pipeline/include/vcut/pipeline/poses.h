@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -51,6 +52,21 @@ struct PoseRun : kinematics::PoseChain {
   // Findings a user must see (terminal, report.json warnings, the page's events): a block
   // whose densification leaves it farther from the machine's path than the gouge tolerance.
   std::vector<std::string> warnings;
+  // Streamed (simulate and study without servo or machine errors): densified.samples and the
+  // feed plan's per-sample arrays stay empty; the poses are densified again, from the program,
+  // wherever they are needed (CutMoves), so that memory does not grow with them. `poses`,
+  // feed.cycle_time_s and the timeline are there either way.
+  bool streamed = false;
+  std::size_t poses = 0;  // densified poses (samples)
+  std::shared_ptr<const kinematics::Machine> machine;
+  kinematics::DensifySettings densify_settings;
+  kinematics::DensifyMachine densify_machine;  // its machine is *machine
+  // Time, feed and contour error (with servo or errors) at most 4,000 samples: sample
+  // p * n / 4000 for point p of n samples (or, with a contour error, the one with the largest
+  // error up to the next point's), for the page.
+  struct Timeline {
+    std::vector<double> t_s, speed_mm_per_s, contour_error_um;
+  } timeline;
   // Summary.
   double max_nonlinear_error_mm = 0.0;
   std::string max_nonlinear_line;
@@ -65,8 +81,9 @@ using PeriodVisitor = kinematics::PeriodVisitor;
 PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period = nullptr);
 // With the program already read; `resolution_mm` sets the default densification (the arc
 // chord tolerance resolution / 20, the tolerance mode's min(resolution / 10, gouge / 2)).
+// stream: without servo and errors, a streamed run (PoseRun::streamed).
 PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolution_mm,
-                        const PeriodVisitor* every_period = nullptr);
+                        const PeriodVisitor* every_period = nullptr, bool stream = false);
 
 // How F reads in axis blocks: the machine file's feed_interpretation, else by the job's
 // dialect (fanuc: combined; apt: tip; G-code and SINUMERIK: linuxcnc). `reader` is the

@@ -133,7 +133,7 @@ class CutMoves : public removal::MoveSource {
   bool next(std::vector<removal::Move>& out, std::size_t wanted) override;
   std::size_t size_hint() const override { return blocks_.size(); }
   // Hands the moves over again from the first (a second cut, a second look).
-  void rewind() { sample_ = 1; }
+  void rewind();
 
   std::size_t count = 0;           // the moves that cut or are a rapid's probe (report.json's "moves")
   std::size_t cutting_moves = 0;   // feed moves of the program path
@@ -146,8 +146,12 @@ class CutMoves : public removal::MoveSource {
 
  private:
   static constexpr std::uint8_t kCut = 0xff;
-  // Appends the moves into sample i (from sample i - 1).
-  void moves_into(std::size_t i, std::vector<removal::Move>& out) const;
+  // The next move of the path: the pose it starts from, the one it ends on and that one's
+  // block; false after the last. From the run's poses, or (a streamed run) densified again.
+  bool step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& block);
+  // Appends the moves from one pose to the next (of `block`).
+  void moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
+                  std::vector<removal::Move>& out) const;
 
   const PoseRun& run_;
   bool actual_, probes_;
@@ -156,6 +160,10 @@ class CutMoves : public removal::MoveSource {
   std::map<int, int> cutter_index_;        // T number -> cutters_
   std::vector<removal::ToolBody> bodies_;  // the shank and holder of each tool's cutter
   std::size_t samples_ = 0, sample_ = 1;   // poses in all, the next one to move into
+  std::optional<kinematics::Densifier> densifier_;  // a streamed run's poses
+  std::vector<kinematics::PoseSample> pending_;     // of its current block
+  std::size_t pending_next_ = 0;
+  kinematics::ToolPose last_;
   std::vector<int> blocks_;
   std::vector<std::uint8_t> kinds_;  // ProbeKind, or kCut
 };
