@@ -171,6 +171,13 @@ class BlockPath {
 
   double tool_length_mm() const { return tool_length_mm_; }
 
+  // A tool pose's straight move that does not turn the tool: the controller's path is the
+  // chord itself.
+  bool straight_translation() const {
+    return mode_ == Mode::Pose && b_.kind != MotionKind::Arc && b_.orientation != OrientationMode::ConeClockwise &&
+           b_.orientation != OrientationMode::ConeCounterClockwise && b_.start_axis == b_.end_axis;
+  }
+
   // Tip path length and orientation change for q = max(ceil(L / lambda), ceil(theta / phi)).
   double length_mm() const {
     if (mode_ == Mode::AxesLinear) {
@@ -314,6 +321,10 @@ int arc_moves(const Block& b, double chord_tolerance_mm) {
 
 int moves_for(const Block& b, const BlockPath& path, const DensifySettings& settings) {
   if (settings.tolerance_mm > 0.0) {
+    // One move: the search below would find the chord's deviation at rounding level (1e-13 mm
+    // at 1 m from the origin), inside any tolerance above 1e-9 mm. The shortcut matters where
+    // a streamed run densifies a raster's blocks several times.
+    if (path.straight_translation() && settings.tolerance_mm > 1e-9) return 1;
     const int least = settings.arcs_by_chord && b.kind == MotionKind::Arc && settings.chord_tolerance_mm > 0.0
                           ? std::min(arc_moves(b, settings.chord_tolerance_mm), kMaxMovesPerBlock)
                           : 1;
@@ -409,8 +420,7 @@ void Densifier::next_block(std::vector<PoseSample>& out, BlockReport& report) {
     PoseSample sample;
     sample.block = static_cast<int>(i);
     // The end of the block is exactly the programmed pose.
-    sample.pose =
-        (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
+    sample.pose = (k == report.q && b.tool_pose && !b.end_rotary.any()) ? ToolPose{b.end_mm, b.end_axis} : path.pose(s);
     if (machine) {
       if (path.axes_known()) {
         sample.axes = path.axes(s);

@@ -709,10 +709,10 @@ double stream_feed(const Program& program, const DensifySettings& densify_settin
   std::deque<Span> spans;
   std::deque<MovingRun> moving;
   std::deque<double> limit, speed;
-  size_t base = 0;            // the first span still held
-  size_t limits = 0;          // limit[0 .. limits - 1] are known
-  size_t next_window = 0;     // the next look-ahead window's first span
-  size_t K = 0;               // the number of spans, once the program has ended
+  size_t base = 0;         // the first span still held
+  size_t limits = 0;       // limit[0 .. limits - 1] are known
+  size_t next_window = 0;  // the next look-ahead window's first span
+  size_t K = 0;            // the number of spans, once the program has ended
   bool ended = false;
   const auto at = [&](std::deque<double>& d, size_t k) -> double& {
     const size_t i = k - base;
@@ -820,8 +820,8 @@ double stream_feed(const Program& program, const DensifySettings& densify_settin
           t_last = t_span + t;
           visit.sample(sample_index++, window[i], t_last, s.unit == Unit::Tip ? v : 0.0);
         }
-        const bool limited = b == s.moving_run && axis_limited_override >= 0 ? axis_limited_override != 0
-                                                                                : r.axis_limited;
+        const bool limited =
+            b == s.moving_run && axis_limited_override >= 0 ? axis_limited_override != 0 : r.axis_limited;
         visit.block(b, report, t_last - t_before, limited);
       }
       t_span += p.duration;

@@ -209,14 +209,16 @@ class Findings {
   void axis_limited(int block) {
     if (block < 0 || block == last_limited_) return;
     last_limited_ = block;
-    limited_.push_back({PoseEventKind::AxisLimitedSpeed, program_.where(program_.blocks[static_cast<size_t>(block)].source),
+    limited_.push_back({PoseEventKind::AxisLimitedSpeed,
+                        program_.where(program_.blocks[static_cast<size_t>(block)].source),
                         "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   void finish() {
     close_singular(static_cast<int>(blocks_) - 1);
     if (densify_warnings_ > kDensifyWarnings)
-      run_.warnings.push_back(std::to_string(densify_warnings_ - kDensifyWarnings) +
-                              " more block(s) densified beyond the gouge tolerance (events densify_error in report.json)");
+      run_.warnings.push_back(
+          std::to_string(densify_warnings_ - kDensifyWarnings) +
+          " more block(s) densified beyond the gouge tolerance (events densify_error in report.json)");
     run_.events.insert(run_.events.end(), singular_.begin(), singular_.end());
     run_.events.insert(run_.events.end(), limited_.begin(), limited_.end());
     run_.q_mean = blocks_ == 0 ? 0.0 : q_sum_ / static_cast<double>(blocks_);

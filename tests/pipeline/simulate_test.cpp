@@ -2,11 +2,13 @@
 // worked by hand from the geometry in the comments.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 #include "vcut/io/input_error.h"
 #include "vcut/io/job.h"
@@ -152,6 +154,59 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   EXPECT_NEAR(simulate(j, {}).removed_volume_mm3, removed, 1e-9);
   // engine: vdb makes the OpenVDB stock.
   EXPECT_NE(dynamic_cast<removal::VdbStock*>(make_stock(job("", "3axis", "vdb"), shape, 0.1, true).get()), nullptr);
+}
+
+// A streamed run (no servo, no errors: what simulate and study use) against the same run
+// with every sample held: the same poses, time line, findings and moves, move by move. The
+// demo's collision job has rapids into the stock, the shank and holder probes and a feed move
+// with the spindle stopped; the ring has arcs and helices; the demo more moves than a batch.
+TEST_F(Stages, StreamedRunMakesTheSameMoves) {
+  for (const char* name : {"/examples/demo/job-coll.yaml", "/examples/ring/job.yaml", "/examples/demo/job.yaml"}) {
+    const io::Job j = io::read_job(std::string(VCUT_SOURCE_DIR) + name);
+    const PoseRun held = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, false);
+    const PoseRun streamed = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, true);
+    ASSERT_FALSE(held.streamed);
+    ASSERT_TRUE(streamed.streamed) << name;
+    EXPECT_TRUE(streamed.densified.samples.empty());
+    EXPECT_TRUE(streamed.feed.t_s.empty());
+    ASSERT_EQ(streamed.poses, held.densified.samples.size()) << name;
+    EXPECT_EQ(streamed.feed.cycle_time_s, held.feed.cycle_time_s) << name;
+    EXPECT_EQ(streamed.timeline.t_s, held.timeline.t_s) << name;
+    EXPECT_EQ(streamed.timeline.speed_mm_per_s, held.timeline.speed_mm_per_s) << name;
+    EXPECT_EQ(held.timeline.t_s.size(), std::min<std::size_t>(held.poses, 4000)) << name;
+    EXPECT_EQ(streamed.q_min, held.q_min);
+    EXPECT_EQ(streamed.q_max, held.q_max);
+    EXPECT_EQ(streamed.q_mean, held.q_mean);
+    ASSERT_EQ(streamed.events.size(), held.events.size()) << name;
+    for (std::size_t i = 0; i < held.events.size(); ++i) {
+      EXPECT_EQ(streamed.events[i].kind, held.events[i].kind);
+      EXPECT_EQ(streamed.events[i].line, held.events[i].line);
+      EXPECT_EQ(streamed.events[i].detail, held.events[i].detail);
+    }
+    CutMoves a(held, false, true, j.resolution_mm), b(streamed, false, true, j.resolution_mm);
+    EXPECT_EQ(a.count, b.count);
+    EXPECT_EQ(a.cutting_moves, b.cutting_moves);
+    EXPECT_EQ(a.blocks(), b.blocks());
+    EXPECT_GT(a.count, std::string(name) == "/examples/demo/job.yaml" ? 4096u : 0u) << name;
+    for (int pass = 0; pass < 2; ++pass) {  // and again after a rewind
+      std::vector<removal::Move> ma, mb;
+      while (a.next(ma, 4096)) {
+      }
+      while (b.next(mb, 4096)) {
+      }
+      ASSERT_EQ(ma.size(), mb.size()) << name;
+      for (std::size_t i = 0; i < ma.size(); ++i) {
+        ASSERT_EQ(ma[i].start_mm, mb[i].start_mm) << name << " move " << i;
+        ASSERT_EQ(ma[i].end_mm, mb[i].end_mm) << name << " move " << i;
+        ASSERT_EQ(ma[i].axis, mb[i].axis) << name << " move " << i;
+        ASSERT_EQ(ma[i].block, mb[i].block) << name << " move " << i;
+        ASSERT_EQ(ma[i].rapid, mb[i].rapid) << name << " move " << i;
+        ASSERT_EQ(ma[i].probe, mb[i].probe) << name << " move " << i;
+      }
+      a.rewind();
+      b.rewind();
+    }
+  }
 }
 
 // Cutting moves that never come near the stock are refused before any cut (work offsets).

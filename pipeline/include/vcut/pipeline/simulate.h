@@ -157,9 +157,9 @@ class CutMoves : public removal::MoveSource {
   bool actual_, probes_;
   double rotation_bound_mm_;
   std::vector<removal::Cutter> cutters_;
-  std::map<int, int> cutter_index_;        // T number -> cutters_
-  std::vector<removal::ToolBody> bodies_;  // the shank and holder of each tool's cutter
-  std::size_t samples_ = 0, sample_ = 1;   // poses in all, the next one to move into
+  std::map<int, int> cutter_index_;                 // T number -> cutters_
+  std::vector<removal::ToolBody> bodies_;           // the shank and holder of each tool's cutter
+  std::size_t samples_ = 0, sample_ = 1;            // poses in all, the next one to move into
   std::optional<kinematics::Densifier> densifier_;  // a streamed run's poses
   std::vector<kinematics::PoseSample> pending_;     // of its current block
   std::size_t pending_next_ = 0;
