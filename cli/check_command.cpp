@@ -19,9 +19,8 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   if (!quiet) {
     const double t = r.run.feed.cycle_time_s;
     std::printf("check %s on %s: %zu blocks, %zu poses, cycle time %.1f s (%d:%02d:%02d)\n", job.name.c_str(),
-                job.machine.c_str(), r.run.program.blocks.size(), r.run.poses, t,
-                static_cast<int>(t / 3600), static_cast<int>(std::fmod(t, 3600.0) / 60),
-                static_cast<int>(std::fmod(t, 60.0)));
+                job.machine.c_str(), r.run.program.blocks.size(), r.run.poses, t, static_cast<int>(t / 3600),
+                static_cast<int>(std::fmod(t, 3600.0) / 60), static_cast<int>(std::fmod(t, 60.0)));
     for (const auto& e : r.events)
       std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), e.line.c_str(), e.detail.c_str());
     for (const auto& c : r.tools) {

@@ -30,8 +30,8 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
   for (const auto& w : run.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   if (quiet) return 0;
   std::printf("job %s on %s: %zu blocks, %zu poses (q %d..%d, mean %.2f), cycle time %.3f s\n", job.name.c_str(),
-              job.machine.c_str(), run.program.blocks.size(), run.poses, run.q_min, run.q_max,
-              run.q_mean, run.feed.cycle_time_s);
+              job.machine.c_str(), run.program.blocks.size(), run.poses, run.q_min, run.q_max, run.q_mean,
+              run.feed.cycle_time_s);
   if (run.max_nonlinear_error_mm > 0.0)
     std::printf("max non-linear tip error %.4f mm at %s\n", run.max_nonlinear_error_mm, run.max_nonlinear_line.c_str());
   if (!run.actual.empty()) {
