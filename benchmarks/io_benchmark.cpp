@@ -154,7 +154,7 @@ void BM_ReadApt(benchmark::State& state) {
     vcut::io::AptState apt_state;
     vcut::io::read_apt(in, "bench.apt", {}, out, apt_state);
     blocks = out.program.blocks.size();
-    benchmark::DoNotOptimize(out.program.blocks.data());
+    benchmark::DoNotOptimize(out.program.blocks.size());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kLines);
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
@@ -167,7 +167,7 @@ void BM_ReadAptFile(benchmark::State& state) {
   { std::ofstream(path, std::ios::binary) << program(); }
   for (auto _ : state) {
     const vcut::io::AptProgram out = vcut::io::read_apt(path);
-    benchmark::DoNotOptimize(out.program.blocks.data());
+    benchmark::DoNotOptimize(out.program.blocks.size());
   }
   std::filesystem::remove(path);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kLines);
@@ -184,7 +184,7 @@ void BM_ReadGcode(benchmark::State& state) {
     vcut::io::GcodeState gcode_state;
     vcut::io::read_gcode(in, "bench.ngc", {}, out, gcode_state);
     blocks = out.blocks.size();
-    benchmark::DoNotOptimize(out.blocks.data());
+    benchmark::DoNotOptimize(out.blocks.size());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kLines);
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
@@ -197,7 +197,7 @@ void BM_ReadGcodeFile(benchmark::State& state) {
   { std::ofstream(path, std::ios::binary) << gcode_program(); }
   for (auto _ : state) {
     const vcut::kinematics::Program out = vcut::io::read_gcode(path, {});
-    benchmark::DoNotOptimize(out.blocks.data());
+    benchmark::DoNotOptimize(out.blocks.size());
   }
   std::filesystem::remove(path);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kLines);
@@ -214,7 +214,7 @@ void BM_ReadSinumerik(benchmark::State& state) {
     vcut::io::SinumerikState sinumerik_state;
     vcut::io::read_sinumerik(in, "bench.mpf", {}, out, sinumerik_state);
     blocks = out.blocks.size();
-    benchmark::DoNotOptimize(out.blocks.data());
+    benchmark::DoNotOptimize(out.blocks.size());
   }
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * kLines);
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations() * text.size()));
@@ -242,7 +242,7 @@ void BM_ReadGcodeLoops(benchmark::State& state) {
   }
   for (auto _ : state) {
     const vcut::kinematics::Program out = vcut::io::read_gcode(path, {});
-    benchmark::DoNotOptimize(out.blocks.data());
+    benchmark::DoNotOptimize(out.blocks.size());
   }
   std::filesystem::remove(path);
   // Per pass: while, call, sub body (3 lines read: #<x>, G1, endsub), #1, if, endif, endwhile = 9
@@ -274,7 +274,7 @@ void BM_ReadFanucMacroLoops(benchmark::State& state) {
   options.flavor = vcut::io::GcodeOptions::Flavor::Fanuc;
   for (auto _ : state) {
     const vcut::kinematics::Program out = vcut::io::read_gcode(path, options);
-    benchmark::DoNotOptimize(out.blocks.data());
+    benchmark::DoNotOptimize(out.blocks.size());
   }
   std::filesystem::remove(path);
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * 100000 * 10);

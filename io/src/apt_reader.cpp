@@ -27,7 +27,6 @@
 #include <tuple>
 #include <vector>
 
-#include "block_room.h"
 #include "cutter_comp.h"
 #include "line_source.h"
 #include "reader_util.h"
@@ -269,7 +268,7 @@ class Reader : public detail::CompHost {
   double comp_unit() const override { return state_.inches ? kMmPerInch : 1.0; }
   void comp_append(Block block, const std::array<bool, 3>& programmed, bool held, const Eigen::Vector2d& direction,
                    double sweep_rad) override;
-  std::vector<Block>& comp_blocks() override { return out_.program.blocks; }
+  kinematics::BlockList& comp_blocks() override { return out_.program.blocks; }
   [[noreturn]] void comp_fail(int column, const std::string& message) const override {
     fail(static_cast<size_t>(column), message +
                                           "; if the CL points are the tool's centre (control compensation for wear), "
@@ -313,18 +312,12 @@ void Reader::run(std::istream& in) {
   std::string text;
   int number = 0;
   bool finished = false;
-  // Most lines of a CL file are motions: room for one Block per line, estimated from the first
-  // 64 KiB, saves the vector's regrowth copies (half the reading time of a 10^6-line file).
-  // Capacity that is never written stays virtual memory.
-  const std::streamsize available = in.rdbuf() ? in.rdbuf()->in_avail() : 0;
-  bool reserved = false;
   while (true) {
     const detail::LineSource::Result r = source.next(text);
     if (r == detail::LineSource::kEnd) break;
-    if (!reserved) {
-      reserved = true;
-      detail::reserve_blocks(out_.program.blocks, source.estimate_lines(static_cast<double>(available)));
-    }
+    // Nothing a CL file reads changes a block once made: every whole chunk goes to the compact
+    // store (block_list.h).
+    out_.program.blocks.seal_before(out_.program.blocks.size());
     if (number == INT_MAX) fail_at(number, 0, "too many lines");
     ++number;
     if (r == detail::LineSource::kTooLong) {

@@ -27,7 +27,7 @@ class CompHost {
   // in rad) for the next move to end, instead of into the program.
   virtual void comp_append(kinematics::Block block, const std::array<bool, 3>& programmed, bool held,
                            const Eigen::Vector2d& direction, double sweep_rad) = 0;
-  virtual std::vector<kinematics::Block>& comp_blocks() = 0;
+  virtual kinematics::BlockList& comp_blocks() = 0;
   [[noreturn]] virtual void comp_fail(int column, const std::string& message) const = 0;
 };
 

@@ -7,7 +7,6 @@
 
 #include <Eigen/Geometry>
 
-#include "block_room.h"
 #include "cutter_comp.h"
 #include "plane_arc.h"
 #include "reader_util.h"
@@ -557,6 +556,8 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   void twp_begin(const Code& g);
   void twp_end();
   void twp_emit();
+  void twp_emit_before(size_t end);
+  void seal_blocks();
   void twp_turn(const Code& g);
   // Rotaries standing turned outside G68.2 (GcodeState::twp without twp_feature).
   bool turns_hold_linear() const {
@@ -627,7 +628,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     append(block, programmed);
     hold_ = false;
   }
-  std::vector<Block>& comp_blocks() override { return program_.blocks; }
+  kinematics::BlockList& comp_blocks() override { return program_.blocks; }
   [[noreturn]] void comp_fail(int column, const std::string& message) const override { fail(column, message); }
   bool hold_ = false;  // append() holds the block for compensation instead of emitting it
   Eigen::Vector2d hold_direction_ = Eigen::Vector2d::Zero();
@@ -850,20 +851,9 @@ void Reader::run(std::istream& in, const std::string& name) {
   }
   twp_first_block_ = program_.blocks.size();
   std::string text;
-  // Most lines of a long program are motions: room for one Block per line, estimated from the
-  // first lines' length, saves the vector's regrowth copies and most page faults.
-  const std::streamsize available = in.rdbuf() ? in.rdbuf()->in_avail() : 0;
-  constexpr int kSampleLines = 256;
-  const std::streamoff first_offset = current_->offset;
-  bool reserved = false;
   try {
     while (true) {
-      if (!reserved && current_->line == kSampleLines && current_ == sources_.front().get() && available > 0) {
-        reserved = true;
-        const double per_line = std::max(1.0, static_cast<double>(current_->offset - first_offset) / kSampleLines);
-        detail::reserve_blocks(program_.blocks,
-                               static_cast<size_t>(std::min(1e9, static_cast<double>(available) / per_line)));
-      }
+      seal_blocks();
       if (!next_line(text)) {
         if (frames_.size() > 1) {
           fail(0, "the file ends inside o<" + frame().sub + "> (expected o<" + frame().sub + "> endsub)");
@@ -1681,7 +1671,7 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
     std::string first;
     for (size_t index : pending) {
       if (index >= program_.blocks.size()) continue;  // a different Program was passed in
-      Block& b = program_.blocks[index];
+      Block& b = program_.blocks.edit(index);
       if (first.empty() && b.source.file >= 0 && static_cast<size_t>(b.source.file) < program_.files.size()) {
         first = program_.where(b.source);
       }
@@ -1759,7 +1749,7 @@ void Reader::corner_to(Block& second, int column) {
   const PendingCorner c = *corner_;
   corner_.reset();
   const char* what = c.round ? ",R" : ",C";
-  Block& first = program_.blocks[c.block];
+  Block& first = program_.blocks.edit(c.block);
   const Eigen::Vector3d corner = first.end_mm;
   const Eigen::Vector3d in = corner - first.start_mm, out = second.end_mm - corner;
   const double in_length = in.norm(), out_length = out.norm();
@@ -2935,16 +2925,33 @@ void Reader::twp_begin(const Code& g) {
 }
 
 // The blocks made in the tilted plane, from the feature frame to the workpiece frame.
-void Reader::twp_emit() {
+void Reader::twp_emit() { twp_emit_before(program_.blocks.size()); }
+
+// Those before block `end` only (the later ones may still change in the plane's frame).
+void Reader::twp_emit_before(size_t end) {
   const Eigen::Matrix3d& r = state_.twp_rotation;
-  for (size_t n = twp_first_block_; n < program_.blocks.size(); ++n) {
-    Block& b = program_.blocks[n];
+  for (size_t n = twp_first_block_; n < end; ++n) {
+    Block& b = program_.blocks.edit(n);
     b.start_mm = twp_out(b.start_mm);
     b.end_mm = twp_out(b.end_mm);
     b.center_mm = twp_out(b.center_mm);
     b.normal = r * b.normal;
   }
-  twp_first_block_ = program_.blocks.size();
+  twp_first_block_ = std::max(twp_first_block_, end);
+}
+
+// Hands the blocks that cannot change any more to the program's compact store (block_list.h):
+// all but those an axis not yet known, a corner to round or a tilted plane may still change
+// (the plane's finished blocks go to the workpiece frame first).
+void Reader::seal_blocks() {
+  kinematics::BlockList& blocks = program_.blocks;
+  if (blocks.open() < 2 * kinematics::BlockList::kChunk) return;
+  size_t first_open = blocks.size();
+  for (const auto& pending : state_.pending)
+    if (!pending.empty()) first_open = std::min(first_open, pending.front());
+  if (corner_) first_open = std::min(first_open, corner_->block);
+  if (state_.twp) twp_emit_before(first_open);
+  blocks.seal_before(first_open);
 }
 
 void Reader::twp_end() {

@@ -5,7 +5,6 @@
 #include <vcut/io/input_error.h>
 #include <vcut/io/sinumerik_reader.h>
 
-#include "block_room.h"
 #include "line_source.h"
 #include "plane_arc.h"
 #include "reader_util.h"
@@ -135,16 +134,10 @@ class Reader {
     detail::LineSource source(in);
     std::string text;
     int number = 0;
-    // Room for one Block per line, estimated from the first 64 KiB (as in the APT reader).
-    const std::streamsize available = in.rdbuf() ? in.rdbuf()->in_avail() : 0;
-    bool reserved = false;
     while (true) {
       const detail::LineSource::Result r = source.next(text);
       if (r == detail::LineSource::kEnd) break;
-      if (!reserved) {
-        reserved = true;
-        detail::reserve_blocks(program_.blocks, source.estimate_lines(static_cast<double>(available)));
-      }
+      seal_blocks();
       if (number == INT_MAX) fail_at(number, 0, "too many lines");
       ++number;
       line_ = number;
@@ -321,6 +314,16 @@ class Reader {
   bool orient(Block& block);
   void arc(Block& block, bool clockwise);
   void append(Block block, const std::array<bool, 3>& programmed, bool reorients);
+  // Hands the blocks before the first one an axis not yet known may still change to the
+  // program's compact store (block_list.h).
+  void seal_blocks() {
+    kinematics::BlockList& blocks = program_.blocks;
+    if (blocks.open() < 2 * kinematics::BlockList::kChunk) return;
+    std::size_t first_open = blocks.size();
+    for (const auto& pending : state_.pending)
+      if (!pending.empty()) first_open = std::min(first_open, pending.front());
+    blocks.seal_before(first_open);
+  }
 
   const std::string& name_;
   const SinumerikOptions& options_;
@@ -2749,7 +2752,7 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, bool reo
     std::string first;
     for (std::size_t index : pending) {
       if (index >= program_.blocks.size()) continue;  // a different Program was passed in
-      Block& b = program_.blocks[index];
+      Block& b = program_.blocks.edit(index);
       if (first.empty() && b.source.file >= 0 && static_cast<std::size_t>(b.source.file) < program_.files.size()) {
         first = program_.where(b.source);
       }

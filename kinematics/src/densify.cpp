@@ -384,7 +384,8 @@ Densifier::Densifier(const Program& program, const DensifySettings& settings, co
   // The program's start: the first block's start pose, with its axis values.
   BlockReport start_report;
   const Machine* m = dm_.machine;
-  BlockPath path(program.blocks.front(), dm_, nullptr, start_report);
+  const Block first = program.blocks.front();  // BlockPath keeps a reference
+  BlockPath path(first, dm_, nullptr, start_report);
   start_.pose = path.pose(0.0);
   if (m) {
     if (path.axes_known()) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 #include "vcut/io/input_error.h"
@@ -43,7 +44,9 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
   double feed = -1.0;
   for (size_t i = 0; i < samples.size(); ++i) {
     const auto& s = samples[i];
-    const kinematics::Block* block = s.block >= 0 ? &program.blocks[static_cast<size_t>(s.block)] : nullptr;
+    const std::optional<kinematics::Block> of_sample =
+        s.block >= 0 ? std::optional<kinematics::Block>(program.blocks[static_cast<size_t>(s.block)]) : std::nullopt;
+    const kinematics::Block* block = of_sample ? &*of_sample : nullptr;
     const double length = run.tool_length_mm[i];
     const kinematics::CompensationResult c = kinematics::compensate(machine, s.pose, length, s.axes);
     ++report.poses;
@@ -60,7 +63,9 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
     }
     // The start pose was computed with the first block's tool (run.tool_length_mm), so its
     // tool change comes before the start line: read back, the line then has the same length.
-    const kinematics::Block* holder = block ? block : program.blocks.empty() ? nullptr : &program.blocks.front();
+    const std::optional<kinematics::Block> first =
+        program.blocks.empty() ? std::nullopt : std::optional<kinematics::Block>(program.blocks.front());
+    const kinematics::Block* holder = block ? block : first ? &*first : nullptr;
     if (holder && holder->tool != tool && holder->tool > 0 && apt) {
       tool = holder->tool;
       text += "LOADTL/" + std::to_string(tool) + "\n";

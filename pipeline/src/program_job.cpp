@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <optional>
 #include <set>
 
 #include "vcut/io/camotics_project.h"
@@ -70,14 +71,15 @@ struct Extent {
 // radius of the tools that make them.
 Extent cutting_extent(const kinematics::Program& program, const io::ToolLibrary& tools) {
   Extent e;
-  const kinematics::Block* last = nullptr;
+  std::optional<kinematics::Block> before;
   for (const kinematics::Block& b : program.blocks) {
-    const kinematics::Block* before = last;
-    last = &b;
+    const bool after_rapid_down = before && before->kind == kinematics::MotionKind::Rapid &&
+                                  before->end_mm.z() < before->start_mm.z() - 1e-9;
+    const Eigen::Vector3d rapid_end = before ? before->end_mm : Eigen::Vector3d::Zero();
+    before = b;
     if (b.kind == kinematics::MotionKind::Rapid) continue;
-    if (before != nullptr && before->kind == kinematics::MotionKind::Rapid && std::isnan(e.first_plunge_mm.z()) &&
-        before->end_mm.z() < before->start_mm.z() - 1e-9 && b.end_mm.z() < b.start_mm.z() - 1e-9)
-      e.first_plunge_mm = before->end_mm;
+    if (after_rapid_down && std::isnan(e.first_plunge_mm.z()) && b.end_mm.z() < b.start_mm.z() - 1e-9)
+      e.first_plunge_mm = rapid_end;
     e.box.extend(b.start_mm);
     e.box.extend(b.end_mm);
     if (b.kind == kinematics::MotionKind::Arc) {

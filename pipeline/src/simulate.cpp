@@ -370,7 +370,7 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
                                      const kinematics::Program& program, const std::vector<int>& move_blocks) {
   const double v = resolution_mm;
   DesignComparison out;
-  auto block_of = [&](int move) -> const kinematics::Block& {
+  auto block_of = [&](int move) -> kinematics::Block {
     return program.blocks[static_cast<std::size_t>(move_blocks[static_cast<std::size_t>(move)])];
   };
   const removal::DesignDistance distance(design);
@@ -520,7 +520,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   result.removed_volume_mm3 = cut.removed_volume_mm3;
   result.final_volume_mm3 = stock.volume_mm3();
   result.stock_memory_mb = static_cast<double>(stock.memory_bytes()) / (1024.0 * 1024.0);
-  auto block_of = [&](int move) -> const kinematics::Block& {
+  auto block_of = [&](int move) -> kinematics::Block {
     return program.blocks[static_cast<std::size_t>(moves.block(static_cast<std::size_t>(move)))];
   };
   result.collisions = collision_records(cut.collisions, moves, program);

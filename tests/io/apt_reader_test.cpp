@@ -754,7 +754,7 @@ TEST(AptReader, CutcomOffsetsTheContourAsG42) {
       "UNITS/MM\nCUTTER/4\nFROM/-10,-10,5\nFEDRAT/200\nGOTO/-10,-10,-1\nCUTCOM/RIGHT,XYPLAN,1\nGOTO/0,0,-1\n"
       "GOTO/20,0,-1\nGOTO/20,20,-1\nCIRCLE/10,20,-1,0,0,1,10\nGOTO/0,20,-1\nGOTO/0,0,-1\nCUTCOM/OFF\nGOTO/"
       "-10,-10,-1\nFINI\n");
-  const std::vector<Block>& b = apt.program.blocks;
+  const kinematics::BlockList& b = apt.program.blocks;
   ASSERT_EQ(b.size(), 8u);
   EXPECT_LT((b[2].end_mm - Eigen::Vector3d(20, -2, -1)).norm(), 1e-9);
   EXPECT_EQ(b[3].kind, kinematics::MotionKind::Arc);

@@ -236,20 +236,20 @@ TEST(GcodeSplines, VerticesOnTheCurveChordsWithinAMicron) {
       {{0, 0}, {5, 5}, {10, 0}}, {{10, 0}, {12, 2}, {18, 2}, {20, 0}}, {{20, 0}, {22, -2}, {28, 2}, {30, 0}}};
   const int lines[] = {2, 3, 4};
   for (size_t c = 0; c < curves.size(); ++c) {
-    std::vector<const Block*> run;
+    std::vector<Block> run;
     for (const Block& b : p.blocks) {
-      if (b.source.line == lines[c]) run.push_back(&b);
+      if (b.source.line == lines[c]) run.push_back(b);
     }
     ASSERT_GE(run.size(), 10u) << "curve " << c;
-    expect_point(run.front()->start_mm, {curves[c].front().x(), curves[c].front().y(), 0}, "start");
-    expect_point(run.back()->end_mm, {curves[c].back().x(), curves[c].back().y(), 0}, "end");
+    expect_point(run.front().start_mm, {curves[c].front().x(), curves[c].front().y(), 0}, "start");
+    expect_point(run.back().end_mm, {curves[c].back().x(), curves[c].back().y(), 0}, "end");
     // Vertices: at t = i / n (uniform steps).
     const double n = static_cast<double>(run.size());
     for (size_t i = 0; i < run.size(); ++i) {
       const Eigen::Vector2d want = bezier(curves[c], (i + 1) / n);
-      EXPECT_LT((run[i]->end_mm.head<2>() - want).norm(), 1e-9) << "curve " << c << " vertex " << i;
+      EXPECT_LT((run[i].end_mm.head<2>() - want).norm(), 1e-9) << "curve " << c << " vertex " << i;
       // The chord's midpoint against the curve's point half way.
-      const Eigen::Vector2d mid = (run[i]->start_mm.head<2>() + run[i]->end_mm.head<2>()) / 2.0;
+      const Eigen::Vector2d mid = (run[i].start_mm.head<2>() + run[i].end_mm.head<2>()) / 2.0;
       EXPECT_LT((mid - bezier(curves[c], (i + 0.5) / n)).norm(), 0.001 + 1e-12) << "curve " << c << " chord " << i;
     }
   }

@@ -3,6 +3,8 @@
 // machines' documented tool-axis formulas (their files' headers).
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include <cmath>
 #include <map>
 #include <sstream>
@@ -52,14 +54,12 @@ Eigen::Matrix3d euler_zxz(double alpha_deg, double beta_deg, double gamma_deg) {
 }
 
 // The last block made by line `line` of the program.
-const Block& last_of_line(const kinematics::Program& program, int line) {
-  const Block* found = nullptr;
-  for (const Block& b : program.blocks) {
-    if (b.source.line == line) found = &b;
-  }
-  EXPECT_NE(found, nullptr) << "no block from line " << line;
-  static const Block none;
-  return found != nullptr ? *found : none;
+Block last_of_line(const kinematics::Program& program, int line) {
+  std::optional<Block> found;
+  for (const Block& b : program.blocks)
+    if (b.source.line == line) found = b;
+  EXPECT_TRUE(found.has_value()) << "no block from line " << line;
+  return found.value_or(Block{});
 }
 
 void expect_near(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double tol, const std::string& what) {

@@ -4,6 +4,8 @@
 // the machines' documented tool-axis formulas and axis lines (their files' headers), not from
 // the reader.
 #include <gtest/gtest.h>
+
+#include <optional>
 #include <vcut/io/input_error.h>
 #include <vcut/io/machine_file.h>
 #include <vcut/io/program_reader.h>
@@ -62,13 +64,12 @@ void expect_vec(const Eigen::Vector3d& got, const Eigen::Vector3d& want, double 
   EXPECT_LE((got - want).norm(), tol) << "got (" << got.transpose() << "), want (" << want.transpose() << ")";
 }
 
-const Block& last_of_line(const Program& program, int line) {
-  const Block* found = nullptr;
+Block last_of_line(const Program& program, int line) {
+  std::optional<Block> found;
   for (const Block& b : program.blocks)
-    if (b.source.line == line) found = &b;
-  EXPECT_NE(found, nullptr) << "no block from line " << line;
-  static const Block none;
-  return found != nullptr ? *found : none;
+    if (b.source.line == line) found = b;
+  EXPECT_TRUE(found.has_value()) << "no block from line " << line;
+  return found.value_or(Block{});
 }
 
 // Rx(30 deg) by hand: x stays, y -> (0, c, s), z -> (0, -s, c).
@@ -226,10 +227,10 @@ TEST(SinumerikSwivel, Cycle800RetractsThenSwingsAndDeselectKeepsTheTurnedAxes) {
       "N50 G0 X0 Y0 Z50\n",
       options);
   // The first block of line 3 is the retraction, straight up.
-  const Block* first = nullptr;
+  std::optional<Block> first;
   for (const Block& b : p.blocks)
-    if (b.source.line == 3 && first == nullptr) first = &b;
-  ASSERT_NE(first, nullptr);
+    if (b.source.line == 3 && !first) first = b;
+  ASSERT_TRUE(first.has_value());
   EXPECT_EQ(first->kind, MotionKind::Rapid);
   expect_vec(first->start_mm, {10, 20, 5});
   expect_vec(first->end_mm, {10, 20, 400});
@@ -241,10 +242,10 @@ TEST(SinumerikSwivel, Cycle800RetractsThenSwingsAndDeselectKeepsTheTurnedAxes) {
   // _FR 5: _FR_I 20 mm along the tool (still upright) before the turn.
   const Program up =
       read("N10 T1 M6\nN20 G0 X10 Y20 Z5\nN30 CYCLE800(5,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,20,1)\n", options);
-  const Block* lift = nullptr;
+  std::optional<Block> lift;
   for (const Block& b : up.blocks)
-    if (b.source.line == 3 && lift == nullptr) lift = &b;
-  ASSERT_NE(lift, nullptr);
+    if (b.source.line == 3 && !lift) lift = b;
+  ASSERT_TRUE(lift.has_value());
   expect_vec(lift->start_mm, {10, 20, 5});
   expect_vec(lift->end_mm, {10, 20, 25});
 }

@@ -198,7 +198,8 @@ TEST(FeedScurve, RandomProgramsStayWithinLimits) {
       pts.push_back(pts.back() + l * Eigen::Vector3d(std::cos(heading), std::sin(heading), 0.1 * turn(rng)));
     }
     Program p = polyline(pts, 1000);
-    for (Block& b : p.blocks) {
+    for (std::size_t k = 0; k < p.blocks.size(); ++k) {
+      Block& b = p.blocks.edit(k);
       b.feed_mm_per_min = feed(rng);
       b.exact_stop = unit(rng) < 0.1;
       b.blend_tolerance_mm = unit(rng) < 0.5 ? 0.2 * unit(rng) : -1;
@@ -271,7 +272,7 @@ TEST(FeedSeed000, WorkedCaseMatchesThePapersTimeStamps) {
 TEST(FeedJunction, ExactStopStopsAtTheJunction) {
   const double v = 50, a = 1000, j = 40000;
   Program p = polyline({{0, 0, 0}, {50, 0, 0}, {100, 0, 0}}, v * 60);
-  p.blocks[0].exact_stop = true;  // G9
+  p.blocks.edit(0).exact_stop = true;  // G9
   const FeedPlan plan = plan_feed(p, straight_samples(p, 10), nullptr, limits(a, j));
   EXPECT_EQ(plan.speed_mm_per_s[10], 0.0);
   expect_relative(plan.block_time_s[0], full_limits_time(50, v, a, j), kClosedForm, "first block");
@@ -294,18 +295,18 @@ TEST(FeedJunction, RightAngleCornerFollowsTheBlendRule) {
   // R (sqrt(2) - 1) = tol, so R = tol / (sqrt(2) - 1), and v^2/R = a gives the speed.
   const double v = 100, a = 2000, j = 50000, tol = 0.05;
   Program p = polyline({{0, 0, 0}, {100, 0, 0}, {100, 100, 0}}, v * 60);
-  p.blocks[0].blend_tolerance_mm = tol;  // G64 P0.05
+  p.blocks.edit(0).blend_tolerance_mm = tol;  // G64 P0.05
   const double expected = std::sqrt(a * tol / (std::sqrt(2.0) - 1));
   const FeedPlan plan = plan_feed(p, straight_samples(p, 20), nullptr, limits(a, j));
   expect_relative(plan.speed_mm_per_s[20], expected, kClosedForm, "corner speed");
 
   // Without P the settings' default tolerance applies; P0 stops.
-  p.blocks[0].blend_tolerance_mm = -1;
+  p.blocks.edit(0).blend_tolerance_mm = -1;
   FeedSettings fs = limits(a, j);
   fs.default_blend_tolerance_mm = 0.01;
   expect_relative(plan_feed(p, straight_samples(p, 20), nullptr, fs).speed_mm_per_s[20],
                   std::sqrt(a * 0.01 / (std::sqrt(2.0) - 1)), kClosedForm, "default tolerance");
-  p.blocks[0].blend_tolerance_mm = 0;
+  p.blocks.edit(0).blend_tolerance_mm = 0;
   EXPECT_EQ(plan_feed(p, straight_samples(p, 20), nullptr, fs).speed_mm_per_s[20], 0.0);
 }
 
@@ -334,14 +335,14 @@ std::vector<PoseSample> with_axes(std::vector<PoseSample> s) {
 
 TEST(FeedInverseTime, BlockTakesOneOverFMinutes) {
   Program p = polyline({{0, 0, 0}, {30, 40, 0}}, 2);  // G93 F2: half a minute
-  p.blocks[0].feed_mode = FeedMode::InverseTime;
+  p.blocks.edit(0).feed_mode = FeedMode::InverseTime;
   const FeedPlan plan = plan_feed(p, straight_samples(p, 50), nullptr, limits(500, 50000));
   expect_relative(plan.block_time_s[0], 30.0, kClosedForm, "G93 F2");
 
   // F600 asks for 0.1 s, beyond an X axis of 10 mm/s: the block runs rest to rest at the
   // axis's speed, L/v + v/a + a/j.
   p = polyline({{0, 0, 0}, {50, 0, 0}}, 600);
-  p.blocks[0].feed_mode = FeedMode::InverseTime;
+  p.blocks.edit(0).feed_mode = FeedMode::InverseTime;
   const Machine m = xyz_machine(10.0, 0.0, 0.0);
   const std::vector<PoseSample> s = with_axes(straight_samples(p, 50));
   const double a = 50, j = 5000;  // a^2/j = 0.5 < v: all limits reached
@@ -357,7 +358,7 @@ TEST(FeedAxisLimits, SlowAxisBoundsThePathSpeedByItsRatio) {
   // limits, a^2/j = 5 <= 20. G9 between them keeps both rest to rest.
   const double a = 500, j = 50000;
   Program p = polyline({{0, 0, 0}, {30, 40, 0}, {130, 40, 0}}, 1200);
-  p.blocks[0].exact_stop = true;
+  p.blocks.edit(0).exact_stop = true;
   const Machine m = xyz_machine(0.0, 5.0, 200.0);
   const std::vector<PoseSample> s = with_axes(straight_samples(p, 25));
   const FeedPlan plan = plan_feed(p, s, &m, limits(a, j));
@@ -374,7 +375,7 @@ TEST(FeedAxisLimits, RapidsRunAtTheAxesSpeed) {
   // 50 sqrt(2) mm/s. Without a machine the settings' rapid speed.
   const double a = 1000, j = 100000;  // a^2/j = 10 <= v
   Program p = polyline({{0, 0, 0}, {100, 100, 0}}, 0);
-  p.blocks[0].kind = MotionKind::Rapid;
+  p.blocks.edit(0).kind = MotionKind::Rapid;
   const Machine m = xyz_machine(100.0, 50.0, 0.0);
   const std::vector<PoseSample> s = with_axes(straight_samples(p, 10));
   const double L = 100 * std::sqrt(2.0);
@@ -394,7 +395,7 @@ TEST(FeedRotation, PureRotationIsTimedInDegreesPerMinute) {
   Program p;
   p.files = {"r.ngc"};
   p.blocks.push_back(line(Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), 600));
-  p.blocks[0].end_axis = Eigen::Vector3d::UnitX();
+  p.blocks.edit(0).end_axis = Eigen::Vector3d::UnitX();
   std::vector<PoseSample> s;
   for (int k = 0; k <= 90; ++k) {
     const double phi = k * M_PI / 180;

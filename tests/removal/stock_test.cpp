@@ -127,7 +127,8 @@ TYPED_TEST(StockTest, FullCircleRemovesTheAnnulus) {
   circle.start_mm = circle.end_mm = plunge.end_mm;
   circle.center_mm = {30, 20, -2};
   circle.normal = -Eigen::Vector3d::UnitZ();
-  program.blocks = {plunge, circle};
+  program.blocks.push_back(plunge);
+  program.blocks.push_back(circle);
   kinematics::DensifySettings settings;
   settings.chord_tolerance_mm = kV / 20;
   const auto poses = kinematics::densify(program, settings);
