@@ -8,8 +8,8 @@
 namespace vcut::kinematics {
 namespace {
 
-// The encoding of a block in its chunk (k >= 1): a bit mask (LEB128) of the fields that differ
-// from their prediction, the line's distance from the anchor's (zigzag LEB128), then each
+// The encoding of block k >= 1 of its chunk: a bit mask (LEB128) of the fields that differ from
+// their prediction, the line's distance from the anchor's line + k (zigzag LEB128), then each
 // differing field's bytes, in the order of Fields below. Predictions: the chunk's first block
 // (the anchor) for every field but the start's, which is the previous block's end (pose, tool
 // axis and rotary words). Fields compare by their bytes, so -0.0 and NaN payloads survive.
@@ -113,17 +113,18 @@ struct Reader {
   }
 };
 
-void encode(const Block& block, const Block& anchor, const Ends& prev, std::vector<std::uint8_t>& out) {
+void encode(const Block& block, const Block& anchor, std::size_t k, const Ends& prev, std::vector<std::uint8_t>& out) {
   Writer w;
   Block b = block;
   fields(w, b, anchor, prev);
   put_varint(out, w.mask);
-  const std::int64_t line = static_cast<std::int64_t>(block.source.line) - anchor.source.line;
+  const std::int64_t line =
+      static_cast<std::int64_t>(block.source.line) - anchor.source.line - static_cast<std::int64_t>(k);
   put_varint(out, (static_cast<std::uint64_t>(line) << 1) ^ static_cast<std::uint64_t>(line >> 63));
   out.insert(out.end(), w.payload.begin(), w.payload.end());
 }
 
-void decode_record(const std::uint8_t* p, const Block& anchor, const Ends& prev, Block& out) {
+void decode_record(const std::uint8_t* p, const Block& anchor, std::size_t k, const Ends& prev, Block& out) {
   Reader r;
   r.mask = get_varint(p);
   const std::uint64_t z = get_varint(p);
@@ -131,7 +132,7 @@ void decode_record(const std::uint8_t* p, const Block& anchor, const Ends& prev,
   r.p = p;
   out = anchor;
   fields(r, out, anchor, prev);
-  out.source.line = static_cast<int>(anchor.source.line + line);
+  out.source.line = static_cast<int>(anchor.source.line + static_cast<std::int64_t>(k) + line);
 }
 
 std::atomic<std::uint64_t> next_id{1};
@@ -198,8 +199,7 @@ Block BlockList::operator[](std::size_t i) const {
 }
 
 Block BlockList::at(std::size_t i) const {
-  if (i >= size())
-    throw std::out_of_range("block " + std::to_string(i) + " of a program of " + std::to_string(size()));
+  if (i >= size()) throw std::out_of_range("block " + std::to_string(i) + " of a program of " + std::to_string(size()));
   return (*this)[i];
 }
 
@@ -225,10 +225,10 @@ void BlockList::decode(std::size_t i, Block& out) const {
     prev = ends_of(d.block);
   } else {
     Block before;
-    decode_record(c.bytes.data() + c.offset[k - 2], c.anchor, Ends{}, before);
+    decode_record(c.bytes.data() + c.offset[k - 2], c.anchor, k - 1, Ends{}, before);
     prev = ends_of(before);  // the end fields do not depend on the prediction of the start
   }
-  decode_record(c.bytes.data() + c.offset[k - 1], c.anchor, prev, out);
+  decode_record(c.bytes.data() + c.offset[k - 1], c.anchor, k, prev, out);
 }
 
 void BlockList::seal_before(std::size_t first_open) {
@@ -238,7 +238,7 @@ void BlockList::seal_before(std::size_t first_open) {
     c.offset.reserve(kChunk - 1);
     for (std::size_t k = 1; k < kChunk; ++k) {
       c.offset.push_back(static_cast<std::uint16_t>(c.bytes.size()));
-      encode(tail_[k], c.anchor, ends_of(tail_[k - 1]), c.bytes);
+      encode(tail_[k], c.anchor, k, ends_of(tail_[k - 1]), c.bytes);
     }
     c.bytes.shrink_to_fit();
     chunks_.push_back(std::move(c));

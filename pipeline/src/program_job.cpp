@@ -73,8 +73,8 @@ Extent cutting_extent(const kinematics::Program& program, const io::ToolLibrary&
   Extent e;
   std::optional<kinematics::Block> before;
   for (const kinematics::Block& b : program.blocks) {
-    const bool after_rapid_down = before && before->kind == kinematics::MotionKind::Rapid &&
-                                  before->end_mm.z() < before->start_mm.z() - 1e-9;
+    const bool after_rapid_down =
+        before && before->kind == kinematics::MotionKind::Rapid && before->end_mm.z() < before->start_mm.z() - 1e-9;
     const Eigen::Vector3d rapid_end = before ? before->end_mm : Eigen::Vector3d::Zero();
     before = b;
     if (b.kind == kinematics::MotionKind::Rapid) continue;

@@ -84,8 +84,8 @@ class BlockList {
 
  private:
   struct Chunk {
-    Block anchor;                 // its first block, whole
-    std::vector<std::uint8_t> bytes;  // the records of the others
+    Block anchor;                       // its first block, whole
+    std::vector<std::uint8_t> bytes;    // the records of the others
     std::vector<std::uint16_t> offset;  // of record k (k = 1 .. kChunk - 1) at offset[k - 1]
   };
   void decode(std::size_t i, Block& out) const;

@@ -12,8 +12,8 @@
 namespace vcut::kinematics {
 
 struct Program {
-  std::vector<std::string> files;  // files[SourceRef::file]
-  BlockList blocks;  // sealed by the reader as it goes (block_list.h)
+  std::vector<std::string> files;     // files[SourceRef::file]
+  BlockList blocks;                   // sealed by the reader as it goes (block_list.h)
   std::vector<std::string> warnings;  // "file:line:col: message"
 
   std::string where(const SourceRef& ref) const {
