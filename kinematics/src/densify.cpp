@@ -378,8 +378,15 @@ ToolPose block_pose(const Block& block, double s) {
   return BlockPath(block, DensifyMachine{}, nullptr, unused).pose(s);
 }
 
-Densifier::Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine)
-    : program_(program), settings_(settings), dm_(machine) {
+bool uses_start_axes(const Block& b) {
+  // BlockPath's second and third cases (the first, an axis program, has its own axes).
+  return b.tool_pose &&
+         (b.end_rotary.any() || (b.orientation == OrientationMode::Axes && (b.start_axis - b.end_axis).norm() > 0.0));
+}
+
+Densifier::Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine,
+                     bool poses_only)
+    : program_(program), settings_(settings), dm_(machine), poses_only_(poses_only) {
   if (program.blocks.empty()) return;
   // The program's start: the first block's start pose, with its axis values.
   BlockReport start_report;
@@ -390,7 +397,7 @@ Densifier::Densifier(const Program& program, const DensifySettings& settings, co
   if (m) {
     if (path.axes_known()) {
       start_.axes = path.axes(0.0);
-    } else {
+    } else if (!poses_only_) {
       const IkResult r = inverse(*m, start_.pose, path.tool_length_mm(), nullptr, dm_.ik);
       start_.axes = r.ok() ? r.q() : m->zero();
       start_.singular = r.status == IkStatus::Singular;
@@ -425,7 +432,7 @@ void Densifier::next_block(std::vector<PoseSample>& out, BlockReport& report) {
     if (machine) {
       if (path.axes_known()) {
         sample.axes = path.axes(s);
-      } else {
+      } else if (!poses_only_) {
         const IkResult r = inverse(*machine, sample.pose, path.tool_length_mm(), &last_.axes, dm_.ik);
         if (r.ok()) {
           sample.axes = r.q();

@@ -309,7 +309,9 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     // Streamed: a pass that counts the poses (the timeline's points depend on their number),
     // then the timed pass, neither holding the samples.
     run.streamed = true;
-    kinematics::Densifier count(program, settings, run.densify_machine);
+    run.poses_need_axes = std::any_of(program.blocks.begin(), program.blocks.end(),
+                                      [](const kinematics::Block& b) { return kinematics::uses_start_axes(b); });
+    kinematics::Densifier count(program, settings, run.densify_machine, !run.poses_need_axes);
     std::vector<kinematics::PoseSample> block_samples;
     run.poses = program.blocks.empty() ? 0 : 1;
     while (!count.done()) {

@@ -102,7 +102,7 @@ const char* collision_part(removal::ProbeKind probe) {
 // One record per run of consecutive blocks with the same kind of collision (a shank
 // dragging through material for a hundred moves is one event): lines as a range, the
 // deepest depth and where it was.
-std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, const CutMoves& moves,
+std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, CutMoves& moves,
                                                const kinematics::Program& program) {
   std::vector<removal::Collision> sorted = found;
   std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
@@ -208,33 +208,48 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resoluti
   // The shank and holder of every tool (their cutters follow the tools' in the list).
   bodies_ = removal::add_tool_bodies(tools);
   cutters_ = std::move(tools.cutters);
-  if (run.streamed && !actual)
-    densifier_.emplace(program, run.densify_settings, run.densify_machine);
-  else
+  if (run.streamed && !actual) {
+    // Only the poses: the axis values are not needed for the moves unless a block's poses
+    // start from the previous sample's axes (PoseRun::poses_need_axes).
+    densifier_.emplace(program, run.densify_settings, run.densify_machine, !run.poses_need_axes);
+  } else {
     samples_ = actual ? run.actual_path.size() : run.densified.samples.size();
-  rewind();
-  std::vector<removal::Move> moves;
-  kinematics::ToolPose from, to;
-  int block = -1;
-  while (step(from, to, block)) {
-    moves.clear();
-    moves_into(from, to, block, moves);
-    if (moves.empty()) continue;
-    const bool rapid =
-        program.blocks[static_cast<std::size_t>(moves.front().block)].kind == kinematics::MotionKind::Rapid;
-    cutting_moves += !rapid;
-    rotating_moves += (from.axis - to.axis).norm() > 1e-12;
-    for (const removal::Move& m : moves) {
-      blocks_.push_back(m.block);
-      kinds_.push_back(m.rapid ? static_cast<std::uint8_t>(m.probe) : kCut);
-      count += !m.rapid || m.probe == removal::ProbeKind::Rapid;
-    }
   }
   rewind();
 }
 
+void CutMoves::counted() {
+  if (counted_) return;
+  rewind();
+  std::vector<removal::Move> batch;
+  while (next(batch, 4096)) batch.clear();
+  rewind();
+}
+
+void CutMoves::record(const kinematics::ToolPose& from, const kinematics::ToolPose& to,
+                      const std::vector<removal::Move>& moves, std::size_t first) {
+  if (moves.size() == first) return;
+  const bool rapid =
+      run_.program.blocks[static_cast<std::size_t>(moves[first].block)].kind == kinematics::MotionKind::Rapid;
+  cutting_moves_ += !rapid;
+  rotating_moves_ += (from.axis - to.axis).norm() > 1e-12;
+  for (std::size_t i = first; i < moves.size(); ++i) {
+    const removal::Move& m = moves[i];
+    blocks_.push_back(m.block);
+    kinds_.push_back(m.rapid ? static_cast<std::uint8_t>(m.probe) : kCut);
+    count_ += !m.rapid || m.probe == removal::ProbeKind::Rapid;
+  }
+}
+
 void CutMoves::rewind() {
   sample_ = 1;
+  // A pass from the first move to the last records the counts and attribution, once.
+  recording_ = !counted_;
+  if (recording_) {
+    blocks_.clear();
+    kinds_.clear();
+    count_ = cutting_moves_ = rotating_moves_ = 0;
+  }
   if (!densifier_) return;
   densifier_->rewind();
   pending_.clear();
@@ -307,7 +322,15 @@ bool CutMoves::next(std::vector<removal::Move>& out, std::size_t wanted) {
   const std::size_t before = out.size();
   kinematics::ToolPose from, to;
   int block = -1;
-  while (out.size() - before < wanted && step(from, to, block)) moves_into(from, to, block, out);
+  while (out.size() - before < wanted) {
+    if (!step(from, to, block)) {
+      if (recording_) counted_ = true, recording_ = false;
+      break;
+    }
+    const std::size_t first = out.size();
+    moves_into(from, to, block, out);
+    if (recording_) record(from, to, out, first);
+  }
   return out.size() > before;
 }
 
@@ -329,7 +352,7 @@ double require_cuttable(const io::Job& job, CutMoves& cut, const removal::StockS
     batch.clear();
   }
   cut.rewind();
-  if (!overlap && cut.cutting_moves > 0) {
+  if (!overlap && cut.cutting_moves() > 0) {
     std::ostringstream msg;
     msg << "the program's cutting moves never reach the stock (stock spans [" << stock_box.min().transpose() << "] to ["
         << stock_box.max().transpose() << "] mm";
@@ -480,11 +503,8 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const bool cut_actual = !run.actual_path.empty();
   CutMoves moves(run, cut_actual, true, v);
   result.poses = run.poses;
-  result.cutting_moves = moves.cutting_moves;
-  result.rotating_moves = moves.rotating_moves;
   std::optional<CutMoves> nominal_moves;
   if (cut_actual) nominal_moves.emplace(run, false, false, v);
-  result.moves = moves.count;
   stage_done("densify");
 
   // 4. Stock, and the design, read now, before the cut, so that a file that cannot be used
@@ -503,6 +523,10 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   std::optional<removal::TriangleMesh> design_mesh = design_of(job);  // kept for the report page
   if (design_mesh) hash(job.design->file);
   result.estimated_memory_mb = require_cuttable(job, moves, shape, v, options.max_memory_mb);
+  // Counted as the reach check pulled them (the first pass over the moves).
+  result.moves = moves.count();
+  result.cutting_moves = moves.cutting_moves();
+  result.rotating_moves = moves.rotating_moves();
   // The primary engine makes the outputs; with engine: both the OpenVDB one checks it. A
   // machine-error run compares the actual with the nominal part (a few um): no flat merging.
   const bool merge_flat = !cut_actual;

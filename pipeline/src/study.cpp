@@ -162,7 +162,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     progress("mesh", 0, 1);
     removal::SurfaceMesh surface = stock->surface();
     row.poses = poses.poses;
-    row.moves = cut.count;
+    row.moves = cut.count();
     row.wall_time_s = std::chrono::duration<double>(Clock::now() - t0).count();
     for (const auto& w : warnings_of(j, poses))
       if (std::find(s.warnings.begin(), s.warnings.end(), w) == s.warnings.end()) s.warnings.push_back(w);

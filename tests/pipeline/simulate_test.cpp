@@ -143,8 +143,8 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   const io::Job j = job("");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
   CutMoves cut(run, false, true, 0.1);
-  EXPECT_EQ(cut.cutting_moves, 2u);  // the plunge and the slot, one pose each (lines need no densifying)
-  EXPECT_EQ(cut.rotating_moves, 0u);
+  EXPECT_EQ(cut.cutting_moves(), 2u);  // the plunge and the slot, one pose each (lines need no densifying)
+  EXPECT_EQ(cut.rotating_moves(), 0u);
   const removal::StockShape shape = stock_shape(j);
   EXPECT_FALSE(design_of(j).has_value());
   EXPECT_GT(require_cuttable(j, cut, shape, 0.1, 0.0), 0.0);
@@ -184,10 +184,10 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
       EXPECT_EQ(streamed.events[i].detail, held.events[i].detail);
     }
     CutMoves a(held, false, true, j.resolution_mm), b(streamed, false, true, j.resolution_mm);
-    EXPECT_EQ(a.count, b.count);
-    EXPECT_EQ(a.cutting_moves, b.cutting_moves);
+    EXPECT_EQ(a.count(), b.count());
+    EXPECT_EQ(a.cutting_moves(), b.cutting_moves());
     EXPECT_EQ(a.blocks(), b.blocks());
-    EXPECT_GT(a.count, std::string(name) == "/examples/demo/job.yaml" ? 4096u : 0u) << name;
+    EXPECT_GT(a.count(), std::string(name) == "/examples/demo/job.yaml" ? 4096u : 0u) << name;
     for (int pass = 0; pass < 2; ++pass) {  // and again after a rewind
       std::vector<removal::Move> ma, mb;
       while (a.next(ma, 4096)) {

@@ -104,7 +104,11 @@ ToolPose block_pose(const Block& block, double s);
 class Densifier {
  public:
   // The program (and the machine DensifyMachine points to) must outlive the densifier.
-  Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine);
+  // poses_only: the machine's axis values only where a pose needs them (axis programs); the
+  // inverse kinematics of tool poses is skipped, their axes and singular flags left as they
+  // were. Only for programs where no block starts from the previous axes (uses_start_axes).
+  Densifier(const Program& program, const DensifySettings& settings, const DensifyMachine& machine,
+            bool poses_only = false);
   // Sample 0: the first block's start (block -1).
   const PoseSample& start() const { return start_; }
   // Block next_index()'s samples appended to out, and its report (block 0's carries the
@@ -123,7 +127,12 @@ class Densifier {
   PoseSample start_, last_;
   std::string start_unreachable_;
   std::size_t next_ = 0;
+  bool poses_only_ = false;
 };
+
+// Whether a block's poses start from the machine's axis values at its start (TCP rotary words,
+// ORIAXES turning the tool): the previous block's inverse kinematics then shapes its path.
+bool uses_start_axes(const Block& block);
 
 Densified densify(const Program& program, const DensifySettings& settings, const DensifyMachine& machine);
 

@@ -57,7 +57,8 @@ struct PoseRun : kinematics::PoseChain {
   // wherever they are needed (CutMoves), so that memory does not grow with them. `poses`,
   // feed.cycle_time_s and the timeline are there either way.
   bool streamed = false;
-  std::size_t poses = 0;  // densified poses (samples)
+  std::size_t poses = 0;        // densified poses (samples)
+  bool poses_need_axes = true;  // a block starts from the previous axes (kinematics::uses_start_axes)
   std::shared_ptr<const kinematics::Machine> machine;
   kinematics::DensifySettings densify_settings;
   kinematics::DensifyMachine densify_machine;  // its machine is *machine

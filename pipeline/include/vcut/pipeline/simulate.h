@@ -135,20 +135,26 @@ class CutMoves : public removal::MoveSource {
   // Hands the moves over again from the first (a second cut, a second look).
   void rewind();
 
-  std::size_t count = 0;           // the moves that cut or are a rapid's probe (report.json's "moves")
-  std::size_t cutting_moves = 0;   // feed moves of the program path
-  std::size_t rotating_moves = 0;  // of those, moves that turn the tool axis
+  // Counted on the first pass that hands every move over (the reach check's, or the cut's), or
+  // on a pass of their own when asked before one.
+  std::size_t count() { return counted(), count_; }  // the moves that cut or are a rapid's probe ("moves")
+  std::size_t cutting_moves() { return counted(), cutting_moves_; }    // feed moves of the program path
+  std::size_t rotating_moves() { return counted(), rotating_moves_; }  // of those, moves that turn the tool axis
   // By move id (the order handed over): the program block it came from, and for a probe
   // (it cuts nothing) what it stands for.
-  int block(std::size_t move) const { return blocks_[move]; }
-  removal::ProbeKind probe_kind(std::size_t move) const { return static_cast<removal::ProbeKind>(kinds_[move]); }
-  const std::vector<int>& blocks() const { return blocks_; }
+  int block(std::size_t move) { return counted(), blocks_[move]; }
+  removal::ProbeKind probe_kind(std::size_t move) { return counted(), static_cast<removal::ProbeKind>(kinds_[move]); }
+  const std::vector<int>& blocks() { return counted(), blocks_; }
 
  private:
   static constexpr std::uint8_t kCut = 0xff;
   // The next move of the path: the pose it starts from, the one it ends on and that one's
   // block; false after the last. From the run's poses, or (a streamed run) densified again.
   bool step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& block);
+  void counted();
+  // The counts and attribution of the moves just made (out[first..]) from one pose to the next.
+  void record(const kinematics::ToolPose& from, const kinematics::ToolPose& to, const std::vector<removal::Move>& out,
+              std::size_t first);
   // Appends the moves from one pose to the next (of `block`).
   void moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
                   std::vector<removal::Move>& out) const;
@@ -166,6 +172,8 @@ class CutMoves : public removal::MoveSource {
   kinematics::ToolPose last_;
   std::vector<int> blocks_;
   std::vector<std::uint8_t> kinds_;  // ProbeKind, or kCut
+  std::size_t count_ = 0, cutting_moves_ = 0, rotating_moves_ = 0;
+  bool counted_ = false, recording_ = false;
 };
 // 4. The job's stock: its box or cylinder, or its mesh read (closed, turned outward).
 removal::StockShape stock_shape(const io::Job& job);
