@@ -174,17 +174,19 @@ class Findings {
   Findings(const io::Job& job, PoseRun& run) : job_(job), run_(run), program_(run.program) {}
 
   void block(std::size_t i, const kinematics::BlockReport& r) {
-    const std::string line = program_.where(program_.blocks[i].source);
+    // The block's line, made only where a finding names it (most blocks have none).
+    const auto line = [&] { return program_.where(program_.blocks[i].source); };
     q_sum_ += r.q;
     run_.q_min = i == 0 ? r.q : std::min(run_.q_min, r.q);
     run_.q_max = std::max(run_.q_max, r.q);
     ++blocks_;
     if (r.nonlinear_error_mm > run_.max_nonlinear_error_mm) {
       run_.max_nonlinear_error_mm = r.nonlinear_error_mm;
-      run_.max_nonlinear_line = line;
+      run_.max_nonlinear_line = line();
     }
     const int block = static_cast<int>(i);
-    if (!r.unreachable.empty()) run_.events.push_back({PoseEventKind::Unreachable, line, r.unreachable, block, block});
+    if (!r.unreachable.empty())
+      run_.events.push_back({PoseEventKind::Unreachable, line(), r.unreachable, block, block});
     // The user's step or angle leaves the moves off the machine's path by more than a gouge.
     if (job_.densify_given && r.chord_error_mm > job_.gouge_tolerance_mm) {
       char detail[240];
@@ -192,9 +194,9 @@ class Findings {
                     "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
                     "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
                     r.chord_error_mm, job_.gouge_tolerance_mm);
-      run_.events.push_back({PoseEventKind::DensifyError, line, detail, block, block});
+      run_.events.push_back({PoseEventKind::DensifyError, line(), detail, block, block});
       // The terminal gets the first few; every block stays in the events (report, page).
-      if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(line + ": " + detail);
+      if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(line() + ": " + detail);
     }
     // Singular poses, one event per run of consecutive blocks (a three-axis program on a
     // five-axis machine sits on the pole throughout: one event, not thousands).
