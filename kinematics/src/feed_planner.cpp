@@ -28,6 +28,7 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <optional>
 #include <utility>
 
 namespace vcut::kinematics {
@@ -540,6 +541,56 @@ double junction_limit(const Span& p, const Span& n) {
   return std::min(v, corner_speed(theta, p.tolerance_mm, std::min(p.a, n.a), std::min(p.seg_out, n.seg_in)));
 }
 
+// Step 4 for one span between junction speeds v_in and v_out: a G93 span gets the cruise
+// speed that makes it last 1/F min. The duration falls as the cruise speed rises (until the
+// peak saturates); bisection on [L/T, the cap]. Returns whether the moving run (its axis
+// bounds given) is then axis-limited, where that changes: when the time cannot be met and the
+// span goes as fast as the limits allow.
+std::optional<bool> solve_inverse_time(Span& s, double v_in, double v_out, double v_axis, double v_cap) {
+  if (s.g93_time_s <= 0.0) return std::nullopt;
+  const auto duration = [&](double v) { return make_profile(s.length, v_in, v_out, v, s.a, s.j).duration; };
+  double hi = std::min(s.v_cap, std::max(v_in, v_out) + std::sqrt(2.0 * s.a * s.length));
+  hi = std::max(hi, s.v);
+  if (duration(hi) >= s.g93_time_s) {
+    s.v = hi;  // not achievable: as fast as the limits allow
+    return std::isfinite(v_axis) && v_axis <= v_cap && hi >= v_axis;
+  }
+  double lo = s.v;
+  for (int it = 0; it < 200 && hi - lo > 4.0 * kEps * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (duration(mid) > s.g93_time_s ? lo : hi) = mid;
+  }
+  s.v = hi;
+  return std::nullopt;
+}
+
+// Step 5 along one span: the time into its profile and the speed there at each arc length, in
+// ascending order (the phase found last is where the search goes on).
+class SpanClock {
+ public:
+  SpanClock(const Span& s, double v_in, double v_out)
+      : profile_(make_profile(s.length, v_in, v_out, s.v, s.a, s.j)), length_(s.length), v_out_(v_out) {}
+  // At `arc` (mm or deg from the span's start): {t, v}.
+  std::pair<double, double> at(double arc) {
+    const Profile& p = profile_;
+    // The span's end is known exactly; solving for it would not be: near a stop s(t) is
+    // flat (j t^3/6), so the rounding of the arc length (1e-15 mm) would move it ~1e-6 s.
+    if (!(p.count > 0 && arc < length_)) return {p.duration, v_out_};
+    while (phase_ + 1 < p.count &&
+           arc > p.phase[static_cast<size_t>(phase_)].s0 + p.phase[static_cast<size_t>(phase_)].length)
+      ++phase_;
+    const Phase& phase = p.phase[static_cast<size_t>(phase_)];
+    const double tau = time_in_phase(phase, arc - phase.s0);
+    return {phase.t0 + tau, std::max(0.0, phase.speed(tau))};
+  }
+  const Profile& profile() const { return profile_; }
+
+ private:
+  Profile profile_;
+  double length_, v_out_;
+  int phase_ = 0;
+};
+
 }  // namespace
 
 FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& samples, const Machine* machine,
@@ -606,28 +657,12 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
     }
   }
 
-  // 4. G93: the cruise speed that makes the block last 1/F min. The duration falls as the
-  //    cruise speed rises (until the peak saturates); bisection on [L/T, the cap].
+  // 4. G93 (solve_inverse_time).
   for (size_t k = 0; k < K; ++k) {
     Span& s = spans[k];
-    if (s.g93_time_s <= 0.0) continue;
-    const auto duration = [&](double v) {
-      return make_profile(s.length, speed[k], speed[k + 1], v, s.a, s.j).duration;
-    };
-    double hi = std::min(s.v_cap, std::max(speed[k], speed[k + 1]) + std::sqrt(2.0 * s.a * s.length));
-    hi = std::max(hi, s.v);
-    if (duration(hi) >= s.g93_time_s) {
-      s.v = hi;  // not achievable: as fast as the limits allow
-      RunTiming& r = runs[s.moving_run];
-      r.axis_limited = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
-      continue;
-    }
-    double lo = s.v;
-    for (int it = 0; it < 200 && hi - lo > 4.0 * kEps * hi; ++it) {
-      const double mid = 0.5 * (lo + hi);
-      (duration(mid) > s.g93_time_s ? lo : hi) = mid;
-    }
-    s.v = hi;
+    RunTiming& r = runs[s.moving_run];
+    if (const auto limited = solve_inverse_time(s, speed[k], speed[k + 1], r.v_axis, r.v_cap))
+      r.axis_limited = *limited;
   }
 
   // 5. Time stamps: the inverse of each span's s(t) at its samples' arc lengths.
@@ -639,23 +674,13 @@ FeedPlan plan_feed(const Program& program, const std::vector<PoseSample>& sample
   plan.speed_mm_per_s[0] = spans.front().unit == Unit::Tip ? speed[0] : 0.0;
   for (size_t k = 0; k < K; ++k) {
     const Span& s = spans[k];
-    const Profile p = make_profile(s.length, speed[k], speed[k + 1], s.v, s.a, s.j);
+    SpanClock clock(s, speed[k], speed[k + 1]);
+    const Profile& p = clock.profile();
     const size_t first = runs[s.first_run].first, last = runs[s.last_run].last;
     double arc = 0.0;
-    int ph = 0;
     for (size_t i = first; i <= last; ++i) {
       arc += seg_len[i];
-      // The span's end is known exactly; solving for it would not be: near a stop s(t) is
-      // flat (j t^3/6), so the rounding of the arc length (1e-15 mm) would move it ~1e-6 s.
-      double t = p.duration, v = speed[k + 1];
-      if (p.count > 0 && arc < s.length) {
-        while (ph + 1 < p.count && arc > p.phase[static_cast<size_t>(ph)].s0 + p.phase[static_cast<size_t>(ph)].length)
-          ++ph;
-        const Phase& phase = p.phase[static_cast<size_t>(ph)];
-        const double tau = time_in_phase(phase, arc - phase.s0);
-        t = phase.t0 + tau;
-        v = std::max(0.0, phase.speed(tau));
-      }
+      const auto [t, v] = clock.at(arc);
       plan.t_s[i] = t_span + t;
       plan.speed_mm_per_s[i] = s.unit == Unit::Tip ? v : 0.0;
       if (settings.timing) plan.path_s[i] = s_span + arc;
@@ -779,52 +804,25 @@ double stream_feed(const Program& program, const DensifySettings& densify_settin
       const size_t k = base;
       Span& s = span(k);
       const double v_in = at(speed, k), v_out = at(speed, k + 1);
-      int axis_limited_override = -1;  // the moving run's flag as G93 decides it
-      if (s.g93_time_s > 0.0) {
-        const auto duration = [&](double v) { return make_profile(s.length, v_in, v_out, v, s.a, s.j).duration; };
-        double hi = std::min(s.v_cap, std::max(v_in, v_out) + std::sqrt(2.0 * s.a * s.length));
-        hi = std::max(hi, s.v);
-        if (duration(hi) >= s.g93_time_s) {
-          s.v = hi;
-          const MovingRun& r = moving.front();
-          axis_limited_override = std::isfinite(r.v_axis) && r.v_axis <= r.v_cap && hi >= r.v_axis;
-        } else {
-          double lo = s.v;
-          for (int it = 0; it < 200 && hi - lo > 4.0 * kEps * hi; ++it) {
-            const double mid = 0.5 * (lo + hi);
-            (duration(mid) > s.g93_time_s ? lo : hi) = mid;
-          }
-          s.v = hi;
-        }
-      }
+      const MovingRun& m = moving.front();
+      const std::optional<bool> limited_by_g93 = solve_inverse_time(s, v_in, v_out, m.v_axis, m.v_cap);
       if (k == 0) visit.sample(sample_index++, behind.start(), 0.0, s.unit == Unit::Tip ? v_in : 0.0);
-      const Profile p = make_profile(s.length, v_in, v_out, s.v, s.a, s.j);
+      SpanClock clock(s, v_in, v_out);
       double arc = 0.0;
-      int ph = 0;
       for (size_t b = s.first_run; b <= s.last_run; ++b) {
         BlockReport report;
         const Run r = densify_block(behind, report);
         const double t_before = t_last;
         for (size_t i = 1; i < window.size(); ++i) {
           arc += seg_len[i];
-          double t = p.duration, v = v_out;
-          if (p.count > 0 && arc < s.length) {
-            while (ph + 1 < p.count &&
-                   arc > p.phase[static_cast<size_t>(ph)].s0 + p.phase[static_cast<size_t>(ph)].length)
-              ++ph;
-            const Phase& phase = p.phase[static_cast<size_t>(ph)];
-            const double tau = time_in_phase(phase, arc - phase.s0);
-            t = phase.t0 + tau;
-            v = std::max(0.0, phase.speed(tau));
-          }
+          const auto [t, v] = clock.at(arc);
           t_last = t_span + t;
           visit.sample(sample_index++, window[i], t_last, s.unit == Unit::Tip ? v : 0.0);
         }
-        const bool limited =
-            b == s.moving_run && axis_limited_override >= 0 ? axis_limited_override != 0 : r.axis_limited;
+        const bool limited = b == s.moving_run && limited_by_g93 ? *limited_by_g93 : r.axis_limited;
         visit.block(b, report, t_last - t_before, limited);
       }
-      t_span += p.duration;
+      t_span += clock.profile().duration;
       spans.pop_front();
       moving.pop_front();
       limit.pop_front();
