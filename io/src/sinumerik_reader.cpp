@@ -1181,7 +1181,9 @@ void Reader::assignment(const std::string& address, int col) {
   skip_argument();
 }
 
-// A letter and its number: X10, G1, N7, M30, "X -1320".
+// A letter and its number: X10, G1, N7, M30, "X -1320". One case per address letter (and per
+// G or M code within them): the control's table of addresses, kept as one table to read
+// against the manual; most cases are a line or two.
 void Reader::code(char letter, int col) {
   switch (letter) {
     case 'X':
@@ -1390,6 +1392,8 @@ void Reader::code(char letter, int col) {
   }
 }
 
+// One case per 840D word (frames, orientation modes, cycles' modal words, notes): a table, kept
+// in one place to read against the manual; the work of each is in its own function.
 void Reader::keyword(const std::string& name, int col) {
   // Flow statements start their block (Reader::flow); here they are inside one, or not read.
   static const char* const kFlow[] = {"IF",      "ELSE",   "ENDIF", "WHILE", "ENDWHILE", "FOR",    "ENDFOR", "LOOP",
@@ -1597,6 +1601,8 @@ void Reader::keyword(const std::string& name, int col) {
 // ---------------------------------------------------------------------------------------------
 // Executing a block
 
+// The order in which the control executes a block's parts (tool, spindle, feed, modes, frames,
+// then the motion and the calls): in one function because that order is what it says.
 void Reader::execute() {
   Line& l = l_;
   // Tool: T selects, M6 loads (Siemens' tool change with M6).
@@ -1848,7 +1854,9 @@ Eigen::Vector3d cone_end_tangent(const Block& block) {
   return block.orientation == OrientationMode::ConeClockwise ? Eigen::Vector3d(-t) : t;
 }
 
-// The block's orientation. Returns whether it changes the tool axis or the rotary axes.
+// The block's orientation. Returns whether it changes the tool axis or the rotary axes. One
+// function: the orientation modes (rotary axes, A3 B3 C3 vectors, ORICONE's cone words and
+// intermediate vector) share the checks of which words a block may combine, made in order.
 bool Reader::orient(Block& block) {
   const Line& l = l_;
   const bool vector = l.vector[0].present || l.vector[1].present || l.vector[2].present;
