@@ -225,7 +225,8 @@ void BlockList::decode(std::size_t i, Block& out) const {
     prev = ends_of(d.block);
   } else {
     Block before;
-    decode_record(c.bytes.data() + c.offset[k - 2], c.anchor, k - 1, Ends{}, before);
+    const Ends unused{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), RotaryWords{}};
+    decode_record(c.bytes.data() + c.offset[k - 2], c.anchor, k - 1, unused, before);
     prev = ends_of(before);  // the end fields do not depend on the prediction of the start
   }
   decode_record(c.bytes.data() + c.offset[k - 1], c.anchor, k, prev, out);

@@ -810,6 +810,7 @@ double stream_feed(const Program& program, const DensifySettings& densify_settin
       SpanClock clock(s, v_in, v_out);
       double arc = 0.0;
       for (size_t b = s.first_run; b <= s.last_run; ++b) {
+        assert(behind.next_index() == b);  // spans cover the blocks in order
         BlockReport report;
         const Run r = densify_block(behind, report);
         const double t_before = t_last;

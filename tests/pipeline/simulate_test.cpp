@@ -158,11 +158,17 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
 
 // A streamed run (no servo, no errors: what simulate and study use) against the same run
 // with every sample held: the same poses, time line, findings and moves, move by move. The
-// demo's collision job has rapids into the stock, the shank and holder probes and a feed move
-// with the spindle stopped; the ring has arcs and helices; the demo more moves than a batch.
+// first job has a rapid into the stock, the shank and holder probes and a feed move with the
+// spindle stopped; the ring has arcs and helices; the demo more moves than a batch.
 TEST_F(Stages, StreamedRunMakesTheSameMoves) {
-  for (const char* name : {"/examples/demo/job-coll.yaml", "/examples/ring/job.yaml", "/examples/demo/job.yaml"}) {
-    const io::Job j = io::read_job(std::string(VCUT_SOURCE_DIR) + name);
+  write("slot.ngc",
+        "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X10 Y10 Z5\nG0 Z-3\nG1 X40 F1000\nG1 Z-30\nG1 Y30\nG0 Z50\nM5\n"
+        "G1 X60 Z-1 F500\nG1 X80\nM30\n");
+  const std::vector<io::Job> jobs = {job(""), io::read_job(std::string(VCUT_SOURCE_DIR) + "/examples/ring/job.yaml"),
+                                     io::read_job(std::string(VCUT_SOURCE_DIR) + "/examples/demo/job.yaml")};
+  for (std::size_t k = 0; k < jobs.size(); ++k) {
+    const io::Job& j = jobs[k];
+    const std::string name = "job " + std::to_string(k);
     const PoseRun held = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, false);
     const PoseRun streamed = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, true);
     ASSERT_FALSE(held.streamed);
@@ -187,7 +193,16 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
     EXPECT_EQ(a.count(), b.count());
     EXPECT_EQ(a.cutting_moves(), b.cutting_moves());
     EXPECT_EQ(a.blocks(), b.blocks());
-    EXPECT_GT(a.count(), std::string(name) == "/examples/demo/job.yaml" ? 4096u : 0u) << name;
+    EXPECT_GT(a.count(), k == 2 ? 4096u : 0u) << name;
+    if (k == 0) {  // the collision job makes every kind of probe
+      bool rapid = false, shank = false, stopped = false;
+      for (std::size_t i = 0; i < a.blocks().size(); ++i) {
+        rapid = rapid || a.probe_kind(i) == removal::ProbeKind::Rapid;
+        shank = shank || a.probe_kind(i) == removal::ProbeKind::Shank;
+        stopped = stopped || a.probe_kind(i) == removal::ProbeKind::SpindleStopped;
+      }
+      EXPECT_TRUE(rapid && shank && stopped);
+    }
     for (int pass = 0; pass < 2; ++pass) {  // and again after a rewind
       std::vector<removal::Move> ma, mb;
       while (a.next(ma, 4096)) {

@@ -136,7 +136,7 @@ class CutMoves : public removal::MoveSource {
   void rewind();
 
   // Counted on the first pass that hands every move over (the reach check's, or the cut's), or
-  // on a pass of their own when asked before one.
+  // on a pass of their own when asked before one (which rewinds: not in the middle of a pass).
   std::size_t count() { return counted(), count_; }  // the moves that cut or are a rapid's probe ("moves")
   std::size_t cutting_moves() { return counted(), cutting_moves_; }    // feed moves of the program path
   std::size_t rotating_moves() { return counted(), rotating_moves_; }  // of those, moves that turn the tool axis
