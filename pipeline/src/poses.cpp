@@ -256,6 +256,8 @@ class Findings {
 };
 
 constexpr std::size_t kTimelinePoints = 4000;
+// The first sample of the timeline's point p of `points` over n samples.
+std::size_t timeline_sample(std::size_t p, std::size_t n, std::size_t points) { return p * n / points; }
 
 }  // namespace
 
@@ -326,7 +328,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     std::size_t point = 0;
     kinematics::FeedStreamVisitor visit;
     visit.sample = [&](std::size_t i, const kinematics::PoseSample&, double t_s, double speed_mm_per_s) {
-      if (n < 2 || point >= points || i != point * n / points) return;
+      if (n < 2 || point >= points || i != timeline_sample(point, n, points)) return;
       run.timeline.t_s.push_back(t_s);
       run.timeline.speed_mm_per_s.push_back(speed_mm_per_s);
       ++point;
@@ -372,7 +374,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     const std::size_t n = t.size(), points = std::min(n, kTimelinePoints);
     const bool contour = run.contour_error_um.size() == n;
     for (std::size_t p = 0; p < points; ++p) {
-      const std::size_t a = p * n / points, b = std::max(a + 1, (p + 1) * n / points);
+      const std::size_t a = timeline_sample(p, n, points), b = std::max(a + 1, timeline_sample(p + 1, n, points));
       std::size_t pick = a;
       if (contour)
         for (std::size_t i = a; i < b; ++i)
