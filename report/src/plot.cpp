@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <optional>
 
@@ -74,125 +73,6 @@ std::vector<double> linear_ticks(double lo, double hi) {
   return out;
 }
 
-// The two back ends draw the same primitives.
-class Canvas {
- public:
-  virtual ~Canvas() = default;
-  virtual void line(Point2 a, Point2 b, Rgb c, double width, bool dashed) = 0;
-  virtual void polyline(const std::vector<Point2>& p, Rgb c, double width) = 0;
-  virtual void rect(double x0, double y0, double x1, double y1, Rgb fill, const Rgb* stroke) = 0;
-  virtual void disc(Point2 centre, double r, Rgb c) = 0;
-  virtual void ring(Point2 centre, double r, Rgb c, double width) = 0;
-  virtual void text(const std::string& s, Point2 at, double height, Rgb c, Align align, bool vertical) = 0;
-};
-
-class PngCanvas : public Canvas {
- public:
-  explicit PngCanvas(Image& image) : image_(image) {}
-  void line(Point2 a, Point2 b, Rgb c, double width, bool dashed) override {
-    if (!dashed) {
-      draw_line(image_, a, b, c, width);
-      return;
-    }
-    const double length = std::hypot(b.x - a.x, b.y - a.y), dash = 8.0, gap = 5.0;
-    for (double s = 0.0; s < length; s += dash + gap) {
-      const double e = std::min(length, s + dash);
-      draw_line(image_, {a.x + (b.x - a.x) * s / length, a.y + (b.y - a.y) * s / length},
-                {a.x + (b.x - a.x) * e / length, a.y + (b.y - a.y) * e / length}, c, width);
-    }
-  }
-  void polyline(const std::vector<Point2>& p, Rgb c, double width) override { draw_polyline(image_, p, c, width); }
-  void rect(double x0, double y0, double x1, double y1, Rgb fill, const Rgb* stroke) override {
-    fill_rect(image_, x0, y0, x1, y1, fill);
-    if (stroke) draw_polyline(image_, {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}, *stroke, 1.0);
-  }
-  void disc(Point2 centre, double r, Rgb c) override { fill_circle(image_, centre, r, c); }
-  void ring(Point2 centre, double r, Rgb c, double width) override {
-    std::vector<Point2> p;
-    for (int i = 0; i <= 64; ++i)
-      p.push_back({centre.x + r * std::cos(i * M_PI / 32), centre.y + r * std::sin(i * M_PI / 32)});
-    draw_polyline(image_, p, c, width);
-  }
-  void text(const std::string& s, Point2 at, double height, Rgb c, Align align, bool vertical) override {
-    draw_text(image_, s, at, height, c, align, vertical ? M_PI / 2 : 0.0);
-  }
-
- private:
-  Image& image_;
-};
-
-std::string escape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
-std::string colour(Rgb c) {
-  char buf[8];
-  std::snprintf(buf, sizeof buf, "#%02x%02x%02x", c[0], c[1], c[2]);
-  return buf;
-}
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2f", v);
-  return buf;
-}
-
-class SvgCanvas : public Canvas {
- public:
-  std::string body;
-  void line(Point2 a, Point2 b, Rgb c, double width, bool dashed) override {
-    body += "<line x1=\"" + num(a.x) + "\" y1=\"" + num(a.y) + "\" x2=\"" + num(b.x) + "\" y2=\"" + num(b.y) +
-            "\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) + "\"" +
-            (dashed ? " stroke-dasharray=\"8 5\"" : "") + "/>\n";
-  }
-  void polyline(const std::vector<Point2>& p, Rgb c, double width) override {
-    body += "<polyline fill=\"none\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) +
-            "\" stroke-linejoin=\"round\" points=\"";
-    for (std::size_t i = 0; i < p.size(); ++i) body += (i ? " " : "") + num(p[i].x) + "," + num(p[i].y);
-    body += "\"/>\n";
-  }
-  void rect(double x0, double y0, double x1, double y1, Rgb fill, const Rgb* stroke) override {
-    body += "<rect x=\"" + num(x0) + "\" y=\"" + num(y0) + "\" width=\"" + num(x1 - x0) + "\" height=\"" +
-            num(y1 - y0) + "\" fill=\"" + colour(fill) + "\"" +
-            (stroke ? " stroke=\"" + colour(*stroke) + "\"" : std::string()) + "/>\n";
-  }
-  void disc(Point2 centre, double r, Rgb c) override {
-    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) + "\" fill=\"" +
-            colour(c) + "\"/>\n";
-  }
-  void ring(Point2 centre, double r, Rgb c, double width) override {
-    body += "<circle cx=\"" + num(centre.x) + "\" cy=\"" + num(centre.y) + "\" r=\"" + num(r) +
-            "\" fill=\"none\" stroke=\"" + colour(c) + "\" stroke-width=\"" + num(width) + "\"/>\n";
-  }
-  void text(const std::string& s, Point2 at, double height, Rgb c, Align align, bool vertical) override {
-    const char* anchor = align == Align::kLeft ? "start" : align == Align::kCenter ? "middle" : "end";
-    // The stroke font's height is that of capitals; a sans-serif's is about 0.72 em.
-    body += "<text x=\"" + num(at.x) + "\" y=\"" + num(at.y) + "\" font-size=\"" + num(height / 0.72) + "\" fill=\"" +
-            colour(c) + "\" text-anchor=\"" + anchor + "\"" +
-            (vertical ? " transform=\"rotate(-90 " + num(at.x) + " " + num(at.y) + ")\"" : std::string()) + ">" +
-            escape(s) + "</text>\n";
-  }
-};
-
 // Tick labels with as many significant digits as it takes to tell neighbours apart (a narrow
 // range, 0.001 to 0.00102, needs more than the usual 3).
 std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
@@ -207,8 +87,8 @@ std::vector<std::string> tick_labels(const std::vector<double>& ticks) {
 
 // ---- Label placement ------------------------------------------------------------------------
 // Each label tries a few spots around what it names and takes the first with the least clutter
-// under it. Boxes are those of the stroke font (cap height above the baseline, descenders
-// below); sans-serif SVG text is narrower, so it fits the same boxes.
+// under it. A label's box is its advance width, the cap height above the baseline and a third
+// of it below (DejaVu Sans's descenders reach 0.32 of the cap height).
 
 struct Box {
   double x0, y0, x1, y1;
@@ -322,28 +202,28 @@ std::vector<Spot> spots_along_mark(bool horizontal, double at_px, const Box& fra
 
 constexpr double kMarkerRadius = 4.0, kRingRadius = 9.0, kLegendRow = 20.0;
 
-void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
+void draw_panel(Drawing& drawing, const Plot& plot, std::size_t index) {
   const PlotPanel& panel = plot.panels[index];
   const PanelFrame f = panel_frame(plot, index);
   const double x0 = f.x.px_min, x1 = f.x.px_max, y0 = f.y.px_max, y1 = f.y.px_min;  // y0 top, y1 bottom
   const Rgb white{255, 255, 255};
-  canvas.rect(x0, y0, x1, y1, white, nullptr);
+  drawing.rect(x0, y0, x1, y1, white, nullptr);
   const std::vector<double> x_ticks = f.x.ticks(), y_ticks = f.y.ticks();
   const std::vector<std::string> x_labels = tick_labels(x_ticks), y_labels = tick_labels(y_ticks);
   for (std::size_t i = 0; i < x_ticks.size(); ++i) {
     const double x = f.x.to_px(x_ticks[i]);
-    canvas.line({x, y0}, {x, y1}, kGrid, 1.0, false);
-    canvas.text(x_labels[i], {x, y1 + 18.0}, kTickText, kMuted, Align::kCenter, false);
+    drawing.line({x, y0}, {x, y1}, kGrid, 1.0, false);
+    drawing.text(x_labels[i], {x, y1 + 18.0}, kTickText, kMuted, Align::kCenter);
   }
   for (std::size_t i = 0; i < y_ticks.size(); ++i) {
     const double y = f.y.to_px(y_ticks[i]);
-    canvas.line({x0, y}, {x1, y}, kGrid, 1.0, false);
-    canvas.text(y_labels[i], {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight, false);
+    drawing.line({x0, y}, {x1, y}, kGrid, 1.0, false);
+    drawing.text(y_labels[i], {x0 - 7.0, y + kTickText / 2.0}, kTickText, kMuted, Align::kRight);
   }
-  canvas.polyline({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}, kFrame, 1.0);
-  canvas.text(panel.title, {(x0 + x1) / 2.0, y0 - 14.0}, kPanelTitleText, kInk, Align::kCenter, false);
-  canvas.text(panel.x_label, {(x0 + x1) / 2.0, y1 + 44.0}, kLabelText, kInk, Align::kCenter, false);
-  canvas.text(panel.y_label, {x0 - 62.0, (y0 + y1) / 2.0}, kLabelText, kInk, Align::kCenter, true);
+  drawing.polyline({{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}, kFrame, 1.0);
+  drawing.text(panel.title, {(x0 + x1) / 2.0, y0 - 14.0}, kPanelTitleText, kInk, Align::kCenter);
+  drawing.text(panel.x_label, {(x0 + x1) / 2.0, y1 + 44.0}, kLabelText, kInk, Align::kCenter);
+  drawing.text(panel.y_label, {x0 - 62.0, (y0 + y1) / 2.0}, kLabelText, kInk, Align::kCenter, M_PI / 2);
 
   const auto finite = [](const Point2& p) { return std::isfinite(p.x) && std::isfinite(p.y); };
   const auto to_px = [&](const Point2& p) { return Point2{f.x.to_px(p.x), f.y.to_px(p.y)}; };
@@ -354,7 +234,7 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     if (!std::isfinite(m.value)) continue;
     Point2 a{x0, f.y.to_px(m.value)}, b{x1, a.y};
     if (!m.horizontal) a = {f.x.to_px(m.value), y0}, b = {a.x, y1};
-    canvas.line(a, b, m.colour, 1.5, true);
+    drawing.line(a, b, m.colour, 1.5, true);
     placer.add_line(a, b);
   }
   for (const PlotSeries& s : panel.series) {
@@ -362,18 +242,18 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     for (const Point2& p : s.points)
       if (finite(p)) px.push_back(to_px(p));
     if (s.line && px.size() > 1) {
-      canvas.polyline(px, s.colour, 2.0);
+      drawing.polyline(px, s.colour, 2.0);
       for (std::size_t i = 1; i < px.size(); ++i) placer.add_line(px[i - 1], px[i]);
     }
     for (const Point2& p : px) {
-      if (s.markers) canvas.disc(p, kMarkerRadius, s.colour);
+      if (s.markers) drawing.disc(p, kMarkerRadius, s.colour);
       placer.add_mark(around(p, kMarkerRadius));
     }
   }
   for (const PlotHighlight& h : panel.highlights) {
     if (!finite(h.at)) continue;
     const Point2 p = to_px(h.at);
-    canvas.ring(p, kRingRadius, h.colour, 2.0);
+    drawing.ring(p, kRingRadius, h.colour, 2.0);
     placer.add_mark(around(p, kRingRadius + 1.0));
   }
 
@@ -439,27 +319,27 @@ void draw_panel(Canvas& canvas, const Plot& plot, std::size_t index) {
     }
   }
 
-  for (const Label& l : labels) canvas.text(l.text, l.spot.at, kPointText, l.colour, l.spot.align, false);
+  for (const Label& l : labels) drawing.text(l.text, l.spot.at, kPointText, l.colour, l.spot.align);
   if (entries.empty()) return;
   const Rgb legend_fill{250, 250, 250};
-  canvas.rect(legend.x0, legend.y0, legend.x1, legend.y1, legend_fill, &kFrame);
+  drawing.rect(legend.x0, legend.y0, legend.x1, legend.y1, legend_fill, &kFrame);
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const double y = legend.y0 + 5.0 + kLegendRow * (static_cast<double>(i) + 0.5);
-    canvas.line({legend.x0 + 8.0, y}, {legend.x0 + 28.0, y}, entries[i].second, 2.0, false);
-    canvas.disc({legend.x0 + 18.0, y}, 3.5, entries[i].second);
-    canvas.text(entries[i].first, {legend.x0 + 34.0, y + kLabelText / 2.0}, kLabelText, kInk, Align::kLeft, false);
+    drawing.line({legend.x0 + 8.0, y}, {legend.x0 + 28.0, y}, entries[i].second, 2.0, false);
+    drawing.disc({legend.x0 + 18.0, y}, 3.5, entries[i].second);
+    drawing.text(entries[i].first, {legend.x0 + 34.0, y + kLabelText / 2.0}, kLabelText, kInk, Align::kLeft);
   }
 }
 
-void draw_plot(Canvas& canvas, const Plot& plot) {
-  canvas.rect(0, 0, plot.width_px, plot.height_px, {255, 255, 255}, nullptr);
-  canvas.text(plot.title, {plot.width_px / 2.0, 34.0}, kTitleText, kInk, Align::kCenter, false);
-  for (std::size_t i = 0; i < plot.panels.size(); ++i) draw_panel(canvas, plot, i);
-  if (!plot.footnote.empty())
-    canvas.text(plot.footnote, {16.0, plot.height_px - 14.0}, kTickText, kMuted, Align::kLeft, false);
-}
-
 }  // namespace
+
+void draw_plot(Drawing& drawing, const Plot& plot) {
+  drawing.rect(0, 0, plot.width_px, plot.height_px, {255, 255, 255}, nullptr);
+  drawing.text(plot.title, {plot.width_px / 2.0, 34.0}, kTitleText, kInk, Align::kCenter);
+  for (std::size_t i = 0; i < plot.panels.size(); ++i) draw_panel(drawing, plot, i);
+  if (!plot.footnote.empty())
+    drawing.text(plot.footnote, {16.0, plot.height_px - 14.0}, kTickText, kMuted, Align::kLeft);
+}
 
 double PlotAxis::to_px(double value) const {
   double t;
@@ -512,20 +392,15 @@ PanelFrame panel_frame(const Plot& plot, std::size_t index) {
 }
 
 std::string render_svg(const Plot& plot) {
-  SvgCanvas canvas;
-  draw_plot(canvas, plot);
-  return "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<svg xmlns=\"http://www.w3.org/2000/svg\" version=\"1.1\" "
-         "width=\"" +
-         std::to_string(plot.width_px) + "\" height=\"" + std::to_string(plot.height_px) + "\" viewBox=\"0 0 " +
-         std::to_string(plot.width_px) + " " + std::to_string(plot.height_px) +
-         "\" font-family=\"DejaVu Sans, Helvetica, Arial, sans-serif\">\n" + canvas.body + "</svg>\n";
+  Drawing drawing = Drawing::svg(plot.width_px, plot.height_px);
+  draw_plot(drawing, plot);
+  return drawing.svg();
 }
 
 Image render_png(const Plot& plot) {
-  Image image(plot.width_px, plot.height_px);
-  PngCanvas canvas(image);
-  draw_plot(canvas, plot);
-  return image;
+  Drawing drawing{Image(plot.width_px, plot.height_px)};
+  draw_plot(drawing, plot);
+  return drawing.image();
 }
 
 void write_plot(const std::string& svg_path, const std::string& png_path, const Plot& plot) {

@@ -12,6 +12,7 @@
 
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/input_error.h"
+#include "vcut/report/drawing.h"
 
 namespace vcut::report {
 namespace {
@@ -207,26 +208,26 @@ double legend_width(const SnapshotOptions& o) {
   return h * 0.8 + (o.legend->label.empty() ? 0 : 2 * h) + 1.2 * h + 0.5 * h + 0.4 * h + labels + h;
 }
 
-void draw_legend(Image& image, const SnapshotOptions& o, double top_px) {
+void draw_legend(Drawing& drawing, const SnapshotOptions& o, int width_px, int height_px, double top_px) {
   const ColourScale& scale = *o.legend;
   const double h = text_px(o), bar_w = 1.2 * h;
-  double x = image.width - legend_width(o) + 0.8 * h;
-  const double y0 = top_px + 0.15 * (image.height - top_px), y1 = image.height - 0.15 * (image.height - top_px);
+  double x = width_px - legend_width(o) + 0.8 * h;
+  const double y0 = top_px + 0.15 * (height_px - top_px), y1 = height_px - 0.15 * (height_px - top_px);
   if (!scale.label.empty()) {
-    draw_text(image, scale.label, {x + h, (y0 + y1) / 2}, h, kInk, Align::kCenter, kPi / 2);
+    drawing.text(scale.label, {x + h, (y0 + y1) / 2}, h, kInk, Align::kCenter, kPi / 2);
     x += 2 * h;
   }
   for (int row = static_cast<int>(std::floor(y0)); row < static_cast<int>(std::ceil(y1)); ++row) {
     const double value = scale.max_value + (row + 0.5 - y0) / (y1 - y0) * (scale.min_value - scale.max_value);
-    fill_rect(image, x, std::max(double(row), y0), x + bar_w, std::min(row + 1.0, y1),
-              scale.colour ? scale.colour(value) : kUniformGrey);
+    drawing.rect(x, std::max(double(row), y0), x + bar_w, std::min(row + 1.0, y1),
+                 scale.colour ? scale.colour(value) : kUniformGrey);
   }
-  draw_polyline(image, {{x, y0}, {x + bar_w, y0}, {x + bar_w, y1}, {x, y1}, {x, y0}}, kInk, 1.0);
+  drawing.polyline({{x, y0}, {x + bar_w, y0}, {x + bar_w, y1}, {x, y1}, {x, y0}}, kInk, 1.0);
   const int ticks = std::max(2, scale.ticks);
   for (int i = 0; i < ticks; ++i) {
     const double y = y1 + static_cast<double>(i) / (ticks - 1) * (y0 - y1);
-    draw_line(image, {x + bar_w, y}, {x + bar_w + 0.5 * h, y}, kInk, 1.0);
-    draw_text(image, format_label(tick_value(scale, i)), {x + bar_w + 0.9 * h, y + h / 2}, h, kInk);
+    drawing.line({x + bar_w, y}, {x + bar_w + 0.5 * h, y}, kInk, 1.0);
+    drawing.text(format_label(tick_value(scale, i)), {x + bar_w + 0.9 * h, y + h / 2}, h, kInk);
   }
 }
 
@@ -254,10 +255,12 @@ Image render_snapshot(const removal::TriangleMesh& mesh, const std::vector<Rgb>&
         fit_frame(mesh, toward_camera, 0, top, options.width_px - legend_width(options), options.height_px, margin);
     rasterise(mesh, colours, frame, options, image);
   }
+  if (options.title.empty() && !options.legend) return image;
+  Drawing drawing(image);
   if (!options.title.empty())
-    draw_text(image, options.title, {options.width_px / 2.0, 1.6 * h}, 1.25 * h, kInk, Align::kCenter);
-  if (options.legend) draw_legend(image, options, top);
-  return image;
+    drawing.text(options.title, {options.width_px / 2.0, 1.6 * h}, 1.25 * h, kInk, Align::kCenter);
+  if (options.legend) draw_legend(drawing, options, options.width_px, options.height_px, top);
+  return drawing.image();
 }
 
 std::vector<std::string> write_snapshots(const std::string& folder, const std::string& stem,

@@ -1,9 +1,11 @@
-// Tests of the PNG writer, the 2D canvas and the mesh snapshots. PNG files are decoded here
+// Tests of the PNG writer, the 2D drawing and the mesh snapshots. PNG files are decoded here
 // from the spec (ISO/IEC 15948: chunk CRCs with zlib's crc32, IDAT inflated with zlib's
 // uncompress, the five row filters undone), not by the writer's code. Pixel counts of
-// rendered shapes are worked out from the view fit by hand, each in a comment beside it.
+// rendered shapes are worked out from the view fit by hand, each in a comment beside it, and
+// the ink of drawn shapes from their areas.
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <vcut/report/drawing.h>
 #include <vcut/report/image.h>
 #include <vcut/io/input_error.h>
 #include <vcut/report/snapshot.h>
@@ -104,70 +106,131 @@ TEST(Png, EveryPixelSurvivesTheRoundTrip) {
   EXPECT_EQ(decoded.rgb, image.rgb);
 }
 
-TEST(Canvas, LineColoursThePixelsOnIt) {
-  Image image(100, 80);
+// Ink of a drawing, in pixels: the sum of (255 - red) / 255 over the image (black on white).
+double ink(const Image& image) {
+  double sum = 0.0;
+  for (int y = 0; y < image.height; ++y)
+    for (int x = 0; x < image.width; ++x) sum += (255 - image.get(x, y)[0]) / 255.0;
+  return sum;
+}
+
+TEST(Drawing, LineCoversItsArea) {
   const Point2 a{10.3, 20.7}, b{90.1, 61.2};
-  draw_line(image, a, b, {0, 0, 0}, 1.0);
-  // The pixel holding a point of the segment has its centre within sqrt(2)/2 of the line, so
-  // a coverage of at least 1 - 0.71; a pixel whose centre is over 1 px off is untouched.
-  for (double t = 0; t <= 1; t += 0.001) {
-    const int x = static_cast<int>(a.x + t * (b.x - a.x)), y = static_cast<int>(a.y + t * (b.y - a.y));
-    EXPECT_LT(image.get(x, y)[0], 255 - 70) << x << "," << y;
-  }
+  Drawing drawing{Image(100, 80)};
+  drawing.line(a, b, {0, 0, 0}, 2.0);
+  const Image image = drawing.image();
+  // A 2 px stroke with round caps covers length x 2 + pi (the two half discs of radius 1).
   const double dx = b.x - a.x, dy = b.y - a.y, length = std::hypot(dx, dy);
+  EXPECT_NEAR(ink(image), 2 * length + kPi, 0.01 * 2 * length);
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x) {
       const double px = x + 0.5 - a.x, py = y + 0.5 - a.y, along = (px * dx + py * dy) / length;
       const double off = along < 0        ? std::hypot(px, py)
                          : along > length ? std::hypot(x + 0.5 - b.x, y + 0.5 - b.y)
                                           : std::abs(px * dy - py * dx) / length;
-      if (off > 1.0) {
+      // A pixel reaches sqrt(2)/2 from its centre: beyond half the width plus that, no ink; a
+      // centre within half the width less that, all ink.
+      if (off > 1.0 + 0.71) {
         EXPECT_EQ(image.get(x, y), (Rgb{255, 255, 255})) << x << "," << y;
       }
-      if (off < 0.5) {  // coverage 1 - off for a 1 px line, as the header says
-        EXPECT_NEAR(image.get(x, y)[0], 255 * off, 1.0) << x << "," << y;
+      if (off < 1.0 - 0.71 && along > 1 && along < length - 1) {
+        EXPECT_EQ(image.get(x, y), (Rgb{0, 0, 0})) << x << "," << y;
       }
     }
 }
 
-TEST(Canvas, RectangleCoverageIsExact) {
-  Image image(10, 10);
-  fill_rect(image, 2.5, 3.0, 5.0, 4.0, {0, 0, 0});
-  EXPECT_EQ(image.get(2, 3), (Rgb{128, 128, 128}));  // half covered: 255 - 127.5 rounds to 128
+TEST(Drawing, RectangleCoverage) {
+  Drawing drawing{Image(10, 10)};
+  drawing.rect(2.5, 3.0, 5.0, 4.0, {0, 0, 0});
+  const Image image = drawing.image();
+  EXPECT_NEAR(image.get(2, 3)[0], 127.5, 1.0);  // half covered
   EXPECT_EQ(image.get(3, 3), (Rgb{0, 0, 0}));
   EXPECT_EQ(image.get(4, 3), (Rgb{0, 0, 0}));
   EXPECT_EQ(image.get(5, 3), (Rgb{255, 255, 255}));
   EXPECT_EQ(image.get(3, 4), (Rgb{255, 255, 255}));
+  EXPECT_NEAR(ink(image), 2.5, 0.01);
 }
 
-TEST(Canvas, TextScalesWithItsHeight) {
+TEST(Drawing, DiscAndRingCoverTheirAreas) {
+  Drawing drawing{Image(60, 60)};
+  drawing.disc({20.3, 20.6}, 8.0, {0, 0, 0});
+  EXPECT_NEAR(ink(drawing.image()), kPi * 64, 0.01 * kPi * 64);
+  Drawing ring{Image(60, 60)};
+  ring.ring({30.0, 30.0}, 20.0, {0, 0, 0}, 2.0);  // the annulus between radii 19 and 21
+  EXPECT_NEAR(ink(ring.image()), kPi * (21 * 21 - 19 * 19), 0.01 * kPi * 80);
+}
+
+TEST(Drawing, TextScalesWithItsHeight) {
   const std::string text = "Accuracy 0.005 mm, 1e-3 (q = 12) {ok}";
   const double small = text_width(text, 12.0);
   EXPECT_GT(small, 0.0);
-  EXPECT_NEAR(text_width(text, 36.0), 3 * small, 1e-9);
-  // Widths add up to the letter spacing, which "..": 2 advances - 1 spacing, shows.
-  const double spacing = text_width("..", 12.0) - 2 * text_width(".", 12.0);
-  EXPECT_GT(spacing, 0.0);
-  EXPECT_NEAR(text_width(text + text, 12.0), 2 * small + spacing, 1e-9);
+  EXPECT_NEAR(text_width(text, 36.0), 3 * small, 1e-3);  // no hinting: advances scale exactly
+  EXPECT_NEAR(text_width(text + text, 12.0), 2 * small, 1e-3);
   EXPECT_EQ(text_width("", 20.0), 0.0);
 
-  // Ink of capitals spans the height (cap height) above the baseline, up to the stroke's
-  // half-width and a pixel of anti-aliasing; it starts at x and ends by text_width.
-  const double height = 40, stroke = height / 10;
-  Image image(400, 100);
-  draw_text(image, "HELLO", {20.0, 70.0}, height, {0, 0, 0});
+  // Capitals stand the height (cap height) above the baseline, to a pixel of anti-aliasing;
+  // the ink starts after x (the H's side bearing) and ends before x + text_width. The box
+  // the drawing records is that ink.
+  const double height = 40;
+  Drawing drawing{Image(400, 100)};
+  drawing.text("HELLO", {20.0, 70.0}, height, {0, 0, 0});
+  const Image image = drawing.image();
   int top = 100, bottom = -1, left = 400, right = -1;
   for (int y = 0; y < image.height; ++y)
     for (int x = 0; x < image.width; ++x)
       if (image.get(x, y)[0] < 128)
         top = std::min(top, y), bottom = std::max(bottom, y), left = std::min(left, x), right = std::max(right, x);
-  EXPECT_NEAR(top, 70 - height, stroke / 2 + 1);
-  EXPECT_NEAR(bottom + 1, 70, stroke / 2 + 1);
-  EXPECT_NEAR(left, 20, stroke / 2 + 1);
-  EXPECT_NEAR(right + 1, 20 + text_width("HELLO", height), stroke / 2 + 1);
+  EXPECT_NEAR(top, 70 - height, 1.0);
+  EXPECT_NEAR(bottom + 1, 70, 1.0);
+  EXPECT_GT(left, 20);
+  EXPECT_LT(left, 20 + 0.25 * height);
+  EXPECT_LT(right + 1, 20 + text_width("HELLO", height));
+  ASSERT_EQ(drawing.texts().size(), 1u);
+  const DrawnText& box = drawing.texts()[0];
+  EXPECT_NEAR(box.y0, top, 1.0);
+  EXPECT_NEAR(box.y1, bottom + 1, 1.0);
+  EXPECT_NEAR(box.x0, left, 1.0);
+  EXPECT_NEAR(box.x1, right + 1, 1.0);
+
+  // Turned a quarter counter-clockwise about its middle: it reads upward, the cap height now
+  // across x, left of the point (no round letter: an O overshoots the cap height), and along
+  // y what the same text upright spans along x, mirrored (x - 70 upright is 200 - y turned).
+  Drawing turned{Image(400, 400)};
+  turned.text("HELL", {70.0, 200.0}, height, {0, 0, 0}, Align::kCenter, kPi / 2);
+  turned.text("HELL", {70.0, 350.0}, height, {0, 0, 0}, Align::kCenter);
+  const DrawnText &up = turned.texts()[0], &flat = turned.texts()[1];
+  EXPECT_NEAR(up.x1 - up.x0, height, 1.0);
+  EXPECT_NEAR(up.x1, 70.0, 1.0);
+  EXPECT_NEAR(200.0 - up.y1, flat.x0 - 70.0, 0.01);
+  EXPECT_NEAR(200.0 - up.y0, flat.x1 - 70.0, 0.01);
 }
 
-TEST(Canvas, Labels) {
+// Bytes that are not UTF-8 are drawn as '?' (Cairo would stop drawing on them); UTF-8 is drawn.
+TEST(Drawing, TextThatIsNotUtf8) {
+  Drawing drawing{Image(200, 50)};
+  drawing.text(
+      "a\xff\xc3"
+      "b \xc2\xb5m \xe2\x82",
+      {5.0, 30.0}, 12.0, {0, 0, 0});
+  drawing.line({0, 44.5}, {200, 44.5}, {0, 0, 0});  // still drawing after it: row 44 covered
+  ASSERT_EQ(drawing.texts().size(), 1u);
+  EXPECT_EQ(drawing.texts()[0].text, "a??b \xc2\xb5m ??");
+  EXPECT_EQ(drawing.image().get(100, 44)[0], 0);
+}
+
+TEST(Drawing, SvgIsOneDocumentOfItsSize) {
+  Drawing drawing = Drawing::svg(320, 200);
+  drawing.rect(10, 10, 100, 50, {255, 0, 0});
+  drawing.text("label", {20, 40}, 12.0, {0, 0, 0});
+  const std::string svg = drawing.svg();
+  EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
+  EXPECT_NE(svg.find("width=\"320px\" height=\"200px\""), std::string::npos) << svg.substr(0, 300);
+  EXPECT_EQ(svg.rfind("</svg>"), svg.size() - 7);
+  EXPECT_THROW(drawing.image(), std::logic_error);
+  EXPECT_THROW(Drawing(Image(4, 4)).svg(), std::logic_error);
+}
+
+TEST(Drawing, Labels) {
   EXPECT_EQ(format_label(0.005), "0.005");
   EXPECT_EQ(format_label(1e-5), "1e-5");
   EXPECT_EQ(format_label(1.5e6), "1.5e6");

@@ -1,4 +1,4 @@
-// Line charts for studies, as SVG and PNG with one layout: panels side by side, each with
+// Line charts for studies, as SVG and PNG drawn one way (drawing.h): panels side by side, each with
 // linear or log axes, series of points (joined, with markers and labels), dashed marks at a
 // value and rings around chosen points.
 #pragma once
@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "vcut/report/drawing.h"
 #include "vcut/report/image.h"
 
 namespace vcut::report {
@@ -68,6 +69,8 @@ struct PanelFrame {
 };
 PanelFrame panel_frame(const Plot& plot, std::size_t index);
 
+// The plot drawn onto a drawing of its size; render_svg and render_png draw it this one way.
+void draw_plot(Drawing& drawing, const Plot& plot);
 std::string render_svg(const Plot& plot);  // a complete standalone SVG document
 Image render_png(const Plot& plot);
 // Writes both files atomically (temporary then rename); errors are vcut::InputError naming

@@ -1,7 +1,10 @@
 // Headless pictures of a triangle mesh in the workpiece frame (mm, z up): an orthographic
 // view fitted to the bounding box, z-buffered, per-vertex colours interpolated per pixel and
 // shaded Lambert + ambient by a light at the camera (two-sided), depth-cued and outlined where
-// the depth jumps. Identical for any thread count.
+// the depth jumps. Identical for any thread count. The mesh is rasterised here rather than by
+// Cairo, which has no depth buffer: its painter's order would need millions of triangles
+// sorted, and the bands drawn in parallel keep the bytes the same for any thread count. The
+// title and the colour bar are drawn with Cairo (drawing.h).
 #pragma once
 
 #include <Eigen/Core>
