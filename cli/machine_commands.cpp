@@ -1,5 +1,6 @@
 #include "machine_commands.h"
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -28,11 +29,7 @@ bool rotary(const Machine& m, int i) { return m.axis(i).kind == AxisKind::Rotary
 double to_file(const Machine& m, int i, double v) { return (rotary(m, i) ? v * kDegPerRad : v) + 0.0; }  // no -0
 double from_file(const Machine& m, int i, double v) { return rotary(m, i) ? v / kDegPerRad : v; }
 
-std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+std::string num(double v) { return fmt::format("{:.10g}", v); }
 
 std::string vec(const Eigen::Vector3d& v) { return "(" + num(v.x()) + ", " + num(v.y()) + ", " + num(v.z()) + ")"; }
 

@@ -2,6 +2,7 @@
 // words, interp_convert.cc for the order of execution within a line, interp_arc.cc for arcs)
 // for the three-axis subset named in gcode_reader.h. Where this reader differs on purpose it
 // says so next to the code. Memory: one line at a time, plus the Blocks.
+#include <fmt/format.h>
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/input_error.h>
 
@@ -16,7 +17,6 @@
 #include <charconv>
 #include <climits>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -2348,9 +2348,7 @@ Mark Reader::locate_program(long long number, int column, const std::string& cal
   std::vector<std::filesystem::path> folders;
   folders.push_back(std::filesystem::path(sources_.front()->name).parent_path());
   for (const std::string& p : options_.subroutine_path) folders.emplace_back(p);
-  char digits4[32], digits[32];
-  std::snprintf(digits4, sizeof digits4, "%04lld", number);
-  std::snprintf(digits, sizeof digits, "%lld", number);
+  const std::string digits4 = fmt::format("{:04}", number), digits = fmt::format("{}", number);
   std::vector<std::string> names;
   for (const std::string& stem : {std::string("O") + digits4, std::string("O") + digits, std::string(digits4),
                                   std::string(digits), std::string("o") + digits4, std::string("o") + digits}) {

@@ -1,8 +1,8 @@
 #include "vcut/io/job.h"
 
+#include <fmt/format.h>
 #include <cctype>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 
 #include "vcut/io/machine_file.h"
@@ -88,11 +88,10 @@ void read_servo(const YamlReader& yaml, const YAML::Node& servo, Job& job) {
     const std::string letter = i < axes.size() ? std::string(1, axes[i].letter) : "";
     const YAML::Node per_axis = servo["axes"] && !letter.empty() ? servo["axes"][letter] : YAML::Node();
     const bool own = per_axis.IsDefined() && per_axis["kv"];
-    char what[200];
-    std::snprintf(what, sizeof what,
-                  "a position loop stable at the period %g s (axis %s: Kv %g/s diverges when sampled; "
-                  "an ideal velocity loop needs Kv x period < 2)",
-                  s.period_s, letter.c_str(), s.axes[i].kv_per_s);
+    const std::string what = fmt::format(
+        "a position loop stable at the period {:g} s (axis {}: Kv {:g}/s diverges when sampled; "
+        "an ideal velocity loop needs Kv x period < 2)",
+        s.period_s, letter, s.axes[i].kv_per_s);
     yaml.fail(own           ? per_axis["kv"]
               : servo["kv"] ? servo["kv"]
                             : servo,

@@ -8,11 +8,12 @@
 
 #include <array>
 #include <cerrno>
+#include <fmt/format.h>
+
 #include <climits>
 #include <cmath>
 #include <algorithm>
 #include <cstddef>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -82,22 +83,12 @@ inline bool is_letter(char c) { return (c >= 'a' && c <= 'z') || (c >= 'A' && c 
 inline char upper(char c) { return (c >= 'a' && c <= 'z') ? static_cast<char>(c - 'a' + 'A') : c; }
 
 // A number for a message: up to 10 significant digits.
-inline std::string num(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.10g", v);
-  return buf;
-}
+inline std::string num(double v) { return fmt::format("{:.10g}", v); }
 
 // A byte for a message: 'x' when printable, else its hex code.
 inline std::string describe(char c) {
   const auto u = static_cast<unsigned char>(c);
-  char buf[16];
-  if (u > 32 && u < 127) {
-    std::snprintf(buf, sizeof buf, "'%c'", c);
-  } else {
-    std::snprintf(buf, sizeof buf, "byte 0x%02X", u);
-  }
-  return buf;
+  return u > 32 && u < 127 ? fmt::format("'{}'", c) : fmt::format("byte 0x{:02X}", static_cast<unsigned>(u));
 }
 
 // An index as a 1-based column (saturated at INT_MAX).

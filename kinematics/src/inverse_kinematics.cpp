@@ -1,5 +1,6 @@
 #include "vcut/kinematics/inverse_kinematics.h"
 
+#include <fmt/format.h>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 
@@ -19,11 +20,7 @@ constexpr double kFreeAngleSine = 1e-12;  // a vector this close to a rotation a
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kMaxWindings = 4.0;  // windings listed per axis when its limits span more turns
 
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
-}
+std::string num(double v) { return fmt::format("{:.6g}", v); }
 
 // The angle (rad) that turns v into w about the unit axis k, both projected onto the plane
 // normal to k; NaN when either lies along k.

@@ -1,10 +1,10 @@
 #include "vcut/kinematics/machine.h"
 
+#include <fmt/format.h>
 #include <Eigen/Geometry>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <stdexcept>
 
 namespace vcut::kinematics {
@@ -13,11 +13,7 @@ namespace {
 constexpr double kUnitTolerance = 1e-6;  // |v| this close to 1 is normalised with a warning
 constexpr double kParallelSine = 1e-6;   // linear axes whose directions' sine is below this are parallel
 
-std::string fixed(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
-  return buf;
-}
+std::string fixed(double v) { return fmt::format("{:.9g}", v); }
 
 // Normalises `v` in place; returns a problem when it is zero or far from unit length.
 void check_unit(Eigen::Vector3d& v, const std::string& key, std::vector<SpecProblem>& out) {

@@ -1,5 +1,6 @@
 #include "vcut/pipeline/check.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -118,11 +119,7 @@ class EventLog {
   std::map<std::string, Open> open_;
 };
 
-std::string mm(double x) {
-  char s[32];
-  std::snprintf(s, sizeof s, "%.3f mm", x);
-  return s;
-}
+std::string mm(double x) { return fmt::format("{:.3f} mm", x); }
 
 }  // namespace
 

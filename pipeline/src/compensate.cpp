@@ -1,8 +1,8 @@
 #include "vcut/pipeline/compensate.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <optional>
 #include <string>
 
@@ -16,9 +16,7 @@ namespace {
 // A G-code number: fixed point, as rs274 reads it (no exponent: a tiny compensated angle like
 // 2.7e-12 in %g form is a syntax error), 9 decimals (1e-9 mm, 1e-9 deg), trailing zeros cut.
 std::string gcode_num(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.9f", v);
-  std::string s = buf;
+  std::string s = fmt::format("{:.9f}", v);
   s.erase(s.find_last_not_of('0') + 1);
   if (s.back() == '.') s.pop_back();
   return s == "-0" ? "0" : s;

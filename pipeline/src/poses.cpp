@@ -1,8 +1,8 @@
 #include "vcut/pipeline/poses.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -189,11 +189,10 @@ class Findings {
       run_.events.push_back({PoseEventKind::Unreachable, line(), r.unreachable, block, block});
     // The user's step or angle leaves the moves off the machine's path by more than a gouge.
     if (job_.densify_given && r.chord_error_mm > job_.gouge_tolerance_mm) {
-      char detail[240];
-      std::snprintf(detail, sizeof detail,
-                    "the densified moves leave the tool tip %.3f mm off the machine's path (chord error; the gouge "
-                    "tolerance is %g mm): densify finer, or leave `densify:` out to densify to the tolerance",
-                    r.chord_error_mm, job_.gouge_tolerance_mm);
+      const std::string detail = fmt::format(
+          "the densified moves leave the tool tip {:.3f} mm off the machine's path (chord error; the gouge "
+          "tolerance is {:g} mm): densify finer, or leave `densify:` out to densify to the tolerance",
+          r.chord_error_mm, job_.gouge_tolerance_mm);
       run_.events.push_back({PoseEventKind::DensifyError, line(), detail, block, block});
       // The terminal gets the first few; every block stays in the events (report, page).
       if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(line() + ": " + detail);
@@ -236,11 +235,10 @@ class Findings {
                                 b = program_.blocks[static_cast<size_t>(last)].source;
     std::string where = program_.where(program_.span_of_blocks(i, last));
     if (b.file != a.file) where += " to " + program_.where(b);
-    char detail[160];
-    std::snprintf(detail, sizeof detail,
-                  "%d block(s) with the tool axis in the singular cone: the free rotary angle was kept "
-                  "(largest tool-axis miss %.3g urad)",
-                  last - i + 1, singular_miss_ * 1e6);
+    const std::string detail = fmt::format(
+        "{} block(s) with the tool axis in the singular cone: the free rotary angle was kept "
+        "(largest tool-axis miss {:.3g} urad)",
+        last - i + 1, singular_miss_ * 1e6);
     singular_.push_back({PoseEventKind::Singular, where, detail, i, last});
   }
 
@@ -350,11 +348,10 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
     const double span_s = feed.cycle_time_s + kinematics::InterpolatorInput{}.settle_max_s;
     const double periods = span_s / job.servo->period_s;
     if (periods <= kMaxPeriods) return;
-    char what[240];
-    std::snprintf(what, sizeof what,
-                  "'servo.period': %g s makes %.3g interpolation periods of the program's %.1f s; expected a period "
-                  "of at least %.3g s",
-                  job.servo->period_s, periods, feed.cycle_time_s, span_s / kMaxPeriods);
+    const std::string what = fmt::format(
+        "'servo.period': {:g} s makes {:.3g} interpolation periods of the program's {:.1f} s; expected a period "
+        "of at least {:.3g} s",
+        job.servo->period_s, periods, feed.cycle_time_s, span_s / kMaxPeriods);
     throw InputError(job.file, 0, 0, what);
   };
   static_cast<kinematics::PoseChain&>(run) =

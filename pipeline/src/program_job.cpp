@@ -1,8 +1,8 @@
 #include "vcut/pipeline/program_job.h"
 
+#include <fmt/format.h>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <optional>
@@ -22,11 +22,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string mm(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.4g", std::abs(v) < 5e-5 ? 0.0 : v);
-  return b;
-}
+std::string mm(double v) { return fmt::format("{:.4g}", std::abs(v) < 5e-5 ? 0.0 : v); }
 
 std::string describe(const removal::Cutter& c) {
   std::string s = mm(c.diameter_mm) + " mm ";

@@ -1,10 +1,10 @@
 #include "vcut/report/image.h"
 
+#include <fmt/format.h>
 #include <cairo.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <string>
 
 #include "cairo_image.h"
@@ -45,9 +45,7 @@ std::string encode_png(const Image& image) {
 void write_png(const std::string& path, const Image& image) { io::write_text_atomically(path, encode_png(image)); }
 
 std::string format_label(double value, int significant) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*g", std::max(1, significant), value);
-  std::string text = buffer;
+  std::string text = fmt::format("{:.{}g}", value, std::max(1, significant));
   const size_t e = text.find('e');
   if (e == std::string::npos) return text == "-0" ? "0" : text;
   std::string mantissa = text.substr(0, e), exponent = text.substr(e + 1);

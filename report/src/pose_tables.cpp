@@ -1,7 +1,7 @@
 #include "vcut/report/pose_tables.h"
 
+#include <fmt/format.h>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -13,11 +13,7 @@
 namespace vcut::report {
 namespace {
 
-std::string num(double v, int digits = 10) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.*g", digits, v + 0.0);
-  return buf;
-}
+std::string num(double v, int digits = 10) { return fmt::format("{:.{}g}", v + 0.0, digits); }
 
 }  // namespace
 
