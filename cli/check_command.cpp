@@ -22,7 +22,8 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
                 job.machine.c_str(), r.run.program.blocks.size(), r.run.poses, t, static_cast<int>(t / 3600),
                 static_cast<int>(std::fmod(t, 3600.0) / 60), static_cast<int>(std::fmod(t, 60.0)));
     for (const auto& e : r.events)
-      std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), e.line.c_str(), e.detail.c_str());
+      std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), r.run.program.where(e.lines).c_str(),
+                  e.detail.c_str());
     for (const auto& c : r.tools) {
       if (!c.has_holder)
         std::printf("T%d: no holder in the tool library (not checked)\n", c.tool);
@@ -31,7 +32,7 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
       else
         std::printf("T%d: holder %.3f mm %s the stock's top at its lowest over the stock (%s)\n", c.tool,
                     std::abs(c.holder_clearance_mm), c.holder_clearance_mm >= 0.0 ? "above" : "below",
-                    c.holder_line.c_str());
+                    r.run.program.where(c.holder_line).c_str());
     }
     std::printf("%s: %zu error(s), %zu warning(s) in %.2f s\n", r.errors == 0 ? "go" : "no-go", r.errors, r.warnings,
                 r.wall_time_s);

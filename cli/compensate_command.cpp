@@ -24,7 +24,7 @@ int run_compensate(const std::string& job_file, std::string out, bool quiet) {
   const pipeline::CompensationReport& r = compensated.report;
   if (quiet) return r.not_converged == 0 ? 0 : 1;
   std::printf("compensated %zu poses on %s: uncompensated tip error up to %.3f um (%s)\n", r.poses, job.machine.c_str(),
-              r.max_error_before_um, r.max_error_line.c_str());
+              r.max_error_before_um, r.max_error_line ? run.program.where(r.max_error_line).c_str() : "start");
   std::printf("residual after compensation: tip %.2e um, axis %.2e urad (bounds 0.01 um, 0.01 urad)\n",
               r.max_residual_tip_um, r.max_residual_axis_urad);
   if (r.not_converged > 0)

@@ -33,16 +33,18 @@ int run_poses(const std::string& job_file, std::string out, bool every_period, b
               job.machine.c_str(), run.program.blocks.size(), run.poses, run.q_min, run.q_max, run.q_mean,
               run.feed.cycle_time_s);
   if (run.max_nonlinear_error_mm > 0.0)
-    std::printf("max non-linear tip error %.4f mm at %s\n", run.max_nonlinear_error_mm, run.max_nonlinear_line.c_str());
+    std::printf("max non-linear tip error %.4f mm at %s\n", run.max_nonlinear_error_mm,
+                run.program.where(run.max_nonlinear_line).c_str());
   if (!run.actual.empty()) {
-    std::printf("contour error: max %.2f um at %s, RMS %.2f um", run.max_contour_error_um, run.max_contour_line.c_str(),
-                run.rms_contour_error_um);
+    std::printf("contour error: max %.2f um at %s, RMS %.2f um", run.max_contour_error_um,
+                run.program.where(run.max_contour_line).c_str(), run.rms_contour_error_um);
     if (job.servo) std::printf(" (%zu interpolation periods of %g s)", run.periods, job.servo->period_s);
     std::printf("\n");
   }
   size_t shown = 0;
   for (const auto& e : run.events)
-    if (shown++ < 10) std::printf("%s at %s: %s\n", pipeline::to_string(e.kind), e.line.c_str(), e.detail.c_str());
+    if (shown++ < 10)
+      std::printf("%s at %s: %s\n", pipeline::to_string(e.kind), run.program.where(e.lines).c_str(), e.detail.c_str());
   if (run.events.size() > 10) std::printf("... %zu events in all\n", run.events.size());
   std::printf("poses: %s\nper block: %s\n", out.c_str(), blocks_out.c_str());
   return 0;

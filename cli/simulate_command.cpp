@@ -38,13 +38,14 @@ int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base
     std::printf("removed %.1f mm3 of %.1f mm3\n", r.removed_volume_mm3, r.initial_volume_mm3);
     for (const auto& c : r.collisions)
       std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", c.kind.c_str(), c.part.c_str(), c.tool,
-                  c.line.c_str(), c.depth_mm, c.deepest_line.c_str());
+                  r.pose_run.program.where(c.lines).c_str(), c.depth_mm,
+                  r.pose_run.program.where(c.deepest_line).c_str());
     if (r.compared) {
       std::printf("max gouge %.4f mm in %zu region(s), max excess %.4f mm in %zu region(s)\n", r.max_gouge_mm,
                   r.gouges.size(), r.max_excess_mm, r.excess.size());
       for (std::size_t i = 0; i < r.gouges.size() && i < 5; ++i) {
         std::string lines;
-        for (const auto& l : r.gouges[i].lines) lines += " " + l;
+        for (const std::string& l : r.pose_run.program.where(r.gouges[i].spans)) lines += " " + l;
         std::printf("  gouge %.4f mm deep, %.3f mm2 at (%.2f, %.2f, %.2f):%s\n", r.gouges[i].depth_mm,
                     r.gouges[i].area_mm2, r.gouges[i].deepest_mm.x(), r.gouges[i].deepest_mm.y(),
                     r.gouges[i].deepest_mm.z(), lines.c_str());

@@ -63,8 +63,8 @@ class EventLog {
       Open& o = it->second;
       CheckEvent& e = events_[o.index];
       if (block <= o.last_block + 1) {
-        if (block != o.last_block && src.file == o.first.file && src.line > o.first.line)
-          e.line = program_.where(kinematics::SourceSpan{o.first.file, o.first.line, src.line});
+        if (block != o.last_block && src.file == e.lines.first.file && src.line > e.lines.first.line)
+          e.lines.last = src;
         o.last_block = block;
         if (depth_mm > e.depth_mm) {
           e.depth_mm = depth_mm;
@@ -74,11 +74,11 @@ class EventLog {
         return;
       }
     }
-    open_[kind] = Open{events_.size(), block, block, src};
+    open_[kind] = Open{events_.size(), block, block};
     CheckEvent e;
     e.severity = severity;
     e.kind = kind;
-    e.line = program_.where(src);
+    e.lines = {src, src};
     e.detail = detail;
     e.depth_mm = depth_mm;
     e.where_mm = where_mm;
@@ -86,12 +86,12 @@ class EventLog {
     events_.push_back(e);
     first_block_.push_back(block);
   }
-  void add_line(Severity severity, const std::string& kind, const std::string& line, const std::string& detail,
-                int block) {
+  void add_lines(Severity severity, const std::string& kind, const kinematics::SourceRange& lines,
+                 const std::string& detail, int block) {
     CheckEvent e;
     e.severity = severity;
     e.kind = kind;
-    e.line = line;
+    e.lines = lines;
     e.detail = detail;
     events_.push_back(e);
     first_block_.push_back(block);
@@ -111,7 +111,6 @@ class EventLog {
   struct Open {
     std::size_t index;
     int first_block, last_block;
-    kinematics::SourceRef first;
   };
   const kinematics::Program& program_;
   std::vector<CheckEvent> events_;
@@ -140,7 +139,7 @@ CheckResult run_check(const io::Job& job) {
     const Severity s = e.kind == PoseEventKind::Unreachable                                         ? Severity::Error
                        : e.kind == PoseEventKind::Singular || e.kind == PoseEventKind::DensifyError ? Severity::Warning
                                                                                                     : Severity::Note;
-    log.add_line(s, to_string(e.kind), e.line, e.detail, block);
+    log.add_lines(s, to_string(e.kind), e.lines, e.detail, block);
   }
 
   // The tools' cutting parts, shanks and holders against the stock's box, move by move.
@@ -207,7 +206,7 @@ CheckResult run_check(const io::Job& job) {
           const double gap = part.min().z() - box.max().z();
           if (over && (!t.over_stock || gap < t.holder_clearance_mm)) {
             t.holder_clearance_mm = gap;
-            t.holder_line = program.where(b.source);
+            t.holder_line = b.source;
           }
           t.over_stock = t.over_stock || over;
         }

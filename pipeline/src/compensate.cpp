@@ -52,7 +52,10 @@ CompensatedProgram compensate_program(const io::Job& job, const PoseRun& run) {
         kinematics::pose_error(s.pose, kinematics::forward(machine, s.axes, length, kinematics::Geometry::Actual))
             .tip_um.norm();
     const std::string line = block ? program.where(block->source) : "start";
-    if (before > report.max_error_before_um) report.max_error_before_um = before, report.max_error_line = line;
+    if (before > report.max_error_before_um) {
+      report.max_error_before_um = before;
+      report.max_error_line = block ? std::optional<kinematics::SourceRef>(block->source) : std::nullopt;
+    }
     report.max_residual_tip_um = std::max(report.max_residual_tip_um, c.residual_tip_um);
     report.max_residual_axis_urad = std::max(report.max_residual_axis_urad, c.residual_axis_urad);
     if (!c.converged) {

@@ -174,8 +174,8 @@ class Findings {
   Findings(const io::Job& job, PoseRun& run) : job_(job), run_(run), program_(run.program) {}
 
   void block(std::size_t i, const kinematics::BlockReport& r) {
-    // The block's line, made only where a finding names it (most blocks have none).
-    const auto line = [&] { return program_.where(program_.blocks[i].source); };
+    // The block's line, decoded only where a finding names it (most blocks have none).
+    const auto line = [&] { return program_.blocks[i].source; };
     q_sum_ += r.q;
     run_.q_min = i == 0 ? r.q : std::min(run_.q_min, r.q);
     run_.q_max = std::max(run_.q_max, r.q);
@@ -186,16 +186,16 @@ class Findings {
     }
     const int block = static_cast<int>(i);
     if (!r.unreachable.empty())
-      run_.events.push_back({PoseEventKind::Unreachable, line(), r.unreachable, block, block});
+      run_.events.push_back({PoseEventKind::Unreachable, {line(), line()}, r.unreachable, block, block});
     // The user's step or angle leaves the moves off the machine's path by more than a gouge.
     if (job_.densify_given && r.chord_error_mm > job_.gouge_tolerance_mm) {
       const std::string detail = fmt::format(
           "the densified moves leave the tool tip {:.3f} mm off the machine's path (chord error; the gouge "
           "tolerance is {:g} mm): densify finer, or leave `densify:` out to densify to the tolerance",
           r.chord_error_mm, job_.gouge_tolerance_mm);
-      run_.events.push_back({PoseEventKind::DensifyError, line(), detail, block, block});
+      run_.events.push_back({PoseEventKind::DensifyError, {line(), line()}, detail, block, block});
       // The terminal gets the first few; every block stays in the events (report, page).
-      if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(line() + ": " + detail);
+      if (++densify_warnings_ <= kDensifyWarnings) run_.warnings.push_back(program_.where(line()) + ": " + detail);
     }
     // Singular poses, one event per run of consecutive blocks (a three-axis program on a
     // five-axis machine sits on the pole throughout: one event, not thousands).
@@ -210,8 +210,7 @@ class Findings {
   void axis_limited(int block) {
     if (block < 0 || block == last_limited_) return;
     last_limited_ = block;
-    limited_.push_back({PoseEventKind::AxisLimitedSpeed,
-                        program_.where(program_.blocks[static_cast<size_t>(block)].source),
+    limited_.push_back({PoseEventKind::AxisLimitedSpeed, program_.range_of_blocks(block, block),
                         "a machine axis limit, not the programmed feed, set the speed", block, block});
   }
   void finish() {
@@ -231,15 +230,11 @@ class Findings {
     if (singular_first_ < 0) return;
     const int i = singular_first_;
     singular_first_ = -1;
-    const kinematics::SourceRef a = program_.blocks[static_cast<size_t>(i)].source,
-                                b = program_.blocks[static_cast<size_t>(last)].source;
-    std::string where = program_.where(program_.span_of_blocks(i, last));
-    if (b.file != a.file) where += " to " + program_.where(b);
     const std::string detail = fmt::format(
         "{} block(s) with the tool axis in the singular cone: the free rotary angle was kept "
         "(largest tool-axis miss {:.3g} urad)",
         last - i + 1, singular_miss_ * 1e6);
-    singular_.push_back({PoseEventKind::Singular, where, detail, i, last});
+    singular_.push_back({PoseEventKind::Singular, program_.range_of_blocks(i, last), detail, i, last});
   }
 
   const io::Job& job_;
@@ -357,7 +352,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   static_cast<kinematics::PoseChain&>(run) =
       kinematics::run_pose_chain(program, machine, tool_length_mm, chain, every_period);
   if (run.max_contour_block >= 0)
-    run.max_contour_line = program.where(program.blocks[static_cast<size_t>(run.max_contour_block)].source);
+    run.max_contour_line = program.blocks[static_cast<size_t>(run.max_contour_block)].source;
   const auto& samples = run.densified.samples;
   run.poses = samples.size();
 

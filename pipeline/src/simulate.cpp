@@ -122,21 +122,19 @@ std::vector<CollisionRecord> collision_records(const std::vector<removal::Collis
       r = &out.emplace_back();
       r->kind = kind;
       r->part = collision_part(moves.probe_kind(move));
-      r->line = program.where(b.source);
-      r->first_line = b.source;
+      r->lines = {b.source, b.source};
       r->tool = b.tool;
       r->first_block = r->last_block = block;
     }
     if (block != r->last_block) {
       r->last_block = block;
-      if (b.source.file == r->first_line.file && b.source.line > r->first_line.line)
-        r->line = program.where(kinematics::SourceSpan{r->first_line.file, r->first_line.line, b.source.line});
+      if (b.source.file == r->lines.first.file && b.source.line > r->lines.first.line) r->lines.last = b.source;
     }
     ++r->moves;
     if (c.depth_mm > r->depth_mm) {
       r->depth_mm = c.depth_mm;
       r->where_mm = c.where_mm;
-      r->deepest_line = program.where(b.source);
+      r->deepest_line = b.source;
     }
   }
   return out;
@@ -149,7 +147,7 @@ std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run) {
   warnings.insert(warnings.end(), run.program.warnings.begin(), run.program.warnings.end());
   for (const PoseEvent& e : run.events)
     if (e.kind == PoseEventKind::Unreachable)
-      warnings.push_back(e.line + ": pose out of the machine's reach: " + e.detail);
+      warnings.push_back(run.program.where(e.lines) + ": pose out of the machine's reach: " + e.detail);
   warnings.insert(warnings.end(), run.warnings.begin(), run.warnings.end());
   return warnings;
 }
@@ -418,7 +416,7 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
     e.excess_points = found.excess_points;
     if (found.max_gouge_mm > 0.0) {
       e.deepest_mm = found.deepest_mm;
-      if (found.deepest_move >= 0) e.deepest_line = program.where(block_of(found.deepest_move).source);
+      if (found.deepest_move >= 0) e.deepest_line = block_of(found.deepest_move).source;
     }
     out.max_gouge_mm = e.max_gouge_mm;
     out.max_excess_mm = e.max_excess_mm;
@@ -441,7 +439,6 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
       tools.insert(b.tool);
     }
     rec.spans = merge_lines(program, std::move(refs));
-    for (const kinematics::SourceSpan& s : rec.spans) rec.lines.push_back(program.where(s));
     rec.tools.assign(tools.begin(), tools.end());
     return rec;
   };
@@ -590,7 +587,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
       const double d = (machined.mesh.vertices_mm[i] - result.nominal.max_where_mm).squaredNorm();
       if (d < best && machined.vertex_move[i] >= 0) {
         best = d;
-        result.nominal.max_line = program.where(block_of(machined.vertex_move[i]).source);
+        result.nominal.max_line = block_of(machined.vertex_move[i]).source;
       }
     }
     stage_done("nominal");

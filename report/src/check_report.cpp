@@ -22,8 +22,10 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
   j["stock_box"] = {{"min", vec(r.stock_box.min())}, {"max", vec(r.stock_box.max())}};
   j["events"] = ordered_json::array();
   for (const pipeline::CheckEvent& e : r.events) {
-    ordered_json x{
-        {"severity", pipeline::to_string(e.severity)}, {"kind", e.kind}, {"line", e.line}, {"detail", e.detail}};
+    ordered_json x{{"severity", pipeline::to_string(e.severity)},
+                   {"kind", e.kind},
+                   {"line", r.run.program.where(e.lines)},
+                   {"detail", e.detail}};
     x["depth_mm"] = e.has_where ? ordered_json(e.depth_mm) : ordered_json(nullptr);
     x["where"] = e.has_where ? vec(e.where_mm) : ordered_json(nullptr);
     j["events"].push_back(x);
@@ -34,7 +36,7 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
         {{"tool", t.tool},
          {"holder", t.has_holder},
          {"holder_clearance_mm", t.over_stock ? ordered_json(t.holder_clearance_mm) : ordered_json(nullptr)},
-         {"line", t.holder_line}});
+         {"line", r.run.program.where(t.holder_line)}});
   j["wall_time_s"] = r.wall_time_s;
   io::write_text_atomically(path, j.dump(1) + "\n");
 }

@@ -27,13 +27,13 @@ ordered_json vec(const Eigen::Vector3d& v) {
 
 double um(double mm) { return std::round(mm * 1e6) / 1e6; }
 
-ordered_json region(const RegionRecord& r) {
+ordered_json region(const RegionRecord& r, const kinematics::Program& program) {
   ordered_json j;
   j["depth_mm"] = um(r.depth_mm);
   j["area_mm2"] = um(r.area_mm2);
   j["centroid"] = vec(r.centroid_mm);
   j["deepest"] = vec(r.deepest_mm);
-  j["lines"] = r.lines;
+  j["lines"] = program.where(r.spans);
   j["tool"] = r.tools.empty() ? ordered_json(nullptr) : ordered_json(r.tools.front());
   j["tools"] = r.tools;
   j["initial_stock"] = r.initial_stock;
@@ -72,15 +72,16 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   s["stage_seconds"] = stages;
   j["summary"] = s;
   j["gouges"] = ordered_json::array();
-  for (const auto& g : r.gouges) j["gouges"].push_back(region(g));
+  const kinematics::Program& program = r.pose_run.program;
+  for (const auto& g : r.gouges) j["gouges"].push_back(region(g, program));
   j["excess"] = ordered_json::array();
-  for (const auto& e : r.excess) j["excess"].push_back(region(e));
+  for (const auto& e : r.excess) j["excess"].push_back(region(e, program));
   j["collisions"] = ordered_json::array();
   for (const auto& c : r.collisions)
     j["collisions"].push_back({{"kind", c.kind},
                                {"part", c.part},
-                               {"line", c.line},
-                               {"deepest_line", c.deepest_line},
+                               {"line", program.where(c.lines)},
+                               {"deepest_line", program.where(c.deepest_line)},
                                {"tool", c.tool},
                                {"depth_mm", um(c.depth_mm)},
                                {"where", vec(c.where_mm)},
@@ -103,7 +104,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     e["points"] = r.endpoints.points;
     e["max_gouge_mm"] = um(r.endpoints.max_gouge_mm);
     e["deepest"] = vec(r.endpoints.deepest_mm);
-    e["deepest_line"] = r.endpoints.deepest_line;
+    e["deepest_line"] = program.where(r.endpoints.deepest_line);
     e["max_excess_mm"] = um(r.endpoints.max_excess_mm);
     e["gouge_points"] = r.endpoints.gouge_points;
     e["excess_points"] = r.endpoints.excess_points;
@@ -137,7 +138,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     e["q"] = {{"min", p.q_min}, {"max", p.q_max}, {"mean", std::round(p.q_mean * 1e3) / 1e3}};
     e["rotating_moves"] = r.rotating_moves;
     e["max_nonlinear_error_mm"] = um(p.max_nonlinear_error_mm);
-    if (!p.max_nonlinear_line.empty()) e["max_nonlinear_line"] = p.max_nonlinear_line;
+    if (p.max_nonlinear_line) e["max_nonlinear_line"] = program.where(p.max_nonlinear_line);
     e["cut_with"] = p.actual.empty()                  ? "nominal poses"
                     : (job.servo && job.apply_errors) ? "actual poses (servo lag and machine errors)"
                     : job.servo                       ? "actual poses (servo lag)"
@@ -152,12 +153,13 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
     }
     if (!p.actual.empty()) {
       e["max_contour_error_um"] = std::round(p.max_contour_error_um * 1e3) / 1e3;
-      e["max_contour_line"] = p.max_contour_line;
+      e["max_contour_line"] = program.where(p.max_contour_line);
       e["rms_contour_error_um"] = std::round(p.rms_contour_error_um * 1e3) / 1e3;
     }
     e["events"] = ordered_json::array();
     for (const PoseEvent& ev : p.events)
-      e["events"].push_back({{"kind", pipeline::to_string(ev.kind)}, {"line", ev.line}, {"detail", ev.detail}});
+      e["events"].push_back(
+          {{"kind", pipeline::to_string(ev.kind)}, {"line", program.where(ev.lines)}, {"detail", ev.detail}});
     if (r.nominal.done) {
       e["nominal_vs_actual"] = {
           {"compared", "the part cut with the actual poses against the part cut with the nominal ones"},
@@ -165,7 +167,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
           {"rms_mm", um(r.nominal.rms_mm)},
           {"p99_mm", um(r.nominal.p99_mm)},
           {"max_at", vec(r.nominal.max_where_mm)},
-          {"max_line", r.nominal.max_line},
+          {"max_line", program.where(r.nominal.max_line)},
           {"vertices", r.nominal.vertices}};
     }
     j["pose_engine"] = e;
@@ -199,7 +201,7 @@ void write_gouges_csv(const std::string& path, const pipeline::SimulationResult&
     int rank = 0;
     for (const auto& g : regions) {
       std::string lines;
-      for (const auto& l : g.lines) lines += (lines.empty() ? "" : " ") + l;
+      for (const std::string& l : r.pose_run.program.where(g.spans)) lines += (lines.empty() ? "" : " ") + l;
       if (g.initial_stock) lines += std::string(lines.empty() ? "" : " ") + "(initial stock)";
       out << kind << ',' << ++rank << ',' << um(g.depth_mm) << ',' << um(g.area_mm2) << ',' << g.centroid_mm.x() << ','
           << g.centroid_mm.y() << ',' << g.centroid_mm.z() << ',' << g.deepest_mm.x() << ',' << g.deepest_mm.y() << ','

@@ -258,7 +258,7 @@ void write_report_page(const std::string& path, const std::string& template_path
                           {"area_mm2", g.area_mm2},
                           {"centroid", vec(g.centroid_mm)},
                           {"deepest", vec(g.deepest_mm)},
-                          {"lines", g.lines},
+                          {"lines", run.program.where(g.spans)},
                           {"tools", g.tools},
                           {"initial_stock", g.initial_stock}},
                          refs});
@@ -269,22 +269,22 @@ void write_report_page(const std::string& path, const std::string& template_path
   for (const CollisionRecord& c : r.collisions) {
     std::ostringstream detail;
     detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at "
-           << c.deepest_line;
+           << run.program.where(c.deepest_line);
     events.push_back({{{"kind", c.kind},
-                       {"line", c.line},
+                       {"line", run.program.where(c.lines)},
                        {"detail", detail.str()},
                        {"depth_mm", c.depth_mm},
                        {"where", vec(c.where_mm)}},
-                      sources.add(run.program.span_of_blocks(c.first_block, c.last_block))});
+                      sources.add(kinematics::Program::span_in_first_file(c.lines))});
   }
   for (const PoseEvent& e : run.events)
-    events.push_back({{{"kind", pipeline::to_string(e.kind)},
-                       {"line", e.line},
-                       {"detail", e.detail},
-                       {"depth_mm", nullptr},
-                       {"where", nullptr}},
-                      e.first_block < 0 ? std::vector<int>{}
-                                        : sources.add(run.program.span_of_blocks(e.first_block, e.last_block))});
+    events.push_back(
+        {{{"kind", pipeline::to_string(e.kind)},
+          {"line", run.program.where(e.lines)},
+          {"detail", e.detail},
+          {"depth_mm", nullptr},
+          {"where", nullptr}},
+         e.first_block < 0 ? std::vector<int>{} : sources.add(kinematics::Program::span_in_first_file(e.lines))});
 
   // Feed and contour error over time, at most 4,000 points (PoseRun::timeline: each the
   // largest contour error of its stretch, so peaks survive).
@@ -330,7 +330,7 @@ void write_report_page(const std::string& path, const std::string& template_path
                   {"removed_volume_mm3", r.removed_volume_mm3},
                   {"initial_volume_mm3", r.initial_volume_mm3},
                   {"max_gouge_mm", r.max_gouge_mm},
-                  {"max_gouge_line", r.endpoints.done ? r.endpoints.deepest_line : std::string()},
+                  {"max_gouge_line", r.endpoints.done ? run.program.where(r.endpoints.deepest_line) : std::string()},
                   {"max_excess_mm", r.max_excess_mm},
                   {"wall_time_s", r.wall_time_s},
                   {"peak_memory_mb", r.peak_memory_mb},

@@ -78,7 +78,7 @@ TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
   ASSERT_TRUE(actual.nominal.done);
   EXPECT_GE(actual.nominal.max_mm, 0.030 - 1e-6);
   EXPECT_LE(actual.nominal.max_mm, 0.030 + 0.05);
-  EXPECT_EQ(actual.nominal.max_line, "slot.ngc:7");
+  EXPECT_EQ(actual.pose_run.program.where(actual.nominal.max_line), "slot.ngc:7");
 }
 
 // The comparison stage alone: the slot (line 7, floor at z = -2, 10 mm wide over the 60 mm
@@ -117,7 +117,7 @@ TEST_F(Stages, CompareWithDesignFindsTheFloorTooDeep) {
   ASSERT_EQ(c.gouges.size(), 1u);
   EXPECT_NEAR(c.gouges[0].area_mm2, 600.0, 14.0);
   EXPECT_NEAR(c.gouges[0].depth_mm, 0.030, 1e-4);
-  EXPECT_EQ(c.gouges[0].lines, std::vector<std::string>{"slot.ngc:7"});
+  EXPECT_EQ(run.program.where(c.gouges[0].spans), std::vector<std::string>{"slot.ngc:7"});
   EXPECT_EQ(c.gouges[0].tools, std::vector<int>{1});
   EXPECT_TRUE(c.excess.empty());
   std::size_t counted = 0;
@@ -186,7 +186,7 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
     ASSERT_EQ(streamed.events.size(), held.events.size()) << name;
     for (std::size_t i = 0; i < held.events.size(); ++i) {
       EXPECT_EQ(streamed.events[i].kind, held.events[i].kind);
-      EXPECT_EQ(streamed.events[i].line, held.events[i].line);
+      EXPECT_EQ(streamed.program.where(streamed.events[i].lines), held.program.where(held.events[i].lines));
       EXPECT_EQ(streamed.events[i].detail, held.events[i].detail);
     }
     CutMoves a(held, false, true, j.resolution_mm), b(streamed, false, true, j.resolution_mm);

@@ -36,6 +36,12 @@ struct SourceSpan {
   int first_line = 0, last_line = 0;
 };
 
+// From one line to another, possibly in another file (a run of blocks that a subprogram call
+// or a second program file splits): what a finding names.
+struct SourceRange {
+  SourceRef first, last;
+};
+
 struct Block {
   MotionKind kind = MotionKind::Linear;
   Eigen::Vector3d start_mm = Eigen::Vector3d::Zero();  // tool tip before the motion

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,9 +22,9 @@ const char* to_string(Severity severity);
 
 struct CheckEvent {
   Severity severity = Severity::Warning;
-  std::string kind;  // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
-                     // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
-  std::string line;  // "file:line" or "file:first-last"
+  std::string kind;               // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
+                                  // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
+  kinematics::SourceRange lines;  // the first block's line to the last's in that file
   std::string detail;
   double depth_mm = 0.0;  // how far into the stock's box (0 where it does not apply)
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
@@ -35,8 +36,8 @@ struct ToolClearance {
   int tool = 0;
   bool has_holder = false;
   double holder_clearance_mm = 0.0;  // min (holder face z - stock top z) over moves above the stock; < 0 enters
-  std::string holder_line;           // where that minimum is
-  bool over_stock = false;           // the tool ever came over the stock's footprint
+  std::optional<kinematics::SourceRef> holder_line;  // where that minimum is
+  bool over_stock = false;                           // the tool ever came over the stock's footprint
 };
 
 struct CheckResult {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <optional>
 #include <string>
 
 #include "vcut/io/job.h"
@@ -23,9 +24,9 @@ struct CompensationReport {
   std::size_t not_converged = 0;
   double max_residual_tip_um = 0.0;
   double max_residual_axis_urad = 0.0;
-  double max_error_before_um = 0.0;  // uncompensated volumetric tip error
-  std::string max_error_line;
-  std::string first_failure;  // "file:line: note" of the first pose that did not converge
+  double max_error_before_um = 0.0;                     // uncompensated volumetric tip error
+  std::optional<kinematics::SourceRef> max_error_line;  // none: at the start, before the first block
+  std::string first_failure;                            // "file:line: note" of the first pose that did not converge
 };
 // The compensated program's text and what its making found; `vcut compensate` writes the text.
 struct CompensatedProgram {

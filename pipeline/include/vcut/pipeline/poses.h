@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,9 +29,9 @@ const char* to_string(PoseEventKind kind);
 
 struct PoseEvent {
   PoseEventKind kind = PoseEventKind::Unreachable;
-  std::string line;  // "file:line", "file:first-last" or "a:12 to b:3"
+  kinematics::SourceRange lines;  // written by Program::where: "file:line", "file:first-last", "a:12 to b:3"
   std::string detail;
-  int first_block = -1, last_block = -1;  // the blocks it names (Program::span_of_blocks)
+  int first_block = -1, last_block = -1;  // the blocks it names
 };
 
 // The job's program files read into one Program (file names relative to the job), and the
@@ -70,8 +71,8 @@ struct PoseRun : kinematics::PoseChain {
   } timeline;
   // Summary.
   double max_nonlinear_error_mm = 0.0;
-  std::string max_nonlinear_line;
-  std::string max_contour_line;  // of PoseChain::max_contour_block
+  std::optional<kinematics::SourceRef> max_nonlinear_line;
+  std::optional<kinematics::SourceRef> max_contour_line;  // of PoseChain::max_contour_block
   int q_min = 0, q_max = 0;
   double q_mean = 0.0;
 };

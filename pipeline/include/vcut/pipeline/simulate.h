@@ -36,8 +36,7 @@ struct RegionRecord {
   double area_mm2 = 0.0;
   Eigen::Vector3d centroid_mm = Eigen::Vector3d::Zero();
   Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
-  std::vector<kinematics::SourceSpan> spans;  // the NC lines of the moves that made it
-  std::vector<std::string> lines;             // the spans as text: "file:line" or "file:first-last"
+  std::vector<kinematics::SourceSpan> spans;  // the NC lines of the moves that made it, merged
   std::vector<int> tools;                     // T numbers; empty for untouched stock
   bool initial_stock = false;                 // part of the region was never cut
 };
@@ -46,15 +45,14 @@ struct RegionRecord {
 struct CollisionRecord {
   // rapid_into_stock | shank_collision | holder_collision | spindle_stopped_cut
   std::string kind;
-  std::string part;          // "cutting part", "shank", "holder"
-  std::string line;          // "file:line" or "file:first-last"
-  std::string deepest_line;  // "file:line" of the deepest point
+  std::string part;                    // "cutting part", "shank", "holder"
+  kinematics::SourceRange lines;       // the first block's line to the last's in that file
+  kinematics::SourceRef deepest_line;  // of the deepest point
   int tool = 0;
   double depth_mm = 0.0;  // deepest overlap with material along the rays
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
   std::size_t moves = 0;  // moves that collided
   int first_block = -1, last_block = -1;
-  kinematics::SourceRef first_line;
 };
 
 // Deviation from the design measured at every dexel endpoint (exact point-to-triangle), so
@@ -64,8 +62,8 @@ struct EndpointCheck {
   std::size_t points = 0;
   double max_gouge_mm = 0.0, max_excess_mm = 0.0;  // positive figures, 0 when none
   Eigen::Vector3d deepest_mm = Eigen::Vector3d::Zero();
-  std::string deepest_line;                         // "file:line" of the move that made the deepest gouge point
-  std::size_t gouge_points = 0, excess_points = 0;  // beyond the tolerances
+  std::optional<kinematics::SourceRef> deepest_line;  // of the move that made the deepest gouge point
+  std::size_t gouge_points = 0, excess_points = 0;    // beyond the tolerances
 };
 
 struct EngineCheck : removal::SurfaceDifference {
@@ -75,7 +73,7 @@ struct EngineCheck : removal::SurfaceDifference {
 // With servo or machine errors the machine cuts with the actual poses; the nominal cut is
 // made too, and this is how far the real part departs from the programmed one.
 struct NominalCheck : removal::SurfaceDifference {
-  std::string max_line;  // NC line of the actual surface's point farthest from the nominal one
+  std::optional<kinematics::SourceRef> max_line;  // of the actual surface's point farthest from the nominal one
 };
 
 struct SimulationResult {
