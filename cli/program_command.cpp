@@ -131,13 +131,14 @@ bool run_program_command(const ProgramCommand& c) {
   options.gcode.max_lines = c.max_lines;
   for (int m : c.tcp_on) options.gcode.tcp_m_codes[m] = true;
   for (int m : c.tcp_off) options.gcode.tcp_m_codes[m] = false;
-  io::LoadedProgram loaded = io::read_program(c.file, c.dialect, options);
+  const io::Dialect dialect = io::parse_dialect(c.dialect);
+  io::LoadedProgram loaded = io::read_program(c.file, dialect, options);
   // An axis program (rotary words without TCP) starts at the home's axis values, as a job's.
   if (spec && loaded.reader == io::ProgramReader::Gcode &&
       std::any_of(loaded.program.blocks.begin(), loaded.program.blocks.end(),
                   [](const Block& b) { return !b.tool_pose; })) {
     io::set_machine(options.gcode, *spec, tools, true);
-    loaded = io::read_program(c.file, c.dialect, options);
+    loaded = io::read_program(c.file, dialect, options);
   }
   for (const auto& w : loaded.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   std::string line;

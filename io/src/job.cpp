@@ -134,10 +134,12 @@ void read_program_key(const YamlReader& yaml, const YAML::Node& program, const f
     for (const auto& f : files) job.program_files.push_back(resolve(base, yaml.text(f, "program.files")));
   }
   if (program["dialect"]) {
-    job.dialect = yaml.text(program["dialect"], "program.dialect");
-    if (job.dialect != "auto" && job.dialect != "gcode" && job.dialect != "linuxcnc" && job.dialect != "fanuc" &&
-        job.dialect != "apt")
-      yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc, fanuc or apt");
+    const std::string dialect = yaml.text(program["dialect"], "program.dialect");
+    try {
+      job.dialect = parse_dialect(dialect);
+    } catch (const InputError&) {
+      yaml.fail(program["dialect"], "program.dialect", "auto, gcode, linuxcnc, fanuc, apt or sinumerik");
+    }
   }
   if (const YAML::Node path = program["subroutine_path"]) {
     if (!path.IsSequence()) yaml.fail(path, "program.subroutine_path", "a list of folders");
@@ -427,7 +429,7 @@ std::string job_yaml(const Job& job, const std::string& program_as_given) {
   s += "job: " + job.name + "\n";
   s += "machine: " + job.machine + "\n";
   s += "program: {file: \"" + program_as_given + "\"";
-  if (job.dialect != "auto") s += ", dialect: " + job.dialect;
+  if (job.dialect != Dialect::Auto) s += std::string(", dialect: ") + dialect_name(job.dialect);
   if (job.initial_tool > 0) s += ", initial_tool: " + std::to_string(job.initial_tool);
   s += "}\n";
   s += tool_library_yaml(job.tools);

@@ -63,7 +63,9 @@ std::string upper(std::string s) {
 class Scanner {
  public:
   explicit Scanner(const std::string& path)
-      : path_(path), sinumerik_(detect_dialect(path) == "sinumerik"), apt_(detect_dialect(path) == "apt") {}
+      : path_(path),
+        sinumerik_(detect_dialect(path) == Dialect::Sinumerik),
+        apt_(detect_dialect(path) == Dialect::Apt) {}
 
   ProgramHeader run() {
     std::ifstream in(path_, std::ios::binary);

@@ -95,7 +95,7 @@ bool letter_space_number(const std::string& line) {
   return false;
 }
 
-std::string detect_from_text(const std::string& head) {
+Dialect detect_from_text(const std::string& head) {
   static const char* const kSinumerikWords[] = {"TRAORI",   "TRAFOOF",  "ORIVECT",  "ORIAXES",   "ORIWKS",
                                                 "ORIMKS",   "ORIPLANE", "ORICONCW", "ORICONCCW", "ORICONIO",
                                                 "ORICONTO", "G641",     "G642"};
@@ -111,8 +111,8 @@ std::string detect_from_text(const std::string& head) {
     line.erase(0, i);
     while (!line.empty() && (line.back() == '\r' || is_blank(line.back()))) line.pop_back();
     if (line.empty()) continue;
-    if (line.rfind("$$", 0) == 0) return "apt";
-    if (apt_statement(line)) return "apt";
+    if (line.rfind("$$", 0) == 0) return Dialect::Apt;
+    if (apt_statement(line)) return Dialect::Apt;
     // G-code and SINUMERIK: look at the words only, not at comments.
     std::string words;
     bool paren = false;
@@ -136,25 +136,26 @@ std::string detect_from_text(const std::string& head) {
       gcode_sign = true;
     }
     for (const char* w : kSinumerikWords) {
-      if (has_word(words, w)) return "sinumerik";
+      if (has_word(words, w)) return Dialect::Sinumerik;
     }
     if (words.find("CR=") != std::string::npos || words.find("MSG(") != std::string::npos ||
         words.find("AC(") != std::string::npos || words.find("IC(") != std::string::npos ||
         words.rfind("DEF ", 0) == 0) {
-      return "sinumerik";
+      return Dialect::Sinumerik;
     }
     if (letter_space_number(words)) letter_space = true;
   }
-  return semicolon && letter_space && !gcode_sign ? "sinumerik" : "gcode";
+  return semicolon && letter_space && !gcode_sign ? Dialect::Sinumerik : Dialect::Gcode;
 }
 
-ProgramReader reader_of(const std::string& dialect) {
-  if (dialect == "gcode" || dialect == "linuxcnc" || dialect == "fanuc") return ProgramReader::Gcode;
-  if (dialect == "apt") return ProgramReader::Apt;
-  if (dialect == "sinumerik") return ProgramReader::Sinumerik;
-  throw InputError("unknown program dialect '" + dialect +
-                   "' (expected auto, gcode, linuxcnc, fanuc, apt or sinumerik)");
+ProgramReader reader_of(Dialect dialect) {
+  return dialect == Dialect::Apt         ? ProgramReader::Apt
+         : dialect == Dialect::Sinumerik ? ProgramReader::Sinumerik
+                                         : ProgramReader::Gcode;
 }
+
+constexpr Dialect kDialects[] = {Dialect::Auto,  Dialect::Gcode, Dialect::LinuxCnc,
+                                 Dialect::Fanuc, Dialect::Apt,   Dialect::Sinumerik};
 
 const char* describe_dialect(ProgramReader reader) {
   return reader == ProgramReader::Apt ? "APT CL data" : reader == ProgramReader::Sinumerik ? "SINUMERIK" : "G-code";
@@ -174,11 +175,35 @@ void check_text(const std::string& path, const std::string& head) {
 
 std::string lower_extension(const std::string& path) { return lower(fs::path(path).extension().string()); }
 
-std::string detect_dialect(const std::string& path) {
+const char* dialect_name(Dialect dialect) {
+  switch (dialect) {
+    case Dialect::Auto:
+      return "auto";
+    case Dialect::Gcode:
+      return "gcode";
+    case Dialect::LinuxCnc:
+      return "linuxcnc";
+    case Dialect::Fanuc:
+      return "fanuc";
+    case Dialect::Apt:
+      return "apt";
+    case Dialect::Sinumerik:
+      return "sinumerik";
+  }
+  return "auto";
+}
+
+Dialect parse_dialect(const std::string& name) {
+  for (const Dialect d : kDialects)
+    if (name == dialect_name(d)) return d;
+  throw InputError("unknown program dialect '" + name + "' (expected auto, gcode, linuxcnc, fanuc, apt or sinumerik)");
+}
+
+Dialect detect_dialect(const std::string& path) {
   const std::string ext = lower_extension(path);
-  if (ext == ".apt" || ext == ".cl" || ext == ".cls" || ext == ".aptsource") return "apt";
-  if (ext == ".mpf" || ext == ".spf") return "sinumerik";
-  if (ext == ".ngc" || ext == ".nc" || ext == ".tap" || ext == ".gcode") return "gcode";
+  if (ext == ".apt" || ext == ".cl" || ext == ".cls" || ext == ".aptsource") return Dialect::Apt;
+  if (ext == ".mpf" || ext == ".spf") return Dialect::Sinumerik;
+  if (ext == ".ngc" || ext == ".nc" || ext == ".tap" || ext == ".gcode") return Dialect::Gcode;
   return detect_from_text(sniff(path));
 }
 
@@ -415,9 +440,7 @@ SinumerikOptions sinumerik_options(const GcodeOptions& gcode) {
   return sinumerik;
 }
 
-LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
-                            const ProgramOptions& options) {
-  if (dialect != "auto") reader_of(dialect);  // an unknown dialect fails before any file
+LoadedProgram read_programs(const std::vector<std::string>& paths, Dialect dialect, const ProgramOptions& options) {
   LoadedProgram out;
   GcodeState gcode_state;
   AptState apt_state;
@@ -434,7 +457,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       throw InputError(path, 0, 0, std::string("cannot open program file for reading: ") + std::strerror(errno));
     }
     check_text(path, sniff(path));
-    const ProgramReader reader = reader_of(dialect == "auto" ? detect_dialect(path) : dialect);
+    const ProgramReader reader = reader_of(dialect == Dialect::Auto ? detect_dialect(path) : dialect);
     if (first) {
       out.reader = reader;
       first = false;
@@ -448,9 +471,9 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
       read_sinumerik(in, path, sinumerik, out.program, sinumerik_state);
     } else if (reader == ProgramReader::Gcode) {
       GcodeOptions gcode = options.gcode;
-      if (dialect == "linuxcnc") gcode.flavor = GcodeOptions::Flavor::LinuxCnc;
-      if (dialect == "fanuc") gcode.flavor = GcodeOptions::Flavor::Fanuc;
-      if ((dialect == "auto" || dialect == "gcode") && reads_like_fanuc_macro(sniff(path))) {
+      if (dialect == Dialect::LinuxCnc) gcode.flavor = GcodeOptions::Flavor::LinuxCnc;
+      if (dialect == Dialect::Fanuc) gcode.flavor = GcodeOptions::Flavor::Fanuc;
+      if ((dialect == Dialect::Auto || dialect == Dialect::Gcode) && reads_like_fanuc_macro(sniff(path))) {
         gcode.flavor = GcodeOptions::Flavor::Fanuc;
       }
       read_gcode(in, path, gcode, out.program, gcode_state);
@@ -465,7 +488,7 @@ LoadedProgram read_programs(const std::vector<std::string>& paths, const std::st
   return out;
 }
 
-LoadedProgram read_program(const std::string& path, const std::string& dialect, const ProgramOptions& options) {
+LoadedProgram read_program(const std::string& path, Dialect dialect, const ProgramOptions& options) {
   return read_programs({path}, dialect, options);
 }
 

@@ -22,7 +22,7 @@ kinematics::FeedInterpretation axis_feed_of(const io::Job& job, io::ProgramReade
   // By dialect: Fanuc and Haas combine mm and deg (Fanuc's feed for simultaneous linear and
   // rotary motion); LinuxCNC's interpreter and SINUMERIK without TRAORI put F on the linear
   // axes when they move; CL data are tool poses (F on the tip).
-  if (job.dialect == "fanuc") return kinematics::FeedInterpretation::Combined;
+  if (job.dialect == io::Dialect::Fanuc) return kinematics::FeedInterpretation::Combined;
   if (reader == io::ProgramReader::Apt) return kinematics::FeedInterpretation::Tip;
   return kinematics::FeedInterpretation::LinuxCnc;
 }

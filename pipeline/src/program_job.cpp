@@ -184,7 +184,8 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   job.out_dir = options.out_dir.empty() ? (fs::current_path() / "out" / job.name).string() : options.out_dir;
   job.program_files = {absolute.string()};
   job.dialect = options.dialect;
-  const std::string dialect = options.dialect == "auto" ? io::detect_dialect(absolute.string()) : options.dialect;
+  const io::Dialect dialect =
+      options.dialect == io::Dialect::Auto ? io::detect_dialect(absolute.string()) : options.dialect;
   const io::ProgramHeader header = io::read_program_header(program_path);
   const double unit_mm = header.inch ? 25.4 : 1.0;
 
@@ -223,7 +224,7 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
     origin[number] = "the " + t.form + " comment at " + t.where;
   }
   std::set<int> used = header.tool_numbers;
-  if (dialect != "apt") {
+  if (dialect != io::Dialect::Apt) {
     // The tool in the spindle at the start: the first one the program names, else T1.
     job.initial_tool = header.first_tool > 0 ? header.first_tool : 1;
     used.insert(job.initial_tool);

@@ -353,6 +353,14 @@ TEST_F(Simulate, StartAndProgramKeys) {
   program = "G21\nT1 M6\nM31\nG0 X0 Y0 Z5\n";
   expect_error(simulate(), "slot.ngc:3:1: unknown M code M31");
   EXPECT_TRUE(no_output());
+  // The dialect: every reader's name is accepted (sinumerik reads the file with the SINUMERIK
+  // reader, where G21 is not a word: G71 is), any other names them all.
+  job = base;
+  job.replace(job.find("program: {file: slot.ngc}"), 25, "program: {file: slot.ngc, dialect: sinumerik}");
+  expect_error(simulate(), "slot.ngc:1:1: G21 is not supported");
+  job = base;
+  job.replace(job.find("program: {file: slot.ngc}"), 25, "program: {file: slot.ngc, dialect: heidenhain}");
+  expect_error(simulate(), "'program.dialect': expected auto, gcode, linuxcnc, fanuc, apt or sinumerik");
 }
 
 TEST_F(Simulate, ToolMissingFromLibrary) {

@@ -674,48 +674,48 @@ class ProgramFiles : public ::testing::Test {
 
 TEST_F(ProgramFiles, DetectDialectByExtensionThenContent) {
   // The extension wins over the content.
-  EXPECT_EQ(detect_dialect(write("a.apt", "G0 X1\n")), "apt");
-  EXPECT_EQ(detect_dialect(write("a.CLS", "")), "apt");
-  EXPECT_EQ(detect_dialect(write("a.cl", "")), "apt");
-  EXPECT_EQ(detect_dialect(write("a.aptsource", "")), "apt");
-  EXPECT_EQ(detect_dialect(write("a.MPF", "GOTO/1,2,3\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("a.spf", "")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("a.ngc", "GOTO/1,2,3\n")), "gcode");
-  EXPECT_EQ(detect_dialect(write("a.nc", "")), "gcode");
-  EXPECT_EQ(detect_dialect(write("a.tap", "")), "gcode");
-  EXPECT_EQ(detect_dialect(write("a.gcode", "")), "gcode");
+  EXPECT_EQ(detect_dialect(write("a.apt", "G0 X1\n")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("a.CLS", "")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("a.cl", "")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("a.aptsource", "")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("a.MPF", "GOTO/1,2,3\n")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("a.spf", "")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("a.ngc", "GOTO/1,2,3\n")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect(write("a.nc", "")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect(write("a.tap", "")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect(write("a.gcode", "")), Dialect::Gcode);
   // Content.
-  EXPECT_EQ(detect_dialect(write("b.txt", "\n$$ header\nGOTO/1,2,3\n")), "apt");
-  EXPECT_EQ(detect_dialect(write("c.txt", "PARTNO X\nCUTTER/10\n")), "apt");
-  EXPECT_EQ(detect_dialect(write("d.txt", "  fedrat / 100\n")), "apt");
-  EXPECT_EQ(detect_dialect(write("e.txt", "N10 G0 X0\nN20 TRAORI\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("f.txt", "N10 G2 X10 Y0 CR=5\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("g.txt", "DEF REAL R1\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("h.txt", "; seed 000\nN7 X -1320 Y -1320 Z 1000 A 0 C 0\n")), "sinumerik");
-  EXPECT_EQ(detect_dialect(write("i.txt", "%\n(TRAORI in a comment)\nG0 X1 Y2\n%\n")), "gcode");
-  EXPECT_EQ(detect_dialect(write("j.txt", "G21 G90\nG1 X1 F100 ; LinuxCNC comment\n")), "gcode");
-  EXPECT_EQ(detect_dialect(write("k", "")), "gcode");
-  EXPECT_EQ(detect_dialect((dir_ / "missing.txt").string()), "gcode");
+  EXPECT_EQ(detect_dialect(write("b.txt", "\n$$ header\nGOTO/1,2,3\n")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("c.txt", "PARTNO X\nCUTTER/10\n")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("d.txt", "  fedrat / 100\n")), Dialect::Apt);
+  EXPECT_EQ(detect_dialect(write("e.txt", "N10 G0 X0\nN20 TRAORI\n")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("f.txt", "N10 G2 X10 Y0 CR=5\n")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("g.txt", "DEF REAL R1\n")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("h.txt", "; seed 000\nN7 X -1320 Y -1320 Z 1000 A 0 C 0\n")), Dialect::Sinumerik);
+  EXPECT_EQ(detect_dialect(write("i.txt", "%\n(TRAORI in a comment)\nG0 X1 Y2\n%\n")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect(write("j.txt", "G21 G90\nG1 X1 F100 ; LinuxCNC comment\n")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect(write("k", "")), Dialect::Gcode);
+  EXPECT_EQ(detect_dialect((dir_ / "missing.txt").string()), Dialect::Gcode);
 }
 
 TEST_F(ProgramFiles, ReadProgramDispatches) {
   const std::string apt = write("p.cls", "CUTTER/6\nFROM/0,0,0\nFEDRAT/10\nGOTO/1,0,0\n");
-  const LoadedProgram a = read_program(apt, "auto");
+  const LoadedProgram a = read_program(apt, Dialect::Auto);
   EXPECT_EQ(a.reader, ProgramReader::Apt);
   ASSERT_EQ(a.program.blocks.size(), 1u);
   ASSERT_EQ(a.cutters.size(), 1u);
   EXPECT_EQ(a.cutters.at(1).diameter_mm, 6.0);
   const std::string gcode = write("p.ngc", "G0 X0 Y0 Z0\nG1 X1 F10\n");
-  const LoadedProgram g = read_program(gcode, "linuxcnc");
+  const LoadedProgram g = read_program(gcode, Dialect::LinuxCnc);
   EXPECT_EQ(g.reader, ProgramReader::Gcode);
   ASSERT_EQ(g.program.blocks.size(), 1u);
   EXPECT_TRUE(g.cutters.empty());
   // An explicit dialect wins over the extension.
   const std::string named = write("q.ngc", "FROM/0,0,0\nFEDRAT/10\nGOTO/0,2,0\n");
-  EXPECT_EQ(read_program(named, "apt").program.blocks.size(), 1u);
+  EXPECT_EQ(read_program(named, Dialect::Apt).program.blocks.size(), 1u);
   // Several files of one dialect in sequence.
   const std::string second = write("r.apt", "GOTO/3,0,0\n");
-  const LoadedProgram both = read_programs({apt, second}, "auto");
+  const LoadedProgram both = read_programs({apt, second}, Dialect::Auto);
   ASSERT_EQ(both.program.blocks.size(), 2u);
   EXPECT_EQ(both.program.files.size(), 2u);
 }
@@ -730,17 +730,17 @@ TEST_F(ProgramFiles, ReadProgramErrors) {
     return "no error";
   };
   const std::string mpf = write("s.mpf", "N10 TRAORI\nN20 ROTS X10\n");
-  EXPECT_NE(message([&] { read_program(mpf, "auto"); }).find(":2:5: ROTS is not supported"), std::string::npos);
-  EXPECT_NE(message([&] { read_program(mpf, "heidenhain"); }).find("unknown program dialect"), std::string::npos);
+  EXPECT_NE(message([&] { read_program(mpf, Dialect::Auto); }).find(":2:5: ROTS is not supported"), std::string::npos);
+  EXPECT_NE(message([&] { parse_dialect("heidenhain"); }).find("unknown program dialect"), std::string::npos);
   const std::string binary = write("t.apt", std::string("GOTO/1\n\x01\x02\0\0", 11));
-  const std::string m = message([&] { read_program(binary, "auto"); });
+  const std::string m = message([&] { read_program(binary, Dialect::Auto); });
   EXPECT_EQ(m.rfind(binary + ":2:3: not a text file", 0), 0u) << m;
   const std::string gcode = write("u.ngc", "G0 X1\n");
   const std::string apt = write("v.apt", "FROM/0,0,0\n");
-  EXPECT_NE(message([&] { read_programs({gcode, apt}, "auto"); }).find("one dialect"), std::string::npos);
-  EXPECT_NE(message([&] { read_program((dir_ / "none.apt").string(), "auto"); }).find("cannot open"),
+  EXPECT_NE(message([&] { read_programs({gcode, apt}, Dialect::Auto); }).find("one dialect"), std::string::npos);
+  EXPECT_NE(message([&] { read_program((dir_ / "none.apt").string(), Dialect::Auto); }).find("cannot open"),
             std::string::npos);
-  EXPECT_NE(message([&] { read_program(dir_.string(), "auto"); }).find("is a directory"), std::string::npos);
+  EXPECT_NE(message([&] { read_program(dir_.string(), Dialect::Auto); }).find("is a directory"), std::string::npos);
 }
 
 // CUTCOM/RIGHT around a square with a half-circle top, run counterclockwise: the tool (radius 2)

@@ -148,7 +148,7 @@ TEST(FanucMacro, ProgramFileOnTheSearchPath) {
   std::ofstream(dir / "auto.nc") << "IF[#1EQ#0]GOTO10\nG0 X1\nN10 G0 Y1\nM30\n";
   ProgramOptions from_zero;
   from_zero.gcode.start_mm = Eigen::Vector3d::Zero();
-  const LoadedProgram loaded = read_program((dir / "auto.nc").string(), "auto", from_zero);
+  const LoadedProgram loaded = read_program((dir / "auto.nc").string(), Dialect::Auto, from_zero);
   ASSERT_EQ(loaded.program.blocks.size(), 1u);
   EXPECT_EQ(loaded.program.blocks[0].end_mm, Eigen::Vector3d(0, 1, 0));
   fs::remove_all(dir);

@@ -632,7 +632,7 @@ TEST(SinumerikReader, ReadProgramDispatch) {
   std::ofstream(path) << "%_N_PART_MPF\nN10 G54 G0 X0 Y0 Z0\nN20 G1 X1 F100\nN30 M30\n";
   ProgramOptions options;
   options.gcode.work_offsets_mm["G54"] = Eigen::Vector3d(0, 0, 5);
-  const LoadedProgram loaded = read_program(path, "auto", options);
+  const LoadedProgram loaded = read_program(path, Dialect::Auto, options);
   EXPECT_EQ(loaded.reader, ProgramReader::Sinumerik);
   ASSERT_EQ(loaded.program.blocks.size(), 1u);
   expect_vec(loaded.program.blocks[0].end_mm, {1, 0, 5});

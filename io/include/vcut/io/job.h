@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "vcut/io/dialect.h"
 #include "vcut/io/tool_library.h"
 #include "vcut/kinematics/feed_planner.h"
 #include "vcut/kinematics/machine.h"
@@ -48,9 +49,9 @@ struct Job {
   std::string tools_file;  // empty: the tools are written in the job (or assumed)
   ToolLibrary tools;
   std::vector<std::string> program_files;
-  // auto (io::detect_dialect per file) | gcode | linuxcnc | fanuc | apt. APT programs define
+  // As dialect.h names them (auto: detected per file). APT programs define
   // their cutters (CUTTER/); the tool library wins for a T number it has.
-  std::string dialect = "auto";
+  Dialect dialect = Dialect::Auto;
   bool unsupported_as_warning = false;
   bool unknown_m_code_as_error = false;    // program.unsupported: error (unset: such M codes warn)
   bool block_delete = true;                // program.block_delete: on (skip '/' lines) | off

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <vcut/io/apt_reader.h>
+#include <vcut/io/dialect.h>
 #include <vcut/io/gcode_reader.h>
 #include <vcut/io/sinumerik_reader.h>
 #include <vcut/kinematics/machine.h>
@@ -16,13 +17,13 @@
 
 namespace vcut::io {
 
-// "gcode", "apt" or "sinumerik". First the extension: .apt .cl .cls .aptsource -> apt;
+// Gcode, Apt or Sinumerik. First the extension: .apt .cl .cls .aptsource -> apt;
 // .mpf .spf -> sinumerik; .ngc .nc .tap .gcode -> gcode (case-insensitive). Otherwise the
 // first meaningful lines: APT statements (GOTO/ FEDRAT/ CUTTER/ FROM/ ..., `$$` comments) ->
 // apt; SINUMERIK words (TRAORI, ORIVECT, ORIWKS, CR=, DEF ..., or `;` comments with N blocks
 // written letter-space-number, "N7 X -1320") -> sinumerik; anything else (and a file that
 // cannot be read, which its reader then reports) -> gcode.
-std::string detect_dialect(const std::string& path);
+Dialect detect_dialect(const std::string& path);
 
 // A path's extension in lower case, with its dot (".nc"; "" for none).
 std::string lower_extension(const std::string& path);
@@ -54,13 +55,11 @@ struct LoadedProgram {
   ProgramReader reader = ProgramReader::Gcode;
 };
 
-// `dialect`: auto (detect_dialect per file), gcode, linuxcnc, fanuc (the G-code reader), apt,
-// or sinumerik (the SINUMERIK reader, with the G-code options' work offsets, unsupported-word
-// mode and arc tolerance). A file with a NUL byte in its first 64 KiB is
+// `dialect`: see Dialect; SINUMERIK is read with the G-code options' work offsets,
+// unsupported-word mode and arc tolerance. A file with a NUL byte in its first 64 KiB is
 // "not a text file". Several files run in sequence with one modal state; all must be of one
 // dialect.
-LoadedProgram read_program(const std::string& path, const std::string& dialect, const ProgramOptions& options = {});
-LoadedProgram read_programs(const std::vector<std::string>& paths, const std::string& dialect,
-                            const ProgramOptions& options = {});
+LoadedProgram read_program(const std::string& path, Dialect dialect, const ProgramOptions& options = {});
+LoadedProgram read_programs(const std::vector<std::string>& paths, Dialect dialect, const ProgramOptions& options = {});
 
 }  // namespace vcut::io

@@ -30,7 +30,7 @@ struct ProgramJobOptions {
   std::string tool_table;  // a LinuxCNC tool table (.tbl) or a CAMotics one (.json); empty: none
   double default_tool_diameter_mm = 6.0;
   double resolution_mm = 0.0;  // 0: by the stock's size and the tools
-  std::string dialect = "auto";
+  io::Dialect dialect = io::Dialect::Auto;
   std::string out_dir;  // empty: out/<program name> in the current folder
 };
 
