@@ -22,7 +22,7 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
                 job.machine.c_str(), r.run.program.blocks.size(), r.run.poses, t, static_cast<int>(t / 3600),
                 static_cast<int>(std::fmod(t, 3600.0) / 60), static_cast<int>(std::fmod(t, 60.0)));
     for (const auto& e : r.events)
-      std::printf("%-7s %s at %s: %s\n", to_string(e.severity), e.kind.c_str(), r.run.program.where(e.lines).c_str(),
+      std::printf("%-7s %s at %s: %s\n", to_string(e.severity), to_string(e.kind), r.run.program.where(e.lines).c_str(),
                   e.detail.c_str());
     for (const auto& c : r.tools) {
       if (!c.has_holder)

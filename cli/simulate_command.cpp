@@ -37,8 +37,8 @@ int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base
                 r.peak_memory_mb);
     std::printf("removed %.1f mm3 of %.1f mm3\n", r.removed_volume_mm3, r.initial_volume_mm3);
     for (const auto& c : r.collisions)
-      std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", c.kind.c_str(), c.part.c_str(), c.tool,
-                  r.pose_run.program.where(c.lines).c_str(), c.depth_mm,
+      std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", pipeline::collision_kind(c.probe),
+                  pipeline::collision_part(c.probe), c.tool, r.pose_run.program.where(c.lines).c_str(), c.depth_mm,
                   r.pose_run.program.where(c.deepest_line).c_str());
     if (r.compared) {
       std::printf("max gouge %.4f mm in %zu region(s), max excess %.4f mm in %zu region(s)\n", r.max_gouge_mm,

@@ -26,6 +26,44 @@ const char* to_string(Severity severity) {
   return "note";
 }
 
+const char* to_string(CheckKind kind) {
+  switch (kind) {
+    case CheckKind::Unreachable:
+      return to_string(PoseEventKind::Unreachable);
+    case CheckKind::Singular:
+      return to_string(PoseEventKind::Singular);
+    case CheckKind::AxisLimitedSpeed:
+      return to_string(PoseEventKind::AxisLimitedSpeed);
+    case CheckKind::DensifyError:
+      return to_string(PoseEventKind::DensifyError);
+    case CheckKind::NoTool:
+      return "no_tool";
+    case CheckKind::RapidInStockBox:
+      return "rapid_in_stock_box";
+    case CheckKind::SpindleStoppedFeed:
+      return "spindle_stopped_feed";
+    case CheckKind::ShankInStockBox:
+      return "shank_in_stock_box";
+    case CheckKind::HolderInStockBox:
+      return "holder_in_stock_box";
+  }
+  return "unreachable";
+}
+
+CheckKind check_kind(PoseEventKind kind) {
+  switch (kind) {
+    case PoseEventKind::Unreachable:
+      return CheckKind::Unreachable;
+    case PoseEventKind::Singular:
+      return CheckKind::Singular;
+    case PoseEventKind::AxisLimitedSpeed:
+      return CheckKind::AxisLimitedSpeed;
+    case PoseEventKind::DensifyError:
+      return CheckKind::DensifyError;
+  }
+  return CheckKind::Unreachable;
+}
+
 namespace {
 
 Eigen::AlignedBox3d stock_bounds(const io::Job& job) {
@@ -55,7 +93,7 @@ class EventLog {
  public:
   explicit EventLog(const kinematics::Program& program) : program_(program) {}
 
-  void add(Severity severity, const std::string& kind, int block, const std::string& detail, double depth_mm,
+  void add(Severity severity, CheckKind kind, int block, const std::string& detail, double depth_mm,
            const Eigen::Vector3d& where_mm) {
     const kinematics::SourceRef& src = program_.blocks[static_cast<std::size_t>(block)].source;
     auto it = open_.find(kind);
@@ -86,8 +124,8 @@ class EventLog {
     events_.push_back(e);
     first_block_.push_back(block);
   }
-  void add_lines(Severity severity, const std::string& kind, const kinematics::SourceRange& lines,
-                 const std::string& detail, int block) {
+  void add_lines(Severity severity, CheckKind kind, const kinematics::SourceRange& lines, const std::string& detail,
+                 int block) {
     CheckEvent e;
     e.severity = severity;
     e.kind = kind;
@@ -115,7 +153,7 @@ class EventLog {
   const kinematics::Program& program_;
   std::vector<CheckEvent> events_;
   std::vector<int> first_block_;
-  std::map<std::string, Open> open_;
+  std::map<CheckKind, Open> open_;
 };
 
 std::string mm(double x) { return fmt::format("{:.3f} mm", x); }
@@ -139,7 +177,7 @@ CheckResult run_check(const io::Job& job) {
     const Severity s = e.kind == PoseEventKind::Unreachable                                         ? Severity::Error
                        : e.kind == PoseEventKind::Singular || e.kind == PoseEventKind::DensifyError ? Severity::Warning
                                                                                                     : Severity::Note;
-    log.add_lines(s, to_string(e.kind), e.lines, e.detail, block);
+    log.add_lines(s, check_kind(e.kind), e.lines, e.detail, block);
   }
 
   // The tools' cutting parts, shanks and holders against the stock's box, move by move.
@@ -160,7 +198,7 @@ CheckResult run_check(const io::Job& job) {
     const bool rapid = b.kind == kinematics::MotionKind::Rapid;
     if (b.tool == 0) {
       if (!rapid)
-        log.add(Severity::Error, "no_tool", block, "a feed move with no tool in the spindle", 0.0,
+        log.add(Severity::Error, CheckKind::NoTool, block, "a feed move with no tool in the spindle", 0.0,
                 samples[i].pose.tip_mm);
       continue;
     }
@@ -183,12 +221,12 @@ CheckResult run_check(const io::Job& job) {
       const double depth = penetration_mm(cut, box);
       if (depth > tolerance_mm) {
         if (rapid)
-          log.add(Severity::Warning, "rapid_in_stock_box", block,
+          log.add(Severity::Warning, CheckKind::RapidInStockBox, block,
                   "a rapid with the cutting part " + mm(depth) +
                       " inside the stock's box (a collision unless that material is gone)",
                   depth, m.end_mm);
         else if (b.spindle == kinematics::SpindleState::Off)
-          log.add(Severity::Error, "spindle_stopped_feed", block,
+          log.add(Severity::Error, CheckKind::SpindleStoppedFeed, block,
                   "a feed move into the stock's box (" + mm(depth) + ") with the spindle stopped", depth, m.end_mm);
       }
       probes.clear();
@@ -212,7 +250,7 @@ CheckResult run_check(const io::Job& job) {
         }
         const double d = penetration_mm(part, box);
         if (d > tolerance_mm)
-          log.add(Severity::Warning, holder ? "holder_in_stock_box" : "shank_in_stock_box", block,
+          log.add(Severity::Warning, holder ? CheckKind::HolderInStockBox : CheckKind::ShankInStockBox, block,
                   std::string(holder ? "the holder" : "the shank") + " of T" + std::to_string(b.tool) + " " + mm(d) +
                       " inside the stock's box (a collision unless that material is gone)",
                   d, p.end_mm);

@@ -74,6 +74,48 @@ removal::TriangleMesh transformed(removal::TriangleMesh mesh, const io::DesignSp
   return mesh;
 }
 
+// One record per run of consecutive blocks with the same kind of collision (a shank
+// dragging through material for a hundred moves is one event): lines as a range, the
+// deepest depth and where it was.
+std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, CutMoves& moves,
+                                               const kinematics::Program& program) {
+  std::vector<removal::Collision> sorted = found;
+  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
+  std::vector<CollisionRecord> out;
+  std::map<removal::ProbeKind, std::size_t> open;  // kind -> its latest record
+  for (const removal::Collision& c : sorted) {
+    const auto move = static_cast<std::size_t>(c.move);
+    const int block = moves.block(move);
+    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(block)];
+    const removal::ProbeKind kind = moves.probe_kind(move);
+    const auto it = open.find(kind);
+    CollisionRecord* r = nullptr;
+    if (it != open.end() && out[it->second].tool == b.tool && block <= out[it->second].last_block + 1)
+      r = &out[it->second];
+    if (r == nullptr) {
+      open[kind] = out.size();
+      r = &out.emplace_back();
+      r->probe = kind;
+      r->lines = {b.source, b.source};
+      r->tool = b.tool;
+      r->first_block = r->last_block = block;
+    }
+    if (block != r->last_block) {
+      r->last_block = block;
+      if (b.source.file == r->lines.first.file && b.source.line > r->lines.first.line) r->lines.last = b.source;
+    }
+    ++r->moves;
+    if (c.depth_mm > r->depth_mm) {
+      r->depth_mm = c.depth_mm;
+      r->where_mm = c.where_mm;
+      r->deepest_line = b.source;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
 const char* collision_kind(removal::ProbeKind probe) {
   switch (probe) {
     case removal::ProbeKind::Rapid:
@@ -98,49 +140,6 @@ const char* collision_part(removal::ProbeKind probe) {
       return "cutting part";
   }
 }
-
-// One record per run of consecutive blocks with the same kind of collision (a shank
-// dragging through material for a hundred moves is one event): lines as a range, the
-// deepest depth and where it was.
-std::vector<CollisionRecord> collision_records(const std::vector<removal::Collision>& found, CutMoves& moves,
-                                               const kinematics::Program& program) {
-  std::vector<removal::Collision> sorted = found;
-  std::sort(sorted.begin(), sorted.end(), [](const auto& a, const auto& b) { return a.move < b.move; });
-  std::vector<CollisionRecord> out;
-  std::map<std::string, std::size_t> open;  // kind -> its latest record
-  for (const removal::Collision& c : sorted) {
-    const auto move = static_cast<std::size_t>(c.move);
-    const int block = moves.block(move);
-    const kinematics::Block& b = program.blocks[static_cast<std::size_t>(block)];
-    const std::string kind = collision_kind(moves.probe_kind(move));
-    const auto it = open.find(kind);
-    CollisionRecord* r = nullptr;
-    if (it != open.end() && out[it->second].tool == b.tool && block <= out[it->second].last_block + 1)
-      r = &out[it->second];
-    if (r == nullptr) {
-      open[kind] = out.size();
-      r = &out.emplace_back();
-      r->kind = kind;
-      r->part = collision_part(moves.probe_kind(move));
-      r->lines = {b.source, b.source};
-      r->tool = b.tool;
-      r->first_block = r->last_block = block;
-    }
-    if (block != r->last_block) {
-      r->last_block = block;
-      if (b.source.file == r->lines.first.file && b.source.line > r->lines.first.line) r->lines.last = b.source;
-    }
-    ++r->moves;
-    if (c.depth_mm > r->depth_mm) {
-      r->depth_mm = c.depth_mm;
-      r->where_mm = c.where_mm;
-      r->deepest_line = b.source;
-    }
-  }
-  return out;
-}
-
-}  // namespace
 
 std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run) {
   std::vector<std::string> warnings = job.warnings;

@@ -23,7 +23,7 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
   j["events"] = ordered_json::array();
   for (const pipeline::CheckEvent& e : r.events) {
     ordered_json x{{"severity", pipeline::to_string(e.severity)},
-                   {"kind", e.kind},
+                   {"kind", pipeline::to_string(e.kind)},
                    {"line", r.run.program.where(e.lines)},
                    {"detail", e.detail}};
     x["depth_mm"] = e.has_where ? ordered_json(e.depth_mm) : ordered_json(nullptr);

@@ -78,8 +78,8 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   for (const auto& e : r.excess) j["excess"].push_back(region(e, program));
   j["collisions"] = ordered_json::array();
   for (const auto& c : r.collisions)
-    j["collisions"].push_back({{"kind", c.kind},
-                               {"part", c.part},
+    j["collisions"].push_back({{"kind", pipeline::collision_kind(c.probe)},
+                               {"part", pipeline::collision_part(c.probe)},
                                {"line", program.where(c.lines)},
                                {"deepest_line", program.where(c.deepest_line)},
                                {"tool", c.tool},

@@ -268,9 +268,9 @@ void write_report_page(const std::string& path, const std::string& template_path
   add_regions("excess", r.excess);
   for (const CollisionRecord& c : r.collisions) {
     std::ostringstream detail;
-    detail << "the " << c.part << " of T" << c.tool << " in material over " << c.moves << " move(s); deepest at "
-           << run.program.where(c.deepest_line);
-    events.push_back({{{"kind", c.kind},
+    detail << "the " << pipeline::collision_part(c.probe) << " of T" << c.tool << " in material over " << c.moves
+           << " move(s); deepest at " << run.program.where(c.deepest_line);
+    events.push_back({{{"kind", pipeline::collision_kind(c.probe)},
                        {"line", run.program.where(c.lines)},
                        {"detail", detail.str()},
                        {"depth_mm", c.depth_mm},

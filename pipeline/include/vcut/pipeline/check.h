@@ -20,10 +20,26 @@ namespace vcut::pipeline {
 enum class Severity { Error, Warning, Note };
 const char* to_string(Severity severity);
 
+// What an event found: the pose engine's findings (PoseEventKind), then the check's own.
+enum class CheckKind {
+  Unreachable,
+  Singular,
+  AxisLimitedSpeed,
+  DensifyError,
+  NoTool,
+  RapidInStockBox,
+  SpindleStoppedFeed,
+  ShankInStockBox,
+  HolderInStockBox,
+};
+// As check.json writes it: "unreachable" ... "densify_error" (PoseEventKind's names), "no_tool",
+// "rapid_in_stock_box", "spindle_stopped_feed", "shank_in_stock_box", "holder_in_stock_box".
+const char* to_string(CheckKind kind);
+CheckKind check_kind(PoseEventKind kind);
+
 struct CheckEvent {
   Severity severity = Severity::Warning;
-  std::string kind;               // unreachable | singular | axis_limited_speed | spindle_stopped_feed |
-                                  // rapid_in_stock_box | shank_in_stock_box | holder_in_stock_box | flutes_too_short
+  CheckKind kind = CheckKind::Unreachable;
   kinematics::SourceRange lines;  // the first block's line to the last's in that file
   std::string detail;
   double depth_mm = 0.0;  // how far into the stock's box (0 where it does not apply)

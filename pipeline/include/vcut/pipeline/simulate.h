@@ -43,17 +43,21 @@ struct RegionRecord {
 
 // Consecutive blocks with the same collision make one record.
 struct CollisionRecord {
-  // rapid_into_stock | shank_collision | holder_collision | spindle_stopped_cut
-  std::string kind;
-  std::string part;                    // "cutting part", "shank", "holder"
-  kinematics::SourceRange lines;       // the first block's line to the last's in that file
-  kinematics::SourceRef deepest_line;  // of the deepest point
+  removal::ProbeKind probe = removal::ProbeKind::Rapid;  // what collided: collision_kind, collision_part
+  kinematics::SourceRange lines;                         // the first block's line to the last's in that file
+  kinematics::SourceRef deepest_line;                    // of the deepest point
   int tool = 0;
   double depth_mm = 0.0;  // deepest overlap with material along the rays
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
   std::size_t moves = 0;  // moves that collided
   int first_block = -1, last_block = -1;
 };
+
+// A collision's kind as report.json names it (rapid_into_stock, shank_collision,
+// holder_collision, spindle_stopped_cut) and the part of the tool ("cutting part", "shank",
+// "holder").
+const char* collision_kind(removal::ProbeKind probe);
+const char* collision_part(removal::ProbeKind probe);
 
 // Deviation from the design measured at every dexel endpoint (exact point-to-triangle), so
 // the figures do not depend on meshing.
