@@ -108,12 +108,11 @@ cairo_surface_t* to_surface(const Image& image) {
   cairo_surface_flush(surface);
   unsigned char* data = cairo_image_surface_get_data(surface);
   const int stride = cairo_image_surface_get_stride(surface);
+  const std::uint8_t* rgb = image.rgb.data();
   for (int y = 0; y < image.height; ++y) {
     auto* row = reinterpret_cast<std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
-    for (int x = 0; x < image.width; ++x) {
-      const Rgb c = image.get(x, y);
-      row[x] = 0xff000000u | std::uint32_t{c[0]} << 16 | std::uint32_t{c[1]} << 8 | c[2];
-    }
+    for (int x = 0; x < image.width; ++x, rgb += 3)
+      row[x] = 0xff000000u | std::uint32_t{rgb[0]} << 16 | std::uint32_t{rgb[1]} << 8 | rgb[2];
   }
   cairo_surface_mark_dirty(surface);
   return surface;
@@ -124,12 +123,14 @@ Image to_image(cairo_surface_t* surface) {
   Image image(cairo_image_surface_get_width(surface), cairo_image_surface_get_height(surface));
   const unsigned char* data = cairo_image_surface_get_data(surface);
   const int stride = cairo_image_surface_get_stride(surface);
+  std::uint8_t* rgb = image.rgb.data();
   for (int y = 0; y < image.height; ++y) {
     const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::size_t>(y) * stride);
-    for (int x = 0; x < image.width; ++x)
-      image.set(x, y,
-                {static_cast<std::uint8_t>(row[x] >> 16), static_cast<std::uint8_t>(row[x] >> 8),
-                 static_cast<std::uint8_t>(row[x])});
+    for (int x = 0; x < image.width; ++x, rgb += 3) {
+      rgb[0] = static_cast<std::uint8_t>(row[x] >> 16);
+      rgb[1] = static_cast<std::uint8_t>(row[x] >> 8);
+      rgb[2] = static_cast<std::uint8_t>(row[x]);
+    }
   }
   return image;
 }

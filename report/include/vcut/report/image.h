@@ -27,8 +27,8 @@ struct Image {
   void blend(int x, int y, Rgb colour, double alpha);
 };
 
-// PNG (RGB, 8 bits, through Cairo and libpng), written atomically. Errors are
-// vcut::InputError naming `path`.
+// PNG (RGB, 8 bits, no interlace; each row filtered by the minimum-sum-of-absolute-differences
+// heuristic, zlib level 6), written atomically. Errors are vcut::InputError naming `path`.
 void write_png(const std::string& path, const Image& image);
 std::string encode_png(const Image& image);
 
