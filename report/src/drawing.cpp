@@ -268,7 +268,17 @@ std::string Drawing::svg() {
   cairo_surface_finish(surface_->surface);
   if (cairo_surface_status(surface_->surface) != CAIRO_STATUS_SUCCESS)
     throw std::runtime_error(std::string("SVG: ") + cairo_status_to_string(cairo_surface_status(surface_->surface)));
-  return surface_->svg;
+  // Cairo numbers the surfaces of the whole process ("surface97" after 96 others): the
+  // document's group is named the same every time, so that its bytes do not depend on what
+  // was drawn before. Nothing in our documents refers to that id.
+  std::string& svg = surface_->svg;
+  const std::string group = "<g id=\"surface";
+  const std::size_t at = svg.find(group);
+  if (at != std::string::npos) {
+    const std::size_t digits = at + group.size(), end = svg.find('"', digits);
+    if (end != std::string::npos && end > digits) svg.replace(digits, end - digits, "1");
+  }
+  return svg;
 }
 
 double text_width(const std::string& text, double height_px) {

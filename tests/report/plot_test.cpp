@@ -116,6 +116,14 @@ TEST(Plot, SvgAndPngPutAMarkerWhereTheFrameSays) {
   EXPECT_GT(g.y.max, 0.07);
 }
 
+// The same plot gives the same SVG bytes however much was drawn before it in the process
+// (Cairo numbers its surfaces process-wide).
+TEST(Plot, SvgBytesDoNotDependOnWhatWasDrawnBefore) {
+  const std::string first = render_svg(sample_plot());
+  for (int i = 0; i < 5; ++i) render_png(sample_plot());
+  EXPECT_EQ(render_svg(sample_plot()), first);
+}
+
 TEST(Plot, WriteIsAtomicAndNamesAnUnwritablePath) {
   const fs::path dir = fs::path(::testing::TempDir()) / "vcut_plot_write";
   fs::remove_all(dir);
