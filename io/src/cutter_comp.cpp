@@ -17,6 +17,7 @@ namespace {
 
 constexpr double kCornerRad = 0.05;  // rs274ngc's TOLERANCE_CONCAVE_CORNER
 constexpr double kTwoPi = 2.0 * M_PI;
+constexpr double kMaxMagnitude = 1e6;  // mm, the readers' bound on any position
 
 double angle(const Eigen::Vector2d& from, const Eigen::Vector2d& to) {
   return std::atan2(to.y() - from.y(), to.x() - from.x());
@@ -40,12 +41,22 @@ double sweep(const Eigen::Vector2d& s, const Eigen::Vector2d& k, int turn, const
 
 }  // namespace
 
+// The offset path can leave the bound a programmed point respects (an offset near 1e6 mm and
+// the radius beyond it): an error on the line being read, as for a programmed point.
+void Compensator::check_range(const Block& block) const {
+  for (const Eigen::Vector3d& p : {block.start_mm, block.end_mm})
+    if (!(p.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+      host_.comp_fail(1, "cutter compensation puts the tool at " + num(p.x()) + ", " + num(p.y()) + ", " + num(p.z()) +
+                             " mm, out of range (expected within +-1e6 mm)");
+}
+
 // Emits the held moves, each from where the one before ended.
 void Compensator::flush() {
   Comp& comp = comp_;
   for (Comp::Held& h : comp.held) {
     Block& block = h.block;
     if (!host_.comp_blocks().empty()) block.start_mm = host_.comp_blocks().back().end_mm;
+    check_range(block);
     if (block.kind != MotionKind::Arc && block.start_mm == block.end_mm &&
         block.start_rotary.angle_rad == block.end_rotary.angle_rad)
       continue;
@@ -115,6 +126,7 @@ void Compensator::corner(const Block& main, const Eigen::Vector2d& corner, const
     block.normal[c] = turn > 0 ? 1.0 : -1.0;
     block.turns = 1;
   }
+  check_range(block);
   host_.comp_append(block, {true, true, true}, false, Eigen::Vector2d::Zero(), 0.0);
 }
 

@@ -44,6 +44,7 @@ class Compensator {
   void move_end_and_flush(const Eigen::Vector2d& x, int column);
   // Emits the held moves, each from where the one before ended.
   void flush();
+  void check_range(const kinematics::Block& block) const;  // comp_fail beyond the readers' 1e6 mm bound
 
  private:
   // A compensated move in the plane's coordinates: the axes, the radius and side, the
