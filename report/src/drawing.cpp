@@ -10,8 +10,8 @@
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
+#include <string>
 
-#include "cairo_image.h"
 #include "vcut/io/input_error.h"
 
 namespace vcut::report {
@@ -89,15 +89,15 @@ void check(cairo_t* cr, const char* what) {
     throw std::runtime_error(std::string(what) + ": " + cairo_status_to_string(cairo_status(cr)));
 }
 
-}  // namespace
+// ---- Images as Cairo surfaces (RGB24: one 32-bit word a pixel) ----------------------------
 
-// ---- Images as Cairo surfaces (cairo_image.h) ----------------------------------------------
-
+// A cairo_write_func_t appending to the std::string `closure` points to.
 cairo_status_t append_to_string(void* closure, const unsigned char* data, unsigned int length) {
   static_cast<std::string*>(closure)->append(reinterpret_cast<const char*>(data), length);
   return CAIRO_STATUS_SUCCESS;
 }
 
+// A new surface holding the image's pixels; the caller destroys it.
 cairo_surface_t* to_surface(const Image& image) {
   cairo_surface_t* surface = cairo_image_surface_create(CAIRO_FORMAT_RGB24, image.width, image.height);
   if (cairo_surface_status(surface) != CAIRO_STATUS_SUCCESS) {
@@ -134,6 +134,8 @@ Image to_image(cairo_surface_t* surface) {
   }
   return image;
 }
+
+}  // namespace
 
 // ---- Drawing ---------------------------------------------------------------------------------
 
