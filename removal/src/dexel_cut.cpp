@@ -497,6 +497,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           // the motion it is about the box again (W1's y rays: 2 % rejected).
           const Vector3d motion = move.end_mm - move.start_mm;
           const bool use_window = std::abs(motion[a]) * 2.0 >= motion.norm();
+          // Tilted tools: the box window on every ray (on the S-piece at 0.1 mm it passed
+          // over half the rays the kernel took, none of which the move would have cut).
+          const bool tilted = sweep.tilted();
           Probe probe{i, a, 0.0, Vector3d::Zero()};
           const MoveHandover& hand = handover[off + static_cast<std::size_t>(i)];
           const RowNeighbours neighbours = row_neighbours(hand, a);
@@ -553,10 +556,13 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 // Rays already clear of the sweep's box cost a look only.
                 if (seg[0].lo_mm >= box_hi || top <= clear_below) continue;
                 const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
-                if (windowed) {
-                  // A tighter window along the ray: the section disc about the tip's path.
+                if (windowed || tilted) {
+                  // A tighter window along the ray: the section disc about the tip's path, or
+                  // for a tilted tool the box about the sweep along its axis and motion.
                   double win_lo, win_hi;
-                  if (!sweep.ray_window(a, u_mm, section, win_lo, win_hi)) continue;
+                  if (tilted ? !sweep.tilted_window(a, u_mm, w_mm, win_lo, win_hi)
+                             : !sweep.ray_window(a, u_mm, section, win_lo, win_hi))
+                    continue;
                   std::uint32_t j = 0;
                   while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
                   if (j == n) continue;

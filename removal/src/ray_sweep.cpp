@@ -205,7 +205,87 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
     method_ = Method::Upright;
   } else {
     method_ = Method::General;
+    if (flat_bottom_)
+      for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
+    prepare_tilt_box();
   }
+}
+
+void RaySweep::prepare_tilt_box() {
+  // Every instance lies in the cylinder of radius R around [0, H] along the axis a from the
+  // tip; the tip moves by delta. Directions: a; n1, the motion's part square to a; n2 = a x n1
+  // (no motion along it). Along a the sweep spans [min(0, delta.a), H + max(0, delta.a)],
+  // along n1 [-R, R + |delta_perp|], along n2 [-R, R].
+  const Vector3d& a = tool_axis_;
+  const double da = delta_.dot(a);
+  const Vector3d perp = delta_ - da * a;
+  const double along = perp.norm();
+  const Vector3d n1 = along > kTiny_mm ? Vector3d(perp / along) : Vector3d(a.unitOrthogonal());
+  const Vector3d n2 = a.cross(n1).normalized();
+  const double R = radius_mm_, H = height_mm_;
+  // A margin (mm) far above rounding and far below anything a ray resolves: the window is
+  // only a filter, the kernel decides.
+  constexpr double kMargin_mm = 1e-6;
+  const Vector3d dirs[3] = {a, n1, n2};
+  const double lo[3] = {std::min(0.0, da), -R, -R};
+  const double hi[3] = {H + std::max(0.0, da), R + along, R};
+  for (int axis = 0; axis < 3; ++axis) {
+    TiltBox& b = tilt_box_[axis];
+    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+    for (int k = 0; k < 3; ++k) {
+      // Taken along the ray (slope > 0), so that its lower bound gives the entry.
+      const double sign = dirs[k][axis] < 0.0 ? -1.0 : 1.0;
+      const Vector3d d = sign * dirs[k];
+      b.base[k] = -d.dot(p0_);
+      b.du[k] = d[a1];
+      b.dw[k] = d[a2];
+      b.lo[k] = (sign > 0.0 ? lo[k] : -hi[k]) - kMargin_mm;
+      b.hi[k] = (sign > 0.0 ? hi[k] : -lo[k]) + kMargin_mm;
+      b.flat[k] = std::abs(d[axis]) <= 1e-12;
+      b.inv_slope[k] = b.flat[k] ? 0.0 : 1.0 / d[axis];
+    }
+  }
+}
+
+void RaySweep::prepare_flat_family(int axis) {
+  FlatFamily& f = flat_[axis];
+  const Vector3d& a = tool_axis_;
+  f.he = a[axis];
+  f.hd = delta_.dot(a);
+  Vector3d e = Vector3d::Zero();
+  e[axis] = 1.0;
+  const Vector3d E = e - f.he * a, D = delta_ - f.hd * a;
+  f.EE = E.dot(E);
+  f.ED = E.dot(D);
+  f.DD = D.dot(D);
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  f.au = a[a1];
+  f.aw = a[a2];
+  f.ak = a[axis];
+  f.pu = p0_[a1];
+  f.pw = p0_[a2];
+  f.pk = p0_[axis];
+  f.Eu = E[a1];
+  f.Ew = E[a2];
+  f.Ek = E[axis];
+  f.Du = D[a1];
+  f.Dw = D[a2];
+  f.Dk = D[axis];
+  const double det = f.EE * f.DD - f.ED * f.ED;
+  f.closed_form = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
+  if (!f.closed_form) return;
+  f.inv_DD = 1.0 / f.DD;
+  f.A = det / f.DD;
+  f.inv_2A = 0.5 / f.A;
+  f.inv_2EE = 0.5 / f.EE;
+  // The h lines he s - hd t = c - hw, walked as (s, t) = k (he, -hd) + lambda (hd, he).
+  f.nn = f.he * f.he + f.hd * f.hd;
+  f.h_lines = f.nn > 1e-24;
+  f.inv_nn = f.h_lines ? 1.0 / f.nn : 0.0;
+  f.qa_h = f.EE * f.hd * f.hd - 2.0 * f.ED * f.hd * f.he + f.DD * f.he * f.he;
+  f.inv_2qa_h = f.qa_h > 0.0 ? 0.5 / f.qa_h : 0.0;
+  f.corners = std::abs(f.he) > 1e-12;
+  f.inv_he = f.corners ? 1.0 / f.he : 0.0;
 }
 
 void RaySweep::prepare_ball_family(int axis) {
@@ -564,15 +644,15 @@ bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) co
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
     case Method::General: {
+      if (flat_bottom_) {
+        bool decided = false;
+        const bool hit = tilted_flat(axis, u, w, lo, hi, decided);
+        if (decided) return hit;
+      }
       Vector3d o;
       o[axis] = 0.0;
       o[axis == 0 ? 1 : 0] = u;
       o[axis == 2 ? 1 : 2] = w;
-      if (flat_bottom_) {
-        bool decided = false;
-        const bool hit = tilted_flat(axis, o, lo, hi, decided);
-        if (decided) return hit;
-      }
       return general(axis, o, lo, hi);
     }
   }
@@ -662,8 +742,9 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   };
   // Where the line stays over the flat core of a bull-nose's underside for the whole move
   // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
+  // (A flat end mill's underside is flat anyway: no distances to work out.)
   const bool over_core =
-      cutter_.type != CutterType::VBit &&
+      cutter_.type != CutterType::VBit && !flat_bottom_ &&
       std::max(std::hypot(qx - ta * dx, qy - ta * dy), std::hypot(qx - tb * dx, qy - tb * dy)) <= core_.core_radius_mm;
   lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
   hi = p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
@@ -736,88 +817,93 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   return true;
 }
 
-bool RaySweep::tilted_flat(int axis, const Vector3d& o, double& lo, double& hi, bool& decided) const {
+bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const {
   // The point o + s e - p(t), p(t) = p0 + t delta, in the tool frame: height along the axis
   // h = hw + he s - hd t, offset from the axis W + s E - t D (all normal to the axis).
-  decided = true;
-  const Vector3d& a = tool_axis_;
-  const Vector3d w = o - p0_;
-  const double hw = w.dot(a), he = a[axis], hd = delta_.dot(a);
-  Vector3d e = Vector3d::Zero();
-  e[axis] = 1.0;
-  const Vector3d W = w - hw * a, E = e - he * a, D = delta_ - hd * a;
+  const FlatFamily& f = flat_[axis];
+  decided = f.closed_form;
+  if (!decided) return false;  // degenerate: a strip, not an ellipse
+  // o - p0 and W in the family's coordinates (u, w, along the ray).
+  const double xu = u - f.pu, xw = w - f.pw, xk = -f.pk;
+  const double hw = xu * f.au + xw * f.aw + xk * f.ak;
+  const double Wu = xu - hw * f.au, Ww = xw - hw * f.aw, Wk = xk - hw * f.ak;
+  const double he = f.he, hd = f.hd, EE = f.EE, ED = f.ED, DD = f.DD;
   const double R = radius_mm_, H = height_mm_;
-  // q(s, t) = |W + s E - t D|^2 - R^2 <= 0: an ellipse when E and D are not parallel.
-  const double EE = E.dot(E), ED = E.dot(D), DD = D.dot(D), WE = W.dot(E), WD = W.dot(D), WW = W.dot(W) - R * R;
-  const double det = EE * DD - ED * ED;
-  if (EE < 1e-12 || DD < 1e-12 || det <= 1e-9 * EE * DD) {
-    decided = false;  // degenerate: a strip, not an ellipse
-    return false;
-  }
+  // q(s, t) = |W + s E - t D|^2 - R^2 <= 0: an ellipse.
+  const double WE = Wu * f.Eu + Ww * f.Ew + Wk * f.Ek, WD = Wu * f.Du + Ww * f.Dw + Wk * f.Dk;
+  const double WW = Wu * Wu + Ww * Ww + Wk * Wk - R * R;
   auto q = [&](double s, double t) {
     return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW;
   };
   constexpr double kSlack = 1e-12;  // mm (and mm^2 for q): points on a boundary count as inside
-  auto inside_lines = [&](double s, double t) {
+  // Which of the four lines' constraints (t >= 0, t <= 1, h >= 0, h <= H) a point breaks.
+  auto broken = [&](double s, double t) {
     const double h = hw + he * s - hd * t;
-    return t >= -kSlack && t <= 1.0 + kSlack && h >= -kSlack && h <= H + kSlack;
+    return (t < -kSlack ? 1 : 0) | (t > 1.0 + kSlack ? 2 : 0) | (h < -kSlack ? 4 : 0) | (h > H + kSlack ? 8 : 0);
   };
   double s_lo = std::numeric_limits<double>::infinity(), s_hi = -s_lo;
   auto take = [&](double s) {
     s_lo = std::min(s_lo, s);
     s_hi = std::max(s_hi, s);
   };
-  // 1. The ellipse's extremes in s (where dq/dt = 0: t = (ED s + WD) / DD).
+  // 1. The ellipse's extremes in s (where dq/dt = 0: t = (ED s + WD) / DD). Where one keeps
+  // all four constraints it is the region's extreme on that side. Where it breaks some, the
+  // region's extreme lies on one of those lines (the segment from it to the ellipse's
+  // extreme would otherwise lead, inside the region, to a better point), so only the lines
+  // an extreme breaks are walked below; every point taken lies in the region.
+  int lines = 0;
   {
-    const double A = det / DD, B = 2.0 * (WE - WD * ED / DD), C = WW - WD * WD / DD;
-    const double disc = B * B - 4.0 * A * C;
+    const double B = 2.0 * (WE - WD * ED * f.inv_DD), C = WW - WD * WD * f.inv_DD;
+    const double disc = B * B - 4.0 * f.A * C;
     if (disc < 0.0) return false;  // the ellipse is empty: the line never comes within R of the axis
     const double root = std::sqrt(disc);
-    for (double s : {(-B - root) / (2.0 * A), (-B + root) / (2.0 * A)}) {
-      const double t = (ED * s + WD) / DD;
-      if (inside_lines(s, t)) take(s);
+    for (double s : {(-B - root) * f.inv_2A, (-B + root) * f.inv_2A}) {
+      const double t = (ED * s + WD) * f.inv_DD;
+      const int breaks = broken(s, t);
+      if (breaks == 0)
+        take(s);
+      else
+        lines |= breaks;
     }
   }
-  // 2. Where each line (t = 0, t = 1, h = 0, h = H) crosses the ellipse, inside the others.
-  // A line is p + lambda d in (s, t); q along it is quadratic in lambda.
-  struct Line {
-    double ps, pt, ds, dt;
-  };
-  Line lines[4];
-  int n_lines = 0;
-  lines[n_lines++] = {0.0, 0.0, 1.0, 0.0};
-  lines[n_lines++] = {0.0, 1.0, 1.0, 0.0};
-  const double nn = he * he + hd * hd;  // the h lines: he s - hd t = c - hw
-  if (nn > 1e-24) {
-    for (double c : {0.0, H}) {
-      const double k = (c - hw) / nn;
-      lines[n_lines++] = {he * k, -hd * k, hd, he};
-    }
-  } else if (hw < 0.0 || hw > H) {
-    return false;  // the height does not change along the line or the move: never within [0, H]
+  if (!f.h_lines && (hw < 0.0 || hw > H)) return false;  // the height never changes: never within [0, H]
+  if (lines == 0) {
+    lo = s_lo;
+    hi = s_hi;
+    return true;
   }
-  for (int i = 0; i < n_lines; ++i) {
-    const Line& l = lines[i];
-    const double qa = EE * l.ds * l.ds - 2.0 * ED * l.ds * l.dt + DD * l.dt * l.dt;
-    const double qb =
-        2.0 * (EE * l.ps * l.ds - ED * (l.ps * l.dt + l.pt * l.ds) + DD * l.pt * l.dt + WE * l.ds - WD * l.dt);
-    const double qc = q(l.ps, l.pt);
-    if (qa <= 0.0) continue;
+  // 2. Where each such line crosses the ellipse, inside the others: along a line
+  // (s, t) = (ps, pt) + lambda (ds, dt), q is qa lambda^2 + qb lambda + qc.
+  auto cross = [&](double ps, double pt, double ds, double dt, double qa, double qb, double inv_2qa) {
+    const double qc = q(ps, pt);
     const double disc = qb * qb - 4.0 * qa * qc;
-    if (disc < 0.0) continue;
+    if (disc < 0.0) return;
     const double root = std::sqrt(disc);
-    for (double lambda : {(-qb - root) / (2.0 * qa), (-qb + root) / (2.0 * qa)}) {
-      const double s = l.ps + lambda * l.ds, t = l.pt + lambda * l.dt;
-      if (inside_lines(s, t)) take(s);
+    for (double lambda : {(-qb - root) * inv_2qa, (-qb + root) * inv_2qa}) {
+      const double s = ps + lambda * ds, t = pt + lambda * dt;
+      if (broken(s, t) == 0) take(s);
+    }
+  };
+  // 3. The corners where a t line meets an h line, inside the ellipse.
+  auto corner = [&](double t, double c) {
+    const double s = (c - hw + hd * t) * f.inv_he;
+    if (q(s, t) <= kSlack * (1.0 + R * R)) take(s);
+  };
+  if (lines & 1) cross(0.0, 0.0, 1.0, 0.0, EE, 2.0 * WE, f.inv_2EE);         // t = 0
+  if (lines & 2) cross(0.0, 1.0, 1.0, 0.0, EE, 2.0 * (WE - ED), f.inv_2EE);  // t = 1
+  if (f.h_lines && f.qa_h > 0.0) {
+    for (int i = 0; i < 2; ++i) {
+      if (!(lines & (4 << i))) continue;
+      const double k = ((i == 0 ? 0.0 : H) - hw) * f.inv_nn;
+      const double ps = he * k, pt = -hd * k;
+      const double qb = 2.0 * (EE * ps * hd - ED * (ps * he + pt * hd) + DD * pt * he + WE * hd - WD * he);
+      cross(ps, pt, hd, he, f.qa_h, qb, f.inv_2qa_h);
     }
   }
-  // 3. The corners where a t line meets an h line, inside the ellipse.
-  if (std::abs(he) > 1e-12) {
-    for (double t : {0.0, 1.0})
-      for (double c : {0.0, H}) {
-        const double s = (c - hw + hd * t) / he;
-        if (q(s, t) <= kSlack * (1.0 + R * R)) take(s);
-      }
+  if (f.corners) {
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        if (lines & ((1 << i) | (4 << j))) corner(i == 0 ? 0.0 : 1.0, j == 0 ? 0.0 : H);
   }
   if (!(s_lo <= s_hi)) return false;
   lo = s_lo;

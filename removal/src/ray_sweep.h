@@ -89,14 +89,58 @@ class __attribute__((visibility("hidden"))) RaySweep {
     return true;
   }
 
+  // For a tilted flat, bull-nose or V-bit tool: a window [lo, hi] along the ray at (u, w)
+  // holding its meeting with the sweep (false: the ray misses), from a box around the sweep
+  // aligned with the tool axis and the motion. A ray with no material in the window is
+  // clear of the move, found with a few products instead of the closed form or the march.
+  bool tilted() const { return method_ == Method::General; }
+  bool tilted_window(int axis, double u, double w, double& lo, double& hi) const {
+    const TiltBox& b = tilt_box_[axis];
+    double s0 = -std::numeric_limits<double>::infinity(), s1 = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 3; ++k) {
+      const double v0 = b.base[k] + u * b.du[k] + w * b.dw[k];
+      if (b.flat[k]) {
+        if (v0 < b.lo[k] || v0 > b.hi[k]) return false;
+        continue;
+      }
+      // inv_slope > 0 (the box's direction taken along the ray): lo before hi.
+      s0 = std::max(s0, (b.lo[k] - v0) * b.inv_slope[k]);
+      s1 = std::min(s1, (b.hi[k] - v0) * b.inv_slope[k]);
+    }
+    lo = s0;
+    hi = s1;
+    return s0 <= s1;
+  }
+
  private:
   enum class Method { Ball, Upright, General };
+  // The box of tilted_window along one family's rays: the coordinate along direction k is
+  // base + u du + w dw + s slope, within [lo, hi] (widened by a rounding margin).
+  struct TiltBox {
+    double base[3], du[3], dw[3], inv_slope[3], lo[3], hi[3];
+    bool flat[3];
+  };
+  void prepare_tilt_box();
+  TiltBox tilt_box_[3];
   bool upright_vertical(double u, double w, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
-  bool tilted_flat(int axis, const Eigen::Vector3d& o, double& lo, double& hi, bool& decided) const;
+  bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;
+  // tilted_flat's constants for the rays of one family, worked out once per move: the
+  // ray's point o + s e in the tool frame has height h = hw + he s - hd t along the axis and
+  // offset W + s E - t D from it (E, D, he, hd the same for every ray of the family).
+  struct FlatFamily {
+    bool closed_form = false;  // false: degenerate (a strip, not an ellipse), general() decides
+    // Coordinates in the family's order (u, w, along the ray): the tool axis, the start
+    // point, E and D.
+    double au, aw, ak, pu, pw, pk, Eu, Ew, Ek, Du, Dw, Dk;
+    double he, hd, EE, ED, DD, inv_DD, A, inv_2A, inv_2EE, nn, inv_nn, qa_h, inv_2qa_h, inv_he;
+    bool h_lines, corners;
+  };
+  void prepare_flat_family(int axis);
+  FlatFamily flat_[3];
 
   // The ball method's pieces with everything that does not depend on the ray worked out per
   // ray family (no divisions left per ray).

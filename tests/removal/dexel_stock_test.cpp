@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <cstring>
 #include <limits>
@@ -184,19 +185,20 @@ TEST(DexelStock, TiltedFlatEndMillFlank) {
   EXPECT_GT(checked, 1000);
 }
 
-TEST(DexelStock, RandomTiltedFlatMovesMatchTheSweepDistance) {
-  // Flat end mills at random tilts (5..70 deg) moving in random directions (along, across
-  // and against the tool axis): every endpoint a move made lies on its swept volume's
-  // surface, and no material is left inside it, measured with TranslationSweep's distance
-  // (a golden-section search over the move, independent of the rays' closed form).
-  std::mt19937 rng(29);
+// Cutters at random tilts (5..70 deg) moving in random directions (along, across and against
+// the tool axis): every endpoint a move made lies on its swept volume's surface, and no
+// material is left inside it, measured with TranslationSweep's distance (a golden-section
+// search over the move, independent of the rays' closed form, root march and window).
+void expect_random_tilted_moves_match_the_sweep_distance(unsigned seed, int trials,
+                                                         const std::function<Cutter(double)>& cutter) {
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const double v = 0.25;
-  for (int trial = 0; trial < 8; ++trial) {
+  for (int trial = 0; trial < trials; ++trial) {
     const BoxShape box{{0, 0, -20}, {40, 30, 0}};
     DexelStock stock(box, v);
     MoveList list;
-    list.cutters.push_back(make(CutterType::Flat, 4 + 8 * unit(rng), 0, 20));
+    list.cutters.push_back(cutter(4 + 8 * unit(rng)));
     const double tilt = (5 + 65 * unit(rng)) * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
     const Eigen::Vector3d axis(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
     const Eigen::Vector3d a(8 + 24 * unit(rng), 6 + 18 * unit(rng), -10 * unit(rng));
@@ -232,6 +234,21 @@ TEST(DexelStock, RandomTiltedFlatMovesMatchTheSweepDistance) {
     }
     EXPECT_EQ(deepest, 0.0) << "trial " << trial;
   }
+}
+
+TEST(DexelStock, RandomTiltedFlatMovesMatchTheSweepDistance) {
+  expect_random_tilted_moves_match_the_sweep_distance(29, 8, [](double d) { return make(CutterType::Flat, d, 0, 20); });
+}
+
+// The same for tools that take the root march when tilted (their rays also pass the window).
+TEST(DexelStock, RandomTiltedBullNoseAndVBitMovesMatchTheSweepDistance) {
+  int n = 0;
+  expect_random_tilted_moves_match_the_sweep_distance(31, 10, [&n](double d) {
+    if (n++ % 2 == 0) return make(CutterType::BullNose, d, d / 4, 20);
+    Cutter c = make(CutterType::VBit, d, 0, 20);
+    c.tip_angle_deg = 90;
+    return c;
+  });
 }
 
 // Groove geometry read off the rays: depth from the z rays, width from the y rays at one
