@@ -201,6 +201,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
       dual_b_ = na / edge_b_.dot(na);
     }
     for (int axis = 0; axis < 3; ++axis) prepare_ball_family(axis);
+    if (!vertical_axis_) prepare_tilt_box();
   } else if (vertical_axis_) {
     method_ = Method::Upright;
   } else {

@@ -89,11 +89,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
     return true;
   }
 
-  // For a tilted flat, bull-nose or V-bit tool: a window [lo, hi] along the ray at (u, w)
+  // For a tilted tool: a window [lo, hi] along the ray at (u, w)
   // holding its meeting with the sweep (false: the ray misses), from a box around the sweep
   // aligned with the tool axis and the motion. A ray with no material in the window is
   // clear of the move, found with a few products instead of the closed form or the march.
-  bool tilted() const { return method_ == Method::General; }
+  bool tilted() const { return !vertical_axis_; }
   bool tilted_window(int axis, double u, double w, double& lo, double& hi) const {
     const TiltBox& b = tilt_box_[axis];
     double s0 = -std::numeric_limits<double>::infinity(), s1 = std::numeric_limits<double>::infinity();

@@ -240,14 +240,22 @@ TEST(DexelStock, RandomTiltedFlatMovesMatchTheSweepDistance) {
   expect_random_tilted_moves_match_the_sweep_distance(29, 8, [](double d) { return make(CutterType::Flat, d, 0, 20); });
 }
 
-// The same for tools that take the root march when tilted (their rays also pass the window).
-TEST(DexelStock, RandomTiltedBullNoseAndVBitMovesMatchTheSweepDistance) {
+// The same for the other tools (the ball's closed form, the root march of the bull-nose and
+// V-bit; the rays of all three pass the tilted window first).
+TEST(DexelStock, RandomTiltedBallBullNoseAndVBitMovesMatchTheSweepDistance) {
   int n = 0;
-  expect_random_tilted_moves_match_the_sweep_distance(31, 10, [&n](double d) {
-    if (n++ % 2 == 0) return make(CutterType::BullNose, d, d / 4, 20);
-    Cutter c = make(CutterType::VBit, d, 0, 20);
-    c.tip_angle_deg = 90;
-    return c;
+  expect_random_tilted_moves_match_the_sweep_distance(31, 12, [&n](double d) {
+    switch (n++ % 3) {
+      case 0:
+        return make(CutterType::Ball, d, d / 2, 20);
+      case 1:
+        return make(CutterType::BullNose, d, d / 4, 20);
+      default: {
+        Cutter c = make(CutterType::VBit, d, 0, 20);
+        c.tip_angle_deg = 90;
+        return c;
+      }
+    }
   });
 }
 
