@@ -53,6 +53,7 @@ bench: build
 	scripts/bench-peers $(BUILD)/cli/vcut
 	scripts/bench-features $(BUILD)/cli/vcut
 	scripts/bench-memory $(BUILD)/cli/vcut
+	scripts/bench-five-axis $(BUILD)/cli/vcut
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz $(BUILD).configure.log $(BUILD_SAN).configure.log
