@@ -260,18 +260,15 @@ void RaySweep::prepare_flat_family(int axis) {
   f.ED = E.dot(D);
   f.DD = D.dot(D);
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-  f.au = a[a1];
-  f.aw = a[a2];
-  f.ak = a[axis];
-  f.pu = p0_[a1];
-  f.pw = p0_[a2];
-  f.pk = p0_[axis];
-  f.Eu = E[a1];
-  f.Ew = E[a2];
-  f.Ek = E[axis];
-  f.Du = D[a1];
-  f.Dw = D[a2];
-  f.Dk = D[axis];
+  auto in_family_order = [&](const Vector3d& from, double* to) {
+    to[0] = from[a1];
+    to[1] = from[a2];
+    to[2] = from[axis];
+  };
+  in_family_order(a, f.a);
+  in_family_order(p0_, f.p);
+  in_family_order(E, f.E);
+  in_family_order(D, f.D);
   const double det = f.EE * f.DD - f.ED * f.ED;
   f.closed_form = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
   if (!f.closed_form) return;
@@ -825,13 +822,13 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   decided = f.closed_form;
   if (!decided) return false;  // degenerate: a strip, not an ellipse
   // o - p0 and W in the family's coordinates (u, w, along the ray).
-  const double xu = u - f.pu, xw = w - f.pw, xk = -f.pk;
-  const double hw = xu * f.au + xw * f.aw + xk * f.ak;
-  const double Wu = xu - hw * f.au, Ww = xw - hw * f.aw, Wk = xk - hw * f.ak;
+  const double xu = u - f.p[0], xw = w - f.p[1], xk = -f.p[2];
+  const double hw = xu * f.a[0] + xw * f.a[1] + xk * f.a[2];
+  const double Wu = xu - hw * f.a[0], Ww = xw - hw * f.a[1], Wk = xk - hw * f.a[2];
   const double he = f.he, hd = f.hd, EE = f.EE, ED = f.ED, DD = f.DD;
   const double R = radius_mm_, H = height_mm_;
   // q(s, t) = |W + s E - t D|^2 - R^2 <= 0: an ellipse.
-  const double WE = Wu * f.Eu + Ww * f.Ew + Wk * f.Ek, WD = Wu * f.Du + Ww * f.Dw + Wk * f.Dk;
+  const double WE = Wu * f.E[0] + Ww * f.E[1] + Wk * f.E[2], WD = Wu * f.D[0] + Ww * f.D[1] + Wk * f.D[2];
   const double WW = Wu * Wu + Ww * Ww + Wk * Wk - R * R;
   auto q = [&](double s, double t) {
     return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW;
