@@ -277,9 +277,9 @@ void RaySweep::prepare_flat_family(int axis) {
   f.inv_2A = 0.5 / f.A;
   f.inv_2EE = 0.5 / f.EE;
   // The h lines he s - hd t = c - hw, walked as (s, t) = k (he, -hd) + lambda (hd, he).
-  f.nn = f.he * f.he + f.hd * f.hd;
-  f.h_lines = f.nn > 1e-24;
-  f.inv_nn = f.h_lines ? 1.0 / f.nn : 0.0;
+  const double nn = f.he * f.he + f.hd * f.hd;
+  f.h_lines = nn > 1e-24;
+  f.inv_nn = f.h_lines ? 1.0 / nn : 0.0;
   f.qa_h = f.EE * f.hd * f.hd - 2.0 * f.ED * f.hd * f.he + f.DD * f.he * f.he;
   f.inv_2qa_h = f.qa_h > 0.0 ? 0.5 / f.qa_h : 0.0;
   f.corners = std::abs(f.he) > 1e-12;
@@ -882,11 +882,6 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
       if (broken(s, t) == 0) take(s);
     }
   };
-  // 3. The corners where a t line meets an h line, inside the ellipse.
-  auto corner = [&](double t, double c) {
-    const double s = (c - hw + hd * t) * f.inv_he;
-    if (q(s, t) <= kSlack * (1.0 + R * R)) take(s);
-  };
   if (lines & 1) cross(0.0, 0.0, 1.0, 0.0, EE, 2.0 * WE, f.inv_2EE);         // t = 0
   if (lines & 2) cross(0.0, 1.0, 1.0, 0.0, EE, 2.0 * (WE - ED), f.inv_2EE);  // t = 1
   if (f.h_lines && f.qa_h > 0.0) {
@@ -898,10 +893,14 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
       cross(ps, pt, hd, he, f.qa_h, qb, f.inv_2qa_h);
     }
   }
+  // 3. The corners where a walked line meets a line of the other kind, inside the ellipse.
   if (f.corners) {
     for (int i = 0; i < 2; ++i)
-      for (int j = 0; j < 2; ++j)
-        if (lines & ((1 << i) | (4 << j))) corner(i == 0 ? 0.0 : 1.0, j == 0 ? 0.0 : H);
+      for (int j = 0; j < 2; ++j) {
+        if (!(lines & ((1 << i) | (4 << j)))) continue;
+        const double t = i == 0 ? 0.0 : 1.0, s = ((j == 0 ? 0.0 : H) - hw + hd * t) * f.inv_he;
+        if (q(s, t) <= kSlack * (1.0 + R * R)) take(s);
+      }
   }
   if (!(s_lo <= s_hi)) return false;
   lo = s_lo;

@@ -136,7 +136,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
     // Coordinates in the family's order (u, w, along the ray): the tool axis, the start
     // point, E and D.
     double a[3], p[3], E[3], D[3];
-    double he, hd, EE, ED, DD, inv_DD, A, inv_2A, inv_2EE, nn, inv_nn, qa_h, inv_2qa_h, inv_he;
+    double he, hd, EE, ED, DD, inv_DD, A, inv_2A, inv_2EE, inv_nn, qa_h, inv_2qa_h, inv_he;
     bool h_lines, corners;
   };
   void prepare_flat_family(int axis);
