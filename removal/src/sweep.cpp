@@ -85,8 +85,8 @@ double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, doubl
   const double mid = 0.5 * (core_.z_low_mm + core_.z_high_mm), half = 0.5 * (core_.z_high_mm - core_.z_low_mm);
   auto eval = [&](double t, double& f, double& slope) {
     const Eigen::Vector3d p = y - t * d;
-    // sqrt of the sum of squares, not hypot: no overflow at mm scale, and a quarter of the
-    // time (hypot was 42 % of a tilted bull-nose's cut).
+    // sqrt of the sum of squares, not hypot: no overflow at mm scale, and hypot was 42 % of
+    // a tilted bull-nose's cut (perf, W5's first rows).
     const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
     const double dr = rho - core_.core_radius_mm;
     const double dr_slope = rho > 0.0 ? -(p.x() * d.x() + p.y() * d.y()) / rho : 0.0;
