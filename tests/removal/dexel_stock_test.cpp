@@ -14,6 +14,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <string>
 
 #include "test_meshes.h"
 #include "vcut/removal/cutter.h"
@@ -189,50 +190,55 @@ TEST(DexelStock, TiltedFlatEndMillFlank) {
 // the tool axis): every endpoint a move made lies on its swept volume's surface, and no
 // material is left inside it, measured with TranslationSweep's distance (a golden-section
 // search over the move, independent of the rays' closed form, root march and window).
+void expect_cut_matches_the_sweep_distance(const Cutter& cutter, const Move& m, const std::string& label) {
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const double v = 0.25;
+  DexelStock stock(box, v);
+  MoveList list;
+  list.cutters.push_back(cutter);
+  list.moves = {m};
+  stock.cut(list, {});
+  const TranslationSweep sweep(list.cutters[0], m);
+  double worst = 0.0;
+  int checked = 0;
+  for (const auto& e : cut_points(stock, 0)) {
+    worst = std::max(worst, std::abs(sweep.distance(e.x_mm)));
+    ++checked;
+  }
+  EXPECT_LT(worst, kEndpointTol_mm) << label;
+  EXPECT_GT(checked, 100) << label;
+  // Material left: every remaining segment's midpoint is outside the sweep (a ray the
+  // move should have cut but did not keeps a segment through it).
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};  // the box at v = 0.25
+  double deepest = 0.0;
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
+        for (const DexelSegment& seg : stock.ray(family, iu, iw)) {
+          Eigen::Vector3d x;
+          x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
+          x[a1] = (iu + 0.5) * v;
+          x[a2] = (iw + 0.5) * v;
+          deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
+        }
+  }
+  EXPECT_EQ(deepest, 0.0) << label;
+}
+
 void expect_random_tilted_moves_match_the_sweep_distance(unsigned seed, int trials,
                                                          const std::function<Cutter(double)>& cutter) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const double v = 0.25;
   for (int trial = 0; trial < trials; ++trial) {
-    const BoxShape box{{0, 0, -20}, {40, 30, 0}};
-    DexelStock stock(box, v);
-    MoveList list;
-    list.cutters.push_back(cutter(4 + 8 * unit(rng)));
+    const Cutter c = cutter(4 + 8 * unit(rng));
     const double tilt = (5 + 65 * unit(rng)) * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
     const Eigen::Vector3d axis(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
     const Eigen::Vector3d a(8 + 24 * unit(rng), 6 + 18 * unit(rng), -10 * unit(rng));
     Eigen::Vector3d step(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
     if (trial % 3 == 0) step += 2.0 * axis;  // a strong component along the tool axis
-    const Move m = line(a, a + 12.0 * step.normalized(), axis);
-    list.moves = {m};
-    stock.cut(list, {});
-    const TranslationSweep sweep(list.cutters[0], m);
-    double worst = 0.0;
-    int checked = 0;
-    for (const auto& e : cut_points(stock, 0)) {
-      worst = std::max(worst, std::abs(sweep.distance(e.x_mm)));
-      ++checked;
-    }
-    EXPECT_LT(worst, kEndpointTol_mm) << "trial " << trial;
-    EXPECT_GT(checked, 100) << "trial " << trial;
-    // Material left: every remaining segment's midpoint is outside the sweep (a ray the
-    // move should have cut but did not keeps a segment through it).
-    const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};  // the box at v = 0.25
-    double deepest = 0.0;
-    for (int family = 0; family < 3; ++family) {
-      const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
-      for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
-        for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
-          for (const DexelSegment& seg : stock.ray(family, iu, iw)) {
-            Eigen::Vector3d x;
-            x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
-            x[a1] = (iu + 0.5) * v;
-            x[a2] = (iw + 0.5) * v;
-            deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
-          }
-    }
-    EXPECT_EQ(deepest, 0.0) << "trial " << trial;
+    expect_cut_matches_the_sweep_distance(c, line(a, a + 12.0 * step.normalized(), axis),
+                                          "trial " + std::to_string(trial));
   }
 }
 
@@ -257,6 +263,27 @@ TEST(DexelStock, RandomTiltedBallBullNoseAndVBitMovesMatchTheSweepDistance) {
       }
     }
   });
+}
+
+// The tilted bull-nose at random tilts and motions, and in the configurations a kernel has to
+// treat apart: the motion square to the tool axis with the axis tilted in a coordinate plane
+// (the plane of a ray family's rays and the motion then holds the axis, and meets the flat
+// bottom in a chord), the motion along a family's rays, along the tool axis, and nearly along
+// a ray.
+TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
+  expect_random_tilted_moves_match_the_sweep_distance(
+      37, 10, [](double d) { return make(CutterType::BullNose, d, d / (3 + (static_cast<int>(d * 7) % 3)), 20); });
+  const Cutter bull = make(CutterType::BullNose, 10, 2, 20);
+  const double tilt = 25 * M_PI / 180.0;
+  const Eigen::Vector3d a_yz(0, -std::sin(tilt), std::cos(tilt)), a_xz(std::sin(tilt), 0, std::cos(tilt));
+  const Eigen::Vector3d p(12, 14, -4);
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 0, 0), a_yz), "x across a yz tilt");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(0, 12, 0), a_xz), "y across an xz tilt");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + 10 * a_yz.cross(Eigen::Vector3d::UnitX()), a_yz),
+                                        "square to the axis in the yz plane");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(0, 0, -3), a_xz), "down z");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p - 6 * a_yz, a_yz), "plunge along the axis");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
 // Groove geometry read off the rays: depth from the z rays, width from the y rays at one
