@@ -271,6 +271,12 @@ void RaySweep::prepare_flat_family(int axis) {
   in_family_order(D, f.D);
   const double det = f.EE * f.DD - f.ED * f.ED;
   f.closed_form = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
+  // Taken as exactly along the axis: the motion below the ellipse's threshold (|D| < 1e-6 mm
+  // moves the instances by less than that; the kinematic chain's rounding leaves a plunge
+  // along a tilted axis some 1e-7 mm off it), the ray within 1e-7 per mm of the axis (over
+  // the cutter's length, < 100 mm, less than 1e-5 mm). The rest of the degenerate cases go to
+  // general().
+  f.strip = f.DD < 1e-12 ? 1 : (f.EE <= 1e-14 ? 2 : 0);
   if (!f.closed_form) return;
   f.inv_DD = 1.0 / f.DD;
   f.A = det / f.DD;
@@ -815,12 +821,45 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   return true;
 }
 
+bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) const {
+  const FlatFamily& f = flat_[axis];
+  const Vector3d& a = tool_axis_;
+  const double R = radius_mm_, H = height_mm_, hd = f.hd;
+  Vector3d o;
+  o[axis] = 0.0;
+  o[axis == 0 ? 1 : 0] = u;
+  o[axis == 2 ? 1 : 2] = w;
+  if (f.strip == 1) {
+    // The tip moves along the axis by hd: the instances fill the cylinder from min(0, hd) to
+    // H + max(0, hd) along it.
+    return line_cylinder(axis, o, p0_ + std::min(0.0, hd) * a, (H + std::abs(hd)) * a, R, lo, hi);
+  }
+  // The ray along the axis (he = +-1): its offset from the axis at t is W - t D, within R for
+  // t in [t1, t2]; there it meets the instance where h = hw + he s - hd t is in [0, H].
+  const Vector3d x = o - p0_;
+  const double hw = x.dot(a), he = f.he;
+  const Vector3d W = x - hw * a, D = delta_ - hd * a;
+  const double WD = W.dot(D), disc = WD * WD - f.DD * (W.squaredNorm() - R * R);
+  if (disc < 0.0) return false;
+  const double root = std::sqrt(disc);
+  const double t1 = std::max(0.0, (WD - root) / f.DD), t2 = std::min(1.0, (WD + root) / f.DD);
+  if (t1 > t2) return false;
+  lo = std::numeric_limits<double>::infinity();
+  hi = -lo;
+  for (const double t : {t1, t2}) {
+    const double b0 = (hd * t - hw) / he, b1 = (H + hd * t - hw) / he;
+    lo = std::min({lo, b0, b1});
+    hi = std::max({hi, b0, b1});
+  }
+  return true;
+}
+
 bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const {
   // The point o + s e - p(t), p(t) = p0 + t delta, in the tool frame: height along the axis
   // h = hw + he s - hd t, offset from the axis W + s E - t D (all normal to the axis).
   const FlatFamily& f = flat_[axis];
-  decided = f.closed_form;
-  if (!decided) return false;  // degenerate: a strip, not an ellipse
+  decided = f.closed_form || f.strip != 0;
+  if (!f.closed_form) return decided && flat_strip(axis, u, w, lo, hi);  // degenerate: a strip
   // o - p0 and W in the family's coordinates (u, w, along the ray).
   const double xu = u - f.p[0], xw = w - f.p[1], xk = -f.p[2];
   const double hw = xu * f.a[0] + xw * f.a[1] + xk * f.a[2];

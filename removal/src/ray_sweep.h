@@ -132,7 +132,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // ray's point o + s e in the tool frame has height h = hw + he s - hd t along the axis and
   // offset W + s E - t D from it (E, D, he, hd the same for every ray of the family).
   struct FlatFamily {
-    bool closed_form = false;  // false: degenerate (a strip, not an ellipse), general() decides
+    bool closed_form = false;  // false: degenerate (a strip, not an ellipse): flat_strip, else general()
+    // The degenerate cases with a closed form of their own: 1, the motion along the tool axis
+    // (or none): the sweep is the cylinder, longer; 2, the ray along the tool axis: the
+    // instances it meets are an interval of t, the ends of its meeting linear in t.
+    int strip = 0;
     // Coordinates in the family's order (u, w, along the ray): the tool axis, the start
     // point, E and D.
     double a[3], p[3], E[3], D[3];
@@ -140,6 +144,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
     bool h_lines, corners;
   };
   void prepare_flat_family(int axis);
+  bool flat_strip(int axis, double u, double w, double& lo, double& hi) const;
   FlatFamily flat_[3];
 
   // The ball method's pieces with everything that does not depend on the ray worked out per

@@ -286,6 +286,24 @@ TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
   expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
+// The tilted flat end mill where its ellipse degenerates into a strip: moving along its own
+// axis (the sweep is the cylinder, longer) and with a ray family along the axis (the ray
+// meets an interval of the instances). Also a plunge along a lattice axis, where both hold.
+TEST(DexelStock, FlatEndMillAlongItsAxisAndRaysAlongTheAxis) {
+  const Cutter flat = make(CutterType::Flat, 8, 0, 20);
+  const double tilt = 25 * M_PI / 180.0;
+  const Eigen::Vector3d a_yz(0, -std::sin(tilt), std::cos(tilt));
+  const Eigen::Vector3d p(20, 14, -4);
+  expect_cut_matches_the_sweep_distance(flat, line(p, p - 7 * a_yz, a_yz), "plunge along a tilted axis");
+  expect_cut_matches_the_sweep_distance(flat, line(p - 7 * a_yz, p, a_yz), "retract along a tilted axis");
+  const Eigen::Vector3d y = Eigen::Vector3d::UnitY(), x = Eigen::Vector3d::UnitX();
+  expect_cut_matches_the_sweep_distance(flat, line({5, 5, -6}, {30, 5, -9}, y), "horizontal along y, moving in xz");
+  expect_cut_matches_the_sweep_distance(flat, line({5, 8, -14}, {5, 20, -6}, x), "horizontal along x, moving in yz");
+  expect_cut_matches_the_sweep_distance(flat, line({5, 5, -6}, {30, 11, -9}, y), "horizontal along y, moving in xyz");
+  expect_cut_matches_the_sweep_distance(flat, line({9, 8, -14}, {4, 20, -6}, x), "horizontal along x, moving in xyz");
+  expect_cut_matches_the_sweep_distance(flat, line({25, 10, -8}, {15, 10, -8}, x), "horizontal along x, plunging");
+}
+
 // Groove geometry read off the rays: depth from the z rays, width from the y rays at one
 // height (the rays cross the groove, which runs along x).
 struct Groove {
