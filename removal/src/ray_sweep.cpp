@@ -271,12 +271,20 @@ void RaySweep::prepare_flat_family(int axis) {
   in_family_order(D, f.D);
   const double det = f.EE * f.DD - f.ED * f.ED;
   f.closed_form = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
-  // Taken as exactly along the axis: the motion below the ellipse's threshold (|D| < 1e-6 mm
-  // moves the instances by less than that; the kinematic chain's rounding leaves a plunge
-  // along a tilted axis some 1e-7 mm off it), the ray within 1e-7 per mm of the axis (over
-  // the cutter's length, < 100 mm, less than 1e-5 mm). The rest of the degenerate cases go to
-  // general().
-  f.strip = f.DD < 1e-12 ? 1 : (f.EE <= 1e-14 ? 2 : 0);
+  if (!f.closed_form) {
+    // E and D along one direction u (the longer one's), the other's part square to it ignored
+    // where that moves no point of the ray's instances by more than 1e-7 mm (along the ray,
+    // measured from the point level with the tip, they lie within the cutter's length plus
+    // diameter plus the move's length).
+    const bool e_longer = f.EE >= f.DD;
+    const double longest = std::sqrt(std::max(f.EE, f.DD));
+    if (longest > 0.0) f.u = (e_longer ? E : D) / longest;
+    f.e1 = E.dot(f.u);
+    f.d1 = D.dot(f.u);
+    const double off_e = (E - f.e1 * f.u).norm(), off_d = (D - f.d1 * f.u).norm();
+    const double span_mm = height_mm_ + 2.0 * radius_mm_ + delta_.norm();
+    f.strip = off_e * span_mm <= 1e-7 && off_d <= 1e-7;
+  }
   if (!f.closed_form) return;
   f.inv_DD = 1.0 / f.DD;
   f.A = det / f.DD;
@@ -824,41 +832,65 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
 bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) const {
   const FlatFamily& f = flat_[axis];
   const Vector3d& a = tool_axis_;
-  const double R = radius_mm_, H = height_mm_, hd = f.hd;
-  Vector3d o;
-  o[axis] = 0.0;
-  o[axis == 0 ? 1 : 0] = u;
-  o[axis == 2 ? 1 : 2] = w;
-  if (f.strip == 1) {
-    // The tip moves along the axis by hd: the instances fill the cylinder from min(0, hd) to
-    // H + max(0, hd) along it.
-    return line_cylinder(axis, o, p0_ + std::min(0.0, hd) * a, (H + std::abs(hd)) * a, R, lo, hi);
+  const double R = radius_mm_, H = height_mm_;
+  // Measured from the ray's point level with the tip (s = s0 + sigma): E's part square to u,
+  // left out, then moves the points by at most its length times |sigma| < the span.
+  const double s0 = p0_[axis];
+  Vector3d x;
+  x[axis] = s0;
+  x[axis == 0 ? 1 : 0] = u;
+  x[axis == 2 ? 1 : 2] = w;
+  x -= p0_;
+  const double hw = x.dot(a);
+  const Vector3d W = x - hw * a;
+  const double Wu = W.dot(f.u), reach2 = R * R - (W.squaredNorm() - Wu * Wu);
+  if (reach2 < 0.0) return false;
+  const double reach = std::sqrt(reach2);
+  // Each strip: value = c + cs s + ct t within [lo, hi].
+  struct Strip {
+    double c, cs, ct, lo, hi;
+  };
+  const Strip strips[3] = {{Wu, f.e1, -f.d1, -reach, reach}, {0.0, 0.0, 1.0, 0.0, 1.0}, {hw, f.he, -f.hd, 0.0, H}};
+  constexpr double kSlack = 1e-9;  // mm, or per unit of t: a vertex on a boundary is inside
+  bool active[3];
+  for (int i = 0; i < 3; ++i) {
+    const Strip& k = strips[i];
+    active[i] = std::abs(k.cs) + std::abs(k.ct) > 1e-12;
+    if (!active[i] && (k.c < k.lo - kSlack || k.c > k.hi + kSlack)) return false;
   }
-  // The ray along the axis (he = +-1): its offset from the axis at t is W - t D, within R for
-  // t in [t1, t2]; there it meets the instance where h = hw + he s - hd t is in [0, H].
-  const Vector3d x = o - p0_;
-  const double hw = x.dot(a), he = f.he;
-  const Vector3d W = x - hw * a, D = delta_ - hd * a;
-  const double WD = W.dot(D), disc = WD * WD - f.DD * (W.squaredNorm() - R * R);
-  if (disc < 0.0) return false;
-  const double root = std::sqrt(disc);
-  const double t1 = std::max(0.0, (WD - root) / f.DD), t2 = std::min(1.0, (WD + root) / f.DD);
-  if (t1 > t2) return false;
+  auto inside = [&](double s, double t) {
+    for (const Strip& k : strips) {
+      const double v = k.c + k.cs * s + k.ct * t;
+      if (v < k.lo - kSlack || v > k.hi + kSlack) return false;
+    }
+    return true;
+  };
+  // The polygon's extremes in s are among its vertices: two strips' boundary lines meeting.
   lo = std::numeric_limits<double>::infinity();
   hi = -lo;
-  for (const double t : {t1, t2}) {
-    const double b0 = (hd * t - hw) / he, b1 = (H + hd * t - hw) / he;
-    lo = std::min({lo, b0, b1});
-    hi = std::max({hi, b0, b1});
-  }
-  return true;
+  for (int i = 0; i < 3; ++i)
+    for (int j = i + 1; j < 3; ++j) {
+      if (!active[i] || !active[j]) continue;
+      const Strip &p = strips[i], &q = strips[j];
+      const double det = p.cs * q.ct - p.ct * q.cs;
+      if (std::abs(det) <= 1e-12 * (std::abs(p.cs) + std::abs(p.ct)) * (std::abs(q.cs) + std::abs(q.ct))) continue;
+      for (const double bp : {p.lo, p.hi})
+        for (const double bq : {q.lo, q.hi}) {
+          const double rp = bp - p.c, rq = bq - q.c;
+          const double s = (rp * q.ct - p.ct * rq) / det, t = (p.cs * rq - rp * q.cs) / det;
+          if (!inside(s, t)) continue;
+          lo = std::min(lo, s0 + s);
+          hi = std::max(hi, s0 + s);
+        }
+    }
+  return lo <= hi;
 }
 
 bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const {
   // The point o + s e - p(t), p(t) = p0 + t delta, in the tool frame: height along the axis
   // h = hw + he s - hd t, offset from the axis W + s E - t D (all normal to the axis).
   const FlatFamily& f = flat_[axis];
-  decided = f.closed_form || f.strip != 0;
+  decided = f.closed_form || f.strip;
   if (!f.closed_form) return decided && flat_strip(axis, u, w, lo, hi);  // degenerate: a strip
   // o - p0 and W in the family's coordinates (u, w, along the ray).
   const double xu = u - f.p[0], xw = w - f.p[1], xk = -f.p[2];

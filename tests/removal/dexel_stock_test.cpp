@@ -286,9 +286,9 @@ TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
   expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
-// The tilted flat end mill where its ellipse degenerates into a strip: moving along its own
-// axis (the sweep is the cylinder, longer) and with a ray family along the axis (the ray
-// meets an interval of the instances). Also a plunge along a lattice axis, where both hold.
+// The tilted flat end mill where its ellipse degenerates into strips: moving along its own
+// axis (or off it by rounding, in a ray family's plane with the axis) and with a ray family
+// along the axis. Also a plunge along a lattice axis, where both hold.
 TEST(DexelStock, FlatEndMillAlongItsAxisAndRaysAlongTheAxis) {
   const Cutter flat = make(CutterType::Flat, 8, 0, 20);
   const double tilt = 25 * M_PI / 180.0;
@@ -296,6 +296,10 @@ TEST(DexelStock, FlatEndMillAlongItsAxisAndRaysAlongTheAxis) {
   const Eigen::Vector3d p(20, 14, -4);
   expect_cut_matches_the_sweep_distance(flat, line(p, p - 7 * a_yz, a_yz), "plunge along a tilted axis");
   expect_cut_matches_the_sweep_distance(flat, line(p - 7 * a_yz, p, a_yz), "retract along a tilted axis");
+  // As APT's six decimals leave a plunge: 3e-5 mm off the axis over 7 mm, in the plane of the
+  // tilt (for the x and z rays the offset's motion and the ray then run side by side).
+  const Eigen::Vector3d a_xz(std::sin(tilt), 0, std::cos(tilt)), off_xz(std::cos(tilt), 0, -std::sin(tilt));
+  expect_cut_matches_the_sweep_distance(flat, line(p, p - 7 * a_xz + 3e-5 * off_xz, a_xz), "plunge off the axis");
   const Eigen::Vector3d y = Eigen::Vector3d::UnitY(), x = Eigen::Vector3d::UnitX();
   expect_cut_matches_the_sweep_distance(flat, line({5, 5, -6}, {30, 5, -9}, y), "horizontal along y, moving in xz");
   expect_cut_matches_the_sweep_distance(flat, line({5, 8, -14}, {5, 20, -6}, x), "horizontal along x, moving in yz");
