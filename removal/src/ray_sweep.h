@@ -16,6 +16,8 @@
 //    distance from the tool axis is at most R (an ellipse in (s, t)) and its height along the
 //    axis lies in [0, H] (two lines), with t in [0, 1] (two more): the convex region's extent
 //    in s, from the ellipse's s-extremes, its meetings with the lines and the lines' corners.
+//    Where the ellipse degenerates (the motion along the axis, the ray along it, or both
+//    square to it along one direction), three strips: a polygon, extreme at its vertices.
 //  - Anything else (tilted bull-nose or V-bit): the sweep's signed distance along the ray is
 //    convex and 1-Lipschitz in s; its two zero crossings are found by a safe root march.
 #pragma once
