@@ -53,4 +53,4 @@ bench: build
 	scripts/bench-five-axis $(BUILD)/cli/vcut
 
 clean:
-	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz $(BUILD).configure.log $(BUILD_SAN).configure.log
+	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz .ccache $(BUILD).configure.log $(BUILD_SAN).configure.log
