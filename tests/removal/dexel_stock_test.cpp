@@ -186,10 +186,10 @@ TEST(DexelStock, TiltedFlatEndMillFlank) {
   EXPECT_GT(checked, 1000);
 }
 
-// Cutters at random tilts (5..70 deg) moving in random directions (along, across and against
-// the tool axis): every endpoint a move made lies on its swept volume's surface, and no
-// material is left inside it, measured with TranslationSweep's distance (a golden-section
-// search over the move, independent of the rays' closed form, root march and window).
+// One move through a 40 x 30 x 20 box at v = 0.25: every endpoint it made lies on its swept
+// volume's surface, and no material is left inside it, measured with TranslationSweep's
+// distance (a golden-section search over the move, independent of the rays' closed forms,
+// root march and window).
 void expect_cut_matches_the_sweep_distance(const Cutter& cutter, const Move& m, const std::string& label) {
   const BoxShape box{{0, 0, -20}, {40, 30, 0}};
   const double v = 0.25;
@@ -226,6 +226,8 @@ void expect_cut_matches_the_sweep_distance(const Cutter& cutter, const Move& m, 
   EXPECT_EQ(deepest, 0.0) << label;
 }
 
+// The same for cutters at random tilts (5..70 deg) moving in random directions (along, across
+// and against the tool axis).
 void expect_random_tilted_moves_match_the_sweep_distance(unsigned seed, int trials,
                                                          const std::function<Cutter(double)>& cutter) {
   std::mt19937 rng(seed);
