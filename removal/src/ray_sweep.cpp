@@ -93,6 +93,16 @@ bool march_to_root(F&& f, double from, double toward, double tolerance, double& 
   return false;
 }
 
+// The point at s on the ray of family `axis` through (u, w) (the other two coordinates, in
+// increasing axis order).
+Vector3d ray_point(int axis, double u, double w, double s) {
+  Vector3d x;
+  x[axis] = s;
+  x[axis == 0 ? 1 : 0] = u;
+  x[axis == 2 ? 1 : 2] = w;
+  return x;
+}
+
 void widen(double& lo, double& hi, double a, double b) {
   lo = std::min(lo, a);
   hi = std::max(hi, b);
@@ -270,8 +280,8 @@ void RaySweep::prepare_flat_family(int axis) {
   in_family_order(E, f.E);
   in_family_order(D, f.D);
   const double det = f.EE * f.DD - f.ED * f.ED;
-  f.closed_form = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
-  if (!f.closed_form) {
+  const bool ellipse = !(f.EE < 1e-12 || f.DD < 1e-12 || det <= 1e-9 * f.EE * f.DD);
+  if (!ellipse) {
     // E and D along one direction u (the longer one's), the other's part square to it ignored
     // where that moves no point of the ray's instances by more than 1e-7 mm (along the ray,
     // measured from the point level with the tip, they lie within the cutter's length plus
@@ -283,9 +293,10 @@ void RaySweep::prepare_flat_family(int axis) {
     f.d1 = D.dot(f.u);
     const double off_e = (E - f.e1 * f.u).norm(), off_d = (D - f.d1 * f.u).norm();
     const double span_mm = height_mm_ + 2.0 * radius_mm_ + delta_.norm();
-    f.strip = off_e * span_mm <= 1e-7 && off_d <= 1e-7;
+    f.kind = off_e * span_mm <= 1e-7 && off_d <= 1e-7 ? FlatFamily::Kind::Strips : FlatFamily::Kind::March;
+    return;
   }
-  if (!f.closed_form) return;
+  f.kind = FlatFamily::Kind::Ellipse;
   f.inv_DD = 1.0 / f.DD;
   f.A = det / f.DD;
   f.inv_2A = 0.5 / f.A;
@@ -661,11 +672,7 @@ bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) co
         const bool hit = tilted_flat(axis, u, w, lo, hi, decided);
         if (decided) return hit;
       }
-      Vector3d o;
-      o[axis] = 0.0;
-      o[axis == 0 ? 1 : 0] = u;
-      o[axis == 2 ? 1 : 2] = w;
-      return general(axis, o, lo, hi);
+      return general(axis, ray_point(axis, u, w, 0.0), lo, hi);
     }
   }
   return false;
@@ -836,11 +843,7 @@ bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) 
   // Measured from the ray's point level with the tip (s = s0 + sigma): E's part square to u,
   // left out, then moves the points by at most its length times |sigma| < the span.
   const double s0 = p0_[axis];
-  Vector3d x;
-  x[axis] = s0;
-  x[axis == 0 ? 1 : 0] = u;
-  x[axis == 2 ? 1 : 2] = w;
-  x -= p0_;
+  const Vector3d x = ray_point(axis, u, w, s0) - p0_;
   const double hw = x.dot(a);
   const Vector3d W = x - hw * a;
   const double Wu = W.dot(f.u), reach2 = R * R - (W.squaredNorm() - Wu * Wu);
@@ -890,8 +893,8 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   // The point o + s e - p(t), p(t) = p0 + t delta, in the tool frame: height along the axis
   // h = hw + he s - hd t, offset from the axis W + s E - t D (all normal to the axis).
   const FlatFamily& f = flat_[axis];
-  decided = f.closed_form || f.strip;
-  if (!f.closed_form) return decided && flat_strip(axis, u, w, lo, hi);  // degenerate: a strip
+  decided = f.kind != FlatFamily::Kind::March;
+  if (f.kind != FlatFamily::Kind::Ellipse) return decided && flat_strip(axis, u, w, lo, hi);
   // o - p0 and W in the family's coordinates (u, w, along the ray).
   const double xu = u - f.p[0], xw = w - f.p[1], xk = -f.p[2];
   const double hw = xu * f.a[0] + xw * f.a[1] + xk * f.a[2];

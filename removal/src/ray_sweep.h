@@ -134,12 +134,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // ray's point o + s e in the tool frame has height h = hw + he s - hd t along the axis and
   // offset W + s E - t D from it (E, D, he, hd the same for every ray of the family).
   struct FlatFamily {
-    bool closed_form = false;  // false: degenerate (no ellipse): flat_strip when `strip`, else general()
-    // The degenerate cases where E and D are parallel (or zero) to within 1e-7 mm over the
-    // move: the offset from the axis is W + (s e1 - t d1) u, and the instances' points on the
-    // ray lie in three strips of the (s, t) plane: a convex polygon.
-    bool strip = false;
-    Eigen::Vector3d u = Eigen::Vector3d::Zero();  // zero when E and D both are
+    // Ellipse: the closed form. Strips: degenerate, E and D parallel (or zero) to within 1e-7
+    // mm over the move: the offset from the axis is W + (s e1 - t d1) u, and the instances'
+    // points on the ray lie in three strips of the (s, t) plane (flat_strip). March: general().
+    enum class Kind { Ellipse, Strips, March } kind = Kind::March;
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();  // Strips: zero when E and D both are
     double e1 = 0.0, d1 = 0.0;
     // Coordinates in the family's order (u, w, along the ray): the tool axis, the start
     // point, E and D.
