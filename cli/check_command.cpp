@@ -15,6 +15,7 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
   const pipeline::CheckResult r = pipeline::run_check(job);
   for (const auto& w : job.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   for (const auto& w : r.run.program.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
+  for (const auto& w : r.notes) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   if (!json_out.empty()) report::write_check_json(json_out, job, r);
   if (!quiet) {
     const double t = r.run.feed.cycle_time_s;
@@ -34,6 +35,9 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
                     std::abs(c.holder_clearance_mm), c.holder_clearance_mm >= 0.0 ? "above" : "below",
                     r.run.program.where(c.holder_line).c_str());
     }
+    if (r.machine_checked)
+      std::printf("machine: %zu bodies, %zu pairs, %zu distance queries in %.2f s (clearance %.3g mm)\n",
+                  r.bodies.size(), r.body_pairs, r.body_queries, r.machine_seconds, job.machine_clearance_mm);
     std::printf("%s: %zu error(s), %zu warning(s) in %.2f s\n", r.errors == 0 ? "go" : "no-go", r.errors, r.warnings,
                 r.wall_time_s);
   }
@@ -43,9 +47,11 @@ int run_check(const std::string& job_file, const std::string& json_out, bool qui
 }  // namespace
 
 void add_check_command(CLI::App& app, CheckCommand& c) {
-  c.command = app.add_subcommand("check",
-                                 "Everything but the cut: parse, densify, time, reach, limits, singularities, "
-                                 "tool clearance against the stock's box; exit 1 on errors");
+  c.command = app.add_subcommand(
+      "check",
+      "Everything but the cut: parse, densify, time, reach, limits, singularities, "
+      "tool clearance against the stock's box, the machine's bodies, fixtures and holder against each "
+      "other and the stock; exit 1 on errors");
   c.command->add_option("job", c.job, "Job file (YAML)")->required();
   c.command->add_option("--json", c.json, "Also write the findings as JSON to this file");
   c.command->add_flag("--quiet,-q", c.quiet, "Print nothing but errors and warnings");

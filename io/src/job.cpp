@@ -251,16 +251,37 @@ void read_stock_key(const YamlReader& yaml, const YAML::Node& stock, const fs::p
 }
 
 // design: the part to compare with, placed by its transform.
-void read_design_key(const YamlReader& yaml, const YAML::Node& design, const fs::path& base, Job& job) {
-  yaml.only_keys(design, "design", {"file", "transform"});
+DesignSpec read_placed_file(const YamlReader& yaml, const YAML::Node& node, const fs::path& base,
+                            const std::string& where) {
+  yaml.only_keys(node, where, {"file", "transform"});
   DesignSpec d;
-  d.file = resolve(base, yaml.text(yaml.require(design, "file", "design"), "design.file"));
-  if (const YAML::Node t = design["transform"]) {
-    yaml.only_keys(t, "design.transform", {"translate", "rotate_deg"});
-    if (t["translate"]) d.translate_mm = yaml.vec3(t["translate"], "design.transform.translate");
-    if (t["rotate_deg"]) d.rotate_deg = yaml.vec3(t["rotate_deg"], "design.transform.rotate_deg");
+  const YAML::Node file = yaml.require(node, "file", where);
+  d.file = resolve(base, yaml.text(file, where + ".file"));
+  if (const YAML::Node t = node["transform"]) {
+    yaml.only_keys(t, where + ".transform", {"translate", "rotate_deg"});
+    if (t["translate"]) d.translate_mm = yaml.vec3(t["translate"], where + ".transform.translate");
+    if (t["rotate_deg"]) d.rotate_deg = yaml.vec3(t["rotate_deg"], where + ".transform.rotate_deg");
   }
-  job.design = d;
+  return d;
+}
+
+void read_design_key(const YamlReader& yaml, const YAML::Node& design, const fs::path& base, Job& job) {
+  job.design = read_placed_file(yaml, design, base, "design");
+}
+
+// fixtures: a list of placed mesh files, each an existing file.
+void read_fixtures_key(const YamlReader& yaml, const YAML::Node& fixtures, const fs::path& base, Job& job) {
+  if (!fixtures.IsSequence())
+    yaml.fail(fixtures, "fixtures", "a list like [{file: vice.stl, transform: {translate: [0, 0, -40]}}]");
+  for (std::size_t i = 0; i < fixtures.size(); ++i) {
+    const std::string where = "fixtures[" + std::to_string(i) + "]";
+    if (!fixtures[i].IsMap()) yaml.fail(fixtures[i], where, "a map with file and transform");
+    DesignSpec d = read_placed_file(yaml, fixtures[i], base, where);
+    std::error_code ec;
+    if (!fs::is_regular_file(d.file, ec))
+      yaml.fail(fixtures[i]["file"], where + ".file", "an existing mesh file (no file " + d.file + ")");
+    job.fixtures.push_back(d);
+  }
 }
 
 // engine: kind, resolution (mm) and threads.
@@ -290,8 +311,9 @@ void read_engine_key(const YamlReader& yaml, const YAML::Node& engine, const fs:
 
 // report: the output folder and the tolerances (mm).
 void read_report_key(const YamlReader& yaml, const YAML::Node& report, const fs::path& base, Job& job) {
-  yaml.only_keys(report, "report",
-                 {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "page_triangles"});
+  yaml.only_keys(
+      report, "report",
+      {"out", "gouge_tolerance", "excess_tolerance", "collision_tolerance", "machine_clearance", "page_triangles"});
   if (report["out"]) job.out_dir = resolve(base, yaml.text(report["out"], "report.out"));
   if (report["gouge_tolerance"])
     job.gouge_tolerance_mm = yaml.non_negative(report["gouge_tolerance"], "report.gouge_tolerance");
@@ -299,6 +321,8 @@ void read_report_key(const YamlReader& yaml, const YAML::Node& report, const fs:
     job.excess_tolerance_mm = yaml.non_negative(report["excess_tolerance"], "report.excess_tolerance");
   if (report["collision_tolerance"])
     job.collision_tolerance_mm = yaml.non_negative(report["collision_tolerance"], "report.collision_tolerance");
+  if (report["machine_clearance"])
+    job.machine_clearance_mm = yaml.non_negative(report["machine_clearance"], "report.machine_clearance");
   if (const YAML::Node page = report["page_triangles"]) {
     const int n = yaml.integer(page, "report.page_triangles");
     if (n < 1000)
@@ -375,7 +399,7 @@ const JobKey kJobKeys[] = {
     {"engine", JobKey::Optional, read_engine_key},   {"report", JobKey::Optional, read_report_key},
     {"densify", JobKey::Optional, read_densify_key}, {"feed", JobKey::Optional, read_feed_key},
     {"servo", JobKey::Optional, read_servo_key},     {"start", JobKey::Optional, read_start_key},
-    {"errors", JobKey::Optional, read_errors_key},
+    {"errors", JobKey::Optional, read_errors_key},   {"fixtures", JobKey::Optional, read_fixtures_key},
 };
 
 }  // namespace

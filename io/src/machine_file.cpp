@@ -300,7 +300,7 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
       if (!kv.second.IsSequence() || kv.second.size() == 0)
         yaml.fail(kv.second, where, "a list of models like [{file: models/x.stl, origin: [0, 0, 0]}]");
       for (const auto& m : kv.second) {
-        check_keys(yaml, m, where, {"file", "origin"});
+        check_keys(yaml, m, where, {"file", "origin", "name"});
         kinematics::ModelSpec model;
         const YAML::Node file = yaml.require(m, "file", where);
         model.file = resolve(base, yaml.text(file, where + ".file"));
@@ -308,6 +308,7 @@ MachineSpec read_spec(const YamlReader& yaml, const YAML::Node& root, const fs::
         if (!fs::is_regular_file(model.file, ec))
           yaml.fail(file, where + ".file", "an existing model file (no file " + model.file + ")");
         if (m["origin"]) model.origin_mm = yaml.vec3(m["origin"], where + ".origin");
+        if (m["name"]) model.name = yaml.text(m["name"], where + ".name");
         spec.models[node[0]].push_back(model);
       }
     }

@@ -8,6 +8,7 @@
 #include <map>
 
 #include "vcut/io/mesh_io.h"
+#include "vcut/pipeline/machine_check.h"
 #include "vcut/removal/move.h"
 #include "vcut/removal/stock.h"
 #include "vcut/removal/sweep.h"
@@ -46,6 +47,12 @@ const char* to_string(CheckKind kind) {
       return "shank_in_stock_box";
     case CheckKind::HolderInStockBox:
       return "holder_in_stock_box";
+    case CheckKind::MachineCollision:
+      return "machine_collision";
+    case CheckKind::MachineNearMiss:
+      return "machine_near_miss";
+    case CheckKind::BodyInStock:
+      return "body_in_stock";
   }
   return "unreachable";
 }
@@ -133,6 +140,37 @@ class EventLog {
     e.detail = detail;
     events_.push_back(e);
     first_block_.push_back(block);
+  }
+  // A contact of the machine check: a hit is an error, a near miss a warning, the tool side
+  // in the stock's initial shape a warning (the program may have cut that material away).
+  void add_contact(const MachineContact& c, const kinematics::Machine& machine) {
+    CheckEvent e;
+    const bool stock = c.b_kind == BodyKind::Stock;
+    e.kind = stock ? CheckKind::BodyInStock : c.hit ? CheckKind::MachineCollision : CheckKind::MachineNearMiss;
+    e.severity = !stock && c.hit ? Severity::Error : Severity::Warning;
+    if (stock && !c.hit) e.kind = CheckKind::MachineNearMiss;
+    e.lines = c.lines;
+    e.bodies = {c.a, c.b};
+    e.depth_mm = c.depth_mm;
+    e.clearance_mm = c.clearance_mm;
+    e.where_mm = c.where_mm;
+    e.has_where = true;
+    e.axes = c.axes;
+    e.between_poses = c.between_poses;
+    std::string at;
+    for (int k = 0; k < machine.axis_count(); ++k) {
+      const bool rotary = machine.axis(k).kind == kinematics::AxisKind::Rotary;
+      at += fmt::format("{}{}{:.3f}", k ? " " : "", machine.axis(k).letter,
+                        rotary ? c.axes[k] * 180.0 / M_PI : c.axes[k]);
+    }
+    const std::string when = c.between_poses ? " between two poses, at " : " at ";
+    if (c.hit)
+      e.detail = c.a + (stock ? " enters " : " hits ") + c.b + fmt::format(" ({:.3f} mm deep)", c.depth_mm) + when +
+                 at + (stock ? " (a collision unless that material is gone)" : "");
+    else
+      e.detail = c.a + fmt::format(" passes {:.3f} mm from ", c.clearance_mm) + c.b + when + at;
+    events_.push_back(e);
+    first_block_.push_back(c.first_block);
   }
   // In program order (stable: the order of detection within a block).
   std::vector<CheckEvent> take() {
@@ -260,6 +298,20 @@ CheckResult run_check(const io::Job& job) {
   for (const auto& b : program.blocks)
     if (b.tool != 0 && !clearance.count(b.tool)) clearance[b.tool].tool = b.tool;  // no holder given
   for (const auto& [tool, t] : clearance) result.tools.push_back(t);
+  if (has_machine_bodies(job, run)) {
+    const auto m0 = std::chrono::steady_clock::now();
+    MachineCheckOptions options;
+    options.clearance_mm = job.machine_clearance_mm;
+    options.stock = true;
+    const MachineCheck m = check_machine(job, run, options);
+    result.machine_checked = true;
+    result.bodies = m.bodies;
+    result.body_pairs = m.pairs;
+    result.body_queries = m.queries;
+    result.notes = m.warnings;
+    for (const MachineContact& c : m.contacts) log.add_contact(c, *run.machine);
+    result.machine_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - m0).count();
+  }
   result.events = log.take();
   for (const CheckEvent& e : result.events) {
     result.errors += e.severity == Severity::Error;

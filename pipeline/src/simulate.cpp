@@ -18,6 +18,7 @@
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/io/program_reader.h"
+#include "vcut/pipeline/machine_check.h"
 #include "vcut/pipeline/poses.h"
 #include "vcut/removal/compare.h"
 #include "vcut/removal/dexel_stock.h"
@@ -62,16 +63,6 @@ std::vector<kinematics::SourceSpan> merge_lines(const kinematics::Program& progr
     i = j + 1;
   }
   return out;
-}
-
-removal::TriangleMesh transformed(removal::TriangleMesh mesh, const io::DesignSpec& d) {
-  const double k = M_PI / 180.0;
-  const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.rotate_deg.z() * k, Eigen::Vector3d::UnitZ()) *
-                             Eigen::AngleAxisd(d.rotate_deg.y() * k, Eigen::Vector3d::UnitY()) *
-                             Eigen::AngleAxisd(d.rotate_deg.x() * k, Eigen::Vector3d::UnitX()))
-                                .toRotationMatrix();
-  for (auto& p : mesh.vertices_mm) p = r * p + d.translate_mm;
-  return mesh;
 }
 
 // One record per run of consecutive blocks with the same kind of collision (a shank
@@ -172,7 +163,7 @@ removal::StockShape stock_shape(const io::Job& job) {
 
 std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
   if (!job.design) return std::nullopt;
-  removal::TriangleMesh design = transformed(io::read_mesh(job.design->file), *job.design);
+  removal::TriangleMesh design = placed_mesh(io::read_mesh(job.design->file), *job.design);
   const auto& t = design.triangles;
   const auto& x = design.vertices_mm;
   if (std::all_of(t.begin(), t.end(), [&](const Eigen::Vector3i& f) {

@@ -2,6 +2,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 #include "vcut/io/atomic_file.h"
 
 namespace vcut::report {
@@ -28,6 +30,17 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
                    {"detail", e.detail}};
     x["depth_mm"] = e.has_where ? ordered_json(e.depth_mm) : ordered_json(nullptr);
     x["where"] = e.has_where ? vec(e.where_mm) : ordered_json(nullptr);
+    if (!e.bodies.empty()) {
+      x["bodies"] = e.bodies;
+      x["clearance_mm"] = e.clearance_mm;
+      x["between_poses"] = e.between_poses;
+      ordered_json axes;
+      for (int k = 0; k < r.run.machine->axis_count(); ++k) {
+        const kinematics::AxisSpec& a = r.run.machine->axis(k);
+        axes[std::string(1, a.letter)] = a.kind == kinematics::AxisKind::Rotary ? e.axes[k] * 180.0 / M_PI : e.axes[k];
+      }
+      x["axes"] = axes;  // mm, deg
+    }
     j["events"].push_back(x);
   }
   j["tools"] = ordered_json::array();
@@ -37,6 +50,12 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
          {"holder", t.has_holder},
          {"holder_clearance_mm", t.over_stock ? ordered_json(t.holder_clearance_mm) : ordered_json(nullptr)},
          {"line", r.run.program.where(t.holder_line)}});
+  if (r.machine_checked)
+    j["machine_check"] = {{"bodies", r.bodies},
+                          {"pairs", r.body_pairs},
+                          {"queries", r.body_queries},
+                          {"notes", r.notes},
+                          {"seconds", r.machine_seconds}};
   j["wall_time_s"] = r.wall_time_s;
   io::write_text_atomically(path, j.dump(1) + "\n");
 }

@@ -158,11 +158,9 @@ class MachineCli : public ::testing::Test {
   // block is its last lines, plus one errors key at the top level.
   std::string error_machine() {
     const fs::path file = dir / "ac-x0c.yaml";
-    std::ifstream in(fs::path(VCUT_SOURCE_DIR) / "examples" / "machines" / "table-table-ac.yaml");
-    std::stringstream text;
-    text << in.rdbuf();
-    EXPECT_FALSE(text.str().empty());
-    write(file, text.str() + "\nerrors: {E_X0C: 10}\n");
+    const std::string text = vcut::cli::test::bundled_machine_text("table-table-ac");
+    EXPECT_FALSE(text.empty());
+    write(file, text + "\nerrors: {E_X0C: 10}\n");
     return file.string();
   }
 

@@ -211,8 +211,7 @@ TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
 // on the nominal tip of the original program, row for row.
 TEST_F(PoseCli, CompensateRoundTrip) {
   // The bundled machine plus an errors line: its own errors block is commented out.
-  std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/table-table-ac.yaml");
-  std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+  std::string machine = vcut::cli::test::bundled_machine_text("table-table-ac");
   ASSERT_FALSE(machine.empty());
   ASSERT_EQ(machine.find("\nerrors:"), std::string::npos) << "the bundled file's errors block is live";
   machine += "\nerrors: {E_X0C: 20, E_A0C: 80, E_XX: {table: [[-300, -10], [300, 15]]}, E_C0Y: 40}\n";
@@ -286,8 +285,7 @@ TEST_F(PoseCli, CompensateRoundTrip) {
 // they land on the nominal poses. The FROM/ line is the read-back run's start row, so here
 // the rows align one to one.
 TEST_F(PoseCli, CompensateAptRoundTrip) {
-  std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/table-table-ac.yaml");
-  std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+  std::string machine = vcut::cli::test::bundled_machine_text("table-table-ac");
   machine += "\nerrors: {E_X0C: 20, E_A0C: 80, E_C0Y: 40}\n";
   write(dir / "machine.yaml", machine);
   write(dir / "tilt.apt",

@@ -40,6 +40,17 @@ inline std::filesystem::path fresh_test_dir(const std::string& prefix) {
 
 inline void write(const std::filesystem::path& path, const std::string& text) { std::ofstream(path) << text; }
 
+// A bundled machine file's text (examples/machines/NAME.yaml) to be written elsewhere: its
+// models' relative paths made absolute, so that the copy still finds them.
+inline std::string bundled_machine_text(const std::string& name) {
+  const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
+  std::ifstream in(folder + name + ".yaml");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t at = text.find("file: models/"); at != std::string::npos; at = text.find("file: models/", at + 1))
+    text.insert(at + 6, folder);
+  return text;
+}
+
 // A bad input: exit code 2 and one line "vcut: error: ..." containing `fragment`.
 inline void expect_error(const CommandResult& r, const std::string& fragment) {
   EXPECT_EQ(r.exit_code, 2) << r.output;

@@ -340,8 +340,7 @@ TEST_F(ServoCli, RingDefaultDensificationAndCoarseWarning) {
 // the part (a spiral from radius 20 to 30 over a quarter turn), its length / 600 min. The
 // machine's axes are fast enough that the block cruises all along (1e7 mm/s^2).
 TEST_F(ServoCli, FeedInterpretations) {
-  std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/table-table-ac.yaml");
-  std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+  std::string machine = vcut::cli::test::bundled_machine_text("table-table-ac");
   machine = std::regex_replace(machine, std::regex("max_acceleration: [0-9.e]+"), "max_acceleration: 1e7");
   machine = std::regex_replace(machine, std::regex("max_jerk: [0-9.e]+"), "max_jerk: 1e9");
   machine = std::regex_replace(machine, std::regex("max_velocity: [0-9.e]+"), "max_velocity: 1e6");

@@ -57,8 +57,13 @@ class Stages : public ::testing::Test {
 //   the two surfaces' vertices up to v/2 apart (surface_difference), so the largest lies in
 //   [0.030, 0.030 + 0.05] mm, on line 7.
 TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
-  std::ifstream bundled(std::string(VCUT_SOURCE_DIR) + "/examples/machines/3axis.yaml");
+  const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
+  std::ifstream bundled(folder + "3axis.yaml");
   std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+  // Its models, found from the copy.
+  for (std::size_t at = machine.find("file: models/"); at != std::string::npos;
+       at = machine.find("file: models/", at + 1))
+    machine.insert(at + 6, folder);
   ASSERT_EQ(machine.find("\nerrors:"), std::string::npos);
   write("machine.yaml", machine + "\nerrors: {E_ZZ: 30}\n");
   io::write_stl((dir / "part.stl").string(), removal::test::slotted_block(5.0, 2.0));

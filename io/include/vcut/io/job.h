@@ -23,6 +23,7 @@ namespace vcut::io {
 enum class Engine { Dexel, Vdb, Both };
 const char* engine_name(Engine engine);  // "dexel", "vdb", "both": as the job file writes it
 
+// A mesh file placed in the workpiece frame: the design part, a fixture.
 struct DesignSpec {
   std::string file;
   Eigen::Vector3d translate_mm = Eigen::Vector3d::Zero();
@@ -66,6 +67,8 @@ struct Job {
   std::map<std::string, Eigen::Vector3d> offsets_mm;
   StockSpec stock;
   std::optional<DesignSpec> design;
+  // fixtures: vices, clamps, plates, carried by the workpiece (closed meshes, workpiece frame).
+  std::vector<DesignSpec> fixtures;
   Engine engine = Engine::Dexel;
   double resolution_mm = 0.1;
   int threads = 0;  // 0 = all cores
@@ -74,6 +77,9 @@ struct Job {
   double excess_tolerance_mm = 0.1;
   std::size_t page_triangles = 2'000'000;  // report.html shows the machined mesh decimated to this
   double collision_tolerance_mm = 0.01;
+  // report.machine_clearance: machine bodies, fixtures and the tool's holder closer than this
+  // are near misses (mm); touching or closer is a collision.
+  double machine_clearance_mm = 1.0;
   double chord_tolerance_mm = 0.0;    // arcs; 0 = resolution / 20
   double step_mm = 0.0;               // densify.step: lambda; 0 = none
   double angle_step_deg = 0.0;        // densify.angle: phi; 0 = none

@@ -77,6 +77,7 @@ struct AxisSpec {
 struct ModelSpec {
   std::string file;
   Eigen::Vector3d origin_mm = Eigen::Vector3d::Zero();
+  std::string name;  // as reports name it ("spindle head"); empty: the file's stem
 };
 
 // How the control reads F in an axis block (rotary words without TCP; seed 001 §4):

@@ -31,9 +31,13 @@ enum class CheckKind {
   SpindleStoppedFeed,
   ShankInStockBox,
   HolderInStockBox,
+  MachineCollision,  // two bodies of the machine, fixture or tool touch (an error)
+  MachineNearMiss,   // closer than report.machine_clearance
+  BodyInStock,       // the tool's holder or shank, or a machine body, inside the stock's initial shape
 };
 // As check.json writes it: "unreachable" ... "densify_error" (PoseEventKind's names), "no_tool",
-// "rapid_in_stock_box", "spindle_stopped_feed", "shank_in_stock_box", "holder_in_stock_box".
+// "rapid_in_stock_box", "spindle_stopped_feed", "shank_in_stock_box", "holder_in_stock_box",
+// "machine_collision", "machine_near_miss", "body_in_stock".
 const char* to_string(CheckKind kind);
 CheckKind check_kind(PoseEventKind kind);
 
@@ -45,6 +49,12 @@ struct CheckEvent {
   double depth_mm = 0.0;  // how far into the stock's box (0 where it does not apply)
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();
   bool has_where = false;
+  // Machine checks: the two bodies, the smallest distance (near misses), the axes at the
+  // deepest or closest instant (mm, rad; machine axis order) and whether it lies between poses.
+  std::vector<std::string> bodies;
+  double clearance_mm = 0.0;
+  kinematics::AxisValues axes;
+  bool between_poses = false;
 };
 
 // Per tool: the lowest its holder comes to the stock's top face over the stock's footprint.
@@ -62,6 +72,12 @@ struct CheckResult {
   std::vector<CheckEvent> events;  // in program order of their first line
   std::vector<ToolClearance> tools;
   std::size_t errors = 0, warnings = 0;
+  // The machine check (where the machine file has models or the job fixtures).
+  bool machine_checked = false;
+  std::vector<std::string> bodies;
+  std::size_t body_pairs = 0, body_queries = 0;
+  double machine_seconds = 0.0;
+  std::vector<std::string> notes;  // a fixture in the stock at the start
   double wall_time_s = 0.0;
 };
 

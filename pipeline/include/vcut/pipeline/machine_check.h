@@ -1,0 +1,70 @@
+// The machine in the simulation (issue #25): the machine file's models on their nodes, the
+// job's fixtures and the tool's parts posed at every densified pose and checked against each
+// other with FCL (BVH of triangles, distance and collision queries): whatever rides on the
+// tool side (spindle head, holder, shank, cutter) against the frame (bed, column) and the
+// workpiece side (table, trunnion, fixtures; in `vcut check` the head against the stock's
+// initial shape, the holder and shank being checked against its box there), and
+// the workpiece side against the frame. Between two poses the axes move linearly; a pair is
+// proven apart over the whole interval by conservative advancement (the distance changes no
+// faster than the bodies' points move, a bound from the axis steps and each body's reach from
+// the rotary axes), and the interval is halved where it is not, so that a fast rotary move
+// cannot step over a collision.
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "vcut/io/job.h"
+#include "vcut/kinematics/machine.h"
+#include "vcut/kinematics/program_block.h"
+#include "vcut/pipeline/poses.h"
+#include "vcut/removal/mesh.h"
+
+namespace vcut::pipeline {
+
+// Which part of the machine a body moves with.
+enum class BodySide { Tool, Frame, Work };
+
+enum class BodyKind { Model, Fixture, Stock, Cutter, Shank, Holder };
+
+struct MachineContact {
+  std::string a, b;  // the two bodies, the tool side's first: "spindle head (Z)", "T1 holder"
+  BodyKind a_kind = BodyKind::Model, b_kind = BodyKind::Model;
+  bool hit = false;               // the bodies touch or overlap (else a near miss)
+  double depth_mm = 0.0;          // hit: the deepest penetration FCL found over the run
+  double clearance_mm = 0.0;      // near miss: the smallest distance over the run
+  kinematics::SourceRange lines;  // the first block's line to the last's
+  int first_block = -1, last_block = -1;
+  kinematics::AxisValues axes;                         // at the deepest (closest) instant (mm, rad)
+  Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();  // a point of the contact, workpiece frame
+  bool between_poses = false;                          // that instant lies between two densified poses
+};
+
+struct MachineCheckOptions {
+  double clearance_mm = 1.0;  // closer than this: a near miss
+  bool stock = false;         // the tool side's machine bodies against the stock's initial shape (`vcut check`)
+};
+
+struct MachineCheck {
+  std::vector<std::string> bodies;       // every body checked, by name
+  std::vector<MachineContact> contacts;  // in program order of their first block
+  std::size_t pairs = 0;                 // pairs of bodies checked
+  std::size_t queries = 0;               // FCL distance queries made (poses and between)
+  std::vector<std::string> warnings;     // a fixture in the stock at the start
+};
+
+// A mesh file placed in the workpiece frame by its transform (rotations about X, then Y, then
+// Z, fixed axes; then the translation).
+removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSpec& placement);
+
+// Nothing to check (no models, no fixtures, no holder): false.
+bool has_machine_bodies(const io::Job& job, const PoseRun& run);
+
+// `run` must hold its samples with axis values (not streamed). A model or fixture that is not
+// a closed mesh is a vcut::InputError naming the file.
+MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
+
+}  // namespace vcut::pipeline

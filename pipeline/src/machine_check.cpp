@@ -1,0 +1,555 @@
+#include "vcut/pipeline/machine_check.h"
+
+#include <fcl/fcl.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <map>
+#include <memory>
+#include <utility>
+
+#include "vcut/io/input_error.h"
+#include "vcut/io/mesh_io.h"
+#include "vcut/kinematics/forward_kinematics.h"
+#include "vcut/removal/cutter.h"
+
+namespace vcut::pipeline {
+
+namespace {
+
+using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
+using kinematics::AxisValues;
+
+// A body: a closed triangle mesh in its own coordinates, hung on a node. `local` takes body
+// coordinates to the node's coordinates, which coincide with the frame F at all-zero axes.
+struct Body {
+  std::string name;
+  BodySide side = BodySide::Frame;
+  BodyKind kind = BodyKind::Model;
+  char node = 'F';
+  int tool = 0;  // tool parts: the T number they belong to
+  Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+  removal::TriangleMesh mesh;
+  std::shared_ptr<Bvh> bvh;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // bounding sphere, body coordinates
+  double radius_mm = 0.0;
+  Eigen::AlignedBox3d box;  // body coordinates
+};
+
+void finish(Body& b) {
+  const auto& v = b.mesh.vertices_mm;
+  Eigen::AlignedBox3d box;
+  for (const Eigen::Vector3d& p : v) box.extend(p);
+  b.box = box;
+  b.center = box.center();
+  for (const Eigen::Vector3d& p : v) b.radius_mm = std::max(b.radius_mm, (p - b.center).norm());
+  std::vector<fcl::Vector3d> points(v.begin(), v.end());
+  std::vector<fcl::Triangle> triangles;
+  triangles.reserve(b.mesh.triangles.size());
+  for (const Eigen::Vector3i& t : b.mesh.triangles)
+    triangles.emplace_back(static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]),
+                           static_cast<std::size_t>(t[2]));
+  b.bvh = std::make_shared<Bvh>();
+  b.bvh->beginModel();
+  b.bvh->addSubModel(points, triangles);
+  b.bvh->endModel();
+}
+
+// A solid of revolution about z: the profile (radius, z) from the bottom pole to the top pole,
+// radii > 0 in between, each ring a polygon of n sides circumscribing its circle (so that the
+// mesh holds the round body).
+removal::TriangleMesh revolved(const std::vector<std::pair<double, double>>& profile, int n = 48) {
+  removal::TriangleMesh m;
+  const double grow = 1.0 / std::cos(M_PI / n);
+  std::vector<int> first;  // first vertex of each profile point (a pole: one vertex)
+  for (const auto& [r, z] : profile) {
+    first.push_back(static_cast<int>(m.vertices_mm.size()));
+    if (r <= 0.0) {
+      m.vertices_mm.emplace_back(0.0, 0.0, z);
+      continue;
+    }
+    for (int k = 0; k < n; ++k) {
+      const double a = 2.0 * M_PI * k / n;
+      m.vertices_mm.emplace_back(r * grow * std::cos(a), r * grow * std::sin(a), z);
+    }
+  }
+  for (std::size_t j = 0; j + 1 < profile.size(); ++j) {
+    const bool pole0 = profile[j].first <= 0.0, pole1 = profile[j + 1].first <= 0.0;
+    const int a = first[j], b = first[j + 1];
+    for (int k = 0; k < n; ++k) {
+      const int k1 = (k + 1) % n;
+      if (pole0 && pole1) break;
+      if (pole0)
+        m.triangles.emplace_back(a, b + k1, b + k);
+      else if (pole1)
+        m.triangles.emplace_back(a + k, a + k1, b);
+      else {
+        m.triangles.emplace_back(a + k, a + k1, b + k1);
+        m.triangles.emplace_back(a + k, b + k1, b + k);
+      }
+    }
+  }
+  return m;
+}
+
+removal::TriangleMesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  removal::TriangleMesh m;
+  for (int i = 0; i < 8; ++i)
+    m.vertices_mm.emplace_back(i & 1 ? hi.x() : lo.x(), i & 2 ? hi.y() : lo.y(), i & 4 ? hi.z() : lo.z());
+  const int f[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                        {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& t : f) m.triangles.emplace_back(t[0], t[1], t[2]);
+  return m;
+}
+
+// The stock's initial shape as a mesh (workpiece frame).
+removal::TriangleMesh stock_mesh(const io::Job& job) {
+  switch (job.stock.kind) {
+    case io::StockSpec::Kind::Box:
+      return box_mesh(job.stock.box.min_mm, job.stock.box.max_mm);
+    case io::StockSpec::Kind::Cylinder: {
+      const removal::CylinderShape& c = job.stock.cylinder;
+      removal::TriangleMesh m =
+          revolved({{0.0, 0.0}, {c.radius_mm, 0.0}, {c.radius_mm, c.height_mm}, {0.0, c.height_mm}}, 96);
+      const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), c.axis);
+      for (Eigen::Vector3d& p : m.vertices_mm) p = c.base_center_mm + turn * p;
+      return m;
+    }
+    case io::StockSpec::Kind::Mesh:
+      break;
+  }
+  return io::read_mesh(job.stock.mesh_file);
+}
+
+removal::TriangleMesh closed_mesh(const std::string& file, const std::string& what) {
+  removal::TriangleMesh m = io::read_mesh(file);
+  if (m.triangles.empty()) throw InputError(file, 0, 0, what + ": expected a mesh with triangles");
+  if (!removal::is_closed(m))
+    throw InputError(file, 0, 0,
+                     what + ": not a closed mesh (expected a solid: every edge shared by exactly two triangles)");
+  return m;
+}
+
+std::string stem(const std::string& file) { return std::filesystem::path(file).stem().string(); }
+
+// The tool's parts in tool coordinates (tip at the origin, +z toward the spindle): the
+// cutting part as steps that hold its profile, the shank, the holder.
+void add_tool_parts(std::vector<Body>& bodies, int number, const removal::Cutter& c, const Eigen::Isometry3d& local) {
+  auto add = [&](BodyKind kind, const std::string& part, removal::TriangleMesh mesh) {
+    Body b;
+    b.name = "T" + std::to_string(number) + " " + part;
+    b.side = BodySide::Tool;
+    b.kind = kind;
+    b.node = 'T';
+    b.tool = number;
+    b.local = local;
+    b.mesh = std::move(mesh);
+    finish(b);
+    bodies.push_back(std::move(b));
+  };
+  if (c.flute_length_mm > 0.0) {
+    constexpr int kSteps = 12;
+    std::vector<std::pair<double, double>> profile = {{0.0, 0.0}};
+    for (int j = 1; j <= kSteps; ++j) {
+      const double z0 = c.flute_length_mm * (j - 1) / kSteps, z1 = c.flute_length_mm * j / kSteps;
+      // Each profile rises with height: the step's radius is the one at its top.
+      const double r = std::max(removal::section_radius(c, z1), 1e-3);
+      profile.emplace_back(r, z0);
+      profile.emplace_back(r, z1);
+    }
+    profile.emplace_back(0.0, c.flute_length_mm);
+    add(BodyKind::Cutter, "cutter", revolved(profile));
+  }
+  const double shank_diameter_mm = c.shank_diameter_mm > 0.0 ? c.shank_diameter_mm : c.diameter_mm;
+  if (c.length_mm - c.flute_length_mm > 1e-9 && shank_diameter_mm > 0.0) {
+    const double r = 0.5 * shank_diameter_mm;
+    add(BodyKind::Shank, "shank",
+        revolved({{0.0, c.flute_length_mm}, {r, c.flute_length_mm}, {r, c.length_mm}, {0.0, c.length_mm}}));
+  }
+  if (c.holder_diameter_mm > 0.0 && c.holder_length_mm > 0.0) {
+    const double r = 0.5 * c.holder_diameter_mm, z0 = std::max(c.length_mm, c.flute_length_mm);
+    const double z1 = z0 + c.holder_length_mm;
+    add(BodyKind::Holder, "holder", revolved({{0.0, z0}, {r, z0}, {r, z1}, {0.0, z1}}));
+  }
+}
+
+// A point inside a closed mesh: the parity of a ray's crossings (a direction no bundled
+// model has faces or edges along).
+bool inside(const removal::TriangleMesh& m, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = Eigen::Vector3d(0.5773, 0.5774, 0.5775).normalized();
+  int crossings = 0;
+  for (const Eigen::Vector3i& t : m.triangles) {
+    const Eigen::Vector3d& a = m.vertices_mm[static_cast<std::size_t>(t[0])];
+    const Eigen::Vector3d e1 = m.vertices_mm[static_cast<std::size_t>(t[1])] - a;
+    const Eigen::Vector3d e2 = m.vertices_mm[static_cast<std::size_t>(t[2])] - a;
+    const Eigen::Vector3d h = d.cross(e2);
+    const double det = e1.dot(h);
+    if (std::abs(det) < 1e-12) continue;
+    const Eigen::Vector3d s = p - a;
+    const double u = s.dot(h) / det;
+    if (u < 0.0 || u > 1.0) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = d.dot(q) / det;
+    if (v < 0.0 || u + v > 1.0) continue;
+    if (e2.dot(q) / det > 0.0) ++crossings;
+  }
+  return crossings % 2 == 1;
+}
+
+Eigen::AlignedBox3d framed_box(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& pose) {
+  Eigen::AlignedBox3d out;
+  for (int i = 0; i < 8; ++i) out.extend(pose * box.corner(static_cast<Eigen::AlignedBox3d::CornerType>(i)));
+  return out;
+}
+
+double box_distance_mm(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b) {
+  const Eigen::Vector3d gap = (a.min() - b.max()).cwiseMax(b.min() - a.max()).cwiseMax(0.0);
+  return gap.norm();
+}
+
+// Node frames at one set of axis values: node coordinates (F at all-zero axes) -> F.
+struct Frames {
+  std::map<char, Eigen::Isometry3d> node;
+};
+
+Frames frames_at(const kinematics::Machine& m, const AxisValues& q) {
+  Frames f;
+  for (const kinematics::NodePose& n : kinematics::node_poses(m, q)) {
+    Eigen::Isometry3d pose = n.pose;
+    if (n.node == 'W') pose.translation() -= pose.linear() * m.spec().workpiece_origin_mm;
+    if (n.node == 'T') pose.translation() -= pose.linear() * m.spec().gauge_point_mm;
+    f.node[n.node] = pose;
+  }
+  f.node['F'] = Eigen::Isometry3d::Identity();
+  return f;
+}
+
+struct Eval {
+  double distance_mm = std::numeric_limits<double>::infinity();  // exact, or a lower bound when !exact
+  bool exact = false;
+  bool hit = false;
+  double depth_mm = 0.0;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  // frame F
+};
+
+struct Finding {
+  int pair = 0;
+  std::size_t sample = 0;  // the pose, or the end of the interval it lies in
+  int block = -1;
+  Eval eval;
+  AxisValues q;
+  bool between = false;
+};
+
+class Checker {
+ public:
+  Checker(const kinematics::Machine& machine, const PoseRun& run, std::vector<Body>& bodies, double clearance_mm)
+      : machine_(machine), run_(run), bodies_(bodies), clearance_mm_(clearance_mm) {
+    for (std::size_t i = 0; i < bodies_.size(); ++i) chain_.push_back(chain_of(bodies_[i].node));
+  }
+
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<Finding> findings;
+  std::size_t queries = 0;
+
+  void run() {
+    const auto& samples = run_.densified.samples;
+    std::vector<Eval> previous(pairs.size());
+    std::vector<int> previous_tool(pairs.size(), -1);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      const int block = samples[i].block;
+      const int tool = block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0;
+      const AxisValues& q = samples[i].axes;
+      const Frames frames = frames_at(machine_, q);
+      for (std::size_t p = 0; p < pairs.size(); ++p) {
+        const Body& a = bodies_[static_cast<std::size_t>(pairs[p].first)];
+        if (a.tool != 0 && a.tool != tool) {
+          previous_tool[p] = -1;
+          continue;
+        }
+        Eval e = evaluate(pairs[p], frames);
+        // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
+        if (previous_tool[p] < 0 && !e.hit && e.exact) contained(pairs[p], frames, e);
+        if (e.distance_mm < clearance_mm_ || e.hit) findings.push_back({static_cast<int>(p), i, block, e, q, false});
+        if (previous_tool[p] >= 0 && i > 0)
+          between(static_cast<int>(p), i, block, samples[i - 1].axes, q, previous[p], e, 0);
+        previous[p] = e;
+        previous_tool[p] = tool;
+      }
+    }
+  }
+
+ private:
+  std::vector<int> chain_of(char node) const {
+    for (const auto* chain : {&machine_.workpiece_chain(), &machine_.tool_chain()}) {
+      if (node == (chain == &machine_.tool_chain() ? 'T' : 'W')) return *chain;
+      std::vector<int> prefix;
+      for (int k : *chain) {
+        prefix.push_back(k);
+        if (machine_.axis(k).letter == node) return prefix;
+      }
+    }
+    return {};
+  }
+
+  Eigen::Isometry3d pose_of(const Body& b, const Frames& f) const { return f.node.at(b.node) * b.local; }
+
+  Eval evaluate(const std::pair<int, int>& pair, const Frames& f) {
+    const Body& a = bodies_[static_cast<std::size_t>(pair.first)];
+    const Body& b = bodies_[static_cast<std::size_t>(pair.second)];
+    const Eigen::Isometry3d ta = pose_of(a, f), tb = pose_of(b, f);
+    Eval e;
+    // A lower bound first: the distance between the bodies' boxes, each the frame-aligned box
+    // of its own box's corners where it stands.
+    const double apart = box_distance_mm(framed_box(a.box, ta), framed_box(b.box, tb));
+    if (apart > clearance_mm_) {
+      e.distance_mm = apart;
+      return e;
+    }
+    ++queries;
+    fcl::DistanceRequestd request(true);
+    fcl::DistanceResultd result;
+    fcl::distance(a.bvh.get(), fcl::Transform3d(ta.matrix()), b.bvh.get(), fcl::Transform3d(tb.matrix()), request,
+                  result);
+    e.exact = true;
+    e.distance_mm = std::max(0.0, result.min_distance);
+    e.point = 0.5 * (result.nearest_points[0] + result.nearest_points[1]);
+    if (result.min_distance > 0.0) return e;
+    e.hit = true;
+    fcl::CollisionRequestd creq(64, true);
+    fcl::CollisionResultd cres;
+    fcl::collide(a.bvh.get(), fcl::Transform3d(ta.matrix()), b.bvh.get(), fcl::Transform3d(tb.matrix()), creq, cres);
+    for (std::size_t k = 0; k < cres.numContacts(); ++k) {
+      const fcl::Contactd& c = cres.getContact(k);
+      if (k == 0 || c.penetration_depth > e.depth_mm) {
+        e.depth_mm = c.penetration_depth;
+        e.point = c.pos;
+      }
+    }
+    return e;
+  }
+
+  void contained(const std::pair<int, int>& pair, const Frames& f, Eval& e) const {
+    const Body& a = bodies_[static_cast<std::size_t>(pair.first)];
+    const Body& b = bodies_[static_cast<std::size_t>(pair.second)];
+    const Eigen::Isometry3d ta = pose_of(a, f), tb = pose_of(b, f);
+    const Eigen::Vector3d pa = ta * a.mesh.vertices_mm.front(), pb = tb * b.mesh.vertices_mm.front();
+    if (inside(b.mesh, tb.inverse() * pa) || inside(a.mesh, ta.inverse() * pb)) {
+      e.hit = true;
+      e.depth_mm = e.distance_mm;  // at least as deep as the faces are apart
+      e.distance_mm = 0.0;
+      e.point = inside(b.mesh, tb.inverse() * pa) ? pa : pb;
+    }
+  }
+
+  // How far any point of a body can move while the axes go from q0 to q1 (linearly): each
+  // axis of its chain, from the outermost in, moves it by its step (linear) or by its step
+  // times the body's reach from the axis line (rotary), the reach grown by what the outer
+  // axes move it.
+  double motion_bound_mm(int body, const Frames& f0, const AxisValues& q0, const AxisValues& q1) const {
+    const Body& b = bodies_[static_cast<std::size_t>(body)];
+    const std::vector<int>& chain = chain_[static_cast<std::size_t>(body)];
+    if (chain.empty()) return 0.0;
+    const Eigen::Vector3d c = pose_of(b, f0) * b.center;
+    double moved = 0.0;
+    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+      const int k = *it;
+      const double step = std::abs(q1[k] - q0[k]);
+      const kinematics::AxisSpec& axis = machine_.axis(k);
+      if (axis.kind == kinematics::AxisKind::Linear) {
+        moved += step;
+        continue;
+      }
+      const Eigen::Isometry3d& pose = f0.node.at(axis.letter);
+      const Eigen::Vector3d point = pose * axis.center_mm, dir = (pose.linear() * axis.direction).normalized();
+      const Eigen::Vector3d r = c - point;
+      const double reach = (r - r.dot(dir) * dir).norm() + b.radius_mm + moved;
+      moved += reach * step;
+    }
+    return moved;
+  }
+
+  // Conservative advancement over the interval (q0, q1) of sample `sample`: halved until the
+  // pair is proven apart by more than the clearance, or met.
+  void between(int p, std::size_t sample, int block, const AxisValues& q0, const AxisValues& q1, const Eval& e0,
+               const Eval& e1, int depth) {
+    if (e0.hit || e1.hit) return;
+    const Frames f0 = frames_at(machine_, q0);
+    const double reach = motion_bound_mm(pairs[static_cast<std::size_t>(p)].first, f0, q0, q1) +
+                         motion_bound_mm(pairs[static_cast<std::size_t>(p)].second, f0, q0, q1);
+    const double low = 0.5 * (e0.distance_mm + e1.distance_mm - reach);
+    if (low >= clearance_mm_) return;
+    if (low > 0.0 && (e0.distance_mm < clearance_mm_ || e1.distance_mm < clearance_mm_)) return;
+    if (reach < kFinestMm || depth > 30) return;
+    const AxisValues qm = 0.5 * (q0 + q1);
+    const Eval em = evaluate(pairs[static_cast<std::size_t>(p)], frames_at(machine_, qm));
+    if (em.distance_mm < clearance_mm_ || em.hit) findings.push_back({p, sample, block, em, qm, true});
+    between(p, sample, block, q0, qm, e0, em, depth + 1);
+    between(p, sample, block, qm, q1, em, e1, depth + 1);
+  }
+
+  static constexpr double kFinestMm = 0.01;
+  const kinematics::Machine& machine_;
+  const PoseRun& run_;
+  std::vector<Body>& bodies_;
+  double clearance_mm_;
+  std::vector<std::vector<int>> chain_;
+};
+
+bool checked_pair(const Body& a, const Body& b, bool stock) {
+  if (a.side == BodySide::Tool && b.side != BodySide::Tool) {
+    // The tool's own parts meet the stock in the cut (and `check`'s box test); its machine
+    // bodies (spindle housing, head) must never.
+    if (b.kind == BodyKind::Stock) return stock && a.kind == BodyKind::Model;
+    return true;
+  }
+  return a.side == BodySide::Work && b.side == BodySide::Frame && a.kind != BodyKind::Stock;
+}
+
+std::string model_name(const kinematics::ModelSpec& m, char node) {
+  const std::string base = m.name.empty() ? stem(m.file) : m.name;
+  return node == 'F' ? base + " (frame)" : base + " (" + std::string(1, node) + ")";
+}
+
+}  // namespace
+
+removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSpec& d) {
+  const double k = M_PI / 180.0;
+  const Eigen::Matrix3d r = (Eigen::AngleAxisd(d.rotate_deg.z() * k, Eigen::Vector3d::UnitZ()) *
+                             Eigen::AngleAxisd(d.rotate_deg.y() * k, Eigen::Vector3d::UnitY()) *
+                             Eigen::AngleAxisd(d.rotate_deg.x() * k, Eigen::Vector3d::UnitX()))
+                                .toRotationMatrix();
+  for (auto& p : mesh.vertices_mm) p = r * p + d.translate_mm;
+  return mesh;
+}
+
+bool has_machine_bodies(const io::Job& job, const PoseRun& run) {
+  return run.machine && (!run.machine->spec().models.empty() || !job.fixtures.empty());
+}
+
+MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options) {
+  MachineCheck out;
+  if (!run.machine) return out;
+  const kinematics::Machine& machine = *run.machine;
+  const kinematics::MachineSpec& spec = machine.spec();
+  std::vector<Body> bodies;
+  auto side_of = [&](char node) {
+    if (node == 'T') return BodySide::Tool;
+    if (node == 'W') return BodySide::Work;
+    if (node == 'F') return BodySide::Frame;
+    const int axis = machine.axis_index(node);
+    const auto& tool = machine.tool_chain();
+    return std::find(tool.begin(), tool.end(), axis) != tool.end() ? BodySide::Tool : BodySide::Work;
+  };
+  for (const auto& [node, models] : spec.models)
+    for (const kinematics::ModelSpec& m : models) {
+      Body b;
+      b.name = model_name(m, node);
+      b.side = side_of(node);
+      b.node = node;
+      b.local = Eigen::Translation3d(m.origin_mm);
+      b.mesh = closed_mesh(m.file, "machine model on " + std::string(1, node));
+      finish(b);
+      bodies.push_back(std::move(b));
+    }
+  const Eigen::Isometry3d on_workpiece(Eigen::Translation3d(spec.workpiece_origin_mm));
+  for (const io::DesignSpec& f : job.fixtures) {
+    Body b;
+    b.name = "fixture " + stem(f.file);
+    b.side = BodySide::Work;
+    b.kind = BodyKind::Fixture;
+    b.node = 'W';
+    b.local = on_workpiece;
+    b.mesh = placed_mesh(closed_mesh(f.file, "fixture"), f);
+    finish(b);
+    bodies.push_back(std::move(b));
+  }
+  // The stock's shape (a fixture in it at the start is a warning; `check` also checks the tool side against it).
+  {
+    Body b;
+    b.name = "the stock";
+    b.side = BodySide::Work;
+    b.kind = BodyKind::Stock;
+    b.node = 'W';
+    b.local = on_workpiece;
+    b.mesh = stock_mesh(job);
+    finish(b);
+    for (const Body& f : bodies) {
+      if (f.kind != BodyKind::Fixture) continue;
+      fcl::CollisionRequestd request;
+      fcl::CollisionResultd result;
+      fcl::collide(f.bvh.get(), fcl::Transform3d::Identity(), b.bvh.get(), fcl::Transform3d::Identity(), request,
+                   result);
+      if (result.isCollision() || inside(b.mesh, f.mesh.vertices_mm.front()) ||
+          inside(f.mesh, b.mesh.vertices_mm.front()))
+        out.warnings.push_back(f.name + " intersects the stock at the start");
+    }
+    bodies.push_back(std::move(b));
+  }
+  // The tools' parts, placed at the spindle nose a gauge length above the tip.
+  for (const auto& [number, cutter] : run.tools) {
+    const auto length = run.densify_machine.tool_length_mm.find(number);
+    const double gauge_mm = length == run.densify_machine.tool_length_mm.end() ? 0.0 : length->second;
+    Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
+    local.translation() = spec.gauge_point_mm - gauge_mm * spec.spindle_axis;
+    local.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), spec.spindle_axis).toRotationMatrix();
+    add_tool_parts(bodies, number, cutter, local);
+  }
+  for (const Body& b : bodies) out.bodies.push_back(b.name);
+
+  Checker checker(machine, run, bodies, options.clearance_mm);
+  for (std::size_t a = 0; a < bodies.size(); ++a)
+    for (std::size_t b = 0; b < bodies.size(); ++b)
+      if (checked_pair(bodies[a], bodies[b], options.stock))
+        checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
+  out.pairs = checker.pairs.size();
+  checker.run();
+  out.queries = checker.queries;
+
+  // Runs of consecutive poses (and the intervals between them) make one contact per pair.
+  std::vector<Finding>& found = checker.findings;
+  std::stable_sort(found.begin(), found.end(), [](const Finding& x, const Finding& y) {
+    return x.pair != y.pair ? x.pair < y.pair : x.sample < y.sample;
+  });
+  const kinematics::Program& program = run.program;
+  for (std::size_t i = 0; i < found.size();) {
+    std::size_t j = i;
+    while (j + 1 < found.size() && found[j + 1].pair == found[i].pair && found[j + 1].sample <= found[j].sample + 1)
+      ++j;
+    MachineContact c;
+    const Body& a = bodies[static_cast<std::size_t>(checker.pairs[static_cast<std::size_t>(found[i].pair)].first)];
+    const Body& b = bodies[static_cast<std::size_t>(checker.pairs[static_cast<std::size_t>(found[i].pair)].second)];
+    c.a = a.name;
+    c.b = b.name;
+    c.a_kind = a.kind;
+    c.b_kind = b.kind;
+    std::size_t worst = i;
+    for (std::size_t k = i; k <= j; ++k) {
+      const Eval& e = found[k].eval;
+      const Eval& w = found[worst].eval;
+      if (e.hit > w.hit || (e.hit && e.depth_mm > w.depth_mm) || (!e.hit && !w.hit && e.distance_mm < w.distance_mm))
+        worst = k;
+    }
+    const Finding& w = found[worst];
+    c.hit = w.eval.hit;
+    c.depth_mm = w.eval.depth_mm;
+    c.clearance_mm = w.eval.hit ? 0.0 : w.eval.distance_mm;
+    c.axes = w.q;
+    c.between_poses = w.between;
+    const Frames f = frames_at(machine, w.q);
+    c.where_mm = (f.node.at('W') * on_workpiece).inverse() * w.eval.point;
+    c.first_block = std::max(found[i].block, 0);
+    c.last_block = std::max(found[j].block, 0);
+    c.lines = {program.blocks[static_cast<std::size_t>(c.first_block)].source,
+               program.blocks[static_cast<std::size_t>(c.last_block)].source};
+    out.contacts.push_back(c);
+    i = j + 1;
+  }
+  std::stable_sort(out.contacts.begin(), out.contacts.end(),
+                   [](const MachineContact& x, const MachineContact& y) { return x.first_block < y.first_block; });
+  return out;
+}
+
+}  // namespace vcut::pipeline
