@@ -1,0 +1,173 @@
+// `vcut check` with the machine's bodies (issue #25), through the real binary, on the bundled
+// example examples/machine-collision: table-table-ac (its models from
+// scripts/make-machine-models), a clamp on the table, a flat D10 tool 120 mm out of the nose
+// in a D40 holder. Expected figures are worked from the models' sizes in that script:
+// - the rotary table's top at z = -40 (C at 0: the workpiece frame is the machine frame);
+// - the spindle housing, radius 60, from the spindle nose up; the nose 120 mm above the tip;
+// - the clamp x 60..100, y -20..20, z -40..40 on the table (workpiece frame).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "run_vcut.h"
+
+namespace {
+namespace fs = std::filesystem;
+using vcut::cli::test::CommandResult;
+using vcut::cli::test::expect_error;
+using vcut::cli::test::fresh_test_dir;
+using vcut::cli::test::run_vcut;
+using vcut::cli::test::write;
+
+const fs::path kExample = fs::path(VCUT_SOURCE_DIR) / "examples" / "machine-collision";
+
+class MachineCheck : public ::testing::Test {
+ protected:
+  void SetUp() override { dir = fresh_test_dir("vcut_machine_check_"); }
+  void TearDown() override { fs::remove_all(dir); }
+  CommandResult check(const fs::path& job) {
+    return run_vcut("check " + job.string() + " --json " + (dir / "check.json").string());
+  }
+  nlohmann::json json() {
+    std::ifstream in(dir / "check.json");
+    return nlohmann::json::parse(in);
+  }
+  // The example's job with its own program, and `extra` keys.
+  fs::path job_with(const std::string& program, const std::string& extra = "") {
+    write(dir / "p.ngc", program);
+    write(dir / "job.yaml", "job: t\nmachine: table-table-ac\ntools: " + (kExample / "tools.yaml").string() +
+                                "\nprogram: {file: p.ngc}\nfixtures: [{file: " + (kExample / "clamp.stl").string() +
+                                "}]\nstock: {box: {min: [-40, -40, -30], max: [40, 40, 0]}}\n"
+                                "report: {machine_clearance: 2}\n" +
+                                extra);
+    return dir / "job.yaml";
+  }
+  std::vector<nlohmann::json> machine_events(const nlohmann::json& j) {
+    std::vector<nlohmann::json> out;
+    for (const auto& e : j["events"])
+      if (e["kind"].get<std::string>().rfind("machine_", 0) == 0 || e["kind"] == "body_in_stock") out.push_back(e);
+    return out;
+  }
+  fs::path dir;
+};
+
+// crash.ngc line 8 puts the tip at z = -170 beside the table (Y -215: the holder, radius 20,
+// stays 5 mm off the cradle's -190 face): the nose at -50, the housing's underside 10 mm below
+// the table's top. Line 12 turns C 0 -> 180 with poses every 60 deg (densify angle 60). At
+// C = 60 the clamp's nearest edge lies 20 mm from the cutter's axis at (0, 80) (the edge from
+// (12.68, 61.96) to (32.68, 96.60)), 15 mm from its side, and at C = 120 likewise by symmetry:
+// both poses are clean; the clamp passes through the cutter around C = 90 (the clamp's middle
+// at 80 mm from the C axis), between the poses.
+TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
+  const CommandResult r = check(kExample / "job.yaml");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const std::vector<nlohmann::json> events = machine_events(json());
+  ASSERT_EQ(events.size(), 2u) << json().dump(1);
+  const nlohmann::json& head = events[0];
+  EXPECT_EQ(head["kind"], "machine_collision");
+  EXPECT_EQ(head["severity"], "error");
+  EXPECT_EQ(head["line"], "crash.ngc:8");
+  EXPECT_EQ(head["bodies"], nlohmann::json::array({"spindle housing (Z)", "rotary table (C)"}));
+  EXPECT_NEAR(head["depth_mm"].get<double>(), 10.0, 0.01);
+  EXPECT_NEAR(head["where"][2].get<double>(), -40.0, 0.01);  // on the table's top
+  EXPECT_FALSE(head["between_poses"].get<bool>());
+  EXPECT_NEAR(head["axes"]["Z"].get<double>(), -170.0 + 120.0 - 500.0, 1e-6);  // nose at -50, 500 at Z = 0
+
+  const nlohmann::json& clamp = events[1];
+  EXPECT_EQ(clamp["kind"], "machine_collision");
+  EXPECT_EQ(clamp["line"], "crash.ngc:12");
+  EXPECT_EQ(clamp["bodies"], nlohmann::json::array({"T1 cutter", "fixture clamp"}));
+  EXPECT_TRUE(clamp["between_poses"].get<bool>());
+  const double c_deg = clamp["axes"]["C"].get<double>();
+  EXPECT_GT(c_deg, 60.0);
+  EXPECT_LT(c_deg, 120.0);
+  EXPECT_NE(r.output.find("error   machine_collision at crash.ngc:8: spindle housing (Z) hits rotary table (C)"),
+            std::string::npos)
+      << r.output;
+}
+
+TEST_F(MachineCheck, CleanVariantReportsNone) {
+  const CommandResult r = check(kExample / "job-clean.yaml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(machine_events(json()).empty()) << json().dump(1);
+  EXPECT_EQ(json()["machine_check"]["bodies"].size(), 11u);  // 6 models, the clamp, the stock, cutter, shank, holder
+}
+
+// The housing's underside 1.5 mm above the table's top (tip at -158.5: nose at -38.5): a near
+// miss within the 2 mm clearance, a warning; at 2.5 mm above, nothing.
+TEST_F(MachineCheck, NearMissWithinTheClearance) {
+  const std::string start = "G21 G90 G94\nT1 M6\nS8000 M3\nG0 X0 Y-215 Z100 A0 C0\nG0 Z-100\n";
+  CommandResult r = check(job_with(start + "G1 Z-158.5 F2000\nG0 Z100\nM30\n"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  std::vector<nlohmann::json> events = machine_events(json());
+  ASSERT_EQ(events.size(), 1u) << json().dump(1);
+  EXPECT_EQ(events[0]["kind"], "machine_near_miss");
+  EXPECT_EQ(events[0]["severity"], "warning");
+  EXPECT_EQ(events[0]["line"], "p.ngc:6");
+  EXPECT_NEAR(events[0]["clearance_mm"].get<double>(), 1.5, 1e-6);
+  r = check(job_with(start + "G1 Z-157.5 F2000\nG0 Z100\nM30\n"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(machine_events(json()).empty()) << json().dump(1);
+}
+
+// A rapid that tilts A from 0 to -90 (right hand about +x through y -20, z -100) with the
+// tool waiting at tip z 30 over y -95. In A's frame (dy, dz) = (y + 20, z + 100) the table is
+// dy -150..190, dz 20..60 and the cutter's point (-75, 130); turned back by 45 deg that point
+// is (-144.9, 38.9), inside the table: the table's -y end swings up through the cutter around
+// A = -45. With densify angle 90 the only poses are A = 0 (the table 70 mm below the tip) and
+// A = -90 (the table a wall at y 0..40; the cradle, dy -170..170, dz -60..18, at y -80..-2
+// and z up to 70: 10 mm from the cutter's side and from the holder's underside at z 80):
+// clean at both.
+TEST_F(MachineCheck, AFastTiltBetweenTwoCleanPosesIsFound) {
+  const CommandResult r =
+      check(job_with("G21 G90 G94\nT1 M6\nS8000 M3\nG0 X0 Y-95 Z100 A0 C0\nG0 Z30\nG0 A-90\nG0 Z100\nM30\n",
+                     "densify: {angle: 90}\n"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const std::vector<nlohmann::json> events = machine_events(json());
+  ASSERT_FALSE(events.empty()) << json().dump(1);
+  bool found = false;
+  for (const auto& e : events)
+    if (e["line"] == "p.ngc:6" && e["kind"] == "machine_collision" && e["bodies"][1] == "rotary table (C)") {
+      found = true;
+      EXPECT_TRUE(e["between_poses"].get<bool>()) << e.dump();
+      const double a_deg = e["axes"]["A"].get<double>();
+      EXPECT_LT(a_deg, 0.0);
+      EXPECT_GT(a_deg, -90.0);
+    }
+  EXPECT_TRUE(found) << json().dump(1);
+}
+
+TEST_F(MachineCheck, BadModelsAndFixtures) {
+  // A machine model that is one triangle, not a solid.
+  write(dir / "flat.stl",
+        "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+        "endsolid f\n");
+  std::string machine = vcut::cli::test::bundled_machine_text("3axis");
+  const std::size_t at = machine.find("  Z: [{file:");
+  ASSERT_NE(at, std::string::npos);
+  machine.insert(at + 6, "{file: " + (dir / "flat.stl").string() + ", name: plate}, ");
+  write(dir / "m.yaml", machine);
+  write(dir / "p.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z10\nM30\n");
+  write(dir / "j.yaml", "job: t\nmachine: m.yaml\ntools: " + (kExample / "tools.yaml").string() +
+                            "\nprogram: {file: p.ngc}\nstock: {box: {min: [0, 0, -10], max: [10, 10, 0]}}\n");
+  expect_error(run_vcut("check " + (dir / "j.yaml").string()), "flat.stl: machine model on Z: not a closed mesh");
+  // A fixture file that does not exist.
+  write(dir / "job.yaml", "job: t\nmachine: table-table-ac\ntools: " + (kExample / "tools.yaml").string() +
+                              "\nprogram: {file: p.ngc}\nfixtures: [{file: vice.stl}]\n"
+                              "stock: {box: {min: [-40, -40, -30], max: [40, 40, 0]}}\n");
+  expect_error(run_vcut("check " + (dir / "job.yaml").string()), "'fixtures[0].file': expected an existing mesh file");
+  // A clamp inside the stock at the start: a warning naming both.
+  write(dir / "p.ngc", "G21 G90\nT1 M6\nG0 X0 Y0 Z100\nM30\n");
+  write(dir / "job.yaml", "job: t\nmachine: table-table-ac\ntools: " + (kExample / "tools.yaml").string() +
+                              "\nprogram: {file: p.ngc}\nfixtures: [{file: " + (kExample / "clamp.stl").string() +
+                              "}]\nstock: {box: {min: [-40, -40, -30], max: [80, 40, 0]}}\n");
+  const CommandResult r = check(dir / "job.yaml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: fixture clamp intersects the stock at the start"), std::string::npos) << r.output;
+}
+
+}  // namespace
