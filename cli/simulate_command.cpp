@@ -40,6 +40,20 @@ int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base
       std::printf("collision: %s (%s of T%d) at %s, %.3f mm deep at %s\n", pipeline::collision_kind(c.probe),
                   pipeline::collision_part(c.probe), c.tool, r.pose_run.program.where(c.lines).c_str(), c.depth_mm,
                   r.pose_run.program.where(c.deepest_line).c_str());
+    for (const auto& c : r.machine.contacts) {
+      std::string at;
+      for (const auto& [letter, value] : pipeline::axis_readout(*r.pose_run.machine, c.axes)) {
+        char field[40];
+        std::snprintf(field, sizeof field, "%s%c%.3f", at.empty() ? "" : " ", letter, value);
+        at += field;
+      }
+      if (c.hit)
+        std::printf("machine collision: %s hits %s, %.3f mm deep, at %s%s (%s)\n", c.a.c_str(), c.b.c_str(), c.depth_mm,
+                    r.pose_run.program.where(c.lines).c_str(), c.between_poses ? " between two poses" : "", at.c_str());
+      else
+        std::printf("machine near miss: %s passes %.3f mm from %s at %s (%s)\n", c.a.c_str(), c.clearance_mm,
+                    c.b.c_str(), r.pose_run.program.where(c.lines).c_str(), at.c_str());
+    }
     if (r.compared) {
       std::printf("max gouge %.4f mm in %zu region(s), max excess %.4f mm in %zu region(s)\n", r.max_gouge_mm,
                   r.gouges.size(), r.max_excess_mm, r.excess.size());

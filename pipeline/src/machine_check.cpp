@@ -254,34 +254,51 @@ class Checker {
   std::vector<Finding> findings;
   std::size_t queries = 0;
 
+  // The samples in order: the run's own, or densified again block by block where the run
+  // streamed them (simulate): the same samples, with their axis values.
   void run() {
     const auto& samples = run_.densified.samples;
-    std::vector<Eval> previous(pairs.size());
-    std::vector<int> previous_tool(pairs.size(), -1);
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const int block = samples[i].block;
-      const int tool = block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0;
-      const AxisValues& q = samples[i].axes;
-      const Frames frames = frames_at(machine_, q);
-      for (std::size_t p = 0; p < pairs.size(); ++p) {
-        const Body& a = bodies_[static_cast<std::size_t>(pairs[p].first)];
-        if (a.tool != 0 && a.tool != tool) {
-          previous_tool[p] = -1;
-          continue;
-        }
-        Eval e = evaluate(pairs[p], frames);
-        // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
-        if (previous_tool[p] < 0 && !e.hit && e.exact) contained(pairs[p], frames, e);
-        if (e.distance_mm < clearance_mm_ || e.hit) findings.push_back({static_cast<int>(p), i, block, e, q, false});
-        if (previous_tool[p] >= 0 && i > 0)
-          between(static_cast<int>(p), i, block, samples[i - 1].axes, q, previous[p], e, 0);
-        previous[p] = e;
-        previous_tool[p] = tool;
-      }
+    if (!samples.empty() || !run_.streamed) {
+      for (const kinematics::PoseSample& s : samples) visit(s);
+      return;
+    }
+    kinematics::Densifier densifier(run_.program, run_.densify_settings, run_.densify_machine);
+    visit(densifier.start());
+    std::vector<kinematics::PoseSample> batch;
+    kinematics::BlockReport report;
+    while (!densifier.done()) {
+      batch.clear();
+      densifier.next_block(batch, report);
+      for (const kinematics::PoseSample& s : batch) visit(s);
     }
   }
 
  private:
+  void visit(const kinematics::PoseSample& sample) {
+    const std::size_t i = index_++;
+    const int block = sample.block;
+    const int tool = block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0;
+    const AxisValues& q = sample.axes;
+    const Frames frames = frames_at(machine_, q);
+    previous_.resize(pairs.size());
+    previous_tool_.resize(pairs.size(), -1);
+    for (std::size_t p = 0; p < pairs.size(); ++p) {
+      const Body& a = bodies_[static_cast<std::size_t>(pairs[p].first)];
+      if (a.tool != 0 && a.tool != tool) {
+        previous_tool_[p] = -1;
+        continue;
+      }
+      Eval e = evaluate(pairs[p], frames);
+      // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
+      if (previous_tool_[p] < 0 && !e.hit && e.exact) contained(pairs[p], frames, e);
+      if (e.distance_mm < clearance_mm_ || e.hit) findings.push_back({static_cast<int>(p), i, block, e, q, false});
+      if (previous_tool_[p] >= 0 && i > 0) between(static_cast<int>(p), i, block, last_q_, q, previous_[p], e, 0);
+      previous_[p] = e;
+      previous_tool_[p] = tool;
+    }
+    last_q_ = q;
+  }
+
   std::vector<int> chain_of(char node) const {
     for (const auto* chain : {&machine_.workpiece_chain(), &machine_.tool_chain()}) {
       if (node == (chain == &machine_.tool_chain() ? 'T' : 'W')) return *chain;
@@ -396,6 +413,10 @@ class Checker {
   std::vector<Body>& bodies_;
   double clearance_mm_;
   std::vector<std::vector<int>> chain_;
+  std::size_t index_ = 0;
+  std::vector<Eval> previous_;      // each pair at the last sample
+  std::vector<int> previous_tool_;  // the tool then; -1: the pair was not checked
+  AxisValues last_q_;
 };
 
 bool checked_pair(const Body& a, const Body& b, bool stock) {
@@ -423,6 +444,15 @@ removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSp
                                 .toRotationMatrix();
   for (auto& p : mesh.vertices_mm) p = r * p + d.translate_mm;
   return mesh;
+}
+
+std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& machine, const kinematics::AxisValues& q) {
+  std::vector<std::pair<char, double>> out;
+  for (int k = 0; k < machine.axis_count() && k < q.size(); ++k) {
+    const bool rotary = machine.axis(k).kind == kinematics::AxisKind::Rotary;
+    out.emplace_back(machine.axis(k).letter, rotary ? q[k] * 180.0 / M_PI : q[k]);
+  }
+  return out;
 }
 
 bool has_machine_bodies(const io::Job& job, const PoseRun& run) {

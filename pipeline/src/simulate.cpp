@@ -523,6 +523,20 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   result.initial_volume_mm3 = stock.volume_mm3();
   stage_done("stock");
 
+  // 4b. The machine: its bodies, the fixtures and the tool's parts against each other at every
+  // pose and between poses (machine_check.h); before the cut, so that a bad model stops the run.
+  if (has_machine_bodies(job, run)) {
+    for (const auto& [node, models] : run.machine->spec().models)
+      for (const kinematics::ModelSpec& m : models) hash(m.file);
+    for (const io::DesignSpec& f : job.fixtures) hash(f.file);
+    MachineCheckOptions machine_options;
+    machine_options.clearance_mm = job.machine_clearance_mm;
+    result.machine = check_machine(job, run, machine_options);
+    result.machine_checked = true;
+    result.warnings.insert(result.warnings.end(), result.machine.warnings.begin(), result.machine.warnings.end());
+    stage_done("machine");
+  }
+
   // 5. Cut.
   removal::CutOptions cut_options;
   cut_options.collision_tolerance_mm = job.collision_tolerance_mm;

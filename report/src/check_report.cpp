@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "vcut/io/atomic_file.h"
+#include "vcut/pipeline/machine_check.h"
 
 namespace vcut::report {
 
@@ -34,11 +35,9 @@ void write_check_json(const std::string& path, const io::Job& job, const pipelin
       x["bodies"] = e.bodies;
       x["clearance_mm"] = e.clearance_mm;
       x["between_poses"] = e.between_poses;
-      ordered_json axes;
-      for (int k = 0; k < r.run.machine->axis_count(); ++k) {
-        const kinematics::AxisSpec& a = r.run.machine->axis(k);
-        axes[std::string(1, a.letter)] = a.kind == kinematics::AxisKind::Rotary ? e.axes[k] * 180.0 / M_PI : e.axes[k];
-      }
+      ordered_json axes = ordered_json::object();
+      for (const auto& [letter, value] : pipeline::axis_readout(*r.run.machine, e.axes))
+        axes[std::string(1, letter)] = value;
       x["axes"] = axes;  // mm, deg
     }
     j["events"].push_back(x);

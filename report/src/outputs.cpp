@@ -75,6 +75,7 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
     snapshot_files = write_snapshots(out.string(), stem, machined.mesh, colours, options);
   });
   writers.run([&] { write_gouges_csv((out / "gouges.csv").string(), result); });
+  writers.run([&] { write_collisions_csv((out / "collisions.csv").string(), result); });
   if (!page.empty()) {
     writers.run([&] {
       ReportPageInput in;
@@ -92,6 +93,7 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
   if (result.compared) result.outputs.push_back("deviation.ply");
   for (const auto& f : snapshot_files) result.outputs.push_back(f);
   result.outputs.push_back("gouges.csv");
+  result.outputs.push_back("collisions.csv");
   if (!page.empty())
     result.outputs.push_back("report.html");
   else

@@ -1,5 +1,6 @@
 #include "vcut/report/report.h"
 
+#include <algorithm>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -26,6 +27,12 @@ ordered_json vec(const Eigen::Vector3d& v) {
 }
 
 double um(double mm) { return std::round(mm * 1e6) / 1e6; }
+
+ordered_json axes_json(const kinematics::Machine& machine, const kinematics::AxisValues& q) {
+  ordered_json axes = ordered_json::object();  // mm, deg
+  for (const auto& [letter, value] : pipeline::axis_readout(machine, q)) axes[std::string(1, letter)] = um(value);
+  return axes;
+}
 
 ordered_json region(const RegionRecord& r, const kinematics::Program& program) {
   ordered_json j;
@@ -61,6 +68,12 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   s["gouge_regions"] = r.gouges.size();
   s["excess_regions"] = r.excess.size();
   s["collisions"] = r.collisions.size();
+  if (r.machine_checked) {
+    const auto hits = std::count_if(r.machine.contacts.begin(), r.machine.contacts.end(),
+                                    [](const pipeline::MachineContact& c) { return c.hit; });
+    s["machine_collisions"] = hits;
+    s["machine_near_misses"] = static_cast<long>(r.machine.contacts.size()) - hits;
+  }
   s["machined_vertices"] = r.machined_vertices;
   s["machined_triangles"] = r.machined_triangles;
   s["wall_time_s"] = std::round(r.wall_time_s * 1e3) / 1e3;
@@ -86,6 +99,24 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
                                {"depth_mm", um(c.depth_mm)},
                                {"where", vec(c.where_mm)},
                                {"moves", c.moves}});
+  if (r.machine_checked) {
+    // The machine's bodies, the fixtures and the tool's parts against each other (machine_check.h).
+    ordered_json m;
+    m["bodies"] = r.machine.bodies;
+    m["pairs"] = r.machine.pairs;
+    m["queries"] = r.machine.queries;
+    m["contacts"] = ordered_json::array();
+    for (const pipeline::MachineContact& c : r.machine.contacts)
+      m["contacts"].push_back({{"kind", c.hit ? "machine_collision" : "machine_near_miss"},
+                               {"bodies", {c.a, c.b}},
+                               {"line", program.where(c.lines)},
+                               {"depth_mm", um(c.depth_mm)},
+                               {"clearance_mm", um(c.clearance_mm)},
+                               {"between_poses", c.between_poses},
+                               {"axes", axes_json(*r.pose_run.machine, c.axes)},
+                               {"where", vec(c.where_mm)}});
+    j["machine"] = m;
+  }
   ordered_json h;
   h["unit"] = "mm";
   h["edges_mm"] = ordered_json::array();
@@ -192,6 +223,25 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   j["inputs"] = inputs;
   j["outputs"] = r.outputs;
   io::write_text_atomically(path, j.dump(2) + "\n");
+}
+
+// One row per collision: the tool's parts in the stock (the cut's collisions), then the
+// machine's (collisions and near misses between bodies).
+void write_collisions_csv(const std::string& path, const pipeline::SimulationResult& r) {
+  std::ostringstream out;
+  out << "kind,body,other,depth_mm,clearance_mm,where_x,where_y,where_z,between_poses,lines\n";
+  const kinematics::Program& program = r.pose_run.program;
+  for (const auto& c : r.collisions)
+    out << pipeline::collision_kind(c.probe) << ','
+        << io::csv_field(std::string("T") + std::to_string(c.tool) + " " + pipeline::collision_part(c.probe))
+        << ",the stock," << um(c.depth_mm) << ",," << c.where_mm.x() << ',' << c.where_mm.y() << ',' << c.where_mm.z()
+        << ",false," << io::csv_field(program.where(c.lines)) << '\n';
+  for (const pipeline::MachineContact& c : r.machine.contacts)
+    out << (c.hit ? "machine_collision" : "machine_near_miss") << ',' << io::csv_field(c.a) << ',' << io::csv_field(c.b)
+        << ',' << um(c.depth_mm) << ',' << um(c.clearance_mm) << ',' << c.where_mm.x() << ',' << c.where_mm.y() << ','
+        << c.where_mm.z() << ',' << (c.between_poses ? "true" : "false") << ',' << io::csv_field(program.where(c.lines))
+        << '\n';
+  io::write_text_atomically(path, out.str());
 }
 
 void write_gouges_csv(const std::string& path, const pipeline::SimulationResult& r) {

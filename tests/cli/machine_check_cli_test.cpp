@@ -55,9 +55,9 @@ class MachineCheck : public ::testing::Test {
   fs::path dir;
 };
 
-// crash.ngc line 8 puts the tip at z = -170 beside the table (Y -215: the holder, radius 20,
+// crash.ngc line 12 puts the tip at z = -170 beside the table (Y -215: the holder, radius 20,
 // stays 5 mm off the cradle's -190 face): the nose at -50, the housing's underside 10 mm below
-// the table's top. Line 12 turns C 0 -> 180 with poses every 60 deg (densify angle 60). At
+// the table's top. Line 16 turns C 0 -> 180 with poses every 60 deg (densify angle 60). At
 // C = 60 the clamp's nearest edge lies 20 mm from the cutter's axis at (0, 80) (the edge from
 // (12.68, 61.96) to (32.68, 96.60)), 15 mm from its side, and at C = 120 likewise by symmetry:
 // both poses are clean; the clamp passes through the cutter around C = 90 (the clamp's middle
@@ -70,7 +70,7 @@ TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
   const nlohmann::json& head = events[0];
   EXPECT_EQ(head["kind"], "machine_collision");
   EXPECT_EQ(head["severity"], "error");
-  EXPECT_EQ(head["line"], "crash.ngc:8");
+  EXPECT_EQ(head["line"], "crash.ngc:12");
   EXPECT_EQ(head["bodies"], nlohmann::json::array({"spindle housing (Z)", "rotary table (C)"}));
   EXPECT_NEAR(head["depth_mm"].get<double>(), 10.0, 0.01);
   EXPECT_NEAR(head["where"][2].get<double>(), -40.0, 0.01);  // on the table's top
@@ -79,15 +79,44 @@ TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
 
   const nlohmann::json& clamp = events[1];
   EXPECT_EQ(clamp["kind"], "machine_collision");
-  EXPECT_EQ(clamp["line"], "crash.ngc:12");
+  EXPECT_EQ(clamp["line"], "crash.ngc:16");
   EXPECT_EQ(clamp["bodies"], nlohmann::json::array({"T1 cutter", "fixture clamp"}));
   EXPECT_TRUE(clamp["between_poses"].get<bool>());
   const double c_deg = clamp["axes"]["C"].get<double>();
   EXPECT_GT(c_deg, 60.0);
   EXPECT_LT(c_deg, 120.0);
-  EXPECT_NE(r.output.find("error   machine_collision at crash.ngc:8: spindle housing (Z) hits rotary table (C)"),
+  EXPECT_NE(r.output.find("error   machine_collision at crash.ngc:12: spindle housing (Z) hits rotary table (C)"),
             std::string::npos)
       << r.output;
+}
+
+// simulate cuts the face pass (lines 6-7) and reports the same two collisions, in the
+// terminal, report.json and collisions.csv.
+TEST_F(MachineCheck, SimulateReportsThemInTheReportAndCollisionsCsv) {
+  const CommandResult r = run_vcut("simulate " + (kExample / "job.yaml").string() + " --out " + (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(
+      r.output.find("machine collision: spindle housing (Z) hits rotary table (C), 10.000 mm deep, at crash.ngc:12"),
+      std::string::npos)
+      << r.output;
+  std::ifstream in(dir / "out" / "report.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["summary"]["machine_collisions"], 2);
+  EXPECT_EQ(j["summary"]["machine_near_misses"], 0);
+  ASSERT_EQ(j["machine"]["contacts"].size(), 2u);
+  EXPECT_EQ(j["machine"]["contacts"][1]["line"], "crash.ngc:16");
+  EXPECT_TRUE(j["machine"]["contacts"][1]["between_poses"].get<bool>());
+  std::ifstream csv_in(dir / "out" / "collisions.csv");
+  std::string header, row1, row2, extra;
+  std::getline(csv_in, header);
+  std::getline(csv_in, row1);
+  std::getline(csv_in, row2);
+  EXPECT_FALSE(std::getline(csv_in, extra));
+  EXPECT_EQ(header, "kind,body,other,depth_mm,clearance_mm,where_x,where_y,where_z,between_poses,lines");
+  EXPECT_EQ(row1.rfind("machine_collision,spindle housing (Z),rotary table (C),", 0), 0u) << row1;
+  EXPECT_NE(row1.find(",false,crash.ngc:12"), std::string::npos) << row1;
+  EXPECT_EQ(row2.rfind("machine_collision,T1 cutter,fixture clamp,", 0), 0u) << row2;
+  EXPECT_NE(row2.find(",true,crash.ngc:16"), std::string::npos) << row2;
 }
 
 TEST_F(MachineCheck, CleanVariantReportsNone) {

@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "vcut/io/job.h"
@@ -60,10 +61,14 @@ struct MachineCheck {
 // Z, fixed axes; then the translation).
 removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSpec& placement);
 
+// Axis values as a person reads them: by letter in the machine's order, linear axes in mm,
+// rotary axes in deg.
+std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& machine, const kinematics::AxisValues& q);
+
 // Nothing to check (no models, no fixtures, no holder): false.
 bool has_machine_bodies(const io::Job& job, const PoseRun& run);
 
-// `run` must hold its samples with axis values (not streamed). A model or fixture that is not
+// A streamed run (simulate) is densified again, block by block. A model or fixture that is not
 // a closed mesh is a vcut::InputError naming the file.
 MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
 

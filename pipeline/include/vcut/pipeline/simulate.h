@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "vcut/io/job.h"
+#include "vcut/pipeline/machine_check.h"
 #include "vcut/pipeline/poses.h"
 #include "vcut/removal/mesh.h"
 #include "vcut/removal/move.h"
@@ -92,6 +93,8 @@ struct SimulationResult {
   double max_gouge_mm = 0.0, max_excess_mm = 0.0;
   std::vector<RegionRecord> gouges, excess;
   std::vector<CollisionRecord> collisions;
+  bool machine_checked = false;  // the machine file has models or the job fixtures
+  MachineCheck machine;          // the machine's bodies, fixtures and holder against each other
   std::vector<std::string> warnings;
   std::vector<double> histogram_edges_mm;
   std::vector<std::size_t> histogram_counts;
