@@ -1,8 +1,11 @@
 #include "vcut/pipeline/machine_check.h"
 
 #include <fcl/fcl.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -29,6 +32,7 @@ struct Body {
   BodySide side = BodySide::Frame;
   BodyKind kind = BodyKind::Model;
   char node = 'F';
+  int slot = 0;  // the node's place in Frames
   int tool = 0;  // tool parts: the T number they belong to
   Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
   removal::TriangleMesh mesh;
@@ -209,10 +213,19 @@ double box_distance_mm(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& 
   return gap.norm();
 }
 
-// Node frames at one set of axis values: node coordinates (F at all-zero axes) -> F.
+// Node frames at one set of axis values: node coordinates (F at all-zero axes) -> F, by slot:
+// the machine's axes in its order, then F, W and T.
 struct Frames {
-  std::map<char, Eigen::Isometry3d> node;
+  std::array<Eigen::Isometry3d, 8> node;
+  const Eigen::Isometry3d& at(int slot) const { return node[static_cast<std::size_t>(slot)]; }
 };
+
+int slot_of(const kinematics::Machine& m, char node) {
+  if (node == 'F') return m.axis_count();
+  if (node == 'W') return m.axis_count() + 1;
+  if (node == 'T') return m.axis_count() + 2;
+  return m.axis_index(node);
+}
 
 Frames frames_at(const kinematics::Machine& m, const AxisValues& q) {
   Frames f;
@@ -220,9 +233,9 @@ Frames frames_at(const kinematics::Machine& m, const AxisValues& q) {
     Eigen::Isometry3d pose = n.pose;
     if (n.node == 'W') pose.translation() -= pose.linear() * m.spec().workpiece_origin_mm;
     if (n.node == 'T') pose.translation() -= pose.linear() * m.spec().gauge_point_mm;
-    f.node[n.node] = pose;
+    f.node[static_cast<std::size_t>(slot_of(m, n.node))] = pose;
   }
-  f.node['F'] = Eigen::Isometry3d::Identity();
+  f.node[static_cast<std::size_t>(m.axis_count())] = Eigen::Isometry3d::Identity();
   return f;
 }
 
@@ -255,48 +268,93 @@ class Checker {
   std::size_t queries = 0;
 
   // The samples in order: the run's own, or densified again block by block where the run
-  // streamed them (simulate): the same samples, with their axis values.
+  // streamed them (simulate): the same samples, with their axis values. Batches of samples
+  // are checked in parallel; what each sample and each interval finds is kept apart and
+  // joined in sample order, so that the findings are the same for any number of threads.
   void run() {
     const auto& samples = run_.densified.samples;
     if (!samples.empty() || !run_.streamed) {
-      for (const kinematics::PoseSample& s : samples) visit(s);
+      for (std::size_t i = 0; i < samples.size(); i += kBatch)
+        check_batch(samples.data() + i, std::min(kBatch, samples.size() - i));
       return;
     }
     kinematics::Densifier densifier(run_.program, run_.densify_settings, run_.densify_machine);
-    visit(densifier.start());
-    std::vector<kinematics::PoseSample> batch;
+    std::vector<kinematics::PoseSample> batch = {densifier.start()};
     kinematics::BlockReport report;
     while (!densifier.done()) {
-      batch.clear();
       densifier.next_block(batch, report);
-      for (const kinematics::PoseSample& s : batch) visit(s);
+      if (batch.size() >= kBatch) {
+        check_batch(batch.data(), batch.size());
+        batch.clear();
+      }
     }
+    check_batch(batch.data(), batch.size());
   }
 
  private:
-  void visit(const kinematics::PoseSample& sample) {
-    const std::size_t i = index_++;
-    const int block = sample.block;
-    const int tool = block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0;
-    const AxisValues& q = sample.axes;
-    const Frames frames = frames_at(machine_, q);
-    previous_.resize(pairs.size());
-    previous_tool_.resize(pairs.size(), -1);
-    for (std::size_t p = 0; p < pairs.size(); ++p) {
-      const Body& a = bodies_[static_cast<std::size_t>(pairs[p].first)];
-      if (a.tool != 0 && a.tool != tool) {
-        previous_tool_[p] = -1;
-        continue;
+  static constexpr std::size_t kBatch = 2048;
+
+  // Samples index_ .. index_ + n - 1; the last sample of the batch before (its frames and
+  // evaluations) opens the interval to the first.
+  void check_batch(const kinematics::PoseSample* batch, std::size_t n) {
+    if (n == 0) return;
+    const std::size_t pair_count = pairs.size();
+    std::vector<Frames> frames(n);
+    std::vector<int> tools(n);
+    std::vector<Eval> evals(n * pair_count);
+    std::vector<std::vector<Finding>> found(n);
+    std::vector<std::size_t> queries(n, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const kinematics::PoseSample& sample = batch[k];
+        const std::size_t i = index_ + k;
+        frames[k] = frames_at(machine_, sample.axes);
+        tools[k] = tool_of(sample.block);
+        const int previous_tool = k > 0 ? tool_of(batch[k - 1].block) : last_tool_;
+        for (std::size_t p = 0; p < pair_count; ++p) {
+          if (!active(p, tools[k])) continue;
+          Eval& e = evals[k * pair_count + p];
+          e = evaluate(pairs[p], frames[k], queries[k]);
+          // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
+          if (!(i > 0 && active(p, previous_tool)) && !e.hit && e.exact) contained(pairs[p], frames[k], e);
+          if (e.distance_mm < clearance_mm_ || e.hit)
+            found[k].push_back({static_cast<int>(p), i, sample.block, e, sample.axes, false});
+        }
       }
-      Eval e = evaluate(pairs[p], frames);
-      // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
-      if (previous_tool_[p] < 0 && !e.hit && e.exact) contained(pairs[p], frames, e);
-      if (e.distance_mm < clearance_mm_ || e.hit) findings.push_back({static_cast<int>(p), i, block, e, q, false});
-      if (previous_tool_[p] >= 0 && i > 0) between(static_cast<int>(p), i, block, last_q_, q, previous_[p], e, 0);
-      previous_[p] = e;
-      previous_tool_[p] = tool;
+    });
+    // The intervals: from the batch before's last sample to this batch's first, and on.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t k = range.begin(); k != range.end(); ++k) {
+        const std::size_t i = index_ + k;
+        if (i == 0) continue;
+        const bool first = k == 0;
+        const int tool0 = first ? last_tool_ : tools[k - 1];
+        const Frames& f0 = first ? last_frames_ : frames[k - 1];
+        const AxisValues& q0 = first ? last_q_ : batch[k - 1].axes;
+        for (std::size_t p = 0; p < pair_count; ++p) {
+          if (!active(p, tools[k]) || !active(p, tool0) || tool0 != tools[k]) continue;
+          const Eval& e0 = first ? last_evals_[p] : evals[(k - 1) * pair_count + p];
+          between(static_cast<int>(p), i, batch[k].block, f0, q0, batch[k].axes, e0, evals[k * pair_count + p], 0,
+                  found[k], queries[k]);
+        }
+      }
+    });
+    for (std::size_t k = 0; k < n; ++k) {
+      findings.insert(findings.end(), found[k].begin(), found[k].end());
+      this->queries += queries[k];
     }
-    last_q_ = q;
+    last_frames_ = frames[n - 1];
+    last_tool_ = tools[n - 1];
+    last_q_ = batch[n - 1].axes;
+    last_evals_.assign(evals.begin() + static_cast<std::ptrdiff_t>((n - 1) * pair_count), evals.end());
+    index_ += n;
+  }
+
+  int tool_of(int block) const { return block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0; }
+  // A pair with a tool's part is checked while that tool is in the spindle.
+  bool active(std::size_t p, int tool) const {
+    const Body& a = bodies_[static_cast<std::size_t>(pairs[p].first)];
+    return tool >= 0 && (a.tool == 0 || a.tool == tool);
   }
 
   std::vector<int> chain_of(char node) const {
@@ -311,9 +369,9 @@ class Checker {
     return {};
   }
 
-  Eigen::Isometry3d pose_of(const Body& b, const Frames& f) const { return f.node.at(b.node) * b.local; }
+  static Eigen::Isometry3d pose_of(const Body& b, const Frames& f) { return f.at(b.slot) * b.local; }
 
-  Eval evaluate(const std::pair<int, int>& pair, const Frames& f) {
+  Eval evaluate(const std::pair<int, int>& pair, const Frames& f, std::size_t& queries) const {
     const Body& a = bodies_[static_cast<std::size_t>(pair.first)];
     const Body& b = bodies_[static_cast<std::size_t>(pair.second)];
     const Eigen::Isometry3d ta = pose_of(a, f), tb = pose_of(b, f);
@@ -379,7 +437,7 @@ class Checker {
         moved += step;
         continue;
       }
-      const Eigen::Isometry3d& pose = f0.node.at(axis.letter);
+      const Eigen::Isometry3d& pose = f0.at(k);
       const Eigen::Vector3d point = pose * axis.center_mm, dir = (pose.linear() * axis.direction).normalized();
       const Eigen::Vector3d r = c - point;
       const double reach = (r - r.dot(dir) * dir).norm() + b.radius_mm + moved;
@@ -390,10 +448,9 @@ class Checker {
 
   // Conservative advancement over the interval (q0, q1) of sample `sample`: halved until the
   // pair is proven apart by more than the clearance, or met.
-  void between(int p, std::size_t sample, int block, const AxisValues& q0, const AxisValues& q1, const Eval& e0,
-               const Eval& e1, int depth) {
+  void between(int p, std::size_t sample, int block, const Frames& f0, const AxisValues& q0, const AxisValues& q1,
+               const Eval& e0, const Eval& e1, int depth, std::vector<Finding>& found, std::size_t& queries) const {
     if (e0.hit || e1.hit) return;
-    const Frames f0 = frames_at(machine_, q0);
     const double reach = motion_bound_mm(pairs[static_cast<std::size_t>(p)].first, f0, q0, q1) +
                          motion_bound_mm(pairs[static_cast<std::size_t>(p)].second, f0, q0, q1);
     const double low = 0.5 * (e0.distance_mm + e1.distance_mm - reach);
@@ -401,10 +458,11 @@ class Checker {
     if (low > 0.0 && (e0.distance_mm < clearance_mm_ || e1.distance_mm < clearance_mm_)) return;
     if (reach < kFinestMm || depth > 30) return;
     const AxisValues qm = 0.5 * (q0 + q1);
-    const Eval em = evaluate(pairs[static_cast<std::size_t>(p)], frames_at(machine_, qm));
-    if (em.distance_mm < clearance_mm_ || em.hit) findings.push_back({p, sample, block, em, qm, true});
-    between(p, sample, block, q0, qm, e0, em, depth + 1);
-    between(p, sample, block, qm, q1, em, e1, depth + 1);
+    const Frames fm = frames_at(machine_, qm);
+    const Eval em = evaluate(pairs[static_cast<std::size_t>(p)], fm, queries);
+    if (em.distance_mm < clearance_mm_ || em.hit) found.push_back({p, sample, block, em, qm, true});
+    between(p, sample, block, f0, q0, qm, e0, em, depth + 1, found, queries);
+    between(p, sample, block, fm, qm, q1, em, e1, depth + 1, found, queries);
   }
 
   static constexpr double kFinestMm = 0.01;
@@ -413,10 +471,13 @@ class Checker {
   std::vector<Body>& bodies_;
   double clearance_mm_;
   std::vector<std::vector<int>> chain_;
+  // The last sample checked: the next index, its frames, tool (-1 before the first), axes and
+  // evaluations.
   std::size_t index_ = 0;
-  std::vector<Eval> previous_;      // each pair at the last sample
-  std::vector<int> previous_tool_;  // the tool then; -1: the pair was not checked
+  Frames last_frames_;
+  int last_tool_ = -1;
   AxisValues last_q_;
+  std::vector<Eval> last_evals_;
 };
 
 bool checked_pair(const Body& a, const Body& b, bool stock) {
@@ -527,7 +588,10 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     local.linear() = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), spec.spindle_axis).toRotationMatrix();
     add_tool_parts(bodies, number, cutter, local);
   }
-  for (const Body& b : bodies) out.bodies.push_back(b.name);
+  for (Body& b : bodies) {
+    b.slot = slot_of(machine, b.node);
+    out.bodies.push_back(b.name);
+  }
 
   Checker checker(machine, run, bodies, options.clearance_mm);
   for (std::size_t a = 0; a < bodies.size(); ++a)
@@ -569,7 +633,7 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     c.axes = w.q;
     c.between_poses = w.between;
     const Frames f = frames_at(machine, w.q);
-    c.where_mm = (f.node.at('W') * on_workpiece).inverse() * w.eval.point;
+    c.where_mm = (f.at(slot_of(machine, 'W')) * on_workpiece).inverse() * w.eval.point;
     c.first_block = std::max(found[i].block, 0);
     c.last_block = std::max(found[j].block, 0);
     c.lines = {program.blocks[static_cast<std::size_t>(c.first_block)].source,
