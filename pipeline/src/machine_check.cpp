@@ -295,58 +295,68 @@ class Checker {
   static constexpr std::size_t kBatch = 2048;
 
   // Samples index_ .. index_ + n - 1; the last sample of the batch before (its frames and
-  // evaluations) opens the interval to the first.
+  // each pair's state) opens the interval to the first. The frames in parallel over the
+  // samples, then the pairs in parallel, each along the samples in order: a pair's distance
+  // falls no faster than its bodies move, so after an exact distance d the pair is queried
+  // again only where d less the motion since then (motion_bound_mm) drops below the clearance.
   void check_batch(const kinematics::PoseSample* batch, std::size_t n) {
     if (n == 0) return;
     const std::size_t pair_count = pairs.size();
     std::vector<Frames> frames(n);
     std::vector<int> tools(n);
-    std::vector<Eval> evals(n * pair_count);
-    std::vector<std::vector<Finding>> found(n);
-    std::vector<std::size_t> queries(n, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
       for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        const kinematics::PoseSample& sample = batch[k];
-        const std::size_t i = index_ + k;
-        frames[k] = frames_at(machine_, sample.axes);
-        tools[k] = tool_of(sample.block);
-        const int previous_tool = k > 0 ? tool_of(batch[k - 1].block) : last_tool_;
-        for (std::size_t p = 0; p < pair_count; ++p) {
-          if (!active(p, tools[k])) continue;
-          Eval& e = evals[k * pair_count + p];
-          e = evaluate(pairs[p], frames[k], queries[k]);
-          // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
-          if (!(i > 0 && active(p, previous_tool)) && !e.hit && e.exact) contained(pairs[p], frames[k], e);
-          if (e.distance_mm < clearance_mm_ || e.hit)
-            found[k].push_back({static_cast<int>(p), i, sample.block, e, sample.axes, false});
-        }
+        frames[k] = frames_at(machine_, batch[k].axes);
+        tools[k] = tool_of(batch[k].block);
       }
     });
-    // The intervals: from the batch before's last sample to this batch's first, and on.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n), [&](const tbb::blocked_range<std::size_t>& range) {
-      for (std::size_t k = range.begin(); k != range.end(); ++k) {
-        const std::size_t i = index_ + k;
-        if (i == 0) continue;
-        const bool first = k == 0;
-        const int tool0 = first ? last_tool_ : tools[k - 1];
-        const Frames& f0 = first ? last_frames_ : frames[k - 1];
-        const AxisValues& q0 = first ? last_q_ : batch[k - 1].axes;
-        for (std::size_t p = 0; p < pair_count; ++p) {
-          if (!active(p, tools[k]) || !active(p, tool0) || tool0 != tools[k]) continue;
-          const Eval& e0 = first ? last_evals_[p] : evals[(k - 1) * pair_count + p];
-          between(static_cast<int>(p), i, batch[k].block, f0, q0, batch[k].axes, e0, evals[k * pair_count + p], 0,
-                  found[k], queries[k]);
-        }
-      }
-    });
-    for (std::size_t k = 0; k < n; ++k) {
-      findings.insert(findings.end(), found[k].begin(), found[k].end());
-      this->queries += queries[k];
+    state_.resize(pair_count);
+    std::vector<std::vector<Finding>> found(pair_count);
+    std::vector<std::size_t> queries(pair_count, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pair_count),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                        for (std::size_t p = range.begin(); p != range.end(); ++p) {
+                          PairState& st = state_[p];
+                          for (std::size_t k = 0; k < n; ++k) {
+                            const std::size_t i = index_ + k;
+                            const kinematics::PoseSample& sample = batch[k];
+                            if (!active(p, tools[k])) {
+                              st.active = false;
+                              continue;
+                            }
+                            const bool continues = st.active && st.tool == tools[k];
+                            const Frames& f0 = k > 0 ? frames[k - 1] : last_frames_;
+                            const AxisValues& q0 = k > 0 ? batch[k - 1].axes : last_q_;
+                            double moved = 0.0;
+                            if (continues)
+                              moved = motion_bound_mm(pairs[p].first, f0, q0, sample.axes) +
+                                      motion_bound_mm(pairs[p].second, f0, q0, sample.axes);
+                            Eval e;
+                            if (continues && st.last.distance_mm - moved >= clearance_mm_) {
+                              // Proven apart over the whole interval by the last distance: nothing to query.
+                              e.distance_mm = st.last.distance_mm - moved;
+                            } else {
+                              e = evaluate(pairs[p], frames[k], queries[p]);
+                              // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
+                              if (!continues && !e.hit && e.exact) contained(pairs[p], frames[k], e);
+                              if (e.distance_mm < clearance_mm_ || e.hit)
+                                found[p].push_back({static_cast<int>(p), i, sample.block, e, sample.axes, false});
+                              if (continues)
+                                between(static_cast<int>(p), i, sample.block, f0, q0, sample.axes, st.last, e, 0,
+                                        found[p], queries[p]);
+                            }
+                            st.last = e;
+                            st.active = true;
+                            st.tool = tools[k];
+                          }
+                        }
+                      });
+    for (std::size_t p = 0; p < pair_count; ++p) {
+      findings.insert(findings.end(), found[p].begin(), found[p].end());
+      this->queries += queries[p];
     }
     last_frames_ = frames[n - 1];
-    last_tool_ = tools[n - 1];
     last_q_ = batch[n - 1].axes;
-    last_evals_.assign(evals.begin() + static_cast<std::ptrdiff_t>((n - 1) * pair_count), evals.end());
     index_ += n;
   }
 
@@ -471,13 +481,18 @@ class Checker {
   std::vector<Body>& bodies_;
   double clearance_mm_;
   std::vector<std::vector<int>> chain_;
-  // The last sample checked: the next index, its frames, tool (-1 before the first), axes and
-  // evaluations.
+  // Each pair along the samples: checked at the last sample (with which tool), and its
+  // distance there (exact, or a lower bound).
+  struct PairState {
+    bool active = false;
+    int tool = 0;
+    Eval last;
+  };
+  std::vector<PairState> state_;
+  // The last sample checked: the next index, its frames and axes.
   std::size_t index_ = 0;
   Frames last_frames_;
-  int last_tool_ = -1;
   AxisValues last_q_;
-  std::vector<Eval> last_evals_;
 };
 
 bool checked_pair(const Body& a, const Body& b, bool stock) {
