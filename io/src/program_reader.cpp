@@ -259,13 +259,11 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
       const int i = machine.axis_index(static_cast<char>('A' + r));
       if (i >= 0) rotary_deg[static_cast<size_t>(r)] = q[i] * 180.0 / M_PI;
     }
-    if (axis_program) {  // X Y Z are the linear axes' values
-      for (int a = 0; a < 3; ++a) {
-        const int i = machine.axis_index(static_cast<char>('X' + a));
-        point[a] = i >= 0 ? q[i] : 0.0;
-      }
-      return;
-    }
+    // An axis program's X Y Z are the tip with the rotary axes at zero (as the pose engine
+    // reads them): the gauge point there, the rotaries left out.
+    if (axis_program)
+      for (int k = 0; k < machine.axis_count(); ++k)
+        if (machine.axis(k).kind == kinematics::AxisKind::Rotary) q[k] = 0.0;
     const kinematics::ToolPose pose = kinematics::forward(machine, q, 0.0);
     point = pose.tip_mm;
     options.spindle_axis = pose.axis;
@@ -282,7 +280,7 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
   options.tool_radius_mm.clear();
   auto lengths = std::make_shared<std::map<int, double>>();
   for (const auto& [number, cutter] : tools) {
-    if (!axis_program) options.tool_length_mm[number] = cutter.gauge_length_mm;
+    options.tool_length_mm[number] = cutter.gauge_length_mm;
     options.tool_radius_mm[number] = cutter.radius_mm();
     (*lengths)[number] = cutter.gauge_length_mm;
   }

@@ -277,6 +277,28 @@ void write_report_page(const std::string& path, const std::string& template_path
                        {"where", vec(c.where_mm)}},
                       sources.add(kinematics::Program::span_in_first_file(c.lines))});
   }
+  for (const pipeline::MachineContact& c : r.machine.contacts) {
+    std::ostringstream detail;
+    detail.precision(3);
+    detail << std::fixed << c.a << (c.hit ? " hits " : " passes ") << c.b;
+    if (c.hit)
+      detail << ", " << c.depth_mm << " mm deep";
+    else
+      detail << " at " << c.clearance_mm << " mm";
+    detail << (c.between_poses ? ", between two poses" : "") << " (";
+    bool first = true;
+    for (const auto& [letter, value] : pipeline::axis_readout(*run.machine, c.axes)) {
+      detail << (first ? "" : " ") << letter << value;
+      first = false;
+    }
+    detail << ")";
+    events.push_back({{{"kind", c.hit ? "machine_collision" : "machine_near_miss"},
+                       {"line", run.program.where(c.lines)},
+                       {"detail", detail.str()},
+                       {"depth_mm", c.hit ? ordered_json(c.depth_mm) : ordered_json(nullptr)},
+                       {"where", vec(c.where_mm)}},
+                      sources.add(kinematics::Program::span_in_first_file(c.lines))});
+  }
   for (const PoseEvent& e : run.events)
     events.push_back(
         {{{"kind", pipeline::to_string(e.kind)},

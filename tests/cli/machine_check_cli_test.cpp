@@ -170,6 +170,45 @@ TEST_F(MachineCheck, AFastTiltBetweenTwoCleanPosesIsFound) {
   EXPECT_TRUE(found) << json().dump(1);
 }
 
+// The bundled machines' own bodies stay clear of each other (and of a tool retracted 50 mm
+// below the top of Z's travel, 100 mm out of the nose; on LinuxCNC's desktop xyzac-trt 5 mm
+// below, 30 mm out) while the rotary axes run to the ends of their travels: the models make no false
+// alarm by themselves.
+TEST_F(MachineCheck, BundledMachinesAreClearOverTheirTravels) {
+  struct Case {
+    const char* machine;
+    double gauge_mm;  // the tool out of the nose
+    double top_mm;    // the tip: the nose's height at Z's top, less the tool, less 50 mm
+    const char* start;
+    const char* moves;
+  };
+  const Case cases[] = {
+      {"table-table-ac", 100, 350, " A0 C0", "G0 A-120\nG0 C180\nG0 A30\nG0 C-90\n"},
+      {"table-table-bc", 100, 300, " B0 C0", "G0 B-110\nG0 C180\nG0 B110\nG0 C-90\n"},
+      {"xyzac-trt", 30, 85, " A0 C0", "G0 A-100\nG0 C180\nG0 A50\nG0 C-90\n"},
+      {"head-table-bc", 100, 250, " B0 C0", "G0 B-110\nG0 C180\nG0 B110\nG0 C-90\n"},
+      {"head-head-ac", 100, 450, " A0 C0", "G0 A-105\nG0 C180\nG0 A105\nG0 C-180\n"},
+      {"gantry-wyxzcat", 100, 2250, " A0 C0", "G0 A-110\nG0 C180\nG0 A110\nG0 C-180\n"},
+      {"3axis", 100, 250, "", "G0 X300 Y200\nG0 X-300 Y-200\n"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.machine);
+    write(dir / "tools.yaml",
+          "tools:\n  1: {type: flat, diameter: 10, flute_length: 10, length: " + std::to_string(c.gauge_mm / 2) +
+              ", gauge_length: " + std::to_string(c.gauge_mm) + ", holder_diameter: 40}\n");
+    write(dir / "p.ngc",
+          "G21 G90 G94\nT1 M6\nG0 X0 Y0 Z" + std::to_string(c.top_mm) + c.start + "\n" + c.moves + "M30\n");
+    write(dir / "job.yaml",
+          std::string("job: t\nmachine: ") + c.machine +
+              "\ntools: tools.yaml\nprogram: {file: p.ngc}\n"
+              "stock: {box: {min: [-40, -40, -30], max: [40, 40, 0]}}\nreport: {machine_clearance: 2}\n");
+    const CommandResult r = check(dir / "job.yaml");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_TRUE(machine_events(json()).empty()) << json().dump(1);
+    EXPECT_GE(json()["machine_check"]["bodies"].size(), 6u);
+  }
+}
+
 TEST_F(MachineCheck, BadModelsAndFixtures) {
   // A machine model that is one triangle, not a solid.
   write(dir / "flat.stl",

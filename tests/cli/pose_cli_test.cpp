@@ -166,6 +166,23 @@ TEST_F(PoseCli, ThreeAxisRestToRestBlockTime) {
 //   both axes: the actual tip runs on a circle of radius R/sqrt(1 + (w/Kv)^2), and the contour
 //   error is R [1 - 1/sqrt(1 + (w/Kv)^2)] = 10 (1 - 1/sqrt(1.0625)) mm = 298.6 um. Sampling
 //   at dT shifts it by O(Kv dT) = 0.2 %; the chords (0.1 um tolerance) by < 0.04 %: 1 %.
+// An axis program (rotary words without TCP) starts where the machine stands: xyzac-trt's home
+// has Z at 120 (the nose 120 mm over the table, its gauge point at the origin at all-zero axes)
+// and the rotaries at 0. T1 M6 leaves the spindle there, so the tool's tip is its 100 mm gauge
+// length below the nose: the start row has tip z = 20 and Z = 120, the machine not moved. (It
+// once read the home's Z as the tip, so that Z had to be 220: out of its travel.)
+TEST_F(PoseCli, AxisProgramStartsAtTheMachinesHome) {
+  write(dir / "tilt.ngc", "G21 G90 G94\nT1 M6\nG0 X0 Y0 Z15 A0 C0\nG0 A-30\nM2\n");
+  const Csv csv = poses("tilt",
+                        "job: tilt\nmachine: xyzac-trt\ntools: tools.yaml\nprogram: {file: tilt.ngc}\n"
+                        "stock: {box: {min: [-20, -20, -20], max: [20, 20, 0]}}\n");
+  ASSERT_GT(csv.rows.size(), 2u);
+  EXPECT_EQ(csv.text(0, "block"), "-1");
+  EXPECT_NEAR(csv.num(0, "z"), 20.0, 1e-9);
+  EXPECT_NEAR(csv.num(0, "Z"), 120.0, 1e-9);
+  EXPECT_NEAR(csv.num(1, "Z"), 115.0, 1e-9);  // the first move: 5 mm down
+}
+
 TEST_F(PoseCli, ServoLagAlongLineAndCircleShrink) {
   // A 110 mm lead-in along -Y ends tangent to the clockwise circle about the origin, run three
   // times (P3): the lag's transient decays as exp(-Kv t), 4.5e-5 after 0.5 s.

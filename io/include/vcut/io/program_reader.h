@@ -32,8 +32,10 @@ std::string lower_extension(const std::string& path);
 // the G28 / G30 references (its home and second_home: the spindle's gauge point there, by
 // forward kinematics, in the workpiece frame without work offsets), the M codes it declares,
 // and each tool's gauge length and radius (for the tip under the gauge point and for cutter
-// compensation). `axis_program`: the program moves the axes (rotary words without TCP), so its
-// X Y Z are axis values and the start is the home's axis values.
+// compensation). `axis_program`: the program moves the axes (rotary words without TCP): its
+// X Y Z are the tip as it would stand with the rotary axes at zero (what the pose engine solves
+// the linear axes from), so the start is the home's gauge point with the rotaries left out,
+// the tip a tool length below it; M6 moves it by the difference of the tool lengths.
 void set_machine(GcodeOptions& options, const kinematics::MachineSpec& machine,
                  const std::map<int, removal::Cutter>& tools, bool axis_program = false);
 // The SINUMERIK reader's options from the G-code reader's (the job's offsets, limits, folders
