@@ -609,9 +609,12 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   }
 
   Checker checker(machine, run, bodies, options.clearance_mm);
+  // Where the workpiece sits on the frame (head-head, gantry), its side never moves against
+  // the frame: a fixture standing on the bed is not a collision.
+  const bool work_moves = !machine.workpiece_chain().empty();
   for (std::size_t a = 0; a < bodies.size(); ++a)
     for (std::size_t b = 0; b < bodies.size(); ++b)
-      if (checked_pair(bodies[a], bodies[b], options.stock))
+      if (checked_pair(bodies[a], bodies[b], options.stock) && (bodies[a].side != BodySide::Work || work_moves))
         checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
   out.pairs = checker.pairs.size();
   checker.run();

@@ -209,6 +209,28 @@ TEST_F(MachineCheck, BundledMachinesAreClearOverTheirTravels) {
   }
 }
 
+// On a head-head machine the workpiece stands on the bed: a fixture standing on the table
+// (the clamp moved down 20 mm: its underside on the table's top at z -60) never moves against
+// it and is no collision; the spindle housing coming down onto the clamp is.
+TEST_F(MachineCheck, AFixtureOnTheBedOfAHeadHeadMachine) {
+  write(dir / "p.ngc", "G21 G90 G94\nT1 M6\nG0 X80 Y0 Z200 A0 C0\nG0 Z100\nM30\n");
+  write(dir / "job.yaml", "job: t\nmachine: head-head-ac\ntools: " + (kExample / "tools.yaml").string() +
+                              "\nprogram: {file: p.ngc}\nfixtures: [{file: " + (kExample / "clamp.stl").string() +
+                              ", transform: {translate: [0, 0, -20]}}]\n"
+                              "stock: {box: {min: [-40, -40, -30], max: [40, 40, 0]}}\n");
+  CommandResult r = check(dir / "job.yaml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(machine_events(json()).empty()) << json().dump(1);
+  // Tip at z -10 over the clamp's middle (x 80): the cutter 30 mm into its top at z 20.
+  write(dir / "p.ngc", "G21 G90 G94\nT1 M6\nG0 X80 Y0 Z200 A0 C0\nG1 Z-10 F1000\nM30\n");
+  r = check(dir / "job.yaml");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const std::vector<nlohmann::json> events = machine_events(json());
+  ASSERT_FALSE(events.empty()) << json().dump(1);
+  EXPECT_EQ(events[0]["line"], "p.ngc:4");
+  EXPECT_EQ(events[0]["bodies"][1], "fixture clamp");
+}
+
 TEST_F(MachineCheck, BadModelsAndFixtures) {
   // A machine model that is one triangle, not a solid.
   write(dir / "flat.stl",
