@@ -208,6 +208,10 @@ CheckResult run_check(const io::Job& job) {
   const Eigen::AlignedBox3d& box = result.stock_box;
   const double tolerance_mm = job.collision_tolerance_mm;
   EventLog log(program);
+  // With the machine check, a stock that is not a box meets the shank and holder there, by its
+  // shape; a box stock's box test is exact.
+  const bool machine_bodies = has_machine_bodies(job, run);
+  const bool by_shape = machine_bodies && job.stock.kind != io::StockSpec::Kind::Box;
 
   // The pose engine's findings, by their first block.
   for (const PoseEvent& e : run.events) {
@@ -287,7 +291,7 @@ CheckResult run_check(const io::Job& job) {
           t.over_stock = t.over_stock || over;
         }
         const double d = penetration_mm(part, box);
-        if (d > tolerance_mm)
+        if (d > tolerance_mm && !by_shape)
           log.add(Severity::Warning, holder ? CheckKind::HolderInStockBox : CheckKind::ShankInStockBox, block,
                   std::string(holder ? "the holder" : "the shank") + " of T" + std::to_string(b.tool) + " " + mm(d) +
                       " inside the stock's box (a collision unless that material is gone)",
@@ -298,11 +302,12 @@ CheckResult run_check(const io::Job& job) {
   for (const auto& b : program.blocks)
     if (b.tool != 0 && !clearance.count(b.tool)) clearance[b.tool].tool = b.tool;  // no holder given
   for (const auto& [tool, t] : clearance) result.tools.push_back(t);
-  if (has_machine_bodies(job, run)) {
+  if (machine_bodies) {
     const auto m0 = std::chrono::steady_clock::now();
     MachineCheckOptions options;
     options.clearance_mm = job.machine_clearance_mm;
     options.stock = true;
+    options.stock_parts = by_shape;
     const MachineCheck m = check_machine(job, run, options);
     result.machine_checked = true;
     result.bodies = m.bodies;

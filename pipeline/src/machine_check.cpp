@@ -495,11 +495,13 @@ class Checker {
   AxisValues last_q_;
 };
 
-bool checked_pair(const Body& a, const Body& b, bool stock) {
+bool checked_pair(const Body& a, const Body& b, const MachineCheckOptions& options) {
   if (a.side == BodySide::Tool && b.side != BodySide::Tool) {
-    // The tool's own parts meet the stock in the cut (and `check`'s box test); its machine
-    // bodies (spindle housing, head) must never.
-    if (b.kind == BodyKind::Stock) return stock && a.kind == BodyKind::Model;
+    // The cutting part meets the stock in the cut; the shank and holder there too, or in
+    // `check`'s box test where the stock is a box; the machine's bodies (spindle housing,
+    // head) must never.
+    if (b.kind == BodyKind::Stock)
+      return options.stock && (a.kind == BodyKind::Model || (options.stock_parts && a.kind != BodyKind::Cutter));
     return true;
   }
   return a.side == BodySide::Work && b.side == BodySide::Frame && a.kind != BodyKind::Stock;
@@ -614,7 +616,7 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   const bool work_moves = !machine.workpiece_chain().empty();
   for (std::size_t a = 0; a < bodies.size(); ++a)
     for (std::size_t b = 0; b < bodies.size(); ++b)
-      if (checked_pair(bodies[a], bodies[b], options.stock) && (bodies[a].side != BodySide::Work || work_moves))
+      if (checked_pair(bodies[a], bodies[b], options) && (bodies[a].side != BodySide::Work || work_moves))
         checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
   out.pairs = checker.pairs.size();
   checker.run();

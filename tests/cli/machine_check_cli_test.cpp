@@ -119,6 +119,27 @@ TEST_F(MachineCheck, SimulateReportsThemInTheReportAndCollisionsCsv) {
   EXPECT_NE(row2.find(",true,crash.ngc:16"), std::string::npos) << row2;
 }
 
+// The same findings, to the byte, with 1 thread and with 3 (the pairs and the poses are
+// checked in parallel): the fast-tilt program has runs of both kinds, at poses and between.
+TEST_F(MachineCheck, SameFindingsForOneAndThreeThreads) {
+  std::string reports[2];
+  int k = 0;
+  for (const char* threads : {"1", "3"}) {
+    job_with(
+        "G21 G90 G94\nT1 M6\nS8000 M3\nG0 X-50 Y0 Z10 A0 C0\nG1 Z-2 F1000\nG1 X50\nG0 Z100\n"
+        "G0 X0 Y-95\nG0 Z30\nG0 A-90\nG0 Z100\nG0 X0 Y-215 A0\nG1 Z-158.5 F2000\nG0 Z100\nM30\n",
+        "densify: {angle: 90}\n");
+    const CommandResult r = run_vcut("simulate " + (dir / "job.yaml").string() + " --quiet --threads " + threads +
+                                     " --out " + (dir / "out").string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    std::ifstream in(dir / "out" / "report.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    reports[k++] = j["machine"].dump();
+    EXPECT_GE(j["machine"]["contacts"].size(), 3u) << j["machine"].dump(1);
+  }
+  EXPECT_EQ(reports[0], reports[1]);
+}
+
 TEST_F(MachineCheck, CleanVariantReportsNone) {
   const CommandResult r = check(kExample / "job-clean.yaml");
   EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -229,6 +250,38 @@ TEST_F(MachineCheck, AFixtureOnTheBedOfAHeadHeadMachine) {
   ASSERT_FALSE(events.empty()) << json().dump(1);
   EXPECT_EQ(events[0]["line"], "p.ngc:4");
   EXPECT_EQ(events[0]["bodies"][1], "fixture clamp");
+}
+
+// A cylinder stock (radius 30 about z, z -30..0): a holder (radius 20) whose underside comes to
+// z -5 at x = y = 45 lies in the cylinder's box but 63.6 - 20 - 30 = 13.6 mm from the
+// cylinder: the box test would flag it, the shape does not. With the tool's axis at x 40 (the holder
+// 10 mm into the cylinder's side, 5 mm below its top) it is in the stock.
+TEST_F(MachineCheck, HolderAgainstACylinderStocksShape) {
+  write(dir / "tools.yaml",
+        "tools:\n  1: {type: flat, diameter: 10, flute_length: 10, length: 20, gauge_length: 100, "
+        "holder_diameter: 40}\n");
+  const std::string job_text =
+      "job: t\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: p.ngc}\n"
+      "stock: {cylinder: {center: [0, 0, -30], radius: 30, height: 30}}\n";
+  write(dir / "job.yaml", job_text);
+  write(dir / "p.ngc", "G21 G90 G94\nT1 M6\nS1000 M3\nG0 X45 Y45 Z50\nG0 Z-25\nG0 Z50\nM30\n");
+  CommandResult r = check(dir / "job.yaml");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  nlohmann::json j = json();
+  for (const auto& e : j["events"]) {
+    EXPECT_NE(e["kind"], "holder_in_stock_box") << e.dump();
+    EXPECT_NE(e["kind"], "body_in_stock") << e.dump();
+  }
+  write(dir / "p.ngc", "G21 G90 G94\nT1 M6\nS1000 M3\nG0 X40 Y0 Z50\nG0 Z-25\nG0 Z50\nM30\n");
+  r = check(dir / "job.yaml");
+  j = json();
+  bool holder = false;
+  for (const auto& e : j["events"])
+    if (e["kind"] == "body_in_stock" && e["bodies"][0] == "T1 holder") {
+      holder = true;
+      EXPECT_EQ(e["line"], "p.ngc:5") << e.dump();
+    }
+  EXPECT_TRUE(holder) << j.dump(1);
 }
 
 TEST_F(MachineCheck, BadModelsAndFixtures) {

@@ -23,8 +23,10 @@ const EVENT_LABELS = {
   unreachable: 'Unreachable pose',
   axis_limited_speed: 'Axis-limited speed',
   densify_error: 'Densified off the machine path',
+  machine_collision: 'Machine collision',
+  machine_near_miss: 'Machine near miss',
 };
-const SEVERE_EVENTS = new Set(['rapid_into_stock', 'holder_collision', 'shank_collision', 'spindle_off_cut', 'axis_limit', 'unreachable']);
+const SEVERE_EVENTS = new Set(['rapid_into_stock', 'holder_collision', 'shank_collision', 'spindle_off_cut', 'axis_limit', 'unreachable', 'machine_collision']);
 
 function fail(title, detail) {
   window.vcutError = `${title}${detail ? `: ${detail}` : ''}`;

@@ -2,7 +2,10 @@
 // real machine. Reads the program, densifies and times it on the machine, and checks reach,
 // axis limits, singular poses, tools, the spindle, and the tool's clearance against the
 // stock's bounding box (the stock is not cut, so a pass through a pocket the program has
-// already made shows as a possible collision: the simulation settles it).
+// already made shows as a possible collision: the simulation settles it). With the machine's
+// bodies (machine_check.h) also the machine, fixtures and holder against each other, the
+// spindle head against the stock's initial shape, and where the stock is not a box, the
+// shank and holder against its shape instead of its box.
 #pragma once
 
 #include <Eigen/Core>

@@ -47,6 +47,7 @@ struct MachineContact {
 struct MachineCheckOptions {
   double clearance_mm = 1.0;  // closer than this: a near miss
   bool stock = false;         // the tool side's machine bodies against the stock's initial shape (`vcut check`)
+  bool stock_parts = false;   // with `stock`: the tool's shank and holder too (a stock that is not a box)
 };
 
 struct MachineCheck {
