@@ -239,6 +239,45 @@ Frames frames_at(const kinematics::Machine& m, const AxisValues& q) {
   return f;
 }
 
+// The axes that move a node, from the frame outward (its chain up to it; W and T: the whole
+// chain; F: none).
+std::vector<int> chain_of(const kinematics::Machine& machine, char node) {
+  for (const auto* chain : {&machine.workpiece_chain(), &machine.tool_chain()}) {
+    if (node == (chain == &machine.tool_chain() ? 'T' : 'W')) return *chain;
+    std::vector<int> prefix;
+    for (int k : *chain) {
+      prefix.push_back(k);
+      if (machine.axis(k).letter == node) return prefix;
+    }
+  }
+  return {};
+}
+
+// How far any point within radius_mm of c (frame F, at q0) on a body moved by `chain` can move
+// while the axes go linearly from q0 to q1, per unit of the interval: each axis of the chain,
+// from the outermost in, moves it at most by its step (linear), or by its step times the
+// point's distance from the axis line (rotary): the sphere's centre's distance plus its radius
+// plus what the outer axes move it (a rotation does not change a point's distance from its own
+// line, and the inner axes carry the line with the point).
+double chain_motion_bound_mm(const kinematics::Machine& machine, const std::vector<int>& chain, const Frames& f0,
+                             const Eigen::Vector3d& c, double radius_mm, const AxisValues& q0, const AxisValues& q1) {
+  double moved = 0.0;
+  for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
+    const int k = *it;
+    const double step = std::abs(q1[k] - q0[k]);
+    const kinematics::AxisSpec& axis = machine.axis(k);
+    if (axis.kind == kinematics::AxisKind::Linear) {
+      moved += step;
+      continue;
+    }
+    const Eigen::Isometry3d& pose = f0.at(k);
+    const Eigen::Vector3d point = pose * axis.center_mm, dir = (pose.linear() * axis.direction).normalized();
+    const Eigen::Vector3d r = c - point;
+    moved += ((r - r.dot(dir) * dir).norm() + radius_mm + moved) * step;
+  }
+  return moved;
+}
+
 struct Eval {
   double distance_mm = std::numeric_limits<double>::infinity();  // exact, or a lower bound when !exact
   bool exact = false;
@@ -260,7 +299,7 @@ class Checker {
  public:
   Checker(const kinematics::Machine& machine, const PoseRun& run, std::vector<Body>& bodies, double clearance_mm)
       : machine_(machine), run_(run), bodies_(bodies), clearance_mm_(clearance_mm) {
-    for (std::size_t i = 0; i < bodies_.size(); ++i) chain_.push_back(chain_of(bodies_[i].node));
+    for (std::size_t i = 0; i < bodies_.size(); ++i) chain_.push_back(chain_of(machine_, bodies_[i].node));
   }
 
   std::vector<std::pair<int, int>> pairs;
@@ -367,18 +406,6 @@ class Checker {
     return tool >= 0 && (a.tool == 0 || a.tool == tool);
   }
 
-  std::vector<int> chain_of(char node) const {
-    for (const auto* chain : {&machine_.workpiece_chain(), &machine_.tool_chain()}) {
-      if (node == (chain == &machine_.tool_chain() ? 'T' : 'W')) return *chain;
-      std::vector<int> prefix;
-      for (int k : *chain) {
-        prefix.push_back(k);
-        if (machine_.axis(k).letter == node) return prefix;
-      }
-    }
-    return {};
-  }
-
   static Eigen::Isometry3d pose_of(const Body& b, const Frames& f) { return f.at(b.slot) * b.local; }
 
   Eval evaluate(const std::pair<int, int>& pair, const Frames& f, std::size_t& queries) const {
@@ -429,31 +456,10 @@ class Checker {
     }
   }
 
-  // How far any point of a body can move while the axes go from q0 to q1 (linearly): each
-  // axis of its chain, from the outermost in, moves it by its step (linear) or by its step
-  // times the body's reach from the axis line (rotary), the reach grown by what the outer
-  // axes move it.
   double motion_bound_mm(int body, const Frames& f0, const AxisValues& q0, const AxisValues& q1) const {
     const Body& b = bodies_[static_cast<std::size_t>(body)];
-    const std::vector<int>& chain = chain_[static_cast<std::size_t>(body)];
-    if (chain.empty()) return 0.0;
-    const Eigen::Vector3d c = pose_of(b, f0) * b.center;
-    double moved = 0.0;
-    for (auto it = chain.rbegin(); it != chain.rend(); ++it) {
-      const int k = *it;
-      const double step = std::abs(q1[k] - q0[k]);
-      const kinematics::AxisSpec& axis = machine_.axis(k);
-      if (axis.kind == kinematics::AxisKind::Linear) {
-        moved += step;
-        continue;
-      }
-      const Eigen::Isometry3d& pose = f0.at(k);
-      const Eigen::Vector3d point = pose * axis.center_mm, dir = (pose.linear() * axis.direction).normalized();
-      const Eigen::Vector3d r = c - point;
-      const double reach = (r - r.dot(dir) * dir).norm() + b.radius_mm + moved;
-      moved += reach * step;
-    }
-    return moved;
+    return chain_motion_bound_mm(machine_, chain_[static_cast<std::size_t>(body)], f0, pose_of(b, f0) * b.center,
+                                 b.radius_mm, q0, q1);
   }
 
   // Conservative advancement over the interval (q0, q1) of sample `sample`: halved until the
@@ -531,6 +537,11 @@ std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& mac
     out.emplace_back(machine.axis(k).letter, rotary ? q[k] * 180.0 / M_PI : q[k]);
   }
   return out;
+}
+
+double motion_bound_mm(const kinematics::Machine& machine, char node, const Eigen::Vector3d& center_mm,
+                       double radius_mm, const kinematics::AxisValues& q0, const kinematics::AxisValues& q1) {
+  return chain_motion_bound_mm(machine, chain_of(machine, node), frames_at(machine, q0), center_mm, radius_mm, q0, q1);
 }
 
 bool has_machine_bodies(const io::Job& job, const PoseRun& run) {

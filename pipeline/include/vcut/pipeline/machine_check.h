@@ -66,6 +66,12 @@ removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSp
 // rotary axes in deg.
 std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& machine, const kinematics::AxisValues& q);
 
+// The bound the continuous check rests on: while the axes go linearly from q0 to q1 (t from 0
+// to 1), no point within radius_mm of center_mm (frame F at q0) on node `node` (an axis letter,
+// F, W or T) moves faster than this many mm per unit of t.
+double motion_bound_mm(const kinematics::Machine& machine, char node, const Eigen::Vector3d& center_mm,
+                       double radius_mm, const kinematics::AxisValues& q0, const kinematics::AxisValues& q1);
+
 // Nothing to check (no models, no fixtures, no holder): false.
 bool has_machine_bodies(const io::Job& job, const PoseRun& run);
 
