@@ -1,5 +1,7 @@
 #include "vcut/io/tool_library.h"
 
+#include <filesystem>
+
 #include "tool_library_node.h"
 
 namespace vcut::io {
@@ -22,7 +24,7 @@ ToolLibrary read_tools(const YamlReader& yaml, const YAML::Node& tools) {
     const YAML::Node& t = kv.second;
     yaml.only_keys(t, where,
                    {"type", "diameter", "corner_radius", "angle", "point_angle", "flute_length", "shank_diameter",
-                    "length", "gauge_length", "holder_diameter", "holder_length", "name"});
+                    "length", "gauge_length", "holder_diameter", "holder_length", "holder_mesh", "name"});
     removal::Cutter c;
     const std::string type = yaml.text(yaml.require(t, "type", where), where + ".type");
     if (type == "flat")
@@ -86,6 +88,15 @@ ToolLibrary read_tools(const YamlReader& yaml, const YAML::Node& tools) {
       if (!(c.holder_length_mm > 0.0))
         yaml.fail(t["holder_diameter"], where + ".holder_diameter",
                   "holder_length (or a gauge_length beyond the length) with it");
+    }
+    // A holder model (the machine check), relative to the file that names it.
+    if (const YAML::Node mesh = t["holder_mesh"]) {
+      const std::filesystem::path file = yaml.text(mesh, where + ".holder_mesh");
+      c.holder_mesh_file =
+          (file.is_absolute() ? file : std::filesystem::absolute(yaml.file()).parent_path() / file).lexically_normal();
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(c.holder_mesh_file, ec))
+        yaml.fail(mesh, where + ".holder_mesh", "an existing mesh file (no file " + c.holder_mesh_file + ")");
     }
     // The machine's kinematics need the spindle nose to tip distance; without one the tool
     // and its holder sit right in the nose.

@@ -172,7 +172,19 @@ void add_tool_parts(std::vector<Body>& bodies, int number, const removal::Cutter
     add(BodyKind::Shank, "shank",
         revolved({{0.0, c.flute_length_mm}, {r, c.flute_length_mm}, {r, c.length_mm}, {0.0, c.length_mm}}));
   }
-  if (c.holder_diameter_mm > 0.0 && c.holder_length_mm > 0.0) {
+  if (!c.holder_mesh_file.empty()) {
+    // The holder model hangs from the spindle nose, a gauge length above the tip.
+    Body b;
+    b.name = "T" + std::to_string(number) + " holder";
+    b.side = BodySide::Tool;
+    b.kind = BodyKind::Holder;
+    b.node = 'T';
+    b.tool = number;
+    b.local = local * Eigen::Translation3d(0.0, 0.0, c.gauge_length_mm);
+    b.mesh = closed_mesh(c.holder_mesh_file, "holder of T" + std::to_string(number));
+    finish(b);
+    bodies.push_back(std::move(b));
+  } else if (c.holder_diameter_mm > 0.0 && c.holder_length_mm > 0.0) {
     const double r = 0.5 * c.holder_diameter_mm, z0 = std::max(c.length_mm, c.flute_length_mm);
     const double z1 = z0 + c.holder_length_mm;
     add(BodyKind::Holder, "holder", revolved({{0.0, z0}, {r, z0}, {r, z1}, {0.0, z1}}));
@@ -200,6 +212,25 @@ bool inside(const removal::TriangleMesh& m, const Eigen::Vector3d& p) {
     if (e2.dot(q) / det > 0.0) ++crossings;
   }
   return crossings % 2 == 1;
+}
+
+// How deep body a reaches into body b: the largest distance from b's surface of a's vertices
+// that lie inside b (0 when none does: edges crossing).
+double vertex_depth_mm(const Body& a, const Eigen::Isometry3d& ta, const Body& b, const Eigen::Isometry3d& tb) {
+  const auto point = std::make_shared<fcl::Sphered>(1e-9);
+  const Eigen::Isometry3d to_b = tb.inverse() * ta;
+  double depth = 0.0;
+  for (const Eigen::Vector3d& v : a.mesh.vertices_mm) {
+    const Eigen::Vector3d in_b = to_b * v;
+    if (!b.box.contains(in_b) || !inside(b.mesh, in_b)) continue;
+    fcl::DistanceRequestd request;
+    fcl::DistanceResultd result;
+    fcl::Transform3d at = fcl::Transform3d::Identity();
+    at.translation() = in_b;
+    fcl::distance(point.get(), at, b.bvh.get(), fcl::Transform3d::Identity(), request, result);
+    depth = std::max(depth, result.min_distance);
+  }
+  return depth;
 }
 
 Eigen::AlignedBox3d framed_box(const Eigen::AlignedBox3d& box, const Eigen::Isometry3d& pose) {
@@ -660,10 +691,17 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     const Finding& w = found[worst];
     c.hit = w.eval.hit;
     c.depth_mm = w.eval.depth_mm;
+    const Frames f = frames_at(machine, w.q);
+    if (c.hit) {
+      // FCL's contact depth is the overlap along a contact, not how far apart the bodies must
+      // move: where a vertex of one lies inside the other, its distance from the surface is.
+      const Eigen::Isometry3d ta = f.at(a.slot) * a.local, tb = f.at(b.slot) * b.local;
+      const double depth = std::max(vertex_depth_mm(a, ta, b, tb), vertex_depth_mm(b, tb, a, ta));
+      if (depth > 0.0) c.depth_mm = depth;
+    }
     c.clearance_mm = w.eval.hit ? 0.0 : w.eval.distance_mm;
     c.axes = w.q;
     c.between_poses = w.between;
-    const Frames f = frames_at(machine, w.q);
     c.where_mm = (f.at(slot_of(machine, 'W')) * on_workpiece).inverse() * w.eval.point;
     c.first_block = std::max(found[i].block, 0);
     c.last_block = std::max(found[j].block, 0);

@@ -284,6 +284,43 @@ TEST_F(MachineCheck, HolderAgainstACylinderStocksShape) {
   EXPECT_TRUE(holder) << j.dump(1);
 }
 
+// A holder model from the tool library (holder_mesh: its origin the spindle nose, hanging
+// below): a block 100 x 100 mm, 60 mm deep. With the nose 120 mm above the tip at -25 the
+// block's underside is at z 35, its side at x 20 + 50 = 70: 5 mm into the clamp's top (z 40)
+// over x 60..70. The tool itself (radius 5 at x 20) stays clear of the clamp.
+TEST_F(MachineCheck, AHolderModelFromTheToolLibrary) {
+  std::string stl = "solid holder\n";
+  const double lo[3] = {-50, -50, -60}, hi[3] = {50, 50, 0};
+  auto v = [&](int i) {
+    return std::to_string(i & 1 ? hi[0] : lo[0]) + " " + std::to_string(i & 2 ? hi[1] : lo[1]) + " " +
+           std::to_string(i & 4 ? hi[2] : lo[2]);
+  };
+  const int faces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                            {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : faces)
+    stl += "facet normal 0 0 0\nouter loop\nvertex " + v(f[0]) + "\nvertex " + v(f[1]) + "\nvertex " + v(f[2]) +
+           "\nendloop\nendfacet\n";
+  write(dir / "holder.stl", stl + "endsolid holder\n");
+  write(dir / "tools.yaml",
+        "tools:\n  1: {type: flat, diameter: 10, flute_length: 20, length: 40, gauge_length: 120, "
+        "holder_mesh: holder.stl}\n");
+  write(dir / "p.ngc", "G21 G90 G94\nT1 M6\nS1000 M3\nG0 X20 Y0 Z50 A0 C0\nG1 Z-25 F500\nG0 Z50\nM30\n");
+  write(dir / "job.yaml",
+        "job: t\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: p.ngc}\n"
+        "fixtures: [{file: " +
+            (kExample / "clamp.stl").string() + "}]\nstock: {box: {min: [-40, -40, -30], max: [40, 40, 0]}}\n");
+  const CommandResult r = check(dir / "job.yaml");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  const std::vector<nlohmann::json> events = machine_events(json());
+  ASSERT_EQ(events.size(), 1u) << json().dump(1);
+  EXPECT_EQ(events[0]["bodies"], nlohmann::json::array({"T1 holder", "fixture clamp"}));
+  EXPECT_EQ(events[0]["line"], "p.ngc:5");
+  EXPECT_NEAR(events[0]["depth_mm"].get<double>(), 5.0, 0.01);
+  // A holder model that is not there: the tool library's error.
+  write(dir / "tools.yaml", "tools:\n  1: {type: flat, diameter: 10, flute_length: 20, holder_mesh: none.stl}\n");
+  expect_error(check(dir / "job.yaml"), "'tools.1.holder_mesh': expected an existing mesh file");
+}
+
 TEST_F(MachineCheck, BadModelsAndFixtures) {
   // A machine model that is one triangle, not a solid.
   write(dir / "flat.stl",

@@ -26,6 +26,9 @@ struct Cutter {
   // The holder, a cylinder from `length_mm` up along the axis; 0 = none given (not checked).
   double holder_diameter_mm = 0.0;
   double holder_length_mm = 0.0;
+  // A holder model instead (the machine check): a closed mesh whose origin is the spindle nose
+  // (gauge line), +z into the spindle, the holder hanging below it. Empty: none.
+  std::string holder_mesh_file;
 
   double radius_mm() const { return 0.5 * diameter_mm; }
 };
