@@ -1,6 +1,5 @@
 #include "vcut/pipeline/machine_check.h"
 
-#include <fcl/fcl.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -13,6 +12,7 @@
 #include <memory>
 #include <utility>
 
+#include "fcl_queries.h"
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/kinematics/forward_kinematics.h"
@@ -22,7 +22,6 @@ namespace vcut::pipeline {
 
 namespace {
 
-using Bvh = fcl::BVHModel<fcl::OBBRSSd>;
 using kinematics::AxisValues;
 
 // A body: a closed triangle mesh in its own coordinates, hung on a node. `local` takes body
@@ -36,7 +35,7 @@ struct Body {
   int tool = 0;  // tool parts: the T number they belong to
   Eigen::Isometry3d local = Eigen::Isometry3d::Identity();
   removal::TriangleMesh mesh;
-  std::shared_ptr<Bvh> bvh;
+  std::shared_ptr<const detail::CollisionMesh> bvh;
   Eigen::Vector3d center = Eigen::Vector3d::Zero();  // bounding sphere, body coordinates
   double radius_mm = 0.0;
   Eigen::AlignedBox3d box;  // body coordinates
@@ -49,16 +48,7 @@ void finish(Body& b) {
   b.box = box;
   b.center = box.center();
   for (const Eigen::Vector3d& p : v) b.radius_mm = std::max(b.radius_mm, (p - b.center).norm());
-  std::vector<fcl::Vector3d> points(v.begin(), v.end());
-  std::vector<fcl::Triangle> triangles;
-  triangles.reserve(b.mesh.triangles.size());
-  for (const Eigen::Vector3i& t : b.mesh.triangles)
-    triangles.emplace_back(static_cast<std::size_t>(t[0]), static_cast<std::size_t>(t[1]),
-                           static_cast<std::size_t>(t[2]));
-  b.bvh = std::make_shared<Bvh>();
-  b.bvh->beginModel();
-  b.bvh->addSubModel(points, triangles);
-  b.bvh->endModel();
+  b.bvh = detail::collision_mesh(b.mesh);
 }
 
 // A solid of revolution about z: the profile (radius, z) from the bottom pole to the top pole,
@@ -217,18 +207,12 @@ bool inside(const removal::TriangleMesh& m, const Eigen::Vector3d& p) {
 // How deep body a reaches into body b: the largest distance from b's surface of a's vertices
 // that lie inside b (0 when none does: edges crossing).
 double vertex_depth_mm(const Body& a, const Eigen::Isometry3d& ta, const Body& b, const Eigen::Isometry3d& tb) {
-  const auto point = std::make_shared<fcl::Sphered>(1e-9);
   const Eigen::Isometry3d to_b = tb.inverse() * ta;
   double depth = 0.0;
   for (const Eigen::Vector3d& v : a.mesh.vertices_mm) {
     const Eigen::Vector3d in_b = to_b * v;
     if (!b.box.contains(in_b) || !inside(b.mesh, in_b)) continue;
-    fcl::DistanceRequestd request;
-    fcl::DistanceResultd result;
-    fcl::Transform3d at = fcl::Transform3d::Identity();
-    at.translation() = in_b;
-    fcl::distance(point.get(), at, b.bvh.get(), fcl::Transform3d::Identity(), request, result);
-    depth = std::max(depth, result.min_distance);
+    depth = std::max(depth, detail::point_distance_mm(*b.bvh, in_b));
   }
   return depth;
 }
@@ -452,25 +436,13 @@ class Checker {
       return e;
     }
     ++queries;
-    fcl::DistanceRequestd request(true);
-    fcl::DistanceResultd result;
-    fcl::distance(a.bvh.get(), fcl::Transform3d(ta.matrix()), b.bvh.get(), fcl::Transform3d(tb.matrix()), request,
-                  result);
+    const detail::MeshDistance d = detail::mesh_distance(*a.bvh, ta, *b.bvh, tb);
     e.exact = true;
-    e.distance_mm = std::max(0.0, result.min_distance);
-    e.point = 0.5 * (result.nearest_points[0] + result.nearest_points[1]);
-    if (result.min_distance > 0.0) return e;
+    e.distance_mm = d.distance_mm;
+    e.point = d.point;
+    if (d.distance_mm > 0.0) return e;
     e.hit = true;
-    fcl::CollisionRequestd creq(64, true);
-    fcl::CollisionResultd cres;
-    fcl::collide(a.bvh.get(), fcl::Transform3d(ta.matrix()), b.bvh.get(), fcl::Transform3d(tb.matrix()), creq, cres);
-    for (std::size_t k = 0; k < cres.numContacts(); ++k) {
-      const fcl::Contactd& c = cres.getContact(k);
-      if (k == 0 || c.penetration_depth > e.depth_mm) {
-        e.depth_mm = c.penetration_depth;
-        e.point = c.pos;
-      }
-    }
+    detail::mesh_contact(*a.bvh, ta, *b.bvh, tb, e.depth_mm, e.point);
     return e;
   }
 
@@ -628,12 +600,11 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     finish(b);
     for (const Body& f : bodies) {
       if (f.kind != BodyKind::Fixture) continue;
-      fcl::CollisionRequestd request;
-      fcl::CollisionResultd result;
-      fcl::collide(f.bvh.get(), fcl::Transform3d::Identity(), b.bvh.get(), fcl::Transform3d::Identity(), request,
-                   result);
-      if (result.isCollision() || inside(b.mesh, f.mesh.vertices_mm.front()) ||
-          inside(f.mesh, b.mesh.vertices_mm.front()))
+      double depth_mm = 0.0;
+      Eigen::Vector3d point;
+      const bool meet = detail::mesh_contact(*f.bvh, Eigen::Isometry3d::Identity(), *b.bvh,
+                                             Eigen::Isometry3d::Identity(), depth_mm, point);
+      if (meet || inside(b.mesh, f.mesh.vertices_mm.front()) || inside(f.mesh, b.mesh.vertices_mm.front()))
         out.warnings.push_back(f.name + " intersects the stock at the start");
     }
     bodies.push_back(std::move(b));

@@ -93,7 +93,8 @@ TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
 // simulate cuts the face pass (lines 6-7) and reports the same two collisions, in the
 // terminal, report.json and collisions.csv.
 TEST_F(MachineCheck, SimulateReportsThemInTheReportAndCollisionsCsv) {
-  const CommandResult r = run_vcut("simulate " + (kExample / "job.yaml").string() + " --out " + (dir / "out").string());
+  const CommandResult r =
+      run_vcut("simulate " + (kExample / "job.yaml").string() + " --resolution 0.5 --out " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(
       r.output.find("machine collision: spindle housing (Z) hits rotary table (C), 10.000 mm deep, at crash.ngc:12"),
@@ -129,8 +130,8 @@ TEST_F(MachineCheck, SameFindingsForOneAndThreeThreads) {
         "G21 G90 G94\nT1 M6\nS8000 M3\nG0 X-50 Y0 Z10 A0 C0\nG1 Z-2 F1000\nG1 X50\nG0 Z100\n"
         "G0 X0 Y-95\nG0 Z30\nG0 A-90\nG0 Z100\nG0 X0 Y-215 A0\nG1 Z-158.5 F2000\nG0 Z100\nM30\n",
         "densify: {angle: 90}\n");
-    const CommandResult r = run_vcut("simulate " + (dir / "job.yaml").string() + " --quiet --threads " + threads +
-                                     " --out " + (dir / "out").string());
+    const CommandResult r = run_vcut("simulate " + (dir / "job.yaml").string() + " --quiet --resolution 1 --threads " +
+                                     threads + " --out " + (dir / "out").string());
     ASSERT_EQ(r.exit_code, 0) << r.output;
     std::ifstream in(dir / "out" / "report.json");
     const nlohmann::json j = nlohmann::json::parse(in);

@@ -42,7 +42,7 @@ TEST(MachineMotionBound, NoPointOfANodeOutrunsIt) {
     SCOPED_TRACE(name);
     const Machine m(vcut::io::read_machine_file(vcut::io::resolve_machine(name)));
     std::string nodes = m.axis_letters() + "FWT";
-    for (int trial = 0; trial < 40; ++trial) {
+    for (int trial = 0; trial < 20; ++trial) {
       AxisValues q0 = m.zero(), q1 = m.zero();
       for (int k = 0; k < m.axis_count(); ++k) {
         const bool rotary = m.axis(k).kind == vcut::kinematics::AxisKind::Rotary;
