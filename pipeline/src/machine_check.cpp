@@ -461,8 +461,9 @@ class Checker {
 
   double motion_bound_mm(int body, const Frames& f0, const AxisValues& q0, const AxisValues& q1) const {
     const Body& b = bodies_[static_cast<std::size_t>(body)];
-    return chain_motion_bound_mm(machine_, chain_[static_cast<std::size_t>(body)], f0, pose_of(b, f0) * b.center,
-                                 b.radius_mm, q0, q1);
+    // The centre placed by one transform of a point (not a product of two transforms).
+    return chain_motion_bound_mm(machine_, chain_[static_cast<std::size_t>(body)], f0,
+                                 f0.at(b.slot) * (b.local * b.center), b.radius_mm, q0, q1);
   }
 
   // Conservative advancement over the interval (q0, q1) of sample `sample`: halved until the
