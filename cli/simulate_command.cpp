@@ -41,12 +41,7 @@ int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base
                   pipeline::collision_part(c.probe), c.tool, r.pose_run.program.where(c.lines).c_str(), c.depth_mm,
                   r.pose_run.program.where(c.deepest_line).c_str());
     for (const auto& c : r.machine.contacts) {
-      std::string at;
-      for (const auto& [letter, value] : pipeline::axis_readout(*r.pose_run.machine, c.axes)) {
-        char field[40];
-        std::snprintf(field, sizeof field, "%s%c%.3f", at.empty() ? "" : " ", letter, value);
-        at += field;
-      }
+      const std::string at = pipeline::axis_text(*r.pose_run.machine, c.axes);
       if (c.hit)
         std::printf("machine collision: %s hits %s, %.3f mm deep, at %s%s (%s)\n", c.a.c_str(), c.b.c_str(), c.depth_mm,
                     r.pose_run.program.where(c.lines).c_str(), c.between_poses ? " between two poses" : "", at.c_str());

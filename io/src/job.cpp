@@ -25,10 +25,6 @@ const char* engine_name(Engine engine) {
 namespace fs = std::filesystem;
 
 namespace {
-std::string resolve(const fs::path& base, const std::string& relative) {
-  const fs::path p(relative);
-  return (p.is_absolute() ? p : base / p).lexically_normal().string();
-}
 
 // One axis's loop keys, over the values it has (`where` prefixes the key in messages).
 void read_servo_axis(const YamlReader& yaml, const YAML::Node& node, const std::string& where,

@@ -51,11 +51,6 @@ void check_keys(const YamlReader& yaml, const YAML::Node& map, const std::string
   unique_keys(yaml, map, where);
 }
 
-std::string resolve(const fs::path& base, const std::string& relative) {
-  const fs::path p(relative);
-  return (p.is_absolute() ? p : base / p).lexically_normal().string();
-}
-
 AxisSpec read_axis(const YamlReader& yaml, const YAML::Node& key, const YAML::Node& a) {
   const std::string letter = yaml.text(key, "axes");
   const std::string where = "axes." + letter;

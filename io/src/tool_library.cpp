@@ -91,9 +91,8 @@ ToolLibrary read_tools(const YamlReader& yaml, const YAML::Node& tools) {
     }
     // A holder model (the machine check), relative to the file that names it.
     if (const YAML::Node mesh = t["holder_mesh"]) {
-      const std::filesystem::path file = yaml.text(mesh, where + ".holder_mesh");
       c.holder_mesh_file =
-          (file.is_absolute() ? file : std::filesystem::absolute(yaml.file()).parent_path() / file).lexically_normal();
+          resolve(std::filesystem::absolute(yaml.file()).parent_path(), yaml.text(mesh, where + ".holder_mesh"));
       std::error_code ec;
       if (!std::filesystem::is_regular_file(c.holder_mesh_file, ec))
         yaml.fail(mesh, where + ".holder_mesh", "an existing mesh file (no file " + c.holder_mesh_file + ")");

@@ -115,6 +115,11 @@ Eigen::Vector3d YamlReader::vec3(const YAML::Node& node, const std::string& key)
   return {number(node[0], key), number(node[1], key), number(node[2], key)};
 }
 
+std::string resolve(const std::filesystem::path& base, const std::string& relative) {
+  const std::filesystem::path p(relative);
+  return (p.is_absolute() ? p : base / p).lexically_normal().string();
+}
+
 std::string yaml_number(double v) {
   char buffer[32];
   const auto r = std::to_chars(buffer, buffer + sizeof buffer, v);

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 
 #include <initializer_list>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,9 @@ namespace vcut::io {
 
 // A number as YAML writes it back exactly: the shortest text that reads as the same double.
 std::string yaml_number(double v);
+
+// A path a YAML file names, relative to `base` (the file's folder) unless absolute, normalised.
+std::string resolve(const std::filesystem::path& base, const std::string& relative);
 
 class YamlReader {
  public:

@@ -115,16 +115,24 @@ std::vector<NodePose> node_poses(const Machine& m, const AxisValues& q, Geometry
   return out;
 }
 
+std::vector<NodePose> node_frames(const Machine& m, const AxisValues& q, Geometry geometry) {
+  std::vector<NodePose> out = node_poses(m, q, geometry);
+  for (NodePose& n : out) {
+    if (n.node == 'W') n.pose.translation() -= n.pose.linear() * m.spec().workpiece_origin_mm;
+    if (n.node == 'T') n.pose.translation() -= n.pose.linear() * m.spec().gauge_point_mm;
+  }
+  out.push_back({'F', Eigen::Isometry3d::Identity()});
+  return out;
+}
+
 std::vector<ModelPose> model_poses(const Machine& m, const AxisValues& q, Geometry geometry) {
-  const std::vector<NodePose> nodes = node_poses(m, q, geometry);
+  const std::vector<NodePose> nodes = node_frames(m, q, geometry);
   std::vector<ModelPose> out;
   for (const auto& [node, models] : m.spec().models) {
-    // A model moves with its node; the node's pose is taken without its own W/T origin offset.
+    // A model moves with its node.
     Eigen::Isometry3d node_pose = Eigen::Isometry3d::Identity();
     for (const NodePose& n : nodes)
       if (n.node == node) node_pose = n.pose;
-    if (node == 'W') node_pose.translation() -= node_pose.linear() * m.spec().workpiece_origin_mm;
-    if (node == 'T') node_pose.translation() -= node_pose.linear() * m.spec().gauge_point_mm;
     for (const ModelSpec& model : models) {
       ModelPose p;
       p.node = node;

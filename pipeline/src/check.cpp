@@ -157,12 +157,7 @@ class EventLog {
     e.has_where = true;
     e.axes = c.axes;
     e.between_poses = c.between_poses;
-    std::string at;
-    for (int k = 0; k < machine.axis_count(); ++k) {
-      const bool rotary = machine.axis(k).kind == kinematics::AxisKind::Rotary;
-      at += fmt::format("{}{}{:.3f}", k ? " " : "", machine.axis(k).letter,
-                        rotary ? c.axes[k] * 180.0 / M_PI : c.axes[k]);
-    }
+    const std::string at = axis_text(machine, c.axes);
     const std::string when = c.between_poses ? " between two poses, at " : " at ";
     if (c.hit)
       e.detail = c.a + (stock ? " enters " : " hits ") + c.b + fmt::format(" ({:.3f} mm deep)", c.depth_mm) + when +

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <map>
@@ -16,7 +17,9 @@
 #include "vcut/io/input_error.h"
 #include "vcut/io/mesh_io.h"
 #include "vcut/kinematics/forward_kinematics.h"
+#include "vcut/pipeline/simulate.h"
 #include "vcut/removal/cutter.h"
+#include "vcut/removal/move.h"
 
 namespace vcut::pipeline {
 
@@ -98,23 +101,18 @@ removal::TriangleMesh box_mesh(const Eigen::Vector3d& lo, const Eigen::Vector3d&
   return m;
 }
 
-// The stock's initial shape as a mesh (workpiece frame).
+// The stock's initial shape (simulate's stock_shape: a mesh stock read and checked closed) as
+// a mesh in the workpiece frame.
 removal::TriangleMesh stock_mesh(const io::Job& job) {
-  switch (job.stock.kind) {
-    case io::StockSpec::Kind::Box:
-      return box_mesh(job.stock.box.min_mm, job.stock.box.max_mm);
-    case io::StockSpec::Kind::Cylinder: {
-      const removal::CylinderShape& c = job.stock.cylinder;
-      removal::TriangleMesh m =
-          revolved({{0.0, 0.0}, {c.radius_mm, 0.0}, {c.radius_mm, c.height_mm}, {0.0, c.height_mm}}, 96);
-      const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), c.axis);
-      for (Eigen::Vector3d& p : m.vertices_mm) p = c.base_center_mm + turn * p;
-      return m;
-    }
-    case io::StockSpec::Kind::Mesh:
-      break;
-  }
-  return io::read_mesh(job.stock.mesh_file);
+  removal::StockShape shape = stock_shape(job);
+  if (auto* mesh = std::get_if<removal::TriangleMesh>(&shape)) return std::move(*mesh);
+  if (const auto* box = std::get_if<removal::BoxShape>(&shape)) return box_mesh(box->min_mm, box->max_mm);
+  const auto& c = std::get<removal::CylinderShape>(shape);
+  removal::TriangleMesh m =
+      revolved({{0.0, 0.0}, {c.radius_mm, 0.0}, {c.radius_mm, c.height_mm}, {0.0, c.height_mm}}, 96);
+  const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), c.axis);
+  for (Eigen::Vector3d& p : m.vertices_mm) p = c.base_center_mm + turn * p;
+  return m;
 }
 
 removal::TriangleMesh closed_mesh(const std::string& file, const std::string& what) {
@@ -129,19 +127,25 @@ removal::TriangleMesh closed_mesh(const std::string& file, const std::string& wh
 std::string stem(const std::string& file) { return std::filesystem::path(file).stem().string(); }
 
 // The tool's parts in tool coordinates (tip at the origin, +z toward the spindle): the
-// cutting part as steps that hold its profile, the shank, the holder.
+// cutting part as steps that hold its profile, the shank and the holder where the cut's probes
+// (removal::add_tool_bodies) have them, or the tool's holder model.
 void add_tool_parts(std::vector<Body>& bodies, int number, const removal::Cutter& c, const Eigen::Isometry3d& local) {
-  auto add = [&](BodyKind kind, const std::string& part, removal::TriangleMesh mesh) {
+  auto add = [&](BodyKind kind, const std::string& part, removal::TriangleMesh mesh, const Eigen::Isometry3d& at) {
     Body b;
     b.name = "T" + std::to_string(number) + " " + part;
     b.side = BodySide::Tool;
     b.kind = kind;
     b.node = 'T';
     b.tool = number;
-    b.local = local;
+    b.local = at;
     b.mesh = std::move(mesh);
     finish(b);
     bodies.push_back(std::move(b));
+  };
+  // A cylinder of a probe cutter, from `height_mm` above the tip up its length.
+  auto cylinder = [](const removal::Cutter& probe, double height_mm) {
+    const double r = probe.radius_mm(), z0 = height_mm, z1 = height_mm + probe.length_mm;
+    return revolved({{0.0, z0}, {r, z0}, {r, z1}, {0.0, z1}});
   };
   if (c.flute_length_mm > 0.0) {
     constexpr int kSteps = 12;
@@ -154,31 +158,20 @@ void add_tool_parts(std::vector<Body>& bodies, int number, const removal::Cutter
       profile.emplace_back(r, z1);
     }
     profile.emplace_back(0.0, c.flute_length_mm);
-    add(BodyKind::Cutter, "cutter", revolved(profile));
+    add(BodyKind::Cutter, "cutter", revolved(profile), local);
   }
-  const double shank_diameter_mm = c.shank_diameter_mm > 0.0 ? c.shank_diameter_mm : c.diameter_mm;
-  if (c.length_mm - c.flute_length_mm > 1e-9 && shank_diameter_mm > 0.0) {
-    const double r = 0.5 * shank_diameter_mm;
+  removal::MoveList parts;
+  parts.cutters.push_back(c);
+  const removal::ToolBody probes = removal::add_tool_bodies(parts).front();
+  if (probes.shank >= 0)
     add(BodyKind::Shank, "shank",
-        revolved({{0.0, c.flute_length_mm}, {r, c.flute_length_mm}, {r, c.length_mm}, {0.0, c.length_mm}}));
-  }
-  if (!c.holder_mesh_file.empty()) {
-    // The holder model hangs from the spindle nose, a gauge length above the tip.
-    Body b;
-    b.name = "T" + std::to_string(number) + " holder";
-    b.side = BodySide::Tool;
-    b.kind = BodyKind::Holder;
-    b.node = 'T';
-    b.tool = number;
-    b.local = local * Eigen::Translation3d(0.0, 0.0, c.gauge_length_mm);
-    b.mesh = closed_mesh(c.holder_mesh_file, "holder of T" + std::to_string(number));
-    finish(b);
-    bodies.push_back(std::move(b));
-  } else if (c.holder_diameter_mm > 0.0 && c.holder_length_mm > 0.0) {
-    const double r = 0.5 * c.holder_diameter_mm, z0 = std::max(c.length_mm, c.flute_length_mm);
-    const double z1 = z0 + c.holder_length_mm;
-    add(BodyKind::Holder, "holder", revolved({{0.0, z0}, {r, z0}, {r, z1}, {0.0, z1}}));
-  }
+        cylinder(parts.cutters[static_cast<std::size_t>(probes.shank)], probes.shank_height_mm), local);
+  if (!c.holder_mesh_file.empty())  // hanging from the spindle nose, a gauge length above the tip
+    add(BodyKind::Holder, "holder", closed_mesh(c.holder_mesh_file, "holder of T" + std::to_string(number)),
+        local * Eigen::Translation3d(0.0, 0.0, c.gauge_length_mm));
+  else if (probes.holder >= 0)
+    add(BodyKind::Holder, "holder",
+        cylinder(parts.cutters[static_cast<std::size_t>(probes.holder)], probes.holder_height_mm), local);
 }
 
 // A point inside a closed mesh: the parity of a ray's crossings (a direction no bundled
@@ -244,13 +237,8 @@ int slot_of(const kinematics::Machine& m, char node) {
 
 Frames frames_at(const kinematics::Machine& m, const AxisValues& q) {
   Frames f;
-  for (const kinematics::NodePose& n : kinematics::node_poses(m, q)) {
-    Eigen::Isometry3d pose = n.pose;
-    if (n.node == 'W') pose.translation() -= pose.linear() * m.spec().workpiece_origin_mm;
-    if (n.node == 'T') pose.translation() -= pose.linear() * m.spec().gauge_point_mm;
-    f.node[static_cast<std::size_t>(slot_of(m, n.node))] = pose;
-  }
-  f.node[static_cast<std::size_t>(m.axis_count())] = Eigen::Isometry3d::Identity();
+  for (const kinematics::NodePose& n : kinematics::node_frames(m, q))
+    f.node[static_cast<std::size_t>(slot_of(m, n.node))] = n.pose;
   return f;
 }
 
@@ -451,11 +439,12 @@ class Checker {
     const Body& b = bodies_[static_cast<std::size_t>(pair.second)];
     const Eigen::Isometry3d ta = pose_of(a, f), tb = pose_of(b, f);
     const Eigen::Vector3d pa = ta * a.mesh.vertices_mm.front(), pb = tb * b.mesh.vertices_mm.front();
-    if (inside(b.mesh, tb.inverse() * pa) || inside(a.mesh, ta.inverse() * pb)) {
+    const bool a_in_b = inside(b.mesh, tb.inverse() * pa);
+    if (a_in_b || inside(a.mesh, ta.inverse() * pb)) {
       e.hit = true;
       e.depth_mm = e.distance_mm;  // at least as deep as the faces are apart
       e.distance_mm = 0.0;
-      e.point = inside(b.mesh, tb.inverse() * pa) ? pa : pb;
+      e.point = a_in_b ? pa : pb;
     }
   }
 
@@ -505,7 +494,9 @@ class Checker {
   AxisValues last_q_;
 };
 
-bool checked_pair(const Body& a, const Body& b, const MachineCheckOptions& options) {
+// Where the workpiece sits on the frame (head-head, gantry: !work_moves), its side never moves
+// against the frame: a fixture standing on the bed is not a collision.
+bool checked_pair(const Body& a, const Body& b, const MachineCheckOptions& options, bool work_moves) {
   if (a.side == BodySide::Tool && b.side != BodySide::Tool) {
     // The cutting part meets the stock in the cut; the shank and holder there too, or in
     // `check`'s box test where the stock is a box; the machine's bodies (spindle housing,
@@ -514,7 +505,7 @@ bool checked_pair(const Body& a, const Body& b, const MachineCheckOptions& optio
       return options.stock && (a.kind == BodyKind::Model || (options.stock_parts && a.kind != BodyKind::Cutter));
     return true;
   }
-  return a.side == BodySide::Work && b.side == BodySide::Frame && a.kind != BodyKind::Stock;
+  return work_moves && a.side == BodySide::Work && b.side == BodySide::Frame && a.kind != BodyKind::Stock;
 }
 
 std::string model_name(const kinematics::ModelSpec& m, char node) {
@@ -539,6 +530,16 @@ std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& mac
   for (int k = 0; k < machine.axis_count() && k < q.size(); ++k) {
     const bool rotary = machine.axis(k).kind == kinematics::AxisKind::Rotary;
     out.emplace_back(machine.axis(k).letter, rotary ? q[k] * 180.0 / M_PI : q[k]);
+  }
+  return out;
+}
+
+std::string axis_text(const kinematics::Machine& machine, const kinematics::AxisValues& q) {
+  std::string out;
+  for (const auto& [letter, value] : axis_readout(machine, q)) {
+    char field[40];
+    std::snprintf(field, sizeof field, "%s%c%.3f", out.empty() ? "" : " ", letter, value);
+    out += field;
   }
   return out;
 }
@@ -625,12 +626,10 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   }
 
   Checker checker(machine, run, bodies, options.clearance_mm);
-  // Where the workpiece sits on the frame (head-head, gantry), its side never moves against
-  // the frame: a fixture standing on the bed is not a collision.
   const bool work_moves = !machine.workpiece_chain().empty();
   for (std::size_t a = 0; a < bodies.size(); ++a)
     for (std::size_t b = 0; b < bodies.size(); ++b)
-      if (checked_pair(bodies[a], bodies[b], options) && (bodies[a].side != BodySide::Work || work_moves))
+      if (checked_pair(bodies[a], bodies[b], options, work_moves))
         checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
   out.pairs = checker.pairs.size();
   checker.run();

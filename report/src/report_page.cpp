@@ -285,13 +285,8 @@ void write_report_page(const std::string& path, const std::string& template_path
       detail << ", " << c.depth_mm << " mm deep";
     else
       detail << " at " << c.clearance_mm << " mm";
-    detail << (c.between_poses ? ", between two poses" : "") << " (";
-    bool first = true;
-    for (const auto& [letter, value] : pipeline::axis_readout(*run.machine, c.axes)) {
-      detail << (first ? "" : " ") << letter << value;
-      first = false;
-    }
-    detail << ")";
+    detail << (c.between_poses ? ", between two poses" : "") << " (" << pipeline::axis_text(*run.machine, c.axes)
+           << ")";
     events.push_back({{{"kind", c.hit ? "machine_collision" : "machine_near_miss"},
                        {"line", run.program.where(c.lines)},
                        {"detail", detail.str()},

@@ -19,16 +19,10 @@ namespace {
 using vcut::kinematics::AxisValues;
 using vcut::kinematics::Machine;
 
-// Node coordinates (the frame at all-zero axes) -> F at q, as the machine check poses bodies.
+// Node coordinates (the frame at all-zero axes) -> F at q, by forward kinematics.
 Eigen::Isometry3d node_frame(const Machine& m, const AxisValues& q, char node) {
-  if (node == 'F') return Eigen::Isometry3d::Identity();
-  for (const auto& n : vcut::kinematics::node_poses(m, q)) {
-    if (n.node != node) continue;
-    Eigen::Isometry3d pose = n.pose;
-    if (node == 'W') pose.translation() -= pose.linear() * m.spec().workpiece_origin_mm;
-    if (node == 'T') pose.translation() -= pose.linear() * m.spec().gauge_point_mm;
-    return pose;
-  }
+  for (const auto& n : vcut::kinematics::node_frames(m, q))
+    if (n.node == node) return n.pose;
   ADD_FAILURE() << "no node " << node;
   return Eigen::Isometry3d::Identity();
 }

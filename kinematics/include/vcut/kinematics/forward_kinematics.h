@@ -35,6 +35,9 @@ ToolPose forward(const Machine& machine, const AxisValues& q, double tool_length
 
 // Every axis node, then W and T, in the frame (animation, collision).
 std::vector<NodePose> node_poses(const Machine& machine, const AxisValues& q, Geometry geometry = Geometry::Ideal);
+// Every node's frame: node coordinates (the frame F's at all-zero axes) -> F; as node_poses,
+// but W and T without their origin offsets (what models and bodies hang on), and F itself.
+std::vector<NodePose> node_frames(const Machine& machine, const AxisValues& q, Geometry geometry = Geometry::Ideal);
 std::vector<ModelPose> model_poses(const Machine& machine, const AxisValues& q, Geometry geometry = Geometry::Ideal);
 
 // The volumetric error of a pose (seed 002 eqs. 1.16-1.17): actual minus nominal tip in the

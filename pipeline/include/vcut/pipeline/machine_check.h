@@ -65,6 +65,8 @@ removal::TriangleMesh placed_mesh(removal::TriangleMesh mesh, const io::DesignSp
 // Axis values as a person reads them: by letter in the machine's order, linear axes in mm,
 // rotary axes in deg.
 std::vector<std::pair<char, double>> axis_readout(const kinematics::Machine& machine, const kinematics::AxisValues& q);
+// The same as one line: "X0.000 Y-215.000 Z-550.000 A0.000 C0.000".
+std::string axis_text(const kinematics::Machine& machine, const kinematics::AxisValues& q);
 
 // The bound the continuous check rests on: while the axes go linearly from q0 to q1 (t from 0
 // to 1), no point within radius_mm of center_mm (frame F at q0) on node `node` (an axis letter,
