@@ -11,6 +11,7 @@
 #include <limits>
 #include <map>
 #include <memory>
+#include <optional>
 #include <utility>
 
 #include "fcl_queries.h"
@@ -289,6 +290,67 @@ struct Eval {
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  // frame F
 };
 
+// The playback's frames and tool path, recorded along the samples in order (machine_check.h:
+// Playback): sample p * n / max for p < max, and the last.
+class PlaybackRecorder {
+ public:
+  PlaybackRecorder(Playback& out, const kinematics::Machine& machine, const kinematics::Program& program,
+                   std::size_t samples, std::size_t max_frames, const Eigen::Isometry3d& on_workpiece)
+      : out_(out),
+        program_(program),
+        samples_(samples),
+        frames_(max_frames),
+        points_(10 * max_frames),
+        work_slot_(slot_of(machine, 'W')),
+        on_workpiece_(on_workpiece) {
+    for (char node : out.nodes) slots_.push_back(slot_of(machine, node));
+  }
+
+  void record(std::size_t i, const kinematics::PoseSample& sample, const Frames& f) {
+    const bool last = i + 1 == samples_;
+    if (kept(i, frames_, next_frame_) || last) {
+      out_.frame_sample.push_back(i);
+      out_.frame_block.push_back(sample.block);
+      out_.frame_tool.push_back(sample.block >= 0 ? program_.blocks[static_cast<std::size_t>(sample.block)].tool : 0);
+      pose(f, out_.frame_pose);
+    }
+    if (kept(i, points_, next_point_) || last) {
+      for (int k = 0; k < 3; ++k) out_.path_mm.push_back(static_cast<float>(sample.pose.tip_mm[k]));
+      out_.path_block.push_back(sample.block);
+      out_.path_rapid.push_back(sample.block < 0 || program_.blocks[static_cast<std::size_t>(sample.block)].kind ==
+                                                        kinematics::MotionKind::Rapid);
+    }
+  }
+
+  // The nodes' poses in the workpiece frame, then the workpiece frame in F (Playback).
+  void pose(const Frames& f, std::vector<float>& out) const {
+    const Eigen::Isometry3d work = f.at(work_slot_) * on_workpiece_, to_work = work.inverse();
+    auto put = [&out](const Eigen::Isometry3d& m) {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 4; ++c) out.push_back(static_cast<float>(m.matrix()(r, c)));
+    };
+    for (int slot : slots_) put(to_work * f.at(slot));
+    put(work);
+  }
+
+ private:
+  // Sample i is kept where it is p * n / max for the next p (all samples when n <= max).
+  bool kept(std::size_t i, std::size_t max, std::size_t& next) const {
+    if (samples_ <= max) return true;
+    if (next >= max || i != next * samples_ / max) return false;
+    ++next;
+    return true;
+  }
+
+  Playback& out_;
+  const kinematics::Program& program_;
+  std::size_t samples_, frames_, points_;
+  std::size_t next_frame_ = 0, next_point_ = 0;
+  int work_slot_;
+  Eigen::Isometry3d on_workpiece_;
+  std::vector<int> slots_;
+};
+
 struct Finding {
   int pair = 0;
   std::size_t sample = 0;  // the pose, or the end of the interval it lies in
@@ -308,6 +370,7 @@ class Checker {
   std::vector<std::pair<int, int>> pairs;
   std::vector<Finding> findings;
   std::size_t queries = 0;
+  PlaybackRecorder* playback = nullptr;  // records the frames when set
 
   // The samples in order: the run's own, or densified again block by block where the run
   // streamed them (simulate): the same samples, with their axis values. Batches of samples
@@ -352,6 +415,8 @@ class Checker {
         tools[k] = tool_of(batch[k].block);
       }
     });
+    if (playback != nullptr)
+      for (std::size_t k = 0; k < n; ++k) playback->record(index_ + k, batch[k], frames[k]);
     state_.resize(pair_count);
     std::vector<std::vector<Finding>> found(pair_count);
     std::vector<std::size_t> queries(pair_count, 0);
@@ -632,6 +697,21 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
       if (checked_pair(bodies[a], bodies[b], options, work_moves))
         checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
   out.pairs = checker.pairs.size();
+  std::optional<PlaybackRecorder> recorder;
+  if (options.playback_frames > 0) {
+    // Every body but the stock (the page shows the part as cut), in node coordinates.
+    Playback& play = out.playback;
+    for (const Body& b : bodies) {
+      if (b.kind == BodyKind::Stock) continue;
+      auto node = std::find(play.nodes.begin(), play.nodes.end(), b.node);
+      if (node == play.nodes.end()) node = play.nodes.insert(node, b.node);
+      Playback::Body body{b.name, b.kind, static_cast<int>(node - play.nodes.begin()), b.tool, b.mesh};
+      for (Eigen::Vector3d& v : body.mesh.vertices_mm) v = b.local * v;
+      play.bodies.push_back(std::move(body));
+    }
+    recorder.emplace(play, machine, run.program, run.poses, options.playback_frames, on_workpiece);
+    checker.playback = &*recorder;
+  }
   checker.run();
   out.queries = checker.queries;
 
@@ -673,6 +753,7 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     c.clearance_mm = w.eval.hit ? 0.0 : w.eval.distance_mm;
     c.axes = w.q;
     c.between_poses = w.between;
+    c.sample = w.sample;
     c.where_mm = (f.at(slot_of(machine, 'W')) * on_workpiece).inverse() * w.eval.point;
     c.first_block = std::max(found[i].block, 0);
     c.last_block = std::max(found[j].block, 0);
@@ -683,6 +764,8 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   }
   std::stable_sort(out.contacts.begin(), out.contacts.end(),
                    [](const MachineContact& x, const MachineContact& y) { return x.first_block < y.first_block; });
+  if (recorder)
+    for (const MachineContact& c : out.contacts) recorder->pose(frames_at(machine, c.axes), out.playback.contact_pose);
   return out;
 }
 

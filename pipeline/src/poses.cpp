@@ -324,6 +324,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
       if (n < 2 || point >= points || i != timeline_sample(point, n, points)) return;
       run.timeline.t_s.push_back(t_s);
       run.timeline.speed_mm_per_s.push_back(speed_mm_per_s);
+      run.timeline.sample.push_back(i);
       ++point;
     };
     visit.block = [&](std::size_t b, const kinematics::BlockReport& report, double, bool axis_limited) {
@@ -372,6 +373,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
         for (std::size_t i = a; i < b; ++i)
           if (run.contour_error_um[i] > run.contour_error_um[pick]) pick = i;
       run.timeline.t_s.push_back(t[pick]);
+      run.timeline.sample.push_back(pick);
       run.timeline.speed_mm_per_s.push_back(run.feed.speed_mm_per_s[pick]);
       if (contour) run.timeline.contour_error_um.push_back(run.contour_error_um[pick]);
     }

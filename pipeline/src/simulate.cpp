@@ -40,6 +40,10 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The report page's playback: at most this many machine poses (about 1 MB for a five-axis
+// machine), and ten times as many tool path points.
+constexpr std::size_t kPlaybackFrames = 20000;
+
 double total_ram_mb() {
   const long pages = ::sysconf(_SC_PHYS_PAGES), page = ::sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page > 0 ? static_cast<double>(pages) * static_cast<double>(page) / (1024.0 * 1024.0) : 4096.0;
@@ -525,14 +529,16 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
 
   // 4b. The machine: its bodies, the fixtures and the tool's parts against each other at every
   // pose and between poses (machine_check.h); before the cut, so that a bad model stops the run.
-  if (has_machine_bodies(job, run)) {
+  // Without models or fixtures the tool alone is posed, for the page's playback.
+  {
+    result.machine_checked = has_machine_bodies(job, run);
     for (const auto& [node, models] : run.machine->spec().models)
       for (const kinematics::ModelSpec& m : models) hash(m.file);
     for (const io::DesignSpec& f : job.fixtures) hash(f.file);
     MachineCheckOptions machine_options;
     machine_options.clearance_mm = job.machine_clearance_mm;
+    machine_options.playback_frames = kPlaybackFrames;
     result.machine = check_machine(job, run, machine_options);
-    result.machine_checked = true;
     result.warnings.insert(result.warnings.end(), result.machine.warnings.begin(), result.machine.warnings.end());
     stage_done("machine");
   }

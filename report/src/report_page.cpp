@@ -113,6 +113,107 @@ class SourceTexts {
   std::vector<std::pair<int, int>> refs_;
 };
 
+const char* body_kind_name(pipeline::BodyKind kind) {
+  switch (kind) {
+    case pipeline::BodyKind::Model:
+      return "model";
+    case pipeline::BodyKind::Fixture:
+      return "fixture";
+    case pipeline::BodyKind::Stock:
+      return "stock";
+    case pipeline::BodyKind::Cutter:
+      return "cutter";
+    case pipeline::BodyKind::Shank:
+      return "shank";
+    case pipeline::BodyKind::Holder:
+      return "holder";
+  }
+  return "model";
+}
+
+// The machine posed along the program (pipeline::Playback), each frame with its time (the
+// timeline's, interpolated by sample) and NC line; null when nothing was posed.
+ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, SourceTexts& sources) {
+  if (play.frame_sample.empty()) return nullptr;
+  const std::size_t frames = play.frame_sample.size();
+  ordered_json bodies = ordered_json::array();
+  for (const pipeline::Playback::Body& b : play.bodies) {
+    ordered_json body = {{"name", b.name}, {"kind", body_kind_name(b.kind)}, {"node", b.node}, {"tool", b.tool}};
+    body["mesh"] = encode_mesh(b.mesh);
+    bodies.push_back(body);
+  }
+  // Time at a sample: linear between the timeline's points (its samples rise).
+  const auto& line = run.timeline;
+  auto time_at = [&line](std::size_t sample) {
+    if (line.sample.empty() || line.sample.size() != line.t_s.size()) return 0.0;
+    const auto next = std::upper_bound(line.sample.begin(), line.sample.end(), sample);
+    if (next == line.sample.begin()) return line.t_s.front();
+    if (next == line.sample.end()) return line.t_s.back();
+    const std::size_t b = static_cast<std::size_t>(next - line.sample.begin()), a = b - 1;
+    const double f =
+        static_cast<double>(sample - line.sample[a]) / static_cast<double>(line.sample[b] - line.sample[a]);
+    return line.t_s[a] + f * (line.t_s[b] - line.t_s[a]);
+  };
+  std::vector<float> t_s;
+  std::vector<std::int32_t> sample, source;
+  for (std::size_t f = 0; f < frames; ++f) {
+    t_s.push_back(static_cast<float>(time_at(play.frame_sample[f])));
+    sample.push_back(static_cast<std::int32_t>(play.frame_sample[f]));
+    const int block = play.frame_block[f];
+    if (block < 0) {
+      source.push_back(-1);
+      continue;
+    }
+    const kinematics::SourceRef& src = run.program.blocks[static_cast<std::size_t>(block)].source;
+    source.push_back(sources.index(src.file, src.line));
+  }
+  ordered_json nodes = ordered_json::array();
+  for (char n : play.nodes) nodes.push_back(std::string(1, n));
+  // A pose whose rotation is the same in every frame (every pose of a three-axis machine)
+  // gives its rotation once and its translation per frame: 3 floats a frame instead of 12.
+  const std::size_t slots = play.nodes.size() + 1, per = 12 * slots;
+  ordered_json layout = ordered_json::array();
+  std::vector<bool> fixed_rotation(slots, true);
+  for (std::size_t k = 0; k < slots; ++k) {
+    const float* first = play.frame_pose.data() + 12 * k;
+    for (std::size_t f = 1; f < frames && fixed_rotation[k]; ++f)
+      for (int c : {0, 1, 2, 4, 5, 6, 8, 9, 10})
+        if (play.frame_pose[f * per + 12 * k + static_cast<std::size_t>(c)] != first[c]) fixed_rotation[k] = false;
+    layout.push_back(fixed_rotation[k] ? ordered_json{{"rotation",
+                                                       {first[0], first[1], first[2], first[4], first[5], first[6],
+                                                        first[8], first[9], first[10]}}}
+                                       : ordered_json{{"rotation", nullptr}});
+  }
+  std::vector<float> pose;
+  for (std::size_t f = 0; f < frames; ++f)
+    for (std::size_t k = 0; k < slots; ++k) {
+      const float* m = play.frame_pose.data() + f * per + 12 * k;
+      if (fixed_rotation[k])
+        pose.insert(pose.end(), {m[3], m[7], m[11]});
+      else
+        pose.insert(pose.end(), m, m + 12);
+    }
+  std::vector<std::int32_t> block(play.frame_block.begin(), play.frame_block.end());
+  std::vector<std::int32_t> tool(play.frame_tool.begin(), play.frame_tool.end());
+  std::vector<std::int32_t> path_block(play.path_block.begin(), play.path_block.end());
+  return {{"nodes", nodes},
+          {"bodies", bodies},
+          {"frames",
+           {{"count", frames},
+            {"t_s", typed_base64(t_s)},
+            {"sample", typed_base64(sample)},
+            {"block", typed_base64(block)},
+            {"tool", typed_base64(tool)},
+            {"source", typed_base64(source)},
+            {"layout", layout},
+            {"pose", typed_base64(pose)}}},
+          {"path",
+           {{"points", play.path_block.size()},
+            {"position", typed_base64(play.path_mm)},
+            {"block", typed_base64(path_block)},
+            {"rapid", typed_base64(play.path_rapid)}}}};
+}
+
 std::string fixed(double x, int digits, const char* unit) {
   std::ostringstream s;
   s.precision(digits);
@@ -237,6 +338,17 @@ void write_report_page(const std::string& path, const std::string& template_path
     vertex_source.push_back(sources.index(src.file, src.line));
   }
   mesh["source"] = typed_base64(vertex_source);
+  // The block that made each vertex (-1: the initial stock): the playback shows the part as
+  // cut up to its frame's block.
+  std::vector<std::int32_t> vertex_block;
+  vertex_block.reserve(kept.size());
+  for (int k : kept) {
+    const int move = machined.vertex_move[static_cast<std::size_t>(k)];
+    const bool known =
+        move >= 0 && input.move_blocks != nullptr && static_cast<std::size_t>(move) < input.move_blocks->size();
+    vertex_block.push_back(known ? (*input.move_blocks)[static_cast<std::size_t>(move)] : -1);
+  }
+  mesh["block"] = typed_base64(vertex_block);
   j["mesh"] = mesh;
   if (input.design != nullptr) {
     std::vector<int> design_kept;
@@ -274,10 +386,14 @@ void write_report_page(const std::string& path, const std::string& template_path
                        {"line", run.program.where(c.lines)},
                        {"detail", detail.str()},
                        {"depth_mm", c.depth_mm},
-                       {"where", vec(c.where_mm)}},
+                       {"where", vec(c.where_mm)},
+                       {"block", c.first_block}},
                       sources.add(kinematics::Program::span_in_first_file(c.lines))});
   }
-  for (const pipeline::MachineContact& c : r.machine.contacts) {
+  const pipeline::Playback& play = r.machine.playback;
+  const std::size_t pose_floats = play.floats_per_pose();
+  for (std::size_t n = 0; n < r.machine.contacts.size(); ++n) {
+    const pipeline::MachineContact& c = r.machine.contacts[n];
     std::ostringstream detail;
     detail.precision(3);
     detail << std::fixed << c.a << (c.hit ? " hits " : " passes ") << c.b;
@@ -287,11 +403,20 @@ void write_report_page(const std::string& path, const std::string& template_path
       detail << " at " << c.clearance_mm << " mm";
     detail << (c.between_poses ? ", between two poses" : "") << " (" << pipeline::axis_text(*run.machine, c.axes)
            << ")";
+    // The machine at the contact's instant, for the playback (which may lie between its frames).
+    ordered_json pose = nullptr;
+    if (play.contact_pose.size() >= (n + 1) * pose_floats)
+      pose = std::vector<float>(play.contact_pose.begin() + static_cast<std::ptrdiff_t>(n * pose_floats),
+                                play.contact_pose.begin() + static_cast<std::ptrdiff_t>((n + 1) * pose_floats));
     events.push_back({{{"kind", c.hit ? "machine_collision" : "machine_near_miss"},
                        {"line", run.program.where(c.lines)},
                        {"detail", detail.str()},
                        {"depth_mm", c.hit ? ordered_json(c.depth_mm) : ordered_json(nullptr)},
-                       {"where", vec(c.where_mm)}},
+                       {"where", vec(c.where_mm)},
+                       {"block", c.first_block},
+                       {"bodies", {c.a, c.b}},
+                       {"sample", c.sample},
+                       {"pose", pose}},
                       sources.add(kinematics::Program::span_in_first_file(c.lines))});
   }
   for (const PoseEvent& e : run.events)
@@ -300,7 +425,8 @@ void write_report_page(const std::string& path, const std::string& template_path
           {"line", run.program.where(e.lines)},
           {"detail", e.detail},
           {"depth_mm", nullptr},
-          {"where", nullptr}},
+          {"where", nullptr},
+          {"block", e.first_block}},
          e.first_block < 0 ? std::vector<int>{} : sources.add(kinematics::Program::span_in_first_file(e.lines))});
 
   // Feed and contour error over time, at most 4,000 points (PoseRun::timeline: each the
@@ -317,6 +443,8 @@ void write_report_page(const std::string& path, const std::string& template_path
     }
     timeline = {{"t_s", ts}, {"feed_mm_min", feed}, {"contour_error_um", contour ? err : ordered_json(nullptr)}};
   }
+
+  j["playback"] = playback_json(play, run, sources);
 
   const ordered_json table = sources.table();
   j["sources"] = table;

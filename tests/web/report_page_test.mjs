@@ -1,9 +1,17 @@
 // Real-browser test of a filled vcut report page (headless Chromium via playwright-core).
 //   node tests/web/report_page_test.mjs REPORT.html "file:line" SCREENSHOT.png
+//   node tests/web/report_page_test.mjs REPORT.html "collision=file:line" SCREENSHOT.png
 // Checks: no console/page errors and no network request; the page becomes ready; the gouge
 // table has a row whose NC lines contain file:line; clicking it flies the camera to the
 // region's deepest point (from the page's own data) and shows the line's text in the NC
-// panel; the WebGL canvas drew an image (not one flat colour).
+// panel; the WebGL canvas drew an image (not one flat colour). Where the report has a
+// playback: the slider at the middle frame poses the machine and shows the part as cut by
+// then (fewer triangles than at the end), and Play advances the frames.
+// With collision=file:line, instead of the gouge: the slider driven to the machine collision
+// at that line poses its two bodies so that their boxes, as the page places them, overlap by
+// the depth vcut measured (FCL, in C++), and not at the first frame; "Next event" from the
+// start lands on the first event's frame; clicking a collision found between two poses shows
+// the machine at that instant, its two bodies' boxes overlapping.
 // Exit 0: all checks passed. 1: a check failed (each printed) or the report is missing.
 // 2: usage. 77 (skip): no Chromium at $VCUT_CHROMIUM or /usr/bin/chromium (1 when
 // VCUT_REQUIRE_PEERS=1, as make test sets it).
@@ -31,7 +39,8 @@ if (!existsSync(executablePath)) {
   console.log(`${required ? 'FAIL' : 'SKIP'}: no Chromium at ${executablePath} (install chromium, or set VCUT_CHROMIUM)`);
   process.exit(required ? 1 : 77);
 }
-const lm = /^(.*):(\d+)$/.exec(lineArg);
+const collisionMode = lineArg.startsWith('collision=');
+const lm = /^(.*):(\d+)$/.exec(collisionMode ? lineArg.slice('collision='.length) : lineArg);
 if (!lm) {
   console.error(`bad line argument "${lineArg}": expected file:line`);
   process.exit(2);
@@ -98,6 +107,102 @@ async function imageStats(page, png) {
   }, png.toString('base64'));
 }
 
+// ---- playback ---------------------------------------------------------------------------
+
+const int32s = (b64) => {
+  const buf = Buffer.from(b64, 'base64');
+  return new Int32Array(buf.buffer, buf.byteOffset, buf.length / 4);
+};
+// How far two boxes overlap along each axis (negative: apart along it).
+const overlaps = (a, b) => [0, 1, 2].map((k) => Math.min(a.max[k], b.max[k]) - Math.max(a.min[k], b.min[k]));
+
+async function setSlider(page, frame) {
+  await page.locator('#playback-slider').fill(String(frame));
+  await page.waitForFunction((f) => window.vcutPlayback.frame() === f, frame, { timeout: 5000, polling: 50 });
+}
+
+// Any report with a playback: the middle frame shows the part as cut by then, Play advances.
+async function checkPlayback(page) {
+  const doc = await reportJson(reportPath);
+  if (!doc.playback) {
+    check(true, 'no playback in this report');
+    return;
+  }
+  const frames = doc.playback.frames.count;
+  const total = await page.evaluate(() => window.vcutPlayback.partTriangles());
+  check(total === doc.summary.triangles_shown, `the last frame shows the whole part (${total} triangles)`);
+  const middle = Math.floor(frames / 2);
+  await setSlider(page, middle);
+  const shown = await page.evaluate(() => window.vcutPlayback.partTriangles());
+  check(shown < total, `frame ${middle} of ${frames} shows the part as cut by then (${shown} of ${total} triangles)`);
+  check(await page.evaluate(() => window.vcutPlayback.machineVisible()), 'the slider shows the machine');
+  const names = await page.evaluate(() => window.vcutPlayback.bodyNames());
+  check(names.some((n) => / cutter$/.test(n)), `the tool is among the bodies (${names.length} bodies)`);
+  await page.selectOption('#playback-speed', '500');
+  await page.locator('#playback-play').click();
+  await page.waitForTimeout(400);
+  const after = await page.evaluate(() => window.vcutPlayback.frame());
+  await page.locator('#playback-play').click();
+  check(after > middle, `Play advances the frames (${middle} -> ${after})`);
+  await setSlider(page, frames - 1);
+}
+
+// The machine-collision example: the slider driven to the collision at file:line.
+async function checkCollisionPlayback(page) {
+  const doc = await reportJson(reportPath);
+  if (!check(doc.playback != null, 'report has a playback')) return;
+  const sample = int32s(doc.playback.frames.sample);
+  const events = doc.events || [];
+  const index = events.findIndex((e) => e.kind === 'machine_collision' && refCovers(e.line));
+  if (!check(index >= 0, `a machine collision at ${wantFile}:${wantLine}`)) return;
+  const e = events[index];
+  // The frame of the collision's pose, from the data: the last frame at or before its sample.
+  let frame = 0;
+  while (frame + 1 < sample.length && sample[frame + 1] <= e.sample) frame++;
+  const [a, b] = e.bodies;
+  const boxes = () => page.evaluate(([x, y]) => [window.vcutPlayback.bodyBox(x), window.vcutPlayback.bodyBox(y)], [a, b]);
+
+  await setSlider(page, 0);
+  const [a0, b0] = await boxes();
+  check(a0 && b0 && Math.min(...overlaps(a0, b0)) < 0, `at the first frame ${a} and ${b} are apart`);
+
+  await setSlider(page, frame);
+  const [a1, b1] = await boxes();
+  const depth = Math.min(...overlaps(a1, b1));
+  check(a1.visible && b1.visible, `both bodies shown at frame ${frame}`);
+  check(Math.abs(depth - e.depth_mm) < 0.05,
+    `at frame ${frame} ${a} is ${depth.toFixed(3)} mm into ${b} (vcut measured ${e.depth_mm.toFixed(3)} mm)`);
+  const readout = await page.locator('#playback-readout').innerText();
+  check(readout.includes(`${path.basename(wantFile)}:${wantLine}`), `the readout names ${wantFile}:${wantLine} ("${readout.replace(/\s+/g, ' ')}")`);
+
+  // Next event from the start: the first event with a frame after 0.
+  await setSlider(page, 0);
+  await page.locator('#playback-next-event').click();
+  const firstEvent = await page.evaluate(() => {
+    const n = document.querySelectorAll('#event-table tbody tr').length;
+    let best = null;
+    for (let i = 0; i < n; i++) {
+      const f = window.vcutPlayback.frameOfEvent(i);
+      if (f != null && f > 0 && (best == null || f < best)) best = f;
+    }
+    return best;
+  });
+  const landed = await page.evaluate(() => window.vcutPlayback.frame());
+  check(landed === firstEvent, `Next event lands on the first event's frame (${landed}, expected ${firstEvent})`);
+  check((await page.locator('#event-table tr.selected').count()) === 1, 'Next event selects the event row');
+
+  // A collision between two poses: clicking it poses the machine at that instant.
+  const between = events.findIndex((x) => x.kind === 'machine_collision' && /between two poses/.test(x.detail || ''));
+  if (check(between >= 0, 'the report has a collision between two poses')) {
+    await page.locator(`#event-table tr[data-event-index="${between}"]`).click();
+    await page.waitForFunction(() => window.vcutViewer.isAnimating() === false, null, { timeout: 10000, polling: 50 });
+    const [x, y] = events[between].bodies;
+    const [bx, by] = await page.evaluate(([p, q]) => [window.vcutPlayback.bodyBox(p), window.vcutPlayback.bodyBox(q)], [x, y]);
+    check(await page.evaluate(() => window.vcutPlayback.atEvent()), 'the machine is shown at the event\'s instant');
+    check(Math.min(...overlaps(bx, by)) > 0, `there ${x} and ${y} overlap (${overlaps(bx, by).map((v) => v.toFixed(2)).join(', ')} mm)`);
+  }
+}
+
 // ---- the test ---------------------------------------------------------------------------
 
 let chromium;
@@ -162,7 +267,9 @@ try {
   const pageError = await page.evaluate(() => window.vcutError || null);
   check(ready, `page ready (window.vcutReady)${pageError ? `: page reports "${pageError}"` : ''}`);
 
-  if (ready) {
+  if (ready && collisionMode) {
+    await checkCollisionPlayback(page);
+  } else if (ready) {
     const rows = await page.$$eval('#gouge-table tbody tr[data-kind="gouge"]', (trs) =>
       trs.map((tr) => ({ index: Number(tr.getAttribute('data-region-index')), lines: tr.getAttribute('data-lines') || '' })));
     const regions = await readRegions(reportPath);
@@ -195,6 +302,9 @@ try {
       }
     }
 
+    await checkPlayback(page);
+  }
+  if (ready) {
     // Let the frame with the marker land, then capture.
     await page.waitForTimeout(200);
     await page.screenshot({ path: shotArg, fullPage: true });

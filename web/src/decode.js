@@ -29,7 +29,7 @@ export function base64ToBytes(b64) {
 
 const littleEndianHost = new Uint8Array(new Uint16Array([1]).buffer)[0] === 1;
 
-function typed(b64, Ctor, expectedCount, what) {
+export function typed(b64, Ctor, expectedCount, what) {
   if (b64 == null) return null;
   const bytes = base64ToBytes(b64);
   if (bytes.length % Ctor.BYTES_PER_ELEMENT !== 0) {
@@ -43,7 +43,7 @@ function typed(b64, Ctor, expectedCount, what) {
   let arr = bytes.byteOffset === 0 && bytes.buffer.byteLength >= bytes.length
     ? new Ctor(bytes.buffer, 0, count)
     : new Ctor(bytes.slice().buffer);
-  if (!littleEndianHost) {
+  if (!littleEndianHost && Ctor.BYTES_PER_ELEMENT > 1) {
     const dv = new DataView(arr.buffer, arr.byteOffset, arr.byteLength);
     const fixed = new Ctor(count);
     const isFloat = Ctor === Float32Array;
@@ -55,7 +55,7 @@ function typed(b64, Ctor, expectedCount, what) {
   return arr;
 }
 
-// Decodes {vertices, triangles, positions, indices, deviation?, source?} into typed arrays.
+// Decodes {vertices, triangles, positions, indices, deviation?, source?, block?} into typed arrays.
 // Releases the base64 strings on the input object so the parsed JSON can be collected.
 export function decodeMesh(m, what) {
   if (!m) return null;
@@ -68,6 +68,7 @@ export function decodeMesh(m, what) {
     indices: typed(m.indices, Uint32Array, nt != null ? nt * 3 : null, `${what}.indices`),
     deviation: typed(m.deviation, Float32Array, nv, `${what}.deviation`),
     source: typed(m.source, Int32Array, nv, `${what}.source`),
+    block: typed(m.block, Int32Array, nv, `${what}.block`),
   };
   if (!out.positions || !out.indices) throw new Error(`${what}: positions and indices are required`);
   out.vertices = out.positions.length / 3;
@@ -77,6 +78,6 @@ export function decodeMesh(m, what) {
   for (let i = 0; i < idx.length; i++) {
     if (idx[i] >= nvert) throw new Error(`${what}: index ${idx[i]} out of range (${nvert} vertices)`);
   }
-  m.positions = m.indices = m.deviation = m.source = null;
+  m.positions = m.indices = m.deviation = m.source = m.block = null;
   return out;
 }

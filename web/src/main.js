@@ -5,6 +5,7 @@
 import './style.css';
 import { decodeMesh } from './decode.js';
 import { Viewer } from './viewer.js';
+import { decodePlayback, orderTrianglesByBlock, Playback, playbackBar } from './playback.js';
 import { histogramChart, lineChart, emptyChart } from './charts.js';
 import { makeScale, deviationColor, cssColor } from './colormap.js';
 import {
@@ -259,6 +260,8 @@ function main() {
   };
 
   let viewer = null;
+  let playback = null;
+  const eventActivators = [];
   const regionTable = (kind, list) => {
     const wrap = el('div', { class: 'table-block' });
     wrap.append(sectionTitle(kind === 'gouge' ? 'Gouges' : 'Excess material', list.length));
@@ -333,10 +336,12 @@ function main() {
         if (e.where) facts.push(['Where', xyz(e.where)]);
         if (e.detail) facts.push(['Detail', e.detail]);
         showNc(label, facts, nc.entriesFor(e.line ? [e.line] : [], e.nc), 'No NC line recorded.');
+        if (playback) playback.showEvent(i);
         if (viewer) {
           if (Array.isArray(e.where)) { viewer.setMarker(e.where); viewer.flyTo(e.where); } else viewer.setMarker(null);
         }
       };
+      eventActivators[i] = activate;
       row.addEventListener('click', activate);
       row.addEventListener('keydown', (ev) => { if (ev.key === 'Enter' || ev.key === ' ') { ev.preventDefault(); activate(); } });
       tbody.append(row);
@@ -412,7 +417,9 @@ function main() {
 
   // Mesh decoding and the 3D view last: the tables are usable even if WebGL fails.
   let model;
+  let partKeys = null;
   try {
+    const pb = data.playback ? decodePlayback(data.playback) : null;
     model = {
       mesh: data.mesh ? decodeMesh(data.mesh, 'mesh') : null,
       design: data.design ? decodeMesh(data.design, 'design') : null,
@@ -420,7 +427,10 @@ function main() {
       regions,
       gougeTol,
       excessTol,
+      playback: pb,
     };
+    // The part drawn up to the playback's block: its triangles in the order the blocks cut them.
+    if (pb && model.mesh) partKeys = orderTrianglesByBlock(model.mesh);
     mark('decode');
   } catch (e) {
     viewport.append(el('div', { class: 'view-error', text: `The mesh data is damaged: ${e.message}` }));
@@ -514,6 +524,31 @@ function main() {
     viewport.append(el('div', { class: 'decimated', text: `Showing ${num(summary.triangles_shown)} of ${num(summary.triangles_machined)} triangles` }));
   }
   if (!model.mesh) viewport.append(el('div', { class: 'view-error soft', text: 'No machined mesh in this report.' }));
+
+  // Playback of the program: the machine, the tool and the part as cut, frame by frame.
+  if (model.playback) {
+    playback = new Playback(viewer, model.playback, partKeys, data.sources, events, (i) => {
+      const row = document.querySelector(`#event-table tr[data-event-index="${i}"]`);
+      if (row) row.scrollIntoView({ block: 'nearest' });
+      if (eventActivators[i]) eventActivators[i]();
+      else playback.showEvent(i);
+    });
+    viewport.classList.add('has-playback');
+    viewport.append(playbackBar(model.playback, playback));
+    window.vcutPlayback = {
+      frames: () => model.playback.frames.count,
+      frame: () => playback.index,
+      setFrame: (i) => playback.setFrame(i),
+      playing: () => playback.playing,
+      frameOfEvent: (i) => playback.eventFrames[i],
+      machineVisible: () => playback.root.visible,
+      bodyNames: () => playback.bodyMeshes.map((m) => m.name),
+      bodyBox: (name) => playback.bodyBox(name),
+      partTriangles: () => playback.partTrianglesShown(),
+      pathPoints: () => (playback.pathLine ? playback.pathLine.geometry.drawRange.count : 0),
+      atEvent: () => playback.eventPose != null,
+    };
+  }
 
   window.vcutViewer = {
     cameraState: () => viewer.cameraState(),

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -42,12 +43,44 @@ struct MachineContact {
   kinematics::AxisValues axes;                         // at the deepest (closest) instant (mm, rad)
   Eigen::Vector3d where_mm = Eigen::Vector3d::Zero();  // a point of the contact, workpiece frame
   bool between_poses = false;                          // that instant lies between two densified poses
+  std::size_t sample = 0;                              // the densified pose at (or just after) that instant
 };
 
 struct MachineCheckOptions {
   double clearance_mm = 1.0;  // closer than this: a near miss
   bool stock = false;         // the tool side's machine bodies against the stock's initial shape (`vcut check`)
   bool stock_parts = false;   // with `stock`: the tool's shank and holder too (a stock that is not a box)
+  // > 0: MachineCheck::playback is filled, with at most this many frames (and at most
+  // 10 times as many tool path points).
+  std::size_t playback_frames = 0;
+};
+
+// The machine posed along the program, for the report page's playback. Every pose is written
+// as 12 floats: the 3 x 4 matrix [R | t] row by row, taking a node's coordinates to the
+// workpiece frame (mm).
+struct Playback {
+  struct Body {
+    std::string name;
+    BodyKind kind = BodyKind::Model;
+    int node = 0;                // index into `nodes`
+    int tool = 0;                // a tool's part: its T number (shown while that tool is in the spindle)
+    removal::TriangleMesh mesh;  // node coordinates
+  };
+  std::vector<char> nodes;  // the nodes that carry a body: axis letters, F, W, T
+  std::vector<Body> bodies;
+  // Frames: the densified poses p * n / max for p < max (all of them when fewer), and the
+  // last. Each frame: `nodes.size()` poses, then the workpiece frame in the machine frame F.
+  std::vector<std::size_t> frame_sample;
+  std::vector<int> frame_block;
+  std::vector<int> frame_tool;    // the T number in the spindle (0: none)
+  std::vector<float> frame_pose;  // 12 * (nodes.size() + 1) per frame
+  // The programmed tool path: the tip of the densified poses (workpiece frame), spread the same
+  // way over at most 10 times as many points, each with its block and whether it is a rapid.
+  std::vector<float> path_mm;  // x y z per point
+  std::vector<int> path_block;
+  std::vector<std::uint8_t> path_rapid;
+  std::vector<float> contact_pose;  // per contact (MachineCheck::contacts): as a frame, at its instant
+  std::size_t floats_per_pose() const { return 12 * (nodes.size() + 1); }
 };
 
 struct MachineCheck {
@@ -56,6 +89,7 @@ struct MachineCheck {
   std::size_t pairs = 0;                 // pairs of bodies checked
   std::size_t queries = 0;               // FCL distance queries made (poses and between)
   std::vector<std::string> warnings;     // a fixture in the stock at the start
+  Playback playback;                     // with MachineCheckOptions::playback_frames
 };
 
 // A mesh file placed in the workpiece frame by its transform (rotations about X, then Y, then
@@ -74,7 +108,8 @@ std::string axis_text(const kinematics::Machine& machine, const kinematics::Axis
 double motion_bound_mm(const kinematics::Machine& machine, char node, const Eigen::Vector3d& center_mm,
                        double radius_mm, const kinematics::AxisValues& q0, const kinematics::AxisValues& q1);
 
-// Nothing to check (no models, no fixtures, no holder): false.
+// Nothing to check (no models, no fixtures): false. check_machine still poses the tool for
+// the playback then.
 bool has_machine_bodies(const io::Job& job, const PoseRun& run);
 
 // A streamed run (simulate) is densified again, block by block. A model or fixture that is not

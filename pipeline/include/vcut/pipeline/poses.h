@@ -68,6 +68,7 @@ struct PoseRun : kinematics::PoseChain {
   // error up to the next point's), for the page.
   struct Timeline {
     std::vector<double> t_s, speed_mm_per_s, contour_error_um;
+    std::vector<std::size_t> sample;  // the sample of each point
   } timeline;
   // Summary.
   double max_nonlinear_error_mm = 0.0;
