@@ -11,7 +11,8 @@
 // at that line poses its two bodies so that their boxes, as the page places them, overlap by
 // the depth vcut measured (FCL, in C++), and not at the first frame; "Next event" from the
 // start lands on the first event's frame; clicking a collision found between two poses shows
-// the machine at that instant, its two bodies' boxes overlapping.
+// the machine at that instant, its two bodies' boxes overlapping; with the machine frame on,
+// the bed stands still.
 // Exit 0: all checks passed. 1: a check failed (each printed) or the report is missing.
 // 2: usage. 77 (skip): no Chromium at $VCUT_CHROMIUM or /usr/bin/chromium (1 when
 // VCUT_REQUIRE_PEERS=1, as make test sets it).
@@ -174,6 +175,22 @@ async function checkCollisionPlayback(page) {
     `at frame ${frame} ${a} is ${depth.toFixed(3)} mm into ${b} (vcut measured ${e.depth_mm.toFixed(3)} mm)`);
   const readout = await page.locator('#playback-readout').innerText();
   check(readout.includes(`${path.basename(wantFile)}:${wantLine}`), `the readout names ${wantFile}:${wantLine} ("${readout.replace(/\s+/g, ' ')}")`);
+
+  // The machine's frame: the bed stands still from frame to frame (in the part's frame it
+  // moves where the part turns: at the collision between two poses the table has turned).
+  const frameBody = (await page.evaluate(() => window.vcutPlayback.bodyNames())).find((n) => /\(frame\)$/.test(n));
+  const turned = await page.evaluate((i) => window.vcutPlayback.frameOfEvent(i),
+    events.findIndex((x) => x.kind === 'machine_collision' && /between two poses/.test(x.detail || '')));
+  if (check(frameBody != null && turned != null, `a body on the machine's frame (${frameBody}) and a frame where the table turned (${turned})`)) {
+    const bedAt = async (k) => { await setSlider(page, k); return page.evaluate((n) => window.vcutPlayback.bodyBox(n), frameBody); };
+    const moved = (p, q) => Math.max(...[0, 1, 2].map((k) => Math.abs(p.min[k] - q.min[k]) + Math.abs(p.max[k] - q.max[k])));
+    const inPart = moved(await bedAt(0), await bedAt(turned));
+    await page.locator('#toggle-machine-frame').click();
+    const inMachine = moved(await bedAt(0), await bedAt(turned));
+    await page.locator('#toggle-machine-frame').click();
+    check(inPart > 1 && inMachine < 1e-3,
+      `with the machine frame on, ${frameBody} stays put (moves ${inMachine.toExponential(1)} mm; in the part's frame ${inPart.toFixed(1)} mm)`);
+  }
 
   // Next event from the start: the first event with a frame after 0.
   await setSlider(page, 0);

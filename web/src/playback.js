@@ -2,10 +2,11 @@
 // tool posed frame by frame (vcut computes the poses: pipeline::Playback), the programmed tool
 // path coloured by rapid and feed and drawn up to the frame, and the part as cut up to the
 // frame's block (its triangles ordered by the block that made them, drawn up to that block).
-// Frame: the part's (workpiece) frame, as the rest of the view; the machine moves around it.
+// Frame: the part's (workpiece) frame, as the rest of the view, the machine moving around the
+// part; or the machine's frame (the toggle), the part moving with its table.
 
 import {
-  BufferGeometry, BufferAttribute, Group, Line, LineBasicMaterial, Mesh, MeshStandardMaterial, DoubleSide, Box3,
+  BufferGeometry, BufferAttribute, Group, Line, LineBasicMaterial, Matrix4, Mesh, MeshStandardMaterial, DoubleSide, Box3,
 } from 'three';
 import { decodeMesh, typed } from './decode.js';
 import { el, num, basename } from './format.js';
@@ -172,7 +173,8 @@ export class Playback {
       this.nodeGroups[b.node].add(mesh);
       return mesh;
     });
-    viewer.scene.add(this.root);
+    viewer.world.add(this.root);
+    this.machineFrame = false;
     this.buildPath();
     this.eventFrames = this.events.map((e) => this.frameOfEvent(e));
     this.apply();
@@ -191,7 +193,7 @@ export class Playback {
     this.pathLine = new Line(g, new LineBasicMaterial({ vertexColors: true, transparent: true, opacity: 0.9 }));
     this.pathLine.renderOrder = 5;
     this.pathLine.visible = false;
-    this.viewer.scene.add(this.pathLine);
+    this.viewer.world.add(this.pathLine);
   }
 
   // The frame of an event: the one at (or before) its pose, else the first of its block.
@@ -210,6 +212,21 @@ export class Playback {
     this.root.visible = on;
     this.viewer.requestRender();
     if (this.onState) this.onState();
+  }
+
+  // The view in the machine's frame (the workpiece frame where the frame's last pose puts it),
+  // or in the workpiece frame. The camera keeps what it looks at.
+  setMachineFrame(on) {
+    this.machineFrame = on;
+    this.viewer.setWorldMatrix(on ? this.workpieceMatrix() : new Matrix4(), true);
+    if (this.onState) this.onState();
+  }
+
+  workpieceMatrix() {
+    const f = this.pb.frames;
+    const k = this.nodeGroups.length;
+    if (this.eventPose) return matrixFrom(new Matrix4(), this.eventPose, 12 * k);
+    return matrixFrom(new Matrix4(), f.pose, this.index * f.perFrame + f.layout[k].offset, f.layout[k].rotation);
   }
 
   setPathVisible(on) {
@@ -263,6 +280,7 @@ export class Playback {
       else matrixFrom(g.matrix, f.pose, i * f.perFrame + f.layout[k].offset, f.layout[k].rotation);
       g.matrixWorldNeedsUpdate = true;
     });
+    if (this.machineFrame) this.viewer.setWorldMatrix(this.workpieceMatrix());
     const tool = f.tool[i];
     for (const m of this.bodyMeshes) m.visible = m.userData.tool === 0 || m.userData.tool === tool;
     const block = f.block[i];
@@ -308,11 +326,12 @@ export class Playback {
 
   // ---- for tests --------------------------------------------------------------------------
 
-  // The axis-aligned box of a body's mesh as posed now, in the workpiece frame.
+  // The axis-aligned box of a body's mesh as posed now, in the view's frame (the workpiece
+  // frame unless the machine's frame is on).
   bodyBox(name) {
     const m = this.bodyMeshes.find((b) => b.name === name);
     if (!m) return null;
-    this.root.updateMatrixWorld(true);
+    this.viewer.world.updateMatrixWorld(true); // now, not at the next render
     const box = new Box3().setFromObject(m, true);
     return { min: box.min.toArray(), max: box.max.toArray(), visible: m.visible && this.root.visible };
   }
@@ -339,6 +358,10 @@ export function playbackBar(pb, playback) {
     SPEEDS.map((s) => el('option', { value: s, text: `${s}×`, selected: s === playback.speed })));
   const nextBtn = el('button', { type: 'button', class: 'tool', id: 'playback-next-event', title: 'Jump to the next event', text: 'Next event' });
   const machineBtn = el('button', { type: 'button', class: 'tool', id: 'toggle-machine', 'aria-pressed': 'false', text: 'Machine' });
+  const frameBtn = el('button', {
+    type: 'button', class: 'tool', id: 'toggle-machine-frame', 'aria-pressed': 'false', text: 'Machine frame',
+    title: 'Hold the machine still and move the part with its table (else the part stays still)',
+  });
   const pathBtn = el('button', { type: 'button', class: 'tool', id: 'toggle-path', 'aria-pressed': 'false', text: 'Tool path', disabled: !playback.pathLine });
   const readout = el('div', { class: 'playback-readout', id: 'playback-readout' });
 
@@ -351,6 +374,8 @@ export function playbackBar(pb, playback) {
     playBtn.classList.toggle('on', playback.playing);
     machineBtn.classList.toggle('on', playback.root.visible);
     machineBtn.setAttribute('aria-pressed', String(playback.root.visible));
+    frameBtn.classList.toggle('on', playback.machineFrame);
+    frameBtn.setAttribute('aria-pressed', String(playback.machineFrame));
     const pathOn = !!(playback.pathLine && playback.pathLine.visible);
     pathBtn.classList.toggle('on', pathOn);
     pathBtn.setAttribute('aria-pressed', String(pathOn));
@@ -384,6 +409,7 @@ export function playbackBar(pb, playback) {
     playback.nextEvent();
   });
   machineBtn.addEventListener('click', () => playback.setMachineVisible(!playback.root.visible));
+  frameBtn.addEventListener('click', () => playback.setMachineFrame(!playback.machineFrame));
   pathBtn.addEventListener('click', () => playback.setPathVisible(!playback.pathLine.visible));
   nextBtn.disabled = !playback.eventFrames.some((x) => x != null);
   playback.onState();
@@ -391,6 +417,6 @@ export function playbackBar(pb, playback) {
   return el('div', { class: 'playback-bar', id: 'playback-bar' },
     el('div', { class: 'tool-group' }, playBtn, speed),
     slider,
-    el('div', { class: 'tool-group' }, nextBtn, machineBtn, pathBtn),
+    el('div', { class: 'tool-group' }, nextBtn, machineBtn, frameBtn, pathBtn),
     readout);
 }

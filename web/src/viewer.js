@@ -97,6 +97,11 @@ export class Viewer {
     fill.position.set(1, -1, 2);
     scene.add(fill);
     scene.add(camera);
+    // What the report places in the workpiece frame; the playback can set where that frame
+    // stands (the machine's frame fixed, the part moving with its table).
+    this.world = new Group();
+    this.world.matrixAutoUpdate = false;
+    scene.add(this.world);
 
     this.buildPart();
     this.buildDesign();
@@ -162,7 +167,7 @@ export class Viewer {
     });
     this.part = new Mesh(g, mat);
     this.part.renderOrder = 0;
-    this.scene.add(this.part);
+    this.world.add(this.part);
     this.colorByDeviation = this.hasDeviation;
   }
 
@@ -178,7 +183,7 @@ export class Viewer {
     this.design = new Mesh(g, mat);
     this.design.renderOrder = 2;
     this.design.visible = false;
-    this.scene.add(this.design);
+    this.world.add(this.design);
   }
 
   buildStock() {
@@ -207,7 +212,7 @@ export class Viewer {
     if (this.stock) {
       this.stock.visible = false;
       this.stock.renderOrder = 3;
-      this.scene.add(this.stock);
+      this.world.add(this.stock);
     }
   }
 
@@ -224,7 +229,7 @@ export class Viewer {
     group.traverse((o) => { o.renderOrder = 10; });
     group.visible = false;
     this.marker = group;
-    this.scene.add(group);
+    this.world.add(group);
   }
 
   buildRegionMarkers() {
@@ -249,7 +254,7 @@ export class Viewer {
     });
     this.regionPoints = new Points(g, mat);
     this.regionPoints.renderOrder = 9;
-    this.scene.add(this.regionPoints);
+    this.world.add(this.regionPoints);
   }
 
   buildTriad() {
@@ -307,6 +312,20 @@ export class Viewer {
       this.marker.position.set(p[0], p[1], p[2]);
       this.marker.visible = true;
     }
+    this.requestRender();
+  }
+
+  // Where the workpiece frame stands in the view (a Matrix4); with `follow` the camera moves
+  // with it, keeping its view of what it looks at.
+  setWorldMatrix(matrix, follow = false) {
+    if (follow) {
+      const delta = matrix.clone().multiply(this.world.matrix.clone().invert());
+      this.camera.position.applyMatrix4(delta);
+      this.controls.target.applyMatrix4(delta);
+      this.controls.update();
+    }
+    this.world.matrix.copy(matrix);
+    this.world.matrixWorldNeedsUpdate = true;
     this.requestRender();
   }
 
@@ -381,14 +400,14 @@ export class Viewer {
   // Standard views: 'iso', 'top', 'front', 'right', 'left', 'back'; frames the whole part.
   setView(name, animate = true) {
     const d = VIEW_DIRS[name] || VIEW_DIRS.iso;
-    const center = this.bounds.getCenter(new Vector3());
+    const center = this.bounds.getCenter(new Vector3()).applyMatrix4(this.world.matrix);
     this.animateTo(center, new Vector3(...d), this.fitDistance(), animate);
   }
 
   // Flies to a point, keeping the view direction, and closes in on it.
   flyTo(p, animate = true) {
     if (!Array.isArray(p) || p.length < 3 || !p.every(Number.isFinite)) return false;
-    const target = new Vector3(p[0], p[1], p[2]);
+    const target = new Vector3(p[0], p[1], p[2]).applyMatrix4(this.world.matrix);
     const offset = this.camera.position.clone().sub(this.controls.target);
     let dist = offset.length();
     const close = Math.max(this.radius * 0.7, 2);
@@ -415,7 +434,7 @@ export class Viewer {
     });
     canvas.addEventListener('dblclick', (e) => {
       const hit = this.pick(e.clientX, e.clientY);
-      if (hit) this.animateTo(new Vector3(...hit.point), this.camera.position.clone().sub(this.controls.target),
+      if (hit) this.animateTo(new Vector3(...hit.point).applyMatrix4(this.world.matrix), this.camera.position.clone().sub(this.controls.target),
         this.camera.position.distanceTo(this.controls.target));
     });
     this.raycaster = new Raycaster();
@@ -429,6 +448,7 @@ export class Viewer {
     const hits = this.raycaster.intersectObject(this.part, false);
     if (hits.length === 0) return null;
     const h = hits[0];
+    h.point = this.world.worldToLocal(h.point.clone()); // workpiece frame
     const m = this.model.mesh;
     const pos = m.positions;
     // The face vertex nearest the hit carries the deviation and source shown.
