@@ -61,12 +61,14 @@ class MachineCheck : public ::testing::Test {
 // C = 60 the clamp's nearest edge lies 20 mm from the cutter's axis at (0, 80) (the edge from
 // (12.68, 61.96) to (32.68, 96.60)), 15 mm from its side, and at C = 120 likewise by symmetry:
 // both poses are clean; the clamp passes through the cutter around C = 90 (the clamp's middle
-// at 80 mm from the C axis), between the poses.
+// at 80 mm from the C axis), between the poses. Line 21 brings the tip down to z = -159 at the
+// same place as line 12: the housing's underside 1 mm above the table's top, within the job's
+// 2 mm clearance (a near miss, a warning).
 TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
   const CommandResult r = check(kExample / "job.yaml");
   EXPECT_EQ(r.exit_code, 1) << r.output;
   const std::vector<nlohmann::json> events = machine_events(json());
-  ASSERT_EQ(events.size(), 2u) << json().dump(1);
+  ASSERT_EQ(events.size(), 3u) << json().dump(1);
   const nlohmann::json& head = events[0];
   EXPECT_EQ(head["kind"], "machine_collision");
   EXPECT_EQ(head["severity"], "error");
@@ -85,13 +87,20 @@ TEST_F(MachineCheck, BundledCrashIsFoundWithItsLinesAndBodies) {
   const double c_deg = clamp["axes"]["C"].get<double>();
   EXPECT_GT(c_deg, 60.0);
   EXPECT_LT(c_deg, 120.0);
+
+  const nlohmann::json& near = events[2];
+  EXPECT_EQ(near["kind"], "machine_near_miss");
+  EXPECT_EQ(near["severity"], "warning");
+  EXPECT_EQ(near["line"], "crash.ngc:21");
+  EXPECT_EQ(near["bodies"], nlohmann::json::array({"spindle housing (Z)", "rotary table (C)"}));
+  EXPECT_NEAR(near["clearance_mm"].get<double>(), 1.0, 0.01);
   EXPECT_NE(r.output.find("error   machine_collision at crash.ngc:12: spindle housing (Z) hits rotary table (C)"),
             std::string::npos)
       << r.output;
 }
 
-// simulate cuts the face pass (lines 6-7) and reports the same two collisions, in the
-// terminal, report.json and collisions.csv.
+// simulate cuts the face pass (lines 6-7) and reports the same two collisions and the near
+// miss, in the terminal, report.json and collisions.csv.
 TEST_F(MachineCheck, SimulateReportsThemInTheReportAndCollisionsCsv) {
   const CommandResult r =
       run_vcut("simulate " + (kExample / "job.yaml").string() + " --resolution 0.5 --out " + (dir / "out").string());
@@ -103,21 +112,24 @@ TEST_F(MachineCheck, SimulateReportsThemInTheReportAndCollisionsCsv) {
   std::ifstream in(dir / "out" / "report.json");
   const nlohmann::json j = nlohmann::json::parse(in);
   EXPECT_EQ(j["summary"]["machine_collisions"], 2);
-  EXPECT_EQ(j["summary"]["machine_near_misses"], 0);
-  ASSERT_EQ(j["machine"]["contacts"].size(), 2u);
+  EXPECT_EQ(j["summary"]["machine_near_misses"], 1);
+  ASSERT_EQ(j["machine"]["contacts"].size(), 3u);
   EXPECT_EQ(j["machine"]["contacts"][1]["line"], "crash.ngc:16");
   EXPECT_TRUE(j["machine"]["contacts"][1]["between_poses"].get<bool>());
   std::ifstream csv_in(dir / "out" / "collisions.csv");
-  std::string header, row1, row2, extra;
+  std::string header, row1, row2, row3, extra;
   std::getline(csv_in, header);
   std::getline(csv_in, row1);
   std::getline(csv_in, row2);
+  std::getline(csv_in, row3);
   EXPECT_FALSE(std::getline(csv_in, extra));
   EXPECT_EQ(header, "kind,body,other,depth_mm,clearance_mm,where_x,where_y,where_z,between_poses,lines");
   EXPECT_EQ(row1.rfind("machine_collision,spindle housing (Z),rotary table (C),", 0), 0u) << row1;
   EXPECT_NE(row1.find(",false,crash.ngc:12"), std::string::npos) << row1;
   EXPECT_EQ(row2.rfind("machine_collision,T1 cutter,fixture clamp,", 0), 0u) << row2;
   EXPECT_NE(row2.find(",true,crash.ngc:16"), std::string::npos) << row2;
+  EXPECT_EQ(row3.rfind("machine_near_miss,spindle housing (Z),rotary table (C),", 0), 0u) << row3;
+  EXPECT_NE(row3.find(",false,crash.ngc:21"), std::string::npos) << row3;
 }
 
 // The same findings, to the byte, with 1 thread and with 3 (the pairs and the poses are
