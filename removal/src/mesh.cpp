@@ -82,37 +82,44 @@ std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh) {
   return area;
 }
 
-TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept) {
-  kept.clear();
-  if (mesh.triangles.size() <= max_triangles) {
-    kept.resize(mesh.vertices_mm.size());
-    for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = static_cast<int>(i);
-    return mesh;
-  }
+namespace {
+
+// Quadric decimation of some of a mesh's triangles (indices into mesh.triangles) to at most
+// `budget`, vertices marked in `locked` kept: the result's vertices are original ones
+// (`kept`: their indices in `mesh`).
+TriangleMesh decimate_part(const TriangleMesh& mesh, const std::vector<int>& triangles,
+                           const std::vector<std::uint8_t>& locked, std::size_t budget, std::vector<int>& kept) {
   OMesh om;
   OpenMesh::VPropHandleT<int> original;
   om.add_property(original);
+  std::vector<int> local(mesh.vertices_mm.size(), -1);
   std::vector<OMesh::VertexHandle> handles;
-  handles.reserve(mesh.vertices_mm.size());
-  for (std::size_t i = 0; i < mesh.vertices_mm.size(); ++i) {
-    const auto& p = mesh.vertices_mm[i];
-    handles.push_back(om.add_vertex(OMesh::Point(p.x(), p.y(), p.z())));
-    om.property(original, handles.back()) = static_cast<int>(i);
+  for (int t : triangles)
+    for (int c = 0; c < 3; ++c) {
+      const int v = mesh.triangles[static_cast<std::size_t>(t)][c];
+      if (local[static_cast<std::size_t>(v)] >= 0) continue;
+      local[static_cast<std::size_t>(v)] = static_cast<int>(handles.size());
+      const auto& p = mesh.vertices_mm[static_cast<std::size_t>(v)];
+      handles.push_back(om.add_vertex(OMesh::Point(p.x(), p.y(), p.z())));
+      om.property(original, handles.back()) = v;
+    }
+  for (int t : triangles) {
+    const Eigen::Vector3i& f = mesh.triangles[static_cast<std::size_t>(t)];
+    om.add_face(handles[static_cast<std::size_t>(local[static_cast<std::size_t>(f[0])])],
+                handles[static_cast<std::size_t>(local[static_cast<std::size_t>(f[1])])],
+                handles[static_cast<std::size_t>(local[static_cast<std::size_t>(f[2])])]);
   }
-  omerr().disable();
-  for (const auto& t : mesh.triangles)
-    om.add_face(handles[static_cast<std::size_t>(t[0])], handles[static_cast<std::size_t>(t[1])],
-                handles[static_cast<std::size_t>(t[2])]);
-  omerr().enable();
   om.request_vertex_status();
   om.request_edge_status();
   om.request_halfedge_status();
   om.request_face_status();
+  for (const auto& vh : handles)
+    if (locked[static_cast<std::size_t>(om.property(original, vh))]) om.status(vh).set_locked(true);
   OpenMesh::Decimater::DecimaterT<OMesh> decimater(om);
   OpenMesh::Decimater::ModQuadricT<OMesh>::Handle quadric;
   decimater.add(quadric);
   decimater.initialize();
-  decimater.decimate_to_faces(0, max_triangles);
+  decimater.decimate_to_faces(0, budget);
   om.garbage_collection();
   TriangleMesh out;
   std::vector<int> index(om.n_vertices(), -1);
@@ -128,6 +135,87 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
     int c = 0;
     for (const auto& vh : om.fv_range(fh)) t[c++] = index[static_cast<std::size_t>(vh.idx())];
     out.triangles.push_back(t);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::size_t decimation_slabs(std::size_t triangles, std::size_t max_triangles) {
+  constexpr std::size_t kMaxSlabs = 16, kSlabTriangles = 200'000;
+  return std::max<std::size_t>(1, std::min({kMaxSlabs, triangles / kSlabTriangles, max_triangles / kSlabTriangles}));
+}
+
+TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept) {
+  return decimate(mesh, max_triangles, kept, decimation_slabs(mesh.triangles.size(), max_triangles));
+}
+
+TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept, std::size_t slabs) {
+  kept.clear();
+  const std::size_t n = mesh.triangles.size();
+  if (n <= max_triangles) {
+    kept.resize(mesh.vertices_mm.size());
+    for (std::size_t i = 0; i < kept.size(); ++i) kept[i] = static_cast<int>(i);
+    return mesh;
+  }
+  slabs = std::max<std::size_t>(1, std::min(slabs, n));
+  // Slabs of equal triangle counts along the bounding box's longest axis, by centroid (ties by
+  // index: the order is the same for any number of threads).
+  Eigen::AlignedBox3d box;
+  for (const auto& p : mesh.vertices_mm) box.extend(p);
+  int axis = 0;
+  box.sizes().maxCoeff(&axis);
+  std::vector<std::pair<double, int>> order(n);
+  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+    const Eigen::Vector3i& t = mesh.triangles[i];
+    double sum = 0.0;
+    for (int c = 0; c < 3; ++c) sum += mesh.vertices_mm[static_cast<std::size_t>(t[c])][axis];
+    order[i] = {sum, static_cast<int>(i)};
+  });
+  if (slabs > 1) tbb::parallel_sort(order.begin(), order.end());
+  std::vector<std::vector<int>> part(slabs);
+  for (std::size_t r = 0; r < n; ++r) part[r * slabs / n].push_back(order[r].second);
+  // A vertex of triangles in two slabs stays, so that the decimated slabs still meet.
+  std::vector<int> slab_of(mesh.vertices_mm.size(), -1);
+  std::vector<std::uint8_t> locked(mesh.vertices_mm.size(), 0);
+  for (std::size_t k = 0; k < slabs; ++k)
+    for (int t : part[k])
+      for (int c = 0; c < 3; ++c) {
+        int& s = slab_of[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(t)][c])];
+        if (s < 0)
+          s = static_cast<int>(k);
+        else if (s != static_cast<int>(k))
+          locked[static_cast<std::size_t>(mesh.triangles[static_cast<std::size_t>(t)][c])] = 1;
+      }
+  std::vector<TriangleMesh> done(slabs);
+  std::vector<std::vector<int>> done_kept(slabs);
+  omerr().disable();  // complex edges at thin features: OpenMesh leaves those triangles out
+  tbb::parallel_for(std::size_t{0}, slabs, [&](std::size_t k) {
+    const std::size_t budget = max_triangles * part[k].size() / n;
+    done[k] = decimate_part(mesh, part[k], locked, budget, done_kept[k]);
+  });
+  omerr().enable();
+  if (slabs == 1) {
+    kept = std::move(done_kept[0]);
+    return std::move(done[0]);
+  }
+  // The slabs joined in order, each shared vertex once.
+  TriangleMesh out;
+  std::vector<int> index(mesh.vertices_mm.size(), -1);
+  for (std::size_t k = 0; k < slabs; ++k) {
+    std::vector<int> local(done[k].vertices_mm.size());
+    for (std::size_t v = 0; v < local.size(); ++v) {
+      int& at = index[static_cast<std::size_t>(done_kept[k][v])];
+      if (at < 0) {
+        at = static_cast<int>(out.vertices_mm.size());
+        out.vertices_mm.push_back(done[k].vertices_mm[v]);
+        kept.push_back(done_kept[k][v]);
+      }
+      local[v] = at;
+    }
+    for (const Eigen::Vector3i& t : done[k].triangles)
+      out.triangles.emplace_back(local[static_cast<std::size_t>(t[0])], local[static_cast<std::size_t>(t[1])],
+                                 local[static_cast<std::size_t>(t[2])]);
   }
   return out;
 }

@@ -4,6 +4,8 @@
 // forms, not the decimater's output.
 #include <gtest/gtest.h>
 
+#include <tbb/global_control.h>
+
 #include <cmath>
 
 #include "test_meshes.h"
@@ -40,8 +42,8 @@ TriangleMesh uv_sphere(double r_mm, int rings, int segments) {
 
 TEST(Decimate, SphereToABudgetKeepsOriginalVerticesClosureAndVolume) {
   const double r = 10.0;
-  const TriangleMesh sphere = uv_sphere(r, 120, 240);  // 2 * 240 * 119 = 57,120 triangles
-  ASSERT_EQ(sphere.triangles.size(), 57120u);
+  const TriangleMesh sphere = uv_sphere(r, 60, 120);  // 2 * 120 * 59 = 14,160 triangles
+  ASSERT_EQ(sphere.triangles.size(), 14160u);
   ASSERT_TRUE(is_closed(sphere));
   ASSERT_GT(signed_volume_mm3(sphere), 0.0);
   std::vector<int> kept;
@@ -87,6 +89,41 @@ TEST(IsClosed, BoxesAndTheWaysToOpenThem) {
   pair.triangles.push_back(box.triangles[0]);
   pair.triangles.push_back({box.triangles[0][0], box.triangles[0][2], box.triangles[0][1]});
   EXPECT_FALSE(is_closed(pair));
+}
+
+// In slabs (as the page's large meshes are decimated, in parallel): the same guarantees, the
+// slabs meeting along the vertices they share, and the same triangles for 1 and 2 threads.
+TEST(Decimate, InSlabsTheSlabsStillMeetForAnyThreadCount) {
+  const double r = 10.0;
+  const TriangleMesh sphere = uv_sphere(r, 60, 120);  // 14,160 triangles
+  std::vector<int> kept;
+  TriangleMesh one_thread;
+  {
+    tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+    one_thread = decimate(sphere, 4000, kept, 4);
+  }
+  std::vector<int> kept2;
+  const TriangleMesh two_threads = decimate(sphere, 4000, kept2, 4);
+  EXPECT_EQ(two_threads.triangles, one_thread.triangles);
+  EXPECT_EQ(kept2, kept);
+  EXPECT_LE(one_thread.triangles.size(), 4000u);
+  EXPECT_GT(one_thread.triangles.size(), 2000u);
+  ASSERT_EQ(kept.size(), one_thread.vertices_mm.size());
+  std::vector<int> seen(sphere.vertices_mm.size(), 0);
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    ASSERT_GE(kept[i], 0);
+    ASSERT_LT(static_cast<std::size_t>(kept[i]), sphere.vertices_mm.size());
+    EXPECT_EQ(one_thread.vertices_mm[i], sphere.vertices_mm[static_cast<std::size_t>(kept[i])]) << i;
+    EXPECT_EQ(++seen[static_cast<std::size_t>(kept[i])], 1) << "vertex " << kept[i] << " twice";
+  }
+  EXPECT_TRUE(is_closed(one_thread));  // the slabs meet: no crack along their borders
+  const double sphere_mm3 = 4.0 / 3.0 * M_PI * r * r * r;
+  EXPECT_NEAR(signed_volume_mm3(one_thread), sphere_mm3, 0.01 * sphere_mm3);
+  EXPECT_LE(signed_volume_mm3(one_thread), sphere_mm3);
+  // One slab per 200,000 triangles of the mesh and of the budget, at most 16.
+  EXPECT_EQ(decimation_slabs(3'300'000, 2'000'000), 10u);
+  EXPECT_EQ(decimation_slabs(14'160, 4000), 1u);
+  EXPECT_EQ(decimation_slabs(50'000'000, 40'000'000), 16u);
 }
 
 TEST(Decimate, SmallMeshComesBackAsItIs) {
