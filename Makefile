@@ -18,7 +18,9 @@ build: deps
 
 demo: build
 	./$(BUILD)/cli/vcut simulate examples/demo/job.yaml
-	@echo "Open examples/demo/out/demo/report.html in a browser (the part coloured by deviation, gouges and their NC lines)"
+	./$(BUILD)/cli/vcut simulate examples/machine-collision/job.yaml
+	@echo "Open examples/demo/out/demo/report.html in a browser (the part coloured by deviation, gouges and their NC lines; Play below the view)"
+	@echo "and examples/machine-collision/out/crash/report.html (the machine played back: Next event poses it at each collision)"
 
 # The peers the tests compare with (LinuxCNC's rs274, Chromium) are installed here, so a
 # missing one fails its test instead of skipping it (VCUT_REQUIRE_PEERS).
