@@ -139,6 +139,11 @@ async function checkPlayback(page) {
   check(await page.evaluate(() => window.vcutPlayback.machineVisible()), 'the slider shows the machine');
   const names = await page.evaluate(() => window.vcutPlayback.bodyNames());
   check(names.some((n) => / cutter$/.test(n)), `the tool is among the bodies (${names.length} bodies)`);
+  // The keys: the right arrow steps a frame (the focus on the page, not on a control).
+  await page.evaluate(() => document.activeElement && document.activeElement.blur());
+  await page.keyboard.press('ArrowRight');
+  check(await page.evaluate(() => window.vcutPlayback.frame()) === middle + 1, 'the right arrow steps one frame');
+  await page.keyboard.press('ArrowLeft');
   await page.selectOption('#playback-speed', '500');
   await page.locator('#playback-play').click();
   await page.waitForTimeout(400);

@@ -412,6 +412,21 @@ export function playbackBar(pb, playback) {
   frameBtn.addEventListener('click', () => playback.setMachineFrame(!playback.machineFrame));
   pathBtn.addEventListener('click', () => playback.setPathVisible(!playback.pathLine.visible));
   nextBtn.disabled = !playback.eventFrames.some((x) => x != null);
+  // Keys, where no control has the focus: Space plays or pauses, the arrows step a frame.
+  window.addEventListener('keydown', (e) => {
+    const t = e.target;
+    if (e.ctrlKey || e.metaKey || e.altKey || (t && /^(INPUT|SELECT|TEXTAREA|BUTTON)$/.test(t.tagName))) return;
+    if (t && t.closest && t.closest('#event-table, #gouge-table, #excess-table')) return; // rows take Space and Enter
+    if (e.key === ' ') {
+      e.preventDefault();
+      playBtn.click();
+    } else if (e.key === 'ArrowRight' || e.key === 'ArrowLeft') {
+      e.preventDefault();
+      activate();
+      playback.pause();
+      playback.setFrame(playback.index + (e.key === 'ArrowRight' ? 1 : -1));
+    }
+  });
   playback.onState();
   playback.onFrame();
   return el('div', { class: 'playback-bar', id: 'playback-bar' },
