@@ -418,8 +418,16 @@ function main() {
   // Mesh decoding and the 3D view last: the tables are usable even if WebGL fails.
   let model;
   let partKeys = null;
+  // A damaged playback leaves the rest of the view as it is.
+  let pb = null;
+  let playbackError = null;
   try {
-    const pb = data.playback ? decodePlayback(data.playback) : null;
+    pb = data.playback ? decodePlayback(data.playback) : null;
+  } catch (e) {
+    playbackError = e.message;
+    console.warn(`vcut report: the playback data is damaged (${e.message}); no playback`);
+  }
+  try {
     model = {
       mesh: data.mesh ? decodeMesh(data.mesh, 'mesh') : null,
       design: data.design ? decodeMesh(data.design, 'design') : null,
@@ -524,6 +532,7 @@ function main() {
     viewport.append(el('div', { class: 'decimated', text: `Showing ${num(summary.triangles_shown)} of ${num(summary.triangles_machined)} triangles` }));
   }
   if (!model.mesh) viewport.append(el('div', { class: 'view-error soft', text: 'No machined mesh in this report.' }));
+  if (playbackError) viewport.append(el('div', { class: 'view-error soft', text: `No playback: its data is damaged (${playbackError}).` }));
 
   // Playback of the program: the machine, the tool and the part as cut, frame by frame.
   if (model.playback) {
