@@ -40,8 +40,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// The report page's playback: at most this many machine poses (about 1 MB for a five-axis
-// machine), and ten times as many tool path points.
+// The report page's playback: at most this many machine poses (up to about 6 MB of the page
+// for a five-axis machine: 12 floats per node and frame), and ten times as many tool path points.
 constexpr std::size_t kPlaybackFrames = 20000;
 
 double total_ram_mb() {

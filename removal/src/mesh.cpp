@@ -161,18 +161,22 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   slabs = std::max<std::size_t>(1, std::min(slabs, n));
   // Slabs of equal triangle counts along the bounding box's longest axis, by centroid (ties by
   // index: the order is the same for any number of threads).
-  Eigen::AlignedBox3d box;
-  for (const auto& p : mesh.vertices_mm) box.extend(p);
-  int axis = 0;
-  box.sizes().maxCoeff(&axis);
   std::vector<std::pair<double, int>> order(n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-    const Eigen::Vector3i& t = mesh.triangles[i];
-    double sum = 0.0;
-    for (int c = 0; c < 3; ++c) sum += mesh.vertices_mm[static_cast<std::size_t>(t[c])][axis];
-    order[i] = {sum, static_cast<int>(i)};
-  });
-  if (slabs > 1) tbb::parallel_sort(order.begin(), order.end());
+  if (slabs > 1) {
+    Eigen::AlignedBox3d box;
+    for (const auto& p : mesh.vertices_mm) box.extend(p);
+    int axis = 0;
+    box.sizes().maxCoeff(&axis);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+      const Eigen::Vector3i& t = mesh.triangles[i];
+      double sum = 0.0;
+      for (int c = 0; c < 3; ++c) sum += mesh.vertices_mm[static_cast<std::size_t>(t[c])][axis];
+      order[i] = {sum, static_cast<int>(i)};
+    });
+    tbb::parallel_sort(order.begin(), order.end());
+  } else {
+    for (std::size_t i = 0; i < n; ++i) order[i].second = static_cast<int>(i);
+  }
   std::vector<std::vector<int>> part(slabs);
   for (std::size_t r = 0; r < n; ++r) part[r * slabs / n].push_back(order[r].second);
   // A vertex of triangles in two slabs stays, so that the decimated slabs still meet.

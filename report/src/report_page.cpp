@@ -113,6 +113,13 @@ class SourceTexts {
   std::vector<std::pair<int, int>> refs_;
 };
 
+// Index in the sources table of a block's line; -1 for no block.
+int source_of_block(SourceTexts& sources, const kinematics::Program& program, int block) {
+  if (block < 0) return -1;
+  const kinematics::SourceRef& src = program.blocks[static_cast<std::size_t>(block)].source;
+  return sources.index(src.file, src.line);
+}
+
 const char* body_kind_name(pipeline::BodyKind kind) {
   switch (kind) {
     case pipeline::BodyKind::Model:
@@ -159,13 +166,7 @@ ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, S
   for (std::size_t f = 0; f < frames; ++f) {
     t_s.push_back(static_cast<float>(time_at(play.frame_sample[f])));
     sample.push_back(static_cast<std::int32_t>(play.frame_sample[f]));
-    const int block = play.frame_block[f];
-    if (block < 0) {
-      source.push_back(-1);
-      continue;
-    }
-    const kinematics::SourceRef& src = run.program.blocks[static_cast<std::size_t>(block)].source;
-    source.push_back(sources.index(src.file, src.line));
+    source.push_back(source_of_block(sources, run.program, play.frame_block[f]));
   }
   ordered_json nodes = ordered_json::array();
   for (char n : play.nodes) nodes.push_back(std::string(1, n));
@@ -325,29 +326,19 @@ void write_report_page(const std::string& path, const std::string& template_path
   } else {
     mesh["deviation"] = nullptr;
   }
-  std::vector<std::int32_t> vertex_source;
-  vertex_source.reserve(kept.size());
-  for (int k : kept) {
-    const int move = machined.vertex_move[static_cast<std::size_t>(k)];
-    if (move < 0 || input.move_blocks == nullptr || static_cast<std::size_t>(move) >= input.move_blocks->size()) {
-      vertex_source.push_back(-1);
-      continue;
-    }
-    const kinematics::SourceRef& src =
-        program.blocks[static_cast<std::size_t>((*input.move_blocks)[static_cast<std::size_t>(move)])].source;
-    vertex_source.push_back(sources.index(src.file, src.line));
-  }
-  mesh["source"] = typed_base64(vertex_source);
-  // The block that made each vertex (-1: the initial stock): the playback shows the part as
-  // cut up to its frame's block.
-  std::vector<std::int32_t> vertex_block;
+  // The block that made each vertex (-1: the initial stock; the playback shows the part as cut
+  // up to its frame's block) and its NC line.
+  std::vector<std::int32_t> vertex_block, vertex_source;
   vertex_block.reserve(kept.size());
+  vertex_source.reserve(kept.size());
   for (int k : kept) {
     const int move = machined.vertex_move[static_cast<std::size_t>(k)];
     const bool known =
         move >= 0 && input.move_blocks != nullptr && static_cast<std::size_t>(move) < input.move_blocks->size();
     vertex_block.push_back(known ? (*input.move_blocks)[static_cast<std::size_t>(move)] : -1);
+    vertex_source.push_back(source_of_block(sources, program, vertex_block.back()));
   }
+  mesh["source"] = typed_base64(vertex_source);
   mesh["block"] = typed_base64(vertex_block);
   j["mesh"] = mesh;
   if (input.design != nullptr) {
