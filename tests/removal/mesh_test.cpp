@@ -1,12 +1,15 @@
-// Decimation for the report page (removal::decimate): a finely triangulated sphere reduced
-// to a budget keeps only original vertices (their attributes carry over through `kept`),
-// stays closed, and keeps the sphere's volume; the expectations are the sphere's closed
-// forms, not the decimater's output.
+// Decimation for the report page (removal::decimate, vertex clustering): a finely
+// triangulated sphere and box reduced to a budget keep only original vertices (their
+// attributes carry over through `kept`), still wind once around their inside, keep the
+// sphere's volume and the box's exactly; the expectations are closed forms, not the
+// decimater's output.
 #include <gtest/gtest.h>
 
 #include <tbb/global_control.h>
 
+#include <array>
 #include <cmath>
+#include <map>
 
 #include "test_meshes.h"
 #include "vcut/removal/mesh.h"
@@ -40,28 +43,120 @@ TriangleMesh uv_sphere(double r_mm, int rings, int segments) {
   return m;
 }
 
-TEST(Decimate, SphereToABudgetKeepsOriginalVerticesClosureAndVolume) {
-  const double r = 10.0;
-  const TriangleMesh sphere = uv_sphere(r, 60, 120);  // 2 * 120 * 59 = 14,160 triangles
-  ASSERT_EQ(sphere.triangles.size(), 14160u);
-  ASSERT_TRUE(is_closed(sphere));
-  ASSERT_GT(signed_volume_mm3(sphere), 0.0);
-  std::vector<int> kept;
-  const TriangleMesh small = decimate(sphere, 2000, kept);
-  EXPECT_LE(small.triangles.size(), 2000u);
-  EXPECT_GT(small.triangles.size(), 1000u);
+// A box [lo, hi] with each face a k x k grid of quads (two triangles each), shared vertices,
+// outward facing.
+TriangleMesh tessellated_box(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int k) {
+  TriangleMesh m;
+  std::map<std::array<int, 3>, int> index;
+  auto vertex = [&](std::array<int, 3> g) {
+    const auto [it, inserted] = index.emplace(g, static_cast<int>(m.vertices_mm.size()));
+    if (inserted)
+      m.vertices_mm.push_back({lo.x() + (hi.x() - lo.x()) * g[0] / k, lo.y() + (hi.y() - lo.y()) * g[1] / k,
+                               lo.z() + (hi.z() - lo.z()) * g[2] / k});
+    return it->second;
+  };
+  for (int axis = 0; axis < 3; ++axis)
+    for (int side = 0; side < 2; ++side) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;  // (u, v, axis) right-handed
+      for (int i = 0; i < k; ++i)
+        for (int j = 0; j < k; ++j) {
+          auto at = [&](int a, int b) {
+            std::array<int, 3> g{};
+            g[static_cast<std::size_t>(axis)] = side * k;
+            g[static_cast<std::size_t>(u)] = a;
+            g[static_cast<std::size_t>(v)] = b;
+            return vertex(g);
+          };
+          const int p00 = at(i, j), p10 = at(i + 1, j), p11 = at(i + 1, j + 1), p01 = at(i, j + 1);
+          if (side == 1) {  // normal +axis = u x v
+            m.triangles.push_back({p00, p10, p11});
+            m.triangles.push_back({p00, p11, p01});
+          } else {
+            m.triangles.push_back({p00, p11, p10});
+            m.triangles.push_back({p00, p01, p11});
+          }
+        }
+    }
+  return m;
+}
+
+// The solid angle a triangle subtends at the origin, signed by its orientation (Van Oosterom
+// and Strackee): the triangles of a closed surface sum to 4 pi times their winding about it.
+double solid_angle(const TriangleMesh& m, const Eigen::Vector3i& t) {
+  const Eigen::Vector3d a = m.vertices_mm[static_cast<std::size_t>(t[0])],
+                        b = m.vertices_mm[static_cast<std::size_t>(t[1])],
+                        c = m.vertices_mm[static_cast<std::size_t>(t[2])];
+  const double la = a.norm(), lb = b.norm(), lc = c.norm();
+  return 2.0 * std::atan2(a.dot(b.cross(c)), la * lb * lc + a.dot(b) * lc + a.dot(c) * lb + b.dot(c) * la);
+}
+
+double winding_about_origin(const TriangleMesh& m) {
+  double sum = 0.0;
+  for (const auto& t : m.triangles) sum += solid_angle(m, t);
+  return sum / (4.0 * M_PI);
+}
+
+// Every vertex of the result is an original one, once, and `kept` says which.
+void expect_original_vertices(const TriangleMesh& small, const std::vector<int>& kept, const TriangleMesh& mesh) {
   ASSERT_EQ(kept.size(), small.vertices_mm.size());
+  std::vector<int> seen(mesh.vertices_mm.size(), 0);
   for (std::size_t i = 0; i < kept.size(); ++i) {
     ASSERT_GE(kept[i], 0);
-    ASSERT_LT(static_cast<std::size_t>(kept[i]), sphere.vertices_mm.size());
-    EXPECT_EQ(small.vertices_mm[i], sphere.vertices_mm[static_cast<std::size_t>(kept[i])]) << i;
+    ASSERT_LT(static_cast<std::size_t>(kept[i]), mesh.vertices_mm.size());
+    EXPECT_EQ(small.vertices_mm[i], mesh.vertices_mm[static_cast<std::size_t>(kept[i])]) << i;
+    EXPECT_EQ(++seen[static_cast<std::size_t>(kept[i])], 1) << "vertex " << kept[i] << " twice";
   }
-  EXPECT_TRUE(is_closed(small));
-  // 2,000 triangles on a 10 mm sphere: an edge of about 1.6 mm, a facet's sagitta under
+}
+
+TEST(Decimate, SphereToABudgetKeepsOriginalVerticesWindingAndVolume) {
+  const double r = 10.0;
+  const TriangleMesh sphere = uv_sphere(r, 100, 200);  // 2 * 200 * 99 = 39,600 triangles
+  ASSERT_EQ(sphere.triangles.size(), 39600u);
+  ASSERT_TRUE(is_closed(sphere));
+  ASSERT_NEAR(winding_about_origin(sphere), 1.0, 1e-9);
+  std::vector<int> kept;
+  TriangleMesh one_thread;
+  {
+    tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
+    one_thread = decimate(sphere, 4000, kept);
+  }
+  EXPECT_LE(one_thread.triangles.size(), 4000u);
+  EXPECT_GT(one_thread.triangles.size(), 2000u);  // the budget used, not wasted
+  expect_original_vertices(one_thread, kept, sphere);
+  // A hole or a triangle turned over would change the winding: it is still once about the centre.
+  EXPECT_NEAR(winding_about_origin(one_thread), 1.0, 1e-9);
+  // 2,000-4,000 triangles on a 10 mm sphere: an edge of about 1.5 mm, a facet's sagitta under
   // 0.05 mm, so the volume falls short of 4/3 pi r^3 by well under 2 %.
   const double sphere_mm3 = 4.0 / 3.0 * M_PI * r * r * r;
-  EXPECT_NEAR(signed_volume_mm3(small), sphere_mm3, 0.02 * sphere_mm3);
-  EXPECT_LE(signed_volume_mm3(small), sphere_mm3);  // inscribed: every vertex on the sphere
+  EXPECT_NEAR(signed_volume_mm3(one_thread), sphere_mm3, 0.02 * sphere_mm3);
+  EXPECT_LE(signed_volume_mm3(one_thread), sphere_mm3);  // every vertex on the sphere
+  // The same triangles for 1 and 2 threads.
+  std::vector<int> kept2;
+  const TriangleMesh two_threads = decimate(sphere, 4000, kept2);
+  EXPECT_EQ(two_threads.triangles, one_thread.triangles);
+  EXPECT_EQ(kept2, kept);
+}
+
+// A box's corners and edges stay where they are: each group of vertices keeps the one nearest
+// its triangles' planes, a corner where three faces meet, an edge vertex where two do. Then
+// every triangle left lies in a face of the box and the volume is the box's to rounding.
+TEST(Decimate, BoxKeepsItsCornersEdgesAndVolume) {
+  const Eigen::Vector3d lo(-3, 1, 2), hi(17, 11, 7);     // 20 x 10 x 5 mm
+  const TriangleMesh box = tessellated_box(lo, hi, 40);  // 6 * 40 * 40 * 2 = 19,200 triangles
+  ASSERT_EQ(box.triangles.size(), 19200u);
+  ASSERT_TRUE(is_closed(box));
+  const double box_mm3 = 20.0 * 10.0 * 5.0;
+  ASSERT_NEAR(signed_volume_mm3(box), box_mm3, 1e-9);
+  std::vector<int> kept;
+  const TriangleMesh small = decimate(box, 1500, kept);
+  EXPECT_LE(small.triangles.size(), 1500u);
+  EXPECT_GT(small.triangles.size(), 750u);
+  expect_original_vertices(small, kept, box);
+  int corners = 0;
+  for (const auto& p : small.vertices_mm)
+    corners += ((p - lo).cwiseAbs().array() < 1e-12 || (p - hi).cwiseAbs().array() < 1e-12).all() ? 1 : 0;
+  EXPECT_EQ(corners, 8);
+  EXPECT_NEAR(signed_volume_mm3(small), box_mm3, 1e-9);
 }
 
 // A closed mesh has every directed edge once and its reverse once (derived by hand on a box's
@@ -89,41 +184,6 @@ TEST(IsClosed, BoxesAndTheWaysToOpenThem) {
   pair.triangles.push_back(box.triangles[0]);
   pair.triangles.push_back({box.triangles[0][0], box.triangles[0][2], box.triangles[0][1]});
   EXPECT_FALSE(is_closed(pair));
-}
-
-// In slabs (as the page's large meshes are decimated, in parallel): the same guarantees, the
-// slabs meeting along the vertices they share, and the same triangles for 1 and 2 threads.
-TEST(Decimate, InSlabsTheSlabsStillMeetForAnyThreadCount) {
-  const double r = 10.0;
-  const TriangleMesh sphere = uv_sphere(r, 60, 120);  // 14,160 triangles
-  std::vector<int> kept;
-  TriangleMesh one_thread;
-  {
-    tbb::global_control serial(tbb::global_control::max_allowed_parallelism, 1);
-    one_thread = decimate(sphere, 4000, kept, 4);
-  }
-  std::vector<int> kept2;
-  const TriangleMesh two_threads = decimate(sphere, 4000, kept2, 4);
-  EXPECT_EQ(two_threads.triangles, one_thread.triangles);
-  EXPECT_EQ(kept2, kept);
-  EXPECT_LE(one_thread.triangles.size(), 4000u);
-  EXPECT_GT(one_thread.triangles.size(), 2000u);
-  ASSERT_EQ(kept.size(), one_thread.vertices_mm.size());
-  std::vector<int> seen(sphere.vertices_mm.size(), 0);
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    ASSERT_GE(kept[i], 0);
-    ASSERT_LT(static_cast<std::size_t>(kept[i]), sphere.vertices_mm.size());
-    EXPECT_EQ(one_thread.vertices_mm[i], sphere.vertices_mm[static_cast<std::size_t>(kept[i])]) << i;
-    EXPECT_EQ(++seen[static_cast<std::size_t>(kept[i])], 1) << "vertex " << kept[i] << " twice";
-  }
-  EXPECT_TRUE(is_closed(one_thread));  // the slabs meet: no crack along their borders
-  const double sphere_mm3 = 4.0 / 3.0 * M_PI * r * r * r;
-  EXPECT_NEAR(signed_volume_mm3(one_thread), sphere_mm3, 0.01 * sphere_mm3);
-  EXPECT_LE(signed_volume_mm3(one_thread), sphere_mm3);
-  // One slab per 200,000 triangles of the mesh and of the budget, at most 16.
-  EXPECT_EQ(decimation_slabs(3'300'000, 2'000'000), 10u);
-  EXPECT_EQ(decimation_slabs(14'160, 4000), 1u);
-  EXPECT_EQ(decimation_slabs(50'000'000, 40'000'000), 16u);
 }
 
 TEST(Decimate, SmallMeshComesBackAsItIs) {

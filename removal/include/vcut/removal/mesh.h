@@ -25,19 +25,16 @@ std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
 // A third of the area of every incident triangle (mm^2): vertex areas sum to the mesh area.
 std::vector<double> vertex_areas_mm2(const TriangleMesh& mesh);
 
-// Fewer triangles, for display: OpenMesh's quadric decimater collapses edges until at most
-// max_triangles remain. Each collapse keeps one of its two vertices, so every vertex left is
-// an original one: `kept` gets, per vertex of the result, its index in `mesh` (its
-// attributes carry over). Triangles OpenMesh cannot take (complex edges at thin features)
-// are left out. A mesh already small enough comes back as it is.
-// Large meshes are cut into slabs of equal triangle counts along their longest axis, each
-// decimated to its share of the budget in parallel, the vertices two slabs share kept (so the
-// slabs still meet): the same result for any number of threads.
+// Fewer triangles, for display, in time linear in the mesh (Lindstrom's vertex clustering):
+// the vertices are grouped by the cells of a grid, the smallest cell (in steps of a few per
+// cent) that leaves at most max_triangles, and each group becomes one of its own vertices, the
+// one nearest the planes of the group's triangles (a corner stays a corner, an edge an edge).
+// So every vertex left is an original one: `kept` gets, per vertex of the result, its index in
+// `mesh` (its attributes carry over). A triangle stays where its corners fall in three groups;
+// a triangle and its reverse cancel (a wall thinner than a cell), so a closed mesh's triangles
+// still bound a volume, though not always as a manifold. The same result for any number of
+// threads. A mesh already small enough comes back as it is.
 TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept);
-// With a given number of slabs (1: the whole mesh at once).
-TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::vector<int>& kept, std::size_t slabs);
-// The slabs `decimate` uses: one per 200,000 triangles of the mesh and of the budget, at most 16.
-std::size_t decimation_slabs(std::size_t triangles, std::size_t max_triangles);
 
 // Whether every edge is shared by exactly two triangles with opposite orientation.
 bool is_closed(const TriangleMesh& mesh);
