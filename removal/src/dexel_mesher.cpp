@@ -610,33 +610,29 @@ SurfaceMesh DexelStock::surface() const {
   const double v = m.v;
   SurfaceMesh mesh = contour_mesh(m);
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
-  const std::size_t count = mesh.mesh.vertices_mm.size();
-  std::vector<std::vector<int>> nearby(count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 512), [&](const auto& range) {
-    for (std::size_t p = range.begin(); p != range.end(); ++p) {
-      const Vector3d& x = mesh.mesh.vertices_mm[p];
-      Eigen::Vector3i base;
-      for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
-      std::vector<int>& ids = nearby[p];
-      for (const Family& f : m.families) {
-        const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
-        const double s_lo = m.position(base[f.axis] - 1), s_hi = m.position(base[f.axis] + 2);
-        for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
-          for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
-            if (!f.contains(iu, iw)) continue;
-            const SegmentList& ray = f.at(iu, iw);
-            for (std::uint32_t s = 0; s < ray.size(); ++s) {
-              const DexelSegment& seg = ray.data()[s];
-              if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo && seg.lo_mm <= s_hi) ids.push_back(seg.lo_move);
-              if (seg.hi_move != kNoMove && seg.hi_mm >= s_lo && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
-            }
+  auto nearby = [&](std::size_t p, std::vector<int>& ids) {
+    ids.clear();
+    const Vector3d& x = mesh.mesh.vertices_mm[p];
+    Eigen::Vector3i base;
+    for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
+    for (const Family& f : m.families) {
+      const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+      const double s_lo = m.position(base[f.axis] - 1), s_hi = m.position(base[f.axis] + 2);
+      for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
+        for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
+          if (!f.contains(iu, iw)) continue;
+          const SegmentList& ray = f.at(iu, iw);
+          for (std::uint32_t s = 0; s < ray.size(); ++s) {
+            const DexelSegment& seg = ray.data()[s];
+            if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo && seg.lo_mm <= s_hi) ids.push_back(seg.lo_move);
+            if (seg.hi_move != kNoMove && seg.hi_mm >= s_lo && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
           }
         }
       }
-      std::sort(ids.begin(), ids.end());
-      ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
     }
-  });
+    std::sort(ids.begin(), ids.end());
+    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+  };
   // A vertex lies in its lattice cell, so the surface is within a cell diagonal.
   detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * v, mesh);
   return mesh;

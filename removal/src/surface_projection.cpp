@@ -80,15 +80,16 @@ SurfaceMesh mesh_from_polygons(const std::vector<openvdb::Vec3s>& points, const 
 
 void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cutter>& cutters,
                                    const std::function<double(const Eigen::Vector3d&)>& initial,
-                                   const std::vector<std::vector<int>>& nearby, double max_travel_mm,
-                                   SurfaceMesh& mesh) {
+                                   const NearbyMoves& nearby, double max_travel_mm, SurfaceMesh& mesh) {
   const std::size_t count = mesh.mesh.vertices_mm.size();
   mesh.vertex_move.assign(count, -1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
     std::vector<TranslationSweep> sweeps;
+    std::vector<int> ids;
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
       sweeps.clear();
-      for (int id : nearby[v]) {
+      nearby(v, ids);
+      for (int id : ids) {
         const Move& move = moves.at(id);
         sweeps.emplace_back(cutters[static_cast<std::size_t>(move.cutter)], move);
       }
@@ -100,7 +101,7 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
           const double cut = -sweeps[k].distance(x);
           if (cut > f) {
             f = cut;
-            active = nearby[v][k];
+            active = ids[k];
           }
         }
         return f;

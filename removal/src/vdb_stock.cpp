@@ -582,18 +582,17 @@ SurfaceMesh VdbStock::surface() const {
   // takes the id of the move whose sweep is its surface (-1: the initial stock).
   const std::size_t count = points.size();
   mesh.vertex_move.assign(count, kNoMove);
-  std::vector<std::vector<int>> nearby(count);
-  for (std::size_t v = 0; v < count; ++v) {
+  auto nearby = [&](std::size_t v, std::vector<int>& list) {
+    list.clear();
     const auto& p = points[v];
     const Coord base(static_cast<int>(std::floor(p.x() / m.v)) - 1, static_cast<int>(std::floor(p.y() / m.v)) - 1,
                      static_cast<int>(std::floor(p.z() / m.v)) - 1);
-    std::vector<int>& list = nearby[v];
     for (int c = 0; c < 64; ++c) {
       const int id = m.id_at(base.offsetBy(c & 3, (c >> 2) & 3, (c >> 4) & 3));
       if (id != kNoMove && std::find(list.begin(), list.end(), id) == list.end()) list.push_back(id);
     }
     std::sort(list.begin(), list.end());
-  }
+  };
   // A vertex lies in its voxel cell, so the surface is within a cell diagonal (sqrt(3) v).
   detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * m.v, mesh);
   return mesh;
