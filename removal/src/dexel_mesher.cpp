@@ -10,11 +10,13 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <functional>
 #include <optional>
 
 #include "dexel_impl.h"
 #include "surface_projection.h"
 #include "vcut/removal/morton.h"
+#include "vcut/removal/sweep.h"
 
 namespace vcut::removal {
 
@@ -603,12 +605,171 @@ class Contour {
 
 SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
 
+// ---- Vertices on creases ----
+//
+// A cell's vertex at the mean of its crossings cuts a crease (the bottom of a V-bit's
+// groove, a slot's top edge) by up to half a cell: the mean lies between the two surfaces,
+// and the projection takes it to the nearer one. In a cell a crease may cross (the tests
+// below), each crossing's plane is taken from the surface that made it (the gradient of its
+// move's sweep distance, or of the initial stock's) and the vertex goes to the point nearest
+// all those planes (dual contouring's quadratic error function; directions in which the
+// planes do not fix it keep the mean), when that point lies within a cell of the cell (where
+// the groove is exactly a cell wide at the nodes' height, its floor lies in the cell below,
+// which holds no surface). A vertex of a merged flat block lies in a cell of its block,
+// whose crossings are flat: it stays.
+constexpr double kCreaseRank = 0.1;  // a plane direction counts above this share of the largest
+
+void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
+  const double v = m.v, flat_mm = kFlatTolerance * v;
+  const std::size_t count = mesh.mesh.vertices_mm.size();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
+    std::vector<Vector3d> points;
+    std::vector<int> made_by;
+    std::vector<std::pair<int, TranslationSweep>> sweeps;
+    std::vector<int> used;  // the moves that made this cell's crossings
+    for (std::size_t p = range.begin(); p != range.end(); ++p) {
+      Vector3d& x = mesh.mesh.vertices_mm[p];
+      Eigen::Vector3i base;
+      for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
+      // The crossings on the cell's twelve edges: the endpoints of the rays along its edges
+      // between its two nodes.
+      points.clear();
+      made_by.clear();
+      unsigned facing = 0;  // bit 2a: a crossing along axis a where material begins, 2a + 1: where it ends
+      for (const Family& f : m.families) {
+        const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
+        const double s_lo = m.position(base[f.axis]), s_hi = m.position(base[f.axis] + 1);
+        for (int iw = base[a2]; iw <= base[a2] + 1; ++iw) {
+          for (int iu = base[a1]; iu <= base[a1] + 1; ++iu) {
+            if (!f.contains(iu, iw)) continue;
+            const SegmentList& ray = f.at(iu, iw);
+            auto add = [&](double s, int move, unsigned side) {
+              if (s < s_lo || s > s_hi) return;
+              facing |= side << (2 * f.axis);
+              Vector3d q;
+              q[f.axis] = s;
+              q[a1] = m.position(iu);
+              q[a2] = m.position(iw);
+              points.push_back(q);
+              made_by.push_back(move);
+            };
+            for (std::uint32_t k = 0; k < ray.size(); ++k) {
+              add(ray.data()[k].lo_mm, ray.data()[k].lo_move, 1u);
+              add(ray.data()[k].hi_mm, ray.data()[k].hi_move, 2u);
+            }
+          }
+        }
+      }
+      if (points.size() < 3) continue;
+      // The surfaces that made the crossings: the moves' sweeps (made_by, then their index in
+      // `sweeps`) and the initial stock's (kNoMove).
+      bool stock = false, opposite = false;
+      used.clear();
+      for (int id : made_by) {
+        if (id == kNoMove)
+          stock = true;
+        else if (std::find(used.begin(), used.end(), id) == used.end())
+          used.push_back(id);
+      }
+      if (used.empty()) continue;  // the stock's own faces: planes, or its own shape
+      for (int a = 0; a < 3; ++a) opposite = opposite || ((facing >> (2 * a)) & 3u) == 3u;
+      Vector3d mean = Vector3d::Zero();
+      for (const Vector3d& q : points) mean += q;
+      mean /= static_cast<double>(points.size());
+      // A crease crosses the cell where the initial stock's face meets a cut, where material
+      // both begins and ends along one axis (a groove's two walls, whose crossings may lie in
+      // one lattice plane), where a V-bit cut (an engraving: every such cell), or where the
+      // crossings do not lie on one plane within a flat block's tolerance (a smooth sheet
+      // bends by its sagitta: under 1e-4 mm on a 4 mm radius at 0.05 mm cells). A ball end
+      // mill's own sweep is smooth: with one move and no other surface, none.
+      if (!stock && !opposite) {
+        bool smooth = true, vbit = false;
+        for (int id : used) {
+          const Cutter& c = m.cutters[static_cast<std::size_t>(m.moves.at(id).cutter)];
+          smooth = smooth && c.type != CutterType::VBit && core_of(c).core_radius_mm == 0.0;
+          vbit = vbit || c.type == CutterType::VBit;
+        }
+        if (used.size() == 1 && smooth) continue;
+        if (!vbit) {
+          double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
+          for (const Vector3d& q : points) {
+            const Vector3d d = q - mean;
+            xx += d.x() * d.x(), xy += d.x() * d.y(), xz += d.x() * d.z();
+            yy += d.y() * d.y(), yz += d.y() * d.z(), zz += d.z() * d.z();
+          }
+          Eigen::Matrix3d cov;
+          cov << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> fit;
+          fit.computeDirect(cov);
+          const Vector3d normal = fit.eigenvectors().col(0);
+          bool flat = true;
+          for (const Vector3d& q : points) flat = flat && std::abs(normal.dot(q - mean)) <= flat_mm;
+          if (flat) continue;
+        }
+      }
+      // The moves' sweeps (kept from cell to cell: neighbours share moves); made_by then
+      // holds each crossing's index into them.
+      if (sweeps.size() > 64) sweeps.clear();
+      for (int& id : made_by) {
+        if (id == kNoMove) continue;
+        auto it = std::find_if(sweeps.begin(), sweeps.end(), [&](const auto& s) { return s.first == id; });
+        if (it == sweeps.end()) {
+          const Move& move = m.moves.at(id);
+          sweeps.emplace_back(id, TranslationSweep(m.cutters[static_cast<std::size_t>(move.cutter)], move));
+          it = sweeps.end() - 1;
+        }
+        id = static_cast<int>(it - sweeps.begin());
+      }
+      // Each crossing's plane: the unit gradient of the distance of the surface that made it.
+      Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
+      Vector3d atb = Vector3d::Zero();
+      for (std::size_t i = 0; i < points.size(); ++i) {
+        const int k = made_by[i];
+        const TranslationSweep* sweep = k == kNoMove ? nullptr : &sweeps[static_cast<std::size_t>(k)].second;
+        auto distance = [&](const Vector3d& y) { return sweep ? sweep->distance(y) : m.initial_distance(y); };
+        // Forward differences (four distances, not six): the step's error, about the step over
+        // the surface's radius, is far below what tilts a plane by a visible angle.
+        constexpr double kStep_mm = 1e-5;
+        const double here = distance(points[i]);
+        Vector3d g;
+        for (int a = 0; a < 3; ++a) {
+          Vector3d h = Vector3d::Zero();
+          h[a] = kStep_mm;
+          g[a] = (distance(points[i] + h) - here) / kStep_mm;
+        }
+        const double norm = g.norm();
+        if (!(norm > 0.5)) continue;  // at a kink of that surface: no plane
+        const Vector3d n = g / norm;
+        ata += n * n.transpose();
+        atb += n * n.dot(points[i] - mean);
+      }
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(ata);
+      const double largest = eig.eigenvalues()(2);
+      if (!(largest > 0.0)) continue;
+      Vector3d offset = Vector3d::Zero();
+      for (int k = 0; k < 3; ++k) {
+        const double lambda = eig.eigenvalues()(k);
+        if (lambda <= kCreaseRank * largest) continue;
+        const Vector3d u = eig.eigenvectors().col(k);
+        offset += u * (u.dot(atb) / lambda);
+      }
+      const Vector3d at = mean + offset;
+      bool inside = true;
+      for (int a = 0; a < 3; ++a)
+        inside = inside && at[a] >= m.position(base[a] - 1) && at[a] <= m.position(base[a] + 2);
+      if (inside) x = at;
+    }
+  });
+}
+
 }  // namespace
 
 SurfaceMesh DexelStock::surface() const {
   const Impl& m = *impl_;
   const double v = m.v;
   SurfaceMesh mesh = contour_mesh(m);
+  place_on_creases(m, mesh);
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
   auto nearby = [&](std::size_t p, std::vector<int>& ids) {
     ids.clear();
