@@ -174,7 +174,9 @@ def main():
             "max_mm": float(e.max()) if e.size else None,
             "rms_mm": float(np.sqrt((e * e).mean())) if e.size else None,
             "engravings_visible": {"deep": int(deep), "total": CENTRE_POINTS, "all": bool(deep == CENTRE_POINTS),
-                                   "centre_max_mm": float(max(cerr)) if cerr else None},
+                                   "centre_max_mm": float(max(cerr)) if cerr else None,
+                                   "centre_mean_mm": float(np.mean(cerr)) if cerr else None,
+                                   "centre_within_0.005": int(sum(1 for c in cerr if c <= 0.005))},
             # the keys scripts/bench-features reads
             "engraving_points_deeper_than_0.05": int(deep), "engraving_points": CENTRE_POINTS}))
 
