@@ -422,9 +422,9 @@ double mesh_top_mm(const TriangleMesh& mesh, double x, double y) {
 // and the bench's round coordinates) and along a line at 30 deg to the rays: the mesh's
 // floor on the crease lies at the tip's depth within 0.005 mm (the closed form: the V's
 // bottom is the tip's path). Before, the cells' vertices at the mean of their crossings cut
-// the crease 0.02-0.03 mm high. A 2 mm flat end mill's slot 0.5 mm deep at 30 deg to the rays:
-// 0.02 mm outside its wall the mesh is the stock's top within 0.005 mm, 0.02 mm inside it the
-// slot's floor (before: a stair-stepped chamfer up to 0.05 mm wide along the edge).
+// the crease 0.02-0.03 mm high. A 2 mm flat end mill's slots 0.5 mm deep at 30 and 45 deg to
+// the rays: 0.02 mm outside a wall the mesh is the stock's top within 0.005 mm, 0.02 mm inside
+// it the slot's floor (before: a stair-stepped chamfer up to 0.05 mm wide along the edge).
 TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
   constexpr double v = 0.05, depth = 0.1;
   const BoxShape box{{0, 0, -2}, {12, 12, 0}};
@@ -436,6 +436,7 @@ TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
   const Eigen::Vector3d a(1, 10, -depth), b(11, 10, -depth);                            // along x, y = 10.0
   const Eigen::Vector3d p(1, 1.5, -depth), q = p + 8.0 * Eigen::Vector3d(c30, s30, 0);  // 30 deg
   const Eigen::Vector3d slot0(1.3, 4.2, -0.5), slot1 = slot0 + 8.0 * Eigen::Vector3d(c30, s30, 0);
+  const Eigen::Vector3d slot45_0(8.5, 0.8, -0.5), slot45_1 = slot45_0 + 3.0 * Eigen::Vector3d(M_SQRT1_2, M_SQRT1_2, 0);
   const Eigen::Vector3d up(0, 0, 1);
   auto cut = [&](int cutter, const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
     for (Move m : {line(from + up, from), line(from, to), line(to, to + up)}) {
@@ -446,6 +447,7 @@ TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
   cut(0, a, b);
   cut(0, p, q);
   cut(1, slot0, slot1);
+  cut(1, slot45_0, slot45_1);
   stock.cut(list, {});
   const TriangleMesh mesh = stock.surface().mesh;
   double worst = 0.0;
@@ -462,15 +464,17 @@ TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
   }
   EXPECT_EQ(checked, 82);
   EXPECT_LT(worst, 0.005) << "the V's floor off its crease";
-  // The slot's wall: the line at 1 mm (the radius) from its centre line.
-  const Eigen::Vector3d side(-s30, c30, 0);
+  // The slots' walls: the lines at 1 mm (the radius) from their centre lines.
   double outside = 0.0, inside = 0.0;
-  for (int i = 0; i <= 40; ++i) {
-    const Eigen::Vector3d on = slot0 + (0.1 + 0.8 * i / 40.0) * (slot1 - slot0);
-    for (double sign : {-1.0, 1.0}) {
-      const Eigen::Vector3d out = on + sign * 1.02 * side, in = on + sign * 0.98 * side;
-      outside = std::max(outside, std::abs(mesh_top_mm(mesh, out.x(), out.y()) - 0.0));
-      inside = std::max(inside, std::abs(mesh_top_mm(mesh, in.x(), in.y()) - -0.5));
+  for (const auto& [from, to] : {std::pair(slot0, slot1), std::pair(slot45_0, slot45_1)}) {
+    const Eigen::Vector3d along = (to - from).normalized(), side(-along.y(), along.x(), 0);
+    for (int i = 0; i <= 40; ++i) {
+      const Eigen::Vector3d on = from + (0.1 + 0.8 * i / 40.0) * (to - from);
+      for (double sign : {-1.0, 1.0}) {
+        const Eigen::Vector3d out = on + sign * 1.02 * side, in = on + sign * 0.98 * side;
+        outside = std::max(outside, std::abs(mesh_top_mm(mesh, out.x(), out.y()) - 0.0));
+        inside = std::max(inside, std::abs(mesh_top_mm(mesh, in.x(), in.y()) - -0.5));
+      }
     }
   }
   EXPECT_LT(outside, 0.005) << "the slot's top edge chamfered";
