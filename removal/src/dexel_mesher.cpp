@@ -8,10 +8,12 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <map>
 #include <functional>
 #include <optional>
+#include <unordered_map>
 
 #include "dexel_impl.h"
 #include "surface_projection.h"
@@ -627,6 +629,10 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
     std::vector<int> made_by;
     std::vector<std::pair<int, TranslationSweep>> sweeps;
     std::vector<int> used;  // the moves that made this cell's crossings
+    // Each crossing's unit normal once per range: an edge's crossing is one of the four cells'
+    // around it (keys: family, ray and the endpoint's bits; NaN: no plane there).
+    std::vector<std::uint64_t> keys;
+    std::unordered_map<std::uint64_t, Vector3d> normals;
     for (std::size_t p = range.begin(); p != range.end(); ++p) {
       Vector3d& x = mesh.mesh.vertices_mm[p];
       Eigen::Vector3i base;
@@ -635,6 +641,7 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
       // between its two nodes.
       points.clear();
       made_by.clear();
+      keys.clear();
       unsigned facing = 0;  // bit 2a: a crossing along axis a where material begins, 2a + 1: where it ends
       for (const Family& f : m.families) {
         const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
@@ -643,8 +650,13 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
           for (int iu = base[a1]; iu <= base[a1] + 1; ++iu) {
             if (!f.contains(iu, iw)) continue;
             const SegmentList& ray = f.at(iu, iw);
-            auto add = [&](double s, int move, unsigned side) {
+            const std::uint64_t ray_key = static_cast<std::uint64_t>(f.axis) << 62 |
+                                          static_cast<std::uint64_t>((iw - f.lo_w) * f.n_u + (iu - f.lo_u)) << 32;
+            auto add = [&](float s, int move, unsigned side) {
               if (s < s_lo || s > s_hi) return;
+              std::uint32_t bits;
+              std::memcpy(&bits, &s, sizeof bits);
+              keys.push_back(ray_key | bits);
               facing |= side << (2 * f.axis);
               Vector3d q;
               q[f.axis] = s;
@@ -726,20 +738,25 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
       for (std::size_t i = 0; i < points.size(); ++i) {
         const int k = made_by[i];
         const TranslationSweep* sweep = k == kNoMove ? nullptr : &sweeps[static_cast<std::size_t>(k)].second;
-        auto distance = [&](const Vector3d& y) { return sweep ? sweep->distance(y) : m.initial_distance(y); };
-        // Forward differences (four distances, not six): the step's error, about the step over
-        // the surface's radius, is far below what tilts a plane by a visible angle.
-        constexpr double kStep_mm = 1e-5;
-        const double here = distance(points[i]);
-        Vector3d g;
-        for (int a = 0; a < 3; ++a) {
-          Vector3d h = Vector3d::Zero();
-          h[a] = kStep_mm;
-          g[a] = (distance(points[i] + h) - here) / kStep_mm;
+        auto [at_key, fresh] = normals.try_emplace(keys[i]);
+        if (fresh) {
+          auto distance = [&](const Vector3d& y) { return sweep ? sweep->distance(y) : m.initial_distance(y); };
+          // Forward differences (four distances, not six): the step's error, about the step
+          // over the surface's radius, is far below what tilts a plane by a visible angle.
+          constexpr double kStep_mm = 1e-5;
+          const double here = distance(points[i]);
+          Vector3d g;
+          for (int a = 0; a < 3; ++a) {
+            Vector3d h = Vector3d::Zero();
+            h[a] = kStep_mm;
+            g[a] = (distance(points[i] + h) - here) / kStep_mm;
+          }
+          const double norm = g.norm();
+          // At a kink of that surface: no plane.
+          at_key->second = norm > 0.5 ? Vector3d(g / norm) : Vector3d::Constant(std::nan(""));
         }
-        const double norm = g.norm();
-        if (!(norm > 0.5)) continue;  // at a kink of that surface: no plane
-        const Vector3d n = g / norm;
+        const Vector3d n = at_key->second;
+        if (!n.allFinite()) continue;
         ata += n * n.transpose();
         atb += n * n.dot(points[i] - mean);
       }
