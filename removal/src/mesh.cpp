@@ -148,7 +148,8 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   const std::size_t nv = mesh.vertices_mm.size();
   std::vector<std::uint64_t> key(nv);
   // Which way each vertex faces: the largest component of its triangles' normals and its sign,
-  // where all its triangles agree, and a seventh group where they do not. So the vertices of a
+  // where all its triangles agree, and a seventh group where they do not (an eighth: in no
+  // triangle). So the vertices of a
   // cell on two sides of a sharp edge fall in two groups, and those along the edge in a third,
   // whose vertex stays on the edge.
   constexpr std::uint8_t kUnset = 0xff, kMixed = 6;
@@ -177,8 +178,9 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   // found within the budget is taken.
   auto spanning_count = [&](double cell_mm) {
     grid.cell_mm = cell_mm;
-    tbb::parallel_for(std::size_t{0}, nv,
-                      [&](std::size_t v) { key[v] = (grid.key(mesh.vertices_mm[v]) << 3) | facing[v]; });
+    tbb::parallel_for(std::size_t{0}, nv, [&](std::size_t v) {
+      key[v] = (grid.key(mesh.vertices_mm[v]) << 3) | std::min<std::uint8_t>(facing[v], 7);
+    });
     return tbb::parallel_reduce(
         tbb::blocked_range<std::size_t>(0, n), std::size_t{0},
         [&](const tbb::blocked_range<std::size_t>& r, std::size_t count) {
