@@ -148,10 +148,9 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   const std::size_t nv = mesh.vertices_mm.size();
   std::vector<std::uint64_t> key(nv);
   // Which way each vertex faces: the largest component of its triangles' normals and its sign,
-  // where all its triangles agree, and a seventh group where they do not (an eighth: in no
-  // triangle). So the vertices of a
-  // cell on two sides of a sharp edge fall in two groups, and those along the edge in a third,
-  // whose vertex stays on the edge.
+  // where all its triangles agree, a seventh group where they do not, an eighth in no triangle.
+  // So the vertices of a cell on two sides of a sharp edge fall in two groups, and those along
+  // the edge in a third, whose vertex stays on the edge.
   constexpr std::uint8_t kUnset = 0xff, kMixed = 6;
   std::vector<std::uint8_t> facing(nv, kUnset);
   for (const auto& t : mesh.triangles) {
