@@ -244,6 +244,10 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
   return out;
 }
 
+// Rounding allowance (mm) between a probe's window and the interval the kernel finds in
+// it: far above the kernel's rounding, far below any depth that counts.
+constexpr double kProbeMargin_mm = 1e-6;
+
 struct Probe {
   int move;  // index in the batch
   int axis;
@@ -556,13 +560,22 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 // Rays already clear of the sweep's box cost a look only.
                 if (seg[0].lo_mm >= box_hi || top <= clear_below) continue;
                 const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
-                if (windowed || tilted) {
-                  // A tighter window along the ray: the section disc about the tip's path, or
-                  // for a tilted tool the box about the sweep along its axis and motion.
-                  double win_lo, win_hi;
-                  if (tilted ? !sweep.tilted_window(a, u_mm, w_mm, win_lo, win_hi)
-                             : !sweep.ray_window(a, u_mm, section, win_lo, win_hi))
+                double win_lo = box_lo, win_hi = box_hi;
+                // A tighter window along the ray: the section disc about the tip's path, or
+                // for a tilted tool the box about the sweep along its axis and motion.
+                if ((windowed || tilted) && (tilted ? !sweep.tilted_window(a, u_mm, w_mm, win_lo, win_hi)
+                                                    : !sweep.ray_window(a, u_mm, section, win_lo, win_hi)))
+                  continue;
+                if (move.rapid) {
+                  // A probe keeps the longest overlap it finds: a ray with no material in the
+                  // window, or less than that overlap by the margin, cannot replace it.
+                  double longest = 0.0;
+                  for (std::uint32_t j = 0; j < n; ++j)
+                    longest = std::max(longest,
+                                       std::min<double>(seg[j].hi_mm, win_hi) - std::max<double>(seg[j].lo_mm, win_lo));
+                  if (longest <= 0.0 || (probe.overlap_mm > 0.0 && longest + kProbeMargin_mm <= probe.overlap_mm))
                     continue;
+                } else if (windowed || tilted) {
                   std::uint32_t j = 0;
                   while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
                   if (j == n) continue;

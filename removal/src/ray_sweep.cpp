@@ -240,6 +240,10 @@ void RaySweep::prepare_tilt_box() {
   const Vector3d dirs[3] = {a, n1, n2};
   const double lo[3] = {std::min(0.0, da), -R, -R};
   const double hi[3] = {H + std::max(0.0, da), R + along, R};
+  for (int c = 0; c < 8; ++c) {
+    tilt_corner_[c] = p0_;
+    for (int k = 0; k < 3; ++k) tilt_corner_[c] += ((c >> k & 1) ? hi[k] + kMargin_mm : lo[k] - kMargin_mm) * dirs[k];
+  }
   for (int axis = 0; axis < 3; ++axis) {
     TiltBox& b = tilt_box_[axis];
     const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
@@ -462,7 +466,28 @@ void RaySweep::row_range(int axis, double w, double section, double& u_lo, doubl
   const int a1 = axis == 0 ? 1 : 0;
   u_lo = bounds().min()[a1];
   u_hi = bounds().max()[a1];
-  if (!vertical_axis_) return;
+  if (!vertical_axis_) {
+    // The row's plane at w cuts the window box (tilted_window's) in a convex polygon whose
+    // corners lie on the box's edges: its extent in u holds every ray that meets the box.
+    const int a2 = axis == 2 ? 1 : 2;
+    double lo = kInf, hi = -kInf;
+    for (int c = 0; c < 8; ++c)
+      for (int k = 0; k < 3; ++k) {
+        if (c >> k & 1) continue;
+        const Vector3d &p = tilt_corner_[c], &q = tilt_corner_[c | 1 << k];
+        const double pw = p[a2], qw = q[a2];
+        if (w < std::min(pw, qw) || w > std::max(pw, qw)) continue;
+        if (pw == qw) {
+          widen(lo, hi, std::min(p[a1], q[a1]), std::max(p[a1], q[a1]));
+        } else {
+          const double x = p[a1] + (w - pw) / (qw - pw) * (q[a1] - p[a1]);
+          widen(lo, hi, x, x);
+        }
+      }
+    u_lo = std::max(u_lo, lo);
+    u_hi = std::min(u_hi, hi);
+    return;
+  }
   const Eigen::Vector3d p1 = p0_ + delta_;
   if (axis == 2) {
     // Rays along z in the row y = w: where the row meets the stadium of radius R around the

@@ -124,6 +124,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
   };
   void prepare_tilt_box();
   TiltBox tilt_box_[3];
+  Eigen::Vector3d tilt_corner_[8];  // the window box's corners (corner c: bit k set, the high side along k)
   bool upright_vertical(double u, double w, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;

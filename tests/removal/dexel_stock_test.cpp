@@ -310,6 +310,86 @@ TEST(DexelStock, FlatEndMillAlongItsAxisAndRaysAlongTheAxis) {
   expect_cut_matches_the_sweep_distance(flat, line({25, 10, -8}, {15, 10, -8}, x), "horizontal along x, plunging");
 }
 
+// A rapid's depth in material is the shortest, over the three ray families, of the longest
+// stretch of a ray's material inside the rapid's sweep. Worked out here ray by ray, each ray's
+// stretch inside the sweep found from the sweep's signed distance (sampled, then bisected),
+// for tilted and upright probes through a stock whose rays hold several intervals (a tunnel
+// and a slot cut first): the cut's windows and its skipping of rays that cannot be longer
+// must not lose the longest.
+TEST(DexelStock, RapidDepthIsTheLongestOverlapAlongTheRays) {
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const double v = 0.5;
+  DexelStock stock(box, v);
+  MoveList cuts;
+  cuts.cutters.push_back(make(CutterType::Ball, 6, 3, 20));
+  cuts.moves = {line({-5, 2, -10}, {45, 2, -10}, Eigen::Vector3d::UnitY()),  // a tunnel along x, 6 mm wide
+                line({20, -5, -4}, {20, 35, -4})};                           // a slot along y
+  stock.cut(cuts, {});
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 8; ++trial) {
+    MoveList list;
+    const double d = 3 + 4 * unit(rng);
+    list.cutters.push_back(trial % 2 == 0 ? make(CutterType::Flat, d, 0, 15) : make(CutterType::Ball, d, d / 2, 15));
+    const double tilt = (trial == 0 ? 0.0 : 5 + 60 * unit(rng)) * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
+    const Eigen::Vector3d axis(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
+    const Eigen::Vector3d a(8 + 24 * unit(rng), 6 + 18 * unit(rng), -2 - 8 * unit(rng));
+    const Eigen::Vector3d step(unit(rng) - 0.5, unit(rng) - 0.5, 0.3 * (unit(rng) - 0.5));
+    Move rapid = line(a, a + 10.0 * step.normalized(), axis);
+    rapid.rapid = true;
+    list.moves = {rapid};
+    const CutResult r = stock.cut(list, {});
+    const TranslationSweep sweep(list.cutters[0], rapid);
+    double expected = std::numeric_limits<double>::infinity();
+    for (int family = 0; family < 3; ++family) {
+      const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+      const double s_lo = sweep.bounds().min()[family] - 1.0, s_hi = sweep.bounds().max()[family] + 1.0;
+      double longest = 0.0;
+      const Eigen::Vector3d& bmin = sweep.bounds().min();
+      const Eigen::Vector3d& bmax = sweep.bounds().max();
+      for (int iu = static_cast<int>(std::floor(bmin[a1] / v)) - 1; iu * v < bmax[a1]; ++iu)
+        for (int iw = static_cast<int>(std::floor(bmin[a2] / v)) - 1; iw * v < bmax[a2]; ++iw) {
+          const auto ray = stock.ray(family, iu, iw);
+          if (ray.empty()) continue;
+          Eigen::Vector3d x;
+          x[a1] = (iu + 0.5) * v;
+          x[a2] = (iw + 0.5) * v;
+          auto inside = [&](double s) {
+            x[family] = s;
+            return sweep.distance(x) <= 0.0;
+          };
+          // The sweep is convex: the ray is inside it on one interval, bracketed by samples.
+          constexpr double kStep_mm = 0.05;
+          double first = 0.0, last = 0.0;
+          bool found = false;
+          for (double s = s_lo; s <= s_hi; s += kStep_mm)
+            if (inside(s)) {
+              if (!found) first = s;
+              found = true;
+              last = s;
+            }
+          if (!found) continue;
+          auto edge = [&](double in, double out) {
+            for (int k = 0; k < 60; ++k) {
+              const double mid = 0.5 * (in + out);
+              (inside(mid) ? in : out) = mid;
+            }
+            return in;
+          };
+          const double lo = edge(first, first - kStep_mm), hi = edge(last, last + kStep_mm);
+          for (const DexelSegment& seg : ray)
+            longest = std::max(longest, std::min<double>(seg.hi_mm, hi) - std::max<double>(seg.lo_mm, lo));
+        }
+      if (longest > 0.0) expected = std::min(expected, longest);
+    }
+    const std::string label = "trial " + std::to_string(trial);
+    ASSERT_GT(expected, 1.0) << label;  // each rapid runs well into the material
+    ASSERT_EQ(r.collisions.size(), 1u) << label;
+    EXPECT_NEAR(r.collisions[0].depth_mm, expected, 1e-6) << label;
+    EXPECT_NEAR(r.removed_volume_mm3, 0.0, 1e-12) << label;
+  }
+}
+
 // Groove geometry read off the rays: depth from the z rays, width from the y rays at one
 // height (the rays cross the groove, which runs along x).
 struct Groove {
