@@ -26,17 +26,21 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
+double rotation_reach_mm(const Cutter& cutter) {
+  if (cutter.type == CutterType::VBit) return std::hypot(cutter.radius_mm(), cutter.flute_length_mm);
+  const CutterCore core = core_of(cutter);
+  return std::hypot(core.core_radius_mm, core.z_high_mm);
+}
+
 double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces) {
-  const double reach = std::hypot(cutter.radius_mm(), cutter.flute_length_mm);
-  return reach * angle_rad / (2.0 * std::max(1, pieces));
+  return rotation_reach_mm(cutter) * angle_rad / (2.0 * std::max(1, pieces));
 }
 
 int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                      double bound_mm) {
   const double angle = angle_between(axis0.normalized(), axis1.normalized());
   if (angle == 0.0) return 1;
-  const double reach = std::hypot(cutter.radius_mm(), cutter.flute_length_mm);
-  const double n = std::ceil(reach * angle / (2.0 * bound_mm) - 1e-12);
+  const double n = std::ceil(rotation_reach_mm(cutter) * angle / (2.0 * bound_mm) - 1e-12);
   return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
 }
 

@@ -185,32 +185,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
   flat_bottom_ = cutter.type != CutterType::VBit && core_.rounding_mm == 0.0;
   if (core_.core_radius_mm == 0.0 && cutter.type != CutterType::VBit) {
     method_ = Method::Ball;
-    c0_ = p0_ + core_.z_low_mm * a;
-    edge_a_ = (core_.z_high_mm - core_.z_low_mm) * a;
-    edge_b_ = delta_;
-    const double la = edge_a_.norm(), lb = edge_b_.norm();
-    const Vector3d cross = edge_a_.cross(edge_b_);
-    if (la <= 1e-9 && lb <= 1e-9) {
-      segments_ = 0;
-    } else if (la <= 1e-9 || lb <= 1e-9 || cross.norm() <= 1e-12 * la * lb) {
-      // The parallelogram is a segment: its two extreme corners along the common direction.
-      const Vector3d dir = (la > lb ? edge_a_ : edge_b_).normalized();
-      Vector3d lo_point = c0_, hi_point = c0_;
-      for (const Vector3d& p : {Vector3d(c0_ + edge_a_), Vector3d(c0_ + edge_b_), Vector3d(c0_ + edge_a_ + edge_b_)}) {
-        if (p.dot(dir) < lo_point.dot(dir)) lo_point = p;
-        if (p.dot(dir) > hi_point.dot(dir)) hi_point = p;
-      }
-      segments_ = 1;
-      c0_ = lo_point;
-      edge_a_ = hi_point - lo_point;
-    } else {
-      segments_ = 2;
-      normal_ = cross.normalized();
-      const Vector3d bn = edge_b_.cross(normal_), na = normal_.cross(edge_a_);
-      dual_a_ = bn / edge_a_.dot(bn);
-      dual_b_ = na / edge_b_.dot(na);
-    }
-    for (int axis = 0; axis < 3; ++axis) prepare_ball_family(axis);
+    prepare_capsule(core_.rounding_mm);
     if (!vertical_axis_) prepare_tilt_box();
   } else if (vertical_axis_) {
     method_ = Method::Upright;
@@ -219,7 +194,46 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move)
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
     prepare_tilt_box();
+    // The root march's bracket: every instance lies within R of the core's axis segment (a
+    // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
+    // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
+    // puts the sweep's boundary outside it (the flat end mill's side lies on it).
+    constexpr double kBracketMargin_mm = 1e-6;
+    prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
   }
+}
+
+// The ball sweep: the core's axis segment from z_low to z_high (a) swept along the move (b),
+// grown by capsule_r.
+void RaySweep::prepare_capsule(double capsule_r) {
+  capsule_r_ = capsule_r;
+  const Vector3d& a = tool_axis_;
+  c0_ = p0_ + core_.z_low_mm * a;
+  edge_a_ = (core_.z_high_mm - core_.z_low_mm) * a;
+  edge_b_ = delta_;
+  const double la = edge_a_.norm(), lb = edge_b_.norm();
+  const Vector3d cross = edge_a_.cross(edge_b_);
+  if (la <= 1e-9 && lb <= 1e-9) {
+    segments_ = 0;
+  } else if (la <= 1e-9 || lb <= 1e-9 || cross.norm() <= 1e-12 * la * lb) {
+    // The parallelogram is a segment: its two extreme corners along the common direction.
+    const Vector3d dir = (la > lb ? edge_a_ : edge_b_).normalized();
+    Vector3d lo_point = c0_, hi_point = c0_;
+    for (const Vector3d& p : {Vector3d(c0_ + edge_a_), Vector3d(c0_ + edge_b_), Vector3d(c0_ + edge_a_ + edge_b_)}) {
+      if (p.dot(dir) < lo_point.dot(dir)) lo_point = p;
+      if (p.dot(dir) > hi_point.dot(dir)) hi_point = p;
+    }
+    segments_ = 1;
+    c0_ = lo_point;
+    edge_a_ = hi_point - lo_point;
+  } else {
+    segments_ = 2;
+    normal_ = cross.normalized();
+    const Vector3d bn = edge_b_.cross(normal_), na = normal_.cross(edge_a_);
+    dual_a_ = bn / edge_a_.dot(bn);
+    dual_b_ = na / edge_b_.dot(na);
+  }
+  for (int axis = 0; axis < 3; ++axis) prepare_ball_family(axis);
 }
 
 void RaySweep::prepare_tilt_box() {
@@ -317,7 +331,7 @@ void RaySweep::prepare_flat_family(int axis) {
 
 void RaySweep::prepare_ball_family(int axis) {
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-  const double r = core_.rounding_mm;
+  const double r = capsule_r_;
   BallFamily& f = ball_[axis];
   // Fixed room, no allocation: a RaySweep is built per move.
   std::array<Vector3d, 4> centres = {c0_, c0_, c0_, c0_};
@@ -427,7 +441,7 @@ inline bool RaySweep::ball_cylinder(int axis, int i, double u, double w, double&
 // Any ball sweep: the hull of the corner spheres, the edge cylinders and the slab.
 inline bool RaySweep::ball_general(int axis, double u, double w, double& lo, double& hi) const {
   const BallFamily& f = ball_[axis];
-  const double r = core_.rounding_mm, r2 = r * r;
+  const double r = capsule_r_, r2 = r * r;
   lo = kInf;
   hi = -kInf;
   double a, b;
@@ -572,7 +586,7 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
     return;
   }
   const BallFamily& f = ball_[axis];
-  const double r = core_.rounding_mm, r2 = r * r;
+  const double r = capsule_r_, r2 = r * r;
   // Sphere i widens [l, h] (entry and exit as asked) where the ray meets it.
   auto sphere = [&](int i, double uk, double& l, double& h, bool entry, bool exit) {
     const double x = uk - f.sphere[i][0], y = w - f.sphere[i][1];
@@ -1011,7 +1025,10 @@ bool RaySweep::general(int axis, const Vector3d& o, double& lo, double& hi) cons
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
-  const double sa = box.min()[axis] - 1e-6, sb = box.max()[axis] + 1e-6;
+  // The enclosing ball sweep's interval: none, no meeting; else the march starts at its ends.
+  double capsule_lo, capsule_hi;
+  if (!ball_general(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], capsule_lo, capsule_hi)) return false;
+  const double sa = std::max(box.min()[axis], capsule_lo) - 1e-6, sb = std::min(box.max()[axis], capsule_hi) + 1e-6;
   auto f = [&](double s) {
     Vector3d x = o;
     x[axis] = s;

@@ -178,6 +178,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,
                      bool& hi_side) const;
 
+  // The ball sweep (c0_, edge_a_, edge_b_, ball_) of radius capsule_r: the ball method's
+  // sweep, or the general method's bracket around the sweep.
+  void prepare_capsule(double capsule_r);
+  double capsule_r_ = 0.0;
+
   TranslationSweep sweep_;
   Cutter cutter_;
   bool flat_bottom_ = false;  // flat end mill: underside at the tip, section constant
