@@ -19,7 +19,9 @@
 //    Where the ellipse degenerates (the motion along the axis, the ray along it, or both
 //    square to it along one direction), three strips: a polygon, extreme at its vertices.
 //  - Anything else (tilted bull-nose or V-bit): the sweep's signed distance along the ray is
-//    convex and 1-Lipschitz in s; its two zero crossings are found by a safe root march.
+//    convex and 1-Lipschitz in s; its two zero crossings are found by a safe root march,
+//    started at the ends of the ray's interval in an enclosing ball sweep (the core's axis
+//    segment swept and grown by R: closed form), and not at all where it misses that.
 #pragma once
 
 #include <Eigen/Core>
