@@ -569,10 +569,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 if (move.rapid) {
                   // A probe keeps the longest overlap it finds: a ray with no material in the
                   // window, or less than that overlap by the margin, cannot replace it.
-                  double longest = 0.0;
-                  for (std::uint32_t j = 0; j < n; ++j)
-                    longest = std::max(longest,
-                                       std::min<double>(seg[j].hi_mm, win_hi) - std::max<double>(seg[j].lo_mm, win_lo));
+                  double middle;
+                  const double longest = overlap(ray, win_lo, win_hi, middle);
                   if (longest <= 0.0 || (probe.overlap_mm > 0.0 && longest + kProbeMargin_mm <= probe.overlap_mm))
                     continue;
                 } else if (windowed || tilted) {

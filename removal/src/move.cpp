@@ -27,8 +27,7 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 }  // namespace
 
 double rotation_reach_mm(const Cutter& cutter) {
-  if (cutter.type == CutterType::VBit) return std::hypot(cutter.radius_mm(), cutter.flute_length_mm);
-  const CutterCore core = core_of(cutter);
+  const CutterCore core = core_of(cutter);  // a V-bit's: its bounding cylinder, so sqrt(R^2 + H^2)
   return std::hypot(core.core_radius_mm, core.z_high_mm);
 }
 
