@@ -33,6 +33,13 @@ json rotary(const RotaryWords& words) {
   return j;
 }
 
+json extra(const ExtraAxes& axes) {
+  json j = json::object();
+  for (size_t k = 0; k < 3; ++k)
+    if (axes.given[k]) j[std::string(1, "UVW"[k])] = clean(axes.value_mm[k]);
+  return j;
+}
+
 const char* kind_name(MotionKind kind) {
   switch (kind) {
     case MotionKind::Rapid:
@@ -66,6 +73,8 @@ json record(const Program& program, const Block& b) {
   j["end"] = array(b.end_mm);
   if (b.start_rotary.any()) j["start_rotary"] = rotary(b.start_rotary);
   if (b.end_rotary.any()) j["rotary"] = rotary(b.end_rotary);
+  if (b.start_extra.any()) j["start_extra"] = extra(b.start_extra);  // U V W, mm
+  if (b.end_extra.any()) j["extra"] = extra(b.end_extra);
   if (b.kind == MotionKind::Arc) {
     j["center"] = array(b.center_mm);
     j["normal"] = array(b.normal);

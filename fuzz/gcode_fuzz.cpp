@@ -32,13 +32,15 @@ void check(const vcut::kinematics::Program& program) {
     require(b.source.file >= 0 && static_cast<size_t>(b.source.file) < program.files.size() && b.source.line >= 1);
     require(b.start_mm.allFinite() && b.end_mm.allFinite() && b.center_mm.allFinite());
     require(b.start_mm.cwiseAbs().maxCoeff() <= kBound && b.end_mm.cwiseAbs().maxCoeff() <= kBound);
+    for (size_t e = 0; e < 3; ++e)  // U V W
+      require(std::abs(b.start_extra.value_mm[e]) <= kBound && std::abs(b.end_extra.value_mm[e]) <= kBound);
     require(b.feed_mm_per_min >= 0.0 && b.feed_mm_per_min <= 1e9);
     if (b.kind == MotionKind::Rapid) require(b.feed_mm_per_min == 0.0);
     if (b.kind != MotionKind::Rapid) require(b.feed_mm_per_min > 0.0);
     if (b.kind != MotionKind::Arc) {
       // Blocks that neither move nor turn are dropped.
       require(b.start_mm != b.end_mm || b.start_rotary.angle_rad != b.end_rotary.angle_rad ||
-              b.start_axis != b.end_axis);
+              b.start_axis != b.end_axis || b.start_extra.value_mm != b.end_extra.value_mm);
       require(std::abs(b.start_axis.norm() - 1.0) < 1e-12 && std::abs(b.end_axis.norm() - 1.0) < 1e-12);
       continue;
     }

@@ -495,6 +495,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     bool was_cycle = false;      // a canned cycle was the motion mode before the line
     int previous_cycle = 0;
     int axis_column = INT_MAX;  // the first axis word
+    int extra_column = 0;       // the line's first U V W axis word (0: none)
   };
   bool macro_call();
   LineCodes codes_of_line();
@@ -576,11 +577,23 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   bool in_swing_ = false;  // append() is emitting the steps of a rotary turn
   // The tip's offset from the spindle's gauge point with the tool in the spindle (mm).
   Eigen::Vector3d tip_offset() const {
+    if (state_.dynamic_length_mm) return -*state_.dynamic_length_mm;  // G43.1: the control's offset
     const auto it = options_.tool_length_mm.find(state_.tool);
     return it == options_.tool_length_mm.end() ? Eigen::Vector3d::Zero()
                                                : Eigen::Vector3d(-it->second * options_.spindle_axis);
   }
-  void append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end = nullptr);
+  void append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end = nullptr,
+              const kinematics::ExtraAxes* extra_end = nullptr);
+  // U V W: the line's words on the current values (G90/G91, G53, the offsets), and a refusal
+  // of them where they do not move (extra_column_: the line's first, 0 when none).
+  kinematics::ExtraAxes extra_target() const;
+  void no_extra(const std::string& where) const;
+  int extra_column_ = 0;
+  std::array<double, 3> extra_program() const {  // U V W in program coordinates (mm)
+    std::array<double, 3> p{};
+    for (size_t e = 0; e < 3; ++e) p[e] = state_.extra.value_mm[e] - state_.g5x_extra_mm[e] - state_.g92_extra_mm[e];
+    return p;
+  }
 
   // Cutter radius compensation (GcodeState::CutterComp).
   using Comp = GcodeState::CutterComp;
@@ -705,7 +718,7 @@ double Reader::numbered_parameter(int number, int column) {
     const int a = number - kPositionParameter;
     if (a < 3) return to_program(state_.position_mm)[a] / unit();
     if (a < 6) return state_.rotary.angle_rad[static_cast<size_t>(a - 3)] * 180.0 / M_PI;
-    return 0.0;
+    return extra_program()[static_cast<size_t>(a - 6)] / unit();
   }
   return state_.parameters[static_cast<size_t>(number)];
 }
@@ -1585,7 +1598,38 @@ Eigen::Vector2d Reader::polar_point(const Eigen::Vector2d& from) const {
 // Appends a block (unless it does not move) and brings the position and the unknown axes up
 // to date. Blocks made while an axis is unknown hold that axis still; when the axis is first
 // programmed they take its value, so that the first move only moves the programmed axes.
-void Reader::append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end) {
+kinematics::ExtraAxes Reader::extra_target() const {
+  kinematics::ExtraAxes extra = state_.extra;
+  for (size_t e = 0; e < 3; ++e) {
+    const char letter = "UVW"[e];
+    const Word& w = word(letter);
+    if (!w.present || extra_column_ == 0) continue;
+    const double v = w.value * unit();
+    if (machine_coordinates_) {
+      if (state_.incremental) fail(w.column, "G53 in incremental mode G91 (expected G90)");
+      extra.value_mm[e] = v;  // machine coordinates: no work offsets
+    } else {
+      extra.value_mm[e] =
+          state_.incremental ? extra.value_mm[e] + v : v + state_.g5x_extra_mm[e] + state_.g92_extra_mm[e];
+    }
+    extra.given[e] = true;
+    if (!(std::abs(extra.value_mm[e]) <= kMaxMagnitude)) {
+      fail(w.column, std::string(1, letter) + " position " + num(extra.value_mm[e]) +
+                         " mm is out of range (expected within +-1e6 mm)");
+    }
+  }
+  return extra;
+}
+
+void Reader::no_extra(const std::string& where) const {
+  if (extra_column_ == 0) return;
+  fail(extra_column_, "U V W words on a " + where +
+                          " line are not supported (U V W move with G0, G1, G2, G3, G28 and G30, or set offsets with "
+                          "G10 and G92)");
+}
+
+void Reader::append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end,
+                    const kinematics::ExtraAxes* extra_end) {
   // Rotary words (degrees, G90/G91 like the linear axes; G20 does not apply).
   kinematics::RotaryWords rotary = rotary_end != nullptr ? *rotary_end : state_.rotary;
   const bool holds_linear = !in_swing_ && turns_hold_linear();
@@ -1607,7 +1651,17 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
       state_.rotary_program = true;
     }
   }
+  // U V W: the line's words (or the G28/G30 reference), linear with the move like A B C.
+  kinematics::ExtraAxes extra = state_.extra;
+  if (extra_end != nullptr) {
+    extra = *extra_end;
+  } else if (rotary_end == nullptr && extra_column_ != 0) {
+    if (hold_ || compensating()) no_extra("cutter compensation (G41/G42)");
+    if (state_.twp || in_swing_) no_extra("tilted work plane (G68.2) or turned rotaries'");
+    extra = extra_target();
+  }
   if (holds_linear && rotary.angle_rad != state_.rotary.angle_rad) {
+    no_extra("rotary turn's");
     joint_move(block, rotary, rotary_column);
     return;
   }
@@ -1624,6 +1678,10 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
   }
   block.start_rotary = state_.rotary;
   block.end_rotary = rotary;
+  block.start_extra = state_.extra;
+  block.end_extra = extra;
+  const bool extra_moves = extra.value_mm != state_.extra.value_mm;
+  state_.extra = extra;
   // Under TCP the block is a tool pose: the tip, and the tool axis from the rotary words
   // (G43.4: the machine's axes at those values) or from I J K (G43.5).
   block.tool_pose = state_.tcp != GcodeState::Tcp::Off || !state_.rotary_program || state_.twp;
@@ -1641,7 +1699,7 @@ void Reader::append(Block block, const std::array<bool, 3>& programmed, const ki
   const bool turns = rotary.angle_rad != state_.rotary.angle_rad;
   state_.rotary = rotary;
   // In a tilted or turned frame a move that is a few ulps long there may be none on the part.
-  const bool moves = block.kind == MotionKind::Arc || turns || reorients ||
+  const bool moves = block.kind == MotionKind::Arc || turns || reorients || extra_moves ||
                      (state_.twp ? twp_out(block.start_mm) != twp_out(block.end_mm) : block.start_mm != block.end_mm);
   if (moves) {
     block.feed_mode = state_.inverse_time && block.kind != MotionKind::Rapid ? kinematics::FeedMode::InverseTime
@@ -1722,9 +1780,10 @@ void Reader::straight(MotionKind kind, int column) {
     block.start_mm = *state_.comp.machine_mm;
     state_.comp.machine_mm.reset();
   }
-  if (corner_) corner_to(block, column);
   const Word& round = line_words_.round;
   const Word& chamfer = line_words_.chamfer;
+  if (corner_ || round.present || chamfer.present) no_extra("corner (,R ,C)");
+  if (corner_) corner_to(block, column);
   if (round.present || chamfer.present) {
     const Word& w = round.present ? round : chamfer;
     if (round.present && chamfer.present) fail(chamfer.column, ",R and ,C on one line (expected one of them)");
@@ -2683,6 +2742,8 @@ void Reader::select_system(int index, int column) {
   if (state_.twp_feature) fail(column, "a work offset change with a tilted work plane on (expected G69 first)");
   for (int a = 0; a < 3; ++a) {
     state_.g5x_mm[a] = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + a)];
+    state_.g5x_extra_mm[static_cast<size_t>(a)] =
+        state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + 6 + a)];
   }
   const double rotation_deg = state_.parameters[static_cast<size_t>(kG5xParameter + 20 * index + 9)];
   if (rotation_deg != 0.0 && state_.rotation_rad != 0.0)
@@ -2758,6 +2819,13 @@ void Reader::set_offsets(const Code& g) {
       }
       state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset;
     }
+    for (size_t e = 0; e < 3; ++e) {  // U V W (L20: the current position takes the value)
+      const Word& w = word("UVW"[e]);
+      if (!w.present || extra_column_ == 0) continue;
+      double offset = w.value * unit();
+      if (l.value == 20.0) offset = state_.extra.value_mm[e] - state_.g92_extra_mm[e] - offset;
+      state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + 6) + e] = offset;
+    }
     if (k == active) select_system(k);
     return;
   }
@@ -2773,12 +2841,22 @@ void Reader::set_offsets(const Code& g) {
       }
       state_.g92_mm[a] = state_.position_mm[a] - state_.g5x_mm[a] - w.value * unit();
     }
+    for (size_t e = 0; e < 3; ++e) {
+      const Word& w = word("UVW"[e]);
+      if (w.present && extra_column_ != 0)
+        state_.g92_extra_mm[e] = state_.extra.value_mm[e] - state_.g5x_extra_mm[e] - w.value * unit();
+    }
   } else if (g.number == 921 || g.number == 922) {
     state_.g92_mm.setZero();
+    state_.g92_extra_mm = {0.0, 0.0, 0.0};
   } else {  // G92.3: back to the offset kept in the parameters
     for (int a = 0; a < 3; ++a) state_.g92_mm[a] = state_.parameters[static_cast<size_t>(kG92Parameter + a)];
+    for (size_t e = 0; e < 3; ++e)
+      state_.g92_extra_mm[e] = state_.parameters[static_cast<size_t>(kG92Parameter + 6) + e];
   }
   if (g.number != 922) {
+    for (size_t e = 0; e < 3; ++e)
+      state_.parameters[static_cast<size_t>(kG92Parameter + 6) + e] = state_.g92_extra_mm[e];
     for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG92Parameter + a)] = state_.g92_mm[a];
     state_.parameters[5210] = g.number == 920 || g.number == 923 ? 1.0 : 0.0;
   }
@@ -3082,6 +3160,7 @@ void Reader::home_return(const Code& g) {
       state_.parameters[base + 3 + static_cast<size_t>(r)] =
           state_.rotary.angle_rad[static_cast<size_t>(r)] * 180.0 / M_PI;
     }
+    for (size_t e = 0; e < 3; ++e) state_.parameters[base + 6 + e] = state_.extra.value_mm[e];
     return;
   }
   std::array<bool, 3> named{};
@@ -3100,6 +3179,11 @@ void Reader::home_return(const Code& g) {
     rotary_named[static_cast<size_t>(r)] = word(static_cast<char>('A' + r)).present;
     any = any || rotary_named[static_cast<size_t>(r)];
   }
+  std::array<bool, 3> extra_named{};
+  for (size_t e = 0; e < 3; ++e) {
+    extra_named[e] = extra_column_ != 0 && word("UVW"[e]).present;
+    any = any || extra_named[e];
+  }
   Block home;
   home.kind = MotionKind::Rapid;
   home.start_mm = state_.position_mm;
@@ -3109,6 +3193,10 @@ void Reader::home_return(const Code& g) {
       Eigen::Vector3d(state_.parameters[base], state_.parameters[base + 1], state_.parameters[base + 2]) + tip_offset();
   for (int a = 0; a < 3; ++a) {
     if (any && !named[a]) continue;
+    if (!(std::abs(tip[a]) <= kMaxMagnitude)) {
+      fail(g.column, g.text + ": the tip's " + kAxisLetter[a] + " there, " + num(tip[a]) +
+                         " mm, is out of range (expected within +-1e6 mm)");
+    }
     home.end_mm[a] = tip[a];
     moved[a] = true;
   }
@@ -3120,7 +3208,21 @@ void Reader::home_return(const Code& g) {
     rotary.angle_rad[k] = state_.parameters[base + 3 + k] * M_PI / 180.0;
     rotary.given[k] = true;
   }
-  append(home, moved, &rotary);
+  // U V W (machine coordinates, mm) likewise; with no axis named, those the program moved or
+  // whose reference is not 0 (LinuxCNC sends every axis home; the others stay at 0).
+  kinematics::ExtraAxes extra = state_.extra;
+  for (size_t e = 0; e < 3; ++e) {
+    const double reference = state_.parameters[base + 6 + e];
+    if (any ? !extra_named[e] : !(state_.extra.given[e] || reference != 0.0)) continue;
+    if (options_.extra_axes.find("UVW"[e]) == std::string::npos) continue;
+    if (!(std::abs(reference) <= kMaxMagnitude)) {
+      fail(g.column, std::string(1, "UVW"[e]) + " reference #" + std::to_string(base + 6 + e) + " = " + num(reference) +
+                         " mm is out of range (expected within +-1e6 mm)");
+    }
+    extra.value_mm[e] = reference;
+    extra.given[e] = true;
+  }
+  append(home, moved, &rotary, &extra);
 }
 
 // Canned cycles G73 G81 G82 G83 G85 G89 in the XY plane, as LinuxCNC documents them: an
@@ -3445,15 +3547,18 @@ void Reader::check_letters(LineCodes& c) {
   // Fanuc: G4 X (or U) is the dwell time in seconds, not an axis.
   c.dwell_axis = options_.flavor != GcodeOptions::Flavor::LinuxCnc && c.non_modal != nullptr &&
                  c.non_modal->number == 40 && !word('P').present && (word('X').present || word('U').present);
-  // --- Letters this reader does not move.
+  // --- U V W: the extra linear axes the machine has (LinuxCNC's axis mask).
+  extra_column_ = 0;
   for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
-    if (w.present && !(c.dwell_axis && letter == 'U')) {
-      unsupported(
-          w.column, std::string(1, letter),
-          std::string(1, letter) + " words (extra linear axes) are not supported: this reader moves X Y Z A B C");
+    if (!w.present || (c.dwell_axis && letter == 'U')) continue;
+    if (options_.extra_axes.find(letter) == std::string::npos) {
+      fail(w.column, std::string(1, letter) + " word: the machine has no " + letter +
+                         " axis (a job's machines move X Y Z and their rotary axes; `vcut program` lists U V W)");
     }
+    if (extra_column_ == 0 || w.column < extra_column_) extra_column_ = w.column;
   }
+  c.extra_column = extra_column_;
   for (char letter : {'A', 'B', 'C'}) {
     const Word& w = word(letter);
     if (w.present && !(std::abs(w.value) <= kMaxMagnitude))
@@ -3663,6 +3768,18 @@ void Reader::set_modes(LineCodes& c) {
                  : g->number == 435 ? GcodeState::Tcp::Vector
                                     : GcodeState::Tcp::Off;
     state_.length_comp = g->number == 430 || g->number == 431 || g->number == 432;
+    if (g->number == 431 || (g->number == 432 && state_.dynamic_length_mm)) {
+      // G43.1: the line's X Y Z; G43.2: added to a G43.1 offset (after G43 H it adds to the
+      // tool table's length, which the tip already is: nothing to track).
+      Eigen::Vector3d offset = g->number == 432 ? *state_.dynamic_length_mm : Eigen::Vector3d::Zero();
+      for (int a = 0; a < 3; ++a)
+        if (word(kAxisLetter[a]).present) offset[a] += word(kAxisLetter[a]).value * unit();
+      if (!(offset.cwiseAbs().maxCoeff() <= kMaxMagnitude))
+        fail(g->column, g->text + " tool length offset out of range (expected within +-1e6 mm)");
+      state_.dynamic_length_mm = offset;
+    } else if (g->number != 432) {
+      state_.dynamic_length_mm.reset();
+    }
   }
   if (tcp_m_code_ >= 0) state_.tcp = tcp_m_code_ ? GcodeState::Tcp::Angles : GcodeState::Tcp::Off;
   // TCP takes X Y Z as the tip on the part again.
@@ -3746,13 +3863,15 @@ bool Reader::run_motion(LineCodes& c) {
   const Word& p = word('P');
   bool line_moves = false;
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
-                        word('B').present || word('C').present || ln.radius.present || ln.angle.present;
+                        word('B').present || word('C').present || ln.radius.present || ln.angle.present ||
+                        c.extra_column != 0;
   const Code* motion_code = c.g[kMotion];
   const bool explicit_motion = motion_code != nullptr && motion_code->number <= 30;
   c.axis_column = INT_MAX;
   for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
     if (word(letter).present) c.axis_column = std::min(c.axis_column, word(letter).column);
   }
+  if (c.extra_column != 0) c.axis_column = std::min(c.axis_column, c.extra_column);
   // Motion errors point at the G0..G3 word, or at the first axis word of a modal motion.
   const int column = explicit_motion ? motion_code->column : c.axis_column;
   if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
@@ -3773,6 +3892,7 @@ bool Reader::run_motion(LineCodes& c) {
                               " alone: it stores the current position)");
     home_return(*c.non_modal);
   } else if (c.non_modal != nullptr && c.non_modal->number == 310) {
+    no_extra("G31");
     if (!has_axis) fail(c.non_modal->column, "G31 without axis words (expected the point the probe moves toward)");
     probe(c.non_modal->column, 310);
   } else if (c.non_modal != nullptr && (c.non_modal->number == 531 || c.non_modal->number == 536)) {
@@ -3785,7 +3905,9 @@ bool Reader::run_motion(LineCodes& c) {
     forget_axes(c.axis_user_all);
   } else if (c.sets_offsets || c.rotates || c.length_axes != nullptr || c.dwell_axis ||
              (c.non_modal != nullptr && c.non_modal->number >= 920 && c.non_modal->number <= 923)) {
-    // G10, G92 and G43.1/G43.2 took the axis words.
+    // G10, G92 and G43.1/G43.2 took the axis words (G10 and G92 U V W too).
+    if (c.rotates) no_extra(c.rotation != nullptr ? c.rotation->text : "G68");
+    if (c.length_axes != nullptr) no_extra(c.length_axes->text);
   } else if (has_axis || explicit_motion ||
              (state_.tcp == GcodeState::Tcp::Vector && (word('I').present || word('J').present || word('K').present))) {
     line_moves = has_axis && state_.motion != Motion::None;
@@ -3803,19 +3925,23 @@ bool Reader::run_motion(LineCodes& c) {
         break;
       case Motion::SpindleSync:
       case Motion::RigidTap:
+        no_extra(state_.motion == Motion::SpindleSync ? "G33" : "G33.1");
         used_['K' - 'A'] = true;
         synchronized(column);
         break;
       case Motion::Nurbs:
+        no_extra("G5.2");
         used_['P' - 'A'] = used_['L' - 'A'] = true;
         if (p.present) c.p_user = "G5.2";
         nurbs_point(column, motion_code != nullptr);
         break;
       case Motion::Probe:
+        no_extra("G38");
         probe(motion_code != nullptr ? motion_code->column : column, state_.probe);
         break;
       case Motion::CubicSpline:
       case Motion::QuadraticSpline:
+        no_extra(state_.motion == Motion::CubicSpline ? "G5" : "G5.1");
         for (char letter : {'I', 'J', 'P', 'Q'}) used_[letter - 'A'] = true;
         if (p.present) c.p_user = "G5";
         spline(column);
@@ -3852,6 +3978,7 @@ bool Reader::run_motion(LineCodes& c) {
         }
         break;
       case Motion::Cycle:
+        no_extra("canned cycle");
         for (char letter : {'R', 'Q', 'L'}) used_[letter - 'A'] = true;
         if (p.present) use_p(c, motion_code != nullptr ? motion_code->text : "the canned cycle");
         cycle(column, !(c.was_cycle && c.previous_cycle == state_.cycle));

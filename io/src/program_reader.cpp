@@ -276,6 +276,7 @@ void set_machine(GcodeOptions& options, const kinematics::MachineSpec& spec,
   options.reference_mm[0] = start;
   gauge_at(spec.second_home ? *spec.second_home : spec.home, options.reference_mm[1], options.reference_rotary_deg[1]);
   options.m_codes_ignored = spec.ignored_m_codes;
+  options.extra_axes.clear();  // vcut's machines move X Y Z and their rotaries: no U V W
   options.tool_length_mm.clear();
   options.tool_radius_mm.clear();
   auto lengths = std::make_shared<std::map<int, double>>();

@@ -31,10 +31,13 @@ std::uint64_t get_varint(const std::uint8_t*& p) {
   }
 }
 
-std::uint8_t given_bits(const RotaryWords& r) {
+// Rotary words and extra axes: which of the three were given, as bits.
+template <class Words>
+std::uint8_t given_bits(const Words& r) {
   return static_cast<std::uint8_t>(r.given[0] | r.given[1] << 1 | r.given[2] << 2);
 }
-void set_given(RotaryWords& r, std::uint8_t bits) {
+template <class Words>
+void set_given(Words& r, std::uint8_t bits) {
   for (int k = 0; k < 3; ++k) r.given[static_cast<std::size_t>(k)] = (bits >> k) & 1;
 }
 
@@ -42,8 +45,9 @@ void set_given(RotaryWords& r, std::uint8_t bits) {
 struct Ends {
   Eigen::Vector3d tip_mm, axis;
   RotaryWords rotary;
+  ExtraAxes extra;
 };
-Ends ends_of(const Block& b) { return {b.end_mm, b.end_axis, b.end_rotary}; }
+Ends ends_of(const Block& b) { return {b.end_mm, b.end_axis, b.end_rotary, b.end_extra}; }
 
 // Every field in one order for the writer and the reader. V visits (value, prediction).
 template <class V>
@@ -62,6 +66,10 @@ void fields(V& v, Block& b, const Block& anchor, const Ends& prev) {
   v.given(b.start_rotary, prev.rotary);
   for (std::size_t k = 0; k < 3; ++k) v(b.end_rotary.angle_rad[k], anchor.end_rotary.angle_rad[k]);
   v.given(b.end_rotary, anchor.end_rotary);
+  for (std::size_t k = 0; k < 3; ++k) v(b.start_extra.value_mm[k], prev.extra.value_mm[k]);
+  v.given(b.start_extra, prev.extra);
+  for (std::size_t k = 0; k < 3; ++k) v(b.end_extra.value_mm[k], anchor.end_extra.value_mm[k]);
+  v.given(b.end_extra, anchor.end_extra);
   v(b.orientation, anchor.orientation);
   for (int k = 0; k < 3; ++k) v(b.cone_axis[k], anchor.cone_axis[k]);
   v(b.feed_mode, anchor.feed_mode);
@@ -86,7 +94,8 @@ struct Writer {
     }
     ++bit;
   }
-  void given(RotaryWords& value, const RotaryWords& predicted) {
+  template <class Words>
+  void given(Words& value, const Words& predicted) {
     std::uint8_t g = given_bits(value);
     (*this)(g, given_bits(predicted));
   }
@@ -106,7 +115,8 @@ struct Reader {
     }
     ++bit;
   }
-  void given(RotaryWords& value, const RotaryWords& predicted) {
+  template <class Words>
+  void given(Words& value, const Words& predicted) {
     std::uint8_t g = 0;
     (*this)(g, given_bits(predicted));
     set_given(value, g);
@@ -225,7 +235,7 @@ void BlockList::decode(std::size_t i, Block& out) const {
     prev = ends_of(d.block);
   } else {
     Block before;
-    const Ends unused{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), RotaryWords{}};
+    const Ends unused{Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero(), RotaryWords{}, ExtraAxes{}};
     decode_record(c.bytes.data() + c.offset[k - 2], c.anchor, k - 1, unused, before);
     prev = ends_of(before);  // the end fields do not depend on the prediction of the start
   }

@@ -101,6 +101,7 @@ JobProgram read_job_program(const io::Job& job) {
   reading.gcode.max_lines = job.max_lines;
   reading.gcode.tcp_m_codes = job.tcp_m_codes;
   reading.gcode.initial_tool = job.initial_tool;
+  reading.gcode.extra_axes.clear();  // a job's machines have no U V W: their words are errors naming the line
   // The machine starts at its home and goes there on G28 (a tool-pose program's tip under the
   // spindle's gauge point; an axis program's axes at their home values).
   auto machine_start = [&](bool axis_program) {

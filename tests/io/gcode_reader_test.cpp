@@ -649,10 +649,10 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   GcodeOptions options;
   options.unsupported_as_warning = true;
   const Program p = read(
-      "G0 X0 Y0 Z0\nG96\nG96\nM123\nG1 X1 U10 F10\nG71 X9 F10\n"
+      "G0 X0 Y0 Z0\nG96\nG96\nM123\nG1 X1 G7 F10\nG71 X9 F10\n"
       "G0 X2\n",
       options);
-  // One warning per distinct word (G96, M123, U, G71), each naming its first place.
+  // One warning per distinct word (G96, M123, G7, G71), each naming its first place.
   ASSERT_EQ(p.warnings.size(), 4u);
   EXPECT_EQ(p.warnings[0].rfind("test.ngc:2:1: ", 0), 0u) << p.warnings[0];
   EXPECT_NE(p.warnings[0].find("G96"), std::string::npos);
@@ -684,7 +684,16 @@ TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
   EXPECT_INPUT_ERROR("#1 + 5\n", 1, 4, "expected '='");
   EXPECT_INPUT_ERROR("G0 [1+2]\n", 1, 4, "expected a letter before '['");
   EXPECT_INPUT_ERROR("G0 X0 O100\n", 1, 7, "o-word");
-  EXPECT_INPUT_ERROR("G0 U10\n", 1, 4, "U words");
+  GcodeOptions no_uvw;  // a job's machine: U V W words are errors at the word
+  no_uvw.extra_axes.clear();
+  try {
+    read("G0 X0 U10\n", no_uvw);
+    ADD_FAILURE() << "U10 read on a machine without U";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.line(), 1);
+    EXPECT_EQ(e.column(), 7);
+    EXPECT_NE(std::string(e.what()).find("no U axis"), std::string::npos) << e.what();
+  }
   EXPECT_INPUT_ERROR("G0 A10000000\n", 1, 4, "out of range");
   EXPECT_INPUT_ERROR("G0 X1.2.3\n", 1, 8, "'.'");
 }

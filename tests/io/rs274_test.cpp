@@ -302,6 +302,91 @@ TEST(Rs274Offsets, G10G92G53) {
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nG92 G1 X0\n").find("both use the axis words"), std::string::npos);
 }
 
+// U V W: LinuxCNC's extra linear axes, read as its interpreter does on a 9-axis machine. The
+// expected values are worked by hand from the rules of the G-code manual: G90 absolute plus the
+// G5x and G92 offsets of that axis, G91 incremental, G20 in inches, G53 in machine coordinates,
+// G28 to #5167..#5169, G10 L2 / L20 and G92 setting #5227.. / #5217...
+TEST(Rs274ExtraAxes, PositionsOffsetsAndHome) {
+  auto extra = [](const Block& b) {
+    return Eigen::Vector3d(b.end_extra.value_mm[0], b.end_extra.value_mm[1], b.end_extra.value_mm[2]);
+  };
+  // A move of W alone is a motion (X Y Z stand still); the start carries the previous value.
+  {
+    // (The first move, from an unknown start, is dropped: `vcut program` starts at 0.)
+    const Program p = read("G0 X1 Y2 Z3\nG1 W-5 F100\nG91 G1 W2 U1\nG90 G0 V4\n");
+    ASSERT_EQ(p.blocks.size(), 3u);
+    EXPECT_EQ(p.blocks[0].kind, F);
+    EXPECT_FALSE(p.blocks[0].start_extra.any());
+    EXPECT_LT((p.blocks[0].end_mm - Eigen::Vector3d(1, 2, 3)).norm(), kTol);
+    EXPECT_LT((extra(p.blocks[0]) - Eigen::Vector3d(0, 0, -5)).norm(), kTol);
+    EXPECT_LT((extra(p.blocks[1]) - Eigen::Vector3d(1, 0, -3)).norm(), kTol);  // G91: -5 + 2, 0 + 1
+    EXPECT_EQ(p.blocks[1].start_extra.value_mm[2], -5.0);
+    EXPECT_LT((extra(p.blocks[2]) - Eigen::Vector3d(1, 4, -3)).norm(), kTol);
+    EXPECT_TRUE(p.blocks[2].end_extra.given[0] && p.blocks[2].end_extra.given[1] && p.blocks[2].end_extra.given[2]);
+  }
+  // Inches: W1 is 25.4 mm. An arc moves W linearly with the helix, like A B C.
+  {
+    const Program p = read("G20 G0 X0 Y0 Z0\nG2 X1 Y0 I0.5 J0 W1 F10\n");
+    ASSERT_EQ(p.blocks.size(), 1u);
+    EXPECT_EQ(p.blocks[0].kind, MotionKind::Arc);
+    EXPECT_NEAR(p.blocks[0].end_extra.value_mm[2], 25.4, kTol);
+  }
+  // Offsets: G10 L2 P1 W10 puts W0 at 10; G92 W0 at W = 12 adds 2 (W1 -> 13); #5428 reads the
+  // program coordinate back (13 - 10 - 2 = 1); G92.1 takes the 2 away; G53 W3 is machine 3.
+  {
+    const Program p =
+        read("G0 X0 Y0 Z0\nG10 L2 P1 W10\nG0 W0\nG0 W2\nG92 W0\nG0 W1\nG0 X#5428\nG92.1\nG0 W1\nG53 G0 W3\n");
+    ASSERT_EQ(p.blocks.size(), 6u);
+    EXPECT_NEAR(p.blocks[0].end_extra.value_mm[2], 10.0, kTol);
+    EXPECT_NEAR(p.blocks[1].end_extra.value_mm[2], 12.0, kTol);
+    EXPECT_NEAR(p.blocks[2].end_extra.value_mm[2], 13.0, kTol);
+    EXPECT_NEAR(p.blocks[3].end_mm.x(), 1.0, kTol);
+    EXPECT_NEAR(p.blocks[4].end_extra.value_mm[2], 11.0, kTol);
+    EXPECT_NEAR(p.blocks[5].end_extra.value_mm[2], 3.0, kTol);
+  }
+  // G10 L20 P0 U0 at U = 7 makes the current U the program's 0: U2 is then at 9.
+  {
+    const Program p = read("G0 X0 Y0 Z0 U7\nG10 L20 P0 U0\nG0 X1 U2\n");
+    EXPECT_NEAR(p.blocks.back().end_extra.value_mm[0], 9.0, kTol);
+  }
+  // G28: named axes through the intermediate point to #5161.. (here #5169 = 20); G28.1 stores
+  // the current W; G28 alone sends W home too once the program moved it.
+  {
+    const Program p = read("G0 X0 Y0 Z0\n#5169 = 20\nG0 W5\nG28 W8\nG0 W1\nG28\n");
+    ASSERT_EQ(p.blocks.size(), 5u);
+    EXPECT_NEAR(p.blocks[1].end_extra.value_mm[2], 8.0, kTol);   // the intermediate point
+    EXPECT_NEAR(p.blocks[2].end_extra.value_mm[2], 20.0, kTol);  // home
+    EXPECT_NEAR(p.blocks[4].end_extra.value_mm[2], 20.0, kTol);
+    const Program q = read("G0 X0 Y0 Z0 W6\nG28.1\nG0 W0\nG28 W0\n");
+    EXPECT_NEAR(q.blocks.back().end_extra.value_mm[2], 6.0, kTol);
+  }
+  // A machine without the axis (a job's) refuses the word at its column; U V W are refused
+  // where they cannot move (canned cycles, compensation, G43.1), each naming the column.
+  GcodeOptions no_w;
+  no_w.extra_axes = "UV";
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG1 X1 W2 F10\n", no_w).find("test.ngc:2:7: W word: the machine has no W axis"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z5\nG81 X1 Y1 Z-1 R1 W3 F10\n").find(":2:18: U V W words on a canned cycle line"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG41.1 D1\nG1 X5 V1 F10\n").find(":3:7: U V W words on a cutter compensation"),
+            std::string::npos);
+  EXPECT_NE(error_of("G0 X0 Y0 Z0\nG43.1 Z1 W1\n").find("U V W words on a G43.1 line"), std::string::npos);
+}
+
+// G43.1 sets the control's tool length: G28 puts the gauge point at home, so the programmed
+// (tip) Z there is home - the offset, as LinuxCNC's interpreter prints it (cone.ngc's second
+// pass: G43.1 Z50, then G91 G28 Z0 ends at Z-50). G49 ends it.
+TEST(Rs274Offsets, DynamicToolLengthAndHome) {
+  // (The first move and G91 G28 Z0's intermediate point do not move: dropped.)
+  const Program p = read("G0 X0 Y0 Z10\nG43.1 Z50\nG91 G28 Z0\nG90 G49\nG28\n");
+  ASSERT_EQ(p.blocks.size(), 2u);
+  EXPECT_NEAR(p.blocks[0].end_mm.z(), -50.0, kTol);  // home: 0 - 50
+  EXPECT_NEAR(p.blocks[1].end_mm.z(), 0.0, kTol);    // G49: the tip at home
+  // G43.2 adds to a G43.1 offset: 50 + 5.
+  const Program q = read("G0 X0 Y0 Z10\nG43.1 Z50\nG43.2 Z5\nG28 Z0\n");
+  EXPECT_NEAR(q.blocks.back().end_mm.z(), -55.0, kTol);
+}
+
 TEST(Rs274Feed, InverseTime) {
   const Program p = read("G0 X0 Y0 Z0\nG93 G1 X10 F2\nG1 X20 F0.5\nG94 F100 G1 X30\n");
   ASSERT_EQ(p.blocks.size(), 3u);

@@ -43,6 +43,10 @@ std::string differs(const Block& a, const Block& b) {
     if (a.start_rotary.given[k] != b.start_rotary.given[k]) return "start_rotary.given";
     if (!same_bytes(a.end_rotary.angle_rad[k], b.end_rotary.angle_rad[k])) return "end_rotary.angle";
     if (a.end_rotary.given[k] != b.end_rotary.given[k]) return "end_rotary.given";
+    if (!same_bytes(a.start_extra.value_mm[k], b.start_extra.value_mm[k])) return "start_extra.value";
+    if (a.start_extra.given[k] != b.start_extra.given[k]) return "start_extra.given";
+    if (!same_bytes(a.end_extra.value_mm[k], b.end_extra.value_mm[k])) return "end_extra.value";
+    if (a.end_extra.given[k] != b.end_extra.given[k]) return "end_extra.given";
   }
   if (a.orientation != b.orientation) return "orientation";
   if (!same_vec(a.cone_axis, b.cone_axis)) return "cone_axis";
@@ -70,6 +74,7 @@ std::vector<Block> random_blocks(std::mt19937& rng, std::size_t n) {
     next.start_mm = b.end_mm;
     next.start_axis = b.end_axis;
     next.start_rotary = b.end_rotary;
+    next.start_extra = b.end_extra;
     next.end_mm[pick(rng) % 3] = x(rng);
     next.source.line = pick(rng) < 90 ? b.source.line + 1 : pick(rng) < 50 ? b.source.line - 40 : 1000000 + pick(rng);
     if (pick(rng) < 5) next.start_mm = {x(rng), -0.0, x(rng)};  // a jump
@@ -84,6 +89,12 @@ std::vector<Block> random_blocks(std::mt19937& rng, std::size_t n) {
       next.end_rotary.given[k] = !next.end_rotary.given[k];
     }
     if (pick(rng) < 3) next.start_rotary.given[1] = !next.start_rotary.given[1];
+    if (pick(rng) < 5) {  // U V W
+      const std::size_t k = static_cast<std::size_t>(pick(rng) % 3);
+      next.end_extra.value_mm[k] = x(rng);
+      next.end_extra.given[k] = true;
+    }
+    if (pick(rng) < 2) next.start_extra.value_mm[2] = -0.0;
     if (pick(rng) < 5) next.orientation = static_cast<OrientationMode>(pick(rng) % 4), next.cone_axis = {0, x(rng), 1};
     if (pick(rng) < 20)
       next.feed_mm_per_min = pick(rng) < 50 ? x(rng) + 600.0 : std::numeric_limits<double>::quiet_NaN();

@@ -215,6 +215,48 @@ def run_rs274(rs274, program, program_text, sub_dirs, timeout):
         return r.returncode, out, err
 
 
+# The standalone rs274's axis mask is X Y Z A B C: a U V W word stops it ("Bad character 'w'
+# used"). LinuxCNC's interpreter through its Python module (linuxcnc_interp.py) takes the
+# caller's mask: those programs are compared with its output, all nine axes.
+_BAD_UVW = re.compile(r"Bad character '[uvw]' used", re.I)
+INTERP_PY = "/usr/bin/python3"  # Debian's, which has linuxcnc-uspace's module
+_interp_module = None
+
+
+def interp_module_available():
+    global _interp_module
+    if _interp_module is None:
+        try:
+            _interp_module = subprocess.run([INTERP_PY, "-c", "import gcode"], stdin=subprocess.DEVNULL,
+                                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                            timeout=60).returncode == 0
+        except (OSError, subprocess.TimeoutExpired):
+            _interp_module = False
+    return _interp_module
+
+
+def run_interp_module(program, program_text, sub_dirs, timeout):
+    """linuxcnc_interp.py on `program`: (rc, stdout, stderr_lines), as run_rs274."""
+    helper = os.path.join(os.path.dirname(os.path.abspath(__file__)), "linuxcnc_interp.py")
+    with tempfile.TemporaryDirectory(prefix="rs274-oracle-module-") as tmp:
+        tbl = os.path.join(tmp, "tool.tbl")
+        with open(tbl, "w") as f:
+            f.write(tool_table_text(program_text))
+        ini = os.path.join(tmp, "oracle.ini")
+        with open(ini, "w") as f:
+            f.write("[RS274NGC]\nSUBROUTINE_PATH = %s\n" % ":".join(sub_dirs + [tmp]))
+        env = dict(os.environ, HOME=tmp, INI_FILE_NAME=ini)
+        try:
+            r = subprocess.run([INTERP_PY, helper, os.path.abspath(program), tbl], cwd=tmp, env=env,
+                               stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               timeout=timeout)
+        except subprocess.TimeoutExpired as e:
+            return 124, (e.stdout or b"").decode("utf-8", "replace"), ["the interpreter module timed out"]
+        err = [l for l in r.stderr.decode("utf-8", "replace").splitlines()
+               if l.strip() and not l.startswith("!!!") and "updating variable file" not in l]
+        return r.returncode, r.stdout.decode("utf-8", "replace"), err
+
+
 # ---------------------------------------------------------------------------------------------
 # Parsing rs274's canonical calls into motions in vcut's frame
 
@@ -239,12 +281,14 @@ def rotate_z(v, deg):
 class Rs274Motion:
     # synchronized: G33 / G33.1, the feed is the spindle's (not compared)
     __slots__ = ("synchronized", "index", "line", "kind", "end", "abc", "center", "normal", "turns", "feed",
-                 "feed_mode", "feed_units", "tol", "changed", "unseen", "unseen_abc")
+                 "feed_mode", "feed_units", "tol", "changed", "unseen", "unseen_abc", "uvw")
 
     def describe(self):
         s = "#%d %s end=%s" % (self.index, self.kind, fmt_vec(self.end))
         if self.abc != [0.0, 0.0, 0.0]:
             s += " abc=%s" % fmt_vec(self.abc)
+        if self.uvw != [0.0, 0.0, 0.0]:
+            s += " uvw=%s" % fmt_vec(self.uvw)
         if self.kind == "arc":
             s += " center=%s normal=%s turns=%d" % (fmt_vec(self.center), fmt_vec(self.normal),
                                                     self.turns)
@@ -260,6 +304,9 @@ def parse_rs274(stdout):
     units = 1.0  # mm per program unit
     g5x = [0.0] * 6
     g92 = [0.0] * 6
+    g5x_uvw = [0.0] * 3  # U V W offsets (mm), from the interpreter module's 9-axis calls
+    g92_uvw = [0.0] * 3
+    uvw = [0.0] * 3  # the current U V W (mm, offsets applied)
     g5x_ulp = 0.0  # rounding (mm) in the offsets as printed
     g92_ulp = 0.0
     rot = 0.0
@@ -290,10 +337,12 @@ def parse_rs274(stdout):
             units = MM_PER_INCH if "INCH" in args else 1.0
         elif name == "SET_G5X_OFFSET" and len(nums) >= 7:
             g5x = [nums[1 + i] * (units if i < 3 else 1.0) for i in range(6)]
+            g5x_uvw = [x * units for x in nums[7:10]] if len(nums) >= 10 else [0.0] * 3
             # printed zeros are taken as exact (the empty var file, G10 L2 X0 ...)
             g5x_ulp = HALF_ULP * units if any(nums[1:7]) else 0.0
         elif name == "SET_G92_OFFSET" and len(nums) >= 6:
             g92 = [nums[i] * (units if i < 3 else 1.0) for i in range(6)]
+            g92_uvw = [x * units for x in nums[6:9]] if len(nums) >= 9 else [0.0] * 3
             g92_ulp = HALF_ULP * units if any(nums[0:6]) else 0.0
         elif name == "SET_XY_ROTATION" and nums:
             rot = nums[0]
@@ -320,6 +369,11 @@ def parse_rs274(stdout):
             mo.feed_units = feed_units
             mo.center = mo.normal = None
             mo.turns = 0
+            mo.uvw = list(uvw)
+            # U V W after A B C (the module's calls; rs274's have none): program units + offsets.
+            extra = nums[6:9] if name != "ARC_FEED" else nums[9:12]
+            if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE", "ARC_FEED") and len(extra) == 3:
+                mo.uvw = [extra[i] * units + g92_uvw[i] + g5x_uvw[i] for i in range(3)]
             if name in ("STRAIGHT_TRAVERSE", "STRAIGHT_FEED", "STRAIGHT_PROBE") and len(nums) >= 6:
                 # STRAIGHT_PROBE: a feed to the point; rs274 standalone trips the probe at its
                 # end, as vcut does with no stock to touch (`vcut program`).
@@ -361,7 +415,9 @@ def parse_rs274(stdout):
                 mo.end, mo.abc = list(pos[:3]), list(pos[3:])
             mo.tol = HALF_ULP * units + g5x_ulp + g92_ulp
             mo.changed = [abs(mo.end[i] - pos[i]) > 1e-9 for i in range(3)] + \
-                         [abs(mo.abc[i] - pos[3 + i]) > 1e-9 for i in range(3)]
+                         [abs(mo.abc[i] - pos[3 + i]) > 1e-9 for i in range(3)] + \
+                         [abs(mo.uvw[i] - uvw[i]) > 1e-9 for i in range(3)]
+            uvw = list(mo.uvw)
             mo.unseen = [not s for s in seen]
             mo.unseen_abc = [not s for s in seen_abc]
             for i in range(3):
@@ -483,6 +539,12 @@ def compare_end(r, v, args, holds):
         d = abs(want - r.abc[i])
         if d > HALF_ULP + 1e-9 and not (letter not in rotary and r.unseen_abc[i]):
             return "end %s differs by %.6g deg" % (letter, d)
+    # U V W (mm): vcut names those the program moved; the others must be 0.
+    extra = v.get("extra") or {}
+    for i, letter in enumerate("UVW"):
+        d = abs(float(extra.get(letter, 0.0)) - r.uvw[i])
+        if d > tol:
+            return "end %s differs by %.6g mm (tolerance %.3g)" % (letter, d, tol)
     return None
 
 
@@ -511,6 +573,11 @@ def motion_length(v):
     xyz = math.sqrt(sum((e[i] - s[i]) ** 2 for i in range(3)))
     if xyz > 1e-9:
         return xyz, False
+    u0 = v.get("start_extra") or {}
+    u1 = v.get("extra") or {}
+    uvw = math.sqrt(sum((float(u1.get(k, 0.0)) - float(u0.get(k, 0.0))) ** 2 for k in "UVW"))
+    if uvw > 1e-9:
+        return uvw, False
     r0 = v.get("start_rotary") or {}
     r1 = v.get("rotary") or {}
     return math.sqrt(sum((float(r1.get(k, 0.0)) - float(r0.get(k, 0.0))) ** 2
@@ -665,6 +732,9 @@ def check_program(path, args, rs274):
         if os.path.isdir(remap_subs):
             sub_dirs.append(remap_subs)
         rc, out, rerr = run_rs274(rs274, program, text, sub_dirs, args.timeout)
+        nine_axes = rc != 0 and any(_BAD_UVW.search(l) for l in rerr) and interp_module_available()
+        if nine_axes:
+            rc, out, rerr = run_interp_module(program, text, sub_dirs, args.timeout)
         vrc, vrecs, verr = run_vcut(args.vcut, program, args.timeout, uses_kins_m_codes(text), sub_dirs[1:],
                                     vcut_tools_text(text))
     finally:
@@ -712,6 +782,9 @@ def check_program(path, args, rs274):
         extra.append("%d unknown-start dropped (R2)" % du)
     if no_end:
         extra.append("no M2/M30/%: rs274 errors at the end of the file, vcut does not (R3)")
+    if nine_axes:
+        extra.append("U V W: LinuxCNC's interpreter module with all nine axes (rs274: %s)" %
+                     "Bad character used")
     if ok:
         return "PASS", motions, "; ".join(extra) or "identical", []
     return "FAIL", motions, detail[0], detail[1:] + (["(" + "; ".join(extra) + ")"] if extra else [])

@@ -92,6 +92,11 @@ struct GcodeOptions {
   // frame on the workpiece (the machine's orientation equation).
   std::string rotary_axes;
   std::function<Eigen::Matrix3d(const kinematics::RotaryWords&)> frame_rotation;
+  // The extra linear axes U V W the machine has (their letters). A U, V or W word for one it
+  // lacks is an error naming the word, as on a LinuxCNC machine whose axis mask lacks it.
+  // `vcut program` reads all three, as LinuxCNC's interpreter on a 9-axis machine; a job none
+  // (vcut's machines move X Y Z and their rotaries).
+  std::string extra_axes = "UVW";
   // Where the gauge point stands at all-zero axes (workpiece frame, mm): machine coordinate 0.
   Eigen::Vector3d machine_zero_mm = Eigen::Vector3d::Zero();
   // Probing (G38.2..G38.5; G31, Fanuc's skip and Mach3's probe): where along the move from
@@ -155,6 +160,10 @@ struct GcodeState {
   // axis program (Block::tool_pose false: X Y Z are the linear axes, A B C axis values).
   kinematics::RotaryWords rotary;
   bool rotary_program = false;
+  // U V W (mm, work offsets applied) as last programmed, and their G5x and G92 offsets
+  // (#5227.. + 20 k, #5217..): LinuxCNC's extra linear axes, 0 at the start.
+  kinematics::ExtraAxes extra;
+  std::array<double, 3> g5x_extra_mm = {0.0, 0.0, 0.0}, g92_extra_mm = {0.0, 0.0, 0.0};
   // Tool centre point: G43.4 (or a job-mapped M code) takes X Y Z as the tip in the workpiece
   // frame and A B C as the rotary axes; G43.5 takes I J K as the tool axis; G43/G49 end it.
   enum class Tcp { Off, Angles, Vector };
@@ -220,6 +229,9 @@ struct GcodeState {
   bool twp_feature = false;
   bool twp_used = false;     // G68.2 came in this program
   bool length_comp = false;  // G43 / G43.1 / G43.2 on (G49, G43.4, G43.5 end it)
+  // G43.1 X Y Z (and G43.2 added to it): the control's tool length offset (mm) while it is on;
+  // G28 / G30 and G28.1 count the tip that far from the gauge point, as LinuxCNC does.
+  std::optional<Eigen::Vector3d> dynamic_length_mm;
   Eigen::Matrix3d twp_rotation = Eigen::Matrix3d::Identity();
   Eigen::Vector3d twp_translation_mm = Eigen::Vector3d::Zero();
 

@@ -24,6 +24,15 @@ struct RotaryWords {
   bool any() const { return given[0] || given[1] || given[2]; }
 };
 
+// Extra linear axes U V W as programmed (mm, work offsets applied, index 0 1 2); `given` says
+// which were. LinuxCNC's interpreter moves them with X Y Z (9-axis machines: a quill, a
+// second carriage); `vcut program` lists them, a job refuses them (its machines have none).
+struct ExtraAxes {
+  std::array<double, 3> value_mm = {0.0, 0.0, 0.0};
+  std::array<bool, 3> given = {false, false, false};
+  bool any() const { return given[0] || given[1] || given[2]; }
+};
+
 // Where a block came from: an index into Program::files and a 1-based line number.
 struct SourceRef {
   int file = 0;
@@ -62,6 +71,7 @@ struct Block {
   Eigen::Vector3d start_axis = Eigen::Vector3d::UnitZ();  // unit, tip -> spindle
   Eigen::Vector3d end_axis = Eigen::Vector3d::UnitZ();
   RotaryWords start_rotary, end_rotary;
+  ExtraAxes start_extra, end_extra;  // U V W (G-code only; none given in most programs)
   OrientationMode orientation = OrientationMode::Vector;
   Eigen::Vector3d cone_axis = Eigen::Vector3d::Zero();  // Cone modes: unit axis of the cone
   double feed_mm_per_min = 0.0;  // 0 for rapids; InverseTime: 1 / F is the block's time in minutes
