@@ -838,6 +838,54 @@ def random_comp_programs(n, seed, folder):
     return paths
 
 
+def random_uvw_programs(n, seed, folder):
+    """n random programs that move U V W with X Y Z (deterministic for a seed), for LinuxCNC's
+    interpreter module: G20/G21, G90/G91, rapids, feeds and arcs (W along the helix), G10 L2/L20
+    P0..P9 offsets and G54..G59.3, G92/G92.1/G92.2/G92.3, G53, G28/G30 named and not, G28.1,
+    and #5426..#5428 read back into a word. Every line is one LinuxCNC runs."""
+    import random
+    rng = random.Random(seed)
+    systems = ["G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"]
+    paths = []
+    for k in range(n):
+        lines = ["G%d G17 G90 G94" % rng.choice([20, 21, 21]), "G0 X0 Y0 Z0", "F500"]
+        incremental = False
+        for _ in range(rng.randint(10, 25)):
+            kind = rng.random()
+            words = lambda letters: " ".join("%s%.3f" % (a, rng.uniform(-20, 20)) for a in letters)
+            some = "".join(a for a in "XYZUVW" if rng.random() < 0.4) or rng.choice("UVW")
+            extra = "".join(a for a in "UVW" if rng.random() < 0.5) or rng.choice("UVW")
+            if kind < 0.06:
+                incremental = not incremental
+                lines.append("G91" if incremental else "G90")
+            elif kind < 0.5:
+                lines.append("G%d %s" % (rng.choice([0, 1]), words(some)))
+            elif kind < 0.58 and not incremental:
+                # a helix: a whole circle about a centre 5 mm off in X, U V W along it
+                lines.append("G%d I5 J0 %s" % (rng.choice([2, 3]), words(extra)))
+            elif kind < 0.68:
+                lines.append("G10 L%d P%d %s" % (rng.choice([2, 20]), rng.randint(0, 9), words(extra)))
+            elif kind < 0.73:
+                lines.append(rng.choice(systems))
+            elif kind < 0.8:
+                lines.append(rng.choice(["G92 %s" % words(extra), "G92.1", "G92.2", "G92.3"]))
+            elif kind < 0.84 and not incremental:
+                lines.append("G53 G0 %s" % words(extra))
+            elif kind < 0.92:
+                code = rng.choice(["G28", "G30"])
+                lines.append(code if rng.random() < 0.3 else "%s %s" % (code, words(extra)))
+            elif kind < 0.95:
+                lines.append(rng.choice(["G28.1", "G30.1"]))
+            else:
+                lines.append("G0 X#%d" % rng.choice([5426, 5427, 5428]))
+        lines.append("M2")
+        path = os.path.join(folder, "uvw-random-%03d.ngc" % k)
+        with open(path, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        paths.append(path)
+    return paths
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(
         description="Compare vcut's G-code reader with LinuxCNC's rs274 interpreter.")
@@ -859,6 +907,8 @@ def main(argv=None):
                          "ones) that make a motion under rs274 are identical")
     ap.add_argument("--random-comp", type=int, default=0, metavar="N",
                     help="also N random cutter-compensation programs (seed --seed)")
+    ap.add_argument("--random-uvw", type=int, default=0, metavar="N",
+                    help="also N random programs moving U V W (LinuxCNC's interpreter module; seed --seed)")
     ap.add_argument("--seed", type=int, default=1, help="seed of the random programs (1)")
     ap.add_argument("-v", "--verbose", action="store_true",
                     help="print the details of SKIPPED/REJECTED programs too")
@@ -897,6 +947,9 @@ def main(argv=None):
     if args.random_comp > 0:
         random_dir = tempfile.mkdtemp(prefix="rs274-oracle-comp-")
         programs = programs + random_comp_programs(args.random_comp, args.seed, random_dir)
+    if args.random_uvw > 0:
+        random_dir = random_dir or tempfile.mkdtemp(prefix="rs274-oracle-comp-")
+        programs = programs + random_uvw_programs(args.random_uvw, args.seed, random_dir)
 
     results = []
     for p in programs:
