@@ -476,35 +476,49 @@ double read_plain_number(const std::string& s, std::size_t& i, char letter, cons
     negative = s[j] == '-';
     j = skip_blanks(s, j + 1);
   }
-  std::string digits;
-  bool point = false, any_digit = false, integer_part_nonzero = false;
+  // The number's characters: digits and one point, blanks allowed among them (rs274 reads
+  // "X1 0.5" as X10.5); most numbers have none, and are read where they stand.
+  bool point = false, any_digit = false, integer_part_nonzero = false, inner_blank = false;
+  const std::size_t start = j;
+  std::size_t last = j;  // one past the last digit or point
   for (; j < n; ++j) {
     const char c = s[j];
     if (is_digit(c)) {
-      digits += c;
       any_digit = true;
       if (!point && c != '0') integer_part_nonzero = true;
     } else if (c == '.' && !point) {
-      digits += c;
       point = true;
-    } else if (!is_blank(c)) {
+    } else if (is_blank(c)) {
+      continue;
+    } else {
       break;
     }
+    inner_blank = inner_blank || last != j;  // a blank between this character and the last one
+    last = j + 1;
   }
-  const std::string after = letter ? std::string("after '") + letter + "'" : std::string("in the expression");
-  if (!any_digit) context.fail(column, "expected a number " + after + ", found " + found(s, j));
+  inner_blank = inner_blank && any_digit;
+  std::string digits;  // only for a number with blanks inside
+  if (inner_blank) {
+    for (std::size_t k = start; k < last; ++k)
+      if (!is_blank(s[k])) digits += s[k];
+  }
+  const char* first = inner_blank ? digits.data() : s.data() + start;
+  const char* end_of_number = inner_blank ? digits.data() + digits.size() : s.data() + last;
+  auto after = [&] { return letter ? std::string("after '") + letter + "'" : std::string("in the expression"); };
+  if (!any_digit) context.fail(column, "expected a number " + after() + ", found " + found(s, j));
   // rs274 numbers have no exponent: in "m66e0l0" the letter after the digits starts the next word.
   i = j;
-  text = (negative ? "-" : "") + (digits.size() > 24 ? digits.substr(0, 24) + "..." : digits);
+  const std::size_t length = static_cast<std::size_t>(end_of_number - first);
+  text.assign(negative ? "-" : "");
+  text.append(first, std::min<std::size_t>(length, 24));
+  if (length > 24) text += "...";
   double value = 0.0;
-  const char* first = digits.data();
-  const char* last = digits.data() + digits.size();
-  const auto [end, ec] = std::from_chars(first, last, value, std::chars_format::fixed);
+  const auto [end, ec] = std::from_chars(first, end_of_number, value, std::chars_format::fixed);
   if (ec == std::errc::result_out_of_range) {
-    if (integer_part_nonzero) context.fail(column, "number " + text + " " + after + " is out of range");
+    if (integer_part_nonzero) context.fail(column, "number " + text + " " + after() + " is out of range");
     value = 0.0;  // underflow: smaller than any length or speed that matters
-  } else if (ec != std::errc() || end != last) {
-    context.fail(column, "malformed number " + text + " " + after);
+  } else if (ec != std::errc() || end != end_of_number) {
+    context.fail(column, "malformed number " + text + " " + after());
   }
   return negative ? -value : value;
 }
