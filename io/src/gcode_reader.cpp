@@ -354,6 +354,7 @@ struct ModalState {
   kinematics::SpindleState spindle;
   std::string work_offset;
   Eigen::Vector3d g5x_mm;
+  std::array<double, 3> g5x_extra_mm;  // U V W
 };
 
 // The main program or one subroutine call.
@@ -674,7 +675,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     const GcodeState& g = state_;
     return {g.inches,      g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
             g.plane,       g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
-            g.work_offset, g.g5x_mm};
+            g.work_offset, g.g5x_mm,      g.g5x_extra_mm};
   }
   void restore_modes(const ModalState& m) {
     GcodeState& g = state_;
@@ -682,7 +683,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     g.inverse_time = m.inverse_time, g.exact_stop = m.exact_stop, g.retract_to_r = m.retract_to_r;
     g.plane = m.plane, g.tcp = m.tcp, g.blend_tolerance_mm = m.blend_tolerance_mm;
     g.feed_mm_per_min = m.feed_mm_per_min, g.spindle_rpm = m.spindle_rpm, g.spindle = m.spindle;
-    g.work_offset = m.work_offset, g.g5x_mm = m.g5x_mm;
+    g.work_offset = m.work_offset, g.g5x_mm = m.g5x_mm, g.g5x_extra_mm = m.g5x_extra_mm;
     g.parameters[5220] = 1 + system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10)));
   }
   int o_column_ = 0;  // column of a Fanuc program number on this line

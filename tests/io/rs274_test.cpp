@@ -349,6 +349,14 @@ TEST(Rs274ExtraAxes, PositionsOffsetsAndHome) {
     const Program p = read("G0 X0 Y0 Z0 U7\nG10 L20 P0 U0\nG0 X1 U2\n");
     EXPECT_NEAR(p.blocks.back().end_extra.value_mm[0], 9.0, kTol);
   }
+  // M72 brings back the coordinate system M70 saved, U V W's offsets with it (G55's W5 while
+  // it is on: W1 at 6; back in G54: W1 at 1), as LinuxCNC's interpreter gives it.
+  {
+    const Program p = read("G0 X0 Y0 Z0\nG10 L2 P2 W5\nG0 W0\nM70\nG55\nG0 W1\nM72\nG0 W1\n");
+    ASSERT_EQ(p.blocks.size(), 2u);
+    EXPECT_NEAR(p.blocks[0].end_extra.value_mm[2], 6.0, kTol);
+    EXPECT_NEAR(p.blocks[1].end_extra.value_mm[2], 1.0, kTol);
+  }
   // G28: named axes through the intermediate point to #5161.. (here #5169 = 20); G28.1 stores
   // the current W; G28 alone sends W home too once the program moved it.
   {
