@@ -352,9 +352,7 @@ struct ModalState {
   GcodeState::Tcp tcp;
   double blend_tolerance_mm, feed_mm_per_min, spindle_rpm;
   kinematics::SpindleState spindle;
-  std::string work_offset;
-  Eigen::Vector3d g5x_mm;
-  std::array<double, 3> g5x_extra_mm;  // U V W
+  std::string work_offset;  // the coordinate system (its offsets are read again on M72)
 };
 
 // The main program or one subroutine call.
@@ -673,9 +671,9 @@ class Reader : public detail::ValueContext, public detail::CompHost {
 
   ModalState save_modes() const {
     const GcodeState& g = state_;
-    return {g.inches,      g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
-            g.plane,       g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
-            g.work_offset, g.g5x_mm,      g.g5x_extra_mm};
+    return {g.inches,     g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
+            g.plane,      g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
+            g.work_offset};
   }
   void restore_modes(const ModalState& m) {
     GcodeState& g = state_;
@@ -683,8 +681,11 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     g.inverse_time = m.inverse_time, g.exact_stop = m.exact_stop, g.retract_to_r = m.retract_to_r;
     g.plane = m.plane, g.tcp = m.tcp, g.blend_tolerance_mm = m.blend_tolerance_mm;
     g.feed_mm_per_min = m.feed_mm_per_min, g.spindle_rpm = m.spindle_rpm, g.spindle = m.spindle;
-    g.work_offset = m.work_offset, g.g5x_mm = m.g5x_mm, g.g5x_extra_mm = m.g5x_extra_mm;
-    g.parameters[5220] = 1 + system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10)));
+    // The coordinate system comes back with its offsets as they are now (#5221..): LinuxCNC's
+    // M72 restores which system is active, not the values it had at M70 (as its interpreter
+    // gives it: G10 L2 P1 X5 between M70 and M72 in G54 puts X1 at 6).
+    g.work_offset = m.work_offset;
+    select_system(system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10))));
   }
   int o_column_ = 0;  // column of a Fanuc program number on this line
 };

@@ -413,6 +413,10 @@ TEST(Rs274Modes, SaveRestoreToolAndUnitsOfF) {
   EXPECT_NEAR(p.blocks[0].feed_mm_per_min, 100.0, kTol);
   p = read("G0 X5 Y0 Z0\nG91 F100\nM70\nG90\nM72\nG1 X1\n");
   expect_path(p, {{F, {6, 0, 0}}});  // incremental again
+  // M72 restores which coordinate system is active, with its offsets as they are at M72: G54's
+  // X offset set to 5 after M70 stays (LinuxCNC's rs274 prints G0 X1 with SET_G5X_OFFSET X5).
+  p = read("G0 X0 Y0 Z0\nM70\nG10 L2 P1 X5\nG55\nM72\nG0 X1\n");
+  expect_path(p, {{R, {6, 0, 0}}});
   // M73 in a subroutine: its mode changes end with the call.
   p = read("o<s> sub\nM73\nG91\nG1 X1\no<s> endsub\nG0 X0 Y0 Z0\nF10\no<s> call\nG1 X3\n");
   expect_path(p, {{F, {1, 0, 0}}, {F, {3, 0, 0}}});  // G90 again after the call

@@ -842,7 +842,7 @@ def random_uvw_programs(n, seed, folder):
     """n random programs that move U V W with X Y Z (deterministic for a seed), for LinuxCNC's
     interpreter module: G20/G21, G90/G91, rapids, feeds and arcs (W along the helix), G10 L2/L20
     P0..P9 offsets and G54..G59.3, G92/G92.1/G92.2/G92.3, G53, G28/G30 named and not, G28.1,
-    and #5426..#5428 read back into a word. Every line is one LinuxCNC runs."""
+    M70/M72, and #5426..#5428 read back into a word. Every line is one LinuxCNC runs."""
     import random
     rng = random.Random(seed)
     systems = ["G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"]
@@ -850,6 +850,7 @@ def random_uvw_programs(n, seed, folder):
     for k in range(n):
         lines = ["G%d G17 G90 G94" % rng.choice([20, 21, 21]), "G0 X0 Y0 Z0", "F500"]
         incremental = False
+        saved, saved_incremental = False, False
         for _ in range(rng.randint(10, 25)):
             kind = rng.random()
             words = lambda letters: " ".join("%s%.3f" % (a, rng.uniform(-20, 20)) for a in letters)
@@ -876,6 +877,15 @@ def random_uvw_programs(n, seed, folder):
                 lines.append(code if rng.random() < 0.3 else "%s %s" % (code, words(extra)))
             elif kind < 0.95:
                 lines.append(rng.choice(["G28.1", "G30.1"]))
+            elif kind < 0.97:
+                # M70 saves the modes (the coordinate system, G90/G91, units); M72 brings them back.
+                if saved:
+                    lines.append("M72")
+                    incremental = saved_incremental
+                else:
+                    lines.append("M70")
+                    saved_incremental = incremental
+                saved = not saved
             else:
                 lines.append("G0 X#%d" % rng.choice([5426, 5427, 5428]))
         lines.append("M2")
