@@ -206,6 +206,7 @@ constexpr GEntry kGCodes[] = {
     {100, {kNonModal, true}},  // G10 L2 / L20 (coordinate systems); L1 L10 L11 (tool table)
     {530, {kNonModal, true}},  // G53: this line's G0/G1 in machine (workpiece-frame) coordinates
     {920, {kNonModal, true}}, {921, {kNonModal, true}}, {922, {kNonModal, true}}, {923, {kNonModal, true}},
+    {520, {kNonModal, true}},  // G52: a local offset, LinuxCNC's G92 offsets set to the axis words
     // G28 / G30: through the line's point to the reference position; G28.1 / G30.1 store it.
     {280, {kNonModal, true}}, {300, {kNonModal, true}}, {281, {kNonModal, true}}, {301, {kNonModal, true}},
 
@@ -225,7 +226,6 @@ constexpr GEntry kGCodes[] = {
     {860, {kMotion, false, true, false, "canned cycle"}},
     {870, {kMotion, false, true, false, "canned cycle"}},
     {880, {kMotion, false, true, false, "canned cycle"}},
-    {520, {kNonModal, false, true, true, "local coordinate offset"}},
     {171, {kPlane, false, false, false, "UVW plane"}},
     {181, {kPlane, false, false, false, "UVW plane"}},
     {191, {kPlane, false, false, false, "UVW plane"}},
@@ -346,6 +346,9 @@ struct Loop {
 
 // What M70 saves and M72 restores (LinuxCNC: units, distance modes, feed mode, plane, tool
 // length mode, coordinate system, path control, retract mode, spindle, feed and speed).
+constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
+constexpr int kG92Parameter = 5211;  // X of the G92 offset
+
 struct ModalState {
   bool inches, incremental, arc_center_absolute, inverse_time, exact_stop, retract_to_r;
   GcodeState::Plane plane;
@@ -353,6 +356,10 @@ struct ModalState {
   double blend_tolerance_mm, feed_mm_per_min, spindle_rpm;
   kinematics::SpindleState spindle;
   std::string work_offset;  // the coordinate system (its offsets are read again on M72)
+  // The G92 / G52 offsets as they were (M72 puts them back, #5210..#5219 with them).
+  Eigen::Vector3d g92_mm;
+  std::array<double, 3> g92_extra_mm;
+  double g92_on;
 };
 
 // The main program or one subroutine call.
@@ -671,9 +678,9 @@ class Reader : public detail::ValueContext, public detail::CompHost {
 
   ModalState save_modes() const {
     const GcodeState& g = state_;
-    return {g.inches,     g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
-            g.plane,      g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
-            g.work_offset};
+    return {g.inches,      g.incremental, g.arc_center_absolute, g.inverse_time,    g.exact_stop,  g.retract_to_r,
+            g.plane,       g.tcp,         g.blend_tolerance_mm,  g.feed_mm_per_min, g.spindle_rpm, g.spindle,
+            g.work_offset, g.g92_mm,      g.g92_extra_mm,        g.parameters[5210]};
   }
   void restore_modes(const ModalState& m) {
     GcodeState& g = state_;
@@ -685,14 +692,17 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     // M72 restores which system is active, not the values it had at M70 (as its interpreter
     // gives it: G10 L2 P1 X5 between M70 and M72 in G54 puts X1 at 6).
     g.work_offset = m.work_offset;
+    g.g92_mm = m.g92_mm, g.g92_extra_mm = m.g92_extra_mm, g.parameters[5210] = m.g92_on;
+    for (size_t a = 0; a < 3; ++a) {
+      g.parameters[static_cast<size_t>(kG92Parameter) + a] = m.g92_mm[static_cast<Eigen::Index>(a)];
+      g.parameters[static_cast<size_t>(kG92Parameter + 6) + a] = m.g92_extra_mm[a];
+    }
     select_system(system_index(static_cast<int>(std::lround(std::stod(m.work_offset.substr(1)) * 10))));
   }
   int o_column_ = 0;  // column of a Fanuc program number on this line
 };
 
 const char* const kSystemNames[9] = {"G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"};
-constexpr int kG5xParameter = 5221;  // X of G54; + 20 per system, Y Z A B C U V W follow X
-constexpr int kG92Parameter = 5211;  // X of the G92 offset
 // An R arc's |R| may fall short of half its chord by LinuxCNC's RADIUS_TOLERANCE, 0.00005 in.
 constexpr double kRadiusShortMm = 0.00005 * kMmPerInch;
 // Splines (G5, G5.1) become straight moves no farther than this from the curve (mm).
@@ -2831,8 +2841,17 @@ void Reader::set_offsets(const Code& g) {
     if (k == active) select_system(k);
     return;
   }
-  if (g.number == 920 && rotated()) fail(g.column, "G92 with a rotation on (G68 or G10 L2 R; expected G92 before it)");
-  if (g.number == 920) {
+  if ((g.number == 920 || g.number == 520) && rotated())
+    fail(g.column, g.text + " with a rotation on (G68 or G10 L2 R; expected " + g.text + " before it)");
+  if (g.number == 520) {
+    // G52 (LinuxCNC, Fanuc): the local origin at the named axes' values from the work zero;
+    // LinuxCNC keeps it in the G92 offsets (#5211..), the axes not named keep theirs, and G52
+    // X0 Y0 ends it (as its rs274 prints SET_G92_OFFSET).
+    for (int a = 0; a < 3; ++a)
+      if (const Word& w = word(kAxisLetter[a]); w.present) state_.g92_mm[a] = w.value * unit();
+    for (size_t e = 0; e < 3; ++e)
+      if (const Word& w = word("UVW"[e]); w.present && extra_column_ != 0) state_.g92_extra_mm[e] = w.value * unit();
+  } else if (g.number == 920) {
     for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
@@ -2860,7 +2879,7 @@ void Reader::set_offsets(const Code& g) {
     for (size_t e = 0; e < 3; ++e)
       state_.parameters[static_cast<size_t>(kG92Parameter + 6) + e] = state_.g92_extra_mm[e];
     for (int a = 0; a < 3; ++a) state_.parameters[static_cast<size_t>(kG92Parameter + a)] = state_.g92_mm[a];
-    state_.parameters[5210] = g.number == 920 || g.number == 923 ? 1.0 : 0.0;
+    state_.parameters[5210] = g.number == 920 || g.number == 923 || g.number == 520 ? 1.0 : 0.0;
   }
 }
 
@@ -3468,7 +3487,8 @@ Reader::LineCodes Reader::codes_of_line() {
                                  " (LinuxCNC rotates with G10 L2 R; expected dialect fanuc or gcode for G68)");
   }
   c.rotates = c.rotation != nullptr && c.rotation->number != 690;  // G68 / G68.2 take X Y Z
-  c.sets_offsets = c.non_modal != nullptr && (c.non_modal->number == 100 || c.non_modal->number == 920 || c.homes);
+  c.sets_offsets = c.non_modal != nullptr &&
+                   (c.non_modal->number == 100 || c.non_modal->number == 920 || c.non_modal->number == 520 || c.homes);
   if (c.rotates && c.g[kMotion] != nullptr && c.g[kMotion]->number != 800) {
     const Code* later = c.rotation->column > c.g[kMotion]->column ? c.rotation : c.g[kMotion];
     fail(later->column, c.rotation->text + " and " + c.g[kMotion]->text +
@@ -3695,8 +3715,8 @@ void Reader::set_plane_and_frames(LineCodes& c) {
     }
     refuse(c.g[kCoordinateSystem], "a coordinate system change");
     refuse(c.g[kToolLength], "a tool length change");
-    if (c.non_modal != nullptr &&
-        (c.homes || c.stores_home || (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
+    if (c.non_modal != nullptr && (c.homes || c.stores_home || c.non_modal->number == 520 ||
+                                   (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
       refuse(c.non_modal, "a move home or an axis offset");
     }
     if (state_.motion == Motion::Cycle ||
@@ -3817,8 +3837,8 @@ void Reader::set_modes(LineCodes& c) {
   if (const Code* g = c.g[kDistance]) state_.incremental = g->number == 910;
   if (const Code* g = c.g[kArcDistance]) state_.arc_center_absolute = g->number == 901;
   if (const Code* g = c.g[kReturnMode]) state_.retract_to_r = g->number == 990;
-  if (c.non_modal != nullptr &&
-      (c.non_modal->number == 100 || (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
+  if (c.non_modal != nullptr && (c.non_modal->number == 100 || c.non_modal->number == 520 ||
+                                 (c.non_modal->number >= 920 && c.non_modal->number <= 923))) {
     set_offsets(*c.non_modal);
   }
   c.was_cycle = state_.motion == Motion::Cycle;

@@ -289,6 +289,11 @@ TEST(Rs274Offsets, G10G92G53) {
   // G92 X0 at X = 5 adds 5; G92.1 takes it away; G92.3 brings back the kept #5211.
   expect_path(read("G0 X5 Y0 Z0\nG92 X0\nG0 X1\nG92.1\nG0 X1\n"), {{R, {6, 0, 0}}, {R, {1, 0, 0}}});
   expect_path(read("G0 X5 Y0 Z0\nG92 X0\nG92.2\nG0 X2\nG92.3\nG0 X2\n"), {{R, {2, 0, 0}}, {R, {7, 0, 0}}});
+  // G52 X5: the local origin 5 mm along X from the work zero (LinuxCNC keeps it in the G92
+  // offsets: X1 at 6); a later G52 Y3 keeps X's; G52 X0 Y0 ends it. A G92 before it is replaced.
+  expect_path(read("G0 X0 Y0 Z0\nG52 X5\nG0 X1\nG52 Y3\nG0 Y0\nG52 X0 Y0\nG0 X0\n"),
+              {{R, {6, 0, 0}}, {R, {6, 3, 0}}, {R, {0, 3, 0}}});
+  expect_path(read("G0 X4 Y0 Z0\nG92 X0\nG52 X1\nG0 X0\n"), {{R, {1, 0, 0}}});
   // G53: this line in machine (workpiece-frame) coordinates, whatever the offsets.
   GcodeOptions options;
   options.work_offsets_mm["G54"] = Eigen::Vector3d(10, 20, 0);
@@ -417,6 +422,12 @@ TEST(Rs274Modes, SaveRestoreToolAndUnitsOfF) {
   // X offset set to 5 after M70 stays (LinuxCNC's rs274 prints G0 X1 with SET_G5X_OFFSET X5).
   p = read("G0 X0 Y0 Z0\nM70\nG10 L2 P1 X5\nG55\nM72\nG0 X1\n");
   expect_path(p, {{R, {6, 0, 0}}});
+  // ... and the G92 (and G52) offsets as they were at M70: rs274 prints SET_G92_OFFSET(-5) for
+  // G92 X5 at X0 (X1 at -4), then SET_G92_OFFSET(0) at M72 (X2 at 2).
+  p = read("G0 X0 Y0 Z0\nM70\nG92 X5\nG0 X1\nM72\nG0 X2\n");
+  expect_path(p, {{R, {-4, 0, 0}}, {R, {2, 0, 0}}});
+  p = read("G0 X0 Y0 Z0\nM70\nG52 X5\nG0 X1\nM72\nG0 X2\n");
+  expect_path(p, {{R, {6, 0, 0}}, {R, {2, 0, 0}}});
   // M73 in a subroutine: its mode changes end with the call.
   p = read("o<s> sub\nM73\nG91\nG1 X1\no<s> endsub\nG0 X0 Y0 Z0\nF10\no<s> call\nG1 X3\n");
   expect_path(p, {{F, {1, 0, 0}}, {F, {3, 0, 0}}});  // G90 again after the call

@@ -841,7 +841,7 @@ def random_comp_programs(n, seed, folder):
 def random_uvw_programs(n, seed, folder):
     """n random programs that move U V W with X Y Z (deterministic for a seed), for LinuxCNC's
     interpreter module: G20/G21, G90/G91, rapids, feeds and arcs (W along the helix), G10 L2/L20
-    P0..P9 offsets and G54..G59.3, G92/G92.1/G92.2/G92.3, G53, G28/G30 named and not, G28.1,
+    P0..P9 offsets and G54..G59.3, G92/G92.1/G92.2/G92.3, G52, G53, G28/G30 named and not, G28.1,
     M70/M72, and #5426..#5428 read back into a word. Every line is one LinuxCNC runs."""
     import random
     rng = random.Random(seed)
@@ -869,7 +869,8 @@ def random_uvw_programs(n, seed, folder):
             elif kind < 0.73:
                 lines.append(rng.choice(systems))
             elif kind < 0.8:
-                lines.append(rng.choice(["G92 %s" % words(extra), "G92.1", "G92.2", "G92.3"]))
+                lines.append(rng.choice(["G92 %s" % words(extra), "G92.1", "G92.2", "G92.3",
+                                         "G52 %s" % words(some.replace("Z", "") or "X")]))
             elif kind < 0.84 and not incremental:
                 lines.append("G53 G0 %s" % words(extra))
             elif kind < 0.92:
