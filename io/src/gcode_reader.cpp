@@ -1597,6 +1597,11 @@ Eigen::Vector2d Reader::polar_point(const Eigen::Vector2d& from) const {
   const Word& radius = line_words_.radius;
   const Word& angle = line_words_.angle;
   double r = from.norm() / unit(), t = std::atan2(from.y(), from.x()) * 180.0 / M_PI;
+  if (state_.incremental && from.norm() <= 1e-9) {
+    fail(radius.present ? radius.column : angle.column,
+         "incremental (G91) polar @/^ at the program origin: the angle it adds to is undefined (expected G90 "
+         "there, as LinuxCNC requires)");
+  }
   if (state_.incremental) {
     r += radius.present ? radius.value : 0.0;
     t += angle.present ? angle.value : 0.0;
@@ -2086,7 +2091,8 @@ void Reader::arc(int column) {
   const bool clockwise = state_.motion == Motion::ArcClockwise;
   const char* code = clockwise ? "G2" : "G3";
   if (rotated() && state_.plane != Plane::XY) {
-    fail(column, std::string(code) + " outside G17 with the XY rotation on (G68 or G10 L2 R; expected G17)");
+    fail(column,
+         std::string(code) + " outside G17 with the XY rotation on is not supported (G68 or G10 L2 R; expected G17)");
   }
   // The plane's first and second axes and its normal, as rs274ngc's convert_arc passes them
   // to convert_arc2: G17 (X, Y; Z), G18 (Z, X; Y), G19 (Y, Z; X). rs274ngc's turn is +1 for
@@ -2813,11 +2819,32 @@ void Reader::set_offsets(const Code& g) {
       if (l.value == 20.0) fail(r.column, "G10 L20 with R (expected R with G10 L2)");
       state_.parameters[rotation_parameter] = r.value;
     }
-    if (l.value == 20.0 && state_.parameters[rotation_parameter] != 0.0) {
-      fail(l.column,
-           "G10 L20 on a rotated coordinate system (vcut sets L20 offsets on unrotated ones; expected G10 L2)");
+    const double turn_rad = state_.parameters[rotation_parameter] * M_PI / 180.0;
+    if (l.value == 20.0 && turn_rad != 0.0) {
+      // A turned system (LinuxCNC): the offset that puts the current point at the named values
+      // in it, the others at their program values, is w - Rz (p + G92); X and Y both change
+      // when either is named (rs274 prints X11.6603 Y9 for G10 L20 P1 X0 at X10 Y5 under X3
+      // Y4 R30).
+      if (state_.rotation_rad != 0.0) fail(l.column, "G10 L20 with G68 on (expected G69 first)");
+      Eigen::Vector3d p = to_program(state_.position_mm);
+      for (int a = 0; a < 3; ++a) {
+        const Word& w = word(kAxisLetter[a]);
+        if (!w.present) continue;
+        if (!state_.known[a])
+          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] +
+                             " position is unknown is not supported: vcut assumes no start position (expected a "
+                             "move first)");
+        p[a] = w.value * unit();
+      }
+      Eigen::Vector3d q = p + state_.g92_mm;
+      q.head<2>() = Eigen::Rotation2Dd(turn_rad) * Eigen::Vector2d(q.head<2>());
+      const Eigen::Vector3d offset = state_.position_mm - q;
+      const bool xy = word('X').present || word('Y').present;
+      for (int a = 0; a < 3; ++a)
+        if (a < 2 ? xy : word(kAxisLetter[a]).present)
+          state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset[a];
     }
-    for (int a = 0; a < 3; ++a) {
+    for (int a = 0; a < 3 && !(l.value == 20.0 && turn_rad != 0.0); ++a) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
       double offset = w.value * unit();
@@ -2841,8 +2868,8 @@ void Reader::set_offsets(const Code& g) {
     if (k == active) select_system(k);
     return;
   }
-  if ((g.number == 920 || g.number == 520) && rotated())
-    fail(g.column, g.text + " with a rotation on (G68 or G10 L2 R; expected " + g.text + " before it)");
+  if ((g.number == 920 || g.number == 520) && state_.rotation_rad != 0.0)
+    fail(g.column, g.text + " with G68 on (expected " + g.text + " before it, or G69)");
   if (g.number == 520) {
     // G52 (LinuxCNC, Fanuc): the local origin at the named axes' values from the work zero;
     // LinuxCNC keeps it in the G92 offsets (#5211..), the axes not named keep theirs, and G52
@@ -2860,7 +2887,10 @@ void Reader::set_offsets(const Code& g) {
              std::string("G92 while the ") + kAxisLetter[a] +
                  " position is unknown is not supported: vcut assumes no start position (expected a move first)");
       }
-      state_.g92_mm[a] = state_.position_mm[a] - state_.g5x_mm[a] - w.value * unit();
+      // In a turned system (G10 L2 R) the offset is counted in its axes: w = Rz (p + G92) + G5x.
+      Eigen::Vector3d q = state_.position_mm - state_.g5x_mm;
+      q.head<2>() = Eigen::Rotation2Dd(-state_.system_rotation_rad) * Eigen::Vector2d(q.head<2>());
+      state_.g92_mm[a] = q[a] - w.value * unit();
     }
     for (size_t e = 0; e < 3; ++e) {
       const Word& w = word("UVW"[e]);
@@ -3212,6 +3242,13 @@ void Reader::home_return(const Code& g) {
   std::array<bool, 3> moved{};
   const Eigen::Vector3d tip =
       Eigen::Vector3d(state_.parameters[base], state_.parameters[base + 1], state_.parameters[base + 2]) + tip_offset();
+  // In a coordinate system LinuxCNC has turned (G10 L2 R), its interpreter turns the home
+  // point into program coordinates and moves only the named axes there, the others keeping
+  // their program values: the machine then ends at that turned point, not at each axis's
+  // home (rs274 prints G28 Y2 at X10 Y5 under G10 L2 P1 X3 Y10 R30 as X10 Y-7.1603).
+  const bool turned_system = state_.system_rotation_rad != 0.0 && state_.rotation_rad == 0.0;
+  Eigen::Vector3d program = to_program(state_.position_mm);
+  const Eigen::Vector3d home_program = to_program(tip);
   for (int a = 0; a < 3; ++a) {
     if (any && !named[a]) continue;
     if (!(std::abs(tip[a]) <= kMaxMagnitude)) {
@@ -3219,8 +3256,10 @@ void Reader::home_return(const Code& g) {
                          " mm, is out of range (expected within +-1e6 mm)");
     }
     home.end_mm[a] = tip[a];
+    program[a] = home_program[a];
     moved[a] = true;
   }
+  if (turned_system) home.end_mm = to_workpiece(program);
   kinematics::RotaryWords rotary = state_.rotary;
   for (int r = 0; r < 3; ++r) {
     const auto k = static_cast<size_t>(r);
@@ -3365,11 +3404,14 @@ void Reader::cycle(int column, bool new_series) {
         move(MotionKind::Rapid, x, y, clear);
         break;
       }
-      case 850:
-      case 890:
+      case 850:  // out at the feed to R, then a rapid to the G98 height
         move(MotionKind::Linear, x, y, bottom);
         move(MotionKind::Linear, x, y, r);
         if (clear != r) move(MotionKind::Rapid, x, y, clear);
+        break;
+      case 890:  // out at the feed all the way to the clear height (rs274ngc's G89, unlike G85)
+        move(MotionKind::Linear, x, y, bottom);
+        move(MotionKind::Linear, x, y, clear);
         break;
       default:  // G81, G82
         move(MotionKind::Linear, x, y, bottom);
@@ -3887,6 +3929,10 @@ bool Reader::run_motion(LineCodes& c) {
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
                         word('B').present || word('C').present || ln.radius.present || ln.angle.present ||
                         c.extra_column != 0;
+  if ((ln.radius.present || ln.angle.present) && state_.plane != Plane::XY) {
+    fail(ln.radius.present ? ln.radius.column : ln.angle.column,
+         "polar @/^ outside G17 (expected G17: polar coordinates are in the XY plane only, as in LinuxCNC)");
+  }
   const Code* motion_code = c.g[kMotion];
   const bool explicit_motion = motion_code != nullptr && motion_code->number <= 30;
   c.axis_column = INT_MAX;

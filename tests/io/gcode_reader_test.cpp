@@ -635,9 +635,20 @@ TEST(GcodeReader, CoordinateSystemRotationG10L2R) {
   // #5420.. read the programmed (turned) coordinates.
   const Program q = read("G21 G90\nG10 L2 P1 R90\nG0 X3 Y4\nG0 X[#5420 + 1]\n", options);
   expect_vec(q.blocks.back().end_mm, {-4, 4, 0});
-  EXPECT_NE(
-      std::string(error_of("G10 L2 P1 R30\nG92 X0\n", options).what()).find("test.ngc:2:1: G92 with a rotation on"),
-      std::string::npos);
+  // G92 and G10 L20 in a turned system count in its axes (LinuxCNC's rs274 prints SET_G92_OFFSET
+  // X10 for G92 X0 at X10 Y5 under G10 L2 P1 X3 Y4 R30, and SET_G5X_OFFSET X11.6603 Y9 for
+  // G10 L20 P1 X0 there): G92: w = Rz(30)(p + (10, 0)) + (3, 4); L20: the G5x offset becomes
+  // w_now - Rz(30)(0, 5), and p = (1, 1) lands at Rz(30)(1, 1) + that.
+  auto rz = [&](double x, double y) { return Eigen::Vector2d(x * c - y * s, x * s + y * c); };
+  const Program g92 = read("G10 L2 P1 X3 Y4 R30\nG0 X10 Y5 Z1\nG92 X0\nG0 X1 Y1\n", options);
+  const Eigen::Vector2d g92_end = rz(11, 1) + Eigen::Vector2d(3, 4);
+  expect_vec(g92.blocks.back().end_mm, {g92_end.x(), g92_end.y(), 1});
+  const Program l20 = read("G10 L2 P1 X3 Y4 R30\nG0 X10 Y5 Z1\nG10 L20 P1 X0\nG0 X1 Y1\n", options);
+  const Eigen::Vector2d offset = rz(10, 5) + Eigen::Vector2d(3, 4) - rz(0, 5);
+  EXPECT_NEAR(offset.x(), 11.6603, 1e-4);  // as rs274 prints it
+  EXPECT_NEAR(offset.y(), 9.0, 1e-4);
+  const Eigen::Vector2d l20_end = rz(1, 1) + offset;
+  expect_vec(l20.blocks.back().end_mm, {l20_end.x(), l20_end.y(), 1});
   EXPECT_NE(std::string(error_of("G10 L20 P1 X0 R30\n", options).what()).find("test.ngc:1:15: G10 L20 with R"),
             std::string::npos);
   EXPECT_NE(std::string(error_of("G10 L2 P1 R30\nG18\nG0 X0 Y0 Z0\nG2 X10 Z0 K5 F10\n", options).what())

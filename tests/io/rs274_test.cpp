@@ -538,10 +538,12 @@ TEST(Rs274Cycles, PeckingG83AndG73) {
 }
 
 TEST(Rs274Cycles, BoringG85AndDwellG82G89) {
-  // G85 and G89 feed back out to R, then rapid to the G98 height.
+  // G85 feeds back out to R, then rapids to the G98 height; G89 feeds all the way out to the
+  // G98 height (rs274 prints STRAIGHT_FEED to the initial Z for G98 G89).
   expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G85 Z-2 R1\n"),
               {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}, {R, {0, 0, 5}}});
   expect_path(read("G0 X0 Y0 Z5\nF100\nG99 G89 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 1}}});
+  expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G89 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {F, {0, 0, 5}}});
   expect_path(read("G0 X0 Y0 Z5\nF100\nG98 G82 Z-2 R1 P0.5\n"), {{R, {0, 0, 1}}, {F, {0, 0, -2}}, {R, {0, 0, 5}}});
   // Without G98 or G99 the return is rs274's power-on G99 (LinuxCNC 2.9's rs274 on
   // "G0 Z5 / G81 Z-1 R1" retracts to R1); Fanuc's power-on mode is G98.

@@ -897,6 +897,93 @@ def random_uvw_programs(n, seed, folder):
     return paths
 
 
+def random_mixed_programs(n, seed, folder):
+    """n random programs mixing what rs274ngc reads (deterministic for a seed): G20/G21,
+    G90/G91, G90.1/G91.1, G17/G18/G19 arcs (whole circles by I J K, R arcs through a point
+    within reach), G10 L2 P R (a rotated system), G10 L2/L20, G54..G59.3, G92 family, G52, G53,
+    G28/G30 and G28.1, canned cycles G73/G81/G82/G83/G85/G89 with G98/G99 in G17, polar @ ^,
+    M70/M72, numbered and named parameters in words. rs274 and vcut must agree on every one:
+    the same motions, or both refuse it."""
+    import random
+    rng = random.Random(seed)
+    systems = ["G54", "G55", "G56", "G57", "G58", "G59", "G59.1", "G59.2", "G59.3"]
+    planes = {"G17": "XYZ", "G18": "ZXY", "G19": "YZX"}  # first, second, normal
+    centre_words = {"X": "I", "Y": "J", "Z": "K"}
+    paths = []
+    for k in range(n):
+        lines = ["G%d G17 G90 G94" % rng.choice([20, 21, 21]), "G0 X0 Y0 Z0", "F500"]
+        plane = "G17"
+        incremental = False
+        saved = False
+        for _ in range(rng.randint(12, 30)):
+            kind = rng.random()
+            v = lambda: "%.3f" % rng.uniform(-20, 20)
+            axes = "".join(a for a in "XYZ" if rng.random() < 0.5) or rng.choice("XYZ")
+            words = lambda letters: " ".join("%s%s" % (a, v()) for a in letters)
+            if kind < 0.05:
+                incremental = not incremental
+                lines.append("G91" if incremental else "G90")
+            elif kind < 0.35:
+                lines.append("G%d %s" % (rng.choice([0, 1]), words(axes)))
+            elif kind < 0.42:
+                plane = rng.choice(list(planes))
+                first, second, normal = planes[plane]
+                # a whole circle, the centre off the current point in the plane (G91.1: incremental)
+                lines.append("%s G%d %s%s %s%s %s" % (plane, rng.choice([2, 3]), centre_words[first], v(),
+                                                      centre_words[second], v(),
+                                                      ("%s%s" % (normal, v())) if rng.random() < 0.3 else ""))
+            elif kind < 0.47 and not incremental:
+                first, second, _ = planes[plane]
+                lines.append("G%d %s%s %s%s R%.3f" % (rng.choice([2, 3]), first, v(), second, v(),
+                                                      rng.choice([1, -1]) * rng.uniform(25, 40)))
+            elif kind < 0.52:
+                lines.append("G10 L2 P%d %s%s" % (rng.randint(0, 9), words(axes),
+                                                  (" R%.1f" % rng.uniform(-90, 90)) if rng.random() < 0.3 else ""))
+            elif kind < 0.55:
+                lines.append("G10 L20 P%d %s" % (rng.randint(0, 9), words(axes)))
+            elif kind < 0.6:
+                lines.append(rng.choice(systems))
+            elif kind < 0.66:
+                lines.append(rng.choice(["G92 %s" % words(axes), "G92.1", "G92.2", "G92.3",
+                                         "G52 %s" % words(axes)]))
+            elif kind < 0.69 and not incremental:
+                lines.append("G53 G0 %s" % words(axes))
+            elif kind < 0.74:
+                code = rng.choice(["G28", "G30", "G28.1"])
+                lines.append(code if code == "G28.1" or rng.random() < 0.3 else "%s %s" % (code, words(axes)))
+            elif kind < 0.82 and plane == "G17" and not incremental:
+                cycle = rng.choice(["G81", "G82 P0.5", "G83 Q%.2f" % rng.uniform(0.5, 3), "G73 Q%.2f" % rng.uniform(0.5, 3),
+                                    "G85", "G89 P0.2"])
+                z = rng.uniform(-10, 0)
+                lines.append("%s %s X%s Y%s Z%.3f R%.3f" % (rng.choice(["G98", "G99"]), cycle, v(), v(), z,
+                                                          z + rng.uniform(0.5, 8)))
+                lines.append("X%s Y%s" % (v(), v()))
+                lines.append("G80")
+            elif kind < 0.86:
+                lines.append("G%d @%.3f ^%.2f" % (rng.choice([0, 1]), rng.uniform(0, 20), rng.uniform(-180, 180)))
+            elif kind < 0.9:
+                lines.append(rng.choice(["G90.1", "G91.1"]))
+            elif kind < 0.93:
+                lines.append("M72" if saved else "M70")
+                if saved and rng.random() < 0.5:
+                    pass
+                saved = not saved
+                incremental = False if not saved and lines[-1] == "M72" else incremental
+            elif kind < 0.97:
+                lines.append("#<p%d> = %s" % (k % 3, v()))
+                lines.append("G1 X[#<p%d> * 2] Y#5422" % (k % 3))
+            else:
+                # (#5211.. and #5221.. are in the machine's units, inches for the standalone rs274:
+                # only the position, in program units, is read back here)
+                lines.append("G0 X#%d Y#%d" % (rng.choice([5420, 5421, 5422]), rng.choice([5420, 5421, 5422])))
+        lines.append("M2")
+        path = os.path.join(folder, "mixed-random-%03d.ngc" % k)
+        with open(path, "w") as f:
+            f.write("\n".join(lines) + "\n")
+        paths.append(path)
+    return paths
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(
         description="Compare vcut's G-code reader with LinuxCNC's rs274 interpreter.")
@@ -920,6 +1007,8 @@ def main(argv=None):
                     help="also N random cutter-compensation programs (seed --seed)")
     ap.add_argument("--random-uvw", type=int, default=0, metavar="N",
                     help="also N random programs moving U V W (LinuxCNC's interpreter module; seed --seed)")
+    ap.add_argument("--random-mixed", type=int, default=0, metavar="N",
+                    help="also N random programs mixing modes, planes, offsets, cycles and parameters")
     ap.add_argument("--seed", type=int, default=1, help="seed of the random programs (1)")
     ap.add_argument("-v", "--verbose", action="store_true",
                     help="print the details of SKIPPED/REJECTED programs too")
@@ -961,6 +1050,9 @@ def main(argv=None):
     if args.random_uvw > 0:
         random_dir = random_dir or tempfile.mkdtemp(prefix="rs274-oracle-comp-")
         programs = programs + random_uvw_programs(args.random_uvw, args.seed, random_dir)
+    if args.random_mixed > 0:
+        random_dir = random_dir or tempfile.mkdtemp(prefix="rs274-oracle-comp-")
+        programs = programs + random_mixed_programs(args.random_mixed, args.seed, random_dir)
 
     results = []
     for p in programs:
