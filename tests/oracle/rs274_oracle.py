@@ -915,6 +915,10 @@ def random_mixed_programs(n, seed, folder):
         plane = "G17"
         incremental = False
         saved = False
+        # Turned systems (G10 L2 R) or G92/G52 offsets, not both: when a turn changes while a
+        # G92 offset is on, rs274 takes the current program point as Rz^-1 (w - G5x - G92),
+        # which its own next move maps elsewhere (a known difference, docs/PROGRAMS.md).
+        turns = rng.random() < 0.5
         for _ in range(rng.randint(12, 30)):
             kind = rng.random()
             v = lambda: "%.3f" % rng.uniform(-20, 20)
@@ -938,14 +942,15 @@ def random_mixed_programs(n, seed, folder):
                                                       rng.choice([1, -1]) * rng.uniform(25, 40)))
             elif kind < 0.52:
                 lines.append("G10 L2 P%d %s%s" % (rng.randint(0, 9), words(axes),
-                                                  (" R%.1f" % rng.uniform(-90, 90)) if rng.random() < 0.3 else ""))
+                                                  (" R%.1f" % rng.uniform(-90, 90)) if turns and rng.random() < 0.3
+                                                  else ""))
             elif kind < 0.55:
                 lines.append("G10 L20 P%d %s" % (rng.randint(0, 9), words(axes)))
             elif kind < 0.6:
                 lines.append(rng.choice(systems))
             elif kind < 0.66:
-                lines.append(rng.choice(["G92 %s" % words(axes), "G92.1", "G92.2", "G92.3",
-                                         "G52 %s" % words(axes)]))
+                lines.append(rng.choice(["G92.1", "G92.2"] if turns else
+                                        ["G92 %s" % words(axes), "G92.1", "G92.2", "G92.3", "G52 %s" % words(axes)]))
             elif kind < 0.69 and not incremental:
                 lines.append("G53 G0 %s" % words(axes))
             elif kind < 0.74:
@@ -959,7 +964,7 @@ def random_mixed_programs(n, seed, folder):
                                                           z + rng.uniform(0.5, 8)))
                 lines.append("X%s Y%s" % (v(), v()))
                 lines.append("G80")
-            elif kind < 0.86:
+            elif kind < 0.86 and plane == "G17":  # (rs274 takes polar words in G17 only)
                 lines.append("G%d @%.3f ^%.2f" % (rng.choice([0, 1]), rng.uniform(0, 20), rng.uniform(-180, 180)))
             elif kind < 0.9:
                 lines.append(rng.choice(["G90.1", "G91.1"]))
