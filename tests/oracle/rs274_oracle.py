@@ -790,6 +790,14 @@ def check_program(path, args, rs274):
     return "FAIL", motions, detail[0], detail[1:] + (["(" + "; ".join(extra) + ")"] if extra else [])
 
 
+def write_program(folder, name, lines):
+    """Writes a generated program (its lines) to folder/name; returns the path."""
+    path = os.path.join(folder, name)
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+    return path
+
+
 def random_comp_programs(n, seed, folder):
     """n random cutter-compensation programs (deterministic for a seed): G41.1/G42.1 with a
     random diameter, then lines and arcs (R and I J, both directions, some helical, some Z
@@ -831,10 +839,7 @@ def random_comp_programs(n, seed, folder):
                 lines.append("G%d X%.3f Y%.3f I%.3f J%.3f%s" % (rng.choice([2, 3]), nx, ny, cx, cy, helix))
             x, y = nx, ny
         lines += ["G40", "G1 X%.3f Y%.3f" % (x + rng.uniform(-20, 20), y + rng.uniform(-20, 20)), "M2"]
-        path = os.path.join(folder, "comp-random-%03d.ngc" % k)
-        with open(path, "w") as f:
-            f.write("\n".join(lines) + "\n")
-        paths.append(path)
+        paths.append(write_program(folder, "comp-random-%03d.ngc" % k, lines))
     return paths
 
 
@@ -890,10 +895,7 @@ def random_uvw_programs(n, seed, folder):
             else:
                 lines.append("G0 X#%d" % rng.choice([5426, 5427, 5428]))
         lines.append("M2")
-        path = os.path.join(folder, "uvw-random-%03d.ngc" % k)
-        with open(path, "w") as f:
-            f.write("\n".join(lines) + "\n")
-        paths.append(path)
+        paths.append(write_program(folder, "uvw-random-%03d.ngc" % k, lines))
     return paths
 
 
@@ -982,10 +984,7 @@ def random_mixed_programs(n, seed, folder):
                 # only the position, in program units, is read back here)
                 lines.append("G0 X#%d Y#%d" % (rng.choice([5420, 5421, 5422]), rng.choice([5420, 5421, 5422])))
         lines.append("M2")
-        path = os.path.join(folder, "mixed-random-%03d.ngc" % k)
-        with open(path, "w") as f:
-            f.write("\n".join(lines) + "\n")
-        paths.append(path)
+        paths.append(write_program(folder, "mixed-random-%03d.ngc" % k, lines))
     return paths
 
 
