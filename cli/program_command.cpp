@@ -1,6 +1,7 @@
 #include "program_command.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <cstdio>
@@ -23,22 +24,16 @@ constexpr double kDegPerRad = 180.0 / M_PI;
 double clean(double v) { return v + 0.0; }  // no -0 in the output
 json array(const Eigen::Vector3d& v) { return json::array({clean(v.x()), clean(v.y()), clean(v.z())}); }
 
-json rotary(const RotaryWords& words) {
-  json j = json::object();
-  for (int k = 0; k < 3; ++k) {
-    if (words.given[static_cast<size_t>(k)]) {
-      j[std::string(1, static_cast<char>('A' + k))] = clean(words.angle_rad[static_cast<size_t>(k)] * kDegPerRad);
-    }
-  }
-  return j;
-}
-
-json extra(const ExtraAxes& axes) {
+// The given ones of three axis values by letter, times `scale` (rotary words: deg; U V W: mm).
+json given_values(const std::array<double, 3>& values, const std::array<bool, 3>& given, const char* letters,
+                  double scale) {
   json j = json::object();
   for (size_t k = 0; k < 3; ++k)
-    if (axes.given[k]) j[std::string(1, "UVW"[k])] = clean(axes.value_mm[k]);
+    if (given[k]) j[std::string(1, letters[k])] = clean(values[k] * scale);
   return j;
 }
+json rotary(const RotaryWords& words) { return given_values(words.angle_rad, words.given, "ABC", kDegPerRad); }
+json extra(const ExtraAxes& axes) { return given_values(axes.value_mm, axes.given, "UVW", 1.0); }
 
 const char* kind_name(MotionKind kind) {
   switch (kind) {

@@ -501,7 +501,6 @@ class Reader : public detail::ValueContext, public detail::CompHost {
     bool was_cycle = false;      // a canned cycle was the motion mode before the line
     int previous_cycle = 0;
     int axis_column = INT_MAX;  // the first axis word
-    int extra_column = 0;       // the line's first U V W axis word (0: none)
   };
   bool macro_call();
   LineCodes codes_of_line();
@@ -591,10 +590,12 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   void append(Block block, const std::array<bool, 3>& programmed, const kinematics::RotaryWords* rotary_end = nullptr,
               const kinematics::ExtraAxes* extra_end = nullptr);
   // U V W: the line's words on the current values (G90/G91, G53, the offsets), and a refusal
-  // of them where they do not move (extra_column_: the line's first, 0 when none).
+  // of them where they do not move. extra_word_: which of U V W the line gives as axes (not
+  // Fanuc's dwell U); extra_column_: the first of them, 0 when none.
   kinematics::ExtraAxes extra_target() const;
   void no_extra(const std::string& where) const;
   int extra_column_ = 0;
+  std::array<bool, 3> extra_word_{};
   std::array<double, 3> extra_program() const {  // U V W in program coordinates (mm)
     std::array<double, 3> p{};
     for (size_t e = 0; e < 3; ++e) p[e] = state_.extra.value_mm[e] - state_.g5x_extra_mm[e] - state_.g92_extra_mm[e];
@@ -1620,7 +1621,7 @@ kinematics::ExtraAxes Reader::extra_target() const {
   for (size_t e = 0; e < 3; ++e) {
     const char letter = "UVW"[e];
     const Word& w = word(letter);
-    if (!w.present || extra_column_ == 0) continue;
+    if (!extra_word_[e]) continue;
     const double v = w.value * unit();
     if (machine_coordinates_) {
       if (state_.incremental) fail(w.column, "G53 in incremental mode G91 (expected G90)");
@@ -2819,49 +2820,41 @@ void Reader::set_offsets(const Code& g) {
       if (l.value == 20.0) fail(r.column, "G10 L20 with R (expected R with G10 L2)");
       state_.parameters[rotation_parameter] = r.value;
     }
+    // L2: the named values. L20: the offset that puts the current point at them, w - Rz (point
+    // + G92), `point` the program point with the named axes replaced; in a turned system
+    // (LinuxCNC) X and Y both change when either is named (rs274 prints X11.6603 Y9 for G10 L20
+    // P1 X0 at X10 Y5 under X3 Y4 R30).
     const double turn_rad = state_.parameters[rotation_parameter] * M_PI / 180.0;
-    if (l.value == 20.0 && turn_rad != 0.0) {
-      // A turned system (LinuxCNC): the offset that puts the current point at the named values
-      // in it, the others at their program values, is w - Rz (p + G92); X and Y both change
-      // when either is named (rs274 prints X11.6603 Y9 for G10 L20 P1 X0 at X10 Y5 under X3
-      // Y4 R30).
-      if (state_.rotation_rad != 0.0) fail(l.column, "G10 L20 with G68 on (expected G69 first)");
-      Eigen::Vector3d p = to_program(state_.position_mm);
-      for (int a = 0; a < 3; ++a) {
-        const Word& w = word(kAxisLetter[a]);
-        if (!w.present) continue;
-        if (!state_.known[a])
-          fail(w.column, std::string("G10 L20 while the ") + kAxisLetter[a] +
-                             " position is unknown is not supported: vcut assumes no start position (expected a "
-                             "move first)");
-        p[a] = w.value * unit();
-      }
-      Eigen::Vector3d q = p + state_.g92_mm;
-      q.head<2>() = Eigen::Rotation2Dd(turn_rad) * Eigen::Vector2d(q.head<2>());
-      const Eigen::Vector3d offset = state_.position_mm - q;
-      const bool xy = word('X').present || word('Y').present;
-      for (int a = 0; a < 3; ++a)
-        if (a < 2 ? xy : word(kAxisLetter[a]).present)
-          state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset[a];
-    }
-    for (int a = 0; a < 3 && !(l.value == 20.0 && turn_rad != 0.0); ++a) {
+    Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+    std::array<bool, 3> set{};
+    Eigen::Vector3d point = l.value == 20.0 ? to_program(state_.position_mm) : Eigen::Vector3d::Zero();
+    for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
-      double offset = w.value * unit();
-      if (l.value == 20.0) {
-        if (!state_.known[a]) {
-          fail(w.column,
-               std::string("G10 L20 while the ") + kAxisLetter[a] +
-                   " position is unknown is not supported: vcut assumes no start position (expected a move first)");
-        }
-        offset = state_.position_mm[a] - state_.g92_mm[a] - offset;
+      if (l.value == 20.0 && !state_.known[a]) {
+        fail(w.column,
+             std::string("G10 L20 while the ") + kAxisLetter[a] +
+                 " position is unknown is not supported: vcut assumes no start position (expected a move first)");
       }
-      state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset;
+      point[a] = w.value * unit();
+      set[static_cast<size_t>(a)] = true;
     }
+    if (l.value == 2.0) {
+      offset = point;
+    } else if (turn_rad == 0.0) {
+      offset = state_.position_mm - state_.g92_mm - point;
+    } else {
+      if (state_.rotation_rad != 0.0) fail(l.column, "G10 L20 with G68 on (expected G69 first)");
+      Eigen::Vector3d q = point + state_.g92_mm;
+      q.head<2>() = Eigen::Rotation2Dd(turn_rad) * Eigen::Vector2d(q.head<2>());
+      offset = state_.position_mm - q;
+      set[0] = set[1] = set[0] || set[1];
+    }
+    for (int a = 0; a < 3; ++a)
+      if (set[static_cast<size_t>(a)]) state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + a)] = offset[a];
     for (size_t e = 0; e < 3; ++e) {  // U V W (L20: the current position takes the value)
-      const Word& w = word("UVW"[e]);
-      if (!w.present || extra_column_ == 0) continue;
-      double offset = w.value * unit();
+      if (!extra_word_[e]) continue;
+      double offset = word("UVW"[e]).value * unit();
       if (l.value == 20.0) offset = state_.extra.value_mm[e] - state_.g92_extra_mm[e] - offset;
       state_.parameters[static_cast<size_t>(kG5xParameter + 20 * k + 6) + e] = offset;
     }
@@ -2877,8 +2870,11 @@ void Reader::set_offsets(const Code& g) {
     for (int a = 0; a < 3; ++a)
       if (const Word& w = word(kAxisLetter[a]); w.present) state_.g92_mm[a] = w.value * unit();
     for (size_t e = 0; e < 3; ++e)
-      if (const Word& w = word("UVW"[e]); w.present && extra_column_ != 0) state_.g92_extra_mm[e] = w.value * unit();
+      if (extra_word_[e]) state_.g92_extra_mm[e] = word("UVW"[e]).value * unit();
   } else if (g.number == 920) {
+    // In a turned system (G10 L2 R) the offset is counted in its axes: w = Rz (p + G92) + G5x.
+    Eigen::Vector3d turned = state_.position_mm - state_.g5x_mm;
+    turned.head<2>() = Eigen::Rotation2Dd(-state_.system_rotation_rad) * Eigen::Vector2d(turned.head<2>());
     for (int a = 0; a < 3; ++a) {
       const Word& w = word(kAxisLetter[a]);
       if (!w.present) continue;
@@ -2887,15 +2883,11 @@ void Reader::set_offsets(const Code& g) {
              std::string("G92 while the ") + kAxisLetter[a] +
                  " position is unknown is not supported: vcut assumes no start position (expected a move first)");
       }
-      // In a turned system (G10 L2 R) the offset is counted in its axes: w = Rz (p + G92) + G5x.
-      Eigen::Vector3d q = state_.position_mm - state_.g5x_mm;
-      q.head<2>() = Eigen::Rotation2Dd(-state_.system_rotation_rad) * Eigen::Vector2d(q.head<2>());
-      state_.g92_mm[a] = q[a] - w.value * unit();
+      state_.g92_mm[a] = turned[a] - w.value * unit();
     }
     for (size_t e = 0; e < 3; ++e) {
-      const Word& w = word("UVW"[e]);
-      if (w.present && extra_column_ != 0)
-        state_.g92_extra_mm[e] = state_.extra.value_mm[e] - state_.g5x_extra_mm[e] - w.value * unit();
+      if (extra_word_[e])
+        state_.g92_extra_mm[e] = state_.extra.value_mm[e] - state_.g5x_extra_mm[e] - word("UVW"[e]).value * unit();
     }
   } else if (g.number == 921 || g.number == 922) {
     state_.g92_mm.setZero();
@@ -3232,7 +3224,7 @@ void Reader::home_return(const Code& g) {
   }
   std::array<bool, 3> extra_named{};
   for (size_t e = 0; e < 3; ++e) {
-    extra_named[e] = extra_column_ != 0 && word("UVW"[e]).present;
+    extra_named[e] = extra_word_[e];
     any = any || extra_named[e];
   }
   Block home;
@@ -3613,6 +3605,7 @@ void Reader::check_letters(LineCodes& c) {
                  c.non_modal->number == 40 && !word('P').present && (word('X').present || word('U').present);
   // --- U V W: the extra linear axes the machine has (LinuxCNC's axis mask).
   extra_column_ = 0;
+  extra_word_ = {false, false, false};
   for (char letter : {'U', 'V', 'W'}) {
     const Word& w = word(letter);
     if (!w.present || (c.dwell_axis && letter == 'U')) continue;
@@ -3620,9 +3613,9 @@ void Reader::check_letters(LineCodes& c) {
       fail(w.column, std::string(1, letter) + " word: the machine has no " + letter +
                          " axis (a job's machines move X Y Z and their rotary axes; `vcut program` lists U V W)");
     }
+    extra_word_[static_cast<size_t>(letter - 'U')] = true;
     if (extra_column_ == 0 || w.column < extra_column_) extra_column_ = w.column;
   }
-  c.extra_column = extra_column_;
   for (char letter : {'A', 'B', 'C'}) {
     const Word& w = word(letter);
     if (w.present && !(std::abs(w.value) <= kMaxMagnitude))
@@ -3928,7 +3921,7 @@ bool Reader::run_motion(LineCodes& c) {
   bool line_moves = false;
   const bool has_axis = word('X').present || word('Y').present || word('Z').present || word('A').present ||
                         word('B').present || word('C').present || ln.radius.present || ln.angle.present ||
-                        c.extra_column != 0;
+                        extra_column_ != 0;
   if ((ln.radius.present || ln.angle.present) && state_.plane != Plane::XY) {
     fail(ln.radius.present ? ln.radius.column : ln.angle.column,
          "polar @/^ outside G17 (expected G17: polar coordinates are in the XY plane only, as in LinuxCNC)");
@@ -3939,7 +3932,7 @@ bool Reader::run_motion(LineCodes& c) {
   for (char letter : {'X', 'Y', 'Z', 'A', 'B', 'C'}) {
     if (word(letter).present) c.axis_column = std::min(c.axis_column, word(letter).column);
   }
-  if (c.extra_column != 0) c.axis_column = std::min(c.axis_column, c.extra_column);
+  if (extra_column_ != 0) c.axis_column = std::min(c.axis_column, extra_column_);
   // Motion errors point at the G0..G3 word, or at the first axis word of a modal motion.
   const int column = explicit_motion ? motion_code->column : c.axis_column;
   if (machine_coordinates_ && !(has_axis && (state_.motion == Motion::Rapid || state_.motion == Motion::Linear))) {
