@@ -208,8 +208,8 @@ Dialect detect_dialect(const std::string& path) {
 }
 
 // Fanuc custom macro B in a G-code file: IF [..] GOTO/THEN, WHILE [..] DOm, ENDm, GOTO n at
-// the start of a block, G65 P (a macro call) or M98 P (a subprogram call), and no LinuxCNC
-// o-word keywords.
+// the start of a block, G65 P (a macro call), M98 P (a subprogram call) or #3000 / #3006 set
+// (an alarm, a stop), and no LinuxCNC o-word keywords.
 bool reads_like_fanuc_macro(const std::string& head) {
   bool fanuc = false;
   std::size_t start = 0;
@@ -241,6 +241,13 @@ bool reads_like_fanuc_macro(const std::string& head) {
     if ((starts("IF") || starts("WHILE")) && after < line.size() && line[after] == '[') fanuc = true;
     if (starts("GOTO") || (starts("END") && i + 3 < line.size() && is_digit(line[i + 3]))) fanuc = true;
     if (has_word(line, "G65") || has_word(line, "M98")) fanuc = true;
+    // #3000 = n (alarm) and #3006 = n (stop): Fanuc's system variables; a plain parameter in
+    // rs274ngc, which no LinuxCNC program sets.
+    if (starts("#3000") || starts("#3006")) {
+      std::size_t j = i + 5;
+      while (j < line.size() && is_blank(line[j])) ++j;
+      if (j < line.size() && line[j] == '=') fanuc = true;
+    }
   }
   return fanuc;
 }

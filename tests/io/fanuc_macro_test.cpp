@@ -151,6 +151,15 @@ TEST(FanucMacro, ProgramFileOnTheSearchPath) {
   const LoadedProgram loaded = read_program((dir / "auto.nc").string(), Dialect::Auto, from_zero);
   ASSERT_EQ(loaded.program.blocks.size(), 1u);
   EXPECT_EQ(loaded.program.blocks[0].end_mm, Eigen::Vector3d(0, 1, 0));
+  // So is one whose only macro is an alarm #3000 (rs274ngc would take it as a plain parameter
+  // and run on).
+  std::ofstream(dir / "alarm.nc") << "O1000\nG0 X1\n#3000 = 1 (TOOL BROKEN)\nM30\n";
+  try {
+    read_program((dir / "alarm.nc").string(), Dialect::Auto, from_zero);
+    ADD_FAILURE() << "no alarm";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("alarm.nc:3:1: alarm #3000 = 1: TOOL BROKEN"), std::string::npos) << e.what();
+  }
   fs::remove_all(dir);
 }
 
