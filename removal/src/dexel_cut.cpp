@@ -259,7 +259,7 @@ struct Probe {
 // material tops, and the intervals found.
 struct RowRays {
   int k[kTileU];
-  double u[kTileU], top[kTileU], lo[kTileU], hi[kTileU];
+  double u[kTileU], bottom[kTileU], top[kTileU], lo[kTileU], hi[kTileU];
   bool hit[kTileU];
 };
 
@@ -566,6 +566,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 if ((windowed || tilted) && (tilted ? !sweep.tilted_window(a, u_mm, w_mm, win_lo, win_hi)
                                                     : !sweep.ray_window(a, u_mm, section, win_lo, win_hi)))
                   continue;
+                // The ray's material the kernel need look at: all of it, or for a cutting move
+                // with a window, from the first interval in the window to the last.
+                double bottom = seg[0].lo_mm, material_top = top;
                 if (move.rapid) {
                   // A probe keeps the longest overlap it finds: a ray with no material in the
                   // window, or less than that overlap by the margin, cannot replace it.
@@ -577,10 +580,15 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                   std::uint32_t j = 0;
                   while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
                   if (j == n) continue;
+                  std::uint32_t last = n - 1;
+                  while (last > j && !(seg[last].lo_mm < win_hi)) --last;
+                  bottom = seg[j].lo_mm;
+                  material_top = seg[last].hi_mm;
                 }
                 rows.k[count] = k;
                 rows.u[count] = u_mm;
-                rows.top[count] = top;
+                rows.bottom[count] = bottom;
+                rows.top[count] = material_top;
                 ++count;
               }
             }
@@ -591,12 +599,13 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 if (handed_over(ray_cover, rows.u[c], w_mm, ray.data(), ray.size())) continue;
                 rows.k[kept] = rows.k[c];
                 rows.u[kept] = rows.u[c];
+                rows.bottom[kept] = rows.bottom[c];
                 rows.top[kept] = rows.top[c];
                 ++kept;
               }
               count = kept;
             }
-            sweep.intervals_below(a, w_mm, count, rows.u, rows.top, rows.lo, rows.hi, rows.hit);
+            sweep.intervals_within(a, w_mm, count, rows.u, rows.bottom, rows.top, rows.lo, rows.hi, rows.hit);
             for (int c = 0; c < count; ++c) {
               if (!rows.hit[c]) continue;
               const int k = rows.k[c];

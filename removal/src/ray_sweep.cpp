@@ -344,7 +344,7 @@ void RaySweep::prepare_ball_family(int axis) {
     spheres_ = 2;
     edges_ = 1;
   } else if (segments_ == 2) {
-    // Order matters to intervals_below: centres c0, c1, top0, top1; edges along the move first.
+    // Order matters to intervals_within: centres c0, c1, top0, top1; edges along the move first.
     centres = {c0_, c0_ + edge_b_, c0_ + edge_a_, c0_ + edge_a_ + edge_b_};
     edges = {{{c0_, edge_b_}, {c0_ + edge_a_, edge_b_}, {c0_, edge_a_}, {c0_ + edge_b_, edge_a_}}};
     spheres_ = 4;
@@ -561,9 +561,9 @@ double RaySweep::row_floor(int axis, double w) const {
   return std::min(p0_.z(), p0_.z() + delta_.z()) + underside_height(cutter_, rho);
 }
 
-bool RaySweep::interval_below(int axis, double u, double w, double top, double& lo, double& hi) const {
+bool RaySweep::interval_within(int axis, double u, double w, double bottom, double top, double& lo, double& hi) const {
   bool hit;
-  intervals_below(axis, w, 1, &u, &top, &lo, &hi, &hit);
+  intervals_within(axis, w, 1, &u, &bottom, &top, &lo, &hi, &hit);
   return hit;
 }
 
@@ -579,8 +579,16 @@ bool RaySweep::interval_below(int axis, double u, double w, double top, double& 
 // A capsule is its edge's cylinder and two end spheres: an end of the cylinder's interval on
 // its side (not on an end plane) is on the capsule's boundary, so the spheres are needed only
 // for an end that is not. Anything else goes through ball_general.
-__attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int count, const double* u,
-                                                        const double* top, double* lo, double* hi, bool* hit) const {
+__attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int count, const double* u,
+                                                         const double* bottom, const double* top, double* lo,
+                                                         double* hi, bool* hit) const {
+  if (method_ == Method::General && !(flat_bottom_ && flat_[axis].kind != FlatFamily::Kind::March)) {
+    // The root march: over the material only. A march started inside the sweep stops at once,
+    // one that never meets it within the material ends the ray's test.
+    for (int k = 0; k < count; ++k)
+      hit[k] = general(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], lo[k], hi[k]);
+    return;
+  }
   if (method_ != Method::Ball) {
     for (int k = 0; k < count; ++k) hit[k] = interval(axis, u[k], w, lo[k], hi[k]);
     return;
@@ -702,7 +710,7 @@ __attribute__((flatten)) void RaySweep::intervals_below(int axis, double w, int 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
     case Method::Ball:
-      return interval_below(axis, u, w, kInf, lo, hi);
+      return interval_within(axis, u, w, -kInf, kInf, lo, hi);
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
     case Method::General: {
@@ -711,7 +719,7 @@ bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) co
         const bool hit = tilted_flat(axis, u, w, lo, hi, decided);
         if (decided) return hit;
       }
-      return general(axis, ray_point(axis, u, w, 0.0), lo, hi);
+      return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
     }
   }
   return false;
@@ -1021,14 +1029,16 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
-bool RaySweep::general(int axis, const Vector3d& o, double& lo, double& hi) const {
+bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
   // The enclosing ball sweep's interval: none, no meeting; else the march starts at its ends.
   double capsule_lo, capsule_hi;
   if (!ball_general(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], capsule_lo, capsule_hi)) return false;
-  const double sa = std::max(box.min()[axis], capsule_lo) - 1e-6, sb = std::min(box.max()[axis], capsule_hi) + 1e-6;
+  const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
+  const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
+  if (!(sa <= sb)) return false;
   auto f = [&](double s) {
     Vector3d x = o;
     x[axis] = s;

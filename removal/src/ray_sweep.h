@@ -55,13 +55,16 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // other coordinates, in increasing axis order, are (u, w). Returns false when it misses the
   // sweep, else the interval [lo, hi] of the axis coordinate inside it.
   bool interval(int axis, double u, double w, double& lo, double& hi) const;
-  // The same where only the interval's part below `top` matters (the ray holds no material
-  // above it): hi may then be any value >= min(true hi, top).
-  bool interval_below(int axis, double u, double w, double top, double& lo, double& hi) const;
-  // interval_below for `count` rays of one row at w, at u[k] with material up to top[k]:
-  // hit[k], lo[k], hi[k]. One call per row keeps the kernel's constants in registers.
-  void intervals_below(int axis, double w, int count, const double* u, const double* top, double* lo, double* hi,
-                       bool* hit) const;
+  // The same where only the interval's part within [bottom, top] matters (the ray holds no
+  // material outside it that the sweep can reach): lo may then be any value <= max(true lo,
+  // bottom) and hi any value >= min(true hi, top), and a sweep that meets the ray only
+  // outside [bottom, top] may count as missed.
+  bool interval_within(int axis, double u, double w, double bottom, double top, double& lo, double& hi) const;
+  // interval_within for `count` rays of one row at w, at u[k] with material in
+  // [bottom[k], top[k]]: hit[k], lo[k], hi[k]. One call per row keeps the kernel's constants
+  // in registers.
+  void intervals_within(int axis, double w, int count, const double* u, const double* bottom, const double* top,
+                        double* lo, double* hi, bool* hit) const;
 
   const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
 
@@ -129,7 +132,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
   Eigen::Vector3d tilt_corner_[8];  // the window box's corners (corner c: bit k set, the high side along k)
   bool upright_vertical(double u, double w, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
-  bool general(int axis, const Eigen::Vector3d& o, double& lo, double& hi) const;
+  // The root march over [bottom, top] of the ray (see interval_within).
+  bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
   bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;

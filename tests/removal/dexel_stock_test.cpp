@@ -288,6 +288,68 @@ TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
   expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
+// Several tilted bull-nose and V-bit moves crossing one region of a box, cut in one call: the
+// later moves meet rays that earlier ones have cut already (split in two by a tilted tool,
+// trimmed at one end), where the root march looks only at the material left. Every endpoint
+// lies on the surface of the sweep of the move that made it (within 1 um, TranslationSweep's
+// distance), and no material is left inside any sweep.
+TEST(DexelStock, TiltedMovesThroughCutMaterialMatchTheirSweeps) {
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const double v = 0.25;
+  DexelStock stock(box, v);
+  MoveList list;
+  list.cutters = {make(CutterType::BullNose, 8, 2, 20), make(CutterType::BullNose, 6, 1, 20)};
+  Cutter vbit = make(CutterType::VBit, 10, 0, 20);
+  vbit.tip_angle_deg = 90;
+  list.cutters.push_back(vbit);
+  for (int i = 0; i < 9; ++i) {
+    const double tilt = (15 + 55 * unit(rng)) * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
+    const Eigen::Vector3d axis(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
+    // Through the box's middle, in a random direction, some along the tool axis.
+    const Eigen::Vector3d mid(20 + 4 * (unit(rng) - 0.5), 15 + 4 * (unit(rng) - 0.5), -6 - 6 * unit(rng));
+    Eigen::Vector3d step(unit(rng) - 0.5, unit(rng) - 0.5, 0.6 * (unit(rng) - 0.5));
+    if (i % 4 == 3) step += axis;
+    step = 8.0 * step.normalized();
+    Move m = line(mid - step, mid + step, axis);
+    m.cutter = i % 3;
+    list.moves.push_back(m);
+  }
+  stock.cut(list, {});
+  std::vector<TranslationSweep> sweeps;
+  for (const Move& m : list.moves) sweeps.emplace_back(list.cutters[static_cast<std::size_t>(m.cutter)], m);
+  double worst = 0.0;
+  std::vector<int> made(list.moves.size(), 0);
+  for (const auto& e : stock.endpoints()) {
+    if (e.move < 0) continue;
+    worst = std::max(worst, std::abs(sweeps[static_cast<std::size_t>(e.move)].distance(e.x_mm)));
+    ++made[static_cast<std::size_t>(e.move)];
+  }
+  EXPECT_LT(worst, kEndpointTol_mm);
+  for (std::size_t i = 0; i < made.size(); ++i) EXPECT_GT(made[i], 50) << "move " << i;
+  int split = 0;  // rays holding more than one interval: the cuts made tunnels
+  double deepest = 0.0;
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+        const std::vector<DexelSegment> ray = stock.ray(family, iu, iw);
+        split += ray.size() > 1 ? 1 : 0;
+        for (const DexelSegment& seg : ray) {
+          Eigen::Vector3d x;
+          x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
+          x[a1] = (iu + 0.5) * v;
+          x[a2] = (iw + 0.5) * v;
+          for (const TranslationSweep& sweep : sweeps) deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
+        }
+      }
+  }
+  EXPECT_EQ(deepest, 0.0);
+  EXPECT_GT(split, 500);
+}
+
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
 // axis (or off it by rounding, in a ray family's plane with the axis) and with a ray family
 // along the axis. Also a plunge along a lattice axis, where both hold.
