@@ -179,7 +179,8 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
 }
 
 // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut as
-// translation pieces within v/10 of the rigid motion (removal::five_axis_pieces). With
+// translation pieces within v/10 of the rigid motion (removal::five_axis_pieces, or within
+// the stock's box five_axis_pieces_within: turning_pieces). With
 // `probes`, the tool's shank and holder follow every move and a feed move made with the
 // spindle stopped is probed before it cuts (collisions).
 CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resolution_mm)
@@ -273,6 +274,31 @@ bool CutMoves::step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& b
   return true;
 }
 
+int CutMoves::turning_pieces(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const {
+  const removal::Cutter& c = cutters_[static_cast<std::size_t>(cutter)];
+  const removal::ToolBody& body = bodies_[static_cast<std::size_t>(cutter)];
+  const double whole = std::numeric_limits<double>::infinity();
+  double height_mm = whole;
+  if (!stock_box_.isEmpty()) {
+    auto highest = [&](double radius_mm) {
+      return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, stock_box_);
+    };
+    // The cutter and the shank above it, at the wider one's radius: the bound is needed up to
+    // that height, unless it reaches the shank (whose points then come inside) or the holder
+    // comes inside; then for the whole cutter, as without a box.
+    double radius_mm = c.radius_mm();
+    if (body.shank >= 0) radius_mm = std::max(radius_mm, cutters_[static_cast<std::size_t>(body.shank)].radius_mm());
+    height_mm = highest(radius_mm);
+    if (height_mm >= c.flute_length_mm) height_mm = whole;
+    if (body.holder >= 0 &&
+        highest(cutters_[static_cast<std::size_t>(body.holder)].radius_mm()) >= body.holder_height_mm)
+      height_mm = whole;
+    if (height_mm < whole)
+      return removal::five_axis_pieces_within(c, radius_mm, height_mm, from.axis, to.axis, rotation_bound_mm_);
+  }
+  return removal::five_axis_pieces(c, from.axis, to.axis, rotation_bound_mm_);
+}
+
 void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
                           std::vector<removal::Move>& out) const {
   const kinematics::Program& program = run_.program;
@@ -289,9 +315,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) return;
   const std::size_t first_piece = out.size();
   if (turns) {
-    const int pieces =
-        removal::five_axis_pieces(cutters_[static_cast<std::size_t>(m.cutter)], from.axis, to.axis, rotation_bound_mm_);
-    removal::append_five_axis_move(out, m, from.axis, to.axis, pieces);
+    removal::append_five_axis_move(out, m, from.axis, to.axis, turning_pieces(m.cutter, from, to));
   } else {
     out.push_back(m);
   }
@@ -511,6 +535,8 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   const removal::StockShape shape = stock_shape(job);
   if (job.stock.kind == io::StockSpec::Kind::Mesh) hash(job.stock.mesh_file);
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
+  moves.set_stock_box(stock_box);
+  if (nominal_moves) nominal_moves->set_stock_box(stock_box);
   std::optional<removal::TriangleMesh> design_mesh = design_of(job);  // kept for the report page
   if (design_mesh) hash(job.design->file);
   result.estimated_memory_mb = require_cuttable(job, moves, shape, v, options.max_memory_mb);

@@ -152,6 +152,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     // What the machine cuts: the actual path with servo or errors.
     CutMoves cut(poses, !poses.actual_path.empty(), false, resolution_mm);
     const removal::StockShape shape = stock_shape(j);
+    cut.set_stock_box(removal::bounds_of(shape));
     require_cuttable(j, cut, shape, resolution_mm, options.max_memory_mb);
     // Two settings' meshes are compared to resolution / 100: no flat merging (make_stock).
     const std::unique_ptr<removal::Stock> stock = make_stock(j, shape, resolution_mm, false);

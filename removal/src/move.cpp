@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace vcut::removal {
 
@@ -40,6 +41,34 @@ int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const E
   const double angle = angle_between(axis0.normalized(), axis1.normalized());
   if (angle == 0.0) return 1;
   const double n = std::ceil(rotation_reach_mm(cutter) * angle / (2.0 * bound_mm) - 1e-12);
+  return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
+}
+
+double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,
+                               const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
+                               const Eigen::AlignedBox3d& box) {
+  const Eigen::Vector3d a0 = axis0.normalized(), a1 = axis1.normalized();
+  const double angle = angle_between(a0, a1);
+  double highest = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k)
+    for (const double sign : {-1.0, 1.0}) {
+      // Face n = sign e_k, offset o: inside means n.x <= o.
+      const double offset = sign > 0.0 ? box.max()[k] : -box.min()[k];
+      const double along_min = std::min(sign * a0[k], sign * a1[k]) - angle * angle / 8.0;
+      if (!(along_min > 0.0)) continue;
+      const double tip_min = std::min(sign * tip0[k], sign * tip1[k]);
+      const double spread = radius_mm * std::sqrt(std::max(0.0, 1.0 - along_min * along_min));
+      highest = std::min(highest, (offset - tip_min + spread) / along_min);
+    }
+  return std::max(0.0, highest);
+}
+
+int five_axis_pieces_within(const Cutter& cutter, double radius_mm, double height_mm, const Eigen::Vector3d& axis0,
+                            const Eigen::Vector3d& axis1, double bound_mm) {
+  const double angle = angle_between(axis0.normalized(), axis1.normalized());
+  if (angle == 0.0) return 1;
+  const double reach = std::min(rotation_reach_mm(cutter), std::hypot(radius_mm, height_mm));
+  const double n = std::ceil(reach * angle / (2.0 * bound_mm) - 1e-12);
   return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
 }
 

@@ -89,5 +89,127 @@ TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
   }
 }
 
+// highest_point_in_box_mm: points of the tool (radius R, any height, any offset) placed by the
+// rigid motion at random instants, and by the pieces' axes, that fall inside the box lie no
+// higher than the bound; and the bound is near the truth (a point a little below it does
+// come inside, for the tilts and boxes taken here).
+TEST(FiveAxisSweep, NoPointAboveTheHeightComesInsideTheBox) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-5, -5, 0), Eigen::Vector3d(40, 30, 12));
+  int bounded = 0;
+  double ratio_sum = 0.0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const double radius = 2 + 4 * unit(rng);
+    auto random_axis = [&](double tilt_deg) {
+      const double tilt = tilt_deg * M_PI / 180.0, azimuth = 2 * M_PI * unit(rng);
+      return Eigen::Vector3d(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth), std::cos(tilt));
+    };
+    const Eigen::Vector3d a0 = random_axis(5 + 40 * unit(rng));
+    // A turn of up to 20 deg from a0 (W5 and the impeller turn 1 deg a move).
+    const Eigen::Vector3d a1 = Eigen::AngleAxisd((20 * unit(rng)) * M_PI / 180.0, a0.unitOrthogonal()) * a0;
+    const Eigen::Vector3d p0(40 * unit(rng), 30 * unit(rng), 2 + 8 * unit(rng));
+    const Eigen::Vector3d p1 = p0 + Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5) * 4.0;
+    const double highest = highest_point_in_box_mm(radius, p0, p1, a0, a1, box);
+    if (!std::isfinite(highest)) continue;
+    ++bounded;
+    const RigidMotion motion{p0, p1, a0, a1};
+    const Eigen::Vector3d n = a0.cross(a1);
+    const double angle = std::atan2(n.norm(), a0.dot(a1));
+    double highest_inside = 0.0;
+    for (int i = 0; i < 20000; ++i) {
+      const double t = unit(rng), h = (highest + 10.0) * unit(rng), rho = radius * std::sqrt(unit(rng));
+      const double phi = 2 * M_PI * unit(rng);
+      // The axis at t on the great circle, and (for a piece) at a second instant.
+      const Eigen::Vector3d a = Eigen::AngleAxisd(t * angle, n.normalized()) * a0;
+      const Eigen::Vector3d piece_a = Eigen::AngleAxisd(unit(rng) * angle, n.normalized()) * a0;
+      for (const Eigen::Vector3d& axis : {a, piece_a}) {
+        const Eigen::Vector3d e1 = axis.unitOrthogonal(), e2 = axis.cross(e1);
+        const Eigen::Vector3d x =
+            motion.p0 + t * (motion.p1 - motion.p0) + h * axis + rho * (std::cos(phi) * e1 + std::sin(phi) * e2);
+        if (box.contains(x)) highest_inside = std::max(highest_inside, h);
+      }
+    }
+    EXPECT_LE(highest_inside, highest) << "trial " << trial;
+    EXPECT_GT(highest_inside, 0.5 * highest) << "trial " << trial << ": a loose bound";
+    ratio_sum += highest_inside / highest;
+  }
+  EXPECT_GT(bounded, 30);
+  EXPECT_GT(ratio_sum / bounded, 0.85) << "the bound is loose on the whole";
+}
+
+// A tool standing out of the box turns in fewer pieces, and every point of it (radius R, any
+// height) that the rigid motion or a piece puts inside the box lies within the bound of where
+// the other puts it: the same point of the tool, turned about the arc's normal by the angle at
+// t or by the piece's middle angle (written out here with its own rotation). And the pieces'
+// sweep stays within the bound of the rigid motion's inside the box: a point of the box inside
+// either lies within the bound (plus the brute force's sampling) of the other.
+TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
+  constexpr int kInstances = 4000;
+  const Eigen::AlignedBox3d box(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 10, 3));
+  const double tilt = 25.0 * M_PI / 180.0, bound = 0.01;
+  std::mt19937 rng(19);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Cutter& c : {make(CutterType::Ball, 6, 3, 25), make(CutterType::BullNose, 8, 1, 25)}) {
+    const Eigen::Vector3d a0(0, std::sin(tilt), std::cos(tilt));
+    const Eigen::Vector3d a1 = Eigen::Vector3d(std::sin(tilt) * 0.3, std::sin(tilt), std::cos(tilt)).normalized();
+    const RigidMotion motion{{0, 0, 0}, {1.5, 0.5, 0.2}, a0, a1};
+    const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, box);
+    ASSERT_LT(height, 8.0);
+    const int n = five_axis_pieces_within(c, c.radius_mm(), height, a0, a1, bound);
+    const int whole = five_axis_pieces(c, a0, a1, bound);
+    EXPECT_LT(2 * n, whole) << to_string(c.type);
+    Move base;
+    base.start_mm = motion.p0;
+    base.end_mm = motion.p1;
+    std::vector<Move> pieces;
+    append_five_axis_move(pieces, base, a0, a1, n);
+    ASSERT_EQ(static_cast<int>(pieces.size()), n);
+    const Eigen::Vector3d normal = a0.cross(a1).normalized();
+    const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+    auto turned = [&](double fraction) { return Eigen::AngleAxisd(fraction * angle, normal).toRotationMatrix(); };
+    // Point by point.
+    double worst_point = 0.0;
+    const Eigen::Vector3d e1 = a0.unitOrthogonal(), e2 = a0.cross(e1);
+    for (int i = 0; i < 200000; ++i) {
+      const double t = unit(rng), h = 25.0 * unit(rng), rho = c.radius_mm() * std::sqrt(unit(rng));
+      const double phi = 2 * M_PI * unit(rng);
+      const int k = std::min(n - 1, static_cast<int>(t * n));
+      EXPECT_LT((turned((k + 0.5) / n) * a0 - pieces[static_cast<std::size_t>(k)].axis).norm(), 1e-12);
+      const Eigen::Vector3d point = h * a0 + rho * (std::cos(phi) * e1 + std::sin(phi) * e2);
+      const Eigen::Vector3d tip = motion.p0 + t * (motion.p1 - motion.p0);
+      const Eigen::Vector3d rigid = tip + turned(t) * point, piece = tip + turned((k + 0.5) / n) * point;
+      if (!box.contains(rigid) && !box.contains(piece)) continue;
+      worst_point = std::max(worst_point, (rigid - piece).norm());
+    }
+    EXPECT_LE(worst_point, bound) << to_string(c.type);
+    EXPECT_GT(worst_point, 0.5 * bound) << to_string(c.type) << ": the points never came near the bound";
+    // The sweeps.
+    std::vector<TranslationSweep> sweeps;
+    for (const Move& m : pieces) sweeps.emplace_back(c, m);
+    const double brute_error =
+        ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), 25.0)) / (2.0 * kInstances);
+    std::uniform_real_distribution<double> x(-6, 8), y(-6, 8), z(-2, 3);
+    int near = 0;
+    while (near < 100) {
+      const Eigen::Vector3d p(x(rng), y(rng), z(rng));
+      double pieces_d = 1e300;
+      for (const TranslationSweep& s : sweeps) pieces_d = std::min(pieces_d, s.distance(p));
+      if (std::abs(pieces_d) > 0.05) continue;  // near the swept surface only
+      double brute = 1e300;
+      for (int i = 0; i <= kInstances; ++i)
+        brute = std::min(brute, motion.instance_distance(c, p, static_cast<double>(i) / kInstances));
+      // Inside one: within the bound of the other (distance to a set <= its signed distance).
+      if (pieces_d <= 0.0) {
+        EXPECT_LE(brute, bound + brute_error + 1e-6) << to_string(c.type) << " at " << p.transpose();
+      }
+      if (brute <= 0.0) {
+        EXPECT_LE(pieces_d, bound + brute_error + 1e-6) << to_string(c.type) << " at " << p.transpose();
+      }
+      ++near;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vcut::removal

@@ -139,6 +139,11 @@ class CutMoves : public removal::MoveSource {
   std::size_t size_hint() const override { return blocks_.size(); }
   // Hands the moves over again from the first (a second cut, a second look).
   void rewind();
+  // The initial stock's box, before the first pass: material never leaves it, so a turning
+  // move whose tool stands out of it (no point of its shank or holder ever inside, the
+  // cutter only up to some height) needs the bound only for the cutter's part below that
+  // height, and is cut in fewer pieces (removal::five_axis_pieces_within).
+  void set_stock_box(const Eigen::AlignedBox3d& box) { stock_box_ = box; }
 
   // Counted on the first pass that hands every move over (the reach check's, or the cut's), or
   // on a pass of their own when asked before one (which rewinds: not in the middle of a pass).
@@ -160,6 +165,8 @@ class CutMoves : public removal::MoveSource {
   // The counts and attribution of the moves just made (out[first..]) from one pose to the next.
   void record(const kinematics::ToolPose& from, const kinematics::ToolPose& to, const std::vector<removal::Move>& out,
               std::size_t first);
+  // The pieces a move that turns the axis from `from` to `to` is cut in, with `cutter`.
+  int turning_pieces(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const;
   // Appends the moves from one pose to the next (of `block`).
   void moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
                   std::vector<removal::Move>& out) const;
@@ -167,6 +174,7 @@ class CutMoves : public removal::MoveSource {
   const PoseRun& run_;
   bool actual_, probes_;
   double rotation_bound_mm_;
+  Eigen::AlignedBox3d stock_box_;  // empty: the whole tool needs the bound
   std::vector<removal::Cutter> cutters_;
   std::map<int, int> cutter_index_;                 // T number -> cutters_
   std::vector<removal::ToolBody> bodies_;           // the shank and holder of each tool's cutter

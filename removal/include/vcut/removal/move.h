@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include <cstddef>
 #include <cstdint>
@@ -81,6 +82,25 @@ double rotation_reach_mm(const Cutter& cutter);
 double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces);
 // The fewest pieces that keep the error within bound_mm (at least 1).
 int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1, double bound_mm);
+
+// Material never leaves the initial stock's box, so only the points of the tool that come
+// inside it need the bound. The height above the tip (mm) over which no point of a tool of
+// radius radius_mm (its widest body) comes inside `box` at any instant of the five-axis move
+// from (tip0, axis0) to (tip1, axis1), in the rigid motion or in any of its pieces (their
+// axes lie on the same great circle): +inf where the axis never points out through a face of
+// the box. A point at height h and offset rho (|rho| <= R) from the axis is outside the face
+// with outward normal n and offset o when n.p + h n.a - R sqrt(1 - (n.a)^2) > o; over the
+// move n.p is smallest at an end, and n.a, a sinusoid of the arc's angle, is at least the
+// smaller end value less angle^2 / 8 (its chord's error).
+double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,
+                               const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
+                               const Eigen::AlignedBox3d& box);
+// five_axis_pieces where the points that matter lie within height_mm of the tip (a point at
+// height h and offset up to radius_mm lies within hypot(radius_mm, h) of it), or within the
+// core's reach, whichever is nearer: a tool that stands out of the stock (W5's, above its
+// 12 mm box) turns in fewer pieces for the same bound.
+int five_axis_pieces_within(const Cutter& cutter, double radius_mm, double height_mm, const Eigen::Vector3d& axis0,
+                            const Eigen::Vector3d& axis1, double bound_mm);
 // Appends the n pieces of `move` (its `axis` is ignored) to `out`.
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, int pieces);
