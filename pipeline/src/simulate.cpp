@@ -405,8 +405,8 @@ std::unique_ptr<removal::Stock> make_stock(const io::Job& job, const removal::St
 
 DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceMesh& machined,
                                      const removal::TriangleMesh& design, const removal::Stock& stock,
-                                     const Eigen::AlignedBox3d& stock_box, double resolution_mm,
-                                     const kinematics::Program& program, const std::vector<int>& move_blocks) {
+                                     double resolution_mm, const kinematics::Program& program,
+                                     const std::vector<int>& move_blocks) {
   const double v = resolution_mm;
   DesignComparison out;
   auto block_of = [&](int move) -> kinematics::Block {
@@ -423,8 +423,7 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
   if (const auto* dexel = dynamic_cast<const removal::DexelStock*>(&stock)) {
     // Every dexel endpoint against the design, exactly: the summary's figures then do not
     // depend on meshing (the mesh's regions still give areas and outlines).
-    const removal::EndpointDeviation found =
-        removal::endpoint_deviation(dexel->endpoints(), stock_box.min(), v, distance, settings);
+    const removal::EndpointDeviation found = removal::endpoint_deviation(*dexel, distance, settings);
     EndpointCheck& e = out.endpoints;
     e.done = true;
     e.points = found.points;
@@ -633,8 +632,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   std::vector<double> deviation;
   if (design_mesh) {
     progress("compare", 0, 1);
-    DesignComparison cmp =
-        compare_with_design(job, machined, *design_mesh, stock, stock_box, v, program, moves.blocks());
+    DesignComparison cmp = compare_with_design(job, machined, *design_mesh, stock, v, program, moves.blocks());
     result.warnings.insert(result.warnings.end(), cmp.warnings.begin(), cmp.warnings.end());
     result.compared = true;
     result.max_gouge_mm = cmp.max_gouge_mm;

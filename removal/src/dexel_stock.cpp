@@ -171,36 +171,37 @@ std::vector<DexelSegment> DexelStock::ray(int axis, int iu, int iw) const {
   return {r.data(), r.data() + r.size()};
 }
 
-std::vector<DexelEndpoint> DexelStock::endpoints() const {
+std::size_t DexelStock::endpoint_rows() const {
   const Impl& m = *impl_;
-  // Rows of all three families in order: each row's count, then each row fills its own
-  // part of the list in parallel (the same order as one pass through the rays).
-  std::vector<std::pair<int, int>> rows;  // family, iw
-  for (int a = 0; a < 3; ++a) {
-    const Family& f = m.families[static_cast<std::size_t>(a)];
-    for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw) rows.emplace_back(a, iw);
+  return static_cast<std::size_t>(m.families[0].n_w + m.families[1].n_w + m.families[2].n_w);
+}
+
+void DexelStock::row_endpoints(std::size_t row, std::vector<DexelEndpoint>& out) const {
+  const Impl& m = *impl_;
+  out.clear();
+  int r = static_cast<int>(row), a = 0;
+  while (a < 2 && r >= m.families[static_cast<std::size_t>(a)].n_w) r -= m.families[static_cast<std::size_t>(a++)].n_w;
+  const Family& f = m.families[static_cast<std::size_t>(a)];
+  const int iw = f.lo_w + r;
+  for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+    const SegmentList& ray = f.at(iu, iw);
+    for (std::uint32_t k = 0; k < ray.size(); ++k) {
+      const DexelSegment& seg = ray.data()[k];
+      out.push_back({m.point(f.axis, iu, iw, seg.lo_mm), seg.lo_move, f.axis});
+      out.push_back({m.point(f.axis, iu, iw, seg.hi_mm), seg.hi_move, f.axis});
+    }
   }
+}
+
+std::vector<DexelEndpoint> DexelStock::endpoints() const {
+  // Each row's list in parallel, then joined in row order.
+  std::vector<std::vector<DexelEndpoint>> rows(endpoint_rows());
+  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) { row_endpoints(r, rows[r]); });
   std::vector<std::size_t> start(rows.size() + 1, 0);
-  tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
-    const Family& f = m.families[static_cast<std::size_t>(rows[r].first)];
-    std::size_t n = 0;
-    for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) n += 2 * f.at(iu, rows[r].second).size();
-    start[r + 1] = n;
-  });
-  for (std::size_t r = 0; r < rows.size(); ++r) start[r + 1] += start[r];
+  for (std::size_t r = 0; r < rows.size(); ++r) start[r + 1] = start[r] + rows[r].size();
   std::vector<DexelEndpoint> out(start.back());
   tbb::parallel_for(std::size_t{0}, rows.size(), [&](std::size_t r) {
-    const Family& f = m.families[static_cast<std::size_t>(rows[r].first)];
-    const int iw = rows[r].second;
-    std::size_t next = start[r];
-    for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
-      const SegmentList& ray = f.at(iu, iw);
-      for (std::uint32_t s = 0; s < ray.size(); ++s) {
-        const DexelSegment& seg = ray.data()[s];
-        out[next++] = {m.point(f.axis, iu, iw, seg.lo_mm), seg.lo_move, f.axis};
-        out[next++] = {m.point(f.axis, iu, iw, seg.hi_mm), seg.hi_move, f.axis};
-      }
-    }
+    std::copy(rows[r].begin(), rows[r].end(), out.begin() + static_cast<std::ptrdiff_t>(start[r]));
   });
   return out;
 }

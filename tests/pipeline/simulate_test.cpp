@@ -114,8 +114,7 @@ TEST_F(Stages, CompareWithDesignFindsTheFloorTooDeep) {
   stock->cut(moves, {});
   const removal::SurfaceMesh machined = stock->surface();
   const removal::TriangleMesh design = removal::test::slotted_block(5.0, 1.97);
-  const DesignComparison c =
-      compare_with_design(j, machined, design, *stock, removal::bounds_of(shape), 0.1, run.program, moves.blocks());
+  const DesignComparison c = compare_with_design(j, machined, design, *stock, 0.1, run.program, moves.blocks());
   ASSERT_TRUE(c.endpoints.done);
   EXPECT_NEAR(c.max_gouge_mm, 0.030, 1e-5);
   EXPECT_LT(c.max_excess_mm, 1e-5);

@@ -12,6 +12,8 @@
 #include <random>
 
 #include "test_meshes.h"
+#include "vcut/removal/dexel_stock.h"
+#include "vcut/removal/endpoint_check.h"
 #include "vcut/removal/vdb_stock.h"
 
 namespace vcut::removal {
@@ -231,6 +233,75 @@ TEST(Compare, DesignAwayFromTheMaterialIsExcess) {
     ++floor;
   }
   EXPECT_GT(floor, 100);
+}
+
+// The endpoint check read row by row (hinted queries, rows in parallel) against a plain loop
+// over the lattice's rays (DexelStock::ray) with unhinted queries: the same count, the same largest
+// gouge and excess to the bit, the same counts beyond the tolerances and the same deepest
+// point, the first of equally deep ones: a slot cut 0.3 mm off the design's centre line and
+// 0.1 mm too deep is deepest along the edge where its wall meets its floor, the same at every
+// ray along x.
+TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
+  Cutter flat;
+  flat.type = CutterType::Flat;
+  flat.diameter_mm = 10;
+  flat.flute_length_mm = 20;
+  flat.length_mm = 40;
+  MoveList list;
+  list.cutters = {flat};
+  Move slot;
+  slot.start_mm = {-10, 20.3, -2.1};
+  slot.end_mm = {70, 20.3, -2.1};
+  list.moves = {slot};
+  DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, 0.2);
+  stock.cut(list, {});
+  const DesignDistance design(test::slotted_block(5.0, 2.0));
+  const CompareSettings settings{0.05, 0.1};
+  const EndpointDeviation rows = endpoint_deviation(stock, design, settings);
+  // The plain loop: every ray of the lattice (and a margin of empty ones around it) through
+  // DexelStock::ray, family by family, row by row, ray by ray.
+  EndpointDeviation plain;
+  const double v = 0.2;
+  const int index_lo[3] = {-3, -3, -103}, index_hi[3] = {303, 203, 3};
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
+      for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+        for (const DexelSegment& seg : stock.ray(family, iu, iw))
+          for (const auto& [along, move] : {std::pair<float, int>{seg.lo_mm, seg.lo_move}, {seg.hi_mm, seg.hi_move}}) {
+            Eigen::Vector3d x;
+            x[family] = along;
+            x[a1] = (iu + 0.5) * v;
+            x[a2] = (iw + 0.5) * v;
+            const double d = design.signed_distance(x);
+            ++plain.points;
+            if (-d > plain.max_gouge_mm) {
+              plain.max_gouge_mm = -d;
+              plain.deepest_mm = x;
+              plain.deepest_move = move;
+            }
+            plain.max_excess_mm = std::max(plain.max_excess_mm, d);
+            plain.gouge_points += -d > settings.gouge_tolerance_mm;
+            plain.excess_points += d > settings.excess_tolerance_mm;
+          }
+  }
+  EXPECT_GT(plain.points, 100000u);
+  EXPECT_EQ(rows.points, plain.points);
+  EXPECT_EQ(rows.max_gouge_mm, plain.max_gouge_mm);
+  EXPECT_EQ(rows.max_excess_mm, plain.max_excess_mm);
+  EXPECT_EQ(rows.gouge_points, plain.gouge_points);
+  EXPECT_EQ(rows.excess_points, plain.excess_points);
+  EXPECT_EQ(rows.deepest_mm, plain.deepest_mm);
+  EXPECT_EQ(rows.deepest_move, plain.deepest_move);
+  // The figures themselves: the wall 0.3 mm into the design, the floor 0.1 mm; the deepest
+  // point where they meet, at the first ray along x (at 0.1, 0.3, 0.5 mm ...) that lies
+  // farther than that from the design's end face x = 0.
+  EXPECT_NEAR(rows.max_gouge_mm, std::hypot(0.3, 0.1), 0.02);
+  EXPECT_EQ(rows.deepest_move, 0);
+  EXPECT_NEAR(rows.deepest_mm.x(), 0.5, 1e-6);
+  EXPECT_NEAR(rows.deepest_mm.y(), 25.3, 0.2);
+  EXPECT_GT(rows.gouge_points, 1000u);
+  EXPECT_GT(rows.excess_points, 1000u);
 }
 
 }  // namespace

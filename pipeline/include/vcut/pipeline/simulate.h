@@ -222,8 +222,8 @@ struct DesignComparison {
 };
 DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceMesh& machined,
                                      const removal::TriangleMesh& design, const removal::Stock& stock,
-                                     const Eigen::AlignedBox3d& stock_box, double resolution_mm,
-                                     const kinematics::Program& program, const std::vector<int>& move_blocks);
+                                     double resolution_mm, const kinematics::Program& program,
+                                     const std::vector<int>& move_blocks);
 
 // Runs the job. Bad input is a vcut::InputError.
 SimulationResult simulate(const io::Job& job, const SimulateOptions& options);

@@ -20,10 +20,12 @@ struct EndpointDeviation {
   std::size_t gouge_points = 0, excess_points = 0;  // beyond the tolerances
 };
 
-// The points are measured in Morton order of their lattice cells (cell size v from
-// origin_mm), so that consecutive queries are neighbours; of equally deep gouge points the
-// first in that order is the deepest: one answer for any thread count.
-EndpointDeviation endpoint_deviation(const std::vector<DexelEndpoint>& points, const Eigen::Vector3d& origin_mm,
-                                     double v, const DesignDistance& design, const CompareSettings& settings);
+// Every endpoint of the stock against the design, read row by row where it lies (no list of
+// them: on the S-piece at 0.05 mm listing, Morton-coding and sorting its 9.3 M endpoints took
+// 1.6 s and 520 MB, the queries themselves 1.4 s): the rows in parallel, each row's queries
+// hinted by the nearest along the rays of its last few points; of equally deep gouge points
+// the first in DexelStock::endpoints()' order. The same figures for any thread count.
+EndpointDeviation endpoint_deviation(const DexelStock& stock, const DesignDistance& design,
+                                     const CompareSettings& settings);
 
 }  // namespace vcut::removal
