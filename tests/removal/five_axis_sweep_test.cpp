@@ -42,6 +42,20 @@ struct RigidMotion {
   }
 };
 
+// The pieces' sweep distance at p (the least over the pieces), and the rigid motion's by
+// brute force over instances + 1 instants.
+double pieces_distance(const std::vector<TranslationSweep>& sweeps, const Eigen::Vector3d& p) {
+  double d = 1e300;
+  for (const TranslationSweep& s : sweeps) d = std::min(d, s.distance(p));
+  return d;
+}
+double brute_distance(const RigidMotion& motion, const Cutter& c, const Eigen::Vector3d& p, int instances) {
+  double d = 1e300;
+  for (int i = 0; i <= instances; ++i)
+    d = std::min(d, motion.instance_distance(c, p, static_cast<double>(i) / instances));
+  return d;
+}
+
 TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
   constexpr int kInstances = 10000;
   const double tilt = 30.0 * M_PI / 180.0;
@@ -70,13 +84,10 @@ TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
       double worst = 0.0;
       while (near_surface < 150) {
         const Eigen::Vector3d p(x(rng), y(rng), z(rng));
-        double pieces_d = 1e300;
-        for (const TranslationSweep& s : sweeps) pieces_d = std::min(pieces_d, s.distance(p));
+        const double pieces_d = pieces_distance(sweeps, p);
         if (std::abs(pieces_d) > 1.0) continue;  // near the swept surface only
         ++near_surface;
-        double brute = 1e300;
-        for (int i = 0; i <= kInstances; ++i)
-          brute = std::min(brute, motion.instance_distance(c, p, static_cast<double>(i) / kInstances));
+        const double brute = brute_distance(motion, c, p, kInstances);
         worst = std::max(worst, std::abs(pieces_d - brute));
         EXPECT_LE(std::abs(pieces_d - brute), bound + brute_error + 1e-6)
             << to_string(c.type) << " bound " << bound << " at " << p.transpose();
@@ -193,12 +204,9 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
     int near = 0;
     while (near < 100) {
       const Eigen::Vector3d p(x(rng), y(rng), z(rng));
-      double pieces_d = 1e300;
-      for (const TranslationSweep& s : sweeps) pieces_d = std::min(pieces_d, s.distance(p));
+      const double pieces_d = pieces_distance(sweeps, p);
       if (std::abs(pieces_d) > 0.05) continue;  // near the swept surface only
-      double brute = 1e300;
-      for (int i = 0; i <= kInstances; ++i)
-        brute = std::min(brute, motion.instance_distance(c, p, static_cast<double>(i) / kInstances));
+      const double brute = brute_distance(motion, c, p, kInstances);
       // Inside one: within the bound of the other (distance to a set <= its signed distance).
       if (pieces_d <= 0.0) {
         EXPECT_LE(brute, bound + brute_error + 1e-6) << to_string(c.type) << " at " << p.transpose();
