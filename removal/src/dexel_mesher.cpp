@@ -793,11 +793,16 @@ SurfaceMesh DexelStock::surface() const {
       for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
         for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
           if (!f.contains(iu, iw)) continue;
+          // Intervals ending below s_lo or starting above s_hi have no endpoint in the range:
+          // from the first that ends at or above s_lo (the intervals are disjoint and in order, a
+          // ray through D32's holes holds dozens) to the last that starts at or below s_hi.
           const SegmentList& ray = f.at(iu, iw);
-          for (std::uint32_t s = 0; s < ray.size(); ++s) {
-            const DexelSegment& seg = ray.data()[s];
-            if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo && seg.lo_mm <= s_hi) ids.push_back(seg.lo_move);
-            if (seg.hi_move != kNoMove && seg.hi_mm >= s_lo && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
+          const DexelSegment* const end = ray.data() + ray.size();
+          for (const DexelSegment* seg =
+                   std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
+               seg != end && seg->lo_mm <= s_hi; ++seg) {
+            if (seg->lo_move != kNoMove && seg->lo_mm >= s_lo) ids.push_back(seg->lo_move);
+            if (seg->hi_move != kNoMove && seg->hi_mm <= s_hi) ids.push_back(seg->hi_move);
           }
         }
       }
