@@ -671,9 +671,13 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
               points.push_back(q);
               made_by.push_back(move);
             };
-            for (std::uint32_t k = 0; k < ray.size(); ++k) {
-              add(ray.data()[k].lo_mm, ray.data()[k].lo_move, 1u);
-              add(ray.data()[k].hi_mm, ray.data()[k].hi_move, 2u);
+            // Only the intervals that reach the cell's edge (as for the candidates below).
+            const DexelSegment* const end = ray.data() + ray.size();
+            for (const DexelSegment* seg =
+                     std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
+                 seg != end && seg->lo_mm <= s_hi; ++seg) {
+              add(seg->lo_mm, seg->lo_move, 1u);
+              add(seg->hi_mm, seg->hi_move, 2u);
             }
           }
         }
