@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <map>
 #include <set>
@@ -29,12 +30,79 @@ using nlohmann::ordered_json;
 
 ordered_json vec(const Eigen::Vector3d& v) { return ordered_json::array({v.x(), v.y(), v.z()}); }
 
-template <typename T>
-std::string typed_base64(const std::vector<T>& values) {
-  return base64(values.data(), values.size() * sizeof(T));  // x86-64: little-endian, as the page reads
-}
+// The page's arrays, base64 (tens of MB on a fine mesh), bypass the JSON writer, which looks
+// at every character of a string to escape it (on W1 at 0.05 mm that and the '<' scan after
+// it were a third of the page's 1.3 s): the JSON holds for each a number no field of the page
+// takes, 2^64 - 1 - its index (counts and sizes are far smaller, measures are written with a
+// point or an exponent), and the page is assembled with the quoted base64 text in its place.
+// A number with a sign, a point or an exponent is never one; one inside a string is text.
+class Blobs {
+ public:
+  template <typename T>
+  ordered_json of(const std::vector<T>& values) {  // x86-64: little-endian, as the page reads
+    texts_.push_back(base64(values.data(), values.size() * sizeof(T)));
+    return std::numeric_limits<std::uint64_t>::max() - (texts_.size() - 1);
+  }
 
-ordered_json encode_mesh(const removal::TriangleMesh& mesh) {
+  // The JSON text into `out` with each placeholder (a number, outside the strings: an NC
+  // comment may hold the same digits) replaced by its quoted text, and every '<' written as
+  // \u003c: inside a <script> element neither "</script" nor "<!--" may appear (an NC comment
+  // could hold either); '<' occurs only inside JSON strings, where "\u003c" is the same
+  // character. Base64 holds neither '<' nor '"'.
+  void splice(const std::string& data, std::string& out) const {
+    static const std::string kMax = std::to_string(std::numeric_limits<std::uint64_t>::max());
+    std::size_t from = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < data.size(); ++i) {
+      const char c = data[i];
+      if (in_string) {
+        if (c == '\\') {
+          ++i;  // an escape: the next character (a quote among them) is not special
+        } else if (c == '"') {
+          in_string = false;
+        } else if (c == '<') {
+          out.append(data, from, i - from);
+          out += "\\u003c";
+          from = i + 1;
+        }
+        continue;
+      }
+      if (c == '"') {
+        in_string = true;
+        continue;
+      }
+      if (c < '0' || c > '9') continue;
+      // A number: a placeholder when it is an integer of kMax's length no smaller than the last.
+      std::size_t end = i;
+      while (end < data.size() && data[end] >= '0' && data[end] <= '9') ++end;
+      const bool integer = (i == 0 || data[i - 1] != '-') &&
+                           (end == data.size() || (data[end] != '.' && data[end] != 'e' && data[end] != 'E'));
+      if (integer && end - i == kMax.size() && data.compare(i, end - i, kMax) <= 0) {
+        const std::uint64_t index = std::numeric_limits<std::uint64_t>::max() - std::stoull(data.substr(i, end - i));
+        if (index < texts_.size()) {
+          out.append(data, from, i - from);
+          out += '"';
+          out += texts_[static_cast<std::size_t>(index)];
+          out += '"';
+          from = end;
+        }
+      }
+      i = end - 1;
+    }
+    out.append(data, from, std::string::npos);
+  }
+
+  std::size_t bytes() const {
+    std::size_t n = 0;
+    for (const std::string& t : texts_) n += t.size() + 2;
+    return n;
+  }
+
+ private:
+  std::vector<std::string> texts_;
+};
+
+ordered_json encode_mesh(const removal::TriangleMesh& mesh, Blobs& blobs) {
   std::vector<float> positions;
   positions.reserve(mesh.vertices_mm.size() * 3);
   for (const auto& p : mesh.vertices_mm)
@@ -45,8 +113,8 @@ ordered_json encode_mesh(const removal::TriangleMesh& mesh) {
     for (int k = 0; k < 3; ++k) indices.push_back(static_cast<std::uint32_t>(t[k]));
   return {{"vertices", mesh.vertices_mm.size()},
           {"triangles", mesh.triangles.size()},
-          {"positions", typed_base64(positions)},
-          {"indices", typed_base64(indices)}};
+          {"positions", blobs.of(positions)},
+          {"indices", blobs.of(indices)}};
 }
 
 // The NC lines a report names, with their text: a region's spans, an event's blocks (from the
@@ -140,13 +208,13 @@ const char* body_kind_name(pipeline::BodyKind kind) {
 
 // The machine posed along the program (pipeline::Playback), each frame with its time (the
 // timeline's, interpolated by sample) and NC line; null when nothing was posed.
-ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, SourceTexts& sources) {
+ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, SourceTexts& sources, Blobs& blobs) {
   if (play.frame_sample.empty()) return nullptr;
   const std::size_t frames = play.frame_sample.size();
   ordered_json bodies = ordered_json::array();
   for (const pipeline::Playback::Body& b : play.bodies) {
     ordered_json body = {{"name", b.name}, {"kind", body_kind_name(b.kind)}, {"node", b.node}, {"tool", b.tool}};
-    body["mesh"] = encode_mesh(b.mesh);
+    body["mesh"] = encode_mesh(b.mesh, blobs);
     bodies.push_back(body);
   }
   // Time at a sample: linear between the timeline's points (its samples rise).
@@ -201,18 +269,18 @@ ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, S
           {"bodies", bodies},
           {"frames",
            {{"count", frames},
-            {"t_s", typed_base64(t_s)},
-            {"sample", typed_base64(sample)},
-            {"block", typed_base64(block)},
-            {"tool", typed_base64(tool)},
-            {"source", typed_base64(source)},
+            {"t_s", blobs.of(t_s)},
+            {"sample", blobs.of(sample)},
+            {"block", blobs.of(block)},
+            {"tool", blobs.of(tool)},
+            {"source", blobs.of(source)},
             {"layout", layout},
-            {"pose", typed_base64(pose)}}},
+            {"pose", blobs.of(pose)}}},
           {"path",
            {{"points", play.path_block.size()},
-            {"position", typed_base64(play.path_mm)},
-            {"block", typed_base64(path_block)},
-            {"rapid", typed_base64(play.path_rapid)}}}};
+            {"position", blobs.of(play.path_mm)},
+            {"block", blobs.of(path_block)},
+            {"rapid", blobs.of(play.path_rapid)}}}};
 }
 
 std::string fixed(double x, int digits, const char* unit) {
@@ -317,12 +385,13 @@ void write_report_page(const std::string& path, const std::string& template_path
   const removal::SurfaceMesh& machined = *input.machined;
   std::vector<int> kept;
   const removal::TriangleMesh shown = removal::decimate(machined.mesh, input.max_triangles, kept);
-  ordered_json mesh = encode_mesh(shown);
+  Blobs blobs;
+  ordered_json mesh = encode_mesh(shown, blobs);
   if (!input.deviation_mm.empty()) {
     std::vector<float> deviation;
     deviation.reserve(kept.size());
     for (int k : kept) deviation.push_back(static_cast<float>(input.deviation_mm[static_cast<std::size_t>(k)]));
-    mesh["deviation"] = typed_base64(deviation);
+    mesh["deviation"] = blobs.of(deviation);
   } else {
     mesh["deviation"] = nullptr;
   }
@@ -338,12 +407,12 @@ void write_report_page(const std::string& path, const std::string& template_path
     vertex_block.push_back(known ? (*input.move_blocks)[static_cast<std::size_t>(move)] : -1);
     vertex_source.push_back(source_of_block(sources, program, vertex_block.back()));
   }
-  mesh["source"] = typed_base64(vertex_source);
-  mesh["block"] = typed_base64(vertex_block);
-  j["mesh"] = mesh;
+  mesh["source"] = blobs.of(vertex_source);
+  mesh["block"] = blobs.of(vertex_block);
+  j["mesh"] = std::move(mesh);
   if (input.design != nullptr) {
     std::vector<int> design_kept;
-    j["design"] = encode_mesh(removal::decimate(*input.design, input.max_triangles / 4, design_kept));
+    j["design"] = encode_mesh(removal::decimate(*input.design, input.max_triangles / 4, design_kept), blobs);
   } else {
     j["design"] = nullptr;
   }
@@ -435,7 +504,7 @@ void write_report_page(const std::string& path, const std::string& template_path
     timeline = {{"t_s", ts}, {"feed_mm_min", feed}, {"contour_error_um", contour ? err : ordered_json(nullptr)}};
   }
 
-  j["playback"] = playback_json(play, run, sources);
+  j["playback"] = playback_json(play, run, sources, blobs);
 
   const ordered_json table = sources.table();
   j["sources"] = table;
@@ -479,19 +548,11 @@ void write_report_page(const std::string& path, const std::string& template_path
   j["warnings"] = r.warnings;
   if (!job.assumptions.empty()) j["assumptions"] = job.assumptions;
 
-  // Inside a <script> element neither "</script" nor "<!--" may appear (an NC comment could
-  // hold either). '<' occurs only inside JSON strings, where "\u003c" is the same character.
   const std::string data = j.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
   std::string filled;
-  filled.reserve(page.size() + data.size() + 64);
+  filled.reserve(page.size() + data.size() + blobs.bytes() + 64);
   filled.append(page, 0, slot);
-  for (std::size_t from = 0; from < data.size();) {
-    const std::size_t lt = data.find('<', from);
-    filled.append(data, from, (lt == std::string::npos ? data.size() : lt) - from);
-    if (lt == std::string::npos) break;
-    filled += "\\u003c";
-    from = lt + 1;
-  }
+  blobs.splice(data, filled);
   filled.append(page, slot + std::strlen(kReportDataMarker), std::string::npos);
   page = std::move(filled);
   io::write_text_atomically(path, page);

@@ -122,7 +122,8 @@ TEST_F(Simulate, GougeNamesItsLine) {
 TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   write_ascii_stl(dir / "part.stl", vcut::removal::test::slotted_block(5.0, 1.95));
   job += "design: {file: part.stl}\n";
-  program.replace(program.find("G1 X70"), 6, "G1 X70 (</script><!-- floor)");
+  // The comment also holds the digits the page's arrays stand for until it is assembled.
+  program.replace(program.find("G1 X70"), 6, "G1 X70 (</script><!-- floor 18446744073709551615,)");
   program.replace(program.find("T1 M6\n"), 6, "T1 M6\nM31\n");  // an M code the machine does not declare
   const std::string open = kDataOpen;
   const CommandResult r = simulate_with_stand_in_page();
@@ -148,7 +149,17 @@ TEST_F(Simulate, ReportPageDataSurvivesHostileCommentsAndSnapshotsAreWritten) {
   ASSERT_FALSE(j["regions"][0]["nc"].empty());
   EXPECT_EQ(j["regions"][0]["nc"][0]["file"], "slot.ngc");
   EXPECT_EQ(j["regions"][0]["nc"][0]["line"], 8);  // line 7 before the M31 line went in
-  EXPECT_EQ(j["regions"][0]["nc"][0]["text"], "G1 X70 (</script><!-- floor)");
+  EXPECT_EQ(j["regions"][0]["nc"][0]["text"], "G1 X70 (</script><!-- floor 18446744073709551615,)");
+  // The mesh's arrays: base64 of as many floats and indices as it has vertices and triangles
+  // (4 bytes each, 3 a vertex or triangle: 4 base64 characters per 3 bytes, padded).
+  const auto& mesh = j["mesh"];
+  ASSERT_TRUE(mesh["positions"].is_string());
+  ASSERT_TRUE(mesh["indices"].is_string());
+  const auto base64_size = [](std::size_t bytes) { return (bytes + 2) / 3 * 4; };
+  EXPECT_GT(mesh["vertices"].get<std::size_t>(), 100u);
+  EXPECT_EQ(mesh["positions"].get<std::string>().size(), base64_size(12 * mesh["vertices"].get<std::size_t>()));
+  EXPECT_EQ(mesh["indices"].get<std::string>().size(), base64_size(12 * mesh["triangles"].get<std::size_t>()));
+  EXPECT_EQ(mesh["deviation"].get<std::string>().size(), base64_size(4 * mesh["vertices"].get<std::size_t>()));
 
   for (const char* view : {"iso", "top", "front"}) {
     std::ifstream png(dir / "out" / ("deviation_" + std::string(view) + ".png"), std::ios::binary);
