@@ -215,18 +215,28 @@ struct DexelStock::Impl {
   void find_occupied() {
     for (Family& f : families) {
       f.occupied.assign(static_cast<std::size_t>(f.n_w) * static_cast<std::size_t>(f.words_u), 0);
-      for (int iw = f.lo_w; iw < f.lo_w + f.n_w; ++iw)
+      tbb::parallel_for(f.lo_w, f.lo_w + f.n_w, [&](int iw) {  // each row its own words
         for (int k = 0; k < f.n_u; ++k)
           if (f.at(f.lo_u + k, iw).size() > 0) f.occupied_word(k / 64, iw) |= std::uint64_t{1} << (k % 64);
+      });
     }
   }
 
+  // Each row's sum in parallel, the rows' added in order: the same total for any thread count.
   void sum_lengths() {
     for (Family& f : families) {
+      std::vector<double> rows(static_cast<std::size_t>(f.n_w), 0.0);
+      tbb::parallel_for(0, f.n_w, [&](int row) {
+        double total = 0.0;
+        for (int iu = f.lo_u; iu < f.lo_u + f.n_u; ++iu) {
+          const SegmentList& ray = f.at(iu, f.lo_w + row);
+          for (std::uint32_t i = 0; i < ray.size(); ++i)
+            total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
+        }
+        rows[static_cast<std::size_t>(row)] = total;
+      });
       double total = 0.0;
-      for (const SegmentList& ray : f.rays)
-        for (std::uint32_t i = 0; i < ray.size(); ++i)
-          total += static_cast<double>(ray.data()[i].hi_mm) - ray.data()[i].lo_mm;
+      for (double r : rows) total += r;
       f.length_mm = total;
     }
   }
