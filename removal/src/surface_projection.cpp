@@ -84,21 +84,30 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
   const std::size_t count = mesh.mesh.vertices_mm.size();
   mesh.vertex_move.assign(count, -1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
-    std::vector<TranslationSweep> sweeps;
+    // The moves' sweeps, kept from vertex to vertex (neighbours share their moves), and the
+    // vertex's own in the order of its candidates.
+    std::vector<std::pair<int, TranslationSweep>> made;
+    std::vector<std::size_t> sweeps;
     std::vector<int> ids;
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
-      sweeps.clear();
       nearby(v, ids);
+      if (made.size() + ids.size() > 64) made.clear();
+      sweeps.clear();
       for (int id : ids) {
-        const Move& move = moves.at(id);
-        sweeps.emplace_back(cutters[static_cast<std::size_t>(move.cutter)], move);
+        auto it = std::find_if(made.begin(), made.end(), [&](const auto& m) { return m.first == id; });
+        if (it == made.end()) {
+          const Move& move = moves.at(id);
+          made.emplace_back(id, TranslationSweep(cutters[static_cast<std::size_t>(move.cutter)], move));
+          it = made.end() - 1;
+        }
+        sweeps.push_back(static_cast<std::size_t>(it - made.begin()));
       }
       int active = -1;
       auto field = [&](const Eigen::Vector3d& x) {
         double f = initial(x);
         active = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
-          const double cut = -sweeps[k].distance(x);
+          const double cut = -made[sweeps[k]].second.distance(x);
           if (cut > f) {
             f = cut;
             active = ids[k];
