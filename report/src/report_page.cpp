@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
-#include <limits>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <set>
 #include <sstream>
@@ -72,11 +72,12 @@ class Blobs {
         continue;
       }
       if (c < '0' || c > '9') continue;
-      // A number: a placeholder when it is an integer of kMax's length no smaller than the last.
+      // A number: a placeholder when it is a whole, unsigned integer of kMax's digits that
+      // stands for a held text (not part of a sign, fraction or exponent).
       std::size_t end = i;
       while (end < data.size() && data[end] >= '0' && data[end] <= '9') ++end;
-      const bool integer = (i == 0 || data[i - 1] != '-') &&
-                           (end == data.size() || (data[end] != '.' && data[end] != 'e' && data[end] != 'E'));
+      const bool integer = (i == 0 || std::strchr("-+.eE", data[i - 1]) == nullptr) &&
+                           (end == data.size() || std::strchr(".eE", data[end]) == nullptr);
       if (integer && end - i == kMax.size() && data.compare(i, end - i, kMax) <= 0) {
         const std::uint64_t index = std::numeric_limits<std::uint64_t>::max() - std::stoull(data.substr(i, end - i));
         if (index < texts_.size()) {
