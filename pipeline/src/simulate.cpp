@@ -276,27 +276,22 @@ bool CutMoves::step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& b
 
 int CutMoves::turning_pieces(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const {
   const removal::Cutter& c = cutters_[static_cast<std::size_t>(cutter)];
+  if (stock_box_.isEmpty()) return removal::five_axis_pieces(c, from.axis, to.axis, rotation_bound_mm_);
   const removal::ToolBody& body = bodies_[static_cast<std::size_t>(cutter)];
-  const double whole = std::numeric_limits<double>::infinity();
-  double height_mm = whole;
-  if (!stock_box_.isEmpty()) {
-    auto highest = [&](double radius_mm) {
-      return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, stock_box_);
-    };
-    // The cutter and the shank above it, at the wider one's radius: the bound is needed up to
-    // that height, unless it reaches the shank (whose points then come inside) or the holder
-    // comes inside; then for the whole cutter, as without a box.
-    double radius_mm = c.radius_mm();
-    if (body.shank >= 0) radius_mm = std::max(radius_mm, cutters_[static_cast<std::size_t>(body.shank)].radius_mm());
-    height_mm = highest(radius_mm);
-    if (height_mm >= c.flute_length_mm) height_mm = whole;
-    if (body.holder >= 0 &&
-        highest(cutters_[static_cast<std::size_t>(body.holder)].radius_mm()) >= body.holder_height_mm)
-      height_mm = whole;
-    if (height_mm < whole)
-      return removal::five_axis_pieces_within(c, radius_mm, height_mm, from.axis, to.axis, rotation_bound_mm_);
-  }
-  return removal::five_axis_pieces(c, from.axis, to.axis, rotation_bound_mm_);
+  auto highest = [&](double radius_mm) {
+    return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, stock_box_);
+  };
+  // The cutter and the shank above it, at the wider one's radius: the bound is needed up to
+  // that height, unless it reaches the shank (whose points then come inside) or the holder
+  // comes inside; then for the whole cutter, as without a box.
+  double radius_mm = c.radius_mm();
+  if (body.shank >= 0) radius_mm = std::max(radius_mm, cutters_[static_cast<std::size_t>(body.shank)].radius_mm());
+  double height_mm = highest(radius_mm);
+  if (height_mm >= c.flute_length_mm ||
+      (body.holder >= 0 &&
+       highest(cutters_[static_cast<std::size_t>(body.holder)].radius_mm()) >= body.holder_height_mm))
+    height_mm = std::numeric_limits<double>::infinity();
+  return removal::five_axis_pieces_within(c, radius_mm, height_mm, from.axis, to.axis, rotation_bound_mm_);
 }
 
 void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,

@@ -625,6 +625,19 @@ SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
 // the groove is exactly a cell wide at the nodes' height, its floor lies in the cell below,
 // which holds no surface). A vertex of a merged flat block lies in a cell of its block,
 // whose crossings are flat: it stays.
+// The ray's intervals that reach [s_lo, s_hi] (only they can have an endpoint in it), in
+// order: from the first that ends at or above s_lo, by binary search (the intervals are
+// disjoint and in order; a ray through D32's holes holds dozens), to the last that starts at
+// or below s_hi.
+template <class Visit>
+void for_each_reaching(const SegmentList& ray, double s_lo, double s_hi, Visit&& visit) {
+  const DexelSegment* const end = ray.data() + ray.size();
+  for (const DexelSegment* seg =
+           std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
+       seg != end && seg->lo_mm <= s_hi; ++seg)
+    visit(*seg);
+}
+
 constexpr double kCreaseRank = 0.1;  // a plane direction counts above this share of the largest
 
 void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
@@ -633,7 +646,7 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
     std::vector<Vector3d> points;
     std::vector<int> made_by;
-    std::vector<std::pair<int, TranslationSweep>> sweeps;
+    detail::SweepCache sweeps(m.moves, m.cutters);
     std::vector<int> used;  // the moves that made this cell's crossings
     // Each crossing's unit normal once per range: an edge's crossing is one of the four cells'
     // around it (keys: family, ray and the endpoint's bits; NaN: no plane there).
@@ -671,14 +684,10 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
               points.push_back(q);
               made_by.push_back(move);
             };
-            // Only the intervals that reach the cell's edge (as for the candidates below).
-            const DexelSegment* const end = ray.data() + ray.size();
-            for (const DexelSegment* seg =
-                     std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
-                 seg != end && seg->lo_mm <= s_hi; ++seg) {
-              add(seg->lo_mm, seg->lo_move, 1u);
-              add(seg->hi_mm, seg->hi_move, 2u);
-            }
+            for_each_reaching(ray, s_lo, s_hi, [&](const DexelSegment& seg) {
+              add(seg.lo_mm, seg.lo_move, 1u);
+              add(seg.hi_mm, seg.hi_move, 2u);
+            });
           }
         }
       }
@@ -719,23 +728,15 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
       }
       // The moves' sweeps (kept from cell to cell: neighbours share moves); made_by then
       // holds each crossing's index into them.
-      if (sweeps.size() > 64) sweeps.clear();
-      for (int& id : made_by) {
-        if (id == kNoMove) continue;
-        auto it = std::find_if(sweeps.begin(), sweeps.end(), [&](const auto& s) { return s.first == id; });
-        if (it == sweeps.end()) {
-          const Move& move = m.moves.at(id);
-          sweeps.emplace_back(id, TranslationSweep(m.cutters[static_cast<std::size_t>(move.cutter)], move));
-          it = sweeps.end() - 1;
-        }
-        id = static_cast<int>(it - sweeps.begin());
-      }
+      sweeps.make_room(used.size());
+      for (int& id : made_by)
+        if (id != kNoMove) id = static_cast<int>(sweeps.index_of(id));
       // Each crossing's plane: the unit gradient of the distance of the surface that made it.
       Eigen::Matrix3d ata = Eigen::Matrix3d::Zero();
       Vector3d atb = Vector3d::Zero();
       for (std::size_t i = 0; i < points.size(); ++i) {
         const int k = made_by[i];
-        const TranslationSweep* sweep = k == kNoMove ? nullptr : &sweeps[static_cast<std::size_t>(k)].second;
+        const TranslationSweep* sweep = k == kNoMove ? nullptr : &sweeps[static_cast<std::size_t>(k)];
         auto [at_key, fresh] = normals.try_emplace(keys[i]);
         if (fresh) {
           auto distance = [&](const Vector3d& y) { return sweep ? sweep->distance(y) : m.initial_distance(y); };
@@ -797,17 +798,10 @@ SurfaceMesh DexelStock::surface() const {
       for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
         for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
           if (!f.contains(iu, iw)) continue;
-          // Intervals ending below s_lo or starting above s_hi have no endpoint in the range:
-          // from the first that ends at or above s_lo (the intervals are disjoint and in order, a
-          // ray through D32's holes holds dozens) to the last that starts at or below s_hi.
-          const SegmentList& ray = f.at(iu, iw);
-          const DexelSegment* const end = ray.data() + ray.size();
-          for (const DexelSegment* seg =
-                   std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
-               seg != end && seg->lo_mm <= s_hi; ++seg) {
-            if (seg->lo_move != kNoMove && seg->lo_mm >= s_lo) ids.push_back(seg->lo_move);
-            if (seg->hi_move != kNoMove && seg->hi_mm <= s_hi) ids.push_back(seg->hi_move);
-          }
+          for_each_reaching(f.at(iu, iw), s_lo, s_hi, [&](const DexelSegment& seg) {
+            if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo) ids.push_back(seg.lo_move);
+            if (seg.hi_move != kNoMove && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
+          });
         }
       }
     }

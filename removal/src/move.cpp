@@ -38,10 +38,8 @@ double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces) {
 
 int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                      double bound_mm) {
-  const double angle = angle_between(axis0.normalized(), axis1.normalized());
-  if (angle == 0.0) return 1;
-  const double n = std::ceil(rotation_reach_mm(cutter) * angle / (2.0 * bound_mm) - 1e-12);
-  return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
+  // No height limit: the core's reach.
+  return five_axis_pieces_within(cutter, 0.0, std::numeric_limits<double>::infinity(), axis0, axis1, bound_mm);
 }
 
 double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,

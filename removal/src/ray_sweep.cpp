@@ -582,11 +582,15 @@ bool RaySweep::interval_within(int axis, double u, double w, double bottom, doub
 __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int count, const double* u,
                                                          const double* bottom, const double* top, double* lo,
                                                          double* hi, bool* hit) const {
-  if (method_ == Method::General && !(flat_bottom_ && flat_[axis].kind != FlatFamily::Kind::March)) {
-    // The root march: over the material only. A march started inside the sweep stops at once,
-    // one that never meets it within the material ends the ray's test.
-    for (int k = 0; k < count; ++k)
-      hit[k] = general(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], lo[k], hi[k]);
+  if (method_ == Method::General) {
+    // The tilted flat end mill's closed form where it decides, else the root march over the
+    // material only (a march started inside the sweep stops at once; one that never meets it
+    // within the material ends the ray's test).
+    for (int k = 0; k < count; ++k) {
+      bool decided = false;
+      if (flat_bottom_) hit[k] = tilted_flat(axis, u[k], w, lo[k], hi[k], decided);
+      if (!decided) hit[k] = general(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], lo[k], hi[k]);
+    }
     return;
   }
   if (method_ != Method::Ball) {
@@ -710,17 +714,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
     case Method::Ball:
+    case Method::General:
       return interval_within(axis, u, w, -kInf, kInf, lo, hi);
     case Method::Upright:
       return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
-    case Method::General: {
-      if (flat_bottom_) {
-        bool decided = false;
-        const bool hit = tilted_flat(axis, u, w, lo, hi, decided);
-        if (decided) return hit;
-      }
-      return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
-    }
   }
   return false;
 }

@@ -84,30 +84,21 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
   const std::size_t count = mesh.mesh.vertices_mm.size();
   mesh.vertex_move.assign(count, -1);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
-    // The moves' sweeps, kept from vertex to vertex (neighbours share their moves), and the
-    // vertex's own in the order of its candidates.
-    std::vector<std::pair<int, TranslationSweep>> made;
+    // The vertex's sweeps in the order of its candidates, from a cache kept across vertices.
+    SweepCache made(moves, cutters);
     std::vector<std::size_t> sweeps;
     std::vector<int> ids;
     for (std::size_t v = range.begin(); v != range.end(); ++v) {
       nearby(v, ids);
-      if (made.size() + ids.size() > 64) made.clear();
+      made.make_room(ids.size());
       sweeps.clear();
-      for (int id : ids) {
-        auto it = std::find_if(made.begin(), made.end(), [&](const auto& m) { return m.first == id; });
-        if (it == made.end()) {
-          const Move& move = moves.at(id);
-          made.emplace_back(id, TranslationSweep(cutters[static_cast<std::size_t>(move.cutter)], move));
-          it = made.end() - 1;
-        }
-        sweeps.push_back(static_cast<std::size_t>(it - made.begin()));
-      }
+      for (int id : ids) sweeps.push_back(made.index_of(id));
       int active = -1;
       auto field = [&](const Eigen::Vector3d& x) {
         double f = initial(x);
         active = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
-          const double cut = -made[sweeps[k]].second.distance(x);
+          const double cut = -made[sweeps[k]].distance(x);
           if (cut > f) {
             f = cut;
             active = ids[k];

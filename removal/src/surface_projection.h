@@ -10,6 +10,7 @@
 
 #include "vcut/removal/move.h"
 #include "vcut/removal/stock.h"
+#include "vcut/removal/sweep.h"
 
 namespace vcut::removal::detail {
 
@@ -35,6 +36,32 @@ class MoveRecord {
   std::vector<int> ids_;  // ascending, of the moves kept
   std::vector<Move> moves_;
   int next_id_ = 0;
+};
+
+// The sweeps of the moves a run of neighbouring vertices or cells names, built once each:
+// neighbours share their moves. Indices stay valid until the next make_room.
+class SweepCache {
+ public:
+  SweepCache(const MoveRecord& moves, const std::vector<Cutter>& cutters) : moves_(moves), cutters_(cutters) {}
+  // Before asking for `incoming` more: forgets all when they would pass the cache's size.
+  void make_room(std::size_t incoming) {
+    if (held_.size() + incoming > kSize) held_.clear();
+  }
+  // The index of move `id`'s sweep, built when not held.
+  std::size_t index_of(int id) {
+    for (std::size_t i = 0; i < held_.size(); ++i)
+      if (held_[i].first == id) return i;
+    const Move& move = moves_.at(id);
+    held_.emplace_back(id, TranslationSweep(cutters_[static_cast<std::size_t>(move.cutter)], move));
+    return held_.size() - 1;
+  }
+  const TranslationSweep& operator[](std::size_t i) const { return held_[i].second; }
+
+ private:
+  static constexpr std::size_t kSize = 64;
+  const MoveRecord& moves_;
+  const std::vector<Cutter>& cutters_;
+  std::vector<std::pair<int, TranslationSweep>> held_;
 };
 
 // volumeToMesh's polygons as an outward, counter-clockwise triangle mesh (OpenVDB winds
