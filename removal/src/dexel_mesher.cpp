@@ -146,8 +146,10 @@ class Contour {
     // whole height, from which each brick takes its 17.
     const std::size_t words = column_words();
     tbb::enumerable_thread_specific<std::vector<std::uint64_t>> column_bits;
+    tbb::enumerable_thread_specific<CrossingCache> crossing_caches;
     tbb::parallel_for(tbb::blocked_range<int>(0, columns, 1), [&](const tbb::blocked_range<int>& range) {
       std::vector<std::uint64_t>& bits = column_bits.local();
+      CrossingCache& crossings = crossing_caches.local();
       std::vector<std::uint64_t> in_any(words), in_all(words);
       for (int c = range.begin(); c != range.end(); ++c) {
         const auto [x0, y0] = column_origin(c);
@@ -170,7 +172,8 @@ class Contour {
           brick_signs(bits, shift, sg);
           BrickMesh b;
           b.origin = {x0, y0, lo_[2] + shift};
-          if (plane(b, sg) || vertices(b, sg)) by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
+          if (plane(b, sg) || vertices(b, sg, crossings))
+            by_column[static_cast<std::size_t>(c)].push_back(std::move(b));
         }
       }
     });
@@ -393,8 +396,36 @@ class Contour {
     return true;
   }
 
+  // The crossings on one brick's edges, each looked up once: a sign-changing edge is an edge
+  // of the four cells around it, all active (D32's rays through its holes hold dozens of
+  // intervals to search). Entries are valid while their stamp is the brick's.
+  struct CrossingCache {
+    static constexpr int kSide = kBrick + 1;
+    std::vector<std::uint32_t> stamp = std::vector<std::uint32_t>(3 * kSide * kSide * kSide, 0);
+    std::vector<double> value = std::vector<double>(3 * kSide * kSide * kSide);
+    std::uint32_t current = 0;
+    void next_brick() {
+      if (++current == 0) {  // wrapped: every stamp is stale again
+        std::fill(stamp.begin(), stamp.end(), 0);
+        current = 1;
+      }
+    }
+    // The crossing on the edge along `axis` from the brick's node (x, y, z), from `find`
+    // the first time.
+    template <class Find>
+    double at(int axis, int x, int y, int z, Find&& find) {
+      const std::size_t i = static_cast<std::size_t>(((axis * kSide + z) * kSide + y) * kSide + x);
+      if (stamp[i] != current) {
+        value[i] = find();
+        stamp[i] = current;
+      }
+      return value[i];
+    }
+  };
+
   // The brick's active cells and their (merged) vertices; false when it has none.
-  bool vertices(BrickMesh& b, const BrickSigns& sg) const {
+  bool vertices(BrickMesh& b, const BrickSigns& sg, CrossingCache& crossings) const {
+    crossings.next_brick();
     const int limit[3] = {std::min(kBrick, lo_[0] + count_[0] - 1 - b.origin[0]),
                           std::min(kBrick, lo_[1] + count_[1] - 1 - b.origin[1]),
                           std::min(kBrick, lo_[2] + count_[2] - 1 - b.origin[2])};
@@ -430,13 +461,16 @@ class Contour {
           for (int d = 0; d < 4; ++d) {
             const int e1 = d & 1, e2 = d >> 1;
             edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1), [&] {
-              return Vector3d(m_.position(gx + e1), m_.position(gy + e2), crossing(2, gx + e1, gy + e2, gz));
+              const double s = crossings.at(2, x + e1, y + e2, z, [&] { return crossing(2, gx + e1, gy + e2, gz); });
+              return Vector3d(m_.position(gx + e1), m_.position(gy + e2), s);
             });
             edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2), [&] {
-              return Vector3d(crossing(0, gy + e1, gz + e2, gx), m_.position(gy + e1), m_.position(gz + e2));
+              const double s = crossings.at(0, x, y + e1, z + e2, [&] { return crossing(0, gy + e1, gz + e2, gx); });
+              return Vector3d(s, m_.position(gy + e1), m_.position(gz + e2));
             });
             edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2), [&] {
-              return Vector3d(m_.position(gx + e1), crossing(1, gx + e1, gz + e2, gy), m_.position(gz + e2));
+              const double s = crossings.at(1, x + e1, y, z + e2, [&] { return crossing(1, gx + e1, gz + e2, gy); });
+              return Vector3d(m_.position(gx + e1), s, m_.position(gz + e2));
             });
           }
           cells.push_back(cell);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 #include "vcut/removal/compare.h"
 #include "vcut/removal/sweep.h"
@@ -94,29 +95,49 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
       sweeps.clear();
       for (int id : ids) sweeps.push_back(made.index_of(id));
       int active = -1;
+      // The surface that leads (an index into sweeps, -1: the initial stock) and by how much
+      // it leads the next one, at the last point the field was taken.
+      int lead = -1;
+      double gap = 0.0;
       auto field = [&](const Eigen::Vector3d& x) {
-        double f = initial(x);
+        double f = initial(x), second = -std::numeric_limits<double>::infinity();
         active = -1;
+        lead = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
           const double cut = -made[sweeps[k]].distance(x);
           if (cut > f) {
+            second = f;
             f = cut;
             active = ids[k];
+            lead = static_cast<int>(k);
+          } else {
+            second = std::max(second, cut);
           }
         }
+        gap = f - second;
         return f;
       };
       const Eigen::Vector3d start = mesh.mesh.vertices_mm[v];
       Eigen::Vector3d x = start;
       constexpr double kStep_mm = 1e-5;  // central differences: error O(h^2) on smooth parts
+      // Every surface's distance is 1-Lipschitz (to its evaluation's error, far below this):
+      // a surface leading the others by more than two steps and this leads them at every
+      // point of the differences, where the field is then its value, the same number.
+      constexpr double kLeadSlack_mm = 1e-6;
       for (int iteration = 0; iteration < 16; ++iteration) {
         const double f = field(x);
         if (std::abs(f) < kProjectionTolerance_mm) break;
+        const bool alone = gap > 2.0 * kStep_mm + kLeadSlack_mm;
+        const int leader = lead;
+        auto probe = [&](const Eigen::Vector3d& y) {
+          if (!alone) return field(y);
+          return leader < 0 ? initial(y) : -made[sweeps[static_cast<std::size_t>(leader)]].distance(y);
+        };
         Eigen::Vector3d g;
         for (int a = 0; a < 3; ++a) {
           Eigen::Vector3d h = Eigen::Vector3d::Zero();
           h[a] = kStep_mm;
-          g[a] = (field(x + h) - field(x - h)) / (2 * kStep_mm);
+          g[a] = (probe(x + h) - probe(x - h)) / (2 * kStep_mm);
         }
         if (g.squaredNorm() < 0.25) break;  // on a kink: keep the point
         x -= f * g / g.squaredNorm();
