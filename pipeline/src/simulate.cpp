@@ -179,8 +179,8 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
 }
 
 // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut as
-// translation pieces within v/10 of the rigid motion (removal::five_axis_pieces, or within
-// the stock's box five_axis_pieces_within: turning_pieces). With
+// translation pieces within v/10 of the rigid motion (removal::five_axis_split, for the part
+// of the cutter that can come inside the stock's box: turning_split). With
 // `probes`, the tool's shank and holder follow every move and a feed move made with the
 // spindle stopped is probed before it cuts (collisions).
 CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resolution_mm)
@@ -274,12 +274,22 @@ bool CutMoves::step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& b
   return true;
 }
 
-int CutMoves::turning_pieces(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const {
+removal::TurningSplit CutMoves::turning_split(int cutter, const kinematics::ToolPose& from,
+                                              const kinematics::ToolPose& to) const {
   const removal::Cutter& c = cutters_[static_cast<std::size_t>(cutter)];
-  if (stock_box_.isEmpty()) return removal::five_axis_pieces(c, from.axis, to.axis, rotation_bound_mm_);
+  constexpr double kWhole = std::numeric_limits<double>::infinity();
+  if (stock_box_.isEmpty()) return removal::five_axis_split(c, kWhole, from.axis, to.axis, rotation_bound_mm_);
   const removal::ToolBody& body = bodies_[static_cast<std::size_t>(cutter)];
+  // The pieces' tips leave the tip's path by at most c (phi / 2 + phi^2 / 8) (removal/move.h):
+  // the box grown by that for the highest pivot (the whole cutter's) and a single piece.
+  double pivot_mm, reach_mm;
+  removal::rotation_reach_mm(c, kWhole, pivot_mm, reach_mm);
+  const double angle = std::atan2(from.axis.normalized().cross(to.axis.normalized()).norm(),
+                                  from.axis.normalized().dot(to.axis.normalized()));
+  const Eigen::Vector3d off = Eigen::Vector3d::Constant(pivot_mm * (angle / 2.0 + angle * angle / 8.0));
+  const Eigen::AlignedBox3d box(stock_box_.min() - off, stock_box_.max() + off);
   auto highest = [&](double radius_mm) {
-    return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, stock_box_);
+    return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, box);
   };
   // The cutter and the shank above it, at the wider one's radius: the bound is needed up to
   // that height, unless it reaches the shank (whose points then come inside) or the holder
@@ -290,8 +300,8 @@ int CutMoves::turning_pieces(int cutter, const kinematics::ToolPose& from, const
   if (height_mm >= c.flute_length_mm ||
       (body.holder >= 0 &&
        highest(cutters_[static_cast<std::size_t>(body.holder)].radius_mm()) >= body.holder_height_mm))
-    height_mm = std::numeric_limits<double>::infinity();
-  return removal::five_axis_pieces_within(c, radius_mm, height_mm, from.axis, to.axis, rotation_bound_mm_);
+    height_mm = kWhole;
+  return removal::five_axis_split(c, height_mm, from.axis, to.axis, rotation_bound_mm_);
 }
 
 void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
@@ -310,7 +320,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) return;
   const std::size_t first_piece = out.size();
   if (turns) {
-    removal::append_five_axis_move(out, m, from.axis, to.axis, turning_pieces(m.cutter, from, to));
+    removal::append_five_axis_move(out, m, from.axis, to.axis, turning_split(m.cutter, from, to));
   } else {
     out.push_back(m);
   }

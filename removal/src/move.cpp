@@ -27,19 +27,43 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
-double rotation_reach_mm(const Cutter& cutter) {
-  const CutterCore core = core_of(cutter);  // a V-bit's: its bounding cylinder, so sqrt(R^2 + H^2)
-  return std::hypot(core.core_radius_mm, core.z_high_mm);
+void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm, double& reach_mm) {
+  double lo, hi, radius;
+  if (cutter.type == CutterType::VBit) {
+    lo = 0.0;
+    hi = std::min(cutter.flute_length_mm, height_mm);
+    radius = cutter.radius_mm();
+  } else {
+    const CutterCore core = core_of(cutter);
+    lo = core.z_low_mm;
+    hi = std::min(core.z_high_mm, height_mm + core.rounding_mm);
+    radius = core.core_radius_mm;
+  }
+  hi = std::max(hi, lo);
+  pivot_mm = 0.5 * (lo + hi);
+  reach_mm = std::hypot(radius, 0.5 * (hi - lo));
 }
 
-double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces) {
-  return rotation_reach_mm(cutter) * angle_rad / (2.0 * std::max(1, pieces));
+double rotation_error_mm(const Cutter& cutter, double height_mm, double angle_rad, const TurningSplit& split) {
+  double pivot_mm, reach_mm;
+  rotation_reach_mm(cutter, height_mm, pivot_mm, reach_mm);
+  const double phi = angle_rad / std::max(1, split.pieces);
+  return reach_mm * phi / 2.0 + std::abs(split.pivot_mm) * phi * phi / 8.0;
 }
 
-int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
-                     double bound_mm) {
-  // No height limit: the core's reach.
-  return five_axis_pieces_within(cutter, 0.0, std::numeric_limits<double>::infinity(), axis0, axis1, bound_mm);
+TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen::Vector3d& axis0,
+                             const Eigen::Vector3d& axis1, double bound_mm) {
+  TurningSplit split;
+  const double angle = angle_between(axis0.normalized(), axis1.normalized());
+  double reach_mm;
+  rotation_reach_mm(cutter, height_mm, split.pivot_mm, reach_mm);
+  if (angle == 0.0) return split;
+  // The first order term alone gives n; the second order one (the pivot's path) adds a piece
+  // now and then.
+  const double n = std::ceil(reach_mm * angle / (2.0 * bound_mm) - 1e-12);
+  split.pieces = static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
+  while (split.pieces < kMaxPieces && rotation_error_mm(cutter, height_mm, angle, split) > bound_mm) ++split.pieces;
+  return split;
 }
 
 double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,
@@ -61,27 +85,27 @@ double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, co
   return std::max(0.0, highest);
 }
 
-int five_axis_pieces_within(const Cutter& cutter, double radius_mm, double height_mm, const Eigen::Vector3d& axis0,
-                            const Eigen::Vector3d& axis1, double bound_mm) {
-  const double angle = angle_between(axis0.normalized(), axis1.normalized());
-  if (angle == 0.0) return 1;
-  const double reach = std::min(rotation_reach_mm(cutter), std::hypot(radius_mm, height_mm));
-  const double n = std::ceil(reach * angle / (2.0 * bound_mm) - 1e-12);
-  return static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
-}
-
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
-                           const Eigen::Vector3d& axis1, int pieces) {
+                           const Eigen::Vector3d& axis1, const TurningSplit& split) {
   const Eigen::Vector3d a = axis0.normalized(), b = axis1.normalized();
-  const int n = std::max(1, pieces);
+  const int n = std::max(1, split.pieces);
+  const double c = split.pivot_mm;
+  // The pivot at the fraction t of the move (its path: the tip's straight line, the axis on the arc).
+  auto pivot = [&](int k) {
+    const Eigen::Vector3d tip =
+        k == n ? move.end_mm
+               : Eigen::Vector3d(move.start_mm + (static_cast<double>(k) / n) * (move.end_mm - move.start_mm));
+    return c == 0.0 ? tip : Eigen::Vector3d(tip + c * kinematics::great_circle(a, b, static_cast<double>(k) / n));
+  };
+  Eigen::Vector3d from = pivot(0);
   for (int k = 0; k < n; ++k) {
+    const Eigen::Vector3d to = pivot(k + 1);
     Move piece = move;
-    piece.start_mm = move.start_mm + (static_cast<double>(k) / n) * (move.end_mm - move.start_mm);
-    piece.end_mm =
-        k + 1 == n ? move.end_mm
-                   : Eigen::Vector3d(move.start_mm + (static_cast<double>(k + 1) / n) * (move.end_mm - move.start_mm));
     piece.axis = kinematics::great_circle(a, b, (k + 0.5) / n);
+    piece.start_mm = c == 0.0 ? from : Eigen::Vector3d(from - c * piece.axis);
+    piece.end_mm = c == 0.0 ? to : Eigen::Vector3d(to - c * piece.axis);
     out.push_back(piece);
+    from = to;
   }
 }
 

@@ -7,6 +7,7 @@
 #include <Eigen/Geometry>
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "vcut/removal/move.h"
@@ -67,13 +68,18 @@ TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
     base.start_mm = motion.p0;
     base.end_mm = motion.p1;
     for (double bound : {0.05, 0.01}) {
-      const int n = five_axis_pieces(c, motion.a0, motion.a1, bound);
-      EXPECT_LE(rotation_error_mm(c, tilt, n), bound);
-      EXPECT_GT(rotation_error_mm(c, tilt, n - 1), bound) << "not the fewest pieces";
+      constexpr double kWhole = std::numeric_limits<double>::infinity();
+      const TurningSplit split = five_axis_split(c, kWhole, motion.a0, motion.a1, bound);
+      const int n = split.pieces;
+      EXPECT_LE(rotation_error_mm(c, kWhole, tilt, split), bound);
+      EXPECT_GT(rotation_error_mm(c, kWhole, tilt, {n - 1, split.pivot_mm}), bound) << "not the fewest pieces";
       std::vector<Move> pieces;
-      append_five_axis_move(pieces, base, motion.a0, motion.a1, n);
+      append_five_axis_move(pieces, base, motion.a0, motion.a1, split);
       ASSERT_EQ(static_cast<int>(pieces.size()), n);
-      EXPECT_EQ(pieces.back().end_mm, motion.p1);
+      // The pivot's path ends where the rigid motion's does.
+      EXPECT_LT(
+          (pieces.back().end_mm + split.pivot_mm * pieces.back().axis - motion.p1 - split.pivot_mm * motion.a1).norm(),
+          1e-12);
       std::vector<TranslationSweep> sweeps;
       for (const Move& m : pieces) sweeps.emplace_back(c, m);
       // Brute force: d_true <= d_brute <= d_true + V / (2 N), V the fastest cutter point's path.
@@ -149,12 +155,14 @@ TEST(FiveAxisSweep, NoPointAboveTheHeightComesInsideTheBox) {
   EXPECT_GT(ratio_sum / bounded, 0.85) << "the bound is loose on the whole";
 }
 
-// A tool standing out of the box turns in fewer pieces, and every point of it (radius R, any
-// height) that the rigid motion or a piece puts inside the box lies within the bound of where
-// the other puts it: the same point of the tool, turned about the arc's normal by the angle at
-// t or by the piece's middle angle (written out here with its own rotation). And the pieces'
-// sweep stays within the bound of the rigid motion's inside the box: a point of the box inside
-// either lies within the bound (plus the brute force's sampling) of the other.
+// A tool standing out of the box turns in fewer pieces, and every point of its core (radius
+// R - r, heights r to H - r) whose ball of radius r reaches into the box (grown by the pieces'
+// tips' offset from the tip's path, as the pipeline grows it) in the rigid motion or in a
+// piece lies within the bound of where the other puts it: the same point, turned about the
+// arc's normal by the angle at t, or by the piece's middle angle on the piece's own straight
+// path (written out here with its own rotation). And the pieces' sweep stays within the
+// bound of the rigid motion's inside the box: a point of the box inside either lies within
+// the bound (plus the brute force's sampling) of the other.
 TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
   constexpr int kInstances = 4000;
   const Eigen::AlignedBox3d box(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 10, 3));
@@ -165,32 +173,41 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
     const Eigen::Vector3d a0(0, std::sin(tilt), std::cos(tilt));
     const Eigen::Vector3d a1 = Eigen::Vector3d(std::sin(tilt) * 0.3, std::sin(tilt), std::cos(tilt)).normalized();
     const RigidMotion motion{{0, 0, 0}, {1.5, 0.5, 0.2}, a0, a1};
-    const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, box);
+    const Eigen::Vector3d normal = a0.cross(a1).normalized();
+    const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+    // The box grown as the pipeline grows it: the whole cutter's pivot, one piece.
+    const double pivot_whole = 0.5 * (c.corner_radius_mm + (c.flute_length_mm - c.corner_radius_mm));
+    const Eigen::Vector3d off = Eigen::Vector3d::Constant(pivot_whole * (angle / 2 + angle * angle / 8));
+    const Eigen::AlignedBox3d grown(box.min() - off, box.max() + off);
+    const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, grown);
     ASSERT_LT(height, 8.0);
-    const int n = five_axis_pieces_within(c, c.radius_mm(), height, a0, a1, bound);
-    const int whole = five_axis_pieces(c, a0, a1, bound);
+    const TurningSplit split = five_axis_split(c, height, a0, a1, bound);
+    const int n = split.pieces;
+    const int whole = five_axis_split(c, std::numeric_limits<double>::infinity(), a0, a1, bound).pieces;
     EXPECT_LT(2 * n, whole) << to_string(c.type);
     Move base;
     base.start_mm = motion.p0;
     base.end_mm = motion.p1;
     std::vector<Move> pieces;
-    append_five_axis_move(pieces, base, a0, a1, n);
+    append_five_axis_move(pieces, base, a0, a1, split);
     ASSERT_EQ(static_cast<int>(pieces.size()), n);
-    const Eigen::Vector3d normal = a0.cross(a1).normalized();
-    const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
     auto turned = [&](double fraction) { return Eigen::AngleAxisd(fraction * angle, normal).toRotationMatrix(); };
-    // Point by point.
+    // Point by point, the core's points: the axis from r up, R - r about it.
+    const double r = c.corner_radius_mm, core_radius = c.radius_mm() - r;
     double worst_point = 0.0;
     const Eigen::Vector3d e1 = a0.unitOrthogonal(), e2 = a0.cross(e1);
+    auto near_box = [&](const Eigen::Vector3d& x) { return grown.exteriorDistance(x) <= r; };
     for (int i = 0; i < 200000; ++i) {
-      const double t = unit(rng), h = 25.0 * unit(rng), rho = c.radius_mm() * std::sqrt(unit(rng));
+      const double t = unit(rng), h = r + (25.0 - 2 * r) * unit(rng), rho = core_radius * std::sqrt(unit(rng));
       const double phi = 2 * M_PI * unit(rng);
       const int k = std::min(n - 1, static_cast<int>(t * n));
-      EXPECT_LT((turned((k + 0.5) / n) * a0 - pieces[static_cast<std::size_t>(k)].axis).norm(), 1e-12);
+      const Move& p = pieces[static_cast<std::size_t>(k)];
+      EXPECT_LT((turned((k + 0.5) / n) * a0 - p.axis).norm(), 1e-12);
       const Eigen::Vector3d point = h * a0 + rho * (std::cos(phi) * e1 + std::sin(phi) * e2);
-      const Eigen::Vector3d tip = motion.p0 + t * (motion.p1 - motion.p0);
-      const Eigen::Vector3d rigid = tip + turned(t) * point, piece = tip + turned((k + 0.5) / n) * point;
-      if (!box.contains(rigid) && !box.contains(piece)) continue;
+      const double along = t * n - k;  // the fraction of the piece
+      const Eigen::Vector3d rigid = motion.p0 + t * (motion.p1 - motion.p0) + turned(t) * point;
+      const Eigen::Vector3d piece = p.start_mm + along * (p.end_mm - p.start_mm) + turned((k + 0.5) / n) * point;
+      if (!near_box(rigid) && !near_box(piece)) continue;
       worst_point = std::max(worst_point, (rigid - piece).norm());
     }
     EXPECT_LE(worst_point, bound) << to_string(c.type);

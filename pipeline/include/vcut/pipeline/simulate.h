@@ -142,7 +142,7 @@ class CutMoves : public removal::MoveSource {
   // The initial stock's box, before the first pass: material never leaves it, so a turning
   // move whose tool stands out of it (no point of its shank or holder ever inside, the
   // cutter only up to some height) needs the bound only for the cutter's part below that
-  // height, and is cut in fewer pieces (removal::five_axis_pieces_within).
+  // height, and is cut in fewer pieces (removal::five_axis_split).
   void set_stock_box(const Eigen::AlignedBox3d& box) { stock_box_ = box; }
 
   // Counted on the first pass that hands every move over (the reach check's, or the cut's), or
@@ -166,7 +166,8 @@ class CutMoves : public removal::MoveSource {
   void record(const kinematics::ToolPose& from, const kinematics::ToolPose& to, const std::vector<removal::Move>& out,
               std::size_t first);
   // The pieces a move that turns the axis from `from` to `to` is cut in, with `cutter`.
-  int turning_pieces(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const;
+  removal::TurningSplit turning_split(int cutter, const kinematics::ToolPose& from,
+                                      const kinematics::ToolPose& to) const;
   // Appends the moves from one pose to the next (of `block`).
   void moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
                   std::vector<removal::Move>& out) const;

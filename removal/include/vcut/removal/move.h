@@ -1,7 +1,7 @@
 // A move: the rigid motion of the cutter between two consecutive tool poses in the
 // workpiece frame (mm). The engines cut translations (tool axis constant) exactly; a
 // five-axis move (the axis turning on a great circle) becomes a few such translations with
-// a stated error bound (five_axis_pieces). The block index leads back to the NC line.
+// a stated error bound (five_axis_split). The block index leads back to the NC line.
 #pragma once
 
 #include <Eigen/Core>
@@ -68,42 +68,50 @@ class ListSource : public MoveSource {
 
 // A five-axis move: the tip goes straight from `move.start_mm` to `move.end_mm` while the tool
 // axis turns on the great circle from axis0 to axis1 (ARCHITECTURE §8). It is cut as n
-// pieces, piece k a translation along its share of the tip path with the axis at the
-// piece's middle instant. At every instant each point of the cutter's core then lies within
-// R_max * angle / (2 n) of where the rigid motion puts it, R_max = rotation_reach_mm: the
-// core's farthest point from the tip. A flat, ball or bull-nose cutter is its core grown by
-// the corner radius r, so an instance's signed distance is the core's distance less r and is
-// off by at most that much too, and hence the sweep's (the instances' minimum). The core:
-// for a ball, the axis from r to H - r (R_max = H - r, not sqrt(R^2 + H^2): 10-13 % fewer
-// pieces on the impeller's and W5's balls); a V-bit is no such sum and takes its farthest
-// point, sqrt(R^2 + H^2). Sampling instances instead would be first order in the step at a
-// sharp rim; here only the rotation is discretised.
-double rotation_reach_mm(const Cutter& cutter);
-double rotation_error_mm(const Cutter& cutter, double angle_rad, int pieces);
-// The fewest pieces that keep the error within bound_mm (at least 1).
-int five_axis_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1, double bound_mm);
+// pieces, piece k a translation with the axis at the piece's middle instant that carries one
+// point of the axis, the pivot c above the tip, along the chord of that point's path over the
+// piece (c = 0: the tip, straight). A flat, ball or bull-nose cutter is its core grown by the
+// corner radius r, so an instance's signed distance is the core's distance less r, off by at
+// most as much as the core's points are; a V-bit is no such sum and takes its own points.
+// Over a piece the axis turns by phi = angle / n; against the rigid motion a point q of the
+// core (from the pivot) is off by at most |q| phi / 2 (the turn to the middle axis) plus
+// c (1 - cos(phi / 2)) <= c phi^2 / 8 (the pivot's path, an arc's chord away from its chord).
+// With c at the middle of the core's part that matters (below height_mm above the tip), |q| is
+// at most half as far as from the tip: about half the pieces. Sampling instances instead
+// would be first order in the step at a sharp rim; here only the rotation is discretised.
+struct TurningSplit {
+  int pieces = 1;
+  double pivot_mm = 0.0;  // c, above the tip along the axis
+};
+// The pivot and reach for the cutter's part below height_mm above the tip (+inf: all of it):
+// for a flat, ball or bull-nose, the core from r to min(H - r, height + r) (a core point
+// higher has its whole ball above the height) and its radius R - r; for a V-bit, its points up
+// to min(H, height) and its radius.
+void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm, double& reach_mm);
+// The bound on the error of the split's pieces (mm), turning by angle_rad in all.
+double rotation_error_mm(const Cutter& cutter, double height_mm, double angle_rad, const TurningSplit& split);
+// The fewest pieces that keep the error within bound_mm (at least 1), for the cutter's part
+// below height_mm (+inf: the whole cutter).
+TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen::Vector3d& axis0,
+                             const Eigen::Vector3d& axis1, double bound_mm);
 
 // Material never leaves the initial stock's box, so only the points of the tool that come
 // inside it need the bound. The height above the tip (mm) over which no point of a tool of
 // radius radius_mm (its widest body) comes inside `box` at any instant of the five-axis move
 // from (tip0, axis0) to (tip1, axis1), in the rigid motion or in any of its pieces (their
-// axes lie on the same great circle): +inf where the axis never points out through a face of
-// the box. A point at height h and offset rho (|rho| <= R) from the axis is outside the face
-// with outward normal n and offset o when n.p + h n.a - R sqrt(1 - (n.a)^2) > o; over the
-// move n.p is smallest at an end, and n.a, a sinusoid of the arc's angle, is at least the
-// smaller end value less angle^2 / 8 (its chord's error).
+// axes lie on the same great circle, their tips on the tip's path: a pivot off the tip takes
+// them off it by at most c (phi / 2 + phi^2 / 8), for which the box is grown): +inf where the
+// axis never points out through a face of the box. A point at height h and offset rho
+// (|rho| <= R) from the axis is outside the face with outward normal n and offset o when
+// n.p + h n.a - R sqrt(1 - (n.a)^2) > o; over the move n.p is smallest at an end, and n.a, a
+// sinusoid of the arc's angle, is at least the smaller end value less angle^2 / 8 (its
+// chord's error).
 double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,
                                const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                                const Eigen::AlignedBox3d& box);
-// five_axis_pieces where the points that matter lie within height_mm of the tip (a point at
-// height h and offset up to radius_mm lies within hypot(radius_mm, h) of it), or within the
-// core's reach, whichever is nearer: a tool that stands out of the stock (W5's, above its
-// 12 mm box) turns in fewer pieces for the same bound.
-int five_axis_pieces_within(const Cutter& cutter, double radius_mm, double height_mm, const Eigen::Vector3d& axis0,
-                            const Eigen::Vector3d& axis1, double bound_mm);
-// Appends the n pieces of `move` (its `axis` is ignored) to `out`.
+// Appends the split's pieces of `move` (its `axis` is ignored) to `out`.
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
-                           const Eigen::Vector3d& axis1, int pieces);
+                           const Eigen::Vector3d& axis1, const TurningSplit& split);
 
 // The non-cutting parts of the tools: for each cutter, the index in MoveList::cutters of its
 // shank and its holder (flat cylinders, tip at their lower face), -1 where it has none, and
