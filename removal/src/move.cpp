@@ -57,7 +57,10 @@ TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen
   const double angle = angle_between(axis0.normalized(), axis1.normalized());
   double reach_mm;
   rotation_reach_mm(cutter, height_mm, split.pivot_mm, reach_mm);
-  if (angle == 0.0) return split;
+  if (angle == 0.0) {
+    split.pivot_mm = 0.0;  // no turn: the tip's own path, exactly
+    return split;
+  }
   // The first order term alone gives n; the second order one (the pivot's path) adds a piece
   // now and then.
   const double n = std::ceil(reach_mm * angle / (2.0 * bound_mm) - 1e-12);
