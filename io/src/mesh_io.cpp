@@ -57,40 +57,46 @@ removal::TriangleMesh read_mesh(const std::string& path) {
 void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
   // Binary STL written directly: an 80-byte header (not starting with "solid", which would
   // read as ASCII STL), the triangle count, then per triangle its unit normal, its three
-  // corners (float32, mm) and a zero attribute word, 50 bytes each. Filled in parallel; a
-  // mesh of no triangles (the stock cut away) is the header and a zero count.
-  constexpr std::size_t kHeader = 84, kRecord = 50;
+  // corners (float32, mm) and a zero attribute word, 50 bytes each. Filled in parallel a
+  // block of triangles at a time, each block written before the next is filled (the whole
+  // file in memory was D32's 280 MB at its peak); a mesh of no triangles (the stock cut away)
+  // is the header and a zero count.
+  constexpr std::size_t kHeader = 84, kRecord = 50, kBlock = std::size_t{1} << 18;  // 13 MB a block
   const std::size_t n = mesh.triangles.size();
   if (n > std::numeric_limits<std::uint32_t>::max())
     throw InputError(path, 0, 0, "cannot write STL: more than 4,294,967,295 triangles");
-  std::string out(kHeader + kRecord * n, '\0');
+  std::string header(kHeader, ' ');
   const std::string title = n == 0 ? "vcut: empty mesh" : "vcut: binary STL, mm";
-  std::memset(out.data(), ' ', 80);
-  std::memcpy(out.data(), title.data(), title.size());
+  std::memcpy(header.data(), title.data(), title.size());
   const auto count = static_cast<std::uint32_t>(n);
-  std::memcpy(out.data() + 80, &count, 4);  // little-endian, as on every target we build for
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
-    for (std::size_t f = range.begin(); f != range.end(); ++f) {
-      const auto& t = mesh.triangles[f];
-      const Eigen::Vector3d& a = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
-      const Eigen::Vector3d& b = mesh.vertices_mm[static_cast<std::size_t>(t[1])];
-      const Eigen::Vector3d& c = mesh.vertices_mm[static_cast<std::size_t>(t[2])];
-      Eigen::Vector3d normal = (b - a).cross(c - a);
-      const double length = normal.norm();
-      normal = length > 0.0 ? Eigen::Vector3d(normal / length) : Eigen::Vector3d::Zero();
-      float record[12];
-      for (int k = 0; k < 3; ++k) {
-        record[k] = static_cast<float>(normal[k]);
-        record[3 + k] = static_cast<float>(a[k]);
-        record[6 + k] = static_cast<float>(b[k]);
-        record[9 + k] = static_cast<float>(c[k]);
-      }
-      std::memcpy(out.data() + kHeader + kRecord * f, record, sizeof record);  // attribute word stays 0
-    }
-  });
+  std::memcpy(header.data() + 80, &count, 4);  // little-endian, as on every target we build for
   write_atomically(path, [&](const std::string& temporary) {
     std::ofstream file(temporary, std::ios::binary);
-    file.write(out.data(), static_cast<std::streamsize>(out.size()));
+    file.write(header.data(), static_cast<std::streamsize>(header.size()));
+    std::string block(kRecord * std::min(n, kBlock), '\0');  // attribute words stay 0
+    for (std::size_t first = 0; first < n && file; first += kBlock) {
+      const std::size_t last = std::min(n, first + kBlock);
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 4096), [&](const auto& range) {
+        for (std::size_t f = range.begin(); f != range.end(); ++f) {
+          const auto& t = mesh.triangles[f];
+          const Eigen::Vector3d& a = mesh.vertices_mm[static_cast<std::size_t>(t[0])];
+          const Eigen::Vector3d& b = mesh.vertices_mm[static_cast<std::size_t>(t[1])];
+          const Eigen::Vector3d& c = mesh.vertices_mm[static_cast<std::size_t>(t[2])];
+          Eigen::Vector3d normal = (b - a).cross(c - a);
+          const double length = normal.norm();
+          normal = length > 0.0 ? Eigen::Vector3d(normal / length) : Eigen::Vector3d::Zero();
+          float record[12];
+          for (int k = 0; k < 3; ++k) {
+            record[k] = static_cast<float>(normal[k]);
+            record[3 + k] = static_cast<float>(a[k]);
+            record[6 + k] = static_cast<float>(b[k]);
+            record[9 + k] = static_cast<float>(c[k]);
+          }
+          std::memcpy(block.data() + kRecord * (f - first), record, sizeof record);
+        }
+      });
+      file.write(block.data(), static_cast<std::streamsize>(kRecord * (last - first)));
+    }
     if (!file) throw InputError(path, 0, 0, "cannot write STL");
   });
 }
