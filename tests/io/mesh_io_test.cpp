@@ -64,6 +64,44 @@ TEST(MeshIo, BinaryStlHoldsEachTriangleWithItsNormal) {
   fs::remove_all(dir);
 }
 
+// A mesh of more triangles than the writer fills at once (2^18), not a multiple of that:
+// every record at its place with its own corners, none lost or repeated at a block's seam,
+// and the attribute words zero. Triangle f's corners are (f, 0, 0), (f, 1, 0), (f, 0, 1)
+// (exact in float32 up to 2^24).
+TEST(MeshIo, BinaryStlAcrossTheWritersBlocks) {
+  constexpr std::size_t kTriangles = (std::size_t{1} << 18) * 2 + 12345;
+  removal::TriangleMesh mesh;
+  mesh.vertices_mm.reserve(3 * kTriangles);
+  for (std::size_t f = 0; f < kTriangles; ++f) {
+    const double x = static_cast<double>(f);
+    mesh.vertices_mm.insert(mesh.vertices_mm.end(), {{x, 0, 0}, {x, 1, 0}, {x, 0, 1}});
+    const int v = static_cast<int>(3 * f);
+    mesh.triangles.emplace_back(v, v + 1, v + 2);
+  }
+  const fs::path dir = fs::temp_directory_path() / "vcut_mesh_io_blocks_test";
+  fs::create_directories(dir);
+  const fs::path path = dir / "strip.stl";
+  write_stl(path.string(), mesh);
+  const std::string bytes = read_bytes(path);
+  ASSERT_EQ(bytes.size(), 84u + 50u * kTriangles);
+  std::uint32_t count;
+  std::memcpy(&count, bytes.data() + 80, 4);
+  EXPECT_EQ(count, kTriangles);
+  std::size_t wrong = 0;
+  for (std::size_t f = 0; f < kTriangles; ++f) {
+    const std::size_t record = 84 + 50 * f;
+    const float x = static_cast<float>(f);
+    // Normal (1, 0, 0): (0, 1, 0) x (0, 0, 1).
+    const float expected[12] = {1, 0, 0, x, 0, 0, x, 1, 0, x, 0, 1};
+    bool same = bytes[record + 48] == 0 && bytes[record + 49] == 0;
+    for (int k = 0; k < 12; ++k)
+      same = same && float_at(bytes, record + 4 * static_cast<std::size_t>(k)) == expected[k];
+    wrong += same ? 0 : 1;
+  }
+  EXPECT_EQ(wrong, 0u);
+  fs::remove_all(dir);
+}
+
 TEST(MeshIo, Base64MatchesRfc4648) {
   const std::pair<std::string, std::string> vectors[] = {{"", ""},
                                                          {"f", "Zg=="},
