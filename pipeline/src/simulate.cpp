@@ -280,14 +280,8 @@ removal::TurningSplit CutMoves::turning_split(int cutter, const kinematics::Tool
   constexpr double kWhole = std::numeric_limits<double>::infinity();
   if (stock_box_.isEmpty()) return removal::five_axis_split(c, kWhole, from.axis, to.axis, rotation_bound_mm_);
   const removal::ToolBody& body = bodies_[static_cast<std::size_t>(cutter)];
-  // The pieces' tips leave the tip's path by at most c (phi / 2 + phi^2 / 8) (removal/move.h):
-  // the box grown by that for the highest pivot (the whole cutter's) and a single piece.
-  double pivot_mm, reach_mm;
-  removal::rotation_reach_mm(c, kWhole, pivot_mm, reach_mm);
-  const double angle = std::atan2(from.axis.normalized().cross(to.axis.normalized()).norm(),
-                                  from.axis.normalized().dot(to.axis.normalized()));
-  const Eigen::Vector3d off = Eigen::Vector3d::Constant(pivot_mm * (angle / 2.0 + angle * angle / 8.0));
-  const Eigen::AlignedBox3d box(stock_box_.min() - off, stock_box_.max() + off);
+  // The pieces' tips leave the tip's path: the box grown for that (removal/move.h).
+  const Eigen::AlignedBox3d box = removal::box_for_pieces(c, from.axis, to.axis, stock_box_);
   auto highest = [&](double radius_mm) {
     return removal::highest_point_in_box_mm(radius_mm, from.tip_mm, to.tip_mm, from.axis, to.axis, box);
   };

@@ -88,6 +88,15 @@ double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, co
   return std::max(0.0, highest);
 }
 
+Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
+                                   const Eigen::AlignedBox3d& box) {
+  double pivot_mm, reach_mm;
+  rotation_reach_mm(cutter, std::numeric_limits<double>::infinity(), pivot_mm, reach_mm);
+  const double angle = angle_between(axis0.normalized(), axis1.normalized());
+  const Eigen::Vector3d off = Eigen::Vector3d::Constant(pivot_mm * (angle / 2.0 + angle * angle / 8.0));
+  return {box.min() - off, box.max() + off};
+}
+
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, const TurningSplit& split) {
   const Eigen::Vector3d a = axis0.normalized(), b = axis1.normalized();

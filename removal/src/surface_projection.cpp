@@ -94,21 +94,18 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
       made.make_room(ids.size());
       sweeps.clear();
       for (int id : ids) sweeps.push_back(made.index_of(id));
-      int active = -1;
       // The surface that leads (an index into sweeps, -1: the initial stock) and by how much
       // it leads the next one, at the last point the field was taken.
       int lead = -1;
       double gap = 0.0;
       auto field = [&](const Eigen::Vector3d& x) {
         double f = initial(x), second = -std::numeric_limits<double>::infinity();
-        active = -1;
         lead = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
           const double cut = -made[sweeps[k]].distance(x);
           if (cut > f) {
             second = f;
             f = cut;
-            active = ids[k];
             lead = static_cast<int>(k);
           } else {
             second = std::max(second, cut);
@@ -145,7 +142,7 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
       if ((x - start).norm() > max_travel_mm || !x.allFinite()) x = start;
       field(x);
       mesh.mesh.vertices_mm[v] = x;
-      mesh.vertex_move[v] = active;
+      mesh.vertex_move[v] = lead < 0 ? -1 : ids[static_cast<std::size_t>(lead)];
     }
   });
 }

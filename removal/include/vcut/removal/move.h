@@ -109,6 +109,11 @@ TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen
 double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, const Eigen::Vector3d& tip1,
                                const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                                const Eigen::AlignedBox3d& box);
+// `box` grown by the most any piece's tip leaves the tip's path for a move turning from axis0
+// to axis1: c (angle / 2 + angle^2 / 8) with the whole cutter's pivot c and a single piece
+// (highest_point_in_box_mm on it then bounds the pieces too).
+Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
+                                   const Eigen::AlignedBox3d& box);
 // Appends the split's pieces of `move` (its `axis` is ignored) to `out`.
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, const TurningSplit& split);
