@@ -323,48 +323,55 @@ class Contour {
     return 0.5 * (a + b);
   }
 
+  // The brick's cells along each axis: kBrick, fewer at the lattice's far side.
+  std::array<int, 3> cell_limits(const BrickMesh& b) const {
+    std::array<int, 3> limit;
+    for (std::size_t a = 0; a < 3; ++a) limit[a] = std::min(kBrick, lo_[a] + count_[a] - 1 - b.origin[a]);
+    return limit;
+  }
+
   // A whole brick crossed by one axis plane that no cut touched (a stock face, a level
   // floor): every node column steps once along one axis at the same place, and every
   // crossing on that axis is the same number. vertices() would merge all its cells into one
   // vertex; this gives the same cells and the same vertex (the same sums, in the same
   // order) without looking at each cell's twelve edges. False: not such a brick.
   bool plane(BrickMesh& b, const BrickSigns& sg) const {
-    for (int a = 0; a < 3; ++a)
-      if (lo_[static_cast<std::size_t>(a)] + count_[static_cast<std::size_t>(a)] - 1 -
-              b.origin[static_cast<std::size_t>(a)] <
-          kBrick)
-        return false;
-    constexpr std::uint32_t kFull = (1u << (kBrick + 1)) - 1u, kSteps = (1u << kBrick) - 1u;
-    // Bit k of a pattern: node k inside; its steps: bit k when nodes k and k + 1 differ.
-    auto single_step = [](std::uint32_t pattern, int& step) {
-      const std::uint32_t steps = (pattern ^ (pattern >> 1)) & kSteps;
+    // A brick at the lattice's far side holds fewer cells (vertices() stops there too): its
+    // nodes beyond the last lattice node take no part (an untouched stock's top and far faces
+    // lie in such bricks).
+    const std::array<int, 3> limit = cell_limits(b);
+    const std::uint32_t nodes = (1u << (limit[2] + 1)) - 1u;  // the z nodes within the lattice
+    // Bit k of a pattern: node k inside; its steps: bit k when nodes k and k + 1 differ, for
+    // the `cells` cells along the axis.
+    auto single_step = [](std::uint32_t pattern, int cells, int& step) {
+      const std::uint32_t steps = (pattern ^ (pattern >> 1)) & ((1u << cells) - 1u);
       if (steps == 0 || (steps & (steps - 1)) != 0) return false;
       step = __builtin_ctz(steps);
       return true;
     };
+    auto all_columns = [&](auto&& holds) {
+      for (int y = 0; y <= limit[1]; ++y)
+        for (int x = 0; x <= limit[0]; ++x)
+          if (!holds(x, y, sg.at(x, y) & nodes)) return false;
+      return true;
+    };
     int axis = -1, step = 0;
-    const std::uint32_t first = sg.column[0];
-    if (std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == first; })) {
-      if (!single_step(first, step)) return false;
+    const std::uint32_t first = sg.at(0, 0) & nodes;
+    if (all_columns([&](int, int, std::uint32_t c) { return c == first; })) {
+      if (!single_step(first, limit[2], step)) return false;
       axis = 2;
     } else {
-      if (!std::all_of(sg.column.begin(), sg.column.end(), [&](std::uint32_t c) { return c == 0 || c == kFull; }))
-        return false;
+      if (!all_columns([&](int, int, std::uint32_t c) { return c == 0 || c == nodes; })) return false;
       std::uint32_t along_x = 0, along_y = 0;
-      for (int k = 0; k <= kBrick; ++k) {
-        along_x |= (sg.at(k, 0) != 0 ? 1u : 0u) << k;
-        along_y |= (sg.at(0, k) != 0 ? 1u : 0u) << k;
-      }
-      bool by_x = true, by_y = true;
-      for (int y = 0; y <= kBrick; ++y)
-        for (int x = 0; x <= kBrick; ++x) {
-          const bool in = sg.at(x, y) != 0;
-          by_x = by_x && in == (((along_x >> x) & 1u) != 0);
-          by_y = by_y && in == (((along_y >> y) & 1u) != 0);
-        }
-      if (by_x && single_step(along_x, step))
+      for (int k = 0; k <= limit[0]; ++k) along_x |= ((sg.at(k, 0) & nodes) != 0 ? 1u : 0u) << k;
+      for (int k = 0; k <= limit[1]; ++k) along_y |= ((sg.at(0, k) & nodes) != 0 ? 1u : 0u) << k;
+      const bool by_x =
+          all_columns([&](int x, int, std::uint32_t c) { return (c != 0) == (((along_x >> x) & 1u) != 0); });
+      const bool by_y =
+          all_columns([&](int, int y, std::uint32_t c) { return (c != 0) == (((along_y >> y) & 1u) != 0); });
+      if (by_x && single_step(along_x, limit[0], step))
         axis = 0;
-      else if (by_y && single_step(along_y, step))
+      else if (by_y && single_step(along_y, limit[1], step))
         axis = 1;
       else
         return false;
@@ -374,27 +381,29 @@ class Contour {
     const int g = b.origin[static_cast<std::size_t>(axis)] + step;
     const int g1 = b.origin[static_cast<std::size_t>(o1)], g2 = b.origin[static_cast<std::size_t>(o2)];
     // crossing() takes (u, w) as its family orders them: z rays (x, y), x rays (y, z), y rays (x, z).
+    const int n1 = limit[static_cast<std::size_t>(o1)], n2 = limit[static_cast<std::size_t>(o2)];
     const double value = crossing(axis, g1, g2, g);
-    for (int j = 0; j <= kBrick; ++j)
-      for (int i = 0; i <= kBrick; ++i)
+    for (int j = 0; j <= n2; ++j)
+      for (int i = 0; i <= n1; ++i)
         if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
     // The cells at `step` along the axis, in Morton order, each adding its four crossings
     // in the order vertices() visits them.
     std::array<std::uint16_t, kBrick * kBrick> codes;
     std::size_t n = 0;
-    for (int j = 0; j < kBrick; ++j)
-      for (int i = 0; i < kBrick; ++i) {
+    for (int j = 0; j < n2; ++j)
+      for (int i = 0; i < n1; ++i) {
         std::array<int, 3> cell;
         cell[static_cast<std::size_t>(axis)] = step;
         cell[static_cast<std::size_t>(o1)] = i;
         cell[static_cast<std::size_t>(o2)] = j;
         codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
       }
-    std::sort(codes.begin(), codes.end());
-    b.cells.assign(codes.begin(), codes.end());
-    b.vertex.assign(codes.size(), 0);
+    std::sort(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
+    b.cells.assign(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
+    b.vertex.assign(n, 0);
     Vector3d sum = Vector3d::Zero();
-    for (std::uint16_t code : codes) {
+    for (std::size_t c = 0; c < n; ++c) {
+      const std::uint16_t code = codes[c];
       const std::array<int, 3> cell = unmorton(code);
       const int i = cell[static_cast<std::size_t>(o1)], j = cell[static_cast<std::size_t>(o2)];
       for (int d = 0; d < 4; ++d) {
@@ -406,7 +415,7 @@ class Contour {
         sum += at;
       }
     }
-    b.points.assign(1, sum / static_cast<double>(4 * static_cast<int>(codes.size())));
+    b.points.assign(1, sum / static_cast<double>(4 * n));
     return true;
   }
 
@@ -440,9 +449,7 @@ class Contour {
   // The brick's active cells and their (merged) vertices; false when it has none.
   bool vertices(BrickMesh& b, const BrickSigns& sg, CrossingCache& crossings) const {
     crossings.next_brick();
-    const int limit[3] = {std::min(kBrick, lo_[0] + count_[0] - 1 - b.origin[0]),
-                          std::min(kBrick, lo_[1] + count_[1] - 1 - b.origin[1]),
-                          std::min(kBrick, lo_[2] + count_[2] - 1 - b.origin[2])};
+    const std::array<int, 3> limit = cell_limits(b);
     // Per active cell: its crossings (a run of `points`) and which way the surface faces
     // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
     struct Cell {

@@ -892,6 +892,27 @@ TEST(DexelStock, MoveRecordGrowsWithTheSurfaceNotTheProgram) {
   EXPECT_NEAR(cut.removed_volume_mm3, 40.79, 0.15 * 40.79);
 }
 
+// Whether the mesh is closed and consistently wound (every directed edge meets its reverse
+// exactly once), and then the volume it encloses (mm3).
+::testing::AssertionResult closed_volume(const TriangleMesh& mesh, double& volume) {
+  std::map<std::pair<int, int>, int> edges;
+  volume = 0.0;
+  for (const auto& t : mesh.triangles) {
+    for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
+    const Eigen::Vector3d &a = mesh.vertices_mm[static_cast<std::size_t>(t[0])],
+                          &b = mesh.vertices_mm[static_cast<std::size_t>(t[1])],
+                          &c = mesh.vertices_mm[static_cast<std::size_t>(t[2])];
+    volume += a.dot(b.cross(c)) / 6.0;
+  }
+  for (const auto& [e, n] : edges) {
+    if (n != 1)
+      return ::testing::AssertionFailure() << "edge " << e.first << "-" << e.second << " used twice the same way";
+    if (edges.count({e.second, e.first}) == 0)
+      return ::testing::AssertionFailure() << "edge " << e.first << "-" << e.second << " has no partner";
+  }
+  return ::testing::AssertionSuccess();
+}
+
 // The surface from dual contouring: closed and consistently wound (every directed edge
 // meets its reverse exactly once), enclosing the analytic volume, its vertices on the exact
 // surface; the untouched faces merged in both modes, the curved groove only with flat
@@ -911,20 +932,8 @@ TEST(DexelStock, ContouredSurfaceIsClosedAndEnclosesTheSolid) {
     stock.cut(list, {});
     const SurfaceMesh s = stock.surface();
     triangles[merge ? 0 : 1] = s.mesh.triangles.size();
-    std::map<std::pair<int, int>, int> edges;
     double volume = 0.0;
-    for (const auto& t : s.mesh.triangles) {
-      for (int k = 0; k < 3; ++k) ++edges[{t[k], t[(k + 1) % 3]}];
-      const Eigen::Vector3d &a = s.mesh.vertices_mm[static_cast<std::size_t>(t[0])],
-                            &b = s.mesh.vertices_mm[static_cast<std::size_t>(t[1])],
-                            &c = s.mesh.vertices_mm[static_cast<std::size_t>(t[2])];
-      volume += a.dot(b.cross(c)) / 6.0;
-    }
-    for (const auto& [e, n] : edges) {
-      ASSERT_EQ(n, 1) << "edge " << e.first << "-" << e.second << " used twice the same way";
-      const auto back = edges.find({e.second, e.first});
-      ASSERT_TRUE(back != edges.end()) << "edge " << e.first << "-" << e.second << " has no partner";
-    }
+    ASSERT_TRUE(closed_volume(s.mesh, volume));
     // Chords across the groove's curve lie inside the solid by up to v^2 / (8 r) over its
     // 2 pi * 20 mm2: at most 0.04 mm3; creases at the groove's rims cut within a cell.
     EXPECT_NEAR(volume, 2000.0 - groove_mm3, 0.3) << (merge ? "merged" : "full");
@@ -940,6 +949,71 @@ TEST(DexelStock, ContouredSurfaceIsClosedAndEnclosesTheSolid) {
   // up to 16 cells; flat merging also the groove, within v/20 of a plane over a few cells.
   EXPECT_LT(triangles[1], 52300u);
   EXPECT_LT(triangles[0], triangles[1]) << triangles[0] << " vs " << triangles[1];
+}
+
+// An untouched box whose far faces (x, y and z high) lie in the mesher's last bricks, fewer
+// than 16 cells deep: every vertex on the box's surface, every triangle lying on a face
+// facing out of the solid, and each face's triangles covering no more than the face.
+TEST(DexelStock, UntouchedFacesInPartialBricksFaceOutward) {
+  const BoxShape box{{0, 0, 0}, {10.37, 7.61, 3.13}};  // no side a multiple of 16 cells at 0.1 mm
+  DexelStock stock(box, 0.1);
+  const SurfaceMesh s = stock.surface();
+  for (const Eigen::Vector3d& x : s.mesh.vertices_mm) {
+    const double solid = std::max((box.min_mm - x).maxCoeff(), (x - box.max_mm).maxCoeff());
+    ASSERT_LT(std::abs(solid), 1e-6) << "a vertex off the box's surface: " << x.transpose();
+  }
+  std::array<double, 6> area{};  // per face: -x, +x, -y, +y, -z, +z
+  std::size_t on_faces = 0;
+  for (const auto& t : s.mesh.triangles) {
+    const Eigen::Vector3d &a = s.mesh.vertices_mm[static_cast<std::size_t>(t[0])],
+                          &b = s.mesh.vertices_mm[static_cast<std::size_t>(t[1])],
+                          &c = s.mesh.vertices_mm[static_cast<std::size_t>(t[2])];
+    const Eigen::Vector3d n = (b - a).cross(c - a);  // twice the area, along the outward normal
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        const double plane = side == 0 ? box.min_mm[axis] : box.max_mm[axis];
+        if (std::abs(a[axis] - plane) > 1e-9 || std::abs(b[axis] - plane) > 1e-9 || std::abs(c[axis] - plane) > 1e-9)
+          continue;
+        ++on_faces;
+        const double outward = side == 0 ? -n[axis] : n[axis];
+        ASSERT_GT(outward, 0.0) << "a triangle on face " << 2 * axis + side << " faces inward: " << a.transpose()
+                                << " / " << b.transpose() << " / " << c.transpose();
+        area[static_cast<std::size_t>(2 * axis + side)] += 0.5 * outward;
+      }
+    }
+  }
+  // Most of the surface lies on the faces (the rest: the strips along the box's edges).
+  EXPECT_GT(on_faces, s.mesh.triangles.size() / 2);
+  const Eigen::Vector3d size = box.max_mm - box.min_mm;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double face = size[(axis + 1) % 3] * size[(axis + 2) % 3];
+    for (int side = 0; side < 2; ++side) {
+      EXPECT_LE(area[static_cast<std::size_t>(2 * axis + side)], face + 1e-9) << "face " << 2 * axis + side;
+      EXPECT_GT(area[static_cast<std::size_t>(2 * axis + side)], 0.5 * face) << "face " << 2 * axis + side;
+    }
+  }
+}
+
+// A groove in the bricks at the top of the lattice (fewer than 16 cells high): the top face
+// lies midway between two nodes, so a ray over the groove, with no endpoint there, gives the
+// same crossing as the face (the middle of the edge). Bricks whose first node column is clean
+// face and the rest groove must still be meshed as the groove, not as the face.
+TEST(DexelStock, GrooveInTheLatticesTopBricksIsNotTakenForTheFace) {
+  const BoxShape box{{0, 0, 0}, {12, 12, 10}};  // at 0.1 mm the top bricks hold 7 cells in z
+  MoveList list;
+  list.cutters.push_back(make(CutterType::Ball, 2, 1, 12));
+  list.moves.push_back(line({-5, 2.9, 9}, {17, 2.9, 9}));  // ball centre on the top: y 1.9 to 3.9
+  DexelStock stock(box, 0.1);
+  stock.cut(list, {});
+  const SurfaceMesh s = stock.surface();
+  double volume = 0.0;
+  ASSERT_TRUE(closed_volume(s.mesh, volume));
+  EXPECT_NEAR(volume, 1440.0 - 0.5 * M_PI * 12.0, 0.3);
+  for (const Eigen::Vector3d& x : s.mesh.vertices_mm) {
+    const double groove = segment_distance(x, {-5, 2.9, 10}, {17, 2.9, 10}) - 1.0;
+    const double solid = std::max(-groove, std::max((box.min_mm - x).maxCoeff(), (x - box.max_mm).maxCoeff()));
+    ASSERT_LT(std::abs(solid), 0.1 * 0.1 + 1e-9) << x.transpose();  // v/10
+  }
 }
 
 TEST(DexelStock, MemoryEstimateCoversTheRealUse) {
