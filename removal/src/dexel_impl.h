@@ -2,6 +2,7 @@
 // cut (dexel_cut.cpp) and the mesher (dexel_mesher.cpp). Private to the removal library.
 #pragma once
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <array>
@@ -12,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <new>
+#include <utility>
 #include <vector>
 
 #include <sys/mman.h>
@@ -103,6 +105,15 @@ struct HugePageAllocator {
     ::madvise(p, (bytes + kHuge - 1) / kHuge * kHuge, MADV_HUGEPAGE);
     return static_cast<T*>(p);
   }
+  // A vector's default construction of its elements is left to its owner, which makes them
+  // in parallel (Impl::setup): the first touch of a page has the kernel zero it, and on one
+  // thread W1's 173 MB of rays took up to 0.4 s of the stock stage on this VM.
+  template <class U>
+  void construct(U*) noexcept {}
+  template <class U, class... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   void deallocate(T* p, std::size_t n) {
     if (n * sizeof(T) < 4 * kHuge)
       ::operator delete(p);
@@ -191,6 +202,11 @@ struct DexelStock::Impl {
       f.words_u = (f.n_u + 63) / 64;
       f.rays = std::vector<SegmentList, HugePageAllocator<SegmentList>>(static_cast<std::size_t>(f.n_u) *
                                                                         static_cast<std::size_t>(f.n_w));
+      SegmentList* const rays = f.rays.data();
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f.rays.size(), std::size_t{1} << 16),
+                        [rays](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i != range.end(); ++i) ::new (rays + i) SegmentList();
+                        });
     }
   }
 
