@@ -148,9 +148,16 @@ class TriangleGrid {
       at[a] = static_cast<int>(i);
     }
     for (int shell = 0; shell <= kMaxShells; ++shell) {
-      // Every cell of this shell and beyond lies at least (shell - 1) cells from x.
-      const double gap = (shell - 1) * cell_mm_;
-      if (shell > 0 && gap * gap > best) return true;
+      if (shell > 0) {
+        // Every cell of this shell and beyond lies outside the cube of the shells before it:
+        // at least x's distance from that cube's nearest face away (at least shell - 1 cells;
+        // most queries, the hint's triangle at hand, end inside x's own cell).
+        double wall = std::numeric_limits<double>::infinity();
+        for (int a = 0; a < 3; ++a)
+          wall = std::min({wall, x[a] - (origin_[a] + (at[a] - shell + 1) * cell_mm_),
+                           origin_[a] + (at[a] + shell) * cell_mm_ - x[a]});
+        if (wall > 0.0 && wall * wall > best) return true;
+      }
       int lo[3], hi[3];
       bool any = true;
       for (int a = 0; a < 3; ++a) {
