@@ -92,8 +92,10 @@ std::string encode_png(const Image& image) {
   const std::string raw = filter_rows(image);
   uLongf size = compressBound(static_cast<uLong>(raw.size()));
   std::string compressed(size, '\0');
+  // Level 3: a 1600 x 1200 snapshot compresses in 20 ms against level 6's 60 ms (three per
+  // run, one after another on the write stage's longest path), 10 % larger.
   if (compress2(reinterpret_cast<Bytef*>(compressed.data()), &size, reinterpret_cast<const Bytef*>(raw.data()),
-                static_cast<uLong>(raw.size()), 6) != Z_OK)
+                static_cast<uLong>(raw.size()), 3) != Z_OK)
     throw InputError("PNG: zlib compression failed");
   compressed.resize(size);
 
