@@ -333,8 +333,9 @@ class Contour {
   // A whole brick crossed by one axis plane that no cut touched (a stock face, a level
   // floor): every node column steps once along one axis at the same place, and every
   // crossing on that axis is the same number. vertices() would merge all its cells into one
-  // vertex; this gives the same cells and the same vertex (the same sums, in the same
-  // order) without looking at each cell's twelve edges. False: not such a brick.
+  // vertex; this gives the same cells and that vertex, the mean of their crossings, in
+  // closed form (vertices() sums 4 per cell: the same point within rounding) without
+  // looking at each cell's twelve edges. False: not such a brick.
   bool plane(BrickMesh& b, const BrickSigns& sg) const {
     // A brick at the lattice's far side holds fewer cells (vertices() stops there too): its
     // nodes beyond the last lattice node take no part (an untouched stock's top and far faces
@@ -386,36 +387,32 @@ class Contour {
     for (int j = 0; j <= n2; ++j)
       for (int i = 0; i <= n1; ++i)
         if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
-    // The cells at `step` along the axis, in Morton order, each adding its four crossings
-    // in the order vertices() visits them.
+    // The cells at `step` along the axis, in Morton order: with the axis's index fixed the
+    // order is the two others' interleaved bits, o1's the lower (kOther lists them in
+    // increasing order), so the cells come sorted from a walk over that 2-D code.
     std::array<std::uint16_t, kBrick * kBrick> codes;
     std::size_t n = 0;
-    for (int j = 0; j < n2; ++j)
-      for (int i = 0; i < n1; ++i) {
-        std::array<int, 3> cell;
-        cell[static_cast<std::size_t>(axis)] = step;
-        cell[static_cast<std::size_t>(o1)] = i;
-        cell[static_cast<std::size_t>(o2)] = j;
-        codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
+    for (int t = 0; t < kBrick * kBrick; ++t) {
+      std::array<int, 3> cell;
+      cell[static_cast<std::size_t>(axis)] = step;
+      cell[static_cast<std::size_t>(o1)] = 0;
+      cell[static_cast<std::size_t>(o2)] = 0;
+      for (int bit = 0; bit < kBrickLevels; ++bit) {
+        cell[static_cast<std::size_t>(o1)] |= (t >> (2 * bit) & 1) << bit;
+        cell[static_cast<std::size_t>(o2)] |= (t >> (2 * bit + 1) & 1) << bit;
       }
-    std::sort(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
+      if (cell[static_cast<std::size_t>(o1)] < n1 && cell[static_cast<std::size_t>(o2)] < n2)
+        codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
+    }
     b.cells.assign(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
     b.vertex.assign(n, 0);
-    Vector3d sum = Vector3d::Zero();
-    for (std::size_t c = 0; c < n; ++c) {
-      const std::uint16_t code = codes[c];
-      const std::array<int, 3> cell = unmorton(code);
-      const int i = cell[static_cast<std::size_t>(o1)], j = cell[static_cast<std::size_t>(o2)];
-      for (int d = 0; d < 4; ++d) {
-        const int e1 = d & 1, e2 = d >> 1;
-        Vector3d at;
-        at[axis] = value;
-        at[o1] = m_.position(g1 + i + e1);
-        at[o2] = m_.position(g2 + j + e2);
-        sum += at;
-      }
-    }
-    b.points.assign(1, sum / static_cast<double>(4 * n));
+    // The mean of the cells' crossings: `value` along the axis, and across it the middle of
+    // the cells' span, nodes g .. g + n of spacing v (positions (g + 0.5) v).
+    Vector3d mean;
+    mean[axis] = value;
+    mean[o1] = (g1 + 0.5 + 0.5 * n1) * m_.v;
+    mean[o2] = (g2 + 0.5 + 0.5 * n2) * m_.v;
+    b.points.assign(1, mean);
     return true;
   }
 
