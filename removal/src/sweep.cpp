@@ -104,11 +104,14 @@ double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, doubl
       slope = dz_slope;
     }
   };
+  // The end first: the march comes at the sweep mostly from ahead of the move (W5's bull-nose
+  // rows: 79 % of these end at t = 1, 17 % at t = 0), and f convex takes its minimum at an end
+  // whose slope points away from the other (both only where f is constant).
   double a = 0.0, b = 1.0, fa, ga, fb, gb;
-  eval(a, fa, ga);
-  if (ga >= 0.0) return fa;
   eval(b, fb, gb);
   if (gb <= 0.0) return fb;
+  eval(a, fa, ga);
+  if (ga >= 0.0) return fa;
   double best = std::min(fa, fb);
   for (int iteration = 0; iteration < 200; ++iteration) {
     // The tangents at a and b meet at t_x, below the convex f's minimum.
