@@ -387,23 +387,18 @@ class Contour {
     for (int j = 0; j <= n2; ++j)
       for (int i = 0; i <= n1; ++i)
         if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
-    // The cells at `step` along the axis, in Morton order: with the axis's index fixed the
-    // order is the two others' interleaved bits, o1's the lower (kOther lists them in
-    // increasing order), so the cells come sorted from a walk over that 2-D code.
+    // The cells at `step` along the axis, in Morton order.
     std::array<std::uint16_t, kBrick * kBrick> codes;
     std::size_t n = 0;
-    for (int t = 0; t < kBrick * kBrick; ++t) {
-      std::array<int, 3> cell;
-      cell[static_cast<std::size_t>(axis)] = step;
-      cell[static_cast<std::size_t>(o1)] = 0;
-      cell[static_cast<std::size_t>(o2)] = 0;
-      for (int bit = 0; bit < kBrickLevels; ++bit) {
-        cell[static_cast<std::size_t>(o1)] |= (t >> (2 * bit) & 1) << bit;
-        cell[static_cast<std::size_t>(o2)] |= (t >> (2 * bit + 1) & 1) << bit;
-      }
-      if (cell[static_cast<std::size_t>(o1)] < n1 && cell[static_cast<std::size_t>(o2)] < n2)
+    for (int j = 0; j < n2; ++j)
+      for (int i = 0; i < n1; ++i) {
+        std::array<int, 3> cell;
+        cell[static_cast<std::size_t>(axis)] = step;
+        cell[static_cast<std::size_t>(o1)] = i;
+        cell[static_cast<std::size_t>(o2)] = j;
         codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
-    }
+      }
+    std::sort(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
     b.cells.assign(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
     b.vertex.assign(n, 0);
     // The mean of the cells' crossings: `value` along the axis, and across it the middle of

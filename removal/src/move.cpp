@@ -25,6 +25,12 @@ double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
 }
 
+// The bound for a split of a turn by angle_rad, given the reach of the core about the pivot.
+double split_error_mm(double reach_mm, double angle_rad, const TurningSplit& split) {
+  const double phi = angle_rad / std::max(1, split.pieces);
+  return reach_mm * phi / 2.0 + std::abs(split.pivot_mm) * phi * phi / 8.0;
+}
+
 }  // namespace
 
 void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm, double& reach_mm) {
@@ -47,8 +53,7 @@ void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm,
 double rotation_error_mm(const Cutter& cutter, double height_mm, double angle_rad, const TurningSplit& split) {
   double pivot_mm, reach_mm;
   rotation_reach_mm(cutter, height_mm, pivot_mm, reach_mm);
-  const double phi = angle_rad / std::max(1, split.pieces);
-  return reach_mm * phi / 2.0 + std::abs(split.pivot_mm) * phi * phi / 8.0;
+  return split_error_mm(reach_mm, angle_rad, split);
 }
 
 TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen::Vector3d& axis0,
@@ -65,7 +70,7 @@ TurningSplit five_axis_split(const Cutter& cutter, double height_mm, const Eigen
   // now and then.
   const double n = std::ceil(reach_mm * angle / (2.0 * bound_mm) - 1e-12);
   split.pieces = static_cast<int>(std::clamp(n, 1.0, static_cast<double>(kMaxPieces)));
-  while (split.pieces < kMaxPieces && rotation_error_mm(cutter, height_mm, angle, split) > bound_mm) ++split.pieces;
+  while (split.pieces < kMaxPieces && split_error_mm(reach_mm, angle, split) > bound_mm) ++split.pieces;
   return split;
 }
 
