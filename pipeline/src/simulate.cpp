@@ -352,6 +352,17 @@ bool CutMoves::next(std::vector<removal::Move>& out, std::size_t wanted) {
 double require_cuttable(const io::Job& job, CutMoves& cut, const removal::StockShape& shape, double resolution_mm,
                         double max_memory_mb) {
   const Eigen::AlignedBox3d stock_box = removal::bounds_of(shape);
+  // A stock thinner than a cell holds no node of the lattice across it: its surface cannot be
+  // meshed (and the level set cannot hold it), so the machined mesh would come out empty.
+  for (int a = 0; a < 3; ++a) {
+    const double size_mm = stock_box.sizes()[a];
+    if (size_mm >= resolution_mm * (1.0 - 1e-9)) continue;  // a stock as thick as a cell, less rounding, holds a node
+    std::ostringstream msg;
+    msg << "the stock is " << size_mm << " mm across in "
+        << "xyz"[a] << ", less than the resolution " << resolution_mm
+        << " mm: no cell fits across it (expected a resolution of at most " << size_mm << " mm, or a thicker stock)";
+    throw InputError(job.file, 0, 0, msg.str());
+  }
   bool overlap = false;
   Eigen::AlignedBox3d path_box;
   std::vector<removal::Move> batch;
@@ -586,8 +597,18 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   removal::SurfaceMesh machined = stock.surface();
   result.machined_vertices = machined.mesh.vertices_mm.size();
   result.machined_triangles = machined.mesh.triangles.size();
-  if (machined.mesh.triangles.empty())
-    result.warnings.push_back("the program cuts the whole stock away: the machined mesh is empty");
+  if (machined.mesh.triangles.empty()) {
+    // Less than half a cell's volume left is nothing the lattice can show.
+    if (result.final_volume_mm3 < 0.5 * v * v * v) {
+      result.warnings.push_back("the program cuts the whole stock away: the machined mesh is empty");
+    } else {
+      std::ostringstream msg;
+      msg << "the machined mesh is empty, but " << result.final_volume_mm3
+          << " mm3 of stock is left, all of it thinner than the resolution (" << v
+          << " mm): choose a finer resolution to see it";
+      result.warnings.push_back(msg.str());
+    }
+  }
   stage_done("mesh");
 
   if (second) {

@@ -459,6 +459,45 @@ TEST_F(Simulate, StockCutAwayWritesAnEmptyMesh) {
   }
 }
 
+// A stock thinner than the resolution holds no node of the lattice across it: refused before
+// the cut, naming the job, the axis and the resolution that would hold it (either engine);
+// at that resolution the same job runs.
+TEST_F(Simulate, StockThinnerThanACellIsRefused) {
+  for (const char* engine : {"dexel", "vdb"}) {
+    SCOPED_TRACE(engine);
+    fs::remove_all(dir / "out");
+    job = std::string("job: thin\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\n") +
+          "stock: {box: {min: [0, 18, -1.03], max: [6, 22, -1]}}\nengine: {kind: " + engine +
+          ", resolution: 0.1, threads: 2}\nreport: {out: out}\n";
+    const CommandResult r = simulate();
+    expect_error(r, "job.yaml");
+    EXPECT_NE(r.output.find("0.03 mm across in z"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("resolution 0.1 mm"), std::string::npos) << r.output;
+    EXPECT_TRUE(no_output());
+    EXPECT_EQ(simulate("--resolution 0.03").exit_code, 0);
+  }
+}
+
+// A face cut 0.03 mm above the stock's floor at v = 0.1 mm: the sliver holds no node, so the
+// mesh is empty, but stock is left and the warning says so. The volume is the three ray
+// families' mean: the z rays hold the sliver exactly (6 x 4 x 0.03 = 0.72 mm3), the x and y
+// rays (at z = -0.95 ... -0.05) none of it: 0.24 mm3.
+TEST_F(Simulate, SliverLeftBelowTheResolutionIsNotCalledCutAway) {
+  program = "%\nG17 G21 G90 G94 G54\nT1 M6\nS10000 M3\nG0 X-10 Y20 Z5\nG1 Z-0.97 F500\nG1 X70\nG0 Z5\nM30\n%\n";
+  job =
+      "job: sliver\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\n"
+      "stock: {box: {min: [0, 18, -1], max: [6, 22, 0]}}\nengine: {kind: dexel, resolution: 0.1, threads: 2}\n"
+      "report: {out: out}\n";
+  const CommandResult r = simulate();
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(r.output.find("cuts the whole stock away"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("mm3 of stock is left, all of it thinner than the resolution"), std::string::npos)
+      << r.output;
+  const auto j = report();
+  EXPECT_EQ(j["summary"]["machined_triangles"].get<int>(), 0);
+  EXPECT_NEAR(j["summary"]["final_volume_mm3"].get<double>(), 0.24, 1e-3);
+}
+
 TEST_F(Simulate, CorruptDesignMesh) {
   write(dir / "part.stl", "solid x\nfacet normal 0 0 0\nouter loop\nvertex 1 2\n");
   job += "design: {file: part.stl}\n";
