@@ -1,6 +1,7 @@
 #include "vcut/report/report_page.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -125,6 +126,18 @@ class SourceTexts {
   SourceTexts(const kinematics::Program& program, const std::vector<std::string>& paths)
       : program_(program), paths_(paths) {}
 
+  // Index in the sources table of a block's line (-1 for no block): each block's looked up
+  // once (W1's page names 706 k vertices' blocks).
+  int of_block(int block) {
+    if (block < 0) return -1;
+    if (block_index_.empty()) block_index_.assign(program_.blocks.size(), -2);
+    int& i = block_index_[static_cast<std::size_t>(block)];
+    if (i == -2) {
+      const kinematics::SourceRef& src = program_.blocks[static_cast<std::size_t>(block)].source;
+      i = index(src.file, src.line);
+    }
+    return i;
+  }
   // Index in the sources table of a program line (registered for reading).
   int index(int file, int line) {
     const auto key = std::make_pair(file, line);
@@ -180,14 +193,8 @@ class SourceTexts {
   const std::vector<std::string>& paths_;
   std::map<std::pair<int, int>, int> index_;
   std::vector<std::pair<int, int>> refs_;
+  std::vector<int> block_index_;  // -2: not looked up yet
 };
-
-// Index in the sources table of a block's line; -1 for no block.
-int source_of_block(SourceTexts& sources, const kinematics::Program& program, int block) {
-  if (block < 0) return -1;
-  const kinematics::SourceRef& src = program.blocks[static_cast<std::size_t>(block)].source;
-  return sources.index(src.file, src.line);
-}
 
 const char* body_kind_name(pipeline::BodyKind kind) {
   switch (kind) {
@@ -235,7 +242,7 @@ ordered_json playback_json(const pipeline::Playback& play, const PoseRun& run, S
   for (std::size_t f = 0; f < frames; ++f) {
     t_s.push_back(static_cast<float>(time_at(play.frame_sample[f])));
     sample.push_back(static_cast<std::int32_t>(play.frame_sample[f]));
-    source.push_back(source_of_block(sources, run.program, play.frame_block[f]));
+    source.push_back(sources.of_block(play.frame_block[f]));
   }
   ordered_json nodes = ordered_json::array();
   for (char n : play.nodes) nodes.push_back(std::string(1, n));
@@ -297,16 +304,24 @@ std::string base64(const void* data, std::size_t bytes) {
   static const char* kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
   const auto* p = static_cast<const std::uint8_t*>(data);
   std::string out((bytes + 2) / 3 * 4, '=');
-  char* o = out.data();
-  std::size_t i = 0;
-  for (; i + 3 <= bytes; i += 3, o += 4) {
-    const std::uint32_t v =
-        static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
-    o[0] = kAlphabet[(v >> 18) & 63];
-    o[1] = kAlphabet[(v >> 12) & 63];
-    o[2] = kAlphabet[(v >> 6) & 63];
-    o[3] = kAlphabet[v & 63];
-  }
+  // Whole groups of three bytes, in chunks side by side (each chunk's text has its own place).
+  const std::size_t groups = bytes / 3;
+  constexpr std::size_t kChunkGroups = std::size_t{1} << 16;
+  tbb::parallel_for(std::size_t{0}, (groups + kChunkGroups - 1) / kChunkGroups, [&](std::size_t c) {
+    const std::size_t g1 = std::min(groups, (c + 1) * kChunkGroups);
+    char* o = out.data() + 4 * c * kChunkGroups;
+    for (std::size_t g = c * kChunkGroups; g < g1; ++g, o += 4) {
+      const std::size_t i = 3 * g;
+      const std::uint32_t v =
+          static_cast<std::uint32_t>(p[i]) << 16 | static_cast<std::uint32_t>(p[i + 1]) << 8 | p[i + 2];
+      o[0] = kAlphabet[(v >> 18) & 63];
+      o[1] = kAlphabet[(v >> 12) & 63];
+      o[2] = kAlphabet[(v >> 6) & 63];
+      o[3] = kAlphabet[v & 63];
+    }
+  });
+  const std::size_t i = 3 * groups;
+  char* o = out.data() + 4 * groups;
   if (i < bytes) {  // one or two bytes left: two or three characters, then '=' padding
     std::uint32_t v = static_cast<std::uint32_t>(p[i]) << 16;
     if (i + 1 < bytes) v |= static_cast<std::uint32_t>(p[i + 1]) << 8;
@@ -406,7 +421,7 @@ void write_report_page(const std::string& path, const std::string& template_path
     const bool known =
         move >= 0 && input.move_blocks != nullptr && static_cast<std::size_t>(move) < input.move_blocks->size();
     vertex_block.push_back(known ? (*input.move_blocks)[static_cast<std::size_t>(move)] : -1);
-    vertex_source.push_back(source_of_block(sources, program, vertex_block.back()));
+    vertex_source.push_back(sources.of_block(vertex_block.back()));
   }
   mesh["source"] = blobs.of(vertex_source);
   mesh["block"] = blobs.of(vertex_block);

@@ -4,6 +4,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -95,18 +96,36 @@ void rasterise(const removal::TriangleMesh& mesh, const std::vector<Rgb>& colour
     if (rows[0] > rows[1] || cols[0] > std::min<std::int64_t>(cols[1], width - 1) || cols[1] < 0) return {1, 0};
     return {static_cast<int>(rows[0] / kBandRows), static_cast<int>(rows[1] / kBandRows)};
   };
+  // In fixed chunks of the mesh, counted and filled in parallel: chunk c's triangles of band b
+  // follow those of the chunks before it, so the order is the mesh's for any thread count.
+  const size_t chunk = std::max<size_t>(4096, (n_triangles + 63) / 64);
+  const size_t chunks = (n_triangles + chunk - 1) / chunk;
+  std::vector<size_t> counts(chunks * static_cast<size_t>(n_bands), 0);  // chunk-major
+  tbb::parallel_for(size_t{0}, chunks, [&](size_t c) {
+    size_t* count = counts.data() + c * n_bands;
+    for (size_t i = c * chunk; i < std::min(n_triangles, (c + 1) * chunk); ++i) {
+      const auto [b0, b1] = band_range(mesh.triangles[i]);
+      for (int b = b0; b <= b1; ++b) ++count[b];
+    }
+  });
   std::vector<size_t> start(n_bands + 1, 0);
-  for (const auto& t : mesh.triangles) {
-    const auto [b0, b1] = band_range(t);
-    for (int b = b0; b <= b1; ++b) ++start[b + 1];
+  for (int b = 0; b < n_bands; ++b) {
+    size_t at = start[b];
+    for (size_t c = 0; c < chunks; ++c) {  // each chunk's count becomes its first slot
+      const size_t n = counts[c * n_bands + b];
+      counts[c * n_bands + b] = at;
+      at += n;
+    }
+    start[b + 1] = at;
   }
-  for (int b = 0; b < n_bands; ++b) start[b + 1] += start[b];
   std::vector<std::uint32_t> binned(start[n_bands]);
-  std::vector<size_t> fill(start.begin(), start.end() - 1);
-  for (size_t i = 0; i < n_triangles; ++i) {
-    const auto [b0, b1] = band_range(mesh.triangles[i]);
-    for (int b = b0; b <= b1; ++b) binned[fill[b]++] = static_cast<std::uint32_t>(i);
-  }
+  tbb::parallel_for(size_t{0}, chunks, [&](size_t c) {
+    size_t* fill = counts.data() + c * n_bands;
+    for (size_t i = c * chunk; i < std::min(n_triangles, (c + 1) * chunk); ++i) {
+      const auto [b0, b1] = band_range(mesh.triangles[i]);
+      for (int b = b0; b <= b1; ++b) binned[fill[b]++] = static_cast<std::uint32_t>(i);
+    }
+  });
 
   std::vector<float> depth(static_cast<size_t>(width) * height, -std::numeric_limits<float>::infinity());
   const double cue_per_mm = frame.half_depth_mm > 0 ? options.depth_cue / (2 * frame.half_depth_mm) : 0.0;
@@ -267,14 +286,16 @@ std::vector<std::string> write_snapshots(const std::string& folder, const std::s
                                          const removal::TriangleMesh& mesh, const std::vector<Rgb>& colours,
                                          const SnapshotOptions& options) {
   io::ensure_writable_folder(folder);
+  const std::array<const char*, 3> views = {"iso", "top", "front"};
   std::vector<std::string> names;
-  for (const char* view : {"iso", "top", "front"}) {
+  for (const char* view : views) names.push_back(stem + "_" + view + ".png");
+  // The views side by side (a view's PNG encoding is one thread's work).
+  tbb::parallel_for(size_t{0}, views.size(), [&](size_t k) {
     SnapshotOptions titled = options;
-    if (!titled.title.empty()) titled.title += std::string(" (") + view + ")";
-    names.push_back(stem + "_" + view + ".png");
-    write_png((std::filesystem::path(folder) / names.back()).string(),
-              render_snapshot(mesh, colours, view_direction(view), titled));
-  }
+    if (!titled.title.empty()) titled.title += std::string(" (") + views[k] + ")";
+    write_png((std::filesystem::path(folder) / names[k]).string(),
+              render_snapshot(mesh, colours, view_direction(views[k]), titled));
+  });
   return names;
 }
 

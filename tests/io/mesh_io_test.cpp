@@ -115,5 +115,36 @@ TEST(MeshIo, Base64MatchesRfc4648) {
   EXPECT_EQ(report::base64(high, 3), "+/+/");
 }
 
+// Long inputs are encoded in chunks side by side: decoded group by group (RFC 4648's table,
+// written out here) they give the bytes back, across every chunk's border and with one and
+// two bytes left over.
+TEST(MeshIo, Base64OfLongInputsDecodesBack) {
+  const std::string alphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  for (const std::size_t bytes : {std::size_t{600000}, std::size_t{600001}, std::size_t{600002}}) {
+    std::vector<unsigned char> in(bytes);
+    for (std::size_t i = 0; i < bytes; ++i) in[i] = static_cast<unsigned char>((i * 2654435761u) >> 13);
+    const std::string text = report::base64(in.data(), in.size());
+    ASSERT_EQ(text.size(), (bytes + 2) / 3 * 4);
+    std::vector<unsigned char> out;
+    for (std::size_t g = 0; g < text.size(); g += 4) {
+      std::uint32_t v = 0;
+      int pad = 0;
+      for (int k = 0; k < 4; ++k) {
+        const char c = text[g + static_cast<std::size_t>(k)];
+        if (c == '=') {
+          ++pad;
+          v <<= 6;
+          continue;
+        }
+        const std::size_t digit = alphabet.find(c);
+        ASSERT_NE(digit, std::string::npos) << g;
+        v = v << 6 | static_cast<std::uint32_t>(digit);
+      }
+      for (int k = 0; k < 3 - pad; ++k) out.push_back(static_cast<unsigned char>(v >> (16 - 8 * k)));
+    }
+    EXPECT_TRUE(out == in) << bytes;
+  }
+}
+
 }  // namespace
 }  // namespace vcut::io

@@ -355,6 +355,44 @@ TEST(Snapshot, SameBytesForOneAndTwoThreads) {
   EXPECT_GT(count_not(images[0], options.background), 640 * 480 / 4);
 }
 
+// Where two triangles tie in depth the earlier in the mesh stays, however far apart they lie
+// in it: a red square first, 9,000 small grey triangles beside it, then a blue square on the
+// red one (the triangles are binned to rows in chunks of the mesh; the blue one's chunk comes
+// two after the red one's).
+TEST(Snapshot, OnATieTheEarlierTriangleStays) {
+  TriangleMesh mesh = square(10, 0);
+  std::vector<Rgb> colours(4, Rgb{200, 0, 0});
+  for (int t = 0; t < 9000; ++t) {
+    const Eigen::Vector3d corner(12.0 + 0.1 * (t % 80), 0.1 * (t / 80), 0.0);
+    const int first = static_cast<int>(mesh.vertices_mm.size());
+    for (const Eigen::Vector3d& d :
+         {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(0.05, 0, 0), Eigen::Vector3d(0, 0.05, 0)})
+      mesh.vertices_mm.push_back(corner + d);
+    colours.insert(colours.end(), 3, Rgb{120, 120, 120});
+    mesh.triangles.emplace_back(first, first + 1, first + 2);
+  }
+  const int blue = static_cast<int>(mesh.vertices_mm.size());
+  for (const Eigen::Vector3d& v : square(10, 0).vertices_mm) mesh.vertices_mm.push_back(v);
+  colours.insert(colours.end(), 4, Rgb{0, 0, 200});
+  mesh.triangles.emplace_back(blue, blue + 1, blue + 2);
+  mesh.triangles.emplace_back(blue, blue + 2, blue + 3);
+  SnapshotOptions options;
+  options.width_px = 400, options.height_px = 300;
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    const Image image = render_snapshot(mesh, colours, view_direction("top"), options);
+    int red = 0, blues = 0;
+    for (int y = 0; y < image.height; ++y)
+      for (int x = 0; x < image.width; ++x) {
+        const Rgb c = image.get(x, y);
+        red += c[0] > 0 && c[1] == 0 && c[2] == 0;
+        blues += c[2] > 0 && c[0] == 0;
+      }
+    EXPECT_GT(red, 1000) << threads;
+    EXPECT_EQ(blues, 0) << threads;
+  }
+}
+
 TEST(Snapshot, WritesThreeViews) {
   std::vector<Rgb> colours;
   const TriangleMesh cube = unit_cube(colours);
