@@ -2,12 +2,14 @@
 
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -37,20 +39,43 @@ ordered_json vec(const Eigen::Vector3d& v) { return ordered_json::array({v.x(), 
 // takes, 2^64 - 1 - its index (counts and sizes are far smaller, measures are written with a
 // point or an exponent), and the page is assembled with the quoted base64 text in its place.
 // A number with a sign, a point or an exponent is never one; one inside a string is text.
+// The largest (the machined mesh's) are made on other threads while the rest of the page is
+// put together, each in its place in the order.
 class Blobs {
  public:
+  Blobs() = default;
+  Blobs(const Blobs&) = delete;
+  Blobs& operator=(const Blobs&) = delete;
+  ~Blobs() {
+    try {
+      tasks_.wait();
+    } catch (...) {  // the page is not written: its error is the one already on its way
+    }
+  }
   template <typename T>
   ordered_json of(const std::vector<T>& values) {  // x86-64: little-endian, as the page reads
     texts_.push_back(base64(values.data(), values.size() * sizeof(T)));
     return std::numeric_limits<std::uint64_t>::max() - (texts_.size() - 1);
   }
+  // The same for the values `make` returns, made on another thread (wait() before splice()).
+  template <typename Make>
+  ordered_json later(Make make) {
+    texts_.emplace_back();
+    std::string* const slot = &texts_.back();  // a deque's elements stay where they are as it grows
+    tasks_.run([slot, make] {
+      const auto values = make();
+      *slot = base64(values.data(), values.size() * sizeof(values[0]));
+    });
+    return std::numeric_limits<std::uint64_t>::max() - (texts_.size() - 1);
+  }
+  void wait() { tasks_.wait(); }
 
-  // The JSON text into `out` with each placeholder (a number, outside the strings: an NC
+  // The JSON text onto `out` with each placeholder (a number, outside the strings: an NC
   // comment may hold the same digits) replaced by its quoted text, and every '<' written as
   // \u003c: inside a <script> element neither "</script" nor "<!--" may appear (an NC comment
   // could hold either); '<' occurs only inside JSON strings, where "\u003c" is the same
   // character. Base64 holds neither '<' nor '"'.
-  void splice(const std::string& data, std::string& out) const {
+  void splice(const std::string& data, std::ostream& out) const {
     static const std::string kMax = std::to_string(std::numeric_limits<std::uint64_t>::max());
     std::size_t from = 0;
     bool in_string = false;
@@ -62,8 +87,8 @@ class Blobs {
         } else if (c == '"') {
           in_string = false;
         } else if (c == '<') {
-          out.append(data, from, i - from);
-          out += "\\u003c";
+          out.write(data.data() + from, static_cast<std::streamsize>(i - from));
+          out << "\\u003c";
           from = i + 1;
         }
         continue;
@@ -82,41 +107,50 @@ class Blobs {
       if (integer && end - i == kMax.size() && data.compare(i, end - i, kMax) <= 0) {
         const std::uint64_t index = std::numeric_limits<std::uint64_t>::max() - std::stoull(data.substr(i, end - i));
         if (index < texts_.size()) {
-          out.append(data, from, i - from);
-          out += '"';
-          out += texts_[static_cast<std::size_t>(index)];
-          out += '"';
+          out.write(data.data() + from, static_cast<std::streamsize>(i - from));
+          out << '"' << texts_[static_cast<std::size_t>(index)] << '"';
           from = end;
         }
       }
       i = end - 1;
     }
-    out.append(data, from, std::string::npos);
-  }
-
-  std::size_t bytes() const {
-    std::size_t n = 0;
-    for (const std::string& t : texts_) n += t.size() + 2;
-    return n;
+    out.write(data.data() + from, static_cast<std::streamsize>(data.size() - from));
   }
 
  private:
-  std::vector<std::string> texts_;
+  std::deque<std::string> texts_;
+  tbb::task_group tasks_;
 };
 
-ordered_json encode_mesh(const removal::TriangleMesh& mesh, Blobs& blobs) {
+std::vector<float> positions_of(const removal::TriangleMesh& mesh) {
   std::vector<float> positions;
   positions.reserve(mesh.vertices_mm.size() * 3);
   for (const auto& p : mesh.vertices_mm)
     for (int k = 0; k < 3; ++k) positions.push_back(static_cast<float>(p[k]));
+  return positions;
+}
+
+std::vector<std::uint32_t> indices_of(const removal::TriangleMesh& mesh) {
   std::vector<std::uint32_t> indices;
   indices.reserve(mesh.triangles.size() * 3);
   for (const auto& t : mesh.triangles)
     for (int k = 0; k < 3; ++k) indices.push_back(static_cast<std::uint32_t>(t[k]));
+  return indices;
+}
+
+ordered_json encode_mesh(const removal::TriangleMesh& mesh, Blobs& blobs) {
   return {{"vertices", mesh.vertices_mm.size()},
           {"triangles", mesh.triangles.size()},
-          {"positions", blobs.of(positions)},
-          {"indices", blobs.of(indices)}};
+          {"positions", blobs.of(positions_of(mesh))},
+          {"indices", blobs.of(indices_of(mesh))}};
+}
+
+// encode_mesh on other threads: `mesh` must outlive `blobs`.
+ordered_json encode_mesh_later(const removal::TriangleMesh& mesh, Blobs& blobs) {
+  return {{"vertices", mesh.vertices_mm.size()},
+          {"triangles", mesh.triangles.size()},
+          {"positions", blobs.later([&mesh] { return positions_of(mesh); })},
+          {"indices", blobs.later([&mesh] { return indices_of(mesh); })}};
 }
 
 // The NC lines a report names, with their text: a region's spans, an event's blocks (from the
@@ -402,7 +436,7 @@ void write_report_page(const std::string& path, const std::string& template_path
   std::vector<int> kept;
   const removal::TriangleMesh shown = removal::decimate(machined.mesh, input.max_triangles, kept);
   Blobs blobs;
-  ordered_json mesh = encode_mesh(shown, blobs);
+  ordered_json mesh = encode_mesh_later(shown, blobs);
   if (!input.deviation_mm.empty()) {
     std::vector<float> deviation;
     deviation.reserve(kept.size());
@@ -565,13 +599,19 @@ void write_report_page(const std::string& path, const std::string& template_path
   if (!job.assumptions.empty()) j["assumptions"] = job.assumptions;
 
   const std::string data = j.dump(-1, ' ', false, ordered_json::error_handler_t::replace);
-  std::string filled;
-  filled.reserve(page.size() + data.size() + blobs.bytes() + 64);
-  filled.append(page, 0, slot);
-  blobs.splice(data, filled);
-  filled.append(page, slot + std::strlen(kReportDataMarker), std::string::npos);
-  page = std::move(filled);
-  io::write_text_atomically(path, page);
+  blobs.wait();
+  // Written as it is put together: the page is tens of MB, and a copy of it in memory cost
+  // W1's page a tenth of its time.
+  io::write_atomically(path, [&](const std::string& temporary) {
+    std::ofstream out(temporary, std::ios::binary);
+    if (!out) throw InputError(path, 0, 0, "cannot write output (cannot create the file)");
+    out.write(page.data(), static_cast<std::streamsize>(slot));
+    blobs.splice(data, out);
+    const std::size_t rest = slot + std::strlen(kReportDataMarker);
+    out.write(page.data() + rest, static_cast<std::streamsize>(page.size() - rest));
+    out.close();
+    if (!out) throw InputError(path, 0, 0, "cannot write output (write failed: disk full?)");
+  });
 }
 
 }  // namespace vcut::report
