@@ -51,7 +51,7 @@ void set_machine(io::Job& job, const std::string& name) {
 // Two significant digits, rounded down (a finer grid, never a coarser one).
 double two_digits(double v) {
   const double scale = std::pow(10.0, std::floor(std::log10(v)) - 1.0);
-  return std::max(1.0, std::floor(v / scale)) * scale;
+  return std::max(1.0, std::floor(v / scale + 1e-9)) * scale;  // 1.2 less rounding is still 1.2
 }
 
 struct Extent {
@@ -311,10 +311,11 @@ io::Job job_for_program(const std::string& program_path, const ProgramJobOptions
   if (options.resolution_mm > 0.0) {
     job.resolution_mm = options.resolution_mm;
   } else {
-    job.resolution_mm = two_digits(std::min(size.maxCoeff() / 1000.0, smallest_mm / 4.0));
+    // No coarser than the stock's thinnest side, which a coarser lattice cannot hold (refused).
+    job.resolution_mm = two_digits(std::min({size.maxCoeff() / 1000.0, smallest_mm / 4.0, size.minCoeff()}));
     job.assumptions.push_back("resolution: " + mm(job.resolution_mm) +
-                              " mm (the longest stock side / 1000, at most a quarter of the smallest tool; "
-                              "--resolution to change)");
+                              " mm (the longest stock side / 1000, at most a quarter of the smallest tool and the "
+                              "stock's thinnest side; --resolution to change)");
   }
   job.assumptions.push_back(
       "design: none, so no gouge or excess is measured (give a job file with design: to compare)");

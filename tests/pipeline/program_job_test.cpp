@@ -51,6 +51,19 @@ TEST_F(ProgramJob, StockFromTheCuttingMoves) {
   EXPECT_GE(j.assumptions.size(), 5u);
 }
 
+// A 10 mm tool along a 2 m line at Z-0.2: the stock is X -5..2005, Y -5..5, Z -1.2..0 (Z-0.2
+// less max(1, 5 % of 0.2) = 1). The longest side / 1000 is 2.01 mm and a quarter of the tool
+// 2.5 mm, but the stock is 1.2 mm thick: a lattice of 2 mm would hold no node across it (a
+// stock thinner than the resolution is refused), so the resolution is 1.2 mm.
+TEST_F(ProgramJob, ResolutionNoCoarserThanTheStocksThinnestSide) {
+  const vcut::io::Job j =
+      job("(T1 D=10 CR=0 - ZMIN=-0.2 - flat end mill)\nG21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-0.2 F100\nX2000\n"
+          "G0 Z5\nM30\n");
+  EXPECT_TRUE(j.stock.box.min_mm.isApprox(Eigen::Vector3d(-5, -5, -1.2), 1e-12)) << j.stock.box.min_mm.transpose();
+  EXPECT_TRUE(j.stock.box.max_mm.isApprox(Eigen::Vector3d(2005, 5, 0), 1e-12)) << j.stock.box.max_mm.transpose();
+  EXPECT_NEAR(j.resolution_mm, 1.2, 1e-12);
+}
+
 // The first plunge: a rapid down to Z-2 over the cutting area, then a feed further down: the
 // stock's top is no higher than Z-2 (CAM systems rapid to just above the stock). The box then
 // runs from Z-4 less max(1, 5 % of 2) = 1 to Z-2. A rapid to depth followed by a level lead-in
