@@ -219,6 +219,10 @@ void read_offsets_key(const YamlReader& yaml, const YAML::Node& offsets, const f
 void read_stock_key(const YamlReader& yaml, const YAML::Node& stock, const fs::path& base, Job& job) {
   yaml.only_keys(stock, "stock", {"box", "cylinder", "mesh"});
   if (stock.size() != 1) yaml.fail(stock, "stock", "exactly one of box, cylinder or mesh");
+  if (!stock.Mark().is_null()) {
+    job.stock.line = stock.Mark().line + 1;
+    job.stock.column = stock.Mark().column + 1;
+  }
   if (const YAML::Node box = stock["box"]) {
     yaml.only_keys(box, "stock.box", {"min", "max"});
     job.stock.kind = StockSpec::Kind::Box;

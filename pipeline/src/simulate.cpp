@@ -361,7 +361,7 @@ double require_cuttable(const io::Job& job, CutMoves& cut, const removal::StockS
     msg << "the stock is " << size_mm << " mm across in "
         << "xyz"[a] << ", less than the resolution " << resolution_mm
         << " mm: no cell fits across it (expected a resolution of at most " << size_mm << " mm, or a thicker stock)";
-    throw InputError(job.file, 0, 0, msg.str());
+    throw InputError(job.file, job.stock.line, job.stock.column, msg.str());
   }
   bool overlap = false;
   Eigen::AlignedBox3d path_box;

@@ -470,7 +470,7 @@ TEST_F(Simulate, StockThinnerThanACellIsRefused) {
           "stock: {box: {min: [0, 18, -1.03], max: [6, 22, -1]}}\nengine: {kind: " + engine +
           ", resolution: 0.1, threads: 2}\nreport: {out: out}\n";
     const CommandResult r = simulate();
-    expect_error(r, "job.yaml");
+    expect_error(r, "job.yaml:5:8:");  // the stock's value, line 5
     EXPECT_NE(r.output.find("0.03 mm across in z"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("resolution 0.1 mm"), std::string::npos) << r.output;
     EXPECT_TRUE(no_output());

@@ -35,6 +35,7 @@ struct StockSpec {
   removal::BoxShape box{};
   removal::CylinderShape cylinder{};
   std::string mesh_file;
+  int line = 0, column = 0;  // where the job file gives it (0: assumed, no job file)
 };
 
 struct Job {
