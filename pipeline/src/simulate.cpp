@@ -385,7 +385,7 @@ double require_cuttable(const io::Job& job, CutMoves& cut, const removal::StockS
     if (!path_box.isEmpty())
       msg << ", cutting moves span [" << path_box.min().transpose() << "] to [" << path_box.max().transpose() << "] mm";
     msg << "): check the work offsets and the stock";
-    throw InputError(job.file, 0, 0, msg.str());
+    throw InputError(job.file, job.stock.line, job.stock.column, msg.str());
   }
   const bool use_dexel = job.engine != io::Engine::Vdb, use_vdb = job.engine != io::Engine::Dexel;
   std::size_t estimate_bytes = 0;

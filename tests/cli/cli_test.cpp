@@ -408,7 +408,9 @@ TEST_F(Simulate, ZeroToolDiameter) {
 
 TEST_F(Simulate, StockAndProgramDoNotOverlap) {
   job.replace(job.find("offsets: {G54: [0, 0, 0]}"), 25, "offsets: {G54: [500, 0, 0]}");
-  expect_error(simulate(), "never reach the stock");
+  const CommandResult r = simulate();
+  expect_error(r, "never reach the stock");
+  EXPECT_NE(r.output.find("job.yaml:6:8:"), std::string::npos) << r.output;  // the stock's line
   EXPECT_TRUE(no_output());
 }
 
