@@ -53,6 +53,7 @@ bench: build
 	scripts/bench-features $(BUILD)/cli/vcut
 	scripts/bench-memory $(BUILD)/cli/vcut
 	scripts/bench-five-axis $(BUILD)/cli/vcut
+	scripts/bench-threads $(BUILD)/cli/vcut
 
 clean:
 	rm -rf $(BUILD) $(BUILD_SAN) build-fuzz .ccache $(BUILD).configure.log $(BUILD_SAN).configure.log
