@@ -29,14 +29,19 @@ void write_atomically(const std::string& path, const std::function<void(const st
   }
 }
 
-void write_text_atomically(const std::string& path, const std::string& text) {
+void write_stream_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
   write_atomically(path, [&](const std::string& temporary) {
     std::ofstream out(temporary, std::ios::binary);
     if (!out) throw InputError(path, 0, 0, "cannot write output (cannot create the file)");
-    out.write(text.data(), static_cast<std::streamsize>(text.size()));
+    write(out);
     out.close();
     if (!out) throw InputError(path, 0, 0, "cannot write output (write failed: disk full?)");
   });
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  write_stream_atomically(
+      path, [&](std::ostream& out) { out.write(text.data(), static_cast<std::streamsize>(text.size())); });
 }
 
 void ensure_writable_folder(const std::string& folder) {

@@ -435,15 +435,11 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     m.moves.append(batch, count, cutter_base);
     std::vector<std::optional<detail::RaySweep>> sweeps(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 256), [&](const auto& range) {
-      for (std::size_t i = range.begin(); i != range.end(); ++i) {
-        const Move& move = batch[i - first];
-        const Cutter& cutter = cutters.at(static_cast<std::size_t>(move.cutter));
-        // Material never leaves the initial stock's box: a tilted tool's part that stays out
-        // of it need not be looked for along the rays.
-        const double window_height_mm = highest_point_in_box_mm(cutter.radius_mm(), move.start_mm, move.end_mm,
-                                                                move.axis, move.axis, m.shape_bounds);
-        sweeps[i - first].emplace(cutter, move, window_height_mm);
-      }
+      // Material never leaves the initial stock's box: a tilted tool's part that stays out of
+      // it need not be looked for along the rays.
+      for (std::size_t i = range.begin(); i != range.end(); ++i)
+        sweeps[i - first].emplace(cutters.at(static_cast<std::size_t>(batch[i - first].cutter)), batch[i - first],
+                                  &m.shape_bounds);
     });
     // Bin the batch's moves to the tiles of rays their sweep's box covers (counting sort:
     // within a tile the moves stay in program order).

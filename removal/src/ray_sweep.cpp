@@ -170,7 +170,7 @@ double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
 }  // namespace
 
-RaySweep::RaySweep(const Cutter& cutter, const Move& move, double window_height_mm)
+RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedBox3d* material_box)
     : sweep_(cutter, move),
       cutter_(cutter),
       core_(core_of(cutter)),
@@ -186,14 +186,14 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, double window_height_
   if (core_.core_radius_mm == 0.0 && cutter.type != CutterType::VBit) {
     method_ = Method::Ball;
     prepare_capsule(core_.rounding_mm);
-    if (!vertical_axis_) prepare_tilt_box(window_height_mm);
+    if (!vertical_axis_) prepare_tilt_box(material_box);
   } else if (vertical_axis_) {
     method_ = Method::Upright;
   } else {
     method_ = Method::General;
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
-    prepare_tilt_box(window_height_mm);
+    prepare_tilt_box(material_box);
     // The root march's bracket: every instance lies within R of the core's axis segment (a
     // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
     // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
@@ -236,20 +236,23 @@ void RaySweep::prepare_capsule(double capsule_r) {
   for (int axis = 0; axis < 3; ++axis) prepare_ball_family(axis);
 }
 
-void RaySweep::prepare_tilt_box(double window_height_mm) {
+void RaySweep::prepare_tilt_box(const Eigen::AlignedBox3d* material_box) {
   // Every instance lies in the cylinder of radius R around [0, H] along the axis a from the
   // tip; the tip moves by delta. Directions: a; n1, the motion's part square to a; n2 = a x n1
   // (no motion along it). Along a the sweep spans [min(0, delta.a), H + max(0, delta.a)],
-  // along n1 [-R, R + |delta_perp|], along n2 [-R, R]. The part above window_height_mm never
-  // meets material: H stops there (W5: the tool stands 25 mm out of a 12 mm block, and two
-  // thirds of the rays the whole box passed held no material inside it).
+  // along n1 [-R, R + |delta_perp|], along n2 [-R, R]. The part that stays out of the
+  // material's box never meets material: H stops where it begins (W5: the tool stands 25 mm
+  // out of a 12 mm block, and two thirds of the rays the whole box passed held none in it).
   const Vector3d& a = tool_axis_;
   const double da = delta_.dot(a);
   const Vector3d perp = delta_ - da * a;
   const double along = perp.norm();
   const Vector3d n1 = along > kTiny_mm ? Vector3d(perp / along) : Vector3d(a.unitOrthogonal());
   const Vector3d n2 = a.cross(n1).normalized();
-  const double R = radius_mm_, H = std::min(height_mm_, std::max(0.0, window_height_mm));
+  const double R = radius_mm_;
+  const double H = material_box == nullptr
+                       ? height_mm_
+                       : std::min(height_mm_, highest_point_in_box_mm(R, p0_, p0_ + delta_, a, a, *material_box));
   // A margin (mm) far above rounding and far below anything a ray resolves: the window is
   // only a filter, the kernel decides.
   constexpr double kMargin_mm = 1e-6;

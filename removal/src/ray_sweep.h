@@ -49,11 +49,11 @@ bool line_cylinder(int axis, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
 // Hidden: used only inside vcut_removal, so its calls from the cut's loop go direct.
 class __attribute__((visibility("hidden"))) RaySweep {
  public:
-  // window_height_mm: for a tilted tool, the height above the tip beyond which no point of
-  // the tool comes inside the material's box during the move (removal::highest_point_in_box_mm):
-  // the window box (tilted_window, row_range) stops there. Only a filter: the kernel still
-  // takes the whole cutter.
-  RaySweep(const Cutter& cutter, const Move& move, double window_height_mm = std::numeric_limits<double>::infinity());
+  // material_box (none: anywhere): where all material lies. A tilted tool's window box
+  // (tilted_window, row_range) stops at the height above the tip beyond which no point of the
+  // tool comes inside it during the move (highest_point_in_box_mm). Only a filter: the kernel
+  // still takes the whole cutter.
+  RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedBox3d* material_box = nullptr);
 
   // The ray parallel to coordinate axis `axis` (0 x, 1 y, 2 z) through the point whose two
   // other coordinates, in increasing axis order, are (u, w). Returns false when it misses the
@@ -131,7 +131,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
     double base[3], du[3], dw[3], inv_slope[3], lo[3], hi[3];
     bool flat[3];
   };
-  void prepare_tilt_box(double window_height_mm);
+  void prepare_tilt_box(const Eigen::AlignedBox3d* material_box);
   TiltBox tilt_box_[3];
   Eigen::Vector3d tilt_corner_[8];  // the window box's corners (corner c: bit k set, the high side along k)
   bool upright_vertical(double u, double w, double& lo, double& hi) const;

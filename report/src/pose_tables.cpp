@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <cmath>
-#include <fstream>
 #include <string>
 #include <vector>
 
@@ -27,9 +26,7 @@ pipeline::PoseRun run_pose_engine_with_periods(const io::Job& job, const std::st
   lines.reserve(input.program.blocks.size());
   for (const auto& b : input.program.blocks) lines.push_back(input.program.where(b.source));
   pipeline::PoseRun run;
-  io::write_atomically(periods_path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (cannot create the file)");
+  io::write_stream_atomically(periods_path, [&](std::ostream& out) {
     std::string header = "t,block,source";
     for (const char* side : {"commanded_", "actual_"})
       for (int a = 0; a < machine.axis_count(); ++a) header += std::string(",") + side + machine.axis(a).letter;
@@ -50,8 +47,6 @@ pipeline::PoseRun run_pose_engine_with_periods(const io::Job& job, const std::st
       out << row;
     };
     run = pipeline::run_pose_engine(job, std::move(input), job.resolution_mm, &visit);
-    out.close();
-    if (!out) throw InputError(periods_path, 0, 0, "cannot write output (write failed: disk full?)");
   });
   return run;
 }

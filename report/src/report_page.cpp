@@ -602,15 +602,11 @@ void write_report_page(const std::string& path, const std::string& template_path
   blobs.wait();
   // Written as it is put together: the page is tens of MB, and a copy of it in memory cost
   // W1's page a tenth of its time.
-  io::write_atomically(path, [&](const std::string& temporary) {
-    std::ofstream out(temporary, std::ios::binary);
-    if (!out) throw InputError(path, 0, 0, "cannot write output (cannot create the file)");
+  io::write_stream_atomically(path, [&](std::ostream& out) {
     out.write(page.data(), static_cast<std::streamsize>(slot));
     blobs.splice(data, out);
     const std::size_t rest = slot + std::strlen(kReportDataMarker);
     out.write(page.data() + rest, static_cast<std::streamsize>(page.size() - rest));
-    out.close();
-    if (!out) throw InputError(path, 0, 0, "cannot write output (write failed: disk full?)");
   });
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <functional>
+#include <ostream>
 #include <string>
 
 namespace vcut::io {
@@ -11,6 +12,9 @@ namespace vcut::io {
 // Errors (cannot create, cannot rename) are vcut::InputError naming `path`.
 void write_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
 void write_text_atomically(const std::string& path, const std::string& text);
+// The same for text written as it is made: write(out) fills the temporary file; a file that
+// cannot be created or written in full (disk full) is an InputError naming `path`.
+void write_stream_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
 
 // Creates the folder (and parents); an InputError when it cannot be created or written.
 void ensure_writable_folder(const std::string& folder);
