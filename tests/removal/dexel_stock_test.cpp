@@ -623,6 +623,47 @@ TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
   EXPECT_LT(inside, 0.005) << "the slot's bottom edge rounded";
 }
 
+// Issue 24 item 5, where creases meet and end: a 90 deg V-bit 0.1 mm deep at v = 0.05 mm on
+// round coordinates (its walls pass through the nodes 0.025 mm below the top nodes' row, the
+// worst case for the lattice), a bar along x from a plunge at (2, 6) to (8, 6) and a stem from
+// a plunge at (5, 6) on the bar down to (5, 2): a T where three creases meet, and three
+// groove ends where a crease ends in the plunge's cone. The floor is the tip's path (closed
+// form: -0.1 mm) all along both creases up to their ends. Before, the cells at the T held
+// their crossings in the nodes' plane and were merged into one flat vertex (the floor 0.03 mm
+// high beside the T), and at a groove's end the cone's narrow fan of planes was cut off as if
+// undetermined (0.005-0.009 mm high).
+TEST(DexelStock, MeshKeepsVBitJunctionsAndGrooveEnds) {
+  constexpr double v = 0.05, depth = 0.1;
+  const BoxShape box{{0, 0, -2}, {10, 10, 0}};
+  DexelStock stock(box, v);
+  MoveList list;
+  list.cutters.push_back(vbit(90));
+  const Eigen::Vector3d up(0, 0, 1);
+  const Eigen::Vector3d bar0(2, 6, -depth), bar1(8, 6, -depth), stem0(5, 6, -depth), stem1(5, 2, -depth);
+  for (const auto& [from, to] : {std::pair(bar0, bar1), std::pair(stem0, stem1)})
+    for (const Move& m : {line(from + up, from), line(from, to), line(to, to + up)}) list.moves.push_back(m);
+  stock.cut(list, {});
+  const TriangleMesh mesh = stock.surface().mesh;
+  double worst = 0.0;
+  Eigen::Vector3d worst_at = Eigen::Vector3d::Zero();
+  int checked = 0;
+  for (const auto& [from, to] : {std::pair(bar0, bar1), std::pair(stem0, stem1)}) {
+    // Every 0.0037 mm along the crease (not a fraction of a cell), ends included.
+    const double length = (to - from).norm();
+    for (double s = 0.0; s <= length; s += 0.0037) {
+      const Eigen::Vector3d on = from + s / length * (to - from);
+      const double off = std::abs(mesh_top_mm(mesh, on.x(), on.y()) - -depth);
+      if (off > worst) {
+        worst = off;
+        worst_at = on;
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 2700);
+  EXPECT_LT(worst, 0.005) << "the V's floor off its crease at " << worst_at.transpose();
+}
+
 TEST(DexelStock, VBitRampMatchesTheConeSweep) {
   // A 60 deg V-bit ramping down (bracketing search on the section): every endpoint is on
   // the boundary of the union of the cone's poses, checked by dense sampling along the move.
