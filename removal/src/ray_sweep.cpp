@@ -191,14 +191,16 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     method_ = Method::Upright;
   } else {
     method_ = Method::General;
+    band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
     prepare_tilt_box(material_box);
     // The root march's bracket: every instance lies within R of the core's axis segment (a
     // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
     // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
-    // puts the sweep's boundary outside it (the flat end mill's side lies on it).
-    constexpr double kBracketMargin_mm = 1e-6;
+    // puts the sweep's boundary outside it (the flat end mill's and the bull-nose's sides
+    // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_end).
+    constexpr double kBracketMargin_mm = 1e-9;
     prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
   }
 }
@@ -1031,6 +1033,15 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
+bool RaySweep::band_end(int axis, const Vector3d& o, double s) const {
+  // Clear of the corner and the top rounding by far more than rounding moves the bracket's end.
+  constexpr double kClear_mm = 1e-6;
+  Vector3d x = o;
+  x[axis] = s;
+  const double h = (x - p0_).dot(tool_axis_), hd = delta_.dot(tool_axis_);
+  return h - std::max(0.0, hd) > core_.z_low_mm + kClear_mm && h - std::min(0.0, hd) < core_.z_high_mm - kClear_mm;
+}
+
 bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
@@ -1041,6 +1052,14 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
   const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
   if (!(sa <= sb)) return false;
+  // A bull-nose's bracket end in its band is the sweep's own (band_end): no march there.
+  const bool exact_lo = band_ && band_end(axis, o, capsule_lo), exact_hi = band_ && band_end(axis, o, capsule_hi);
+  if ((exact_lo && capsule_lo > top) || (exact_hi && capsule_hi < bottom)) return false;  // all material beside it
+  if (exact_lo && exact_hi) {
+    lo = capsule_lo;
+    hi = capsule_hi;
+    return true;
+  }
   auto f = [&](double s) {
     Vector3d x = o;
     x[axis] = s;
@@ -1049,7 +1068,11 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   // The sweep's signed distance is convex and 1-Lipschitz along the line: march to its first
   // zero from each end (exact to the distance's own tolerance, kGeneralSweepTolerance_mm).
   bool converged_lo = false, converged_hi = false;
-  if (march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
+  if (exact_lo ? (lo = capsule_lo, true) : march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
+    if (exact_hi) {
+      hi = capsule_hi;
+      return true;
+    }
     if (march_to_root(f, sb, sa, kGeneralSweepTolerance_mm, hi, converged_hi) && hi >= lo) return true;
     if (converged_hi) return false;
   } else if (converged_lo) {

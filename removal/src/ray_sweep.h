@@ -138,6 +138,15 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   // The root march over [bottom, top] of the ray (see interval_within).
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
+  // Bull-nose (band_): between the heights z_low = r and z_high above its tip the cutter is a
+  // cylinder of radius R, and so is the bracket's capsule (the core's axis segment grown by
+  // R). A point at a height strictly inside (z_low, z_high) above every instance's tip is
+  // nearest each instance's core segment at an inner point, so it lies in the capsule sweep
+  // exactly when it lies in the sweep: an end of the ray's capsule interval there (the point
+  // at s) is on the sweep's boundary and is the sweep's own entry or exit (the sweep lies
+  // inside the capsule sweep), to the capsule's 1e-9 mm margin.
+  bool band_end(int axis, const Eigen::Vector3d& o, double s) const;
+  bool band_ = false;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
   bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;
