@@ -192,6 +192,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   } else {
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
+    bottom_plane_mm_ = tool_axis_.dot(p0_) + std::min(0.0, delta_.dot(tool_axis_));
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
     prepare_tilt_box(material_box);
@@ -1042,6 +1043,15 @@ bool RaySweep::band_end(int axis, const Vector3d& o, double s) const {
   return h - std::max(0.0, hd) > core_.z_low_mm + kClear_mm && h - std::min(0.0, hd) < core_.z_high_mm - kClear_mm;
 }
 
+bool RaySweep::on_bottom_face(int axis, const Vector3d& o, double s) const {
+  Vector3d x = o;
+  x[axis] = s;
+  const Vector3d lowest_tip = delta_.dot(tool_axis_) >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
+  const Vector3d off = x - lowest_tip;
+  const double radial2 = off.squaredNorm() - std::pow(off.dot(tool_axis_), 2);
+  return radial2 <= core_.core_radius_mm * core_.core_radius_mm;
+}
+
 bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
@@ -1052,12 +1062,27 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
   const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
   if (!(sa <= sb)) return false;
-  // A bull-nose's bracket end in its band is the sweep's own (band_end): no march there.
-  const bool exact_lo = band_ && band_end(axis, o, capsule_lo), exact_hi = band_ && band_end(axis, o, capsule_hi);
-  if ((exact_lo && capsule_lo > top) || (exact_hi && capsule_hi < bottom)) return false;  // all material beside it
+  // A bull-nose's ends where they are known without the march: the bracket's end in the band
+  // (band_end), or the point where the ray crosses the sweep's lowest plane inside the lowest
+  // instance's flat bottom (on_bottom_face).
+  bool exact_lo = band_ && band_end(axis, o, capsule_lo), exact_hi = band_ && band_end(axis, o, capsule_hi);
+  double known_lo = capsule_lo, known_hi = capsule_hi;
+  if (band_ && !(exact_lo && exact_hi) && tool_axis_[axis] != 0.0) {
+    const double s_plane = (bottom_plane_mm_ - tool_axis_.dot(o)) / tool_axis_[axis];
+    if (on_bottom_face(axis, o, s_plane)) {
+      if (tool_axis_[axis] > 0.0 && !exact_lo) {
+        exact_lo = true;
+        known_lo = s_plane;
+      } else if (tool_axis_[axis] < 0.0 && !exact_hi) {
+        exact_hi = true;
+        known_hi = s_plane;
+      }
+    }
+  }
+  if ((exact_lo && known_lo > top) || (exact_hi && known_hi < bottom)) return false;  // all material beside it
   if (exact_lo && exact_hi) {
-    lo = capsule_lo;
-    hi = capsule_hi;
+    lo = known_lo;
+    hi = known_hi;
     return true;
   }
   auto f = [&](double s) {
@@ -1068,9 +1093,9 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   // The sweep's signed distance is convex and 1-Lipschitz along the line: march to its first
   // zero from each end (exact to the distance's own tolerance, kGeneralSweepTolerance_mm).
   bool converged_lo = false, converged_hi = false;
-  if (exact_lo ? (lo = capsule_lo, true) : march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
+  if (exact_lo ? (lo = known_lo, true) : march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
     if (exact_hi) {
-      hi = capsule_hi;
+      hi = known_hi;
       return true;
     }
     if (march_to_root(f, sb, sa, kGeneralSweepTolerance_mm, hi, converged_hi) && hi >= lo) return true;

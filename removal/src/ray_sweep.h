@@ -146,7 +146,13 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // at s) is on the sweep's boundary and is the sweep's own entry or exit (the sweep lies
   // inside the capsule sweep), to the capsule's 1e-9 mm margin.
   bool band_end(int axis, const Eigen::Vector3d& o, double s) const;
+  // Bull-nose: the sweep lies on the upper side of the plane a.x = bottom_plane_mm_ through
+  // the lowest instance's tip, and holds of it that instance's flat bottom (the disc of the
+  // core's radius about the tip). The point at s of a ray crossing the plane there is on the
+  // sweep's boundary: its entry (exit for a ray running down the tool axis).
+  bool on_bottom_face(int axis, const Eigen::Vector3d& o, double s) const;
   bool band_ = false;
+  double bottom_plane_mm_ = 0.0;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
   bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;
