@@ -587,6 +587,12 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                   while (last > j && !(seg[last].lo_mm < win_hi)) --last;
                   bottom = seg[j].lo_mm;
                   material_top = seg[last].hi_mm;
+                  // The sweep lies in a tilted tool's window: the kernel need look no further
+                  // (the root march then starts at the tool's tip plane, not below it).
+                  if (tilted) {
+                    bottom = std::max(bottom, win_lo);
+                    material_top = std::min(material_top, win_hi);
+                  }
                 }
                 rows.k[count] = k;
                 rows.u[count] = u_mm;
