@@ -193,6 +193,15 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
     bottom_plane_mm_ = tool_axis_.dot(p0_) + std::min(0.0, delta_.dot(tool_axis_));
+    core_mid_ = p0_ + 0.5 * delta_;
+    half_move_mm_ = 0.5 * delta_.norm();
+    // band_'s heights: clear of the corner and the top rounding above every instance's tip by
+    // far more than rounding moves the bracket's end.
+    constexpr double kClear_mm = 1e-6;
+    const double hd = delta_.dot(tool_axis_);
+    band_h_lo_mm_ = core_.z_low_mm + kClear_mm + std::max(0.0, hd);
+    band_h_hi_mm_ = core_.z_high_mm - kClear_mm + std::min(0.0, hd);
+    lowest_tip_ = hd >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
     prepare_tilt_box(material_box);
@@ -200,7 +209,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
     // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
     // puts the sweep's boundary outside it (the flat end mill's and the bull-nose's sides
-    // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_end).
+    // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_).
     constexpr double kBracketMargin_mm = 1e-9;
     prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
   }
@@ -1034,28 +1043,27 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
-bool RaySweep::band_end(int axis, const Vector3d& o, double s) const {
-  // Clear of the corner and the top rounding by far more than rounding moves the bracket's end.
-  constexpr double kClear_mm = 1e-6;
-  Vector3d x = o;
-  x[axis] = s;
-  const double h = (x - p0_).dot(tool_axis_), hd = delta_.dot(tool_axis_);
-  return h - std::max(0.0, hd) > core_.z_low_mm + kClear_mm && h - std::min(0.0, hd) < core_.z_high_mm - kClear_mm;
-}
-
-bool RaySweep::on_bottom_face(int axis, const Vector3d& o, double s) const {
-  Vector3d x = o;
-  x[axis] = s;
-  const Vector3d lowest_tip = delta_.dot(tool_axis_) >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
-  const Vector3d off = x - lowest_tip;
-  const double radial2 = off.squaredNorm() - std::pow(off.dot(tool_axis_), 2);
-  return radial2 <= core_.core_radius_mm * core_.core_radius_mm;
-}
-
 bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
+  // The ray's material, a ball about its middle, farther than the bracket's radius plus half
+  // the move from the middle instance's core segment (every instance's lies within half the
+  // move of it): clear of the bracket, for a few products instead of its closed form. These
+  // are mostly shreds the earlier pieces left beside the tool (W5: 0.03-2 mm long, 0.05-1.5
+  // mm from its sweep, in half the rays the window passes).
+  // In scalars throughout: o's coordinate along the ray is written by index, and a vector
+  // built from it stalls on the store.
+  const double ak = tool_axis_[axis];
+  if (std::isfinite(bottom) && std::isfinite(top)) {
+    const double half = 0.5 * (top - bottom), s = bottom + half;
+    const double px = o[0] - core_mid_[0], py = o[1] - core_mid_[1], pz = o[2] - core_mid_[2];
+    const double qa = px * tool_axis_[0] + py * tool_axis_[1] + pz * tool_axis_[2] + s * ak;
+    const double qq = px * px + py * py + pz * pz + s * (2.0 * (o[axis] - core_mid_[axis]) + s);
+    const double h = std::clamp(qa, core_.z_low_mm, core_.z_high_mm);
+    const double reach = capsule_r_ + half_move_mm_ + half;
+    if (qq - h * (2.0 * qa - h) > reach * reach) return false;
+  }
   // The enclosing ball sweep's interval: none, no meeting; else the march starts at its ends.
   double capsule_lo, capsule_hi;
   if (!ball_general(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], capsule_lo, capsule_hi)) return false;
@@ -1063,19 +1071,34 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
   if (!(sa <= sb)) return false;
   // A bull-nose's ends where they are known without the march: the bracket's end in the band
-  // (band_end), or the point where the ray crosses the sweep's lowest plane inside the lowest
-  // instance's flat bottom (on_bottom_face).
-  bool exact_lo = band_ && band_end(axis, o, capsule_lo), exact_hi = band_ && band_end(axis, o, capsule_hi);
+  // (band_), or the point where the ray crosses the sweep's lowest plane inside the lowest
+  // instance's flat bottom.
+  bool exact_lo = false, exact_hi = false;
   double known_lo = capsule_lo, known_hi = capsule_hi;
-  if (band_ && !(exact_lo && exact_hi) && tool_axis_[axis] != 0.0) {
-    const double s_plane = (bottom_plane_mm_ - tool_axis_.dot(o)) / tool_axis_[axis];
-    if (on_bottom_face(axis, o, s_plane)) {
-      if (tool_axis_[axis] > 0.0 && !exact_lo) {
-        exact_lo = true;
-        known_lo = s_plane;
-      } else if (tool_axis_[axis] < 0.0 && !exact_hi) {
-        exact_hi = true;
-        known_hi = s_plane;
+  if (band_) {
+    // Heights along the axis above the first tip: h(s) = oa + s ak.
+    const double oa = (o[0] - p0_[0]) * tool_axis_[0] + (o[1] - p0_[1]) * tool_axis_[1] +
+                      (o[2] - p0_[2]) * tool_axis_[2] - o[axis] * ak;
+    auto in_band = [&](double s) {
+      const double h = oa + s * ak;
+      return h > band_h_lo_mm_ && h < band_h_hi_mm_;
+    };
+    exact_lo = in_band(capsule_lo);
+    exact_hi = in_band(capsule_hi);
+    if (!(exact_lo && exact_hi) && ak != 0.0) {
+      // Where the ray crosses the lowest plane (h = min(0, delta.a)), its offset from the
+      // lowest tip is square to the axis.
+      const double s_plane = (bottom_plane_mm_ - (oa + p0_.dot(tool_axis_))) / ak;
+      const double dx = o[0] - lowest_tip_[0], dy = o[1] - lowest_tip_[1], dz = o[2] - lowest_tip_[2];
+      const double radial2 = dx * dx + dy * dy + dz * dz + s_plane * (2.0 * (o[axis] - lowest_tip_[axis]) + s_plane);
+      if (radial2 <= core_.core_radius_mm * core_.core_radius_mm) {
+        if (ak > 0.0 && !exact_lo) {
+          exact_lo = true;
+          known_lo = s_plane;
+        } else if (ak < 0.0 && !exact_hi) {
+          exact_hi = true;
+          known_hi = s_plane;
+        }
       }
     }
   }

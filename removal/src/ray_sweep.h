@@ -140,19 +140,21 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
   // Bull-nose (band_): between the heights z_low = r and z_high above its tip the cutter is a
   // cylinder of radius R, and so is the bracket's capsule (the core's axis segment grown by
-  // R). A point at a height strictly inside (z_low, z_high) above every instance's tip is
-  // nearest each instance's core segment at an inner point, so it lies in the capsule sweep
-  // exactly when it lies in the sweep: an end of the ray's capsule interval there (the point
-  // at s) is on the sweep's boundary and is the sweep's own entry or exit (the sweep lies
-  // inside the capsule sweep), to the capsule's 1e-9 mm margin.
-  bool band_end(int axis, const Eigen::Vector3d& o, double s) const;
-  // Bull-nose: the sweep lies on the upper side of the plane a.x = bottom_plane_mm_ through
-  // the lowest instance's tip, and holds of it that instance's flat bottom (the disc of the
-  // core's radius about the tip). The point at s of a ray crossing the plane there is on the
-  // sweep's boundary: its entry (exit for a ray running down the tool axis).
-  bool on_bottom_face(int axis, const Eigen::Vector3d& o, double s) const;
+  // R). A point at a height strictly inside (z_low, z_high) above every instance's tip
+  // (band_h_lo_mm_ < h < band_h_hi_mm_, h above the first tip) is nearest each instance's core
+  // segment at an inner point, so it lies in the capsule sweep exactly when it lies in the
+  // sweep: an end of the ray's capsule interval there is on the sweep's boundary and is the
+  // sweep's own entry or exit (the sweep lies inside the capsule sweep), to the capsule's
+  // 1e-9 mm margin. Likewise the sweep lies on the upper side of the plane a.x =
+  // bottom_plane_mm_ through the lowest instance's tip (lowest_tip_), and holds of it that
+  // instance's flat bottom (the disc of the core's radius about the tip): a ray crossing the
+  // plane there enters the sweep (leaves it, running down the tool axis).
   bool band_ = false;
-  double bottom_plane_mm_ = 0.0;
+  double band_h_lo_mm_ = 0.0, band_h_hi_mm_ = 0.0, bottom_plane_mm_ = 0.0;
+  Eigen::Vector3d lowest_tip_ = Eigen::Vector3d::Zero();
+  // The general method's middle tip and half the move's length (mm).
+  Eigen::Vector3d core_mid_ = Eigen::Vector3d::Zero();
+  double half_move_mm_ = 0.0;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
   bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;
