@@ -96,11 +96,8 @@ bool march_to_root(F&& f, double from, double toward, double tolerance, double& 
 // The point at s on the ray of family `axis` through (u, w) (the other two coordinates, in
 // increasing axis order).
 Vector3d ray_point(int axis, double u, double w, double s) {
-  Vector3d x;
-  x[axis] = s;
-  x[axis == 0 ? 1 : 0] = u;
-  x[axis == 2 ? 1 : 2] = w;
-  return x;
+  // Built whole (a store by index read back by a vector load stalls).
+  return axis == 0 ? Vector3d(s, u, w) : axis == 1 ? Vector3d(u, s, w) : Vector3d(u, w, s);
 }
 
 void widen(double& lo, double& hi, double a, double b) {
@@ -1108,10 +1105,10 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
     hi = known_hi;
     return true;
   }
+  // The point built whole from scalars (no store by index under a vector load: see above).
+  const double o0 = o[0], o1 = o[1], o2 = o[2];
   auto f = [&](double s) {
-    Vector3d x = o;
-    x[axis] = s;
-    return sweep_.distance(x);
+    return sweep_.distance(Vector3d(axis == 0 ? s : o0, axis == 1 ? s : o1, axis == 2 ? s : o2));
   };
   // The sweep's signed distance is convex and 1-Lipschitz along the line: march to its first
   // zero from each end (exact to the distance's own tolerance, kGeneralSweepTolerance_mm).
