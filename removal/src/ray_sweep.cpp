@@ -178,6 +178,8 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
   const Vector3d a = move.axis.normalized();
   tool_axis_ = a;
+  core_mid_ = p0_ + 0.5 * delta_;
+  half_move_mm_ = 0.5 * delta_.norm();
   vertical_axis_ = std::abs(a.x()) <= kTiny_mm && std::abs(a.y()) <= kTiny_mm && a.z() > 0.0;
   flat_bottom_ = cutter.type != CutterType::VBit && core_.rounding_mm == 0.0;
   if (core_.core_radius_mm == 0.0 && cutter.type != CutterType::VBit) {
@@ -190,8 +192,6 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
     bottom_plane_mm_ = tool_axis_.dot(p0_) + std::min(0.0, delta_.dot(tool_axis_));
-    core_mid_ = p0_ + 0.5 * delta_;
-    half_move_mm_ = 0.5 * delta_.norm();
     // band_'s heights: clear of the corner and the top rounding above every instance's tip by
     // far more than rounding moves the bracket's end.
     constexpr double kClear_mm = 1e-6;
@@ -722,7 +722,8 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     }
     return;
   }
-  for (int k = 0; k < count; ++k) hit[k] = ball_general(axis, u[k], w, lo[k], hi[k]);
+  for (int k = 0; k < count; ++k)
+    hit[k] = !material_clear(axis, u[k], w, bottom[k], top[k]) && ball_general(axis, u[k], w, lo[k], hi[k]);
 }
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
@@ -1040,27 +1041,26 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
+bool RaySweep::material_clear(int axis, double u, double w, double bottom, double top) const {
+  if (!(std::isfinite(bottom) && std::isfinite(top))) return false;
+  // In scalars: see ray_point.
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const double half = 0.5 * (top - bottom);
+  const double pu = u - core_mid_[a1], pw = w - core_mid_[a2], ps = bottom + half - core_mid_[axis];
+  const double qa = pu * tool_axis_[a1] + pw * tool_axis_[a2] + ps * tool_axis_[axis];
+  const double h = std::clamp(qa, core_.z_low_mm, core_.z_high_mm);
+  const double reach = capsule_r_ + half_move_mm_ + half;
+  return pu * pu + pw * pw + ps * ps - h * (2.0 * qa - h) > reach * reach;
+}
+
 bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   for (int a = 0; a < 3; ++a)
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
-  // The ray's material, a ball about its middle, farther than the bracket's radius plus half
-  // the move from the middle instance's core segment (every instance's lies within half the
-  // move of it): clear of the bracket, for a few products instead of its closed form. These
-  // are mostly shreds the earlier pieces left beside the tool (W5: 0.03-2 mm long, 0.05-1.5
-  // mm from its sweep, in half the rays the window passes).
-  // In scalars throughout: o's coordinate along the ray is written by index, and a vector
-  // built from it stalls on the store.
+  // Material clear of the bracket (material_clear). In scalars throughout: o's coordinate
+  // along the ray is written by index, and a vector built from it stalls on the store.
   const double ak = tool_axis_[axis];
-  if (std::isfinite(bottom) && std::isfinite(top)) {
-    const double half = 0.5 * (top - bottom), s = bottom + half;
-    const double px = o[0] - core_mid_[0], py = o[1] - core_mid_[1], pz = o[2] - core_mid_[2];
-    const double qa = px * tool_axis_[0] + py * tool_axis_[1] + pz * tool_axis_[2] + s * ak;
-    const double qq = px * px + py * py + pz * pz + s * (2.0 * (o[axis] - core_mid_[axis]) + s);
-    const double h = std::clamp(qa, core_.z_low_mm, core_.z_high_mm);
-    const double reach = capsule_r_ + half_move_mm_ + half;
-    if (qq - h * (2.0 * qa - h) > reach * reach) return false;
-  }
+  if (material_clear(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], bottom, top)) return false;
   // The enclosing ball sweep's interval: none, no meeting; else the march starts at its ends.
   double capsule_lo, capsule_hi;
   if (!ball_general(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], capsule_lo, capsule_hi)) return false;

@@ -152,8 +152,14 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool band_ = false;
   double band_h_lo_mm_ = 0.0, band_h_hi_mm_ = 0.0, bottom_plane_mm_ = 0.0;
   Eigen::Vector3d lowest_tip_ = Eigen::Vector3d::Zero();
-  // The general method's middle tip and half the move's length (mm).
-  Eigen::Vector3d core_mid_ = Eigen::Vector3d::Zero();
+  // The ray's material [bottom, top] (finite), a ball about its middle, lies farther than
+  // the capsule's radius plus half the move from the middle instance's core segment (every
+  // instance's lies within half the move of it): clear of the capsule sweep, which holds the
+  // sweep, for a few products instead of the capsule's closed form. Such rays are mostly
+  // shreds the earlier pieces of a turning move left beside the tool (W5's bull-nose rows:
+  // 0.03-2 mm long, 0.05-1.5 mm from the sweep, half the rays the window passes).
+  bool material_clear(int axis, double u, double w, double bottom, double top) const;
+  Eigen::Vector3d core_mid_ = Eigen::Vector3d::Zero();  // the middle instance's tip
   double half_move_mm_ = 0.0;
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
