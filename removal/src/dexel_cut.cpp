@@ -546,6 +546,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
             const int k0 = first_u - f.lo_u, k1 = last_u - f.lo_u;
             SegmentList* const row = &f.at(f.lo_u, iw);
             const bool windowed = use_window && section < std::numeric_limits<double>::infinity();
+            detail::RaySweep::TiltRow tilt_row{};
+            if (tilted) sweep.tilted_row(a, w_mm, tilt_row);
             // The row's rays that pass the tests below, then their intervals in one call.
             int count = 0;
             for (int word = k0 / 64; word <= k1 / 64; ++word) {
@@ -566,7 +568,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 double win_lo = box_lo, win_hi = box_hi;
                 // A tighter window along the ray: the section disc about the tip's path, or
                 // for a tilted tool the box about the sweep along its axis and motion.
-                if ((windowed || tilted) && (tilted ? !sweep.tilted_window(a, u_mm, w_mm, win_lo, win_hi)
+                if ((windowed || tilted) && (tilted ? !detail::RaySweep::tilted_window(tilt_row, u_mm, win_lo, win_hi)
                                                     : !sweep.ray_window(a, u_mm, section, win_lo, win_hi)))
                   continue;
                 // The ray's material the kernel need look at: all of it, or for a cutting move

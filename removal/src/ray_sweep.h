@@ -100,27 +100,48 @@ class __attribute__((visibility("hidden"))) RaySweep {
     return true;
   }
 
-  // For a tilted tool: a window [lo, hi] along the ray at (u, w)
+  // For a tilted tool: a window [lo, hi] along the ray at u of a row
   // holding its meeting with the sweep (false: the ray misses), from a box around the sweep
   // aligned with the tool axis and the motion. A ray with no material in the window is
   // clear of the move, found with a few products instead of the closed form or the march.
+  // The row's part (tilted_row, at w) is worked out once: along each of the box's directions
+  // the window's ends are c + slope u.
   bool tilted() const { return !vertical_axis_; }
-  bool tilted_window(int axis, double u, double w, double& lo, double& hi) const {
+  struct TiltRow {
+    double c_lo[3], c_hi[3], slope[3];
+    double u_min, u_max;  // where the directions square to the rays keep the row in the box
+  };
+  void tilted_row(int axis, double w, TiltRow& row) const {
     const TiltBox& b = tilt_box_[axis];
-    double s0 = -std::numeric_limits<double>::infinity(), s1 = std::numeric_limits<double>::infinity();
+    row.u_min = -std::numeric_limits<double>::infinity();
+    row.u_max = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k) {
-      const double v0 = b.base[k] + u * b.du[k] + w * b.dw[k];
+      const double v0 = b.base[k] + w * b.dw[k];
       if (b.flat[k]) {
-        if (v0 < b.lo[k] || v0 > b.hi[k]) return false;
+        row.c_lo[k] = -std::numeric_limits<double>::infinity();
+        row.c_hi[k] = std::numeric_limits<double>::infinity();
+        row.slope[k] = 0.0;
+        if (b.du[k] == 0.0) {
+          if (v0 < b.lo[k] || v0 > b.hi[k]) row.u_min = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        double e0 = (b.lo[k] - v0) / b.du[k], e1 = (b.hi[k] - v0) / b.du[k];
+        if (e0 > e1) std::swap(e0, e1);
+        row.u_min = std::max(row.u_min, e0);
+        row.u_max = std::min(row.u_max, e1);
         continue;
       }
       // inv_slope > 0 (the box's direction taken along the ray): lo before hi.
-      s0 = std::max(s0, (b.lo[k] - v0) * b.inv_slope[k]);
-      s1 = std::min(s1, (b.hi[k] - v0) * b.inv_slope[k]);
+      row.c_lo[k] = (b.lo[k] - v0) * b.inv_slope[k];
+      row.c_hi[k] = (b.hi[k] - v0) * b.inv_slope[k];
+      row.slope[k] = -b.du[k] * b.inv_slope[k];
     }
-    lo = s0;
-    hi = s1;
-    return s0 <= s1;
+  }
+  static bool tilted_window(const TiltRow& row, double u, double& lo, double& hi) {
+    if (!(u >= row.u_min && u <= row.u_max)) return false;
+    lo = std::max({row.c_lo[0] + row.slope[0] * u, row.c_lo[1] + row.slope[1] * u, row.c_lo[2] + row.slope[2] * u});
+    hi = std::min({row.c_hi[0] + row.slope[0] * u, row.c_hi[1] + row.slope[1] * u, row.c_hi[2] + row.slope[2] * u});
+    return lo <= hi;
   }
 
  private:
