@@ -18,7 +18,11 @@
 #include "surface_projection.h"
 
 namespace vcut::removal {
+
 namespace {
+
+// A ray holding more intervals than this is searched by bisection for those in a window.
+constexpr std::uint32_t kScanIntervals = 8;
 
 // Removes [a, b] (made by `move`) from the ray; returns the length removed (mm).
 double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelSegment>& scratch) {
@@ -582,11 +586,24 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                   if (longest <= 0.0 || (probe.overlap_mm > 0.0 && longest + kProbeMargin_mm <= probe.overlap_mm))
                     continue;
                 } else if (windowed || tilted) {
-                  std::uint32_t j = 0;
-                  while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
-                  if (j == n) continue;
-                  std::uint32_t last = n - 1;
-                  while (last > j && !(seg[last].lo_mm < win_hi)) --last;
+                  // The intervals are disjoint and in order: the first that ends past the
+                  // window's start, to the last that starts before its end (by bisection on
+                  // a ray that many earlier cuts left in shreds).
+                  std::uint32_t j = 0, last = n - 1;
+                  if (n <= kScanIntervals) {
+                    while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
+                    if (j == n) continue;
+                    while (last > j && !(seg[last].lo_mm < win_hi)) --last;
+                  } else {
+                    j = static_cast<std::uint32_t>(
+                        std::partition_point(seg, seg + n, [&](const DexelSegment& g) { return g.hi_mm <= win_lo; }) -
+                        seg);
+                    if (j == n || !(seg[j].lo_mm < win_hi)) continue;
+                    last = static_cast<std::uint32_t>(
+                        std::partition_point(seg + j, seg + n,
+                                             [&](const DexelSegment& g) { return g.lo_mm < win_hi; }) -
+                        seg - 1);
+                  }
                   bottom = seg[j].lo_mm;
                   material_top = seg[last].hi_mm;
                   // The sweep lies in a tilted tool's window: the kernel need look no further

@@ -186,6 +186,48 @@ TEST(DexelStock, TiltedFlatEndMillFlank) {
   EXPECT_GT(checked, 1000);
 }
 
+// The sweeps of `list`'s moves, which the stock numbered from `first_id`; the farthest any
+// endpoint they made lies from its own sweep, and how many each made.
+std::vector<TranslationSweep> sweeps_and_endpoints(const DexelStock& stock, const MoveList& list, int first_id,
+                                                   double& worst, std::vector<int>& made) {
+  std::vector<TranslationSweep> sweeps;
+  for (const Move& m : list.moves) sweeps.emplace_back(list.cutters[static_cast<std::size_t>(m.cutter)], m);
+  worst = 0.0;
+  made.assign(list.moves.size(), 0);
+  for (const auto& e : stock.endpoints()) {
+    if (e.move < first_id) continue;  // the initial stock's faces, or earlier moves
+    const std::size_t i = static_cast<std::size_t>(e.move - first_id);
+    worst = std::max(worst, std::abs(sweeps[i].distance(e.x_mm)));
+    ++made[i];
+  }
+  return sweeps;
+}
+
+// Material left inside sweeps: the least of the sweeps' distances, plus the endpoint
+// tolerance, at every remaining segment's midpoint of the 40 x 30 x 20 box at v = 0.25 (below
+// 0: a ray a move should have cut but did not keeps a segment through its sweep).
+double deepest_left_inside(const DexelStock& stock, const std::vector<TranslationSweep>& sweeps, int* split = nullptr) {
+  const double v = 0.25;
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  double deepest = 0.0;
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+        const std::vector<DexelSegment> ray = stock.ray(family, iu, iw);
+        if (split != nullptr) *split += ray.size() > 1 ? 1 : 0;
+        for (const DexelSegment& seg : ray) {
+          Eigen::Vector3d x;
+          x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
+          x[a1] = (iu + 0.5) * v;
+          x[a2] = (iw + 0.5) * v;
+          for (const TranslationSweep& sweep : sweeps) deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
+        }
+      }
+  }
+  return deepest;
+}
+
 // One move through a 40 x 30 x 20 box at v = 0.25: every endpoint it made lies on its swept
 // volume's surface, and no material is left inside it, measured with TranslationSweep's
 // distance (a golden-section search over the move, independent of the rays' closed forms,
@@ -207,22 +249,8 @@ void expect_cut_matches_the_sweep_distance(const Cutter& cutter, const Move& m, 
   }
   EXPECT_LT(worst, kEndpointTol_mm) << label;
   EXPECT_GT(checked, 100) << label;
-  // Material left: every remaining segment's midpoint is outside the sweep (a ray the
-  // move should have cut but did not keeps a segment through it).
-  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};  // the box at v = 0.25
-  double deepest = 0.0;
-  for (int family = 0; family < 3; ++family) {
-    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
-    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
-      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
-        for (const DexelSegment& seg : stock.ray(family, iu, iw)) {
-          Eigen::Vector3d x;
-          x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
-          x[a1] = (iu + 0.5) * v;
-          x[a2] = (iw + 0.5) * v;
-          deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
-        }
-  }
+  // Material left: every remaining segment's midpoint is outside the sweep.
+  const double deepest = deepest_left_inside(stock, {sweep});
   EXPECT_EQ(deepest, 0.0) << label;
 }
 
@@ -317,37 +345,60 @@ TEST(DexelStock, TiltedMovesThroughCutMaterialMatchTheirSweeps) {
     list.moves.push_back(m);
   }
   stock.cut(list, {});
-  std::vector<TranslationSweep> sweeps;
-  for (const Move& m : list.moves) sweeps.emplace_back(list.cutters[static_cast<std::size_t>(m.cutter)], m);
-  double worst = 0.0;
-  std::vector<int> made(list.moves.size(), 0);
-  for (const auto& e : stock.endpoints()) {
-    if (e.move < 0) continue;
-    worst = std::max(worst, std::abs(sweeps[static_cast<std::size_t>(e.move)].distance(e.x_mm)));
-    ++made[static_cast<std::size_t>(e.move)];
-  }
+  double worst;
+  std::vector<int> made;
+  const std::vector<TranslationSweep> sweeps = sweeps_and_endpoints(stock, list, 0, worst, made);
   EXPECT_LT(worst, kEndpointTol_mm);
   for (std::size_t i = 0; i < made.size(); ++i) EXPECT_GT(made[i], 50) << "move " << i;
   int split = 0;  // rays holding more than one interval: the cuts made tunnels
-  double deepest = 0.0;
-  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
-  for (int family = 0; family < 3; ++family) {
-    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
-    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
-      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
-        const std::vector<DexelSegment> ray = stock.ray(family, iu, iw);
-        split += ray.size() > 1 ? 1 : 0;
-        for (const DexelSegment& seg : ray) {
-          Eigen::Vector3d x;
-          x[family] = 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm);
-          x[a1] = (iu + 0.5) * v;
-          x[a2] = (iw + 0.5) * v;
-          for (const TranslationSweep& sweep : sweeps) deepest = std::min(deepest, sweep.distance(x) + kEndpointTol_mm);
-        }
-      }
-  }
+  const double deepest = deepest_left_inside(stock, sweeps, &split);
   EXPECT_EQ(deepest, 0.0);
   EXPECT_GT(split, 500);
+}
+
+// Tilted moves through a comb: fifteen upright slots first leave the x rays in up to sixteen
+// intervals, so the cut's search for a ray's material in a tilted tool's window bisects
+// (more than eight intervals) instead of scanning. A bull-nose, a ball and a V-bit then cut
+// along x through the comb: every endpoint they made lies on its own sweep and no material is
+// left inside any of their sweeps (TranslationSweep's distance, as above).
+TEST(DexelStock, TiltedMovesThroughAComb) {
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const double v = 0.25;
+  DexelStock stock(box, v);
+  MoveList comb;
+  comb.cutters = {make(CutterType::Flat, 1, 0, 30)};
+  for (int i = 0; i < 15; ++i) {
+    const double x = 3.0 + 2.4 * i;
+    comb.moves.push_back(line({x, -2, -16}, {x, 32, -16}));
+  }
+  stock.cut(comb, {});
+  int shredded = 0;
+  for (int iw = -64; iw < -4; ++iw)
+    for (int iu = 0; iu < 120; ++iu) shredded += stock.ray(0, iu, iw).size() > 8 ? 1 : 0;
+  ASSERT_GT(shredded, 1000) << "the x rays are not left in more than eight intervals";
+  MoveList list;
+  Cutter vbit = make(CutterType::VBit, 10, 0, 20);
+  vbit.tip_angle_deg = 90;
+  list.cutters = {make(CutterType::BullNose, 8, 2, 20), make(CutterType::Ball, 6, 3, 20), vbit};
+  const double tilt = 25 * M_PI / 180.0;
+  const Eigen::Vector3d axes[3] = {{0, std::sin(tilt), std::cos(tilt)},
+                                   {std::sin(tilt) * 0.6, -std::sin(tilt) * 0.8, std::cos(tilt)},
+                                   {-std::sin(tilt), 0.2, std::cos(tilt)}};
+  for (int i = 0; i < 3; ++i) {
+    const double y = 7.0 + 8.0 * i, z = -9.0 + 1.5 * i;
+    Move m = line({-2, y, z}, {42, y + 1.0, z - 0.5}, axes[i].normalized());
+    m.cutter = i;
+    list.moves.push_back(m);
+  }
+  stock.cut(list, {});
+  double worst;
+  std::vector<int> made;
+  const std::vector<TranslationSweep> sweeps =
+      sweeps_and_endpoints(stock, list, static_cast<int>(comb.moves.size()), worst, made);
+  EXPECT_LT(worst, kEndpointTol_mm);
+  for (std::size_t i = 0; i < made.size(); ++i) EXPECT_GT(made[i], 200) << "move " << i;
+  const double deepest = deepest_left_inside(stock, sweeps);
+  EXPECT_EQ(deepest, 0.0);
 }
 
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
