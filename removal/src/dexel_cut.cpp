@@ -21,7 +21,8 @@ namespace vcut::removal {
 
 namespace {
 
-// A ray holding more intervals than this is searched by bisection for those in a window.
+// A ray holding more intervals than this is searched by bisection for those in a window;
+// fewer, by a scan (bisection on every ray cost W1's and W5's cut 4 %).
 constexpr std::uint32_t kScanIntervals = 8;
 
 // Removes [a, b] (made by `move`) from the ray; returns the length removed (mm).

@@ -510,7 +510,7 @@ class Contour {
         while (last < n && (cells[last].code >> shift) == (cells[first].code >> shift)) ++last;
         bool candidate = true;
         for (std::size_t i = first; i < last && candidate; ++i) candidate = merged[i] != 0;
-        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance, any_plane, m_.v)) {
+        if (candidate && last - first > 1 && flat(cells, points, first, last, tolerance, any_plane)) {
           for (std::size_t i = first; i < last; ++i) group[i] = static_cast<std::uint32_t>(first);
         } else {
           for (std::size_t i = first; i < last; ++i) merged[i] = 0;
@@ -545,8 +545,8 @@ class Contour {
   // sheet (a junction of two such grooves merged into one vertex sat 0.03 mm above their
   // floor). Such a sheet is left in cells: more triangles, never a cut crease.
   template <class Cells>
-  static bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
-                   double tolerance, bool any_plane, double v) {
+  bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
+            double tolerance, bool any_plane) const {
     std::uint8_t facing = 0;
     for (std::size_t i = first; i < last; ++i) facing |= cells[i].facing;
     for (int a = 0; a < 3; ++a)
@@ -564,8 +564,8 @@ class Contour {
     }
     int axis;
     if ((hi - lo).minCoeff(&axis) <= 2.0 * tolerance) {  // an axis plane
-      const double at = 0.5 * (lo[axis] + hi[axis]) / v - 0.5;
-      return std::abs(at - std::round(at)) * v > kExactPlane_mm;
+      const double at = m_.index_of(0.5 * (lo[axis] + hi[axis]));
+      return std::abs(at - std::round(at)) * m_.v > kExactPlane_mm;
     }
     if (!any_plane) return false;
     mean /= static_cast<double>(count);
@@ -827,10 +827,11 @@ void place_on_creases(const DexelStock::Impl& m, SurfaceMesh& mesh) {
       eig.computeDirect(ata);
       const double largest = eig.eigenvalues()(2);
       if (!(largest > 0.0)) continue;
+      const double rank = all_vbit && !stock ? kVBitCreaseRank : kCreaseRank;
       Vector3d offset = Vector3d::Zero();
       for (int k = 0; k < 3; ++k) {
         const double lambda = eig.eigenvalues()(k);
-        if (lambda <= (all_vbit && !stock ? kVBitCreaseRank : kCreaseRank) * largest) continue;
+        if (lambda <= rank * largest) continue;
         const Vector3d u = eig.eigenvectors().col(k);
         offset += u * (u.dot(atb) / lambda);
       }

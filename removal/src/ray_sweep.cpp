@@ -191,13 +191,13 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   } else {
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
-    bottom_plane_mm_ = tool_axis_.dot(p0_) + std::min(0.0, delta_.dot(tool_axis_));
     // band_'s heights: clear of the corner and the top rounding above every instance's tip by
     // far more than rounding moves the bracket's end.
     constexpr double kClear_mm = 1e-6;
     const double hd = delta_.dot(tool_axis_);
     band_h_lo_mm_ = core_.z_low_mm + kClear_mm + std::max(0.0, hd);
     band_h_hi_mm_ = core_.z_high_mm - kClear_mm + std::min(0.0, hd);
+    lowest_h_mm_ = std::min(0.0, hd);
     lowest_tip_ = hd >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
@@ -1085,7 +1085,7 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
     if (!(exact_lo && exact_hi) && ak != 0.0) {
       // Where the ray crosses the lowest plane (h = min(0, delta.a)), its offset from the
       // lowest tip is square to the axis.
-      const double s_plane = (bottom_plane_mm_ - (oa + p0_.dot(tool_axis_))) / ak;
+      const double s_plane = (lowest_h_mm_ - oa) / ak;
       const double dx = o[0] - lowest_tip_[0], dy = o[1] - lowest_tip_[1], dz = o[2] - lowest_tip_[2];
       const double radial2 = dx * dx + dy * dy + dz * dz + s_plane * (2.0 * (o[axis] - lowest_tip_[axis]) + s_plane);
       if (radial2 <= core_.core_radius_mm * core_.core_radius_mm) {

@@ -166,12 +166,12 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // segment at an inner point, so it lies in the capsule sweep exactly when it lies in the
   // sweep: an end of the ray's capsule interval there is on the sweep's boundary and is the
   // sweep's own entry or exit (the sweep lies inside the capsule sweep), to the capsule's
-  // 1e-9 mm margin. Likewise the sweep lies on the upper side of the plane a.x =
-  // bottom_plane_mm_ through the lowest instance's tip (lowest_tip_), and holds of it that
+  // 1e-9 mm margin. Likewise the sweep lies above the plane at height lowest_h_mm_ (above the
+  // first tip) through the lowest instance's tip (lowest_tip_), and holds of that plane the
   // instance's flat bottom (the disc of the core's radius about the tip): a ray crossing the
   // plane there enters the sweep (leaves it, running down the tool axis).
   bool band_ = false;
-  double band_h_lo_mm_ = 0.0, band_h_hi_mm_ = 0.0, bottom_plane_mm_ = 0.0;
+  double band_h_lo_mm_ = 0.0, band_h_hi_mm_ = 0.0, lowest_h_mm_ = 0.0;
   Eigen::Vector3d lowest_tip_ = Eigen::Vector3d::Zero();
   // The ray's material [bottom, top] (finite), a ball about its middle, lies farther than
   // the capsule's radius plus half the move from the middle instance's core segment (every

@@ -682,7 +682,7 @@ TEST(DexelStock, MeshKeepsVBitCreasesAndSlotEdges) {
 // form: -0.1 mm) all along both creases up to their ends. Before, the cells at the T held
 // their crossings in the nodes' plane and were merged into one flat vertex (the floor 0.03 mm
 // high beside the T), and at a groove's end the cone's narrow fan of planes was cut off as if
-// undetermined (0.005-0.009 mm high).
+// undetermined (up to 0.012 mm high).
 TEST(DexelStock, MeshKeepsVBitJunctionsAndGrooveEnds) {
   constexpr double v = 0.05, depth = 0.1;
   const BoxShape box{{0, 0, -2}, {10, 10, 0}};
