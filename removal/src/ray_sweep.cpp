@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -12,6 +13,12 @@ namespace {
 
 using Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Whether the processor runs AVX2 (bracket_avx2).
+#if defined(__x86_64__)
+const bool kHaveAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
+#else
+const bool kHaveAvx2 = false;
+#endif
 // Motion or edge lengths below this (mm) count as zero.
 constexpr double kTiny_mm = 1e-12;
 
@@ -91,6 +98,18 @@ bool march_to_root(F&& f, double from, double toward, double tolerance, double& 
   }
   converged = false;
   return false;
+}
+
+// The rays first .. end - 1 of a row that `keep` keeps, by their index from first, into todo
+// (how many: returned); hit false for all of them.
+template <class Keep>
+int rays_to_do(int first, int end, bool* hit, int* todo, Keep&& keep) {
+  int n = 0;
+  for (int k = first; k < end; ++k) {
+    hit[k] = false;
+    if (keep(k)) todo[n++] = k - first;
+  }
+  return n;
 }
 
 // The point at s on the ray of family `axis` through (u, w) (the other two coordinates, in
@@ -178,6 +197,9 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
   const Vector3d a = move.axis.normalized();
   tool_axis_ = a;
+  // Unless VCUT_SCALAR_KERNELS is set (read per move, so that a test can cut both ways and
+  // compare).
+  lanes_ = kHaveAvx2 && std::getenv("VCUT_SCALAR_KERNELS") == nullptr;
   core_mid_ = p0_ + 0.5 * delta_;
   half_move_mm_ = 0.5 * delta_.norm();
   vertical_axis_ = std::abs(a.x()) <= kTiny_mm && std::abs(a.y()) <= kTiny_mm && a.z() > 0.0;
@@ -600,6 +622,29 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     // The tilted flat end mill's closed form where it decides, else the root march over the
     // material only (a march started inside the sweep stops at once; one that never meets it
     // within the material ends the ray's test).
+    if (!flat_bottom_ && segments_ == 2 && lanes_) {
+      // general() with the bracket's intervals four rays at a time (bracket_avx2).
+      const Eigen::AlignedBox3d& box = sweep_.bounds();
+      const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+      const bool row_in = w >= box.min()[a2] && w <= box.max()[a2];
+      int todo[kLanesBlock];
+      double capsule_lo[kLanesBlock], capsule_hi[kLanesBlock];
+      bool capsule_hit[kLanesBlock];
+      for (int first = 0; first < count; first += kLanesBlock) {
+        const int n = rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo, [&](int k) {
+          return row_in && u[k] >= box.min()[a1] && u[k] <= box.max()[a1] &&
+                 !material_clear(axis, u[k], w, bottom[k], top[k]);
+        });
+        bracket_avx2(axis, w, n, todo, u + first, capsule_lo, capsule_hi, capsule_hit);
+        for (int j = 0; j < n; ++j) {
+          const int c = todo[j], k = first + c;
+          if (capsule_hit[c])
+            hit[k] = bracketed(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], capsule_lo[c], capsule_hi[c],
+                               lo[k], hi[k]);
+        }
+      }
+      return;
+    }
     for (int k = 0; k < count; ++k) {
       bool decided = false;
       if (flat_bottom_) hit[k] = tilted_flat(axis, u[k], w, lo[k], hi[k], decided);
@@ -722,9 +767,133 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     }
     return;
   }
+  if (segments_ == 2 && lanes_) {
+    // material_clear first, as below, then ball_general four rays at a time.
+    int todo[kLanesBlock];
+    for (int first = 0; first < count; first += kLanesBlock) {
+      const int n = rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo,
+                               [&](int k) { return !material_clear(axis, u[k], w, bottom[k], top[k]); });
+      bracket_avx2(axis, w, n, todo, u + first, lo + first, hi + first, hit + first);
+    }
+    return;
+  }
   for (int k = 0; k < count; ++k)
     hit[k] = !material_clear(axis, u[k], w, bottom[k], top[k]) && ball_general(axis, u[k], w, lo[k], hi[k]);
 }
+
+#if defined(__x86_64__)
+// Four lanes of doubles for the AVX2 kernel (GCC's vector extensions), and its operations,
+// compiled for AVX2 like their caller.
+namespace {
+typedef double v4d __attribute__((vector_size(32)));
+typedef long long v4i __attribute__((vector_size(32)));
+#define VCUT_AVX2 __attribute__((target("avx2"), always_inline)) inline
+VCUT_AVX2 v4d all(double x) { return v4d{x, x, x, x}; }
+VCUT_AVX2 v4d select(v4i mask, v4d a, v4d b) { return mask ? a : b; }
+VCUT_AVX2 v4d vmin(v4d current, v4d a) { return a < current ? a : current; }  // std::min(current, a)
+VCUT_AVX2 v4d vmax(v4d current, v4d a) { return current < a ? a : current; }  // std::max(current, a)
+VCUT_AVX2 v4d vsqrt(v4d x) { return __builtin_ia32_sqrtpd256(x); }
+#undef VCUT_AVX2
+}  // namespace
+
+// ball_general (two segments: four spheres, four edges and the slab) for the rays todo[0 ..
+// n - 1] of a row (at u[todo[j]]; lo, hi and hit at the same index), four at a time in AVX2,
+// where the processor has it. Without a branch per ray: every part's interval is worked out
+// and an empty one left out by a mask, with the same operations in the same order as the
+// scalar code (no fused multiply-add), so the same bits. The scalar code skips the parts a
+// ray misses; four lanes take all of them and still come out ahead: W5's rows of the tilted
+// ball cut 3.16 -> 2.44 s, of the bull-nose (whose march this brackets) 7.8-8.2 -> 6.3 s.
+__attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, int n, const int* todo, const double* u,
+                                                            double* lo, double* hi, bool* hit) const {
+  const BallFamily& f = ball_[axis];
+  const double r = capsule_r_, r2 = r * r;
+  const v4d inf = all(kInf), minus_inf = all(-kInf), zero = all(0.0);
+  const double bounds[3][2] = {{-r, r}, {0.0, 1.0}, {0.0, 1.0}};
+  for (int k0 = 0; k0 < n; k0 += 4) {
+    // Four rays; past the end, the last one again.
+    double uu[4];
+    for (int j = 0; j < 4; ++j) uu[j] = u[todo[std::min(k0 + j, n - 1)]];
+    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    v4d l = inf, h = minus_inf;
+    for (int i = 0; i < 4; ++i) {
+      const double y = w - f.sphere[i][1];
+      const v4d x = U - all(f.sphere[i][0]);
+      const v4d h2 = (all(r2) - x * x) - all(y * y);
+      const v4i ok = h2 >= zero;
+      const v4d root = vsqrt(select(ok, h2, zero));
+      const v4d c = all(f.sphere[i][2]);
+      l = vmin(l, select(ok, c - root, inf));
+      h = vmax(h, select(ok, c + root, minus_inf));
+    }
+    for (int i = 0; i < 4; ++i) {
+      const Edge& e = f.edge[i];
+      const double y = w - e.p2;
+      const v4d x = U - all(e.p1);
+      const v4d md = (x * all(e.d1) + all(y * e.d2)) + all(e.e0);
+      const v4d c = all(e.dd) * ((x * x + all(y * y)) + all(e.pk2)) - md * md;
+      v4d s0, s1;
+      v4i ok;
+      if (e.parallel) {
+        ok = !(c > zero);
+        s0 = minus_inf;
+        s1 = inf;
+      } else {
+        const v4d half_b = all(e.bk) - all(e.dk) * md;
+        const v4d disc = half_b * half_b - all(e.a) * c;
+        ok = !(disc < zero);
+        const v4d root = vsqrt(select(ok, disc, zero));
+        s0 = (-half_b - root) * all(e.inv_a);
+        s1 = (-half_b + root) * all(e.inv_a);
+      }
+      if (e.dk != 0.0) {
+        const v4d t0 = -md * all(e.inv_dk), t1 = (all(e.dd) - md) * all(e.inv_dk);
+        const v4i swap = t0 > t1;
+        const v4d tl = select(swap, t1, t0), th = select(swap, t0, t1);
+        s0 = vmax(s0, tl);
+        s1 = vmin(s1, th);
+      } else {
+        ok = ok & !((md < zero) | (md > all(e.dd)));
+      }
+      ok = ok & !(s0 > s1);
+      l = vmin(l, select(ok, s0, inf));
+      h = vmax(h, select(ok, s1, minus_inf));
+    }
+    {
+      // The slab of thickness 2r over the parallelogram's inside.
+      const Slab& sl = f.slab;
+      v4d s0 = minus_inf, s1 = inf;
+      v4i inside = ~v4i{};
+      for (int j = 0; j < 3; ++j) {
+        const v4d v0 = (all(sl.base[j]) + all(sl.c1[j]) * U) + all(sl.c2[j] * w);
+        if (sl.flat[j]) {
+          inside = inside & !((v0 < all(bounds[j][0])) | (v0 > all(bounds[j][1])));
+          continue;
+        }
+        const v4d e0 = (all(bounds[j][0]) - v0) * all(sl.inv_slope[j]);
+        const v4d e1 = (all(bounds[j][1]) - v0) * all(sl.inv_slope[j]);
+        const v4i swap = e0 > e1;
+        s0 = vmax(s0, select(swap, e1, e0));
+        s1 = vmin(s1, select(swap, e0, e1));
+      }
+      const v4i ok = inside & (s0 <= s1);
+      l = vmin(l, select(ok, s0, inf));
+      h = vmax(h, select(ok, s1, minus_inf));
+    }
+    const v4i hits = l <= h;
+    for (int j = 0; j < 4 && k0 + j < n; ++j) {
+      const int k = todo[k0 + j];
+      hit[k] = hits[j] != 0;
+      lo[k] = l[j];
+      hi[k] = h[j];
+    }
+  }
+}
+#else
+void RaySweep::bracket_avx2(int axis, double w, int n, const int* todo, const double* u, double* lo, double* hi,
+                            bool* hit) const {
+  for (int j = 0; j < n; ++j) hit[todo[j]] = ball_general(axis, u[todo[j]], w, lo[todo[j]], hi[todo[j]]);
+}
+#endif
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
@@ -1059,11 +1228,17 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
   // Material clear of the bracket (material_clear). In scalars throughout: o's coordinate
   // along the ray is written by index, and a vector built from it stalls on the store.
-  const double ak = tool_axis_[axis];
   if (material_clear(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], bottom, top)) return false;
   // The enclosing ball sweep's interval: none, no meeting; else the march starts at its ends.
   double capsule_lo, capsule_hi;
   if (!ball_general(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], capsule_lo, capsule_hi)) return false;
+  return bracketed(axis, o, bottom, top, capsule_lo, capsule_hi, lo, hi);
+}
+
+bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
+                         double& lo, double& hi) const {
+  const Eigen::AlignedBox3d& box = sweep_.bounds();
+  const double ak = tool_axis_[axis];
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
   const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
   if (!(sa <= sb)) return false;

@@ -159,6 +159,9 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
   // The root march over [bottom, top] of the ray (see interval_within).
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
+  // The rest of general() given the bracket's interval [capsule_lo, capsule_hi] on the ray.
+  bool bracketed(int axis, const Eigen::Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
+                 double& lo, double& hi) const;
   // Bull-nose (band_): between the heights z_low = r and z_high above its tip the cutter is a
   // cylinder of radius R, and so is the bracket's capsule (the core's axis segment grown by
   // R). A point at a height strictly inside (z_low, z_high) above every instance's tip
@@ -227,6 +230,12 @@ class __attribute__((visibility("hidden"))) RaySweep {
   };
   void prepare_ball_family(int axis);
   bool ball_general(int axis, double u, double w, double& lo, double& hi) const;
+  // ball_general for the rays todo[0 .. n - 1] of a row (u, lo, hi, hit by that index),
+  // where the processor runs AVX2; at most kLanesBlock rays a call.
+  static constexpr int kLanesBlock = 512;
+  bool lanes_ = false;  // the processor has AVX2, and the four-ray kernel is wanted
+  void bracket_avx2(int axis, double w, int n, const int* todo, const double* u, double* lo, double* hi,
+                    bool* hit) const;
   // `lo_side`/`hi_side`: that end of the interval lies on the cylinder's side, not on an end
   // plane, so on the boundary of the capsule around the edge: its end spheres cannot move it.
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,

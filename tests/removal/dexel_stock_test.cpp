@@ -11,9 +11,11 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <map>
+#include <memory>
 #include <string>
 
 #include "test_meshes.h"
@@ -399,6 +401,65 @@ TEST(DexelStock, TiltedMovesThroughAComb) {
   for (std::size_t i = 0; i < made.size(); ++i) EXPECT_GT(made[i], 200) << "move " << i;
   const double deepest = deepest_left_inside(stock, sweeps);
   EXPECT_EQ(deepest, 0.0);
+}
+
+// On a processor with AVX2 the tilted ball's and bull-nose's bracket (a ball swept over a
+// parallelogram) is found four rays at a time, else ray by ray; VCUT_SCALAR_KERNELS asks for
+// the second everywhere. The same operations in the same order: a chain of random tilted ball
+// and bull-nose moves (the axis turning a few degrees a move, every move starting where the
+// last ended, through what the earlier ones cut; the tools' tops within the stock), cut both
+// ways, leaves every ray the same intervals, to the bit and to the move that made each end.
+TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
+#if defined(__x86_64__)
+  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 here: only the scalar kernel runs";
+#else
+  GTEST_SKIP() << "not x86-64: only the scalar kernel runs";
+#endif
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const double v = 0.25;
+  MoveList list;
+  list.cutters = {make(CutterType::Ball, 6, 3, 12), make(CutterType::BullNose, 8, 2, 12)};
+  std::mt19937 rng(53);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Eigen::Vector3d at(6, 6, -8), axis(0.2, 0.3, 1.0);
+  for (int i = 0; i < 60; ++i) {
+    Eigen::Vector3d to = at + Eigen::Vector3d(3.0 * unit(rng) - 1.0, 3.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
+    to = to.cwiseMax(Eigen::Vector3d(4, 4, -14)).cwiseMin(Eigen::Vector3d(36, 26, -4));
+    axis = (axis.normalized() + 0.08 * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 0)).normalized();
+    if (axis.z() < std::cos(60 * M_PI / 180.0)) axis.z() = 1.0;  // keep within 60 deg of upright
+    Move m = line(at, to, axis);
+    m.cutter = i / 30;
+    list.moves.push_back(m);
+    at = to;
+  }
+  double removed[2];
+  auto cut = [&](bool scalar) {
+    if (scalar) ::setenv("VCUT_SCALAR_KERNELS", "1", 1);
+    auto stock = std::make_unique<DexelStock>(box, v);
+    removed[scalar] = stock->cut(list, {}).removed_volume_mm3;
+    ::unsetenv("VCUT_SCALAR_KERNELS");
+    return stock;
+  };
+  const std::unique_ptr<DexelStock> lanes = cut(false), scalar = cut(true);
+  EXPECT_GT(removed[0], 500.0);
+  EXPECT_EQ(removed[0], removed[1]);
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  int differ = 0, cut_rays = 0;
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+        const std::vector<DexelSegment> a = lanes->ray(family, iu, iw), b = scalar->ray(family, iu, iw);
+        bool same = a.size() == b.size();
+        for (std::size_t k = 0; same && k < a.size(); ++k)
+          same = a[k].lo_mm == b[k].lo_mm && a[k].hi_mm == b[k].hi_mm && a[k].lo_move == b[k].lo_move &&
+                 a[k].hi_move == b[k].hi_move;
+        differ += same ? 0 : 1;
+        for (const DexelSegment& seg : a) cut_rays += seg.lo_move >= 0 || seg.hi_move >= 0 ? 1 : 0;
+      }
+  }
+  EXPECT_EQ(differ, 0);
+  EXPECT_GT(cut_rays, 20000);
 }
 
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
