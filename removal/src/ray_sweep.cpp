@@ -673,6 +673,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     const double t_lo = std::min(f.sphere[2][1], f.sphere[3][1]), t_hi = std::max(f.sphere[2][1], f.sphere[3][1]);
     if (w < c_lo || w > t_hi) {
       const int first = w < c_lo ? 0 : 2;
+      if (lanes_) {
+        capsule_avx2(axis, w, first, count, u, lo, hi, hit);
+        return;
+      }
       for (int k = 0; k < count; ++k) {
         double l = kInf, h = -kInf, a, b;
         bool lo_side, hi_side;
@@ -706,6 +710,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
       const bool band_holds_discs =
           band && n_u == 0.0 && n_s != 0.0 && t_s == 0.0 && clip_inv(n_base, inv_n_s, -r, r, b0, b1) &&
           b0 <= std::min(s0c, s1c) - std::sqrt(r2) && b1 >= std::max(s0c, s1c) + std::sqrt(r2);
+      if (lanes_ && !band_holds_discs) {
+        band_avx2(axis, inv_n_s, inv_t_s, count, u, lo, hi, hit);
+        return;
+      }
       for (int k = 0; k < count; ++k) {
         if (band_holds_discs) {
           const double t0 = t_base + t_u * u[k];
@@ -739,6 +747,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     // The exit is never below the lower top centre: with no material above that, it is not
     // needed.
     const double floor_of_exit = std::min(f.sphere[2][2], f.sphere[3][2]);
+    if (lanes_) {
+      vertical_avx2(w, floor_of_exit, count, u, top, lo, hi, hit);
+      return;
+    }
     for (int k = 0; k < count; ++k) {
       double l = kInf, h = -kInf, a, b;
       bool lo_side, hi_side;
@@ -786,13 +798,85 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
 // compiled for AVX2 like their caller.
 namespace {
 typedef double v4d __attribute__((vector_size(32)));
-typedef long long v4i __attribute__((vector_size(32)));
+typedef long v4i __attribute__((vector_size(32)));  // what comparing two v4d gives
 #define VCUT_AVX2 __attribute__((target("avx2"), always_inline)) inline
 VCUT_AVX2 v4d all(double x) { return v4d{x, x, x, x}; }
 VCUT_AVX2 v4d select(v4i mask, v4d a, v4d b) { return mask ? a : b; }
 VCUT_AVX2 v4d vmin(v4d current, v4d a) { return a < current ? a : current; }  // std::min(current, a)
 VCUT_AVX2 v4d vmax(v4d current, v4d a) { return current < a ? a : current; }  // std::max(current, a)
 VCUT_AVX2 v4d vsqrt(v4d x) { return __builtin_ia32_sqrtpd256(x); }
+// ball_cylinder for four rays at u = U of the row at w: ok (it meets them), [s0, s1], and
+// whether each end lies on the cylinder's side (meaningful where ok).
+template <class Edge>
+VCUT_AVX2 void cylinder_lanes(const Edge& e, v4d U, double w, v4i& ok, v4d& s0, v4d& s1, v4i& lo_side, v4i& hi_side) {
+  const v4d zero = all(0.0);
+  const double y = w - e.p2;
+  const v4d x = U - all(e.p1);
+  const v4d md = (x * all(e.d1) + all(y * e.d2)) + all(e.e0);
+  const v4d c = all(e.dd) * ((x * x + all(y * y)) + all(e.pk2)) - md * md;
+  if (e.parallel) {
+    ok = !(c > zero);
+    s0 = all(-std::numeric_limits<double>::infinity());
+    s1 = all(std::numeric_limits<double>::infinity());
+  } else {
+    const v4d half_b = all(e.bk) - all(e.dk) * md;
+    const v4d disc = half_b * half_b - all(e.a) * c;
+    ok = !(disc < zero);
+    const v4d root = vsqrt(select(ok, disc, zero));
+    s0 = (-half_b - root) * all(e.inv_a);
+    s1 = (-half_b + root) * all(e.inv_a);
+  }
+  if (e.dk != 0.0) {
+    const v4d t0 = -md * all(e.inv_dk), t1 = (all(e.dd) - md) * all(e.inv_dk);
+    const v4i swap = t0 > t1;
+    const v4d tl = select(swap, t1, t0), th = select(swap, t0, t1);
+    lo_side = s0 > tl;
+    hi_side = s1 < th;
+    s0 = vmax(s0, tl);
+    s1 = vmin(s1, th);
+  } else {
+    ok = ok & !((md < zero) | (md > all(e.dd)));
+    lo_side = hi_side = e.parallel ? v4i{} : ~v4i{};
+  }
+  ok = ok & !(s0 > s1);
+}
+// The sphere of radius^2 r2 about `centre` (u, w, along the ray) on four rays: ok where it
+// meets them, and the half chord.
+VCUT_AVX2 void sphere_lanes(const double* centre, v4d U, double w, double r2, v4i& ok, v4d& root) {
+  const double y = w - centre[1];
+  const v4d x = U - all(centre[0]);
+  const v4d h2 = (all(r2) - x * x) - all(y * y);
+  ok = h2 >= all(0.0);
+  root = vsqrt(select(ok, h2, all(0.0)));
+}
+// The entry (kEntry) or exit of four vertical rays through the capsule of an upright ball's
+// edge (0: the centres', 1: the top centres'): its cylinder's, unless the rays miss the
+// cylinder or leave it through an end plane, then widened by the edge's end spheres.
+template <bool kEntry, class Family>
+VCUT_AVX2 v4d capsule_end(const Family& f, int edge, v4d U, double w, double r2) {
+  const v4d none = all(kEntry ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity());
+  v4i ok, lo_side, hi_side;
+  v4d s0, s1;
+  cylinder_lanes(f.edge[edge], U, w, ok, s0, s1, lo_side, hi_side);
+  v4d end = select(ok, kEntry ? s0 : s1, none);
+  const v4i spheres = (end == none) | !(ok & (kEntry ? lo_side : hi_side));
+  for (int i = 2 * edge; i < 2 * edge + 2; ++i) {
+    v4i meets;
+    v4d root;
+    sphere_lanes(f.sphere[i], U, w, r2, meets, root);
+    end = select(spheres & meets,
+                 kEntry ? vmin(end, all(f.sphere[i][2]) - root) : vmax(end, all(f.sphere[i][2]) + root), end);
+  }
+  return end;
+}
+// clip_inv on four lanes: [e0, e1] narrowed to where v0 + s / inv stays in [a, b].
+VCUT_AVX2 v4i clip_lanes(v4d v0, double inv, double a, double b, v4d& e0, v4d& e1) {
+  const v4d c0 = (all(a) - v0) * all(inv), c1 = (all(b) - v0) * all(inv);
+  const v4i swap = c0 > c1;
+  e0 = vmax(e0, select(swap, c1, c0));
+  e1 = vmin(e1, select(swap, c0, c1));
+  return e0 <= e1;
+}
 #undef VCUT_AVX2
 }  // namespace
 
@@ -807,7 +891,7 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
                                                             double* lo, double* hi, bool* hit) const {
   const BallFamily& f = ball_[axis];
   const double r = capsule_r_, r2 = r * r;
-  const v4d inf = all(kInf), minus_inf = all(-kInf), zero = all(0.0);
+  const v4d inf = all(kInf), minus_inf = all(-kInf);
   const double bounds[3][2] = {{-r, r}, {0.0, 1.0}, {0.0, 1.0}};
   for (int k0 = 0; k0 < n; k0 += 4) {
     // Four rays; past the end, the last one again.
@@ -816,45 +900,17 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
     const v4d U = {uu[0], uu[1], uu[2], uu[3]};
     v4d l = inf, h = minus_inf;
     for (int i = 0; i < 4; ++i) {
-      const double y = w - f.sphere[i][1];
-      const v4d x = U - all(f.sphere[i][0]);
-      const v4d h2 = (all(r2) - x * x) - all(y * y);
-      const v4i ok = h2 >= zero;
-      const v4d root = vsqrt(select(ok, h2, zero));
+      v4i ok;
+      v4d root;
+      sphere_lanes(f.sphere[i], U, w, r2, ok, root);
       const v4d c = all(f.sphere[i][2]);
       l = vmin(l, select(ok, c - root, inf));
       h = vmax(h, select(ok, c + root, minus_inf));
     }
     for (int i = 0; i < 4; ++i) {
-      const Edge& e = f.edge[i];
-      const double y = w - e.p2;
-      const v4d x = U - all(e.p1);
-      const v4d md = (x * all(e.d1) + all(y * e.d2)) + all(e.e0);
-      const v4d c = all(e.dd) * ((x * x + all(y * y)) + all(e.pk2)) - md * md;
+      v4i ok, lo_side, hi_side;
       v4d s0, s1;
-      v4i ok;
-      if (e.parallel) {
-        ok = !(c > zero);
-        s0 = minus_inf;
-        s1 = inf;
-      } else {
-        const v4d half_b = all(e.bk) - all(e.dk) * md;
-        const v4d disc = half_b * half_b - all(e.a) * c;
-        ok = !(disc < zero);
-        const v4d root = vsqrt(select(ok, disc, zero));
-        s0 = (-half_b - root) * all(e.inv_a);
-        s1 = (-half_b + root) * all(e.inv_a);
-      }
-      if (e.dk != 0.0) {
-        const v4d t0 = -md * all(e.inv_dk), t1 = (all(e.dd) - md) * all(e.inv_dk);
-        const v4i swap = t0 > t1;
-        const v4d tl = select(swap, t1, t0), th = select(swap, t0, t1);
-        s0 = vmax(s0, tl);
-        s1 = vmin(s1, th);
-      } else {
-        ok = ok & !((md < zero) | (md > all(e.dd)));
-      }
-      ok = ok & !(s0 > s1);
+      cylinder_lanes(f.edge[i], U, w, ok, s0, s1, lo_side, hi_side);
       l = vmin(l, select(ok, s0, inf));
       h = vmax(h, select(ok, s1, minus_inf));
     }
@@ -888,11 +944,124 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
     }
   }
 }
-#else
-void RaySweep::bracket_avx2(int axis, double w, int n, const int* todo, const double* u, double* lo, double* hi,
-                            bool* hit) const {
-  for (int j = 0; j < n; ++j) hit[todo[j]] = ball_general(axis, u[todo[j]], w, lo[todo[j]], hi[todo[j]]);
+
+// The upright ball's rows (intervals_within's three ways), four rays at a time in AVX2 with
+// the same operations as the scalar loops there, so the same bits: each ray's parts all
+// worked out, the scalar loop's choices between them made by masks. Horizontal rays below
+// both centres (first 0) or above both top centres (first 2): the capsule of that edge.
+__attribute__((target("avx2"))) void RaySweep::capsule_avx2(int axis, double w, int first, int count, const double* u,
+                                                            double* lo, double* hi, bool* hit) const {
+  const BallFamily& f = ball_[axis];
+  const double r = capsule_r_, r2 = r * r;
+  const v4d inf = all(kInf), minus_inf = all(-kInf);
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    double uu[4];
+    for (int j = 0; j < 4; ++j) uu[j] = u[std::min(k0 + j, count - 1)];
+    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    v4i ok, lo_side, hi_side;
+    v4d s0, s1;
+    cylinder_lanes(f.edge[first / 2], U, w, ok, s0, s1, lo_side, hi_side);
+    const v4d cyl_l = select(ok, vmin(inf, s0), inf), cyl_h = select(ok, vmax(minus_inf, s1), minus_inf);
+    // On the cylinder's side at both ends: the capsule's boundary, the spheres not asked.
+    const v4i done = ok & lo_side & hi_side;
+    v4d l = cyl_l, h = cyl_h;
+    for (int i = first; i <= first + 1; ++i) {
+      v4i meets;
+      v4d root;
+      sphere_lanes(f.sphere[i], U, w, r2, meets, root);
+      const v4d c = all(f.sphere[i][2]);
+      l = select(meets, vmin(l, c - root), l);
+      h = select(meets, vmax(h, c + root), h);
+    }
+    l = select(done, cyl_l, l);
+    h = select(done, cyl_h, h);
+    const v4i hits = done | (l <= h);
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      hit[k0 + j] = hits[j] != 0;
+      lo[k0 + j] = l[j];
+      hi[k0 + j] = h[j];
+    }
+  }
 }
+
+// Horizontal rays between the centres' and the top centres' heights: the two discs and the
+// band swept between them (not where the band alone answers: the scalar loop's quick case).
+__attribute__((target("avx2"))) void RaySweep::band_avx2(int axis, double inv_n_s, double inv_t_s, int count,
+                                                         const double* u, double* lo, double* hi, bool* hit) const {
+  const BallFamily& f = ball_[axis];
+  const double r = capsule_r_, r2 = r * r;
+  const v4d inf = all(kInf), minus_inf = all(-kInf), zero = all(0.0);
+  const double x0 = f.sphere[0][0], s0c = f.sphere[0][2], x1 = f.sphere[1][0], s1c = f.sphere[1][2];
+  const bool band = f.slab_band;
+  const double n_base = f.band_n_base, n_u = f.band_n_u, n_s = f.band_n_s;
+  const double t_base = f.band_t_base, t_u = f.band_t_u, t_s = f.band_t_s;
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    double uu[4];
+    for (int j = 0; j < 4; ++j) uu[j] = u[std::min(k0 + j, count - 1)];
+    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    v4d l = inf, h = minus_inf;
+    const double centres[2][2] = {{x0, s0c}, {x1, s1c}};
+    for (const auto& centre : centres) {
+      const v4d x = U - all(centre[0]), h2 = all(r2) - x * x;
+      const v4i meets = h2 >= zero;
+      const v4d root = vsqrt(select(meets, h2, zero));
+      l = select(meets, vmin(l, all(centre[1]) - root), l);
+      h = select(meets, vmax(h, all(centre[1]) + root), h);
+    }
+    if (band) {
+      v4d e0 = minus_inf, e1 = inf;
+      const v4d n0 = all(n_base) + all(n_u) * U, t0 = all(t_base) + all(t_u) * U;
+      v4i in = n_s == 0.0 ? (n0 >= all(-r)) & (n0 <= all(r)) : clip_lanes(n0, inv_n_s, -r, r, e0, e1);
+      in = in & (t_s == 0.0 ? (t0 >= zero) & (t0 <= all(1.0)) : clip_lanes(t0, inv_t_s, 0.0, 1.0, e0, e1));
+      l = select(in, vmin(l, e0), l);
+      h = select(in, vmax(h, e1), h);
+    }
+    const v4i hits = l <= h;
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      hit[k0 + j] = hits[j] != 0;
+      lo[k0 + j] = l[j];
+      hi[k0 + j] = h[j];
+    }
+  }
+}
+
+// Vertical rays: the entry through the centres' capsule, the exit (where material reaches
+// above floor_of_exit) through the top one.
+__attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double floor_of_exit, int count, const double* u,
+                                                             const double* top, double* lo, double* hi,
+                                                             bool* hit) const {
+  const BallFamily& f = ball_[2];
+  const double r = capsule_r_, r2 = r * r;
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    double uu[4], tt[4];
+    for (int j = 0; j < 4; ++j) {
+      uu[j] = u[std::min(k0 + j, count - 1)];
+      tt[j] = top[std::min(k0 + j, count - 1)];
+    }
+    const v4d U = {uu[0], uu[1], uu[2], uu[3]}, T = {tt[0], tt[1], tt[2], tt[3]};
+    const v4d l = capsule_end<true>(f, 0, U, w, r2);
+    const v4i met = l != all(kInf), low = T <= all(floor_of_exit);
+    v4d h = all(floor_of_exit);
+    v4i hits = met & low;
+    const v4i exit = met & !low;
+    if (exit[0] | exit[1] | exit[2] | exit[3]) {
+      const v4d e = capsule_end<false>(f, 1, U, w, r2);
+      h = select(exit, e, h);
+      hits = hits | (exit & (e >= l));
+    }
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      hit[k0 + j] = hits[j] != 0;
+      lo[k0 + j] = l[j];
+      hi[k0 + j] = h[j];
+    }
+  }
+}
+#else
+// Never called (lanes_ is false off x86-64): defined for the linker.
+void RaySweep::bracket_avx2(int, double, int, const int*, const double*, double*, double*, bool*) const {}
+void RaySweep::capsule_avx2(int, double, int, int, const double*, double*, double*, bool*) const {}
+void RaySweep::band_avx2(int, double, double, int, const double*, double*, double*, bool*) const {}
+void RaySweep::vertical_avx2(double, double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {

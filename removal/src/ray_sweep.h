@@ -236,6 +236,12 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool lanes_ = false;  // the processor has AVX2, and the four-ray kernel is wanted
   void bracket_avx2(int axis, double w, int n, const int* todo, const double* u, double* lo, double* hi,
                     bool* hit) const;
+  // The upright ball's rows the same way (intervals_within's capsule, band and vertical rows).
+  void capsule_avx2(int axis, double w, int first, int count, const double* u, double* lo, double* hi, bool* hit) const;
+  void band_avx2(int axis, double inv_n_s, double inv_t_s, int count, const double* u, double* lo, double* hi,
+                 bool* hit) const;
+  void vertical_avx2(double w, double floor_of_exit, int count, const double* u, const double* top, double* lo,
+                     double* hi, bool* hit) const;
   // `lo_side`/`hi_side`: that end of the interval lies on the cylinder's side, not on an end
   // plane, so on the boundary of the capsule around the edge: its end spheres cannot move it.
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,

@@ -403,45 +403,22 @@ TEST(DexelStock, TiltedMovesThroughAComb) {
   EXPECT_EQ(deepest, 0.0);
 }
 
-// On a processor with AVX2 the tilted ball's and bull-nose's bracket (a ball swept over a
-// parallelogram) is found four rays at a time, else ray by ray; VCUT_SCALAR_KERNELS asks for
-// the second everywhere. The same operations in the same order: a chain of random tilted ball
-// and bull-nose moves (the axis turning a few degrees a move, every move starting where the
-// last ended, through what the earlier ones cut; the tools' tops within the stock), cut both
-// ways, leaves every ray the same intervals, to the bit and to the move that made each end.
-TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
-#if defined(__x86_64__)
-  if (!__builtin_cpu_supports("avx2")) GTEST_SKIP() << "no AVX2 here: only the scalar kernel runs";
-#else
-  GTEST_SKIP() << "not x86-64: only the scalar kernel runs";
-#endif
+// On a processor with AVX2 the ball's rays and the bull-nose's bracket (a ball swept over a
+// parallelogram) are found four rays at a time, else ray by ray; VCUT_SCALAR_KERNELS asks for
+// the second everywhere. The same operations in the same order: `list` cut both ways through
+// the 40 x 30 x 20 box at v = 0.25 leaves every ray the same intervals, to the bit and to the
+// move that made each end. Returns the volume removed.
+double expect_the_same_rays_four_at_a_time(const MoveList& list) {
   const BoxShape box{{0, 0, -20}, {40, 30, 0}};
-  const double v = 0.25;
-  MoveList list;
-  list.cutters = {make(CutterType::Ball, 6, 3, 12), make(CutterType::BullNose, 8, 2, 12)};
-  std::mt19937 rng(53);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  Eigen::Vector3d at(6, 6, -8), axis(0.2, 0.3, 1.0);
-  for (int i = 0; i < 60; ++i) {
-    Eigen::Vector3d to = at + Eigen::Vector3d(3.0 * unit(rng) - 1.0, 3.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
-    to = to.cwiseMax(Eigen::Vector3d(4, 4, -14)).cwiseMin(Eigen::Vector3d(36, 26, -4));
-    axis = (axis.normalized() + 0.08 * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 0)).normalized();
-    if (axis.z() < std::cos(60 * M_PI / 180.0)) axis.z() = 1.0;  // keep within 60 deg of upright
-    Move m = line(at, to, axis);
-    m.cutter = i / 30;
-    list.moves.push_back(m);
-    at = to;
-  }
   double removed[2];
   auto cut = [&](bool scalar) {
     if (scalar) ::setenv("VCUT_SCALAR_KERNELS", "1", 1);
-    auto stock = std::make_unique<DexelStock>(box, v);
+    auto stock = std::make_unique<DexelStock>(box, 0.25);
     removed[scalar] = stock->cut(list, {}).removed_volume_mm3;
     ::unsetenv("VCUT_SCALAR_KERNELS");
     return stock;
   };
   const std::unique_ptr<DexelStock> lanes = cut(false), scalar = cut(true);
-  EXPECT_GT(removed[0], 500.0);
   EXPECT_EQ(removed[0], removed[1]);
   const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
   int differ = 0, cut_rays = 0;
@@ -460,6 +437,58 @@ TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
   }
   EXPECT_EQ(differ, 0);
   EXPECT_GT(cut_rays, 20000);
+  return removed[0];
+}
+
+bool have_avx2() {
+#if defined(__x86_64__)
+  return __builtin_cpu_supports("avx2");
+#else
+  return false;
+#endif
+}
+
+// A chain of random tilted ball and bull-nose moves (the axis turning a few degrees a move,
+// every move starting where the last ended, through what the earlier ones cut; the tools'
+// tops within the stock).
+TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  MoveList list;
+  list.cutters = {make(CutterType::Ball, 6, 3, 12), make(CutterType::BullNose, 8, 2, 12)};
+  std::mt19937 rng(53);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  Eigen::Vector3d at(6, 6, -8), axis(0.2, 0.3, 1.0);
+  for (int i = 0; i < 60; ++i) {
+    Eigen::Vector3d to = at + Eigen::Vector3d(3.0 * unit(rng) - 1.0, 3.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
+    to = to.cwiseMax(Eigen::Vector3d(4, 4, -14)).cwiseMin(Eigen::Vector3d(36, 26, -4));
+    axis = (axis.normalized() + 0.08 * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 0)).normalized();
+    if (axis.z() < std::cos(60 * M_PI / 180.0)) axis.z() = 1.0;  // keep within 60 deg of upright
+    Move m = line(at, to, axis);
+    m.cutter = i / 30;
+    list.moves.push_back(m);
+    at = to;
+  }
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
+}
+
+// An upright ball: a zig-zag raster in x over a wavy floor (steps along x and in z, the rows
+// below, between and above the ball's centres), a ramp in y and a plunge.
+TEST(DexelStock, UprightBallCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  MoveList list;
+  list.cutters = {make(CutterType::Ball, 6, 3, 12)};
+  Eigen::Vector3d at(2, 3, -2);
+  for (int row = 0; row < 8; ++row) {
+    for (int i = 1; i <= 24; ++i) {
+      const double x = row % 2 == 0 ? 2 + 1.5 * i : 38 - 1.5 * i;
+      const Eigen::Vector3d to(x, 3 + 3.0 * row, -6 - 2.5 * std::sin(0.4 * x + row));
+      list.moves.push_back(line(at, to));
+      at = to;
+    }
+  }
+  list.moves.push_back(line(at, {at.x(), 28, -3}));
+  list.moves.push_back(line({20, 15, 2}, {20, 15, -12}));
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
