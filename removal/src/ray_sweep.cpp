@@ -625,16 +625,16 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     if (!flat_bottom_ && segments_ == 2 && lanes_) {
       // general() with the bracket's intervals four rays at a time (bracket_avx2).
       const Eigen::AlignedBox3d& box = sweep_.bounds();
-      const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+      const int a2 = axis == 2 ? 1 : 2;
       const bool row_in = w >= box.min()[a2] && w <= box.max()[a2];
       int todo[kLanesBlock];
       double capsule_lo[kLanesBlock], capsule_hi[kLanesBlock];
       bool capsule_hit[kLanesBlock];
       for (int first = 0; first < count; first += kLanesBlock) {
-        const int n = rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo, [&](int k) {
-          return row_in && u[k] >= box.min()[a1] && u[k] <= box.max()[a1] &&
-                 !material_clear(axis, u[k], w, bottom[k], top[k]);
-        });
+        const int n =
+            row_in
+                ? not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, true, hit, todo)
+                : rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo, [](int) { return false; });
         bracket_avx2(axis, w, n, todo, u + first, capsule_lo, capsule_hi, capsule_hit);
         for (int j = 0; j < n; ++j) {
           const int c = todo[j], k = first + c;
@@ -783,8 +783,8 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     // material_clear first, as below, then ball_general four rays at a time.
     int todo[kLanesBlock];
     for (int first = 0; first < count; first += kLanesBlock) {
-      const int n = rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo,
-                               [&](int k) { return !material_clear(axis, u[k], w, bottom[k], top[k]); });
+      const int n =
+          not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, false, hit, todo);
       bracket_avx2(axis, w, n, todo, u + first, lo + first, hi + first, hit + first);
     }
     return;
@@ -945,6 +945,46 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
   }
 }
 
+// rays_to_do with material_clear's test (and with `in_box`, general()'s test of the ray
+// against the sweep's box across the rays, the row being within it) four rays at a time, the
+// same operations, and the rays kept written without a branch: the scalar loop's branch on
+// each ray's test went wrong about as often as not (W5).
+__attribute__((target("avx2"))) int RaySweep::not_clear_avx2(int axis, double w, int first, int end, const double* u,
+                                                             const double* bottom, const double* top, bool in_box,
+                                                             bool* hit, int* todo) const {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const double pw = w - core_mid_[a2], pw_a = pw * tool_axis_[a2], pw2 = pw * pw;
+  const double reach_base = capsule_r_ + half_move_mm_;
+  const v4d zl = all(core_.z_low_mm), zh = all(core_.z_high_mm), inf = all(kInf), zero = all(0.0);
+  const v4d u_lo = all(in_box ? sweep_.bounds().min()[a1] : -kInf),
+            u_hi = all(in_box ? sweep_.bounds().max()[a1] : kInf);
+  int n = 0;
+  for (int k0 = first; k0 < end; k0 += 4) {
+    double uu[4], bb[4], tt[4];
+    for (int j = 0; j < 4; ++j) {
+      const int k = std::min(k0 + j, end - 1);
+      uu[j] = u[k];
+      bb[j] = bottom[k];
+      tt[j] = top[k];
+    }
+    const v4d U = {uu[0], uu[1], uu[2], uu[3]}, B = {bb[0], bb[1], bb[2], bb[3]}, T = {tt[0], tt[1], tt[2], tt[3]};
+    const v4d half = all(0.5) * (T - B);
+    const v4d pu = U - all(core_mid_[a1]), ps = (B + half) - all(core_mid_[axis]);
+    const v4d qa = (pu * all(tool_axis_[a1]) + all(pw_a)) + ps * all(tool_axis_[axis]);
+    const v4d hq = select(qa < zl, zl, select(zh < qa, zh, qa));
+    const v4d reach = all(reach_base) + half;
+    const v4i finite = (select(B < zero, -B, B) < inf) & (select(T < zero, -T, T) < inf);
+    const v4i clear = finite & (((pu * pu + all(pw2)) + ps * ps) - hq * (all(2.0) * qa - hq) > reach * reach);
+    const v4i keep = ~clear & ~((U < u_lo) | (U > u_hi));
+    for (int j = 0; j < 4 && k0 + j < end; ++j) {
+      hit[k0 + j] = false;
+      todo[n] = k0 + j - first;
+      n += keep[j] != 0;
+    }
+  }
+  return n;
+}
+
 // The upright ball's rows (intervals_within's three ways), four rays at a time in AVX2 with
 // the same operations as the scalar loops there, so the same bits: each ray's parts all
 // worked out, the scalar loop's choices between them made by masks. Horizontal rays below
@@ -1058,6 +1098,10 @@ __attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double fl
 }
 #else
 // Never called (lanes_ is false off x86-64): defined for the linker.
+int RaySweep::not_clear_avx2(int, double, int, int, const double*, const double*, const double*, bool, bool*,
+                             int*) const {
+  return 0;
+}
 void RaySweep::bracket_avx2(int, double, int, const int*, const double*, double*, double*, bool*) const {}
 void RaySweep::capsule_avx2(int, double, int, int, const double*, double*, double*, bool*) const {}
 void RaySweep::band_avx2(int, double, double, int, const double*, double*, double*, bool*) const {}

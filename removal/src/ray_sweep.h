@@ -236,6 +236,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool lanes_ = false;  // the processor has AVX2, and the four-ray kernel is wanted
   void bracket_avx2(int axis, double w, int n, const int* todo, const double* u, double* lo, double* hi,
                     bool* hit) const;
+  // The rays first .. end - 1 whose material is not clear of the bracket (material_clear) and
+  // with `in_box` within the sweep's box across the rays, by their index from first, into
+  // todo (how many: returned); hit false for all of them.
+  int not_clear_avx2(int axis, double w, int first, int end, const double* u, const double* bottom, const double* top,
+                     bool in_box, bool* hit, int* todo) const;
   // The upright ball's rows the same way (intervals_within's capsule, band and vertical rows).
   void capsule_avx2(int axis, double w, int first, int count, const double* u, double* lo, double* hi, bool* hit) const;
   void band_avx2(int axis, double inv_n_s, double inv_t_s, int count, const double* u, double* lo, double* hi,
