@@ -100,18 +100,6 @@ bool march_to_root(F&& f, double from, double toward, double tolerance, double& 
   return false;
 }
 
-// The rays first .. end - 1 of a row that `keep` keeps, by their index from first, into todo
-// (how many: returned); hit false for all of them.
-template <class Keep>
-int rays_to_do(int first, int end, bool* hit, int* todo, Keep&& keep) {
-  int n = 0;
-  for (int k = first; k < end; ++k) {
-    hit[k] = false;
-    if (keep(k)) todo[n++] = k - first;
-  }
-  return n;
-}
-
 // The point at s on the ray of family `axis` through (u, w) (the other two coordinates, in
 // increasing axis order).
 Vector3d ray_point(int axis, double u, double w, double s) {
@@ -626,15 +614,16 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
       // general() with the bracket's intervals four rays at a time (bracket_avx2).
       const Eigen::AlignedBox3d& box = sweep_.bounds();
       const int a2 = axis == 2 ? 1 : 2;
-      const bool row_in = w >= box.min()[a2] && w <= box.max()[a2];
+      if (!(w >= box.min()[a2] && w <= box.max()[a2])) {  // the row misses the sweep's box
+        std::fill(hit, hit + count, false);
+        return;
+      }
       int todo[kLanesBlock];
       double capsule_lo[kLanesBlock], capsule_hi[kLanesBlock];
       bool capsule_hit[kLanesBlock];
       for (int first = 0; first < count; first += kLanesBlock) {
         const int n =
-            row_in
-                ? not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, true, hit, todo)
-                : rays_to_do(first, std::min(count, first + kLanesBlock), hit, todo, [](int) { return false; });
+            not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, true, hit, todo);
         bracket_avx2(axis, w, n, todo, u + first, capsule_lo, capsule_hi, capsule_hit);
         for (int j = 0; j < n; ++j) {
           const int c = todo[j], k = first + c;
@@ -945,10 +934,10 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
   }
 }
 
-// rays_to_do with material_clear's test (and with `in_box`, general()'s test of the ray
-// against the sweep's box across the rays, the row being within it) four rays at a time, the
-// same operations, and the rays kept written without a branch: the scalar loop's branch on
-// each ray's test went wrong about as often as not (W5).
+// material_clear (and with `in_box`, general()'s test of the ray against the sweep's box
+// across the rays, the row being within it) four rays at a time, the same operations, and the
+// rays kept written without a branch: a loop branching on each ray's test went wrong about
+// as often as not (W5).
 __attribute__((target("avx2"))) int RaySweep::not_clear_avx2(int axis, double w, int first, int end, const double* u,
                                                              const double* bottom, const double* top, bool in_box,
                                                              bool* hit, int* todo) const {
