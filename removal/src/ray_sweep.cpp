@@ -858,6 +858,24 @@ VCUT_AVX2 v4d capsule_end(const Family& f, int edge, v4d U, double w, double r2)
   }
   return end;
 }
+// Four rays' values: a[k0 + j] (through `index` where given), past the n-th the last again.
+VCUT_AVX2 v4d lanes_of(const double* a, const int* index, int k0, int n) {
+  double x[4];
+  for (int j = 0; j < 4; ++j) {
+    const int k = std::min(k0 + j, n - 1);
+    x[j] = a[index != nullptr ? index[k] : k];
+  }
+  return v4d{x[0], x[1], x[2], x[3]};
+}
+// The four rays' results, those up to the n-th, at the same places.
+VCUT_AVX2 void store_lanes(v4i hits, v4d l, v4d h, const int* index, int k0, int n, bool* hit, double* lo, double* hi) {
+  for (int j = 0; j < 4 && k0 + j < n; ++j) {
+    const int k = index != nullptr ? index[k0 + j] : k0 + j;
+    hit[k] = hits[j] != 0;
+    lo[k] = l[j];
+    hi[k] = h[j];
+  }
+}
 // clip_inv on four lanes: [e0, e1] narrowed to where v0 + s / inv stays in [a, b].
 VCUT_AVX2 v4i clip_lanes(v4d v0, double inv, double a, double b, v4d& e0, v4d& e1) {
   const v4d c0 = (all(a) - v0) * all(inv), c1 = (all(b) - v0) * all(inv);
@@ -883,10 +901,7 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
   const v4d inf = all(kInf), minus_inf = all(-kInf);
   const double bounds[3][2] = {{-r, r}, {0.0, 1.0}, {0.0, 1.0}};
   for (int k0 = 0; k0 < n; k0 += 4) {
-    // Four rays; past the end, the last one again.
-    double uu[4];
-    for (int j = 0; j < 4; ++j) uu[j] = u[todo[std::min(k0 + j, n - 1)]];
-    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    const v4d U = lanes_of(u, todo, k0, n);
     v4d l = inf, h = minus_inf;
     for (int i = 0; i < 4; ++i) {
       v4i ok;
@@ -924,13 +939,7 @@ __attribute__((target("avx2"))) void RaySweep::bracket_avx2(int axis, double w, 
       l = vmin(l, select(ok, s0, inf));
       h = vmax(h, select(ok, s1, minus_inf));
     }
-    const v4i hits = l <= h;
-    for (int j = 0; j < 4 && k0 + j < n; ++j) {
-      const int k = todo[k0 + j];
-      hit[k] = hits[j] != 0;
-      lo[k] = l[j];
-      hi[k] = h[j];
-    }
+    store_lanes(l <= h, l, h, todo, k0, n, hit, lo, hi);
   }
 }
 
@@ -949,14 +958,8 @@ __attribute__((target("avx2"))) int RaySweep::not_clear_avx2(int axis, double w,
             u_hi = all(in_box ? sweep_.bounds().max()[a1] : kInf);
   int n = 0;
   for (int k0 = first; k0 < end; k0 += 4) {
-    double uu[4], bb[4], tt[4];
-    for (int j = 0; j < 4; ++j) {
-      const int k = std::min(k0 + j, end - 1);
-      uu[j] = u[k];
-      bb[j] = bottom[k];
-      tt[j] = top[k];
-    }
-    const v4d U = {uu[0], uu[1], uu[2], uu[3]}, B = {bb[0], bb[1], bb[2], bb[3]}, T = {tt[0], tt[1], tt[2], tt[3]};
+    const v4d U = lanes_of(u, nullptr, k0, end), B = lanes_of(bottom, nullptr, k0, end),
+              T = lanes_of(top, nullptr, k0, end);
     const v4d half = all(0.5) * (T - B);
     const v4d pu = U - all(core_mid_[a1]), ps = (B + half) - all(core_mid_[axis]);
     const v4d qa = (pu * all(tool_axis_[a1]) + all(pw_a)) + ps * all(tool_axis_[axis]);
@@ -984,9 +987,7 @@ __attribute__((target("avx2"))) void RaySweep::capsule_avx2(int axis, double w, 
   const double r = capsule_r_, r2 = r * r;
   const v4d inf = all(kInf), minus_inf = all(-kInf);
   for (int k0 = 0; k0 < count; k0 += 4) {
-    double uu[4];
-    for (int j = 0; j < 4; ++j) uu[j] = u[std::min(k0 + j, count - 1)];
-    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    const v4d U = lanes_of(u, nullptr, k0, count);
     v4i ok, lo_side, hi_side;
     v4d s0, s1;
     cylinder_lanes(f.edge[first / 2], U, w, ok, s0, s1, lo_side, hi_side);
@@ -1004,12 +1005,7 @@ __attribute__((target("avx2"))) void RaySweep::capsule_avx2(int axis, double w, 
     }
     l = select(done, cyl_l, l);
     h = select(done, cyl_h, h);
-    const v4i hits = done | (l <= h);
-    for (int j = 0; j < 4 && k0 + j < count; ++j) {
-      hit[k0 + j] = hits[j] != 0;
-      lo[k0 + j] = l[j];
-      hi[k0 + j] = h[j];
-    }
+    store_lanes(done | (l <= h), l, h, nullptr, k0, count, hit, lo, hi);
   }
 }
 
@@ -1025,9 +1021,7 @@ __attribute__((target("avx2"))) void RaySweep::band_avx2(int axis, double inv_n_
   const double n_base = f.band_n_base, n_u = f.band_n_u, n_s = f.band_n_s;
   const double t_base = f.band_t_base, t_u = f.band_t_u, t_s = f.band_t_s;
   for (int k0 = 0; k0 < count; k0 += 4) {
-    double uu[4];
-    for (int j = 0; j < 4; ++j) uu[j] = u[std::min(k0 + j, count - 1)];
-    const v4d U = {uu[0], uu[1], uu[2], uu[3]};
+    const v4d U = lanes_of(u, nullptr, k0, count);
     v4d l = inf, h = minus_inf;
     const double centres[2][2] = {{x0, s0c}, {x1, s1c}};
     for (const auto& centre : centres) {
@@ -1045,12 +1039,7 @@ __attribute__((target("avx2"))) void RaySweep::band_avx2(int axis, double inv_n_
       l = select(in, vmin(l, e0), l);
       h = select(in, vmax(h, e1), h);
     }
-    const v4i hits = l <= h;
-    for (int j = 0; j < 4 && k0 + j < count; ++j) {
-      hit[k0 + j] = hits[j] != 0;
-      lo[k0 + j] = l[j];
-      hi[k0 + j] = h[j];
-    }
+    store_lanes(l <= h, l, h, nullptr, k0, count, hit, lo, hi);
   }
 }
 
@@ -1062,12 +1051,7 @@ __attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double fl
   const BallFamily& f = ball_[2];
   const double r = capsule_r_, r2 = r * r;
   for (int k0 = 0; k0 < count; k0 += 4) {
-    double uu[4], tt[4];
-    for (int j = 0; j < 4; ++j) {
-      uu[j] = u[std::min(k0 + j, count - 1)];
-      tt[j] = top[std::min(k0 + j, count - 1)];
-    }
-    const v4d U = {uu[0], uu[1], uu[2], uu[3]}, T = {tt[0], tt[1], tt[2], tt[3]};
+    const v4d U = lanes_of(u, nullptr, k0, count), T = lanes_of(top, nullptr, k0, count);
     const v4d l = capsule_end<true>(f, 0, U, w, r2);
     const v4i met = l != all(kInf), low = T <= all(floor_of_exit);
     v4d h = all(floor_of_exit);
@@ -1078,11 +1062,7 @@ __attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double fl
       h = select(exit, e, h);
       hits = hits | (exit & (e >= l));
     }
-    for (int j = 0; j < 4 && k0 + j < count; ++j) {
-      hit[k0 + j] = hits[j] != 0;
-      lo[k0 + j] = l[j];
-      hi[k0 + j] = h[j];
-    }
+    store_lanes(hits, l, h, nullptr, k0, count, hit, lo, hi);
   }
 }
 #else
