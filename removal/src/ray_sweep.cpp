@@ -172,6 +172,42 @@ bool clip_inv(double v0, double inv_slope, double lo, double hi, double& s0, dou
 
 double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
+// The real roots of a x^2 + 2 b x + c (into roots; how many returned). A discriminant a hair
+// below zero from rounding counts as zero (a ray through a cone's apex line: the double root
+// is the answer there).
+int quadratic_roots(double a, double b, double c, double roots[2]) {
+  if (a == 0.0) {
+    if (b == 0.0) return 0;
+    roots[0] = -c / (2.0 * b);
+    return 1;
+  }
+  double disc = b * b - a * c;
+  if (disc < 0.0) {
+    if (disc < -1e-12 * std::max(b * b, std::abs(a * c))) return 0;
+    disc = 0.0;
+  }
+  const double q = -(b + std::copysign(std::sqrt(disc), b));
+  if (q == 0.0) {  // b = 0 and a c = 0: the double root 0
+    roots[0] = 0.0;
+    return 1;
+  }
+  roots[0] = q / a;
+  roots[1] = c / q;
+  return 2;
+}
+
+// ss s^2 + 2 st s t + tt t^2 + 2 s s + 2 t t + c over the (s, t) plane.
+struct Conic {
+  double ss, st, tt, s, t, c;
+  double at(double x, double y) const { return (ss * x + 2.0 * (st * y + s)) * x + (tt * y + 2.0 * t) * y + c; }
+  // Along the line (x, y) + l (dx, dy): a l^2 + 2 b l + c.
+  int on_line(double x, double y, double dx, double dy, double roots[2]) const {
+    const double qa = (ss * dx + 2.0 * st * dy) * dx + tt * dy * dy;
+    const double qb = ss * x * dx + st * (x * dy + y * dx) + tt * y * dy + s * dx + t * dy;
+    return quadratic_roots(qa, qb, at(x, y), roots);
+  }
+};
+
 }  // namespace
 
 RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedBox3d* material_box)
@@ -201,6 +237,12 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   } else {
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
+    if (cutter.type == CutterType::VBit) {
+      cone_ = true;
+      cone_k_ = std::tan(0.5 * cutter.tip_angle_deg * M_PI / 180.0);
+      cone_top_mm_ = std::min(cutter.flute_length_mm, cutter.radius_mm() / cone_k_);
+      cone_r_mm_ = cone_top_mm_ * cone_k_;
+    }
     // band_'s heights: clear of the corner and the top rounding above every instance's tip by
     // far more than rounding moves the bracket's end.
     constexpr double kClear_mm = 1e-6;
@@ -1392,6 +1434,73 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
+bool RaySweep::cone_interval(int axis, double u, double w, double& lo, double& hi) const {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const Vector3d& a = tool_axis_;
+  // The ray's point at s less the first tip, with s' = s - p0[axis]: w0 + s' e, w0[axis] = 0
+  // (coordinates near the move, whatever the ray's position along its axis).
+  const double w0_1 = u - p0_[a1], w0_2 = w - p0_[a2];
+  const double d_1 = delta_[a1], d_2 = delta_[a2], d_e = delta_[axis];
+  // Height above the instance's tip at (s', t): y = A0 + A1 s' - A2 t; its square distance
+  // from the instance's tip, |w0 + s' e - t delta|^2, less y^2 is the square radius.
+  const double A0 = w0_1 * a[a1] + w0_2 * a[a2], A1 = a[axis];
+  const double A2 = d_1 * a[a1] + d_2 * a[a2] + d_e * a[axis];
+  const double wd = w0_1 * d_1 + w0_2 * d_2, ww = w0_1 * w0_1 + w0_2 * w0_2;
+  const double dd = d_1 * d_1 + d_2 * d_2 + d_e * d_e;
+  // |.|^2 - c y^2 - kappa: the cone (c = 1 + k^2, kappa = 0: radius^2 <= k^2 y^2) and the
+  // cylinder (c = 1, kappa = R^2).
+  auto conic = [&](double c, double kappa) {
+    return Conic{1.0 - c * A1 * A1, -d_e + c * A1 * A2, dd - c * A2 * A2,
+                 -c * A0 * A1,      -wd + c * A0 * A2,  ww - c * A0 * A0 - kappa};
+  };
+  const double k = cone_k_, r = cone_r_mm_, H = height_mm_;
+  const Conic cone = conic(1.0 + k * k, 0.0), cylinder = conic(1.0, r * r);
+  // A point counts when inside every bound to within rounding (1e-9 mm; the conics' values
+  // are about twice the radius times the distance from their surfaces).
+  constexpr double kTol_mm = 1e-9, kTolT = 1e-12;
+  const double cone_tol = 2.0 * r * std::sqrt(1.0 + k * k) * kTol_mm, cylinder_tol = 2.0 * r * kTol_mm;
+  double s_lo = kInf, s_hi = -kInf;
+  auto consider = [&](double s, double t) {
+    if (!(t >= -kTolT && t <= 1.0 + kTolT)) return;
+    const double y = A0 + A1 * s - A2 * t;
+    if (!(y >= -kTol_mm && y <= H + kTol_mm && cone.at(s, t) <= cone_tol && cylinder.at(s, t) <= cylinder_tol)) return;
+    s_lo = std::min(s_lo, s);
+    s_hi = std::max(s_hi, s);
+  };
+  double roots[2];
+  // Where each conic runs square to s (its derivative in t zero).
+  for (const Conic* q : {&cone, &cylinder}) {
+    if (q->tt == 0.0) continue;
+    const int n =
+        quadratic_roots(q->ss * q->tt - q->st * q->st, q->s * q->tt - q->st * q->t, q->c * q->tt - q->t * q->t, roots);
+    for (int i = 0; i < n; ++i) consider(roots[i], -(q->st * roots[i] + q->t) / q->tt);
+  }
+  // Each conic against the first and last instance.
+  for (const double t : {0.0, 1.0})
+    for (const Conic* q : {&cone, &cylinder}) {
+      const int n = q->on_line(0.0, t, 1.0, 0.0, roots);
+      for (int i = 0; i < n; ++i) consider(roots[i], t);
+    }
+  // The cylinder against the top (y = H) and where it meets the cone (y = cone top), and the
+  // top's ends at the first and last instance. (The cone meets the tip's height y = 0 only at
+  // the apex, the cylinder there outside the cone.)
+  const bool along_s = std::abs(A1) >= std::abs(A2);
+  if (A1 != 0.0 || A2 != 0.0) {
+    for (int line = 0; line < (cone_top_mm_ < H ? 2 : 1); ++line) {
+      const double height = line == 0 ? H : cone_top_mm_;
+      const double x = along_s ? (height - A0) / A1 : 0.0, y = along_s ? 0.0 : (A0 - height) / A2;
+      const int n = cylinder.on_line(x, y, A2, A1, roots);
+      for (int i = 0; i < n; ++i) consider(x + roots[i] * A2, y + roots[i] * A1);
+    }
+  }
+  if (A1 != 0.0)
+    for (const double t : {0.0, 1.0}) consider((H - A0 + A2 * t) / A1, t);
+  if (!(s_lo <= s_hi)) return false;
+  lo = s_lo + p0_[axis];
+  hi = s_hi + p0_[axis];
+  return true;
+}
+
 bool RaySweep::material_clear(int axis, double u, double w, double bottom, double top) const {
   if (!(std::isfinite(bottom) && std::isfinite(top))) return false;
   // In scalars: see ray_point.
@@ -1419,6 +1528,9 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
 
 bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
                          double& lo, double& hi) const {
+  // A V-bit's sweep in closed form, within the bracket.
+  if (cone_) return cone_interval(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], lo, hi);
+  // A V-bit's sweep in closed form, within the bracket.
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   const double ak = tool_axis_[axis];
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;

@@ -185,6 +185,18 @@ class __attribute__((visibility("hidden"))) RaySweep {
   bool material_clear(int axis, double u, double w, double bottom, double top) const;
   Eigen::Vector3d core_mid_ = Eigen::Vector3d::Zero();  // the middle instance's tip
   double half_move_mm_ = 0.0;
+  // V-bit, tool axis not vertical: closed form. The tool is convex (a cone from the tip up to
+  // radius R, a cylinder of radius R above it to the flute length H), and so is its sweep
+  // along the move: a ray meets it in one interval, the extent in s of the convex region Q of
+  // (s, t), t in [0, 1] the time along the move, where the ray's point at s lies in the
+  // instance at t. Q is bounded by lines (t = 0, t = 1, the heights 0 and H above the tip)
+  // and two conics (the cone's and the cylinder's surfaces), so its extremes in s are among
+  // a fixed set of points: where a conic runs square to s, and where two boundaries meet.
+  bool cone_interval(int axis, double u, double w, double& lo, double& hi) const;
+  bool cone_ = false;
+  double cone_k_ = 0.0;       // radius per height of the cone
+  double cone_top_mm_ = 0.0;  // the height at which the cone reaches cone_r_mm_ (<= H)
+  double cone_r_mm_ = 0.0;    // the tool's widest radius (R, or the cone's at H when shorter)
   // Flat end mill, any tool axis: closed form; `decided` false in the degenerate cases
   // (motion along the tool axis, a ray along it) that general() then takes.
   bool tilted_flat(int axis, double u, double w, double& lo, double& hi, bool& decided) const;

@@ -318,6 +318,33 @@ TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
   expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
+// The tilted V-bit's closed form (RaySweep::cone_interval) at random tilts and motions, with
+// 60, 90 and 120 deg cones, some cut off at a flute length below their full diameter, and
+// where its points degenerate: the motion across the rays of a tilt in their plane, along the
+// tool axis, square to it and down z; the axis along x (x rays parallel to it), moving across
+// and along it. Every endpoint lies on the sweep (within 1 um of TranslationSweep's distance,
+// a golden-section search over the move) and no material is left inside it.
+TEST(DexelStock, TiltedVBitMovesMatchTheSweepDistance) {
+  int n = 0;
+  expect_random_tilted_moves_match_the_sweep_distance(43, 12, [&n](double d) {
+    Cutter c = make(CutterType::VBit, d, 0, n % 4 == 3 ? 0.3 * d : 20);
+    c.tip_angle_deg = 60.0 + 30.0 * (n++ % 3);
+    return c;
+  });
+  Cutter vbit = make(CutterType::VBit, 8, 0, 20);
+  vbit.tip_angle_deg = 90;
+  const double tilt = 35 * M_PI / 180.0;
+  const Eigen::Vector3d a_yz(0, -std::sin(tilt), std::cos(tilt)), p(12, 14, -4);
+  expect_cut_matches_the_sweep_distance(vbit, line(p, p + Eigen::Vector3d(14, 0, 0), a_yz), "x across a yz tilt");
+  expect_cut_matches_the_sweep_distance(vbit, line(p, p - 6 * a_yz, a_yz), "plunge along the axis");
+  expect_cut_matches_the_sweep_distance(vbit, line(p, p + 10 * a_yz.cross(Eigen::Vector3d::UnitX()), a_yz),
+                                        "square to the axis");
+  expect_cut_matches_the_sweep_distance(vbit, line(p, p + Eigen::Vector3d(0, 0, -3), a_yz), "down z");
+  const Eigen::Vector3d along_x(1, 0, 0), q(6, 15, -8);
+  expect_cut_matches_the_sweep_distance(vbit, line(q, q + Eigen::Vector3d(0, 8, 2), along_x), "axis along x");
+  expect_cut_matches_the_sweep_distance(vbit, line(q, q + Eigen::Vector3d(10, 0, 0), along_x), "along x, axis along x");
+}
+
 // Several tilted bull-nose and V-bit moves crossing one region of a box, cut in one call: the
 // later moves meet rays that earlier ones have cut already (split in two by a tilted tool,
 // trimmed at one end), where the root march looks only at the material left. Every endpoint
