@@ -26,11 +26,14 @@ double vbit_slope(double tip_angle_deg) {
   return slope;
 }
 
+}  // namespace
+
 // Signed distance in the (rho, z) half-plane to the V-bit's profile: the convex polygon
 // (0, 0), (R, R / tan(a/2)), (R, H), (0, H), cut at H when the cone is taller than that. Its
 // edge on the axis (0, H) - (0, 0) bounds the half-plane, not the solid of revolution: it
-// counts for inside or out, never as the nearest surface.
-double vbit_profile_distance(const Cutter& c, double rho, double z) {
+// counts for inside or out, never as the nearest surface. The gradient: away from the
+// nearest boundary point (toward it inside), the outward normal of the nearest edge on it.
+double vbit_profile_distance(const Cutter& c, double rho, double z, double& g_rho, double& g_z) {
   const double slope = vbit_slope(c.tip_angle_deg);
   const double height = c.flute_length_mm;
   const double cone_top = std::min(height, c.radius_mm() / slope);
@@ -39,6 +42,7 @@ double vbit_profile_distance(const Cutter& c, double rho, double z) {
   const Eigen::Vector2d v[4] = {{0.0, 0.0}, {radius, cone_top}, {radius, height}, {0.0, height}};
   const Eigen::Vector2d q(rho, z);
   double best = std::numeric_limits<double>::infinity();
+  Eigen::Vector2d away(0.0, 0.0), normal(0.0, -1.0);
   bool inside = true;
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector2d a = v[i], b = v[(i + 1) % 4], e = b - a;
@@ -46,12 +50,20 @@ double vbit_profile_distance(const Cutter& c, double rho, double z) {
     if (e.x() * (q.y() - a.y()) - e.y() * (q.x() - a.x()) < 0.0) inside = false;
     if (i == 3) continue;  // the axis
     const double t = std::clamp((q - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
-    best = std::min(best, (q - a - t * e).norm());
+    const Eigen::Vector2d off = q - a - t * e;
+    const double d2 = off.squaredNorm();
+    if (d2 < best) {
+      best = d2;
+      away = off;
+      normal = Eigen::Vector2d(e.y(), -e.x()).normalized();
+    }
   }
-  return inside ? -best : best;
+  const double distance = std::sqrt(best);
+  const Eigen::Vector2d g = distance > 0.0 ? Eigen::Vector2d(away / distance) : normal;
+  g_rho = inside ? -g.x() : g.x();
+  g_z = inside ? -g.y() : g.y();
+  return inside ? -distance : distance;
 }
-
-}  // namespace
 
 double section_radius(const Cutter& c, double h) {
   if (h < 0.0 || h > c.flute_length_mm) return 0.0;
@@ -68,7 +80,8 @@ double underside_height(const Cutter& c, double rho) {
 
 double cutter_distance(const Cutter& cutter, const Eigen::Vector3d& p) {
   const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());  // mm: no overflow to guard against
-  if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, rho, p.z());
+  double g_rho, g_z;
+  if (cutter.type == CutterType::VBit) return vbit_profile_distance(cutter, rho, p.z(), g_rho, g_z);
   const CutterCore k = core_of(cutter);
   // The core cylinder is a disk extruded over an interval (exact).
   return detail::extrude(rho - k.core_radius_mm, detail::interval_distance(p.z(), k.z_low_mm, k.z_high_mm)) -

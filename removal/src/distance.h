@@ -5,6 +5,13 @@
 #include <algorithm>
 #include <cmath>
 
+namespace vcut::removal {
+struct Cutter;
+// A V-bit's signed distance in its (radius, height) half-plane, and the gradient there
+// (cutter.cpp; cutter_distance's for a V-bit).
+double vbit_profile_distance(const Cutter& c, double rho, double z, double& g_rho, double& g_z);
+}  // namespace vcut::removal
+
 namespace vcut::removal::detail {
 
 // A convex 2-D shape with signed distance `d_plane`, extruded over an interval with signed

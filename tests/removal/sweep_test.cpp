@@ -105,13 +105,20 @@ TEST(TranslationSweep, MatchesBruteForceMinimumOverInstances) {
     }
 }
 
-// Points near the surface of flat and bull-nose sweeps in general directions (the secant
-// search on the derivative), inside and out, and the `far` contract: exact below far, at
-// least far beyond it.
-TEST(TranslationSweep, GeneralCylinderSweepNearItsSurface) {
+Cutter vbit(double d, double angle_deg, double flute) {
+  Cutter c = cutter(CutterType::VBit, d, 0, flute);
+  c.tip_angle_deg = angle_deg;
+  return c;
+}
+
+// Points near the surface of flat, bull-nose and V-bit sweeps in general directions (the
+// secant search on the derivative: the core's, or the V-bit profile's gradient), inside and
+// out, and the `far` contract: exact below far, at least far beyond it. The V-bits: 90 deg,
+// and 60 deg cut off at its flute length below its full diameter.
+TEST(TranslationSweep, GeneralSweepNearItsSurface) {
   std::mt19937 rng(5);
   const Cutter cutters[] = {cutter(CutterType::Flat, 10, 0, 15), cutter(CutterType::BullNose, 10, 2, 15),
-                            cutter(CutterType::BullNose, 6, 3, 15)};
+                            cutter(CutterType::BullNose, 6, 3, 15), vbit(10, 90, 15), vbit(10, 60, 6)};
   const Move moves[] = {move({0, 0, 0}, {0.5, 0, -0.2}), move({0, 0, 0}, {3, 4, 2}), move({0, 0, 0}, {0.01, 0, 8})};
   constexpr int kInstances = 20000;
   for (const Cutter& c : cutters)

@@ -49,6 +49,8 @@ class TranslationSweep {
   // The General kind for a cylinder core: the distance to the core's sweep (before the
   // rounding), exact to kGeneralSweepTolerance_mm, or any value >= far where it is that far.
   double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
+  // The same for a V-bit (its whole profile).
+  double vbit_sweep_distance(const Eigen::Vector3d& y, double far) const;
 
   CutterCore core_;
   Cutter cutter_;            // a V-bit's distance comes from its profile, not from a core
