@@ -172,10 +172,10 @@ bool clip_inv(double v0, double inv_slope, double lo, double hi, double& s0, dou
 
 double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
-// The real roots of a x^2 + 2 b x + c (into roots; how many returned). A discriminant a hair
+// The real roots of a x^2 + 2 b x + c (into roots; how many returned), given 1 / a. A discriminant a hair
 // below zero from rounding counts as zero (a ray through a cone's apex line: the double root
 // is the answer there).
-int quadratic_roots(double a, double b, double c, double roots[2]) {
+int quadratic_roots(double a, double b, double c, double roots[2], double inv_a) {
   if (a == 0.0) {
     if (b == 0.0) return 0;
     roots[0] = -c / (2.0 * b);
@@ -191,7 +191,7 @@ int quadratic_roots(double a, double b, double c, double roots[2]) {
     roots[0] = 0.0;
     return 1;
   }
-  roots[0] = q / a;
+  roots[0] = q * inv_a;
   roots[1] = c / q;
   return 2;
 }
@@ -200,11 +200,13 @@ int quadratic_roots(double a, double b, double c, double roots[2]) {
 struct Conic {
   double ss, st, tt, s, t, c;
   double at(double x, double y) const { return (ss * x + 2.0 * (st * y + s)) * x + (tt * y + 2.0 * t) * y + c; }
-  // Along the line (x, y) + l (dx, dy): a l^2 + 2 b l + c.
-  int on_line(double x, double y, double dx, double dy, double roots[2]) const {
-    const double qa = (ss * dx + 2.0 * st * dy) * dx + tt * dy * dy;
+  // Along the line (x, y) + l (dx, dy): a l^2 + 2 b l + c, given a = lead(dx, dy) and 1 / a.
+  static double lead(double ss, double st, double tt, double dx, double dy) {
+    return (ss * dx + 2.0 * st * dy) * dx + tt * dy * dy;
+  }
+  int on_line(double x, double y, double dx, double dy, double a, double inv_a, double roots[2]) const {
     const double qb = ss * x * dx + st * (x * dy + y * dx) + tt * y * dy + s * dx + t * dy;
-    return quadratic_roots(qa, qb, at(x, y), roots);
+    return quadratic_roots(a, qb, at(x, y), roots, inv_a);
   }
 };
 
@@ -242,6 +244,7 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
       cone_k_ = std::tan(0.5 * cutter.tip_angle_deg * M_PI / 180.0);
       cone_top_mm_ = std::min(cutter.flute_length_mm, cutter.radius_mm() / cone_k_);
       cone_r_mm_ = cone_top_mm_ * cone_k_;
+      for (int axis = 0; axis < 3; ++axis) prepare_cone_family(axis);
     }
     // band_'s heights: clear of the corner and the top rounding above every instance's tip by
     // far more than rounding moves the bracket's end.
@@ -1434,67 +1437,103 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   return true;
 }
 
-bool RaySweep::cone_interval(int axis, double u, double w, double& lo, double& hi) const {
+void RaySweep::prepare_cone_family(int axis) {
+  ConeFamily& f = cone_family_[axis];
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
   const Vector3d& a = tool_axis_;
+  f.a1 = a[a1];
+  f.a2 = a[a2];
+  f.d1 = delta_[a1];
+  f.d2 = delta_[a2];
+  f.A1 = a[axis];
+  f.A2 = delta_.dot(a);
+  const double d_e = delta_[axis], dd = delta_.squaredNorm(), k = cone_k_;
+  f.along_s = std::abs(f.A1) >= std::abs(f.A2);
+  f.inv_A1 = 1.0 / f.A1;
+  f.inv_A2 = 1.0 / f.A2;
+  for (int j = 0; j < 2; ++j) {
+    const double c = j == 0 ? 1.0 + k * k : 1.0;
+    f.c[j] = c;
+    f.kappa[j] = j == 0 ? 0.0 : cone_r_mm_ * cone_r_mm_;
+    f.ss[j] = 1.0 - c * f.A1 * f.A1;
+    f.st[j] = -d_e + c * f.A1 * f.A2;
+    f.tt[j] = dd - c * f.A2 * f.A2;
+    f.lead[j] = f.ss[j] * f.tt[j] - f.st[j] * f.st[j];
+    f.inv_lead[j] = 1.0 / f.lead[j];
+    f.inv_tt[j] = 1.0 / f.tt[j];
+    f.inv_ss[j] = 1.0 / f.ss[j];
+  }
+  f.line_lead = Conic::lead(f.ss[1], f.st[1], f.tt[1], f.A2, f.A1);
+  f.inv_line_lead = 1.0 / f.line_lead;
+}
+
+bool RaySweep::cone_interval(int axis, double u, double w, double& lo, double& hi) const {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const ConeFamily& f = cone_family_[axis];
   // The ray's point at s less the first tip, with s' = s - p0[axis]: w0 + s' e, w0[axis] = 0
   // (coordinates near the move, whatever the ray's position along its axis).
   const double w0_1 = u - p0_[a1], w0_2 = w - p0_[a2];
-  const double d_1 = delta_[a1], d_2 = delta_[a2], d_e = delta_[axis];
   // Height above the instance's tip at (s', t): y = A0 + A1 s' - A2 t; its square distance
   // from the instance's tip, |w0 + s' e - t delta|^2, less y^2 is the square radius.
-  const double A0 = w0_1 * a[a1] + w0_2 * a[a2], A1 = a[axis];
-  const double A2 = d_1 * a[a1] + d_2 * a[a2] + d_e * a[axis];
-  const double wd = w0_1 * d_1 + w0_2 * d_2, ww = w0_1 * w0_1 + w0_2 * w0_2;
-  const double dd = d_1 * d_1 + d_2 * d_2 + d_e * d_e;
+  const double A0 = w0_1 * f.a1 + w0_2 * f.a2, A1 = f.A1, A2 = f.A2;
+  const double wd = w0_1 * f.d1 + w0_2 * f.d2, ww = w0_1 * w0_1 + w0_2 * w0_2;
   // |.|^2 - c y^2 - kappa: the cone (c = 1 + k^2, kappa = 0: radius^2 <= k^2 y^2) and the
   // cylinder (c = 1, kappa = R^2).
-  auto conic = [&](double c, double kappa) {
-    return Conic{1.0 - c * A1 * A1, -d_e + c * A1 * A2, dd - c * A2 * A2,
-                 -c * A0 * A1,      -wd + c * A0 * A2,  ww - c * A0 * A0 - kappa};
+  auto conic = [&](int j) {
+    const double c = f.c[j];
+    return Conic{f.ss[j], f.st[j], f.tt[j], -c * A0 * A1, -wd + c * A0 * A2, ww - c * A0 * A0 - f.kappa[j]};
   };
-  const double k = cone_k_, r = cone_r_mm_, H = height_mm_;
-  const Conic cone = conic(1.0 + k * k, 0.0), cylinder = conic(1.0, r * r);
-  // A point counts when inside every bound to within rounding (1e-9 mm; the conics' values
-  // are about twice the radius times the distance from their surfaces).
+  const double r = cone_r_mm_, H = height_mm_;
+  const Conic cone = conic(0), cylinder = conic(1);
+  // A point on one of the surfaces counts where the tool has that surface: the cone from the
+  // tip's height to the cone's top, the cylinder from there to H (on the cone, radius^2 =
+  // k^2 y^2, which is below R^2 there and above it higher up; on the cylinder the other way
+  // round), at a time within the move: a range test each, to within rounding (1e-9 mm).
   constexpr double kTol_mm = 1e-9, kTolT = 1e-12;
-  const double cone_tol = 2.0 * r * std::sqrt(1.0 + k * k) * kTol_mm, cylinder_tol = 2.0 * r * kTol_mm;
+  const double top = cone_top_mm_;
   double s_lo = kInf, s_hi = -kInf;
-  auto consider = [&](double s, double t) {
+  auto take = [&](double s, double t, double y_lo, double y_hi) {
     if (!(t >= -kTolT && t <= 1.0 + kTolT)) return;
     const double y = A0 + A1 * s - A2 * t;
-    if (!(y >= -kTol_mm && y <= H + kTol_mm && cone.at(s, t) <= cone_tol && cylinder.at(s, t) <= cylinder_tol)) return;
+    if (!(y >= y_lo - kTol_mm && y <= y_hi + kTol_mm)) return;
     s_lo = std::min(s_lo, s);
     s_hi = std::max(s_hi, s);
   };
   double roots[2];
   // Where each conic runs square to s (its derivative in t zero).
-  for (const Conic* q : {&cone, &cylinder}) {
-    if (q->tt == 0.0) continue;
+  for (int which = 0; which < 2; ++which) {
+    const Conic& q = which == 0 ? cone : cylinder;
+    if (q.tt == 0.0) continue;
     const int n =
-        quadratic_roots(q->ss * q->tt - q->st * q->st, q->s * q->tt - q->st * q->t, q->c * q->tt - q->t * q->t, roots);
-    for (int i = 0; i < n; ++i) consider(roots[i], -(q->st * roots[i] + q->t) / q->tt);
+        quadratic_roots(f.lead[which], q.s * q.tt - q.st * q.t, q.c * q.tt - q.t * q.t, roots, f.inv_lead[which]);
+    for (int i = 0; i < n; ++i)
+      take(roots[i], -(q.st * roots[i] + q.t) * f.inv_tt[which], which == 0 ? 0.0 : top, which == 0 ? top : H);
   }
   // Each conic against the first and last instance.
   for (const double t : {0.0, 1.0})
-    for (const Conic* q : {&cone, &cylinder}) {
-      const int n = q->on_line(0.0, t, 1.0, 0.0, roots);
-      for (int i = 0; i < n; ++i) consider(roots[i], t);
+    for (int which = 0; which < 2; ++which) {
+      const int n = (which == 0 ? cone : cylinder).on_line(0.0, t, 1.0, 0.0, f.ss[which], f.inv_ss[which], roots);
+      for (int i = 0; i < n; ++i) take(roots[i], t, which == 0 ? 0.0 : top, which == 0 ? top : H);
     }
-  // The cylinder against the top (y = H) and where it meets the cone (y = cone top), and the
-  // top's ends at the first and last instance. (The cone meets the tip's height y = 0 only at
-  // the apex, the cylinder there outside the cone.)
-  const bool along_s = std::abs(A1) >= std::abs(A2);
+  // The cylinder against the top (y = H) and where it meets the cone (y = cone top; the top
+  // again when the cone is cut off there). (The cone meets the tip's height y = 0 only at the
+  // apex, the cylinder there outside the cone.) The line y = height: through (x, y), along
+  // (A2, A1).
   if (A1 != 0.0 || A2 != 0.0) {
-    for (int line = 0; line < (cone_top_mm_ < H ? 2 : 1); ++line) {
-      const double height = line == 0 ? H : cone_top_mm_;
-      const double x = along_s ? (height - A0) / A1 : 0.0, y = along_s ? 0.0 : (A0 - height) / A2;
-      const int n = cylinder.on_line(x, y, A2, A1, roots);
-      for (int i = 0; i < n; ++i) consider(x + roots[i] * A2, y + roots[i] * A1);
+    for (int line = 0; line < (top < H ? 2 : 1); ++line) {
+      const double height = line == 0 ? H : top;
+      const double x = f.along_s ? (height - A0) * f.inv_A1 : 0.0, y = f.along_s ? 0.0 : (A0 - height) * f.inv_A2;
+      const int n = cylinder.on_line(x, y, A2, A1, f.line_lead, f.inv_line_lead, roots);
+      for (int i = 0; i < n; ++i) take(x + roots[i] * A2, y + roots[i] * A1, height, height);
     }
   }
+  // The top's centre line at the first and last instance, where it lies in the top disc.
+  const double cylinder_tol = 2.0 * r * kTol_mm;
   if (A1 != 0.0)
-    for (const double t : {0.0, 1.0}) consider((H - A0 + A2 * t) / A1, t);
+    for (const double t : {0.0, 1.0}) {
+      const double s = (H - A0 + A2 * t) * f.inv_A1;
+      if (cylinder.at(s, t) <= cylinder_tol) take(s, t, H, H);
+    }
   if (!(s_lo <= s_hi)) return false;
   lo = s_lo + p0_[axis];
   hi = s_hi + p0_[axis];

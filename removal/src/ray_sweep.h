@@ -193,6 +193,20 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // and two conics (the cone's and the cylinder's surfaces), so its extremes in s are among
   // a fixed set of points: where a conic runs square to s, and where two boundaries meet.
   bool cone_interval(int axis, double u, double w, double& lo, double& hi) const;
+  // Its constants for the rays of one family: the tool axis's and the motion's coordinates
+  // across the rays (a1, a2, d1, d2); y = A0 + A1 s - A2 t; per conic (0 the cone, 1 the
+  // cylinder) its y^2 factor c and constant kappa, its coefficients in s and t that do not
+  // depend on the ray, the leading coefficient of its extremes' quadratic (lead) and the
+  // inverses; the cylinder's leading coefficient along the lines y = height (along_s: they
+  // are written from s = (height - A0) / A1, else from t).
+  struct ConeFamily {
+    double a1, a2, d1, d2, A1, A2, inv_A1, inv_A2;
+    double c[2], kappa[2], ss[2], st[2], tt[2], lead[2], inv_lead[2], inv_tt[2], inv_ss[2];
+    double line_lead, inv_line_lead;
+    bool along_s;
+  };
+  void prepare_cone_family(int axis);
+  ConeFamily cone_family_[3];
   bool cone_ = false;
   double cone_k_ = 0.0;       // radius per height of the cone
   double cone_top_mm_ = 0.0;  // the height at which the cone reaches cone_r_mm_ (<= H)
