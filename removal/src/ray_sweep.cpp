@@ -239,13 +239,6 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
   } else {
     method_ = Method::General;
     band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
-    if (cutter.type == CutterType::VBit) {
-      cone_ = true;
-      cone_k_ = std::tan(0.5 * cutter.tip_angle_deg * M_PI / 180.0);
-      cone_top_mm_ = std::min(cutter.flute_length_mm, cutter.radius_mm() / cone_k_);
-      cone_r_mm_ = cone_top_mm_ * cone_k_;
-      for (int axis = 0; axis < 3; ++axis) prepare_cone_family(axis);
-    }
     // band_'s heights: clear of the corner and the top rounding above every instance's tip by
     // far more than rounding moves the bracket's end.
     constexpr double kClear_mm = 1e-6;
@@ -264,6 +257,15 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_).
     constexpr double kBracketMargin_mm = 1e-9;
     prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
+  }
+  // A V-bit's closed form (cone_interval): every ray of a tilted one, and an upright one's
+  // horizontal rays where its section changes along the move (ramps).
+  if (cutter.type == CutterType::VBit) {
+    cone_ = true;
+    cone_k_ = std::tan(0.5 * cutter.tip_angle_deg * M_PI / 180.0);
+    cone_top_mm_ = std::min(cutter.flute_length_mm, cutter.radius_mm() / cone_k_);
+    cone_r_mm_ = cone_top_mm_ * cone_k_;
+    for (int axis = 0; axis < 3; ++axis) prepare_cone_family(axis);
   }
 }
 
@@ -1271,7 +1273,8 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
     hi = c0 + t_hi * dc + half(t_hi);
     return true;
   }
-  // A bull-nose or V-bit moving up or down: the section changes along the move. The line meets the
+  if (cone_) return cone_interval(axis, u, w, lo, hi);
+  // A bull-nose moving up or down: the section changes along the move. The line meets the
   // section while k(t) = |w(t)| - section(h(t)) <= 0, k convex; inside that range the extent
   // along the line is the minimum of a convex and the maximum of a concave function of t.
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, delta_.norm());

@@ -833,8 +833,9 @@ TEST(DexelStock, MeshKeepsVBitJunctionsAndGrooveEnds) {
 }
 
 TEST(DexelStock, VBitRampMatchesTheConeSweep) {
-  // A 60 deg V-bit ramping down (bracketing search on the section): every endpoint is on
-  // the boundary of the union of the cone's poses, checked by dense sampling along the move.
+  // A 60 deg V-bit ramping down (the cone's closed form on the x and y rays, where the section
+  // changes along the move; Newton steps on z): every endpoint is on the boundary of the
+  // union of the cone's poses, checked by dense sampling along the move.
   const BoxShape box{{0, 0, -5}, {20, 10, 0}};
   DexelStock stock(box, 0.1);
   MoveList list;
