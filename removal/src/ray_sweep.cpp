@@ -236,27 +236,16 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     if (!vertical_axis_) prepare_tilt_box(material_box);
   } else if (vertical_axis_) {
     method_ = Method::Upright;
+    // An upright bull-nose moving up or down: its horizontal rays take the general method's
+    // march where the section changes along the move (upright_horizontal).
+    upright_march_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && std::abs(delta_.z()) > kTiny_mm;
+    if (upright_march_) prepare_march();
   } else {
     method_ = Method::General;
-    band_ = cutter.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
-    // band_'s heights: clear of the corner and the top rounding above every instance's tip by
-    // far more than rounding moves the bracket's end.
-    constexpr double kClear_mm = 1e-6;
-    const double hd = delta_.dot(tool_axis_);
-    band_h_lo_mm_ = core_.z_low_mm + kClear_mm + std::max(0.0, hd);
-    band_h_hi_mm_ = core_.z_high_mm - kClear_mm + std::min(0.0, hd);
-    lowest_h_mm_ = std::min(0.0, hd);
-    lowest_tip_ = hd >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
+    prepare_march();
     if (flat_bottom_)
       for (int axis = 0; axis < 3; ++axis) prepare_flat_family(axis);
     prepare_tilt_box(material_box);
-    // The root march's bracket: every instance lies within R of the core's axis segment (a
-    // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
-    // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
-    // puts the sweep's boundary outside it (the flat end mill's and the bull-nose's sides
-    // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_).
-    constexpr double kBracketMargin_mm = 1e-9;
-    prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
   }
   // A V-bit's closed form (cone_interval): every ray of a tilted one, and an upright one's
   // horizontal rays where its section changes along the move (ramps).
@@ -267,6 +256,25 @@ RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedB
     cone_r_mm_ = cone_top_mm_ * cone_k_;
     for (int axis = 0; axis < 3; ++axis) prepare_cone_family(axis);
   }
+}
+
+void RaySweep::prepare_march() {
+  band_ = cutter_.type != CutterType::VBit && core_.rounding_mm > 0.0 && core_.core_radius_mm > 0.0;
+  // band_'s heights: clear of the corner and the top rounding above every instance's tip by
+  // far more than rounding moves the bracket's end.
+  constexpr double kClear_mm = 1e-6;
+  const double hd = delta_.dot(tool_axis_);
+  band_h_lo_mm_ = core_.z_low_mm + kClear_mm + std::max(0.0, hd);
+  band_h_hi_mm_ = core_.z_high_mm - kClear_mm + std::min(0.0, hd);
+  lowest_h_mm_ = std::min(0.0, hd);
+  lowest_tip_ = hd >= 0.0 ? p0_ : Vector3d(p0_ + delta_);
+  // The root march's bracket: every instance lies within R of the core's axis segment (a
+  // V-bit within R of its axis over [0, H]), so the sweep lies in that segment's sweep
+  // grown by R, a ball sweep with the closed form. A hair wider, so that rounding never
+  // puts the sweep's boundary outside it (the flat end mill's and the bull-nose's sides
+  // lie on it), and no wider: a bull-nose's ends in its band are taken from it (band_).
+  constexpr double kBracketMargin_mm = 1e-9;
+  prepare_capsule(core_.core_radius_mm + core_.rounding_mm + kBracketMargin_mm);
 }
 
 // The ball sweep: the core's axis segment from z_low to z_high (a) swept along the move (b),
@@ -1154,9 +1162,13 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   }
   // Height of the cutter's underside above its tip at the line, at move parameter t; the
   // top mirrors it (rounded top of the core model), except a V-bit's, which is flat.
-  auto underside = [&](double t) {
-    return underside_height(cutter_, std::min(radius, std::hypot(qx - t * dx, qy - t * dy)));
+  // (The root of the sum of squares, not hypot: no overflow at mm scale, and hypot was 11 % of
+  // a bull-nose ramp's cut.)
+  auto distance_at = [&](double t) {
+    const double x = qx - t * dx, y = qy - t * dy;
+    return std::sqrt(x * x + y * y);
   };
+  auto underside = [&](double t) { return underside_height(cutter_, std::min(radius, distance_at(t))); };
   const bool flat_top = cutter_.type == CutterType::VBit || flat_bottom_;
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, std::sqrt(dd + dz * dz));
   // min over [ta, tb] of t*slope + height(t): convex (the underside is a convex function
@@ -1167,7 +1179,7 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   const double cone =
       cutter_.type == CutterType::VBit ? 1.0 / std::tan(0.5 * cutter_.tip_angle_deg * M_PI / 180.0) : 0.0;
   auto slope_at = [&](double slope, double t, double& second) {
-    const double rho = std::hypot(qx - t * dx, qy - t * dy);
+    const double rho = distance_at(t);
     const double drho = rho > 0.0 ? (t * dd - qd) / rho : 0.0;
     const double d2rho = rho > 0.0 ? (dd - drho * drho) / rho : 0.0;
     if (cutter_.type == CutterType::VBit) {
@@ -1219,9 +1231,8 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   // Where the line stays over the flat core of a bull-nose's underside for the whole move
   // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
   // (A flat end mill's underside is flat anyway: no distances to work out.)
-  const bool over_core =
-      cutter_.type != CutterType::VBit && !flat_bottom_ &&
-      std::max(std::hypot(qx - ta * dx, qy - ta * dy), std::hypot(qx - tb * dx, qy - tb * dy)) <= core_.core_radius_mm;
+  const bool over_core = cutter_.type != CutterType::VBit && !flat_bottom_ &&
+                         std::max(distance_at(ta), distance_at(tb)) <= core_.core_radius_mm;
   lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
   hi = p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
   return true;
@@ -1274,6 +1285,7 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
     return true;
   }
   if (cone_) return cone_interval(axis, u, w, lo, hi);
+  if (upright_march_) return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
   // A bull-nose moving up or down: the section changes along the move. The line meets the
   // section while k(t) = |w(t)| - section(h(t)) <= 0, k convex; inside that range the extent
   // along the line is the minimum of a convex and the maximum of a concave function of t.

@@ -193,6 +193,10 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // and two conics (the cone's and the cylinder's surfaces), so its extremes in s are among
   // a fixed set of points: where a conic runs square to s, and where two boundaries meet.
   bool cone_interval(int axis, double u, double w, double& lo, double& hi) const;
+  // The general method's march (band_ and the bracket's capsule), for a tilted tool or an
+  // upright bull-nose moving up or down (upright_march_: its horizontal rays).
+  void prepare_march();
+  bool upright_march_ = false;
   // Its constants for the rays of one family: the tool axis's and the motion's coordinates
   // across the rays (a1, a2, d1, d2); y = A0 + A1 s - A2 t; per conic (0 the cone, 1 the
   // cylinder) its y^2 factor c and constant kappa, its coefficients in s and t that do not

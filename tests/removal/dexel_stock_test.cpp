@@ -318,6 +318,20 @@ TEST(DexelStock, TiltedBullNoseMovesMatchTheSweepDistance) {
   expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 1e-9, 0), a_xz), "nearly along x");
 }
 
+// An upright bull-nose moving up or down: its horizontal rays take the tilted tool's march
+// (the bracket, the band's exact ends, the root march), its z rays Newton steps on the
+// underside. Ramps down and up from inside the box, across and along the rays, and a
+// plunge: every endpoint on the sweep (within 1 um of TranslationSweep's distance), none
+// inside it.
+TEST(DexelStock, UprightBullNoseRampsMatchTheSweepDistance) {
+  const Cutter bull = make(CutterType::BullNose, 10, 2, 20);
+  const Eigen::Vector3d p(14, 12, -2), up(0, 0, 1);
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(14, 5, -3), up), "ramp down");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(-6, 8, 1.5), up), "ramp up");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(12, 0, -0.5), up), "along x");
+  expect_cut_matches_the_sweep_distance(bull, line(p, p + Eigen::Vector3d(0, 0, -4), up), "plunge");
+}
+
 // The tilted V-bit's closed form (RaySweep::cone_interval) at random tilts and motions, with
 // 60, 90 and 120 deg cones, some cut off at a flute length below their full diameter, and
 // where its points degenerate: the motion across the rays of a tilt in their plane, along the
