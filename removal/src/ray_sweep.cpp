@@ -1,6 +1,7 @@
 #include "ray_sweep.h"
 
 #include <algorithm>
+#include <cassert>
 #include <array>
 #include <cmath>
 #include <cstdlib>
@@ -1284,26 +1285,12 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
     hi = c0 + t_hi * dc + half(t_hi);
     return true;
   }
+  // A V-bit or a bull-nose moving up or down: the section changes along the move. The cone's
+  // closed form; the bull-nose's march (a flat end mill's section never changes, a ball is
+  // the ball method's), prepared for it (upright_march_).
   if (cone_) return cone_interval(axis, u, w, lo, hi);
-  if (upright_march_) return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
-  // A bull-nose moving up or down: the section changes along the move. The line meets the
-  // section while k(t) = |w(t)| - section(h(t)) <= 0, k convex; inside that range the extent
-  // along the line is the minimum of a convex and the maximum of a concave function of t.
-  const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, delta_.norm());
-  auto k = [&](double t) { return std::abs(w0 + t * dw) - section(h0 + t * dh); };
-  const double t_mid = golden_argmin(k, ta, tb, t_tolerance);
-  if (k(t_mid) > 0.0) return false;
-  const double t_first = k(ta) > 0.0 ? bisect(k, ta, t_mid, t_tolerance) : ta;
-  const double t_last = k(tb) > 0.0 ? bisect(k, tb, t_mid, t_tolerance) : tb;
-  auto half = [&](double t) {
-    const double radius = section(h0 + t * dh), off = w0 + t * dw;
-    return std::sqrt(std::max(0.0, radius * radius - off * off));
-  };
-  const auto near_end = [&](double t) { return c0 + t * dc - half(t); };
-  const auto far_end = [&](double t) { return -(c0 + t * dc + half(t)); };
-  lo = near_end(golden_argmin(near_end, t_first, t_last, t_tolerance));
-  hi = -far_end(golden_argmin(far_end, t_first, t_last, t_tolerance));
-  return true;
+  assert(upright_march_);
+  return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
 }
 
 bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) const {
