@@ -1559,6 +1559,12 @@ Eigen::Vector3d Reader::target(std::array<bool, 3>& programmed) const {
     end.x() = p.x() + offset.x();
     end.y() = p.y() + offset.y();
     programmed[0] = programmed[1] = true;
+    for (int a = 0; a < 2; ++a) {
+      if (!(std::abs(end[a]) <= kMaxMagnitude)) {
+        fail(column, std::string(1, kAxisLetter[a]) + " position " + num(end[a]) +
+                         " mm from polar @/^ is out of range (expected within +-1e6 mm)");
+      }
+    }
   }
   for (int a = 0; a < 3; ++a) {
     const Word& w = word(kAxisLetter[a]);

@@ -692,6 +692,9 @@ TEST(GcodeReaderErrors, UnknownLettersAndCharacters) {
   EXPECT_INPUT_ERROR("G0 E5\n", 1, 4, "'E'");
   EXPECT_INPUT_ERROR("G0 X1 $\n", 1, 7, "'$'");
   EXPECT_INPUT_ERROR("G0 X1 @2\n", 1, 4, "X word with polar");
+  // Polar words name X and Y without their words: the range check holds there too (found by
+  // the fuzzer: sqrt(2) 999999 mm from the origin at angle 0 went through).
+  EXPECT_INPUT_ERROR("G0 X999999 Y999999\nG0 ^0\n", 2, 4, "X position 1414212.148 mm from polar @/^ is out of range");
   EXPECT_INPUT_ERROR("#1 + 5\n", 1, 4, "expected '='");
   EXPECT_INPUT_ERROR("G0 [1+2]\n", 1, 4, "expected a letter before '['");
   EXPECT_INPUT_ERROR("G0 X0 O100\n", 1, 7, "o-word");
