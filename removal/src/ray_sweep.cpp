@@ -1,8 +1,8 @@
 #include "ray_sweep.h"
 
 #include <algorithm>
-#include <cassert>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstdlib>
 #include <limits>
@@ -173,9 +173,9 @@ bool clip_inv(double v0, double inv_slope, double lo, double hi, double& s0, dou
 
 double sign(double x) { return x < 0.0 ? -1.0 : 1.0; }
 
-// The real roots of a x^2 + 2 b x + c (into roots; how many returned), given 1 / a. A discriminant a hair
-// below zero from rounding counts as zero (a ray through a cone's apex line: the double root
-// is the answer there).
+// The real roots of a x^2 + 2 b x + c (into roots; how many returned), given 1 / a. A
+// discriminant a hair below zero from rounding counts as zero (a ray through a cone's apex
+// line: the double root is the answer there).
 int quadratic_roots(double a, double b, double c, double roots[2], double inv_a) {
   if (a == 0.0) {
     if (b == 0.0) return 0;
@@ -1571,7 +1571,6 @@ bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top,
                          double& lo, double& hi) const {
   // A V-bit's sweep in closed form, within the bracket.
   if (cone_) return cone_interval(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], lo, hi);
-  // A V-bit's sweep in closed form, within the bracket.
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   const double ak = tool_axis_[axis];
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
