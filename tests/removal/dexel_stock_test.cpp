@@ -232,8 +232,8 @@ double deepest_left_inside(const DexelStock& stock, const std::vector<Translatio
 
 // One move through a 40 x 30 x 20 box at v = 0.25: every endpoint it made lies on its swept
 // volume's surface, and no material is left inside it, measured with TranslationSweep's
-// distance (a golden-section search over the move, independent of the rays' closed forms,
-// root march and window).
+// distance (a search over the move for the point's nearest instance, independent of the
+// rays' closed forms, root march and window).
 void expect_cut_matches_the_sweep_distance(const Cutter& cutter, const Move& m, const std::string& label) {
   const BoxShape box{{0, 0, -20}, {40, 30, 0}};
   const double v = 0.25;
@@ -337,7 +337,7 @@ TEST(DexelStock, UprightBullNoseRampsMatchTheSweepDistance) {
 // where its points degenerate: the motion across the rays of a tilt in their plane, along the
 // tool axis, square to it and down z; the axis along x (x rays parallel to it), moving across
 // and along it. Every endpoint lies on the sweep (within 1 um of TranslationSweep's distance,
-// a golden-section search over the move) and no material is left inside it.
+// a search over the move on the profile's slope) and no material is left inside it.
 TEST(DexelStock, TiltedVBitMovesMatchTheSweepDistance) {
   int n = 0;
   expect_random_tilted_moves_match_the_sweep_distance(43, 12, [&n](double d) {

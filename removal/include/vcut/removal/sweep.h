@@ -17,8 +17,8 @@ namespace vcut::removal {
 // (K + segment) grown by r. For motion perpendicular or parallel to the tool axis,
 // K + segment is a stadium or a cylinder extruded over an interval and the distance is in
 // closed form. Otherwise d is the minimum of a convex function of t, found to
-// kGeneralSweepTolerance_mm (secant steps on its analytic derivative for the cylinder core,
-// golden-section search for the V-bit's profile). Outside the sweep the distance is
+// kGeneralSweepTolerance_mm by secant steps on its analytic slope (the cylinder core's, or
+// the V-bit profile's gradient turned about the axis). Outside the sweep the distance is
 // exact to that tolerance; inside, |d| may be underestimated (never the sign), which the
 // level-set narrow band tolerates.
 inline constexpr double kGeneralSweepTolerance_mm = 1e-7;
