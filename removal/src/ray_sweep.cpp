@@ -662,6 +662,18 @@ bool RaySweep::interval_within(int axis, double u, double w, double bottom, doub
 __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int count, const double* u,
                                                          const double* bottom, const double* top, double* lo,
                                                          double* hi, bool* hit) const {
+  if (method_ == Method::General && cone_) {
+    // The V-bit's closed form on every ray in the sweep's box whose material is not clear of
+    // the capsule around it (material_clear): the capsule's own interval (bracket_avx2) as a
+    // filter in front of it cost more than it saved.
+    const Eigen::AlignedBox3d& box = sweep_.bounds();
+    const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+    const bool row_in = w >= box.min()[a2] && w <= box.max()[a2];
+    for (int k = 0; k < count; ++k)
+      hit[k] = row_in && u[k] >= box.min()[a1] && u[k] <= box.max()[a1] &&
+               !material_clear(axis, u[k], w, bottom[k], top[k]) && cone_interval(axis, u[k], w, lo[k], hi[k]);
+    return;
+  }
   if (method_ == Method::General) {
     // The tilted flat end mill's closed form where it decides, else the root march over the
     // material only (a march started inside the sweep stops at once; one that never meets it
@@ -1569,8 +1581,6 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
 
 bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
                          double& lo, double& hi) const {
-  // A V-bit's sweep in closed form, within the bracket.
-  if (cone_) return cone_interval(axis, o[axis == 0 ? 1 : 0], o[axis == 2 ? 1 : 2], lo, hi);
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   const double ak = tool_axis_[axis];
   const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
