@@ -42,7 +42,7 @@ double vbit_profile_distance(const Cutter& c, double rho, double z, double& g_rh
   const Eigen::Vector2d v[4] = {{0.0, 0.0}, {radius, cone_top}, {radius, height}, {0.0, height}};
   const Eigen::Vector2d q(rho, z);
   double best = std::numeric_limits<double>::infinity();
-  Eigen::Vector2d away(0.0, 0.0), normal(0.0, -1.0);
+  Eigen::Vector2d away(0.0, 0.0), edge(1.0, 0.0);
   bool inside = true;
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector2d a = v[i], b = v[(i + 1) % 4], e = b - a;
@@ -55,11 +55,12 @@ double vbit_profile_distance(const Cutter& c, double rho, double z, double& g_rh
     if (d2 < best) {
       best = d2;
       away = off;
-      normal = Eigen::Vector2d(e.y(), -e.x()).normalized();
+      edge = e;
     }
   }
   const double distance = std::sqrt(best);
-  const Eigen::Vector2d g = distance > 0.0 ? Eigen::Vector2d(away / distance) : normal;
+  const Eigen::Vector2d g =
+      distance > 0.0 ? Eigen::Vector2d(away / distance) : Eigen::Vector2d(edge.y(), -edge.x()).normalized();
   g_rho = inside ? -g.x() : g.x();
   g_z = inside ? -g.y() : g.y();
   return inside ? -distance : distance;
