@@ -854,6 +854,11 @@ SurfaceMesh DexelStock::surface() const {
   // The moves that made the crossings around each vertex: its candidates on the exact surface.
   auto nearby = [&](std::size_t p, std::vector<int>& ids) {
     ids.clear();
+    // A vertex's 48 rays name a few moves many times over: each is kept once as it comes
+    // (the repeats' sort was a third of this search).
+    auto add = [&ids](int id) {
+      if (std::find(ids.begin(), ids.end(), id) == ids.end()) ids.push_back(id);
+    };
     const Vector3d& x = mesh.mesh.vertices_mm[p];
     Eigen::Vector3i base;
     for (int a = 0; a < 3; ++a) base[a] = static_cast<int>(std::floor(m.index_of(x[a])));
@@ -864,14 +869,13 @@ SurfaceMesh DexelStock::surface() const {
         for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
           if (!f.contains(iu, iw)) continue;
           for_each_reaching(f.at(iu, iw), s_lo, s_hi, [&](const DexelSegment& seg) {
-            if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo) ids.push_back(seg.lo_move);
-            if (seg.hi_move != kNoMove && seg.hi_mm <= s_hi) ids.push_back(seg.hi_move);
+            if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo) add(seg.lo_move);
+            if (seg.hi_move != kNoMove && seg.hi_mm <= s_hi) add(seg.hi_move);
           });
         }
       }
     }
     std::sort(ids.begin(), ids.end());
-    ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
   };
   // A vertex lies in its lattice cell, so the surface is within a cell diagonal.
   detail::project_onto_machined_surface(m.moves, m.cutters, m.initial_distance, nearby, 2.0 * v, mesh);

@@ -121,11 +121,28 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
       // a surface leading the others by more than two steps and this leads them at every
       // point of the differences, where the field is then its value, the same number.
       constexpr double kLeadSlack_mm = 1e-6;
+      bool settled = false;  // the field was last taken at x, within the tolerance
       for (int iteration = 0; iteration < 16; ++iteration) {
         const double f = field(x);
-        if (std::abs(f) < kProjectionTolerance_mm) break;
+        if (std::abs(f) < kProjectionTolerance_mm) {
+          settled = true;
+          break;
+        }
         const bool alone = gap > 2.0 * kStep_mm + kLeadSlack_mm;
         const int leader = lead;
+        // A ball end's sweep leading alone: its nearest surface point in closed form (the
+        // core sweep's nearest point, then the ball's radius toward x), where Newton's steps
+        // took six more distances each.
+        Eigen::Vector3d core;
+        double radius_mm;
+        if (alone && leader >= 0 &&
+            made[sweeps[static_cast<std::size_t>(leader)]].ball_core_nearest(x, core, radius_mm)) {
+          const double from_core = (x - core).norm();
+          if (from_core > 0.0) {
+            x = core + (radius_mm / from_core) * (x - core);
+            continue;
+          }
+        }
         auto probe = [&](const Eigen::Vector3d& y) {
           if (!alone) return field(y);
           return leader < 0 ? initial(y) : -made[sweeps[static_cast<std::size_t>(leader)]].distance(y);
@@ -139,8 +156,11 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
         if (g.squaredNorm() < 0.25) break;  // on a kink: keep the point
         x -= f * g / g.squaredNorm();
       }
-      if ((x - start).norm() > max_travel_mm || !x.allFinite()) x = start;
-      field(x);
+      if ((x - start).norm() > max_travel_mm || !x.allFinite()) {
+        x = start;
+        settled = false;
+      }
+      if (!settled) field(x);
       mesh.mesh.vertices_mm[v] = x;
       mesh.vertex_move[v] = lead < 0 ? -1 : ids[static_cast<std::size_t>(lead)];
     }

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace vcut::removal {
 namespace {
@@ -171,6 +172,53 @@ double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
   return extrude(d_radial, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm));
 }
 
+Eigen::Vector3d TranslationSweep::ball_core_point(const Eigen::Vector3d& y) const {
+  const double lo = core_.z_low_mm, hi = core_.z_high_mm;
+  switch (kind_) {
+    case Kind::Across: {
+      // The core segment moved square to itself: a rectangle, the motion's segment times [lo, hi].
+      const Eigen::Vector2d d = delta_tool_.head<2>();
+      const double len2 = d.squaredNorm();
+      const double t = len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
+      return {t * d.x(), t * d.y(), std::clamp(y.z(), lo, hi)};
+    }
+    case Kind::Along:
+      return {0.0, 0.0, std::clamp(y.z(), lo + std::min(0.0, delta_tool_.z()), hi + std::max(0.0, delta_tool_.z()))};
+    case Kind::General:
+      break;
+  }
+  // The segment swept into a parallelogram P spanned by the axis and delta: y's foot on P's
+  // plane where it falls inside P, else the nearest point of P's four edges.
+  const Eigen::Vector3d o(0.0, 0.0, lo), up(0.0, 0.0, hi - lo);
+  const Eigen::Vector3d q = y - o;
+  const Eigen::Vector2d d_plane = delta_tool_.head<2>();
+  const double t = q.head<2>().dot(d_plane) / d_plane.squaredNorm();
+  const double s = q.z() - t * delta_tool_.z();
+  if (t >= 0.0 && t <= 1.0 && s >= 0.0 && s <= up.z()) return o + t * delta_tool_ + Eigen::Vector3d(0.0, 0.0, s);
+  Eigen::Vector3d best_point = o;
+  double best = std::numeric_limits<double>::infinity();
+  auto edge = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& d) {
+    const double u = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    const Eigen::Vector3d p = a + u * d;
+    const double e = (q - p).squaredNorm();
+    if (e < best) best = e, best_point = o + p;
+  };
+  edge(Eigen::Vector3d::Zero(), delta_tool_);
+  edge(up, delta_tool_);
+  if (up.z() > 0.0) {
+    edge(Eigen::Vector3d::Zero(), up);
+    edge(delta_tool_, up);
+  }
+  return best_point;
+}
+
+bool TranslationSweep::ball_core_nearest(const Eigen::Vector3d& x, Eigen::Vector3d& q, double& radius_mm) const {
+  if (!ball()) return false;
+  q = origin_ + to_tool_.transpose() * ball_core_point(to_tool_ * (x - origin_));
+  radius_mm = core_.rounding_mm;
+  return true;
+}
+
 double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const {
   const Eigen::Vector3d y = to_tool_ * (x - origin_);
   switch (kind_) {
@@ -189,28 +237,7 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
       return extrude(y.head<2>().norm() - core_.core_radius_mm, interval_distance(y.z(), lo, hi)) - core_.rounding_mm;
     }
     case Kind::General: {
-      if (core_.core_radius_mm == 0.0 && cutter_.type != CutterType::VBit) {
-        // Ball end: the core is a segment on the axis, swept into a parallelogram P spanned
-        // by the axis and delta; the distance to P is in closed form.
-        const Eigen::Vector3d o(0.0, 0.0, core_.z_low_mm);
-        const double height = core_.z_high_mm - core_.z_low_mm;
-        const Eigen::Vector3d q = y - o;
-        const Eigen::Vector2d d_plane = delta_tool_.head<2>();
-        const double t = q.head<2>().dot(d_plane) / d_plane.squaredNorm();
-        const double s = q.z() - t * delta_tool_.z();
-        if (t >= 0.0 && t <= 1.0 && s >= 0.0 && s <= height) {
-          const Eigen::Vector2d n(-d_plane.y(), d_plane.x());
-          return std::abs(q.head<2>().dot(n)) / n.norm() - core_.rounding_mm;
-        }
-        const Eigen::Vector3d up(0.0, 0.0, height);
-        auto segment = [&](const Eigen::Vector3d& a, const Eigen::Vector3d& d) {
-          const double u = std::clamp((q - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-          return (q - a - u * d).squaredNorm();
-        };
-        double best = std::min(segment(Eigen::Vector3d::Zero(), delta_tool_), segment(up, delta_tool_));
-        if (height > 0.0) best = std::min({best, segment(Eigen::Vector3d::Zero(), up), segment(delta_tool_, up)});
-        return std::sqrt(best) - core_.rounding_mm;
-      }
+      if (ball()) return (y - ball_core_point(y)).norm() - core_.rounding_mm;
       if (cutter_.type != CutterType::VBit)
         return cylinder_sweep_distance(y, far_mm + core_.rounding_mm) - core_.rounding_mm;
       return vbit_sweep_distance(y, far_mm);

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -103,6 +104,67 @@ TEST(TranslationSweep, MatchesBruteForceMinimumOverInstances) {
         EXPECT_GE(d, brute - 0.5 * length / kInstances - kGeneralSweepTolerance_mm);
       }
     }
+}
+
+// min over t in [0, 1] of a convex f, by ternary search (independent of the sweep's closed forms).
+template <class F>
+double convex_min(F&& f) {
+  double a = 0.0, b = 1.0;
+  for (int i = 0; i < 200; ++i) {
+    const double m1 = a + (b - a) / 3.0, m2 = b - (b - a) / 3.0;
+    if (f(m1) <= f(m2))
+      b = m2;
+    else
+      a = m1;
+  }
+  return std::min({f(0.0), f(1.0), f(0.5 * (a + b))});
+}
+
+// A ball end's nearest point of its core's sweep (the projection's closed form): on that
+// sweep (the core segment, centres r to max(r, H - r) up the axis, at some instant), as far
+// from x as the nearest instance's core segment (a ternary search over the move), on tilted
+// axes, for motion across the axis, along it and in general, and for a ball whose core is a
+// point (H = 2r).
+TEST(TranslationSweep, BallCoreNearestPointOnTheCoreSweep) {
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Cutter balls[] = {cutter(CutterType::Ball, 6, 3, 15), cutter(CutterType::Ball, 6, 3, 6)};
+  int checked = 0;
+  for (const Cutter& c : balls) {
+    const double lo = 3.0, hi = std::max(3.0, c.flute_length_mm - 3.0);
+    for (int trial = 0; trial < 60; ++trial) {
+      Move m;
+      m.axis = Eigen::Vector3d(0.6 * u(rng), 0.6 * u(rng), 1.0).normalized();
+      m.start_mm = Eigen::Vector3d(u(rng), u(rng), u(rng));
+      Eigen::Vector3d delta(4 * u(rng), 4 * u(rng), 4 * u(rng));
+      if (trial % 3 == 0) delta -= delta.dot(m.axis) * m.axis;  // across the axis
+      if (trial % 3 == 1) delta = delta.dot(m.axis) * m.axis;   // along it
+      m.end_mm = m.start_mm + delta;
+      const TranslationSweep sweep(c, m);
+      auto core_distance = [&](const Eigen::Vector3d& x) {
+        return convex_min([&](double t) {
+          const Eigen::Vector3d tip = m.start_mm + t * delta;
+          return segment_distance(x, tip + lo * m.axis, tip + (hi > lo ? hi : lo + 1e-12) * m.axis);
+        });
+      };
+      for (int i = 0; i < 20; ++i) {
+        const Eigen::Vector3d x = m.start_mm + Eigen::Vector3d(9 * u(rng), 9 * u(rng), 6 + 12 * u(rng));
+        Eigen::Vector3d q;
+        double radius = 0.0;
+        ASSERT_TRUE(sweep.ball_core_nearest(x, q, radius));
+        EXPECT_EQ(radius, 3.0);
+        EXPECT_LT(core_distance(q), 1e-9) << "off the core's sweep: " << q.transpose();
+        EXPECT_NEAR((x - q).norm(), core_distance(x), 1e-9) << x.transpose();
+        EXPECT_NEAR(sweep.distance(x), (x - q).norm() - 3.0, kClosedForm_mm);
+        ++checked;
+      }
+    }
+  }
+  EXPECT_EQ(checked, 2400);
+  Eigen::Vector3d q;
+  double radius;
+  EXPECT_FALSE(TranslationSweep(cutter(CutterType::BullNose, 10, 2, 15), move({0, 0, 0}, {1, 2, 3}))
+                   .ball_core_nearest({0, 0, 0}, q, radius));
 }
 
 Cutter vbit(double d, double angle_deg, double flute) {

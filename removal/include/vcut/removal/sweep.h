@@ -32,6 +32,12 @@ class TranslationSweep {
   double distance(const Eigen::Vector3d& x_mm, double far_mm = std::numeric_limits<double>::infinity()) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
 
+  // A ball end's sweep is the sweep of its core (a segment on the axis) grown by the ball's
+  // radius: the point q_mm of the core's sweep nearest x_mm (workpiece frame), so that
+  // distance(x) = |x - q| - radius_mm and, outside the core's sweep, the sweep's surface
+  // point nearest x is q + radius (x - q) / |x - q|. False for other cutters.
+  bool ball_core_nearest(const Eigen::Vector3d& x_mm, Eigen::Vector3d& q_mm, double& radius_mm) const;
+
   // Whether, at every point of `box` (workpiece frame), the nearest cutter instance of the
   // sweep is the one at the move's start, so that the distance to the sweep is the distance
   // to that cutter: true only when that is certain. The test: d(t) = d_K(y - t delta) is
@@ -46,6 +52,9 @@ class TranslationSweep {
  private:
   enum class Kind { Along, Across, General };
   double core_distance(const Eigen::Vector3d& y) const;  // y in the tool frame at t = 0
+  bool ball() const { return core_.core_radius_mm == 0.0 && cutter_.type != CutterType::VBit; }
+  // A ball end's core sweep (tool frame, y relative to the tip at t = 0): its point nearest y.
+  Eigen::Vector3d ball_core_point(const Eigen::Vector3d& y) const;
   // The General kind for a cylinder core: the distance to the core's sweep (before the
   // rounding), exact to kGeneralSweepTolerance_mm, or any value >= far where it is that far.
   double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
