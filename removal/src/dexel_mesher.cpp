@@ -414,8 +414,23 @@ class Contour {
   // The crossings on one brick's edges, each looked up once: a sign-changing edge is an edge
   // of the four cells around it, all active (D32's rays through its holes hold dozens of
   // intervals to search). Entries are valid while their stamp is the brick's.
+  // Per active cell: its crossings (a run of `points`) and which way the surface faces
+  // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
+  struct Cell {
+    std::uint16_t code;
+    std::uint8_t facing;
+    std::uint8_t count;
+    std::uint32_t first;
+  };
+
   struct CrossingCache {
     static constexpr int kSide = kBrick + 1;
+    // vertices()'s lists, kept by the thread from brick to brick.
+    std::vector<Cell> cells;
+    std::vector<Vector3d> points;
+    std::vector<std::uint32_t> group;
+    std::vector<std::uint8_t> merged;
+    std::vector<int> members;
     std::vector<std::uint32_t> stamp = std::vector<std::uint32_t>(3 * kSide * kSide * kSide, 0);
     std::vector<double> value = std::vector<double>(3 * kSide * kSide * kSide);
     std::uint32_t current = 0;
@@ -442,16 +457,10 @@ class Contour {
   bool vertices(BrickMesh& b, const BrickSigns& sg, CrossingCache& crossings) const {
     crossings.next_brick();
     const std::array<int, 3> limit = cell_limits(b);
-    // Per active cell: its crossings (a run of `points`) and which way the surface faces
-    // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
-    struct Cell {
-      std::uint16_t code;
-      std::uint8_t facing;
-      std::uint8_t count;
-      std::uint32_t first;
-    };
-    std::vector<Cell> cells;
-    std::vector<Vector3d> points;
+    std::vector<Cell>& cells = crossings.cells;
+    std::vector<Vector3d>& points = crossings.points;
+    cells.clear();
+    points.clear();
     for (int y = 0; y < limit[1]; ++y) {
       for (int x = 0; x < limit[0]; ++x) {
         const std::uint32_t c00 = sg.at(x, y), c10 = sg.at(x + 1, y), c01 = sg.at(x, y + 1), c11 = sg.at(x + 1, y + 1);
@@ -494,8 +503,10 @@ class Contour {
     std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
     // Octree merging, level by level: a block's cells are a run of the Morton order.
     const std::size_t n = cells.size();
-    std::vector<std::uint32_t> group(n);     // the run start of each cell's merged block
-    std::vector<std::uint8_t> merged(n, 1);  // the cell's block so far is one vertex
+    std::vector<std::uint32_t>& group = crossings.group;   // the run start of each cell's merged block
+    std::vector<std::uint8_t>& merged = crossings.merged;  // the cell's block so far is one vertex
+    group.resize(n);
+    merged.assign(n, 1);
     for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
     double tolerance = kFlatTolerance * m_.v;
     // Without flat merging only exact axis planes merge (untouched stock faces, floors of a
@@ -521,7 +532,8 @@ class Contour {
     // Each vertex at the mean of its cells' crossings.
     b.cells.resize(n);
     b.vertex.resize(n);
-    std::vector<int> members;
+    std::vector<int>& members = crossings.members;
+    members.clear();
     for (std::size_t i = 0; i < n; ++i) {
       b.cells[i] = cells[i].code;
       if (group[i] == i) {
