@@ -190,30 +190,42 @@ class SourceTexts {
   }
   // Reads every registered line's text (each file once, streaming) and returns the table.
   ordered_json table() const {
-    std::map<int, std::set<int>> wanted;
-    for (const auto& [file, line] : refs_) wanted[file].insert(line);
-    std::map<std::pair<int, int>, std::string> text;
-    for (const auto& [file, lines] : wanted) {
-      if (file < 0 || static_cast<std::size_t>(file) >= paths_.size()) continue;
-      std::ifstream in(paths_[static_cast<std::size_t>(file)]);
-      std::string s;
-      int n = 0;
-      auto next = lines.begin();
-      while (next != lines.end() && std::getline(in, s)) {
-        if (++n < *next) continue;
-        if (!s.empty() && s.back() == '\r') s.pop_back();
-        if (s.size() > 200) s = s.substr(0, 200) + "...";
-        text[{file, n}] = s;
-        ++next;
+    // The registered lines by file and line (each registered once), each file read up to the
+    // last of them; a line that is not in the file has no text.
+    std::vector<std::size_t> order(refs_.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return refs_[a] < refs_[b]; });
+    std::vector<std::string> text(refs_.size());
+    for (std::size_t first = 0; first < order.size();) {
+      const int file = refs_[order[first]].first;
+      std::size_t last = first;
+      while (last < order.size() && refs_[order[last]].first == file) ++last;
+      if (file >= 0 && static_cast<std::size_t>(file) < paths_.size()) {
+        std::ifstream in(paths_[static_cast<std::size_t>(file)]);
+        std::string s;
+        int n = 0;
+        for (std::size_t k = first; k < last;) {
+          const int wanted = refs_[order[k]].second;
+          if (wanted <= n) {  // before the file's first line
+            ++k;
+            continue;
+          }
+          if (!std::getline(in, s)) break;
+          if (++n < wanted) continue;
+          if (!s.empty() && s.back() == '\r') s.pop_back();
+          if (s.size() > 200) s = s.substr(0, 200) + "...";
+          text[order[k]] = std::move(s);
+          ++k;
+        }
       }
+      first = last;
     }
     ordered_json out = ordered_json::array();
-    for (const auto& key : refs_) {
-      const auto it = text.find(key);
-      out.push_back({{"file", program_.files[static_cast<std::size_t>(key.first)]},
-                     {"line", key.second},
-                     {"text", it == text.end() ? std::string() : it->second}});
-    }
+    out.get_ref<ordered_json::array_t&>().reserve(refs_.size());
+    for (std::size_t i = 0; i < refs_.size(); ++i)
+      out.push_back({{"file", program_.files[static_cast<std::size_t>(refs_[i].first)]},
+                     {"line", refs_[i].second},
+                     {"text", std::move(text[i])}});
     return out;
   }
   ordered_json lines_of(const std::vector<int>& indices, const ordered_json& table) const {
@@ -556,18 +568,19 @@ void write_report_page(const std::string& path, const std::string& template_path
 
   j["playback"] = playback_json(play, run, sources, blobs);
 
-  const ordered_json table = sources.table();
-  j["sources"] = table;
+  ordered_json table = sources.table();
+  j["sources"] = nullptr;  // its place; the table itself moves in once the regions and events have their lines
   j["regions"] = ordered_json::array();
   for (auto& [record, refs] : regions) {
     record["nc"] = sources.lines_of(refs, table);
-    j["regions"].push_back(record);
+    j["regions"].push_back(std::move(record));
   }
   j["events"] = ordered_json::array();
   for (auto& [record, refs] : events) {
     record["nc"] = sources.lines_of(refs, table);
-    j["events"].push_back(record);
+    j["events"].push_back(std::move(record));
   }
+  j["sources"] = std::move(table);  // W1's page names 67 k lines: a copy cost a tenth of the page
   if (r.compared) {
     ordered_json edges = ordered_json::array();
     for (double e : r.histogram_edges_mm) edges.push_back(std::isinf(e) ? ordered_json(nullptr) : ordered_json(e));
