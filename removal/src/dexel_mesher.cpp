@@ -411,9 +411,6 @@ class Contour {
     return true;
   }
 
-  // The crossings on one brick's edges, each looked up once: a sign-changing edge is an edge
-  // of the four cells around it, all active (D32's rays through its holes hold dozens of
-  // intervals to search). Entries are valid while their stamp is the brick's.
   // Per active cell: its crossings (a run of `points`) and which way the surface faces
   // across each of them (bit 2a: toward +a, bit 2a + 1: toward -a, from inside to outside).
   struct Cell {
@@ -423,6 +420,9 @@ class Contour {
     std::uint32_t first;
   };
 
+  // The crossings on one brick's edges, each looked up once: a sign-changing edge is an edge
+  // of the four cells around it, all active (D32's rays through its holes hold dozens of
+  // intervals to search). Entries are valid while their stamp is the brick's.
   struct CrossingCache {
     static constexpr int kSide = kBrick + 1;
     // vertices()'s lists, kept by the thread from brick to brick.

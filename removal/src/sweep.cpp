@@ -53,7 +53,7 @@ TranslationSweep::TranslationSweep(const Cutter& cutter, const Move& move)
 }
 
 bool TranslationSweep::start_dominates(const Eigen::AlignedBox3d& box) const {
-  if (core_.core_radius_mm != 0.0 || cutter_.type == CutterType::VBit || delta_length_ == 0.0) return false;
+  if (!ball() || delta_length_ == 0.0) return false;
   // The box in the tool frame, bounded by the box around the rotated box.
   const Eigen::Vector3d center = to_tool_ * (box.center() - origin_);
   const Eigen::Vector3d half = to_tool_.cwiseAbs() * (0.5 * box.sizes());
@@ -68,7 +68,7 @@ bool TranslationSweep::start_dominates(const Eigen::AlignedBox3d& box) const {
 }
 
 bool TranslationSweep::start_dominates(const Eigen::Vector3d& x) const {
-  if (core_.core_radius_mm != 0.0 || cutter_.type == CutterType::VBit || delta_length_ == 0.0) return false;
+  if (!ball() || delta_length_ == 0.0) return false;
   const Eigen::Vector3d y = to_tool_ * (x - origin_);
   const double g = y.z() - std::clamp(y.z(), core_.z_low_mm, core_.z_high_mm);
   return delta_tool_.x() * y.x() + delta_tool_.y() * y.y() + delta_tool_.z() * g <= 0.0;
