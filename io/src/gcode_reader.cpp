@@ -667,6 +667,15 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   std::map<long long, Mark> programs_;                             // Fanuc O<number>: the line after its O line
   std::map<std::pair<const Source*, long long>, Mark> sequences_;  // N<number> lines found
   long long lines_read_ = 0;
+  // The steps of a rotary turn (joint_move, twp_turn) beyond the line's own block: each is a
+  // block as a line's is, and counts toward max_lines with the lines read.
+  void count_steps(int steps, int column) {
+    lines_read_ += steps - 1;
+    if (lines_read_ > options_.max_lines)
+      fail(column, "read " + std::to_string(options_.max_lines) +
+                       " lines and rotary steps without reaching the end (a loop that never ends? the limit is "
+                       "the job's program.max_lines)");
+  }
   Line line_words_;
   std::vector<Assignment> assignments_;
   std::array<bool, 26> used_{};                           // words consumed by some code on this line
@@ -3131,8 +3140,10 @@ void Reader::joint_move(const Block& block, const kinematics::RotaryWords& to, i
   kinematics::RotaryWords zero = from;
   zero.angle_rad = {0.0, 0.0, 0.0};
   const Eigen::Vector3d q0 = block.start_mm, q1 = block.end_mm;  // the machine's X Y Z
+  if (const std::string why = detail::rotary_turn_refused(from, to); !why.empty()) fail(column, why);
   if (state_.twp) end_turned_frame();
   const int steps = rotary_steps(from, to);
+  count_steps(steps, column);
   const bool inverse_time = block.kind != MotionKind::Rapid && state_.inverse_time;
   state_.position_mm = options_.tip_after_turn(state_.tool, q0, zero, from);
   in_swing_ = true;
@@ -3180,7 +3191,10 @@ void Reader::twp_turn(const Code& g) {
                        num(axis.y()) + ", " + num(axis.z()) + "): " + why);
   }
   const bool feed = state_.motion == Motion::Linear && !state_.inverse_time && state_.feed_mm_per_min > 0.0;
+  if (const std::string why = detail::rotary_turn_refused(from, to); g.number != 536 && !why.empty())
+    fail(g.column, g.text + ": " + why);
   const int steps = g.number == 536 ? 1 : rotary_steps(from, to);
+  count_steps(steps, g.column);
   in_swing_ = true;
   for (int n = 1; n <= steps; ++n) {
     const kinematics::RotaryWords step = rotary_step(from, to, n, steps);

@@ -29,11 +29,24 @@ namespace vcut::io::detail {
 
 // A turn of the rotaries from `from` to `to` in steps of at most 1 deg (the largest axis
 // turn decides), and the rotary values after step n of them.
-inline int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
+inline double rotary_turn_deg(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
   double turn_deg = 0.0;
   for (size_t a = 0; a < 3; ++a)
     turn_deg = std::max(turn_deg, std::abs(to.angle_rad[a] - from.angle_rad[a]) * 180.0 / M_PI);
-  return std::max(1, static_cast<int>(std::ceil(turn_deg - 1e-9)));
+  return turn_deg;
+}
+inline int rotary_steps(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
+  return std::max(1, static_cast<int>(std::ceil(rotary_turn_deg(from, to) - 1e-9)));
+}
+// Each step is a block (about 400 bytes held): a turn of more steps than this in one move
+// (1,000 revolutions) is refused, as a mistyped C901011 made 900,000 blocks and 390 MB from
+// one line. The reason, or empty where the turn is within it.
+constexpr int kMaxRotarySteps = 360000;
+inline std::string rotary_turn_refused(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to) {
+  if (rotary_steps(from, to) <= kMaxRotarySteps) return {};
+  return "the rotaries turn by " + std::to_string(static_cast<long long>(std::llround(rotary_turn_deg(from, to)))) +
+         " deg in one move, which goes out as steps of 1 deg (expected at most " + std::to_string(kMaxRotarySteps) +
+         " deg, 1000 turns, in one move: split it)";
 }
 inline kinematics::RotaryWords rotary_step(const kinematics::RotaryWords& from, const kinematics::RotaryWords& to,
                                            int n, int steps) {

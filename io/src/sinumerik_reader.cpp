@@ -280,7 +280,7 @@ class Reader {
   void home();                                          // G74 / G75
   void finish_block();                                  // the block's call and end
   // The rotaries turn from where they stand to `to`, the linear axes held, in steps of 1 deg.
-  void turn_rotaries(const kinematics::RotaryWords& to);
+  void turn_rotaries(const kinematics::RotaryWords& to, int column);
   // The spindle's direction (tip -> spindle) in the frame of X Y Z: the tool axis, or in an axis
   // program (X Y Z the machine's, at zero rotaries) the machine's spindle axis.
   Eigen::Vector3d spindle() const { return state_.rotary_program ? options_.spindle_axis : state_.tool_axis; }
@@ -2565,7 +2565,7 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
         fail(column, "CYCLE800: the machine cannot turn the tool to the plane's Z (" + num(axis.x()) + ", " +
                          num(axis.y()) + ", " + num(axis.z()) + "): " + why);
     }
-    turn_rotaries(to);
+    turn_rotaries(to, column);
     state_.tool_axis = rotation.col(2);
   }
   state_.swivel_rotation = rotation;
@@ -2677,8 +2677,9 @@ void Reader::retract(double fr, double fr_i_mm, int column) {
   if (fr == 2.0) straight_to(r * Eigen::Vector3d(home.x(), home.y(), up.z()) + t, column);
 }
 
-void Reader::turn_rotaries(const kinematics::RotaryWords& to) {
+void Reader::turn_rotaries(const kinematics::RotaryWords& to, int column) {
   const kinematics::RotaryWords from = state_.rotary;
+  if (const std::string why = detail::rotary_turn_refused(from, to); !why.empty()) fail(column, "CYCLE800: " + why);
   const Eigen::Vector3d tip = state_.position_mm;
   const int steps = detail::rotary_steps(from, to);
   for (int n = 1; n <= steps; ++n) {

@@ -255,6 +255,33 @@ TEST(TiltedPlane, AMoveToWhereTheMachineStandsMakesNoBlock) {
   }
 }
 
+// A turn of the rotaries with G43 and no TCP goes out as 1 deg steps, each a block: a turn of
+// more than 1,000 revolutions in one move is refused (a fuzzed C901011 made 900,000 blocks,
+// 390 MB, from one line), and every step counts toward max_lines as a line does (the fuzzer's
+// limit of 10,000 lines, or an endless loop of turns).
+TEST(TiltedPlane, ALongRotaryTurnIsRefusedAndItsStepsCountAsLines) {
+  GcodeOptions options = machine_options("table-table-ac");
+  const std::string head = "G43 H1 G0 X10 Y0 Z50 A0 C0\n";
+  const std::string refused = error_text(head + "G1 C901011 F100\n", options, "c.nc");
+  EXPECT_NE(refused.find("c.nc:2:4: the rotaries turn by 901011 deg in one move, which goes out as steps of 1 deg "
+                         "(expected at most 360000 deg, 1000 turns, in one move: split it)"),
+            std::string::npos)
+      << refused;
+  EXPECT_NE(error_text(head + "G1 C360001 F100\n", options, "d.nc").find("d.nc:2:4: the rotaries turn by 360001 deg"),
+            std::string::npos);
+  // 1,000 turns exactly: 360,000 steps, the last at C 360000.
+  const auto most = read_text(head + "G1 C360000 F100\n", options, "most.nc");
+  ASSERT_EQ(most.blocks.size(), 360001u);
+  EXPECT_NEAR(most.blocks.back().end_rotary.angle_rad[2], 360000 * kDeg, 1e-6);
+  // 360 steps and two lines: within 400 lines, not within 300.
+  options.max_lines = 400;
+  EXPECT_EQ(read_text(head + "G1 C360 F100\n", options, "ok.nc").blocks.size(), 361u);
+  options.max_lines = 300;
+  const std::string endless = error_text(head + "G1 C360 F100\n", options, "loop.nc");
+  EXPECT_NE(endless.find("loop.nc:2:4: read 300 lines and rotary steps without reaching the end"), std::string::npos)
+      << endless;
+}
+
 TEST(TiltedPlane, RollPitchYawWithP1) {
   // P1: I about X, then J about Y, then K about Z, all fixed axes: R = Rz(K) Ry(J) Rx(I).
   // I90 alone: feature Y goes to +Z, feature Z to -Y.

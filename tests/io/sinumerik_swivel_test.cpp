@@ -325,6 +325,9 @@ TEST(SinumerikSwivel, ReviewFindings) {
             std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z5\nCYCLE800(0,\"T\",1,192,0,0,0,10,0,0,0,0,0,1)\n", ac).find("additive"),
             std::string::npos);
+  // The swing goes out as 1 deg steps: from C 900000 back to 0 is more than 1,000 turns.
+  const std::string spun = error_of("G0 X0 Y0 Z5 C900000\nCYCLE800(0,\"T\",0,192,0,0,0,10,0,0,0,0,0,1)\n", ac);
+  EXPECT_NE(spun.find(":2:1: CYCLE800: the rotaries turn by 900000 deg in one move"), std::string::npos) << spun;
   EXPECT_NE(error_of("G0 X0 Y0 Z5\nCYCLE81(\"x\",0,2,-5)\n").find("CYCLE81 with a text parameter"), std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z5\nG3 TURN=2\n").find("TURN= outside an arc"), std::string::npos);
 }
