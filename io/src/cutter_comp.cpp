@@ -319,7 +319,16 @@ void Compensator::arc(Block& block, const std::array<bool, 3>& programmed, int t
     }
     const double psi = inside ? (turn > 0 ? theta + std::asin(l) : theta - std::asin(l))
                               : (turn > 0 ? theta + M_PI - std::asin(l) : theta + M_PI + std::asin(l));
-    move_end_and_flush(k + dist * direction(psi), column);
+    const Eigen::Vector2d corner = k + dist * direction(psi);
+    // The move before was already sent (M0, M1 or M60 send the held move, ending where the
+    // tool is): this arc would start off its offset circle (the fuzzer found such an arc, its
+    // start 0.47 mm further from the centre than its end).
+    if (comp.held.empty() && (corner - cur).norm() > 0.01 * host_.comp_unit()) {
+      host_.comp_fail(column, "cutter compensation: this " + code +
+                                  " arc turns into a concave corner after a stop (M0, M1 or M60) sent the move "
+                                  "before it, which can no longer end in the corner (expected the stop elsewhere)");
+    }
+    move_end_and_flush(corner, column);
   } else if (concave) {
     // Arc then arc: where the two offset circles meet.
     const Eigen::Vector2d front_end(front->block.end_mm[a], front->block.end_mm[b]);

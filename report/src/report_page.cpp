@@ -442,16 +442,23 @@ void write_report_page(const std::string& path, const std::string& template_path
               {"collision_tolerance_mm", job.collision_tolerance_mm},
               {"settings", settings}};
 
-  // The machined mesh, decimated for the page; each vertex keeps its deviation and NC line.
+  // The machined mesh, decimated for the page where it has more triangles than the page takes
+  // (else the mesh itself, not a copy); each vertex keeps its deviation and NC line.
   const removal::SurfaceMesh& machined = *input.machined;
-  std::vector<int> kept;
-  const removal::TriangleMesh shown = removal::decimate(machined.mesh, input.max_triangles, kept);
+  const bool whole = machined.mesh.triangles.size() <= input.max_triangles;
+  std::vector<int> kept;  // the shown vertices' indices in the machined mesh, where decimated
+  removal::TriangleMesh decimated;
+  if (!whole) decimated = removal::decimate(machined.mesh, input.max_triangles, kept);
+  const removal::TriangleMesh& shown = whole ? machined.mesh : decimated;
+  const std::size_t shown_vertices = shown.vertices_mm.size();
+  auto original = [&](std::size_t i) { return whole ? i : static_cast<std::size_t>(kept[i]); };
   Blobs blobs;
   ordered_json mesh = encode_mesh_later(shown, blobs);
   if (!input.deviation_mm.empty()) {
     std::vector<float> deviation;
-    deviation.reserve(kept.size());
-    for (int k : kept) deviation.push_back(static_cast<float>(input.deviation_mm[static_cast<std::size_t>(k)]));
+    deviation.reserve(shown_vertices);
+    for (std::size_t i = 0; i < shown_vertices; ++i)
+      deviation.push_back(static_cast<float>(input.deviation_mm[original(i)]));
     mesh["deviation"] = blobs.of(deviation);
   } else {
     mesh["deviation"] = nullptr;
@@ -459,10 +466,10 @@ void write_report_page(const std::string& path, const std::string& template_path
   // The block that made each vertex (-1: the initial stock; the playback shows the part as cut
   // up to its frame's block) and its NC line.
   std::vector<std::int32_t> vertex_block, vertex_source;
-  vertex_block.reserve(kept.size());
-  vertex_source.reserve(kept.size());
-  for (int k : kept) {
-    const int move = machined.vertex_move[static_cast<std::size_t>(k)];
+  vertex_block.reserve(shown_vertices);
+  vertex_source.reserve(shown_vertices);
+  for (std::size_t i = 0; i < shown_vertices; ++i) {
+    const int move = machined.vertex_move[original(i)];
     const bool known =
         move >= 0 && input.move_blocks != nullptr && static_cast<std::size_t>(move) < input.move_blocks->size();
     vertex_block.push_back(known ? (*input.move_blocks)[static_cast<std::size_t>(move)] : -1);
@@ -472,8 +479,11 @@ void write_report_page(const std::string& path, const std::string& template_path
   mesh["block"] = blobs.of(vertex_block);
   j["mesh"] = std::move(mesh);
   if (input.design != nullptr) {
+    const removal::TriangleMesh& design = *input.design;
     std::vector<int> design_kept;
-    j["design"] = encode_mesh(removal::decimate(*input.design, input.max_triangles / 4, design_kept), blobs);
+    j["design"] = design.triangles.size() <= input.max_triangles / 4
+                      ? encode_mesh(design, blobs)
+                      : encode_mesh(removal::decimate(design, input.max_triangles / 4, design_kept), blobs);
   } else {
     j["design"] = nullptr;
   }

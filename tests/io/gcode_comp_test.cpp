@@ -125,6 +125,15 @@ TEST(CutterComp, ImpossibleCompensationIsAnError) {
   EXPECT_NE(error_of("F100\nG41.1 D2\nG41.1 D2\n").find("already on"), std::string::npos);
   EXPECT_NE(error_of("F100\nG41.1 D2\nG1 X10\nG40\nG2 X20 R5\n").find("arc just after G40"), std::string::npos);
   EXPECT_NE(error_of("G19\nG41.1 D2\n").find("G41.1 in G19"), std::string::npos);
+  // A stop sends the held move ending where the tool is: an arc after it into a concave corner
+  // would start off its offset circle (found by the fuzzer). After a straight it is no matter,
+  // nor where the arc continues tangentially.
+  const std::string stopped = error_of("G0 X-5 Y0 Z1\nG41.1 D4\nM1 X20 Y0\nG3 X30 Y10 R74 F300\nG1 X30 Y30\n");
+  EXPECT_NE(stopped.find("comp.ngc:4:1: cutter compensation: this G3 arc turns into a concave corner after a stop"),
+            std::string::npos)
+      << stopped;
+  EXPECT_NO_THROW(read("G0 X-5 Y0 Z1\nG41.1 D4\nG0 X20 Y0\nG3 X30 Y10 R74 F300\nG1 X30 Y30\n"));
+  EXPECT_NO_THROW(read("G0 X-5 Y0 Z1\nG41.1 D4\nM1 X20 Y0\nG1 X30 Y10 F300\nG1 X30 Y30\n"));
   // From an unknown position (no start position given): the offset needs the plane's axes
   // before the move, and a held block the third axis by its end.
   GcodeOptions unknown;
