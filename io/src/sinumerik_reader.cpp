@@ -450,6 +450,13 @@ void Reader::prescan() {
     s_.assign(raw, 0, std::min<std::size_t>(raw.size(), begin_ + 80));
     for (char& ch : s_) ch = upper(ch);
     i_ = body(&label_[k], &number_[k]);
+    if (s_.size() < raw.size() && i_ + 16 > s_.size()) {
+      // Blanks, N or a label fill the window up to where the first word may be cut: the whole
+      // line (the fuzzer put an ENDFOR after 170 form feeds).
+      s_.assign(raw);
+      for (char& ch : s_) ch = upper(ch);
+      i_ = body(&label_[k], &number_[k]);
+    }
     if (s_.compare(i_, 2, "IF") == 0 && s_.size() < raw.size()) {
       s_.assign(raw);
       for (char& ch : s_) ch = upper(ch);
@@ -636,6 +643,13 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
       fail_here("unexpected text after " + word + " (expected the end of the block)");
   };
   const long partner = partner_[pc];
+  // A loop or branch word whose partner prescan() did not pair is refused, not followed (the
+  // fuzzer found an ENDFOR that the scan had missed, followed to line -1).
+  static const std::map<std::string, std::string> kPartner = {
+      {"ELSE", "IF"},    {"WHILE", "ENDWHILE"}, {"ENDWHILE", "WHILE"}, {"FOR", "ENDFOR"},
+      {"ENDFOR", "FOR"}, {"UNTIL", "REPEAT"},   {"ENDLOOP", "LOOP"}};
+  if (const auto it = kPartner.find(word); partner < 0 && it != kPartner.end())
+    fail(col, word + " without its " + it->second);
   if (word == "PROC") {
     proc();
   } else if (word == "RET") {

@@ -760,6 +760,14 @@ TEST(SinumerikReader, ProgramFlow) {
   const InputError endless = error_of("LOOP\nG1 X1 F1\nENDLOOP\n", few);
   EXPECT_NE(std::string(endless.what()).find("more than 1000 blocks run"), std::string::npos) << endless.what();
   EXPECT_MPF_ERROR("WHILE 1\nG1 X1 F1\n", 1, 1, "WHILE without its ENDWHILE");
+  // A flow word after more than the scan's first 80 bytes of blanks (the fuzzer's ENDFOR after
+  // 170 form feeds, followed to line -1): paired as any, or refused naming it.
+  const std::string indent(100, ' '), feeds(170, '\f');
+  const Program deep = read("DEF INT KK\nG0 X0 Y0 Z0\nFOR KK = 1 TO 3\nG1 X=KK F1\n" + indent + "ENDFOR\nG1 Y1\n");
+  ASSERT_EQ(deep.blocks.size(), 4u);  // X1, X2, X3 (G0 to where it stands makes none), Y1
+  EXPECT_EQ(deep.blocks[2].end_mm.x(), 3.0);
+  EXPECT_EQ(deep.blocks[3].end_mm.y(), 1.0);
+  EXPECT_MPF_ERROR("G1 X1 F1\n" + feeds + "ENDFOR\n", 2, 171, "ENDFOR without its FOR");
   EXPECT_MPF_ERROR("G1 X1 F1\nENDIF\n", 2, 1, "ENDIF without its IF");
   EXPECT_MPF_ERROR("GOTOF NOWHERE\n", 1, 7, "no such label");
   EXPECT_MPF_ERROR("IF R1 == 0 ; GOTO in a comment\nG1 X1 F1\nENDIF\n", 3, 1, "ENDIF without its IF");
