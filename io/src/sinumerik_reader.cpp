@@ -646,7 +646,7 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
   // A loop or branch word whose partner prescan() did not pair is refused, not followed (the
   // fuzzer found an ENDFOR that the scan had missed, followed to line -1).
   static const std::map<std::string, std::string> kPartner = {
-      {"ELSE", "IF"},    {"WHILE", "ENDWHILE"}, {"ENDWHILE", "WHILE"}, {"FOR", "ENDFOR"},
+      {"ELSE", "ENDIF"}, {"WHILE", "ENDWHILE"}, {"ENDWHILE", "WHILE"}, {"FOR", "ENDFOR"},
       {"ENDFOR", "FOR"}, {"UNTIL", "REPEAT"},   {"ENDLOOP", "LOOP"}};
   if (const auto it = kPartner.find(word); partner < 0 && it != kPartner.end())
     fail(col, word + " without its " + it->second);
