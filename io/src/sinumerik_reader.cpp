@@ -648,8 +648,8 @@ bool Reader::flow(std::size_t pc, std::size_t& next) {
   static const std::map<std::string, std::string> kPartner = {
       {"ELSE", "ENDIF"}, {"WHILE", "ENDWHILE"}, {"ENDWHILE", "WHILE"}, {"FOR", "ENDFOR"},
       {"ENDFOR", "FOR"}, {"UNTIL", "REPEAT"},   {"ENDLOOP", "LOOP"}};
-  if (const auto it = kPartner.find(word); partner < 0 && it != kPartner.end())
-    fail(col, word + " without its " + it->second);
+  if (partner < 0)
+    if (const auto it = kPartner.find(word); it != kPartner.end()) fail(col, word + " without its " + it->second);
   if (word == "PROC") {
     proc();
   } else if (word == "RET") {

@@ -172,18 +172,30 @@ double TranslationSweep::core_distance(const Eigen::Vector3d& y) const {
   return extrude(d_radial, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm));
 }
 
+Eigen::Vector2d TranslationSweep::across_spine(const Eigen::Vector3d& y) const {
+  const Eigen::Vector2d d = delta_tool_.head<2>();
+  const double len2 = d.squaredNorm();
+  return (len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0) * d;
+}
+
+void TranslationSweep::along_span(double& lo_mm, double& hi_mm) const {
+  lo_mm = core_.z_low_mm + std::min(0.0, delta_tool_.z());
+  hi_mm = core_.z_high_mm + std::max(0.0, delta_tool_.z());
+}
+
 Eigen::Vector3d TranslationSweep::ball_core_point(const Eigen::Vector3d& y) const {
   const double lo = core_.z_low_mm, hi = core_.z_high_mm;
   switch (kind_) {
     case Kind::Across: {
       // The core segment moved square to itself: a rectangle, the motion's segment times [lo, hi].
-      const Eigen::Vector2d d = delta_tool_.head<2>();
-      const double len2 = d.squaredNorm();
-      const double t = len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
-      return {t * d.x(), t * d.y(), std::clamp(y.z(), lo, hi)};
+      const Eigen::Vector2d spine = across_spine(y);
+      return {spine.x(), spine.y(), std::clamp(y.z(), lo, hi)};
     }
-    case Kind::Along:
-      return {0.0, 0.0, std::clamp(y.z(), lo + std::min(0.0, delta_tool_.z()), hi + std::max(0.0, delta_tool_.z()))};
+    case Kind::Along: {
+      double z_lo, z_hi;
+      along_span(z_lo, z_hi);
+      return {0.0, 0.0, std::clamp(y.z(), z_lo, z_hi)};
+    }
     case Kind::General:
       break;
   }
@@ -224,16 +236,13 @@ double TranslationSweep::distance(const Eigen::Vector3d& x, double far_mm) const
   switch (kind_) {
     case Kind::Across: {
       // Core + segment = stadium (disk swept along a segment in the plane) x [z_low, z_high].
-      const Eigen::Vector2d d = delta_tool_.head<2>();
-      const double len2 = d.squaredNorm();
-      const double t = len2 > 0.0 ? std::clamp(y.head<2>().dot(d) / len2, 0.0, 1.0) : 0.0;
-      const double d_plane = (y.head<2>() - t * d).norm() - core_.core_radius_mm;
+      const double d_plane = (y.head<2>() - across_spine(y)).norm() - core_.core_radius_mm;
       return extrude(d_plane, interval_distance(y.z(), core_.z_low_mm, core_.z_high_mm)) - core_.rounding_mm;
     }
     case Kind::Along: {
       // Core + segment = a longer cylinder.
-      const double lo = core_.z_low_mm + std::min(0.0, delta_tool_.z());
-      const double hi = core_.z_high_mm + std::max(0.0, delta_tool_.z());
+      double lo, hi;
+      along_span(lo, hi);
       return extrude(y.head<2>().norm() - core_.core_radius_mm, interval_distance(y.z(), lo, hi)) - core_.rounding_mm;
     }
     case Kind::General: {

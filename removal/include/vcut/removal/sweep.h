@@ -53,6 +53,10 @@ class TranslationSweep {
   enum class Kind { Along, Across, General };
   double core_distance(const Eigen::Vector3d& y) const;  // y in the tool frame at t = 0
   bool ball() const { return core_.core_radius_mm == 0.0 && cutter_.type != CutterType::VBit; }
+  // Kind::Across: the point of the motion's segment (tool frame, xy) nearest y's xy.
+  Eigen::Vector2d across_spine(const Eigen::Vector3d& y) const;
+  // Kind::Along: the heights the core's segment covers over the move (tool frame).
+  void along_span(double& lo_mm, double& hi_mm) const;
   // A ball end's core sweep (tool frame, y relative to the tip at t = 0): its point nearest y.
   Eigen::Vector3d ball_core_point(const Eigen::Vector3d& y) const;
   // The General kind for a cylinder core: the distance to the core's sweep (before the
