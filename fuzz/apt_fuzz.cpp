@@ -4,6 +4,7 @@
 #include <vcut/io/input_error.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstddef>
@@ -29,6 +30,11 @@ void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options)
   // Coordinates are bounded by 1e6 mm (a GODLTA/ adds at most that to a bounded point, and
   // its end is checked too).
   constexpr double kBound = 1e6;
+  // Cutter compensation takes a corner under 0.05 rad as tangent (rs274's rule) and starts the
+  // arc where the straight's offset ends: at most the tool radius times 0.05 from the arc's
+  // offset start, so its radius may differ from the end's by that much more.
+  double comp_allowed_mm = 0.0;
+  for (const auto& [number, c] : out.cutters) comp_allowed_mm = std::max(comp_allowed_mm, 0.05 * 0.5 * c.diameter_mm);
   for (const auto& b : out.program.blocks) {
     require(b.source.file == 0 && b.source.line >= 1);
     require(b.tool_pose && b.tool >= 1 && b.tool <= 99999);
@@ -54,7 +60,7 @@ void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options)
     const double r1 = u.norm(), r2 = v.norm();
     require(r1 > 0.0 && r2 > 0.0);
     const double allowed = 2.0 * std::max(options.arc_tolerance_mm, 1e-6 * std::max(r1, r2));
-    require(std::abs(r1 - r2) <= allowed + 1e-6);
+    require(std::abs(r1 - r2) <= allowed + comp_allowed_mm + 1e-6);
   }
   for (const auto& [number, c] : out.cutters) {
     require(number >= 1 && number <= 99999);

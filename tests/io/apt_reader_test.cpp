@@ -782,6 +782,35 @@ TEST(AptReader, CutcomOffsetsTheContourAsG42) {
   }
 }
 
+// A straight meeting an arc 0.03 rad off tangent (under rs274's 0.05 rad corner threshold,
+// TOLERANCE_CONCAVE_CORNER): LinuxCNC's convert_arc_comp2 takes it as tangent ("convex, one arc
+// needed") and starts the arc where the straight's offset ends, off the arc's offset circle.
+// By hand, CUTCOM/LEFT with a radius 2 tool: the straight heads at 0.03 rad into (10, 0), so
+// its offset end is (10 - 2 sin 0.03, 2 cos 0.03); the arc about (10, 10) ends at its programmed
+// end (20, 10) moved 2 toward the centre, (18, 10). No corner arc between them. The start's
+// distance from the centre differs from the end's by less than the tool radius times 0.05 (a
+// bound the APT fuzz driver relies on).
+TEST(AptReader, CutcomNearlyTangentArcStartsWhereTheStraightEnds) {
+  const double h = 0.03;  // rad
+  const std::string start =
+      "GOTO/" + std::to_string(10.0 - 10.0 * std::cos(h)) + "," + std::to_string(-10.0 * std::sin(h)) + ",-1\n";
+  const AptProgram apt =
+      read("UNITS/MM\nCUTTER/4\nFROM/-20,-20,5\nFEDRAT/200\nGOTO/-20,-20,-1\nCUTCOM/LEFT\n" + start +
+           "GOTO/10,0,-1\nCIRCLE/10,10,-1,0,0,1,10\nGOTO/20,10,-1\nGOTO/20,20,-1\nCUTCOM/OFF\nGOTO/30,30,-1\n");
+  const kinematics::BlockList& b = apt.program.blocks;
+  ASSERT_EQ(b.size(), 7u);
+  const Eigen::Vector3d corner(10.0 - 2.0 * std::sin(h), 2.0 * std::cos(h), -1.0);
+  EXPECT_EQ(b[3].kind, kinematics::MotionKind::Linear);
+  EXPECT_LT((b[3].end_mm - corner).norm(), 1e-5);  // the GOTO/'s six decimals
+  ASSERT_EQ(b[4].kind, kinematics::MotionKind::Arc);
+  EXPECT_EQ(b[4].start_mm, b[3].end_mm);
+  EXPECT_LT((b[4].center_mm - Eigen::Vector3d(10, 10, -1)).norm(), 1e-9);
+  EXPECT_LT((b[4].end_mm - Eigen::Vector3d(18, 10, -1)).norm(), 1e-9);
+  const double r_start = (b[4].start_mm - b[4].center_mm).norm();
+  EXPECT_GT(std::abs(r_start - 8.0), 1e-4);
+  EXPECT_LT(std::abs(r_start - 8.0), 2.0 * 0.05);
+}
+
 // ---------------------------------------------------------------- CAM output as written
 // The forms below are copied in shape (not in content) from CL files of SolidWorks CAM, NX,
 // CATIA and Creo in public repositories (docs/PROGRAMS.md lists them); expected values are
