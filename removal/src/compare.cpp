@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -100,28 +101,44 @@ class TriangleGrid {
     const double cells = (size / cell_mm_).array().ceil().prod();
     if (cells > kMaxCells) cell_mm_ *= std::cbrt(cells / kMaxCells) * 1.01;
     origin_ = box.min();
-    // Two passes over the triangles' cells: count, then fill (a counting sort by cell). Many
-    // large triangles among small ones would each be listed in many cells: past kMaxItems
-    // per triangle the count starts again with cells twice the size.
-    std::vector<std::uint32_t> count;
+    // The cells each triangle meets, listed once (in parallel, in fixed chunks of triangles),
+    // then sorted by cell (a counting sort, each cell's triangles in ascending order). Many
+    // large triangles among small ones would each be listed in many cells: past kMaxItems per
+    // triangle the listing starts again with cells twice the size.
+    constexpr std::size_t kChunk = 1024;  // triangles a task: the same lists for any thread count
+    const std::size_t chunks = (corners.size() + kChunk - 1) / kChunk;
+    std::vector<std::vector<std::uint32_t>> chunk_cells(chunks);
+    std::vector<std::uint32_t> listed(corners.size());  // cells per triangle
     for (;;) {
       for (int a = 0; a < 3; ++a) n_[a] = std::max(1, static_cast<int>(std::ceil(size[a] / cell_mm_)));
-      count.assign(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
       const std::uint64_t limit = kMaxItems * corners.size();
-      std::uint64_t items = 0;
-      for (std::size_t f = 0; f < corners.size() && items <= limit; ++f)
-        visit_cells(points, corners[f], [&](std::size_t cell) {
-          ++count[cell + 1];
-          ++items;
-        });
-      if (items <= limit) break;
+      std::atomic<std::uint64_t> items{0};
+      tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t k) {
+        std::vector<std::uint32_t>& cells = chunk_cells[k];
+        cells.clear();
+        const std::size_t end = std::min(corners.size(), (k + 1) * kChunk);
+        for (std::size_t f = k * kChunk; f < end && items.load(std::memory_order_relaxed) <= limit; ++f) {
+          const std::size_t before = cells.size();
+          visit_cells(points, corners[f], [&](std::size_t cell) { cells.push_back(static_cast<std::uint32_t>(cell)); });
+          listed[f] = static_cast<std::uint32_t>(cells.size() - before);
+          items.fetch_add(listed[f], std::memory_order_relaxed);
+        }
+      });
+      if (items.load() <= limit) break;  // then no chunk stopped early
       cell_mm_ *= 2.0;
     }
+    std::vector<std::uint32_t> count(static_cast<std::size_t>(n_[0]) * n_[1] * n_[2] + 1, 0);
+    for (const std::vector<std::uint32_t>& cells : chunk_cells)
+      for (const std::uint32_t cell : cells) ++count[cell + 1];
     for (std::size_t c = 1; c < count.size(); ++c) count[c] += count[c - 1];
     first_ = count;
     items_.resize(first_.back());
-    for (std::size_t f = 0; f < corners.size(); ++f)
-      visit_cells(points, corners[f], [&](std::size_t cell) { items_[count[cell]++] = static_cast<std::uint32_t>(f); });
+    for (std::size_t k = 0; k < chunks; ++k) {
+      const std::vector<std::uint32_t>& cells = chunk_cells[k];
+      std::size_t at = 0;
+      for (std::size_t f = k * kChunk; at < cells.size(); ++f)
+        for (std::uint32_t i = 0; i < listed[f]; ++i) items_[count[cells[at++]]++] = static_cast<std::uint32_t>(f);
+    }
     box_lo_.resize(corners.size());
     box_hi_.resize(corners.size());
     for (std::size_t f = 0; f < corners.size(); ++f) {

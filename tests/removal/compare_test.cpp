@@ -71,10 +71,10 @@ double brute_distance(const TriangleMesh& mesh, const Eigen::Vector3d& x) {
 // The grid behind the distance queries (cells listing the triangles that meet them, a
 // search outward from the query's cell) against a brute-force minimum over all triangles
 // and an analytic inside test, on meshes of long slivers beside small triangles (a fan-
-// triangulated 240-gon prism, convex; the slotted block, not convex), for points near and
+// triangulated 600-gon prism, convex, 2,396 triangles; the slotted block, not convex), for points near and
 // far, queried with and without hints and with hints from far away.
 TEST(DesignDistance, GridSearchMatchesBruteForce) {
-  constexpr int kSides = 240;
+  constexpr int kSides = 600;
   constexpr double kRadius = 10.0;
   std::vector<Eigen::Vector2d> polygon;
   std::vector<Eigen::Vector3i> fan;
@@ -101,13 +101,14 @@ TEST(DesignDistance, GridSearchMatchesBruteForce) {
     const bool in_slot = std::abs(x.y() - 20.0) < 5.0 && x.z() > -2.0;
     return in_box && !in_slot;
   };
-  // Twelve large triangles (a 100 mm cube) and 52 tiny ones (13 tetrahedra of 1 um beside
+  // Twelve large triangles (a 100 mm cube) and 1,200 tiny ones (300 tetrahedra of 1 um beside
   // it): the median triangle is tiny, so the grid's first cells would list each large
-  // triangle thousands of times and it coarsens them.
+  // triangle thousands of times and it coarsens them; the triangles span the grid's chunks
+  // of 1,024 that are listed in parallel.
   TriangleMesh cube = test::box_mesh({0, 0, 0}, {100, 100, 100});
-  for (int k = 0; k < 13; ++k) {
+  for (int k = 0; k < 300; ++k) {
     const int base = static_cast<int>(cube.vertices_mm.size());
-    const Eigen::Vector3d o(120.0 + k, 50.0, 50.0);
+    const Eigen::Vector3d o(120.0 + k % 15, 40.0 + k / 15, 50.0);
     for (const Eigen::Vector3d& e : {Eigen::Vector3d(0, 0, 0), Eigen::Vector3d(1e-3, 0, 0), Eigen::Vector3d(0, 1e-3, 0),
                                      Eigen::Vector3d(0, 0, 1e-3)})
       cube.vertices_mm.push_back(o + e);
