@@ -25,7 +25,7 @@ void require_at(bool ok, int line) {
 
 bool unit(const Eigen::Vector3d& v) { return v.allFinite() && std::abs(v.norm() - 1.0) <= 1e-12; }
 
-void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options) {
+void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options, double comp_radius_mm) {
   using vcut::kinematics::MotionKind;
   // Coordinates are bounded by 1e6 mm (a GODLTA/ adds at most that to a bounded point, and
   // its end is checked too).
@@ -33,8 +33,7 @@ void check(const vcut::io::AptProgram& out, const vcut::io::AptOptions& options)
   // Cutter compensation takes a corner under 0.05 rad as tangent (rs274's rule) and starts the
   // arc where the straight's offset ends: at most the tool radius times 0.05 from the arc's
   // offset start, so its radius may differ from the end's by that much more.
-  double comp_allowed_mm = 0.0;
-  for (const auto& [number, c] : out.cutters) comp_allowed_mm = std::max(comp_allowed_mm, 0.05 * 0.5 * c.diameter_mm);
+  const double comp_allowed_mm = 0.05 * comp_radius_mm;
   for (const auto& b : out.program.blocks) {
     require(b.source.file == 0 && b.source.line >= 1);
     require(b.tool_pose && b.tool >= 1 && b.tool <= 99999);
@@ -87,6 +86,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const vcut::InputError&) {
     // Expected for bad input; the blocks read before the error must still be well formed.
   }
-  check(out, options);
+  check(out, options, state.comp.max_radius_mm);
   return 0;
 }

@@ -1369,6 +1369,7 @@ void Reader::do_cutcom() {
     fail(a.pos, "CUTCOM/" + a.word + " between a CIRCLE/ and its GOTO/ (expected it before the CIRCLE/)");
   comp.side = a.word == "LEFT" ? Comp::Side::Left : Comp::Side::Right;
   comp.radius_mm = state_.cutter.radius_mm();
+  comp.max_radius_mm = std::max(comp.max_radius_mm, comp.radius_mm);
   comp.first_move = true;
   comp.held.clear();
   comp.endpoint_valid = false;

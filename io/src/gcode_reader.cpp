@@ -2733,6 +2733,7 @@ void Reader::comp_on(const Code& g) {
   comp.side = g.number / 10 == 41 ? Comp::Side::Left : Comp::Side::Right;
   if (radius < 0.0) comp.side = comp.side == Comp::Side::Left ? Comp::Side::Right : Comp::Side::Left;
   comp.radius_mm = std::abs(radius);
+  comp.max_radius_mm = std::max(comp.max_radius_mm, comp.radius_mm);
   comp.first_move = true;
   comp.held.clear();
   comp.endpoint_valid = false;

@@ -5,6 +5,7 @@
 // LinuxCNC's compensation programs and on random ones.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <sstream>
 #include <string>
 
@@ -86,6 +87,39 @@ TEST(CutterComp, TangentArcInsideKeepsItsCentre) {
   expect_point(arc.end_mm, {19, 10, 0}, "arc end");
   expect_point(arc.center_mm, {10, 10, 0}, "arc centre");
   expect_line(p.blocks[2], {19, 10, 0}, {30, 10, 0});
+}
+
+// A line meeting an inside arc 0.04 rad off tangent, under rs274's 0.05 rad threshold
+// (TOLERANCE_CONCAVE_CORNER in convert_arc_comp2, "convex, one arc needed"): no corner, and
+// the arc starts where the line's offset ends. By hand, with r = 5: the line heads at 0.04
+// rad into (0, 0), so its offset end is (-5 sin 0.04, 5 cos 0.04), 0.2254 mm from the arc's
+// centre (0, 5.1); the arc ends at its end (5.1, 5.1) moved 5 toward the centre, (0.1, 5.1),
+// 0.1 mm from it: a spiral, within the 0.05 r = 0.25 mm the tangent rule allows (the fuzz
+// drivers' bound, from max_radius_mm).
+TEST(CutterComp, NearlyTangentInsideArcStartsWhereTheLineEnds) {
+  const double h = 0.04;  // rad
+  std::ostringstream text;
+  text.precision(17);
+  text << "G21 G17 G90 F100\nG0 X" << -10.0 * std::cos(h) - 10.0 << " Y" << -10.0 * std::sin(h) << "\nG41.1 D10\nG1 X"
+       << -10.0 * std::cos(h) << " Y" << -10.0 * std::sin(h)
+       << "\nG1 X0 Y0\nG3 X5.1 Y5.1 I0 J5.1\nG1 X5.1 Y20\nG40\nM2\n";
+  GcodeState state;
+  std::istringstream in(text.str());
+  Program p;
+  read_gcode(in, "comp.ngc", from_zero({}), p, state);
+  ASSERT_EQ(p.blocks.size(), 5u);
+  const Eigen::Vector3d corner(-5.0 * std::sin(h), 5.0 * std::cos(h), 0.0);
+  expect_point(p.blocks[2].end_mm, corner, "line end");
+  const Block& arc = p.blocks[3];
+  ASSERT_EQ(arc.kind, MotionKind::Arc);
+  expect_point(arc.start_mm, corner, "arc start");
+  expect_point(arc.center_mm, {0, 5.1, 0}, "arc centre");
+  expect_point(arc.end_mm, {0.1, 5.1, 0}, "arc end");
+  const double r_start = (arc.start_mm - arc.center_mm).norm();
+  EXPECT_NEAR(r_start, std::hypot(5.0 * std::sin(h), 5.1 - 5.0 * std::cos(h)), 1e-12);
+  EXPECT_GT(r_start - 0.1, 0.07);  // beyond LinuxCNC's arc tolerance: the rule, not rounding
+  EXPECT_LT(r_start - 0.1, 0.05 * 5.0);
+  EXPECT_EQ(state.comp.max_radius_mm, 5.0);
 }
 
 // Radii from the tool library: G41 D3 takes tool 3's; G41 alone the tool in the spindle's.

@@ -242,9 +242,13 @@ struct GcodeState {
   struct CutterComp {
     enum class Side { Off, Left, Right };
     Side side = Side::Off;
-    double radius_mm = 0.0;        // > 0 compensates; 0 (a tool of no radius) moves as programmed
-    bool first_move = true;        // the next move is the entry move
-    bool arc_not_allowed = false;  // the move after G40 must be straight
+    double radius_mm = 0.0;  // > 0 compensates; 0 (a tool of no radius) moves as programmed
+    // The largest radius compensated with so far (mm). A corner under 0.05 rad counts as
+    // tangent (rs274's rule): the arc after it starts where the move before ends, up to 0.05
+    // times the radius off its offset circle (the machine spirals to its end).
+    double max_radius_mm = 0.0;
+    bool first_move = true;                                // the next move is the entry move
+    bool arc_not_allowed = false;                          // the move after G40 must be straight
     Eigen::Vector3d program_mm = Eigen::Vector3d::Zero();  // the last programmed (uncompensated) end
     struct Held {
       kinematics::Block block;
