@@ -174,6 +174,29 @@ class TriangleGrid {
           wall = std::min({wall, x[a] - (origin_[a] + (at[a] - shell + 1) * cell_mm_),
                            origin_[a] + (at[a] + shell) * cell_mm_ - x[a]});
         if (wall > 0.0 && wall * wall > best) return true;
+        // With a distance in hand, the cells that may hold a nearer triangle are those within
+        // it of x: a box of them, usually a few beside x's own, instead of the shells'
+        // surfaces (the first shell alone is 26 cells). A hair wider for rounding and ties.
+        if (best < std::numeric_limits<double>::infinity()) {
+          const double r = std::sqrt(best) * (1.0 + 1e-9) + 1e-12;
+          int lo[3], hi[3];
+          bool near = true;
+          for (int a = 0; a < 3; ++a) {
+            lo[a] = static_cast<int>(std::floor((x[a] - r - origin_[a]) / cell_mm_));
+            hi[a] = static_cast<int>(std::floor((x[a] + r - origin_[a]) / cell_mm_));
+            near = near && lo[a] >= at[a] - kMaxShells && hi[a] <= at[a] + kMaxShells;
+            lo[a] = std::max(lo[a], 0);
+            hi[a] = std::min(hi[a], n_[a] - 1);
+          }
+          if (near) {
+            for (int k = lo[2]; k <= hi[2]; ++k)
+              for (int j = lo[1]; j <= hi[1]; ++j)
+                for (int i = lo[0]; i <= hi[0]; ++i)
+                  if (std::max({std::abs(i - at[0]), std::abs(j - at[1]), std::abs(k - at[2])}) >= shell)
+                    scan_cell(x, best, consider, i, j, k);  // not among the shells before
+            return true;
+          }
+        }
       }
       int lo[3], hi[3];
       bool any = true;
@@ -189,19 +212,7 @@ class TriangleGrid {
           const bool inner = std::abs(k - at[2]) < shell && std::abs(j - at[1]) < shell;
           const int step = inner ? 2 * shell : 1;
           for (int i = at[0] - shell; i <= at[0] + shell; i += step) {
-            if (i < lo[0] || i > hi[0]) continue;
-            const Eigen::Vector3d cell_lo = origin_ + cell_mm_ * Eigen::Vector3d(i, j, k);
-            const Eigen::Vector3d cell_gap =
-                (cell_lo - x).cwiseMax(x - (cell_lo.array() + cell_mm_).matrix()).cwiseMax(0.0);
-            if (cell_gap.squaredNorm() > best) continue;
-            const std::size_t cell = (static_cast<std::size_t>(k) * n_[1] + j) * n_[0] + i;
-            for (std::uint32_t e = first_[cell]; e < first_[cell + 1]; ++e) {
-              const std::uint32_t f = items_[e];
-              // The triangle's box within the best distance (a triangle listed in several
-              // cells is tested again: cheaper than remembering it).
-              const Eigen::Vector3d box_gap = (box_lo_[f] - x).cwiseMax(x - box_hi_[f]).cwiseMax(0.0);
-              if (box_gap.squaredNorm() <= best) consider(f);
-            }
+            if (i >= lo[0] && i <= hi[0]) scan_cell(x, best, consider, i, j, k);
           }
         }
     }
@@ -209,6 +220,23 @@ class TriangleGrid {
   }
 
  private:
+  // Offers consider() the triangles of cell (i, j, k) whose boxes lie within the best
+  // distance, if the cell does.
+  template <class Consider>
+  void scan_cell(const Eigen::Vector3d& x, const double& best, Consider& consider, int i, int j, int k) const {
+    const Eigen::Vector3d cell_lo = origin_ + cell_mm_ * Eigen::Vector3d(i, j, k);
+    const Eigen::Vector3d cell_gap = (cell_lo - x).cwiseMax(x - (cell_lo.array() + cell_mm_).matrix()).cwiseMax(0.0);
+    if (cell_gap.squaredNorm() > best) return;
+    const std::size_t cell = (static_cast<std::size_t>(k) * n_[1] + j) * n_[0] + i;
+    for (std::uint32_t e = first_[cell]; e < first_[cell + 1]; ++e) {
+      const std::uint32_t f = items_[e];
+      // The triangle's box within the best distance (a triangle listed in several cells is
+      // tested again: cheaper than remembering it).
+      const Eigen::Vector3d box_gap = (box_lo_[f] - x).cwiseMax(x - box_hi_[f]).cwiseMax(0.0);
+      if (box_gap.squaredNorm() <= best) consider(f);
+    }
+  }
+
   static constexpr double kMaxCells = 4.0e6;
   static constexpr std::uint64_t kMaxItems = 16;  // cells listing a triangle, on average
   static constexpr int kMaxShells = 6;
