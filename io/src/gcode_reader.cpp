@@ -463,6 +463,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   void go_to_sequence(double number, int column);
   bool find_sequence(long long number, Mark& found);
   Mark find_program(long long number, int column, const std::string& caller);
+  void check_after_end();
   Mark locate_program(long long number, int column, const std::string& caller);
   void fanuc_call(Frame::Kind kind, long long program, long long repeats, int column, const std::string& what,
                   const std::vector<std::pair<int, double>>& arguments = {}, bool modal = false);
@@ -664,7 +665,8 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   Source* current_ = nullptr;
   std::vector<Frame> frames_;
   std::map<std::string, SubDefinition> subs_;
-  std::map<long long, Mark> programs_;                             // Fanuc O<number>: the line after its O line
+  std::map<long long, Mark> programs_;  // Fanuc O<number>: the line after its O line
+  int end_line_ = 0;                    // the main file's closing '%' or M99 line, where reading stopped (0: neither)
   std::map<std::pair<const Source*, long long>, Mark> sequences_;  // N<number> lines found
   long long lines_read_ = 0;
   // The steps of a rotary turn (joint_move, twp_turn) beyond the line's own block: each is a
@@ -913,6 +915,7 @@ void Reader::run(std::istream& in, const std::string& name) {
     fail(0, "read error (expected a readable text file)");
   }
   if (current_->in->bad()) fail(0, "read error (expected a readable text file)");
+  if (end_line_ != 0) check_after_end();
   // A file that ends (with '%' or without M2) while a compensated move is held: the machine
   // runs it, ending at its offset point (LinuxCNC's rs274 drops it).
   comp_stop(false, 1);
@@ -959,6 +962,7 @@ bool Reader::line(std::string& text) {
     if (!src.opened_with_percent) {
       fail(column_at(i), "closing '%' in a program that did not open with '%' on its first line");
     }
+    if (&src == sources_.front().get() && frames_.size() == 1) end_line_ = src.line;
     return false;
   }
   src.seen_content = true;
@@ -2402,6 +2406,46 @@ void Reader::go_to_sequence(double value, int column) {
 }
 
 // The body of program O<number>: the line after its O line.
+// After the main file's closing '%' (a control reads a tape up to it) or its M99 (read once):
+// the reader reads on only to find subprograms there. A program there that nothing called, or
+// blocks outside any program, are not run: a warning names the first (a file holding a
+// subprogram ending in M99, then its main program, runs the subprogram alone).
+void Reader::check_after_end() {
+  const int closing = end_line_;
+  end_line_ = 0;
+  Source& src = *current_;
+  if (!src.seekable) return;
+  std::string text;
+  bool in_program = false;  // after an O line of a program that was called
+  constexpr int kScanLines = 100000;
+  for (int k = 0; k < kScanLines && lines_read_ < options_.max_lines && next_line(text); ++k) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    const size_t i = skip_blanks(text, 0);
+    if (i == text.size() || text[i] == '%' || text[i] == '(' || text[i] == ';') continue;
+    std::string t = text;
+    if (t[i] == ':') t[i] = 'O';
+    OLine o;
+    if (o_line(t, o) && o.keyword.empty() && !o.label.empty() &&
+        std::all_of(o.label.begin(), o.label.end(), [](char c) { return is_digit(c); })) {
+      if (o.label.size() > 12 || programs_.count(std::stoll(o.label)) == 0) {
+        std::string written = "O";  // as the file writes it (O0001)
+        for (size_t j = i + 1; j < t.size() && is_digit(t[j]); ++j) written += t[j];
+        warn(1, "program " + (written.size() > 1 ? written : "O" + o.label) + " after the main program's end on line " +
+                    std::to_string(closing) +
+                    " is not run (expected the main program first, or this one in a file of its own)");
+        return;
+      }
+      in_program = true;
+      continue;
+    }
+    if (!in_program) {
+      warn(1, "this line and those after it follow the main program's end on line " + std::to_string(closing) +
+                  ": not run");
+      return;
+    }
+  }
+}
+
 Mark Reader::find_program(long long number, int column, const std::string& caller) {
   if (const auto it = programs_.find(number); it != programs_.end()) return it->second;
   const Mark body = locate_program(number, column, caller);
@@ -4090,6 +4134,7 @@ bool Reader::call_or_return(const LineCodes& c) {
     if (!fanuc_return()) {
       // M99 in the main program: the control starts it again, endlessly; read once.
       warn(c.flow->column, "M99 in the main program (the control runs it again from the top, endlessly); read once");
+      if (current_ == sources_.front().get()) end_line_ = current_->line;
       return false;
     }
     return true;

@@ -122,6 +122,37 @@ TEST(FanucMacro, SubprogramsM98M97M99) {
   EXPECT_NE(once.warnings[0].find("M99 in the main program"), std::string::npos);
 }
 
+// What follows the main program's end (its closing '%', or M99 read once) is read only to find
+// subprograms: a program there that nothing called is not run, and a warning says so (a real
+// file held a subprogram, then the main program that calls it, each between '%' lines: only
+// the subprogram ran). Programs there that were called, and blanks and comments, say nothing.
+TEST(FanucMacro, ProgramsAfterTheMainProgramsEnd) {
+  const Program sub_first = read("%\nO1000\nG0 X1\nM99\n%\n\n%\nO0001 (MAIN)\nM98 P1000\nG0 Z50\nM30\n%\n");
+  ASSERT_EQ(sub_first.blocks.size(), 1u);  // O1000's move, read once as the main program
+  ASSERT_EQ(sub_first.warnings.size(), 2u);
+  EXPECT_NE(sub_first.warnings[0].find("macro.nc:4:1: M99 in the main program"), std::string::npos);
+  EXPECT_NE(sub_first.warnings[1].find("macro.nc:8:1: program O0001 after the main program's end on line 4 is "
+                                       "not run"),
+            std::string::npos)
+      << sub_first.warnings[1];
+  // After a closing '%': a called subprogram is run and says nothing; an uncalled one warns.
+  const Program called = read("%\nO0001\nM98 P1000\nG0 X3\n%\n(SUBS)\n%\nO1000\nG0 Y2\nM99\n%\n");
+  EXPECT_EQ(last_end(called), Eigen::Vector3d(3, 2, 0));
+  EXPECT_TRUE(called.warnings.empty());
+  const Program uncalled = read("%\nO0001\nG0 X1\n%\nO2000\nG0 Y2\nM99\n");
+  EXPECT_EQ(last_end(uncalled), Eigen::Vector3d(1, 0, 0));
+  ASSERT_EQ(uncalled.warnings.size(), 1u);
+  EXPECT_NE(uncalled.warnings[0].find("macro.nc:5:1: program O2000 after the main program's end on line 4"),
+            std::string::npos);
+  // Blocks outside any program after the '%'.
+  const Program stray = read("%\nG0 X1\n%\n\nG0 X5\n");
+  EXPECT_EQ(last_end(stray), Eigen::Vector3d(1, 0, 0));
+  ASSERT_EQ(stray.warnings.size(), 1u);
+  EXPECT_NE(stray.warnings[0].find("macro.nc:5:1: this line and those after it follow the main program's end on "
+                                   "line 3: not run"),
+            std::string::npos);
+}
+
 TEST(FanucMacro, ProgramFileOnTheSearchPath) {
   const fs::path dir = fs::temp_directory_path() / ("vcut_fanuc_" + std::to_string(::getpid()));
   fs::create_directories(dir / "subs");
