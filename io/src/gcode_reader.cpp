@@ -3560,8 +3560,12 @@ Reader::LineCodes Reader::codes_of_line() {
       slot = &g;
     }
     if (info.supported) continue;
-    const std::string message =
+    std::string message =
         info.group < 0 ? "unknown G code " + g.text : "unsupported G code " + g.text + " (" + info.what + ")";
+    // Mach3 and older controls write G70 / G71 for inch / mm (a real Mach3 file: G71G91.1).
+    if (g.number == 700 || g.number == 710)
+      message += "; if it means " + std::string(g.number == 700 ? "inch" : "mm") + " units, as on Mach3, write " +
+                 (g.number == 700 ? "G20" : "G21");
     unsupported(g.column, g.text, message);
     lenient_ = true;  // warning mode: the code and the words it would use are ignored
     if (info.group == kNonModal && info.uses_axes) {

@@ -670,6 +670,9 @@ TEST(GcodeReader, UnsupportedWordsAsWarnings) {
   EXPECT_EQ(p.warnings[1].rfind("test.ngc:4:1: ", 0), 0u) << p.warnings[1];
   EXPECT_EQ(p.warnings[2].rfind("test.ngc:5:7: ", 0), 0u) << p.warnings[2];
   EXPECT_EQ(p.warnings[3].rfind("test.ngc:6:1: ", 0), 0u) << p.warnings[3];
+  // Mach3 writes G71 for mm (a real file: G71G91.1): the message says what to write instead.
+  EXPECT_NE(p.warnings[3].find("G71 (lathe cycle); if it means mm units, as on Mach3, write G21"), std::string::npos)
+      << p.warnings[3];
   // The ignored lathe cycle leaves X unknown: the G0 X2 after it only re-establishes X.
   ASSERT_EQ(p.blocks.size(), 1u);
   expect_vec(p.blocks[0].end_mm, {1, 0, 0});
