@@ -1,5 +1,6 @@
 #include "vcut/report/outputs.h"
 
+#include <tbb/global_control.h>
 #include <tbb/task_group.h>
 
 #include <algorithm>
@@ -26,6 +27,9 @@ void write_simulation(const std::string& out_dir, const io::Job& job, pipeline::
   // The mesh, the deviation map, the pictures and the page only read the results: they are
   // written side by side (the kernel's copying of 100 MB into files is a good part of this
   // stage) and listed in a fixed order.
+  // The run's thread count holds for its outputs too (simulate() limits its own stages).
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism,
+                            static_cast<std::size_t>(std::max(1, result.threads)));
   if (progress) progress("write", 0, 1);
   for (const auto& f : result.input_files)
     result.input_hashes.emplace_back(io::display_name(f, job.file), io::sha256_file(f));
