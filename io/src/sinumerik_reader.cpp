@@ -2554,7 +2554,8 @@ void Reader::swivel(const std::vector<std::optional<double>>& args, const std::v
     for (int k = 0; k < 3; ++k) {
       if (!state_.known[static_cast<std::size_t>(k)])
         fail(column, std::string("CYCLE800 from an unknown ") + kAxisLetter[k] +
-                         " position (expected X, Y and Z programmed before it: it retracts and turns from there)");
+                         " position (expected X, Y and Z programmed before it, or the job's start: position: it "
+                         "retracts and turns from there)");
     }
   }
   if (state_.rotary_program) {

@@ -359,7 +359,8 @@ TEST(SinumerikSwivel, BadInputNamesTheLine) {
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nCYCLE800(3,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,0,1)\n", ac).find("CYCLE800 _FR 3"),
             std::string::npos);
   EXPECT_NE(error_of("CYCLE800(5,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,0,10,1)\n")
-                .find("swivel.mpf:1:1: CYCLE800 from an unknown X position"),
+                .find("swivel.mpf:1:1: CYCLE800 from an unknown X position (expected X, Y and Z programmed before "
+                      "it, or the job's start: position"),
             std::string::npos);
   EXPECT_NE(error_of("G0 X0 Y0 Z0\nCYCLE800(0,\"TC1\",0,57,0,0,0,30,0,0,0,0,0,-1,0,1) X1\n", ac)
                 .find("CYCLE800 with axis words"),
