@@ -2405,7 +2405,6 @@ void Reader::go_to_sequence(double value, int column) {
   jump(target);
 }
 
-// The body of program O<number>: the line after its O line.
 // After the main file's closing '%' (a control reads a tape up to it) or its M99 (read once):
 // the reader reads on only to find subprograms there. A program there that nothing called, or
 // blocks outside any program, are not run: a warning names the first (a file holding a
@@ -2446,6 +2445,7 @@ void Reader::check_after_end() {
   }
 }
 
+// The body of program O<number>: the line after its O line.
 Mark Reader::find_program(long long number, int column, const std::string& caller) {
   if (const auto it = programs_.find(number); it != programs_.end()) return it->second;
   const Mark body = locate_program(number, column, caller);

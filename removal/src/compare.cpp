@@ -182,11 +182,13 @@ class TriangleGrid {
           int lo[3], hi[3];
           bool near = true;
           for (int a = 0; a < 3; ++a) {
-            lo[a] = static_cast<int>(std::floor((x[a] - r - origin_[a]) / cell_mm_));
-            hi[a] = static_cast<int>(std::floor((x[a] + r - origin_[a]) / cell_mm_));
-            near = near && lo[a] >= at[a] - kMaxShells && hi[a] <= at[a] + kMaxShells;
-            lo[a] = std::max(lo[a], 0);
-            hi[a] = std::min(hi[a], n_[a] - 1);
+            // Compared as doubles first: a far hint's distance may not fit an int in cells.
+            const double lo_cell = std::floor((x[a] - r - origin_[a]) / cell_mm_),
+                         hi_cell = std::floor((x[a] + r - origin_[a]) / cell_mm_);
+            near = lo_cell >= at[a] - kMaxShells && hi_cell <= at[a] + kMaxShells;
+            if (!near) break;
+            lo[a] = std::max(static_cast<int>(lo_cell), 0);
+            hi[a] = std::min(static_cast<int>(hi_cell), n_[a] - 1);
           }
           if (near) {
             for (int k = lo[2]; k <= hi[2]; ++k)
