@@ -383,8 +383,9 @@ struct Frame {
 };
 
 struct SubDefinition {
-  Mark body;          // the line after "o<name> sub"
-  std::string where;  // file:line of the sub line
+  Mark body;            // the line after "o<name> sub"
+  std::string where;    // file:line of the sub line
+  bool called = false;  // a call has found it
 };
 
 // An o-word line: "o<name> keyword ..." or "o123 keyword ...".
@@ -450,7 +451,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   double condition(const std::string& s, const OLine& o);
   void call(const std::string& s, const OLine& o);
   void leave_sub(const std::string& s, const OLine& o);
-  const SubDefinition* find_sub(const std::string& name, int column);
+  SubDefinition* find_sub(const std::string& name, int column);
   Source* open_file(const std::filesystem::path& path, int column, const char* what);
   bool read_to_sub(const std::string& name);
   Frame& frame() { return frames_.back(); }
@@ -666,6 +667,7 @@ class Reader : public detail::ValueContext, public detail::CompHost {
   std::vector<Frame> frames_;
   std::map<std::string, SubDefinition> subs_;
   std::map<long long, Mark> programs_;  // Fanuc O<number>: the line after its O line
+  bool axis_words_ = false;             // a line with axis words has run
   int end_line_ = 0;                    // the main file's closing '%' or M99 line, where reading stopped (0: neither)
   std::map<std::pair<const Source*, long long>, Mark> sequences_;  // N<number> lines found
   long long lines_read_ = 0;
@@ -916,6 +918,17 @@ void Reader::run(std::istream& in, const std::string& name) {
   }
   if (current_->in->bad()) fail(0, "read error (expected a readable text file)");
   if (end_line_ != 0) check_after_end();
+  // A file of subroutine definitions alone (LinuxCNC keeps each in a file of its own name):
+  // nothing runs, which the warning says where the cause is not plain.
+  if (program_.blocks.empty() && !axis_words_) {
+    for (const auto& [label, sub] : subs_) {
+      if (sub.called || sub.body.source != sources_.front().get()) continue;
+      program_.warnings.push_back(sub.where + ": o" + label +
+                                  " sub is defined but never called: the program makes no "
+                                  "motion (expected a call, or the file that calls it)");
+      break;
+    }
+  }
   // A file that ends (with '%' or without M2) while a compensated move is held: the machine
   // runs it, ending at its offset point (LinuxCNC's rs274 drops it).
   comp_stop(false, 1);
@@ -1091,7 +1104,7 @@ Source* Reader::open_file(const std::filesystem::path& path, int column, const c
   return sources_.back().get();
 }
 
-const SubDefinition* Reader::find_sub(const std::string& name, int column) {
+SubDefinition* Reader::find_sub(const std::string& name, int column) {
   if (const auto it = subs_.find(name); it != subs_.end()) return &it->second;
   // Defined further down the calling file (after M2, say): read ahead for it, as rs274 does.
   if (current_->seekable) {
@@ -1123,7 +1136,7 @@ const SubDefinition* Reader::find_sub(const std::string& name, int column) {
 }
 
 void Reader::call(const std::string& s, const OLine& o) {
-  const SubDefinition* sub = find_sub(o.label, o.column);
+  SubDefinition* sub = find_sub(o.label, o.column);
   if (sub == nullptr) {
     std::string folders = std::filesystem::path(sources_.front()->name).parent_path().string();
     for (const std::string& p : options_.subroutine_path) folders += ", " + p;
@@ -1133,6 +1146,7 @@ void Reader::call(const std::string& s, const OLine& o) {
                                                : std::string()) +
                        ")");
   }
+  sub->called = true;
   if (frames_.size() > 64) fail(o.column, "subroutine calls nested more than 64 deep (a call that never returns?)");
   // Arguments: bracketed expressions, to #1..#30 of the call.
   std::vector<double> args;
@@ -4210,6 +4224,8 @@ bool Reader::execute() {
     warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
     return false;
   }
+  for (const char axis : {'X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'})
+    axis_words_ = axis_words_ || ln.words[static_cast<size_t>(axis - 'A')].present;
   if (!current_->executed) {  // a block with words (not a comment line) has run
     current_->executed = !ln.g.empty() || !ln.m.empty() || !assignments_.empty() ||
                          std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });

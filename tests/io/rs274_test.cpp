@@ -258,6 +258,22 @@ TEST(Rs274ControlFlow, SubroutineDefinedAfterTheProgramEnd) {
   EXPECT_EQ(p.blocks[0].source.line, 6);
 }
 
+// A file of subroutine definitions alone (LinuxCNC keeps one in a file of its name; a real
+// probing routine was such a file) makes no motion: a warning names the sub and its line.
+// Called, or in a program that moves, it says nothing.
+TEST(Rs274ControlFlow, SubroutineFileAloneWarns) {
+  const Program alone = read("(a probing routine)\no<probe> sub\n  G38.2 Z-5 F10\no<probe> endsub\nM2\n");
+  EXPECT_TRUE(alone.blocks.empty());
+  ASSERT_EQ(alone.warnings.size(), 1u);
+  EXPECT_NE(alone.warnings[0].find(":2: o<probe> sub is defined but never called: the program makes no motion"),
+            std::string::npos)
+      << alone.warnings[0];
+  EXPECT_TRUE(read("o<up> sub\n  G0 Z#1\no<up> endsub\nG0 X0 Y0 Z0\no<up> call [5]\nM2\n").warnings.empty());
+  EXPECT_TRUE(read("o<set> sub\n  #<_depth> = 5\no<set> endsub\no<set> call\nM2\n").warnings.empty());
+  const Program moves = read("o<up> sub\n  G0 Z#1\no<up> endsub\nG0 X1 Y0 Z0\nM2\n");
+  for (const std::string& w : moves.warnings) EXPECT_EQ(w.find("never called"), std::string::npos) << w;
+}
+
 TEST(Rs274ControlFlow, Errors) {
   GcodeOptions limited;
   limited.max_lines = 1000;
