@@ -4229,8 +4229,9 @@ bool Reader::execute() {
     warn(o_column_, "the program ends at the next program number (no M30 or M2 before it)");
     return false;
   }
-  for (const char axis : {'X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'})
-    axis_words_ = axis_words_ || ln.words[static_cast<size_t>(axis - 'A')].present;
+  if (!axis_words_)
+    for (const char axis : {'X', 'Y', 'Z', 'A', 'B', 'C', 'U', 'V', 'W'})
+      axis_words_ = axis_words_ || ln.words[static_cast<size_t>(axis - 'A')].present;
   if (!current_->executed) {  // a block with words (not a comment line) has run
     current_->executed = !ln.g.empty() || !ln.m.empty() || !assignments_.empty() ||
                          std::any_of(ln.words.begin(), ln.words.end(), [](const Word& w) { return w.present; });

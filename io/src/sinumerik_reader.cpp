@@ -447,20 +447,15 @@ void Reader::prescan() {
     // in upper case (the whole line is checked when it runs); an IF line whole, for its GOTO.
     const std::string& raw = lines_[k];
     begin_ = k == 0 && raw.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
-    s_.assign(raw, 0, std::min<std::size_t>(raw.size(), begin_ + 80));
-    for (char& ch : s_) ch = upper(ch);
-    i_ = body(&label_[k], &number_[k]);
-    if (s_.size() < raw.size() && i_ + 16 > s_.size()) {
-      // Blanks, N or a label fill the window up to where the first word may be cut: the whole
-      // line (the fuzzer put an ENDFOR after 170 form feeds).
-      s_.assign(raw);
+    auto take = [&](std::size_t bytes) {
+      s_.assign(raw, 0, bytes);
       for (char& ch : s_) ch = upper(ch);
       i_ = body(&label_[k], &number_[k]);
-    }
-    if (s_.compare(i_, 2, "IF") == 0 && s_.size() < raw.size()) {
-      s_.assign(raw);
-      for (char& ch : s_) ch = upper(ch);
-    }
+    };
+    take(std::min<std::size_t>(raw.size(), begin_ + 80));
+    // The whole line where blanks, N or a label fill the window up to where the first word may
+    // be cut (the fuzzer put an ENDFOR after 170 form feeds), or for an IF.
+    if (s_.size() < raw.size() && (i_ + 16 > s_.size() || s_.compare(i_, 2, "IF") == 0)) take(raw.size());
     const std::size_t start = i_;
     const std::string word = letters();
     const int col = column(start);
