@@ -3,9 +3,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -306,6 +308,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   const int tiles = tile_base[3];
   std::vector<int> start(static_cast<std::size_t>(tiles) + 1);
   std::vector<int> entries;
+  std::vector<std::int64_t> rays_of(static_cast<std::size_t>(tiles), 0);  // per tile: its moves' rays, summed
   std::vector<TileResult> results(static_cast<std::size_t>(tiles));
   tbb::enumerable_thread_specific<std::vector<DexelSegment>> scratch;
   // The moves around a batch that its hand-over tests look at: the last cutting move before
@@ -460,29 +463,44 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         int u0, u1, w0, w1;
         if (!m.ray_range(f, sweeps[i - first]->bounds(), u0, u1, w0, w1)) continue;
         for (int tw = (w0 - f.lo_w) / kTileW; tw <= (w1 - f.lo_w) / kTileW; ++tw)
-          for (int tu = (u0 - f.lo_u) / kTileU; tu <= (u1 - f.lo_u) / kTileU; ++tu)
-            visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu);
+          for (int tu = (u0 - f.lo_u) / kTileU; tu <= (u1 - f.lo_u) / kTileU; ++tu) {
+            const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
+            const std::int64_t rays = std::int64_t{std::min(u1, tile_u0 + kTileU - 1) - std::max(u0, tile_u0) + 1} *
+                                      (std::min(w1, tile_w0 + kTileW - 1) - std::max(w0, tile_w0) + 1);
+            visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu, rays);
+          }
       }
     };
     for (std::size_t i = first; i < last; ++i)
-      for_each_tile(i, [&](int t) { ++start[static_cast<std::size_t>(t) + 1]; });
+      for_each_tile(i, [&](int t, std::int64_t) { ++start[static_cast<std::size_t>(t) + 1]; });
     for (int t = 0; t < tiles; ++t) start[static_cast<std::size_t>(t) + 1] += start[static_cast<std::size_t>(t)];
     entries.resize(static_cast<std::size_t>(start[static_cast<std::size_t>(tiles)]));
     {
       std::vector<int> fill(start.begin(), start.end() - 1);
       for (std::size_t i = first; i < last; ++i)
-        for_each_tile(i, [&](int t) {
+        for_each_tile(i, [&](int t, std::int64_t rays) {
           entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = static_cast<int>(i - first);
+          rays_of[static_cast<std::size_t>(t)] += rays;
         });
     }
+    // The busy tiles, those the most rays' worth of moves cover first, handed out one at a
+    // time: a few heavy tiles (where the tool dwells) then start early instead of last.
+    // Tiles share no ray, so the order changes nothing but the time.
     std::vector<int> busy;
     for (int t = 0; t < tiles; ++t)
       if (start[static_cast<std::size_t>(t) + 1] > start[static_cast<std::size_t>(t)]) busy.push_back(t);
-
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, busy.size(), 1), [&](const auto& range) {
+    std::vector<int> heaviest_first = busy;
+    std::stable_sort(heaviest_first.begin(), heaviest_first.end(), [&](int x, int y) {
+      return rays_of[static_cast<std::size_t>(x)] > rays_of[static_cast<std::size_t>(y)];
+    });
+    for (int t : busy) rays_of[static_cast<std::size_t>(t)] = 0;
+    std::atomic<std::size_t> next_busy{0};
+    const std::size_t workers =
+        std::min(busy.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
+    tbb::parallel_for(std::size_t{0}, workers, [&](std::size_t) {
       auto& buffer = scratch.local();
-      for (std::size_t b = range.begin(); b != range.end(); ++b) {
-        const int t = busy[b];
+      for (std::size_t b; (b = next_busy.fetch_add(1, std::memory_order_relaxed)) < busy.size();) {
+        const int t = heaviest_first[b];
         const int a = t >= tile_base[2] ? 2 : (t >= tile_base[1] ? 1 : 0);
         Family& f = m.families[static_cast<std::size_t>(a)];
         const int local = t - tile_base[static_cast<std::size_t>(a)];

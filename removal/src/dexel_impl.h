@@ -31,8 +31,10 @@ constexpr int kNoMove = -1;
 // rays' range, its neighbours' hand-over bounds) and per row (range, section) is done once
 // per tile it covers: long rows, so that a tool's rows fall in one or two tiles (W1, a 6 mm
 // ball at 0.05 mm: cut 7.3 -> 6.4 s with 256 x 8 against 64 x 4; W1 on 40 mm, 1 thread,
-// 1.109 -> 1.017 s with 512 x 16 against 256 x 8).
-constexpr int kTileU = 512, kTileW = 16;
+// 1.109 -> 1.017 s with 512 x 16 against 256 x 8). 8 rows, not 16: a batch waits for its
+// heaviest tile, and on 16 threads that bounded W5's cut at 12.3x one thread's (the tiles'
+// times, scheduled; 14.3x with 8 rows, one thread's time the same within 2 %).
+constexpr int kTileU = 512, kTileW = 8;
 static_assert(kTileU % 64 == 0, "a tile row's occupied rays are whole 64-bit words");
 constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
 // The move record is pruned when it has grown by this many moves and doubled since the last time.
