@@ -309,6 +309,20 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   std::vector<int> start(static_cast<std::size_t>(tiles) + 1);
   std::vector<int> entries;
   std::vector<std::int64_t> rays_of(static_cast<std::size_t>(tiles), 0);  // per tile: its moves' rays, summed
+  // A move's rays in each family (none: u0 > u1), and the bands of tile rows binned side by
+  // side (about 16 a family).
+  struct RayBox {
+    int u0 = 1, u1 = 0, w0 = 1, w1 = 0;
+  };
+  std::vector<std::array<RayBox, 3>> ray_boxes;
+  struct Band {
+    int axis, tw0, tw1;  // tile rows tw0..tw1 of family axis
+  };
+  std::vector<Band> bands;
+  for (int a = 0; a < 3; ++a) {
+    const int rows = m.families[static_cast<std::size_t>(a)].tiles_w, height = std::max(1, (rows + 15) / 16);
+    for (int tw = 0; tw < rows; tw += height) bands.push_back({a, tw, std::min(rows, tw + height) - 1});
+  }
   std::vector<TileResult> results(static_cast<std::size_t>(tiles));
   tbb::enumerable_thread_specific<std::vector<DexelSegment>> scratch;
   // The moves around a batch that its hand-over tests look at: the last cutting move before
@@ -442,46 +456,59 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     const Move* const batch = window.moves.data() + off;
     m.moves.append(batch, count, cutter_base);
     std::vector<std::optional<detail::RaySweep>> sweeps(count);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(first, last, 256), [&](const auto& range) {
-      // Material never leaves the initial stock's box: a tilted tool's part that stays out of
-      // it need not be looked for along the rays.
-      for (std::size_t i = range.begin(); i != range.end(); ++i)
-        sweeps[i - first].emplace(cutters.at(static_cast<std::size_t>(batch[i - first].cutter)), batch[i - first],
-                                  &m.shape_bounds);
+    ray_boxes.assign(count, {});
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        // Material never leaves the initial stock's box: a tilted tool's part that stays out
+        // of it need not be looked for along the rays, and a sweep clear of it (a holder
+        // probe high above the part) meets no ray's material.
+        const detail::RaySweep& sweep =
+            sweeps[i].emplace(cutters.at(static_cast<std::size_t>(batch[i].cutter)), batch[i], &m.shape_bounds);
+        if (!sweep.bounds().intersects(m.shape_bounds)) continue;
+        const int only = probe_family(batch[i]);
+        for (int a = 0; a < 3; ++a) {
+          RayBox& r = ray_boxes[i][static_cast<std::size_t>(a)];
+          if ((only >= 0 && a != only) ||
+              !m.ray_range(m.families[static_cast<std::size_t>(a)], sweep.bounds(), r.u0, r.u1, r.w0, r.w1))
+            r = RayBox{};
+        }
+      }
     });
     // Bin the batch's moves to the tiles of rays their sweep's box covers (counting sort:
-    // within a tile the moves stay in program order).
+    // within a tile the moves stay in program order), each band of tiles on its own.
     std::fill(start.begin(), start.end(), 0);
-    auto for_each_tile = [&](std::size_t i, auto&& visit) {
-      // Material never leaves the initial stock's box: a sweep clear of it (a holder probe
-      // high above the part) meets no ray's material.
-      if (!sweeps[i - first]->bounds().intersects(m.shape_bounds)) return;
-      const int only = probe_family(batch[i - first]);
-      for (int a = 0; a < 3; ++a) {
-        if (only >= 0 && a != only) continue;
-        const Family& f = m.families[static_cast<std::size_t>(a)];
-        int u0, u1, w0, w1;
-        if (!m.ray_range(f, sweeps[i - first]->bounds(), u0, u1, w0, w1)) continue;
-        for (int tw = (w0 - f.lo_w) / kTileW; tw <= (w1 - f.lo_w) / kTileW; ++tw)
-          for (int tu = (u0 - f.lo_u) / kTileU; tu <= (u1 - f.lo_u) / kTileU; ++tu) {
+    auto for_each_tile = [&](const Band& band, auto&& visit) {
+      const Family& f = m.families[static_cast<std::size_t>(band.axis)];
+      for (std::size_t i = 0; i < count; ++i) {
+        const RayBox& r = ray_boxes[i][static_cast<std::size_t>(band.axis)];
+        if (r.u0 > r.u1) continue;
+        const int tw0 = std::max(band.tw0, (r.w0 - f.lo_w) / kTileW),
+                  tw1 = std::min(band.tw1, (r.w1 - f.lo_w) / kTileW);
+        for (int tw = tw0; tw <= tw1; ++tw)
+          for (int tu = (r.u0 - f.lo_u) / kTileU; tu <= (r.u1 - f.lo_u) / kTileU; ++tu) {
             const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
-            const std::int64_t rays = std::int64_t{std::min(u1, tile_u0 + kTileU - 1) - std::max(u0, tile_u0) + 1} *
-                                      (std::min(w1, tile_w0 + kTileW - 1) - std::max(w0, tile_w0) + 1);
-            visit(tile_base[static_cast<std::size_t>(a)] + tw * f.tiles_u + tu, rays);
+            const std::int64_t rays = std::int64_t{std::min(r.u1, tile_u0 + kTileU - 1) - std::max(r.u0, tile_u0) + 1} *
+                                      (std::min(r.w1, tile_w0 + kTileW - 1) - std::max(r.w0, tile_w0) + 1);
+            visit(tile_base[static_cast<std::size_t>(band.axis)] + tw * f.tiles_u + tu, static_cast<int>(i), rays);
           }
       }
     };
-    for (std::size_t i = first; i < last; ++i)
-      for_each_tile(i, [&](int t, std::int64_t) { ++start[static_cast<std::size_t>(t) + 1]; });
+    // A tile's slots (its count, its fill position, its rays) are its band's alone.
+    tbb::parallel_for(std::size_t{0}, bands.size(), [&](std::size_t b) {
+      for_each_tile(bands[b], [&](int t, int, std::int64_t rays) {
+        ++start[static_cast<std::size_t>(t) + 1];
+        rays_of[static_cast<std::size_t>(t)] += rays;
+      });
+    });
     for (int t = 0; t < tiles; ++t) start[static_cast<std::size_t>(t) + 1] += start[static_cast<std::size_t>(t)];
     entries.resize(static_cast<std::size_t>(start[static_cast<std::size_t>(tiles)]));
     {
       std::vector<int> fill(start.begin(), start.end() - 1);
-      for (std::size_t i = first; i < last; ++i)
-        for_each_tile(i, [&](int t, std::int64_t rays) {
-          entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = static_cast<int>(i - first);
-          rays_of[static_cast<std::size_t>(t)] += rays;
+      tbb::parallel_for(std::size_t{0}, bands.size(), [&](std::size_t b) {
+        for_each_tile(bands[b], [&](int t, int i, std::int64_t) {
+          entries[static_cast<std::size_t>(fill[static_cast<std::size_t>(t)]++)] = i;
         });
+      });
     }
     // The busy tiles, those the most rays' worth of moves cover first, handed out one at a
     // time: a few heavy tiles (where the tool dwells) then start early instead of last.
@@ -696,14 +723,21 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     // Moves no endpoint names any more leave the record (the mesher projects onto the moves
     // the endpoints name): it then grows with the machined surface, not with the program.
     if (m.moves.kept() >= 2 * m.kept_after_pruning + kPruneMoves) {
-      std::vector<bool> named(static_cast<std::size_t>(m.moves.next_id()), false);
+      // Value-initialised: all clear. Threads only ever set a flag, so relaxed stores do.
+      std::vector<std::atomic<unsigned char>> flags(static_cast<std::size_t>(m.moves.next_id()));
       for (const Family& f : m.families)
-        for (const SegmentList& ray : f.rays)
-          for (std::uint32_t k = 0; k < ray.size(); ++k) {
-            const DexelSegment& seg = ray.data()[k];
-            if (seg.lo_move != kNoMove) named[static_cast<std::size_t>(seg.lo_move)] = true;
-            if (seg.hi_move != kNoMove) named[static_cast<std::size_t>(seg.hi_move)] = true;
-          }
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, f.rays.size(), 4096), [&](const auto& range) {
+          for (std::size_t r = range.begin(); r != range.end(); ++r)
+            for (std::uint32_t k = 0; k < f.rays[r].size(); ++k) {
+              const DexelSegment& seg = f.rays[r].data()[k];
+              if (seg.lo_move != kNoMove)
+                flags[static_cast<std::size_t>(seg.lo_move)].store(1, std::memory_order_relaxed);
+              if (seg.hi_move != kNoMove)
+                flags[static_cast<std::size_t>(seg.hi_move)].store(1, std::memory_order_relaxed);
+            }
+        });
+      std::vector<bool> named(flags.size());
+      for (std::size_t i = 0; i < flags.size(); ++i) named[i] = flags[i].load(std::memory_order_relaxed) != 0;
       m.moves.keep_only(named);
       m.kept_after_pruning = m.moves.kept();
     }

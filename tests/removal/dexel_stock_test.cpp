@@ -1114,6 +1114,20 @@ TEST(DexelStock, MoveRecordGrowsWithTheSurfaceNotTheProgram) {
   // 2.0626 mm2 for r = 1.5, over 18 mm, plus the spherical cap pi h^2 (3 r - h) / 3 = 3.665
   // mm3 at the two ends together: 40.79 mm3, within 15 % at v = 0.5 mm.
   EXPECT_NEAR(cut.removed_volume_mm3, 40.79, 0.15 * 40.79);
+  // The moves kept are those the surface needs: the groove's vertices, projected onto the
+  // moves their cells name, lie on its wall, the cylinder of radius 1.5 about y = 5, z = 10.5,
+  // or within the sagitta 0.5^2 / (8 x 1.5) = 0.021 mm inside it where the mesher leaves a
+  // vertex at its crossings' mean (one row of them here); one projected onto another move
+  // than the one its cell names (pruned away) lies elsewhere.
+  const SurfaceMesh surface = stock.surface();
+  int on_wall = 0;
+  for (const Eigen::Vector3d& q : surface.mesh.vertices_mm) {
+    // Not the top face, the box's other faces, the groove's ends.
+    if (q.z() > 10.0 - 1e-6 || q.z() < 8.5 || std::abs(q.y() - 5.0) > 2.0 || q.x() < 2.0 || q.x() > 17.0) continue;
+    EXPECT_NEAR(std::hypot(q.y() - 5.0, q.z() - 10.5), 1.5, 0.025) << q.transpose();
+    ++on_wall;
+  }
+  EXPECT_GT(on_wall, 100);
 }
 
 // Whether the mesh is closed and consistently wound (every directed edge meets its reverse
