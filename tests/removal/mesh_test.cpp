@@ -161,6 +161,38 @@ TEST(Decimate, BoxKeepsItsCornersEdgesAndVolume) {
 
 // A closed mesh has every directed edge once and its reverse once (derived by hand on a box's
 // twelve triangles: each of its 18 edges is shared by two triangles, one in each direction).
+// A regular octahedron: each corner meets four equal faces symmetric about its axis, so its
+// area-weighted normal is the corner's own direction. A fin of three triangles on one edge
+// (a complex edge, as thin walls give): normals (0, 0, 1), (0, -1, 0) and (0, 0, -1) by the
+// right-hand rule, so the edge's ends sum to (0, -1, 0); each free corner keeps its own
+// triangle's normal. A vertex no triangle uses: zero.
+TEST(VertexNormals, AreaWeightedAtEveryCornerAndOnComplexEdges) {
+  TriangleMesh octahedron;
+  octahedron.vertices_mm = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int x : {0, 1})
+    for (int y : {2, 3})
+      for (int z : {4, 5}) {
+        // Counter-clockwise seen from outside: (x, y, z) in the octant's positive orientation.
+        const bool positive = (x == 0) == (y == 2) ? z == 4 : z == 5;
+        octahedron.triangles.push_back(positive ? Eigen::Vector3i(x, y, z) : Eigen::Vector3i(x, z, y));
+      }
+  const std::vector<Eigen::Vector3d> n = vertex_normals(octahedron);
+  ASSERT_EQ(n.size(), 6u);
+  for (std::size_t v = 0; v < 6; ++v) EXPECT_LT((n[v] - octahedron.vertices_mm[v]).norm(), 1e-12) << v;
+
+  TriangleMesh fin;
+  fin.vertices_mm = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}, {0, -1, 0}, {5, 5, 5}};
+  fin.triangles = {{0, 1, 2}, {0, 1, 3}, {0, 1, 4}};
+  const std::vector<Eigen::Vector3d> f = vertex_normals(fin);
+  ASSERT_EQ(f.size(), 6u);
+  EXPECT_LT((f[0] - Eigen::Vector3d(0, -1, 0)).norm(), 1e-12);
+  EXPECT_LT((f[1] - Eigen::Vector3d(0, -1, 0)).norm(), 1e-12);
+  EXPECT_LT((f[2] - Eigen::Vector3d(0, 0, 1)).norm(), 1e-12);
+  EXPECT_LT((f[3] - Eigen::Vector3d(0, -1, 0)).norm(), 1e-12);
+  EXPECT_LT((f[4] - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+  EXPECT_EQ(f[5], Eigen::Vector3d::Zero());
+}
+
 TEST(IsClosed, BoxesAndTheWaysToOpenThem) {
   const TriangleMesh box = test::box_mesh({0, 0, 0}, {1, 2, 3});
   ASSERT_EQ(box.triangles.size(), 12u);

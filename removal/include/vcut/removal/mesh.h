@@ -18,8 +18,8 @@ struct TriangleMesh {
 // Signed enclosed volume (mm^3, divergence theorem): positive for outward triangles.
 double signed_volume_mm3(const TriangleMesh& mesh);
 
-// Area-weighted unit vertex normals (OpenMesh); triangles OpenMesh cannot take (complex
-// edges) still count through a direct accumulation.
+// Area-weighted unit vertex normals: every triangle counts, at complex edges too; a vertex
+// no triangle uses (or whose triangles' normals cancel) gets zero.
 std::vector<Eigen::Vector3d> vertex_normals(const TriangleMesh& mesh);
 
 // A third of the area of every incident triangle (mm^2): vertex areas sum to the mesh area.
