@@ -397,11 +397,20 @@ class Checker {
   }
 
  private:
+  // Each pair along the samples: checked at the last sample (with which tool), and its
+  // distance there (exact, or a lower bound).
+  struct PairState {
+    bool active = false;
+    int tool = 0;
+    Eval last;
+  };
   static constexpr std::size_t kBatch = 2048;
+  static constexpr std::size_t kChunk = 256;  // a pair's samples checked by one task
 
   // Samples index_ .. index_ + n - 1; the last sample of the batch before (its frames and
   // each pair's state) opens the interval to the first. The frames in parallel over the
-  // samples, then the pairs in parallel, each along the samples in order: a pair's distance
+  // samples, then each pair's chunks of samples in parallel (check_batch's loop below), each
+  // along its samples in order: a pair's distance
   // falls no faster than its bodies move, so after an exact distance d the pair is queried
   // again only where d less the motion since then (motion_bound_mm) drops below the clearance.
   void check_batch(const kinematics::PoseSample* batch, std::size_t n) {
@@ -418,53 +427,80 @@ class Checker {
     if (playback != nullptr)
       for (std::size_t k = 0; k < n; ++k) playback->record(index_ + k, batch[k], frames[k]);
     state_.resize(pair_count);
-    std::vector<std::vector<Finding>> found(pair_count);
-    std::vector<std::size_t> queries(pair_count, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pair_count),
+    // Each pair's samples in chunks of kChunk, all side by side: a chunk after the batch's
+    // first opens at the sample before it as a pair's first sample does (its distance there, a
+    // box bound or exact; no finding, that sample is the chunk before's), so that a few busy
+    // pairs do not keep the rest of the threads waiting. The chunks are fixed, not the thread
+    // count's: the same findings for any.
+    const std::size_t chunks = (n + kChunk - 1) / kChunk;
+    std::vector<std::vector<Finding>> found(pair_count * chunks);
+    std::vector<std::size_t> queries(pair_count * chunks, 0);
+    std::vector<PairState> ends(pair_count * chunks);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, pair_count * chunks),
                       [&](const tbb::blocked_range<std::size_t>& range) {
-                        for (std::size_t p = range.begin(); p != range.end(); ++p) {
-                          PairState& st = state_[p];
-                          for (std::size_t k = 0; k < n; ++k) {
-                            const std::size_t i = index_ + k;
-                            const kinematics::PoseSample& sample = batch[k];
-                            if (!active(p, tools[k])) {
-                              st.active = false;
-                              continue;
+                        for (std::size_t task = range.begin(); task != range.end(); ++task) {
+                          const std::size_t p = task / chunks, c = task % chunks;
+                          const std::size_t k0 = c * kChunk, k1 = std::min(n, k0 + kChunk);
+                          PairState st = state_[p];
+                          if (c > 0) {
+                            st = PairState{};
+                            if (active(p, tools[k0 - 1])) {
+                              st.active = true;
+                              st.tool = tools[k0 - 1];
+                              st.last = evaluate(pairs[p], frames[k0 - 1], queries[task]);
                             }
-                            const bool continues = st.active && st.tool == tools[k];
-                            const Frames& f0 = k > 0 ? frames[k - 1] : last_frames_;
-                            const AxisValues& q0 = k > 0 ? batch[k - 1].axes : last_q_;
-                            double moved = 0.0;
-                            if (continues)
-                              moved = motion_bound_mm(pairs[p].first, f0, q0, sample.axes) +
-                                      motion_bound_mm(pairs[p].second, f0, q0, sample.axes);
-                            Eval e;
-                            if (continues && st.last.distance_mm - moved >= clearance_mm_) {
-                              // Proven apart over the whole interval by the last distance: nothing to query.
-                              e.distance_mm = st.last.distance_mm - moved;
-                            } else {
-                              e = evaluate(pairs[p], frames[k], queries[p]);
-                              // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
-                              if (!continues && !e.hit && e.exact) contained(pairs[p], frames[k], e);
-                              if (e.distance_mm < clearance_mm_ || e.hit)
-                                found[p].push_back({static_cast<int>(p), i, sample.block, e, sample.axes, false});
-                              if (continues)
-                                between(static_cast<int>(p), i, sample.block, f0, q0, sample.axes, st.last, e, 0,
-                                        found[p], queries[p]);
-                            }
-                            st.last = e;
-                            st.active = true;
-                            st.tool = tools[k];
                           }
+                          check_samples(p, batch, k0, k1, frames, tools, st, found[task], queries[task]);
+                          ends[task] = st;
                         }
                       });
     for (std::size_t p = 0; p < pair_count; ++p) {
-      findings.insert(findings.end(), found[p].begin(), found[p].end());
-      this->queries += queries[p];
+      state_[p] = ends[p * chunks + chunks - 1];
+      for (std::size_t c = 0; c < chunks; ++c) {
+        findings.insert(findings.end(), found[p * chunks + c].begin(), found[p * chunks + c].end());
+        this->queries += queries[p * chunks + c];
+      }
     }
     last_frames_ = frames[n - 1];
     last_q_ = batch[n - 1].axes;
     index_ += n;
+  }
+
+  // Pair p along samples k0 .. k1 - 1 of the batch, from state st (at the sample before k0).
+  void check_samples(std::size_t p, const kinematics::PoseSample* batch, std::size_t k0, std::size_t k1,
+                     const std::vector<Frames>& frames, const std::vector<int>& tools, PairState& st,
+                     std::vector<Finding>& found, std::size_t& queries) const {
+    for (std::size_t k = k0; k < k1; ++k) {
+      const std::size_t i = index_ + k;
+      const kinematics::PoseSample& sample = batch[k];
+      if (!active(p, tools[k])) {
+        st.active = false;
+        continue;
+      }
+      const bool continues = st.active && st.tool == tools[k];
+      const Frames& f0 = k > 0 ? frames[k - 1] : last_frames_;
+      const AxisValues& q0 = k > 0 ? batch[k - 1].axes : last_q_;
+      double moved = 0.0;
+      if (continues)
+        moved = motion_bound_mm(pairs[p].first, f0, q0, sample.axes) +
+                motion_bound_mm(pairs[p].second, f0, q0, sample.axes);
+      Eval e;
+      if (continues && st.last.distance_mm - moved >= clearance_mm_) {
+        // Proven apart over the whole interval by the last distance: nothing to query.
+        e.distance_mm = st.last.distance_mm - moved;
+      } else {
+        e = evaluate(pairs[p], frames[k], queries);
+        // Where a pair first meets, one body may lie wholly inside the other (no faces cross).
+        if (!continues && !e.hit && e.exact) contained(pairs[p], frames[k], e);
+        if (e.distance_mm < clearance_mm_ || e.hit)
+          found.push_back({static_cast<int>(p), i, sample.block, e, sample.axes, false});
+        if (continues)
+          between(static_cast<int>(p), i, sample.block, f0, q0, sample.axes, st.last, e, 0, found, queries);
+      }
+      st.last = e;
+      st.active = true;
+      st.tool = tools[k];
+    }
   }
 
   int tool_of(int block) const { return block >= 0 ? run_.program.blocks[static_cast<std::size_t>(block)].tool : 0; }
@@ -545,13 +581,6 @@ class Checker {
   std::vector<Body>& bodies_;
   double clearance_mm_;
   std::vector<std::vector<int>> chain_;
-  // Each pair along the samples: checked at the last sample (with which tool), and its
-  // distance there (exact, or a lower bound).
-  struct PairState {
-    bool active = false;
-    int tool = 0;
-    Eval last;
-  };
   std::vector<PairState> state_;
   // The last sample checked: the next index, its frames and axes.
   std::size_t index_ = 0;

@@ -204,6 +204,27 @@ TEST_F(MachineCheck, AFastTiltBetweenTwoCleanPosesIsFound) {
   EXPECT_TRUE(found) << json().dump(1);
 }
 
+// The same fast tilt after 253 short clean moves: a pair's samples are checked in chunks of
+// 256 side by side, and here the tilt is sample 256 (the start is sample 0, then one a move:
+// lines 4 to 258 are samples 1 to 255),
+// the first of the second chunk. The interval from sample 255 into it is where the clamp
+// passes through the cutter: the chunk must open at the sample before it, as the one before
+// would have left it (a chunk that starts afresh finds nothing here).
+TEST_F(MachineCheck, AFastTiltAtTheStartOfAChunkOfSamplesIsFound) {
+  std::string program = "G21 G90 G94\nT1 M6\nS8000 M3\nG0 X0 Y-95 Z100 A0 C0\nG0 Z30\n";
+  for (int line = 6; line < 259; ++line) program += line % 2 == 0 ? "G0 Z31\n" : "G0 Z30\n";
+  program += "G0 A-90\nG0 Z100\nM30\n";  // the tilt on line 259
+  const CommandResult r = check(job_with(program, "densify: {angle: 90}\n"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(json()["poses"], 258) << json().dump(1);  // the start, then lines 4 to 260
+  bool found = false;
+  for (const auto& e : machine_events(json())) {
+    EXPECT_EQ(e["line"], "p.ngc:259") << e.dump();
+    found = found || (e["kind"] == "machine_collision" && e["between_poses"].get<bool>());
+  }
+  EXPECT_TRUE(found) << json().dump(1);
+}
+
 // The bundled machines' own bodies stay clear of each other (and of a tool retracted 50 mm
 // below the top of Z's travel, 100 mm out of the nose; on LinuxCNC's desktop xyzac-trt 5 mm
 // below, 30 mm out) while the rotary axes run to the ends of their travels: the models make no false
