@@ -409,10 +409,10 @@ class Checker {
 
   // Samples index_ .. index_ + n - 1; the last sample of the batch before (its frames and
   // each pair's state) opens the interval to the first. The frames in parallel over the
-  // samples, then each pair's chunks of samples in parallel (check_batch's loop below), each
-  // along its samples in order: a pair's distance
-  // falls no faster than its bodies move, so after an exact distance d the pair is queried
-  // again only where d less the motion since then (motion_bound_mm) drops below the clearance.
+  // samples, then each pair's chunks of samples in parallel, each along its samples in order:
+  // a pair's distance falls no faster than its bodies move, so after an exact distance d the
+  // pair is queried again only where d less the motion since then (motion_bound_mm) drops
+  // below the clearance.
   void check_batch(const kinematics::PoseSample* batch, std::size_t n) {
     if (n == 0) return;
     const std::size_t pair_count = pairs.size();
