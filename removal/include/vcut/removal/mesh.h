@@ -1,5 +1,5 @@
-// Triangle meshes in the workpiece frame (mm), and the mesh work done on them with
-// OpenMesh: outward vertex normals, per-vertex areas, enclosed volume.
+// Triangle meshes in the workpiece frame (mm), and the mesh work done on them: outward
+// vertex normals, per-vertex areas, enclosed volume, closedness, decimation.
 #pragma once
 
 #include <Eigen/Core>
