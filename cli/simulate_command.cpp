@@ -8,6 +8,7 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/job.h"
 #include "vcut/pipeline/simulate.h"
+#include "vcut/report/drawing.h"
 #include "vcut/report/outputs.h"
 
 namespace vcut::cli {
@@ -23,6 +24,7 @@ int run_simulate(const SimulateCommand& c, const pipeline::SimulateOptions& base
   const std::string out_dir = out.empty() ? job.out_dir : out;
   // Fail on an unwritable output folder before hours of cutting, not after.
   io::ensure_writable_folder(out_dir);
+  report::require_font();  // likewise the pictures' font
   ProgressBar bar(!quiet);
   options.progress = [&](const std::string& stage, std::size_t done, std::size_t total) {
     bar.update(stage, done, total);

@@ -7,6 +7,7 @@
 #include "vcut/io/atomic_file.h"
 #include "vcut/io/job.h"
 #include "vcut/pipeline/study.h"
+#include "vcut/report/drawing.h"
 #include "vcut/report/study_report.h"
 
 namespace vcut::cli {
@@ -17,6 +18,7 @@ int run_study(const std::string& job_file, pipeline::StudyOptions options, const
   const std::string out_dir = out.empty() ? job.out_dir : out;
   // Fail on an unwritable output folder before the runs, not after.
   io::ensure_writable_folder(out_dir);
+  report::require_font();  // likewise the plot's font
   ProgressBar bar(!quiet);
   std::string current;
   options.on_run = [&](std::size_t index, std::size_t count, const std::string& label) {

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <stdexcept>
 #include <string>
 
@@ -17,7 +18,8 @@
 namespace vcut::report {
 namespace {
 
-// DejaVu Sans, loaded once from the file CMake found (VCUT_FONT_FILE) and kept for the process.
+// DejaVu Sans, loaded once from the file CMake found (VCUT_FONT_FILE; the environment
+// variable of that name replaces it) and kept for the process.
 struct Font {
   cairo_font_face_t* face = nullptr;
   double cap_per_em = 0.0;  // the height of 'H' over the em
@@ -28,10 +30,11 @@ const Font& font() {
     FT_Library library = nullptr;
     FT_Face face = nullptr;
     if (FT_Init_FreeType(&library) != 0) throw std::runtime_error("FreeType could not start");
-    if (FT_New_Face(library, VCUT_FONT_FILE, 0, &face) != 0 || FT_Load_Char(face, 'H', FT_LOAD_NO_SCALE) != 0) {
+    const char* env = std::getenv("VCUT_FONT_FILE");
+    const std::string file = env != nullptr && *env != '\0' ? env : VCUT_FONT_FILE;
+    if (FT_New_Face(library, file.c_str(), 0, &face) != 0 || FT_Load_Char(face, 'H', FT_LOAD_NO_SCALE) != 0) {
       FT_Done_FreeType(library);
-      throw InputError(std::string("font file ") + VCUT_FONT_FILE +
-                       ": cannot be read (expected DejaVu Sans, Debian's fonts-dejavu-core)");
+      throw InputError("font file " + file + ": cannot be read (expected DejaVu Sans, Debian's fonts-dejavu-core)");
     }
     Font f;
     f.cap_per_em = static_cast<double>(face->glyph->metrics.height) / face->units_per_EM;
@@ -136,6 +139,8 @@ Image to_image(cairo_surface_t* surface) {
 }
 
 }  // namespace
+
+void require_font() { font(); }
 
 // ---- Drawing ---------------------------------------------------------------------------------
 

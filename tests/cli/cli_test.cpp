@@ -512,6 +512,19 @@ TEST_F(Simulate, UnwritableOutputFolder) {
   expect_error(simulate(), "blocker");
 }
 
+// The pictures' font missing (VCUT_FONT_FILE names where it is): the run stops before it
+// simulates, naming the file, as for an unwritable folder. Found when a lent machine without
+// Debian's fonts ran every job for minutes and then stopped at its pictures, with the STL
+// already written.
+TEST_F(Simulate, MissingFontStopsTheRunBeforeItsWork) {
+  const std::string missing = (dir / "no-such-font.ttf").string();
+  ::setenv("VCUT_FONT_FILE", missing.c_str(), 1);
+  const CommandResult r = simulate();
+  ::unsetenv("VCUT_FONT_FILE");
+  expect_error(r, "font file " + missing + ": cannot be read");
+  EXPECT_TRUE(no_output()) << r.output;
+}
+
 }  // namespace
 
 // The S-piece's deepest gouge in report `j`: 0.3 mm deep (make_s_piece.py pushes three poses

@@ -12,6 +12,10 @@
 
 namespace vcut::report {
 
+// Loads the font texts are drawn with (once a process); throws InputError naming the file
+// when it cannot be read, so that a run stops before its work instead of at its pictures.
+void require_font();
+
 enum class Align { kLeft, kCenter, kRight };
 
 // A text as drawn: its ink box (px) on the drawing, after alignment and turning.
