@@ -2432,35 +2432,32 @@ void Reader::check_after_end() {
   std::string text;
   bool in_program = false;  // after an O line of a program that was called
   constexpr int kScanLines = 100000;
-  auto scan = [&] {
-    for (int k = 0; k < kScanLines && lines_read_ < options_.max_lines && next_line(text); ++k) {
-      if (!text.empty() && text.back() == '\r') text.pop_back();
-      const size_t i = skip_blanks(text, 0);
-      if (i == text.size() || text[i] == '%' || text[i] == '(' || text[i] == ';') continue;
-      std::string t = text;
-      if (t[i] == ':') t[i] = 'O';
-      OLine o;
-      if (o_line(t, o) && o.keyword.empty() && !o.label.empty() &&
-          std::all_of(o.label.begin(), o.label.end(), [](char c) { return is_digit(c); })) {
-        if (o.label.size() > 12 || programs_.count(std::stoll(o.label)) == 0) {
-          std::string written = "O";  // as the file writes it (O0001)
-          for (size_t j = i + 1; j < t.size() && is_digit(t[j]); ++j) written += t[j];
-          warn(1, "program " + (written.size() > 1 ? written : "O" + o.label) +
-                      " after the main program's end on line " + std::to_string(closing) +
-                      " is not run (expected the main program first, or this one in a file of its own)");
-          return;
-        }
-        in_program = true;
-        continue;
+  for (int k = 0; k < kScanLines && lines_read_ < options_.max_lines && next_line(text); ++k) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    const size_t i = skip_blanks(text, 0);
+    if (i == text.size() || text[i] == '%' || text[i] == '(' || text[i] == ';') continue;
+    std::string t = text;
+    if (t[i] == ':') t[i] = 'O';
+    OLine o;
+    if (o_line(t, o) && o.keyword.empty() && !o.label.empty() &&
+        std::all_of(o.label.begin(), o.label.end(), [](char c) { return is_digit(c); })) {
+      if (o.label.size() > 12 || programs_.count(std::stoll(o.label)) == 0) {
+        std::string written = "O";  // as the file writes it (O0001)
+        for (size_t j = i + 1; j < t.size() && is_digit(t[j]); ++j) written += t[j];
+        warn(1, "program " + (written.size() > 1 ? written : "O" + o.label) + " after the main program's end on line " +
+                    std::to_string(closing) +
+                    " is not run (expected the main program first, or this one in a file of its own)");
+        break;
       }
-      if (!in_program) {
-        warn(1, "this line and those after it follow the main program's end on line " + std::to_string(closing) +
-                    ": not run");
-        return;
-      }
+      in_program = true;
+      continue;
     }
-  };
-  scan();
+    if (!in_program) {
+      warn(1, "this line and those after it follow the main program's end on line " + std::to_string(closing) +
+                  ": not run");
+      break;
+    }
+  }
   jump(back);  // where reading stopped, for the messages that follow
 }
 

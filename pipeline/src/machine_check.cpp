@@ -441,15 +441,9 @@ class Checker {
                         for (std::size_t task = range.begin(); task != range.end(); ++task) {
                           const std::size_t p = task / chunks, c = task % chunks;
                           const std::size_t k0 = c * kChunk, k1 = std::min(n, k0 + kChunk);
-                          PairState st = state_[p];
-                          if (c > 0) {
-                            st = PairState{};
-                            if (active(p, tools[k0 - 1])) {
-                              st.active = true;
-                              st.tool = tools[k0 - 1];
-                              st.last = evaluate(pairs[p], frames[k0 - 1], queries[task]);
-                            }
-                          }
+                          PairState st = c == 0 ? state_[p] : PairState{};
+                          if (c > 0 && active(p, tools[k0 - 1]))
+                            st = {true, tools[k0 - 1], evaluate(pairs[p], frames[k0 - 1], queries[task])};
                           check_samples(p, batch, k0, k1, frames, tools, st, found[task], queries[task]);
                           ends[task] = st;
                         }

@@ -542,12 +542,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
           const Move& move = batch[i];
           const int id = id_base + static_cast<int>(first) + i;
-          int u0, u1, w0, w1;
-          m.ray_range(f, sweep.bounds(), u0, u1, w0, w1);
-          u0 = std::max(u0, tile_u0);
-          u1 = std::min(u1, tile_u0 + kTileU - 1);
-          w0 = std::max(w0, tile_w0);
-          w1 = std::min(w1, tile_w0 + kTileW - 1);
+          const RayBox& box = ray_boxes[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)];  // as binned
+          const int u0 = std::max(box.u0, tile_u0), u1 = std::min(box.u1, tile_u0 + kTileU - 1);
+          const int w0 = std::max(box.w0, tile_w0), w1 = std::min(box.w1, tile_w0 + kTileW - 1);
           const double box_lo = sweep.bounds().min()[a], box_hi = sweep.bounds().max()[a];
           // The section window pays for itself on rays that run along the motion (a move
           // along x sweeps its disc along the x rays: most of the box is clear of it); across
