@@ -641,12 +641,22 @@ bool has_machine_bodies(const io::Job& job, const PoseRun& run) {
   return run.machine && (!run.machine->spec().models.empty() || !job.fixtures.empty());
 }
 
-MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options) {
+struct MachineChecker::Parts {
+  const PoseRun& run;
+  MachineCheckOptions options;
+  std::vector<Body> bodies;
+  std::vector<std::pair<int, int>> pairs;
+  Eigen::Isometry3d on_workpiece = Eigen::Isometry3d::Identity();
   MachineCheck out;
-  if (!run.machine) return out;
+};
+
+MachineChecker::MachineChecker(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options)
+    : parts_(std::make_unique<Parts>(Parts{run, options, {}, {}, Eigen::Isometry3d::Identity(), {}})) {
+  if (!run.machine) return;
+  MachineCheck& out = parts_->out;
+  std::vector<Body>& bodies = parts_->bodies;
   const kinematics::Machine& machine = *run.machine;
   const kinematics::MachineSpec& spec = machine.spec();
-  std::vector<Body> bodies;
   auto side_of = [&](char node) {
     if (node == 'T') return BodySide::Tool;
     if (node == 'W') return BodySide::Work;
@@ -666,7 +676,8 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
       finish(b);
       bodies.push_back(std::move(b));
     }
-  const Eigen::Isometry3d on_workpiece(Eigen::Translation3d(spec.workpiece_origin_mm));
+  parts_->on_workpiece = Eigen::Translation3d(spec.workpiece_origin_mm);
+  const Eigen::Isometry3d& on_workpiece = parts_->on_workpiece;
   for (const io::DesignSpec& f : job.fixtures) {
     Body b;
     b.name = "fixture " + stem(f.file);
@@ -712,14 +723,26 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
     b.slot = slot_of(machine, b.node);
     out.bodies.push_back(b.name);
   }
-
-  Checker checker(machine, run, bodies, options.clearance_mm);
   const bool work_moves = !machine.workpiece_chain().empty();
   for (std::size_t a = 0; a < bodies.size(); ++a)
     for (std::size_t b = 0; b < bodies.size(); ++b)
       if (checked_pair(bodies[a], bodies[b], options, work_moves))
-        checker.pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
-  out.pairs = checker.pairs.size();
+        parts_->pairs.emplace_back(static_cast<int>(a), static_cast<int>(b));
+  out.pairs = parts_->pairs.size();
+}
+
+MachineChecker::~MachineChecker() = default;
+
+MachineCheck MachineChecker::run() {
+  MachineCheck out = std::move(parts_->out);
+  const PoseRun& poses = parts_->run;
+  if (!poses.machine) return out;
+  const kinematics::Machine& machine = *poses.machine;
+  const MachineCheckOptions& options = parts_->options;
+  std::vector<Body>& bodies = parts_->bodies;
+  const Eigen::Isometry3d& on_workpiece = parts_->on_workpiece;
+  Checker checker(machine, poses, bodies, options.clearance_mm);
+  checker.pairs = std::move(parts_->pairs);
   std::optional<PlaybackRecorder> recorder;
   if (options.playback_frames > 0) {
     // Every body but the stock (the page shows the part as cut), in node coordinates.
@@ -732,7 +755,7 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
       for (Eigen::Vector3d& v : body.mesh.vertices_mm) v = b.local * v;
       play.bodies.push_back(std::move(body));
     }
-    recorder.emplace(play, machine, run.program, run.poses, options.playback_frames, on_workpiece);
+    recorder.emplace(play, machine, poses.program, poses.poses, options.playback_frames, on_workpiece);
     checker.playback = &*recorder;
   }
   checker.run();
@@ -743,7 +766,7 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   std::stable_sort(found.begin(), found.end(), [](const Finding& x, const Finding& y) {
     return x.pair != y.pair ? x.pair < y.pair : x.sample < y.sample;
   });
-  const kinematics::Program& program = run.program;
+  const kinematics::Program& program = poses.program;
   for (std::size_t i = 0; i < found.size();) {
     std::size_t j = i;
     while (j + 1 < found.size() && found[j + 1].pair == found[i].pair && found[j + 1].sample <= found[j].sample + 1)
@@ -790,6 +813,10 @@ MachineCheck check_machine(const io::Job& job, const PoseRun& run, const Machine
   if (recorder)
     for (const MachineContact& c : out.contacts) recorder->pose(frames_at(machine, c.axes), out.playback.contact_pose);
   return out;
+}
+
+MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options) {
+  return MachineChecker(job, run, options).run();
 }
 
 }  // namespace vcut::pipeline

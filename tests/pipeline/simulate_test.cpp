@@ -35,6 +35,12 @@ class Stages : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir); }
   void write(const std::string& name, const std::string& text) { std::ofstream(dir / name) << text; }
+  // A mesh that is one triangle, not a solid.
+  void write_one_triangle(const std::string& name) {
+    write(name,
+          "solid f\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+          "endsolid f\n");
+  }
   io::Job job(const std::string& extra, const std::string& machine = "3axis", const std::string& engine = "dexel") {
     write("job.yaml", "job: slot\nmachine: " + machine + "\ntools: tools.yaml\nprogram: {file: slot.ngc}\n" +
                           "stock: {box: {min: [0, 0, -20], max: [60, 40, 0]}}\nengine: {kind: " + engine +
@@ -240,6 +246,63 @@ TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("never reach the stock"), std::string::npos) << e.what();
   }
+}
+
+// The machine check runs beside the cut, but its bodies are read before it: a machine model that
+// is not a solid stops the run with the model's file named, and the cut never starts (no
+// progress reported for it). Reading the models inside the check's own task would fail this: the
+// error would then come when the check is waited for, after the cut and the mesh.
+TEST_F(Stages, ABadMachineModelStopsTheRunBeforeTheCut) {
+  write_one_triangle("flat.stl");
+  const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
+  std::ifstream in(folder + "3axis.yaml");
+  std::string machine((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (std::size_t at = machine.find("file: models/"); at != std::string::npos;
+       at = machine.find("file: models/", at + 1))
+    machine.insert(at + 6, folder);
+  const std::size_t at = machine.find("  Z: [{file:");
+  ASSERT_NE(at, std::string::npos);
+  machine.insert(at + 6, "{file: " + (dir / "flat.stl").string() + ", name: plate}, ");
+  write("m.yaml", machine);
+  SimulateOptions options;
+  std::vector<std::string> stages;
+  options.progress = [&](const std::string& stage, std::size_t, std::size_t) { stages.push_back(stage); };
+  try {
+    simulate(job("", (dir / "m.yaml").string()), options);
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("flat.stl: machine model on Z: not a closed mesh"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(std::count(stages.begin(), stages.end(), "cut"), 0);
+  // The same job with the bundled machine runs through, the cut reported.
+  stages.clear();
+  const SimulationResult r = simulate(job(""), options);
+  EXPECT_GT(std::count(stages.begin(), stages.end(), "cut"), 0);
+  EXPECT_GT(r.removed_volume_mm3, 0.0);
+}
+
+// The stock is made while the program is read, yet the errors come in the order the stages
+// read their inputs: with a program naming a tool the library lacks and a stock mesh that is
+// not closed, the program's error; with the program mended, the stock's.
+TEST_F(Stages, TheProgramsErrorComesBeforeTheStocksMadeBesideIt) {
+  write_one_triangle("flat.stl");
+  auto error_of = [&](const std::string& program) {
+    write("slot.ngc", program);
+    write("job.yaml",
+          "job: slot\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: slot.ngc}\n"
+          "stock: {mesh: flat.stl}\nengine: {kind: dexel, resolution: 0.1, threads: 2}\n");
+    try {
+      simulate(io::read_job((dir / "job.yaml").string()), SimulateOptions{});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no InputError");
+  };
+  const std::string both = error_of("G21 G90\nT9 M6\nG0 X0 Y0 Z5\nG1 Z-2 F500\nM30\n");
+  EXPECT_NE(both.find("tool T9 is not in the tool library"), std::string::npos) << both;
+  const std::string stock = error_of("G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-2 F500\nM30\n");
+  EXPECT_NE(stock.find("stock mesh is not closed"), std::string::npos) << stock;
 }
 
 }  // namespace

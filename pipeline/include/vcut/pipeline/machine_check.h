@@ -15,6 +15,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -115,5 +116,21 @@ bool has_machine_bodies(const io::Job& job, const PoseRun& run);
 // A streamed run (simulate) is densified again, block by block. A model or fixture that is not
 // a closed mesh is a vcut::InputError naming the file.
 MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
+
+// check_machine in two steps, so that the check can run beside the cut (simulate): made, it
+// has read and placed every body (a model or fixture that is not a closed mesh stops the run
+// here, before the cut); run(), once, poses them along the program. job and run must outlive it.
+class MachineChecker {
+ public:
+  MachineChecker(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
+  ~MachineChecker();
+  MachineChecker(const MachineChecker&) = delete;
+  MachineChecker& operator=(const MachineChecker&) = delete;
+  MachineCheck run();
+
+ private:
+  struct Parts;
+  std::unique_ptr<Parts> parts_;
+};
 
 }  // namespace vcut::pipeline
