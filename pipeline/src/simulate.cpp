@@ -517,7 +517,8 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
 namespace {
 
 // Work run beside the stages that follow it; waited for before what it uses goes away, also
-// when one of them throws (then cancelled: its result is not wanted).
+// when one of them throws. Not cancelled then: a parallel loop cut short inside a constructor
+// (the stock's rays) would leave objects half made for their destructors.
 class Beside {
  public:
   template <class F>
@@ -526,7 +527,6 @@ class Beside {
   }
   ~Beside() {
     if (waited_) return;
-    group_.cancel();
     try {
       group_.wait();
     } catch (...) {  // the run is stopping for another error already

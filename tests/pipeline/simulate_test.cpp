@@ -303,6 +303,9 @@ TEST_F(Stages, TheProgramsErrorComesBeforeTheStocksMadeBesideIt) {
   EXPECT_NE(both.find("tool T9 is not in the tool library"), std::string::npos) << both;
   const std::string stock = error_of("G21 G90\nT1 M6\nG0 X0 Y0 Z5\nG1 Z-2 F500\nM30\n");
   EXPECT_NE(stock.find("stock mesh is not closed"), std::string::npos) << stock;
+  // A program's error while a good stock is being made: the run waits for it, then stops.
+  write("slot.ngc", "G21 G90\nT9 M6\nG0 X0 Y0 Z5\nG1 Z-2 F500\nM30\n");
+  EXPECT_THROW(simulate(job(""), SimulateOptions{}), InputError);
 }
 
 }  // namespace
