@@ -308,5 +308,20 @@ TEST_F(Stages, TheProgramsErrorComesBeforeTheStocksMadeBesideIt) {
   EXPECT_THROW(simulate(job(""), SimulateOptions{}), InputError);
 }
 
+// The machine check's warnings come when it is waited for, after the comparison, yet they are
+// listed where its stage stands: the program's (an M code the machine lacks, line 4), then the
+// machine's (a fixture in the stock), then the comparison's (a design that is not closed).
+TEST_F(Stages, WarningsComeInTheStagesOrder) {
+  write("slot.ngc", "G21 G90\nT1 M6\nS1000 M3\nM123\nG0 X-10 Y20 Z5\nG1 Z-2 F500\nG1 X70\nG0 Z5\nM30\n");
+  write_one_triangle("part.stl");
+  const std::string clamp = std::string(VCUT_SOURCE_DIR) + "/examples/machine-collision/clamp.stl";
+  const SimulationResult r = simulate(job("design: {file: part.stl}\nfixtures: [{file: " + clamp + "}]\n"), {});
+  ASSERT_EQ(r.warnings.size(), 3u);
+  EXPECT_NE(r.warnings[0].find("slot.ngc:4:1: M code M123 is not one the machine file declares"), std::string::npos)
+      << r.warnings[0];
+  EXPECT_EQ(r.warnings[1], "fixture clamp intersects the stock at the start");
+  EXPECT_NE(r.warnings[2].find("part.stl: design mesh is not closed"), std::string::npos) << r.warnings[2];
+}
+
 }  // namespace
 }  // namespace vcut::pipeline
