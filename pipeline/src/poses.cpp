@@ -253,10 +253,53 @@ constexpr std::size_t kTimelinePoints = 4000;
 // The first sample of the timeline's point p of `points` over n samples.
 std::size_t timeline_sample(std::size_t p, std::size_t n, std::size_t points) { return p * n / points; }
 
+// A streamed run's two passes over the program, neither holding the samples: one counts the
+// poses (the timeline's points depend on their number), the other times them and gathers the
+// findings.
+void streamed_passes(const io::Job& job, PoseRun& run) {
+  const kinematics::Program& program = run.program;
+  const kinematics::DensifySettings& settings = run.densify_settings;
+  Findings findings(job, run);
+  kinematics::Densifier count(program, settings, run.densify_machine, !run.poses_need_axes);
+  std::vector<kinematics::PoseSample> block_samples;
+  run.poses = program.blocks.empty() ? 0 : 1;
+  while (!count.done()) {
+    kinematics::BlockReport report;
+    block_samples.clear();
+    count.next_block(block_samples, report);
+    run.poses += block_samples.size();
+  }
+  const std::size_t n = run.poses, points = std::min(n, kTimelinePoints);
+  std::size_t point = 0;
+  kinematics::FeedStreamVisitor visit;
+  visit.sample = [&](std::size_t i, const kinematics::PoseSample&, double t_s, double speed_mm_per_s) {
+    if (n < 2 || point >= points || i != timeline_sample(point, n, points)) return;
+    run.timeline.t_s.push_back(t_s);
+    run.timeline.speed_mm_per_s.push_back(speed_mm_per_s);
+    run.timeline.sample.push_back(i);
+    ++point;
+  };
+  visit.block = [&](std::size_t b, const kinematics::BlockReport& report, double, bool axis_limited) {
+    findings.block(b, report);
+    if (axis_limited) findings.axis_limited(static_cast<int>(b));
+  };
+  kinematics::FeedSettings feed = job.feed;  // as run_pose_engine's chain has it
+  feed.axis_feed = axis_feed_of(job, run.reader);
+  feed.timing = false;
+  run.feed.cycle_time_s = kinematics::stream_feed(program, settings, run.densify_machine, feed, visit);
+  findings.finish();
+}
+
 }  // namespace
 
+void finish_pose_run(const io::Job& job, PoseRun& run) {
+  if (!run.passes_pending) return;
+  streamed_passes(job, run);
+  run.passes_pending = false;
+}
+
 PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_mm, const PeriodVisitor* every_period,
-                        bool stream) {
+                        bool stream, bool stream_passes_later) {
   PoseRun run;
   run.program = std::move(input.program);
   run.tools = std::move(input.tools);
@@ -304,38 +347,13 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   Findings findings(job, run);
 
   if (stream && !job.servo && !job.apply_errors && every_period == nullptr) {
-    // Streamed: a pass that counts the poses (the timeline's points depend on their number),
-    // then the timed pass, neither holding the samples.
     run.streamed = true;
     run.poses_need_axes = std::any_of(program.blocks.begin(), program.blocks.end(),
                                       [](const kinematics::Block& b) { return kinematics::uses_start_axes(b); });
-    kinematics::Densifier count(program, settings, run.densify_machine, !run.poses_need_axes);
-    std::vector<kinematics::PoseSample> block_samples;
-    run.poses = program.blocks.empty() ? 0 : 1;
-    while (!count.done()) {
-      kinematics::BlockReport report;
-      block_samples.clear();
-      count.next_block(block_samples, report);
-      run.poses += block_samples.size();
-    }
-    const std::size_t n = run.poses, points = std::min(n, kTimelinePoints);
-    std::size_t point = 0;
-    kinematics::FeedStreamVisitor visit;
-    visit.sample = [&](std::size_t i, const kinematics::PoseSample&, double t_s, double speed_mm_per_s) {
-      if (n < 2 || point >= points || i != timeline_sample(point, n, points)) return;
-      run.timeline.t_s.push_back(t_s);
-      run.timeline.speed_mm_per_s.push_back(speed_mm_per_s);
-      run.timeline.sample.push_back(i);
-      ++point;
-    };
-    visit.block = [&](std::size_t b, const kinematics::BlockReport& report, double, bool axis_limited) {
-      findings.block(b, report);
-      if (axis_limited) findings.axis_limited(static_cast<int>(b));
-    };
-    kinematics::FeedSettings feed = chain.feed;
-    feed.timing = false;
-    run.feed.cycle_time_s = kinematics::stream_feed(program, settings, run.densify_machine, feed, visit);
-    findings.finish();
+    if (stream_passes_later)
+      run.passes_pending = true;
+    else
+      streamed_passes(job, run);
     return run;
   }
 

@@ -590,19 +590,19 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   });
 
   // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
-  // with servo or machine errors the actual poses, which are what the machine cuts).
-  result.pose_run = run_pose_engine(job, read_job_program(job), v, nullptr, true);
+  // with servo or machine errors the actual poses, which are what the machine cuts). A
+  // streamed run's two passes over the program (the poses counted, then timed, with the
+  // findings) run beside the cut with the machine check (4b): the moves need nothing they find.
+  result.pose_run = run_pose_engine(job, read_job_program(job), v, nullptr, true, true);
   const PoseRun& run = result.pose_run;
   const kinematics::Program& program = run.program;
   result.blocks = program.blocks.size();
-  result.warnings = warnings_of(job, run);
   stage_done("read");
 
   // 3. Moves: the actual poses (servo, errors) when there are any, else the nominal; with
   // the nominal ones as well for the nominal cut.
   const bool cut_actual = !run.actual_path.empty();
   CutMoves moves(run, cut_actual, true, v);
-  result.poses = run.poses;
   std::optional<CutMoves> nominal_moves;
   if (cut_actual) nominal_moves.emplace(run, false, false, v);
   stage_done("densify");
@@ -641,9 +641,11 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // 4b. The machine: its bodies, the fixtures and the tool's parts against each other at every
   // pose and between poses (machine_check.h). The bodies are read here, before the cut, so that
   // a bad model stops the run; the check itself runs beside the cut, the mesh and the
-  // comparison, which it shares nothing with: its pass over the program, densified again, is
-  // mostly one thread's work, and on its own it stood on the run's path (W1, 16 threads:
-  // 0.09 of 2.19 s). Without models or fixtures the tool alone is posed, for the page's playback.
+  // comparison, which it shares nothing with, after the pose engine's passes (it places the
+  // page's frames by the number of poses): each pass over the program, densified again, is
+  // one thread's work, and on their own they stood on the run's path (W1, 16 threads: the
+  // machine stage 0.09 of 2.19 s). Without models or fixtures the tool alone is posed, for the
+  // page's playback.
   result.machine_checked = has_machine_bodies(job, run);
   for (const auto& [node, models] : run.machine->spec().models)
     for (const kinematics::ModelSpec& m : models) hash(m.file);
@@ -652,8 +654,10 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   machine_options.clearance_mm = job.machine_clearance_mm;
   machine_options.playback_frames = kPlaybackFrames;
   MachineChecker machine_checker(job, run, machine_options);
-  const std::size_t machine_warnings_at = result.warnings.size();  // where they stood when the check ran first
-  Beside machine_check([&] { result.machine = machine_checker.run(); });
+  Beside machine_check([&] {
+    finish_pose_run(job, result.pose_run);
+    result.machine = machine_checker.run();
+  });
   stage_done("machine");
 
   // 5. Cut.
@@ -745,10 +749,14 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
     stage_done("compare");
   }
 
-  // The machine check's wait, if it outlasted the rest, counts as its stage.
+  // The wait for the passes and the machine check, if they outlasted the rest, counts as the
+  // machine stage. Their warnings go first, as their stages come first: the job's, the
+  // program's and the poses', then the machine's.
   machine_check.wait();
-  result.warnings.insert(result.warnings.begin() + static_cast<std::ptrdiff_t>(machine_warnings_at),
-                         result.machine.warnings.begin(), result.machine.warnings.end());
+  result.poses = run.poses;
+  std::vector<std::string> early = warnings_of(job, run);
+  early.insert(early.end(), result.machine.warnings.begin(), result.machine.warnings.end());
+  result.warnings.insert(result.warnings.begin(), early.begin(), early.end());
   for (auto& [name, seconds] : result.stage_seconds)
     if (name == "machine") seconds += std::chrono::duration<double>(Clock::now() - t_stage).count();
   t_stage = Clock::now();

@@ -167,7 +167,8 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
 }
 
 // A streamed run (no servo, no errors: what simulate and study use) against the same run
-// with every sample held: the same poses, time line, findings and moves, move by move. The
+// with every sample held: the same poses, time line, findings and moves, move by move (the
+// streamed run's passes made later, after its moves, as simulate makes them). The
 // first job has a rapid into the stock, the shank and holder probes and a feed move with the
 // spindle stopped; the ring has arcs and helices; the demo more moves than a batch.
 TEST_F(Stages, StreamedRunMakesTheSameMoves) {
@@ -180,9 +181,18 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
     const io::Job& j = jobs[k];
     const std::string name = "job " + std::to_string(k);
     const PoseRun held = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, false);
-    const PoseRun streamed = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, true);
+    PoseRun streamed = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, true, true);
     ASSERT_FALSE(held.streamed);
     ASSERT_TRUE(streamed.streamed) << name;
+    // Its two passes later, as simulate makes them beside the cut: nothing of theirs yet, and
+    // the moves are made (and counted) before them.
+    ASSERT_TRUE(streamed.passes_pending) << name;
+    EXPECT_EQ(streamed.poses, 0u);
+    EXPECT_TRUE(streamed.timeline.t_s.empty());
+    CutMoves b(streamed, false, true, j.resolution_mm);
+    const std::size_t moves_before_the_passes = b.count();
+    finish_pose_run(j, streamed);
+    EXPECT_FALSE(streamed.passes_pending);
     EXPECT_TRUE(streamed.densified.samples.empty());
     EXPECT_TRUE(streamed.feed.t_s.empty());
     ASSERT_EQ(streamed.poses, held.densified.samples.size()) << name;
@@ -199,7 +209,8 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
       EXPECT_EQ(streamed.program.where(streamed.events[i].lines), held.program.where(held.events[i].lines));
       EXPECT_EQ(streamed.events[i].detail, held.events[i].detail);
     }
-    CutMoves a(held, false, true, j.resolution_mm), b(streamed, false, true, j.resolution_mm);
+    CutMoves a(held, false, true, j.resolution_mm);
+    EXPECT_EQ(a.count(), moves_before_the_passes);
     EXPECT_EQ(a.count(), b.count());
     EXPECT_EQ(a.cutting_moves(), b.cutting_moves());
     EXPECT_EQ(a.blocks(), b.blocks());

@@ -58,6 +58,10 @@ struct PoseRun : kinematics::PoseChain {
   // wherever they are needed (CutMoves), so that memory does not grow with them. `poses`,
   // feed.cycle_time_s and the timeline are there either way.
   bool streamed = false;
+  // A streamed run whose passes are still to come (run_pose_engine's stream_passes_later):
+  // until finish_pose_run, `poses`, `events`, `warnings`, feed.cycle_time_s, the timeline and
+  // the summary are not filled.
+  bool passes_pending = false;
   std::size_t poses = 0;        // densified poses (samples)
   bool poses_need_axes = true;  // a block starts from the previous axes (kinematics::uses_start_axes)
   std::shared_ptr<const kinematics::Machine> machine;
@@ -84,9 +88,15 @@ using PeriodVisitor = kinematics::PeriodVisitor;
 PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period = nullptr);
 // With the program already read; `resolution_mm` sets the default densification (the arc
 // chord tolerance resolution / 20, the tolerance mode's min(resolution / 10, gouge / 2)).
-// stream: without servo and errors, a streamed run (PoseRun::streamed).
+// stream: without servo and errors, a streamed run (PoseRun::streamed). stream_passes_later:
+// such a run comes back before its two passes over the program (PoseRun::passes_pending), which
+// finish_pose_run then makes (simulate: beside the cut; the moves, CutMoves, need nothing the
+// passes find).
 PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolution_mm,
-                        const PeriodVisitor* every_period = nullptr, bool stream = false);
+                        const PeriodVisitor* every_period = nullptr, bool stream = false,
+                        bool stream_passes_later = false);
+// The passes a streamed run made with stream_passes_later still owes (none: nothing to do).
+void finish_pose_run(const io::Job& job, PoseRun& run);
 
 // How F reads in axis blocks: the machine file's feed_interpretation, else by the job's
 // dialect (fanuc: combined; apt: tip; G-code and SINUMERIK: linuxcnc). `reader` is the
