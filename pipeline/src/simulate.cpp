@@ -592,7 +592,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // 1. Program and 2. poses: the pose engine (densified poses with axis values, time, and
   // with servo or machine errors the actual poses, which are what the machine cuts). A
   // streamed run's two passes over the program (the poses counted, then timed, with the
-  // findings) run beside the cut with the machine check (4b): the moves need nothing they find.
+  // findings) come later, with the machine check (4b): the moves need nothing they find.
   result.pose_run = run_pose_engine(job, read_job_program(job), v, nullptr, true, true);
   const PoseRun& run = result.pose_run;
   const kinematics::Program& program = run.program;
@@ -640,7 +640,7 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
 
   // 4b. The machine: its bodies, the fixtures and the tool's parts against each other at every
   // pose and between poses (machine_check.h). The bodies are read here, before the cut, so that
-  // a bad model stops the run; the check itself runs beside the cut, the mesh and the
+  // a bad model stops the run; the check itself runs after the cut, beside the mesh and the
   // comparison, which it shares nothing with, after the pose engine's passes (it places the
   // page's frames by the number of poses): each pass over the program, densified again, is
   // one thread's work, and on their own they stood on the run's path (W1, 16 threads: the
@@ -654,10 +654,6 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   machine_options.clearance_mm = job.machine_clearance_mm;
   machine_options.playback_frames = kPlaybackFrames;
   MachineChecker machine_checker(job, run, machine_options);
-  Beside machine_check([&] {
-    finish_pose_run(job, result.pose_run);
-    result.machine = machine_checker.run();
-  });
   stage_done("machine");
 
   // 5. Cut.
@@ -673,6 +669,12 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   };
   result.collisions = collision_records(cut.collisions, moves, program);
   stage_done("cut");
+  // The pose engine's passes and the machine check beside the mesh and the comparison (not the
+  // cut, so that its stage times the cut alone).
+  Beside machine_check([&] {
+    finish_pose_run(job, result.pose_run);
+    result.machine = machine_checker.run();
+  });
 
   // 6. Mesh.
   progress("mesh", 0, 1);
