@@ -253,6 +253,13 @@ constexpr std::size_t kTimelinePoints = 4000;
 // The first sample of the timeline's point p of `points` over n samples.
 std::size_t timeline_sample(std::size_t p, std::size_t n, std::size_t points) { return p * n / points; }
 
+// The job's feed settings, F read in axis blocks as its program's reader and machine say.
+kinematics::FeedSettings feed_settings_of(const io::Job& job, io::ProgramReader reader) {
+  kinematics::FeedSettings feed = job.feed;
+  feed.axis_feed = axis_feed_of(job, reader);
+  return feed;
+}
+
 // A streamed run's two passes over the program, neither holding the samples: one counts the
 // poses (the timeline's points depend on their number), the other times them and gathers the
 // findings.
@@ -283,8 +290,7 @@ void streamed_passes(const io::Job& job, PoseRun& run) {
     findings.block(b, report);
     if (axis_limited) findings.axis_limited(static_cast<int>(b));
   };
-  kinematics::FeedSettings feed = job.feed;  // as run_pose_engine's chain has it
-  feed.axis_feed = axis_feed_of(job, run.reader);
+  kinematics::FeedSettings feed = feed_settings_of(job, run.reader);
   feed.timing = false;
   run.feed.cycle_time_s = kinematics::stream_feed(program, settings, run.densify_machine, feed, visit);
   findings.finish();
@@ -336,8 +342,7 @@ PoseRun run_pose_engine(const io::Job& job, JobProgram input, double resolution_
   }
   kinematics::PoseChainSettings chain;
   chain.densify = settings;
-  chain.feed = job.feed;
-  chain.feed.axis_feed = axis_feed_of(job, run.reader);
+  chain.feed = feed_settings_of(job, run.reader);
   chain.servo = job.servo;
   chain.geometry = job.apply_errors ? kinematics::Geometry::Actual : kinematics::Geometry::Ideal;
   chain.actual_path_tolerance_mm = default_densify_tolerance_mm(job, resolution_mm);

@@ -90,8 +90,8 @@ PoseRun run_pose_engine(const io::Job& job, const PeriodVisitor* every_period = 
 // chord tolerance resolution / 20, the tolerance mode's min(resolution / 10, gouge / 2)).
 // stream: without servo and errors, a streamed run (PoseRun::streamed). stream_passes_later:
 // such a run comes back before its two passes over the program (PoseRun::passes_pending), which
-// finish_pose_run then makes (simulate: beside the cut; the moves, CutMoves, need nothing the
-// passes find).
+// finish_pose_run then makes (simulate: after the cut, beside the mesh; the moves, CutMoves,
+// need nothing the passes find).
 PoseRun run_pose_engine(const io::Job& job, JobProgram program, double resolution_mm,
                         const PeriodVisitor* every_period = nullptr, bool stream = false,
                         bool stream_passes_later = false);
