@@ -184,7 +184,7 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
     PoseRun streamed = run_pose_engine(j, read_job_program(j), j.resolution_mm, nullptr, true, true);
     ASSERT_FALSE(held.streamed);
     ASSERT_TRUE(streamed.streamed) << name;
-    // Its two passes later, as simulate makes them beside the cut: nothing of theirs yet, and
+    // Its two passes later, as simulate makes them after the cut: nothing of theirs yet, and
     // the moves are made (and counted) before them.
     ASSERT_TRUE(streamed.passes_pending) << name;
     EXPECT_EQ(streamed.poses, 0u);
@@ -259,10 +259,10 @@ TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
   }
 }
 
-// The machine check runs beside the cut, but its bodies are read before it: a machine model that
-// is not a solid stops the run with the model's file named, and the cut never starts (no
-// progress reported for it). Reading the models inside the check's own task would fail this: the
-// error would then come when the check is waited for, after the cut and the mesh.
+// The machine check runs after the cut, beside the mesh, but its bodies are read before the cut:
+// a machine model that is not a solid stops the run with the model's file named, and the cut
+// never starts (no progress reported for it). Reading the models inside the check's own task
+// would fail this: the error would then come when the check is waited for, after the mesh.
 TEST_F(Stages, ABadMachineModelStopsTheRunBeforeTheCut) {
   write_one_triangle("flat.stl");
   const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
