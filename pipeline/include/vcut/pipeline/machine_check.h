@@ -117,9 +117,10 @@ bool has_machine_bodies(const io::Job& job, const PoseRun& run);
 // a closed mesh is a vcut::InputError naming the file.
 MachineCheck check_machine(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
 
-// check_machine in two steps, so that the check can run beside the cut (simulate): made, it
-// has read and placed every body (a model or fixture that is not a closed mesh stops the run
-// here, before the cut); run(), once, poses them along the program. job and run must outlive it.
+// check_machine in two steps, so that the check can run beside other work (simulate: after the
+// cut, beside the mesh): made, it has read and placed every body (a model or fixture that is not
+// a closed mesh stops the run here, before the cut); run(), once, poses them along the program.
+// job and run must outlive it.
 class MachineChecker {
  public:
   MachineChecker(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options);
