@@ -642,6 +642,7 @@ bool has_machine_bodies(const io::Job& job, const PoseRun& run) {
 }
 
 struct MachineChecker::Parts {
+  Parts(const PoseRun& r, const MachineCheckOptions& o) : run(r), options(o) {}
   const PoseRun& run;
   MachineCheckOptions options;
   std::vector<Body> bodies;
@@ -651,7 +652,7 @@ struct MachineChecker::Parts {
 };
 
 MachineChecker::MachineChecker(const io::Job& job, const PoseRun& run, const MachineCheckOptions& options)
-    : parts_(std::make_unique<Parts>(Parts{run, options, {}, {}, Eigen::Isometry3d::Identity(), {}})) {
+    : parts_(std::make_unique<Parts>(run, options)) {
   if (!run.machine) return;
   MachineCheck& out = parts_->out;
   std::vector<Body>& bodies = parts_->bodies;

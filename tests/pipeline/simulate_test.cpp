@@ -35,6 +35,16 @@ class Stages : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir); }
   void write(const std::string& name, const std::string& text) { std::ofstream(dir / name) << text; }
+  // A bundled machine file's text, its models found from a copy elsewhere.
+  static std::string bundled_machine(const std::string& name) {
+    const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
+    std::ifstream bundled(folder + name + ".yaml");
+    std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
+    for (std::size_t at = machine.find("file: models/"); at != std::string::npos;
+         at = machine.find("file: models/", at + 1))
+      machine.insert(at + 6, folder);
+    return machine;
+  }
   // A mesh that is one triangle, not a solid.
   void write_one_triangle(const std::string& name) {
     write(name,
@@ -63,13 +73,7 @@ class Stages : public ::testing::Test {
 //   the two surfaces' vertices up to v/2 apart (surface_difference), so the largest lies in
 //   [0.030, 0.030 + 0.05] mm, on line 7.
 TEST_F(Stages, MachineErrorsCutThePartTheMachineMakes) {
-  const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
-  std::ifstream bundled(folder + "3axis.yaml");
-  std::string machine((std::istreambuf_iterator<char>(bundled)), std::istreambuf_iterator<char>());
-  // Its models, found from the copy.
-  for (std::size_t at = machine.find("file: models/"); at != std::string::npos;
-       at = machine.find("file: models/", at + 1))
-    machine.insert(at + 6, folder);
+  const std::string machine = bundled_machine("3axis");
   ASSERT_EQ(machine.find("\nerrors:"), std::string::npos);
   write("machine.yaml", machine + "\nerrors: {E_ZZ: 30}\n");
   io::write_stl((dir / "part.stl").string(), removal::test::slotted_block(5.0, 2.0));
@@ -265,12 +269,7 @@ TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
 // would fail this: the error would then come when the check is waited for, after the mesh.
 TEST_F(Stages, ABadMachineModelStopsTheRunBeforeTheCut) {
   write_one_triangle("flat.stl");
-  const std::string folder = std::string(VCUT_SOURCE_DIR) + "/examples/machines/";
-  std::ifstream in(folder + "3axis.yaml");
-  std::string machine((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  for (std::size_t at = machine.find("file: models/"); at != std::string::npos;
-       at = machine.find("file: models/", at + 1))
-    machine.insert(at + 6, folder);
+  std::string machine = bundled_machine("3axis");
   const std::size_t at = machine.find("  Z: [{file:");
   ASSERT_NE(at, std::string::npos);
   machine.insert(at + 6, "{file: " + (dir / "flat.stl").string() + ", name: plate}, ");
