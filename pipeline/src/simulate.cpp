@@ -500,7 +500,7 @@ DesignComparison compare_with_design(const io::Job& job, const removal::SurfaceM
   out.histogram_edges_mm.push_back(std::numeric_limits<double>::infinity());
   out.histogram_counts.assign(bins + 2, 0);
   out.histogram_area_mm2.assign(bins + 2, 0.0);
-  const std::vector<double> area = removal::vertex_areas_mm2(machined.mesh);
+  const std::vector<double>& area = cmp.vertex_area_mm2;
   for (std::size_t i = 0; i < cmp.deviation_mm.size(); ++i) {
     const double d = cmp.deviation_mm[i];
     const std::size_t bin =

@@ -484,14 +484,36 @@ Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, co
     result.max_excess_mm = std::max(result.max_excess_mm, d);
   }
   // Regions: connected components of the vertices beyond a tolerance, through the
-  // triangles' edges.
-  std::vector<std::vector<int>> neighbours(n);
-  for (const auto& t : mesh.triangles)
-    for (int c = 0; c < 3; ++c) {
-      neighbours[static_cast<std::size_t>(t[c])].push_back(t[(c + 1) % 3]);
-      neighbours[static_cast<std::size_t>(t[(c + 1) % 3])].push_back(t[c]);
-    }
-  const std::vector<double> area = vertex_areas_mm2(mesh);
+  // triangles' edges. Only the edges between two vertices beyond one tolerance or the other
+  // are listed (a walk from a region's vertex takes no other), each vertex's in the order
+  // of the triangles as before: the same walks. (A list per vertex of the whole mesh was the
+  // comparison's longest stretch on one thread: the S-piece's 353 k vertices, 0.06 s of its
+  // 0.09 s with the lists' freeing.)
+  std::vector<char> beyond(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double d = result.deviation_mm[i];
+    beyond[i] = -d > settings.gouge_tolerance_mm || d > settings.excess_tolerance_mm;
+  }
+  std::vector<std::size_t> first(n + 1, 0);  // vertex v's neighbours: listed[first[v] .. first[v + 1])
+  std::vector<int> listed;
+  auto for_each_edge = [&](auto&& visit) {
+    for (const auto& t : mesh.triangles)
+      for (int c = 0; c < 3; ++c) {
+        const int a = t[c], b = t[(c + 1) % 3];
+        if (!beyond[static_cast<std::size_t>(a)] || !beyond[static_cast<std::size_t>(b)]) continue;
+        visit(a, b);
+        visit(b, a);
+      }
+  };
+  for_each_edge([&](int v, int) { ++first[static_cast<std::size_t>(v) + 1]; });
+  for (std::size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  listed.resize(first[n]);
+  {
+    std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+    for_each_edge([&](int v, int u) { listed[fill[static_cast<std::size_t>(v)]++] = u; });
+  }
+  result.vertex_area_mm2 = vertex_areas_mm2(mesh);
+  const std::vector<double>& area = result.vertex_area_mm2;
   auto regions = [&](double sign, double tolerance) {
     std::vector<Region> out;
     std::vector<char> seen(n, 0);
@@ -514,8 +536,8 @@ Comparison compare(const SurfaceMesh& machined, const DesignDistance& design, co
         weight += area[v];
         r.moves.push_back(machined.vertex_move.empty() ? -1 : machined.vertex_move[v]);
         ++r.vertices;
-        for (int u : neighbours[v]) {
-          const std::size_t uu = static_cast<std::size_t>(u);
+        for (std::size_t k = first[v]; k < first[v + 1]; ++k) {
+          const std::size_t uu = static_cast<std::size_t>(listed[k]);
           if (!seen[uu] && sign * result.deviation_mm[uu] > tolerance) {
             seen[uu] = 1;
             stack.push_back(uu);

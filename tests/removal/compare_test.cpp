@@ -236,6 +236,96 @@ TEST(Compare, DesignAwayFromTheMaterialIsExcess) {
   EXPECT_GT(floor, 100);
 }
 
+// Regions against a flood fill over a height field: a grid of vertices 1 mm apart, each
+// square split along its diagonal, on the top face of a design box, so a vertex's deviation is
+// its height. Two bumps above the excess tolerance (one only just), a dip below the gouge
+// tolerance, a row of excess vertices edge to edge with a row of gouge vertices, and a row
+// along the mesh's open edge (whose edges only one triangle lists, one way): six regions,
+// each vertex of them in exactly one, none across the sign change; the areas sum to the
+// mesh's.
+TEST(Compare, RegionsAreTheConnectedPartsBeyondEachTolerance) {
+  constexpr int kSide = 41;
+  auto index = [](int i, int j) { return j * kSide + i; };
+  SurfaceMesh machined;
+  std::vector<int> label(kSide * kSide, 0);  // 0: within the tolerances, else the part's move
+  for (int j = 0; j < kSide; ++j)
+    for (int i = 0; i < kSide; ++i) {
+      double z = 0.0;
+      int move = 0;
+      if ((i - 10) * (i - 10) + (j - 10) * (j - 10) <= 9) z = 0.5, move = 7;
+      if ((i - 30) * (i - 30) + (j - 10) * (j - 10) <= 9) z = 0.21, move = 9;
+      if ((i - 20) * (i - 20) + (j - 30) * (j - 30) <= 16) z = -0.4, move = 4;
+      if (j == 36 && i >= 5 && i <= 7) z = 0.3, move = 11;
+      if (j == 36 && i >= 8 && i <= 10) z = -0.3, move = 12;
+      if (j == kSide - 1 && i >= 15 && i <= 20) z = 0.6, move = 13;  // along the open edge
+      machined.mesh.vertices_mm.emplace_back(i, j, z);
+      machined.vertex_move.push_back(move);
+      label[static_cast<std::size_t>(index(i, j))] = move;
+    }
+  for (int j = 0; j + 1 < kSide; ++j)
+    for (int i = 0; i + 1 < kSide; ++i) {
+      const int a = index(i, j), b = index(i + 1, j), c = index(i + 1, j + 1), d = index(i, j + 1);
+      machined.mesh.triangles.emplace_back(a, b, c);
+      machined.mesh.triangles.emplace_back(a, c, d);
+    }
+  const DesignDistance design(test::box_mesh({-5, -5, -10}, {45, 45, 0}));
+  const Comparison c = compare(machined, design, {0.1, 0.2});
+  for (std::size_t v = 0; v < machined.mesh.vertices_mm.size(); ++v)
+    ASSERT_NEAR(c.deviation_mm[v], machined.mesh.vertices_mm[v].z(), 1e-12) << v;
+  // The parts by a flood fill over the grid's edges (the four sides and the diagonal).
+  struct Part {
+    int vertices = 0, move = 0;
+    double depth = 0.0;
+  };
+  std::vector<Part> excess, gouges;
+  std::vector<char> seen(label.size(), 0);
+  for (int start = 0; start < kSide * kSide; ++start) {
+    if (seen[static_cast<std::size_t>(start)] || label[static_cast<std::size_t>(start)] == 0) continue;
+    const int move = label[static_cast<std::size_t>(start)];
+    Part part{0, move, 0.0};
+    std::vector<int> todo{start};
+    seen[static_cast<std::size_t>(start)] = 1;
+    while (!todo.empty()) {
+      const int v = todo.back();
+      todo.pop_back();
+      ++part.vertices;
+      part.depth = std::max(part.depth, std::abs(machined.mesh.vertices_mm[static_cast<std::size_t>(v)].z()));
+      const int i = v % kSide, j = v / kSide;
+      for (const auto& [di, dj] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}, {1, 1}, {-1, -1}}) {
+        const int ni = i + di, nj = j + dj;
+        if (ni < 0 || nj < 0 || ni >= kSide || nj >= kSide) continue;
+        const int u = index(ni, nj);
+        if (seen[static_cast<std::size_t>(u)] || label[static_cast<std::size_t>(u)] != move) continue;
+        seen[static_cast<std::size_t>(u)] = 1;
+        todo.push_back(u);
+      }
+    }
+    (machined.mesh.vertices_mm[static_cast<std::size_t>(start)].z() > 0 ? excess : gouges).push_back(part);
+  }
+  ASSERT_EQ(excess.size(), 4u);
+  ASSERT_EQ(gouges.size(), 2u);
+  auto same = [](std::vector<Part> parts, const std::vector<Region>& regions) {
+    ASSERT_EQ(parts.size(), regions.size());
+    std::stable_sort(parts.begin(), parts.end(), [](const Part& a, const Part& b) { return a.depth > b.depth; });
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+      EXPECT_EQ(regions[k].vertices, parts[k].vertices) << "region " << k;
+      EXPECT_NEAR(regions[k].depth_mm, parts[k].depth, 1e-12) << "region " << k;
+      EXPECT_EQ(regions[k].moves, std::vector<int>{parts[k].move}) << "region " << k;
+    }
+  };
+  same(excess, c.excess);
+  same(gouges, c.gouges);
+  double area = 0.0, vertex_area = 0.0;
+  for (const auto& t : machined.mesh.triangles) {
+    const auto& x = machined.mesh.vertices_mm;
+    area += 0.5 * (x[static_cast<std::size_t>(t[1])] - x[static_cast<std::size_t>(t[0])])
+                      .cross(x[static_cast<std::size_t>(t[2])] - x[static_cast<std::size_t>(t[0])])
+                      .norm();
+  }
+  for (double a : c.vertex_area_mm2) vertex_area += a;
+  EXPECT_NEAR(vertex_area, area, 1e-9 * area);
+}
+
 // The endpoint check read row by row (hinted queries, rows in parallel) against a plain loop
 // over the lattice's rays (DexelStock::ray) with unhinted queries: the same count, the same largest
 // gouge and excess to the bit, the same counts beyond the tolerances and the same deepest

@@ -67,10 +67,11 @@ struct Region {
 };
 
 struct Comparison {
-  std::vector<double> deviation_mm;  // per machined vertex
-  std::vector<Region> gouges;        // deepest first
-  std::vector<Region> excess;        // thickest first
-  double max_gouge_mm = 0.0;         // positive depth, 0 when none
+  std::vector<double> deviation_mm;     // per machined vertex
+  std::vector<double> vertex_area_mm2;  // per machined vertex: a third of its triangles' area
+  std::vector<Region> gouges;           // deepest first
+  std::vector<Region> excess;           // thickest first
+  double max_gouge_mm = 0.0;            // positive depth, 0 when none
   double max_excess_mm = 0.0;
 };
 
