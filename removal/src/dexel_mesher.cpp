@@ -227,14 +227,24 @@ class Contour {
         }
       }
     });
+    // The bricks' vertices and faces into the mesh, side by side, each brick's lists freed as
+    // it is copied (on one thread the copies and the freeing were 0.045 s of W1's 0.78 s
+    // contour on two).
     SurfaceMesh mesh;
-    mesh.mesh.vertices_mm.reserve(next);
-    for (const BrickMesh& b : bricks_list_)
-      mesh.mesh.vertices_mm.insert(mesh.mesh.vertices_mm.end(), b.points.begin(), b.points.end());
-    std::size_t triangles = 0;
-    for (const auto& f : faces) triangles += f.size();
-    mesh.mesh.triangles.reserve(triangles);
-    for (const auto& f : faces) mesh.mesh.triangles.insert(mesh.mesh.triangles.end(), f.begin(), f.end());
+    std::vector<std::size_t> first_face(bricks_list_.size() + 1, 0);
+    for (std::size_t i = 0; i < faces.size(); ++i) first_face[i + 1] = first_face[i] + faces[i].size();
+    mesh.mesh.vertices_mm.resize(next);
+    mesh.mesh.triangles.resize(first_face.back());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, bricks_list_.size(), 64), [&](const auto& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        BrickMesh& b = bricks_list_[i];
+        std::copy(b.points.begin(), b.points.end(), mesh.mesh.vertices_mm.begin() + b.first_vertex);
+        std::copy(faces[i].begin(), faces[i].end(),
+                  mesh.mesh.triangles.begin() + static_cast<std::ptrdiff_t>(first_face[i]));
+        b = BrickMesh{};
+        faces[i] = std::vector<Triangle>{};
+      }
+    });
     return mesh;
   }
 
