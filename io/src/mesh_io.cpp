@@ -101,20 +101,9 @@ void write_stl(const std::string& path, const removal::TriangleMesh& mesh) {
   });
 }
 
-namespace {
-template <class T>
-void put(std::string& out, T value) {
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));  // x86-64 and every target we build for are little-endian
-  out.append(bytes, sizeof(T));
-}
-}  // namespace
-
 void write_deviation_ply(const std::string& path, const removal::TriangleMesh& mesh, const PlyAttributes& a) {
   const std::size_t n = mesh.vertices_mm.size();
-  std::string out;
-  out.reserve(256 + n * 39 + mesh.triangles.size() * 13);
-  out +=
+  std::string out =
       "ply\nformat binary_little_endian 1.0\ncomment vcut deviation map: deviation in mm, "
       "negative = gouge, positive = excess; move -1 = initial stock; line = NC source line\n";
   out += "element vertex " + std::to_string(n) + "\n";
@@ -124,20 +113,35 @@ void write_deviation_ply(const std::string& path, const removal::TriangleMesh& m
   out += "property float deviation\nproperty int move\nproperty int line\n";
   out += "element face " + std::to_string(mesh.triangles.size()) + "\n";
   out += "property list uchar int vertex_indices\nend_header\n";
-  for (std::size_t i = 0; i < n; ++i) {
-    for (int c = 0; c < 3; ++c) put<float>(out, static_cast<float>(mesh.vertices_mm[i][c]));
-    for (int c = 0; c < 3; ++c) put<float>(out, i < a.normals.size() ? static_cast<float>(a.normals[i][c]) : 0.0f);
-    const std::array<std::uint8_t, 3> rgb =
-        i < a.colors.size() ? a.colors[i] : std::array<std::uint8_t, 3>{255, 255, 255};
-    for (int c = 0; c < 3; ++c) put<std::uint8_t>(out, rgb[static_cast<std::size_t>(c)]);
-    put<float>(out, i < a.deviation_mm.size() ? static_cast<float>(a.deviation_mm[i]) : 0.0f);
-    put<std::int32_t>(out, i < a.move.size() ? a.move[i] : -1);
-    put<std::int32_t>(out, i < a.line.size() ? a.line[i] : 0);
-  }
-  for (const auto& t : mesh.triangles) {
-    put<std::uint8_t>(out, 3);
-    for (int c = 0; c < 3; ++c) put<std::int32_t>(out, t[c]);
-  }
+  // Records of fixed size (vertex 39 bytes, face 13), filled side by side (on one thread
+  // the S-piece's 23 MB took 0.05 s, the writing stage's longest task on many threads).
+  constexpr std::size_t kVertex = 39, kFace = 13;
+  const std::size_t header = out.size(), faces_at = header + n * kVertex;
+  out.resize(faces_at + mesh.triangles.size() * kFace);
+  auto store = [&out](std::size_t& at, auto value) {
+    std::memcpy(out.data() + at, &value, sizeof value);  // x86-64 and every target we build for are little-endian
+    at += sizeof value;
+  };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const auto& range) {
+    for (std::size_t i = range.begin(); i != range.end(); ++i) {
+      std::size_t at = header + i * kVertex;
+      for (int c = 0; c < 3; ++c) store(at, static_cast<float>(mesh.vertices_mm[i][c]));
+      for (int c = 0; c < 3; ++c) store(at, i < a.normals.size() ? static_cast<float>(a.normals[i][c]) : 0.0f);
+      const std::array<std::uint8_t, 3> rgb =
+          i < a.colors.size() ? a.colors[i] : std::array<std::uint8_t, 3>{255, 255, 255};
+      for (int c = 0; c < 3; ++c) store(at, rgb[static_cast<std::size_t>(c)]);
+      store(at, i < a.deviation_mm.size() ? static_cast<float>(a.deviation_mm[i]) : 0.0f);
+      store(at, static_cast<std::int32_t>(i < a.move.size() ? a.move[i] : -1));
+      store(at, static_cast<std::int32_t>(i < a.line.size() ? a.line[i] : 0));
+    }
+  });
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 8192), [&](const auto& range) {
+    for (std::size_t f = range.begin(); f != range.end(); ++f) {
+      std::size_t at = faces_at + f * kFace;
+      store(at, std::uint8_t{3});
+      for (int c = 0; c < 3; ++c) store(at, static_cast<std::int32_t>(mesh.triangles[f][c]));
+    }
+  });
   write_text_atomically(path, out);
 }
 

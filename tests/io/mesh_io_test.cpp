@@ -1,6 +1,6 @@
 // The binary STL writer against the format's layout (80-byte header, uint32 count, then
 // 50-byte records: normal, three corners, attribute word), read back byte by byte here and
-// through assimp; base64 against RFC 4648's test vectors (section 10).
+// through assimp; the deviation map's PLY likewise; base64 against RFC 4648's test vectors (section 10).
 #include <gtest/gtest.h>
 #include <vcut/io/mesh_io.h>
 #include <vcut/report/report_page.h>
@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -99,6 +100,86 @@ TEST(MeshIo, BinaryStlAcrossTheWritersBlocks) {
     wrong += same ? 0 : 1;
   }
   EXPECT_EQ(wrong, 0u);
+  fs::remove_all(dir);
+}
+
+// The deviation map's binary PLY against the format's layout as its header states it
+// (little-endian records: vertex x y z nx ny nz float32, red green blue uint8, deviation
+// float32, move and line int32; face: a uint8 count 3 and three int32 indices), read here
+// byte by byte at the offsets the header's properties give, and through assimp. Enough
+// vertices and faces that the writer fills them in many blocks: vertex i at (i, 2i, -i) mm
+// with its own normal, colour, deviation, move and line; face f joins f, f + 1, f + 2.
+TEST(MeshIo, DeviationPlyHoldsEveryVertexAndFaceAtItsPlace) {
+  constexpr std::size_t kVertices = 50001, kFaces = kVertices - 2;
+  removal::TriangleMesh mesh;
+  PlyAttributes a;
+  for (std::size_t i = 0; i < kVertices; ++i) {
+    const double x = static_cast<double>(i);
+    mesh.vertices_mm.emplace_back(x, 2 * x, -x);
+    a.normals.emplace_back(0.0, i % 2 ? 1.0 : 0.0, i % 2 ? 0.0 : 1.0);
+    a.colors.push_back({static_cast<std::uint8_t>(i % 256), static_cast<std::uint8_t>(i % 7), 200});
+    a.deviation_mm.push_back(0.001 * static_cast<double>(i % 1000) - 0.5);
+    a.move.push_back(static_cast<int>(i % 5000) - 1);
+    a.line.push_back(static_cast<int>(i / 3));
+  }
+  for (std::size_t f = 0; f < kFaces; ++f)
+    mesh.triangles.emplace_back(static_cast<int>(f), static_cast<int>(f + 1), static_cast<int>(f + 2));
+  const fs::path dir = fs::temp_directory_path() / "vcut_mesh_io_ply_test";
+  fs::create_directories(dir);
+  const fs::path path = dir / "deviation.ply";
+  write_deviation_ply(path.string(), mesh, a);
+  const std::string bytes = read_bytes(path);
+  const std::size_t body = bytes.find("end_header\n");
+  ASSERT_NE(body, std::string::npos);
+  const std::string header = bytes.substr(0, body);
+  EXPECT_NE(header.find("format binary_little_endian 1.0\n"), std::string::npos);
+  EXPECT_NE(header.find("element vertex " + std::to_string(kVertices) + "\n"), std::string::npos);
+  EXPECT_NE(header.find("element face " + std::to_string(kFaces) + "\n"), std::string::npos);
+  // The vertex properties' offsets from the header's list, in its order.
+  std::size_t vertex_size = 0;
+  std::map<std::string, std::size_t> at;
+  for (std::size_t p = header.find("property "); p < header.find("element face"); p = header.find("property ", p + 1)) {
+    const std::size_t end = header.find('\n', p);
+    const std::string line = header.substr(p + 9, end - p - 9);  // "<type> <name>"
+    const std::string type = line.substr(0, line.find(' ')), name = line.substr(line.find(' ') + 1);
+    at[name] = vertex_size;
+    vertex_size += type == "uchar" ? 1 : 4;
+  }
+  ASSERT_EQ(vertex_size, 39u);
+  const std::size_t vertices = body + 11, faces = vertices + kVertices * vertex_size;
+  ASSERT_EQ(bytes.size(), faces + kFaces * 13);
+  auto value = [&](std::size_t offset, auto zero) {
+    decltype(zero) v;
+    std::memcpy(&v, bytes.data() + offset, sizeof v);
+    return v;
+  };
+  std::size_t wrong_vertices = 0, wrong_faces = 0;
+  for (std::size_t i = 0; i < kVertices; ++i) {
+    const std::size_t r = vertices + i * vertex_size;
+    bool same = true;
+    for (int k = 0; k < 3; ++k) {
+      same = same && value(r + at[std::string(1, "xyz"[k])], 0.0f) == static_cast<float>(mesh.vertices_mm[i][k]);
+      same = same && value(r + at[std::string("n") + "xyz"[k]], 0.0f) == static_cast<float>(a.normals[i][k]);
+    }
+    same = same && value(r + at["red"], std::uint8_t{}) == a.colors[i][0] &&
+           value(r + at["green"], std::uint8_t{}) == a.colors[i][1] &&
+           value(r + at["blue"], std::uint8_t{}) == a.colors[i][2] &&
+           value(r + at["deviation"], 0.0f) == static_cast<float>(a.deviation_mm[i]) &&
+           value(r + at["move"], std::int32_t{}) == a.move[i] && value(r + at["line"], std::int32_t{}) == a.line[i];
+    wrong_vertices += same ? 0 : 1;
+  }
+  for (std::size_t f = 0; f < kFaces; ++f) {
+    const std::size_t r = faces + f * 13;
+    bool same = value(r, std::uint8_t{}) == 3;
+    for (int c = 0; c < 3; ++c)
+      same = same && value(r + 1 + 4 * static_cast<std::size_t>(c), std::int32_t{}) == mesh.triangles[f][c];
+    wrong_faces += same ? 0 : 1;
+  }
+  EXPECT_EQ(wrong_vertices, 0u);
+  EXPECT_EQ(wrong_faces, 0u);
+  // And assimp reads the same corners back (its own PLY reader).
+  const removal::TriangleMesh back = read_mesh(path.string());
+  EXPECT_EQ(back.triangles.size(), kFaces);
   fs::remove_all(dir);
 }
 
