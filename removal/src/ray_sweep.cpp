@@ -1177,8 +1177,7 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   // Its derivative g'(t) = slope + U'(rho) rho'(t), and g'' in `second` (U the underside
   // as a function of the distance rho to the axis; infinite where the side is vertical).
   const double rc = core_.core_radius_mm, r = core_.rounding_mm;
-  const double cone =
-      cutter_.type == CutterType::VBit ? 1.0 / std::tan(0.5 * cutter_.tip_angle_deg * M_PI / 180.0) : 0.0;
+  const double cone = cutter_.type == CutterType::VBit ? 1.0 / cone_k_ : 0.0;  // cone_k_: the tangent, once
   auto slope_at = [&](double slope, double t, double& second) {
     const double rho = distance_at(t);
     const double drho = rho > 0.0 ? (t * dd - qd) / rho : 0.0;
