@@ -462,6 +462,12 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& h
   return d.dot(normal) < 0.0 ? -distance : distance;
 }
 
+double DesignDistance::distance_bound(const Eigen::Vector3d& x, const DistanceHint& hint) const {
+  const Impl& m = *impl_;
+  if (hint.triangle >= m.triangles.size()) return std::numeric_limits<double>::infinity();
+  return std::sqrt(m.squared_distance(hint.triangle, x));
+}
+
 void hinted_queries(std::size_t count, const std::function<void(std::size_t, DistanceHint&)>& query) {
   constexpr std::size_t kChunk = 1024;
   tbb::parallel_for(std::size_t{0}, (count + kChunk - 1) / kChunk, [&](std::size_t chunk) {

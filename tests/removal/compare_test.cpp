@@ -326,34 +326,16 @@ TEST(Compare, RegionsAreTheConnectedPartsBeyondEachTolerance) {
   EXPECT_NEAR(vertex_area, area, 1e-9 * area);
 }
 
-// The endpoint check read row by row (hinted queries, rows in parallel) against a plain loop
-// over the lattice's rays (DexelStock::ray) with unhinted queries: the same count, the same largest
-// gouge and excess to the bit, the same counts beyond the tolerances and the same deepest
-// point, the first of equally deep ones: a slot cut 0.3 mm off the design's centre line and
-// 0.1 mm too deep is deepest along the edge where its wall meets its floor, the same at every
-// ray along x.
-TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
-  Cutter flat;
-  flat.type = CutterType::Flat;
-  flat.diameter_mm = 10;
-  flat.flute_length_mm = 20;
-  flat.length_mm = 40;
-  MoveList list;
-  list.cutters = {flat};
-  Move slot;
-  slot.start_mm = {-10, 20.3, -2.1};
-  slot.end_mm = {70, 20.3, -2.1};
-  list.moves = {slot};
-  DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, 0.2);
-  stock.cut(list, {});
-  const DesignDistance design(test::slotted_block(5.0, 2.0));
-  const CompareSettings settings{0.05, 0.1};
-  const EndpointDeviation rows = endpoint_deviation(stock, design, settings);
-  // The plain loop: every ray of the lattice (and a margin of empty ones around it) through
-  // DexelStock::ray, family by family, row by row, ray by ray.
+// The endpoint check read row by row (hinted queries, rows in parallel, points whose hint's
+// triangle puts them within both tolerances measured only where they could be the deepest or
+// thickest) against a plain loop over the lattice's rays (DexelStock::ray) with unhinted
+// queries of every point: the same count, the same largest gouge and excess to the bit, the
+// same counts beyond the tolerances and the same deepest point, the first of equally deep
+// ones.
+EndpointDeviation plain_endpoint_deviation(const DexelStock& stock, const DesignDistance& design,
+                                           const CompareSettings& settings, double v) {
   EndpointDeviation plain;
-  const double v = 0.2;
-  const int index_lo[3] = {-3, -3, -103}, index_hi[3] = {303, 203, 3};
+  const int index_lo[3] = {-3, -3, -103}, index_hi[3] = {303, 203, 3};  // the lattice and a margin
   for (int family = 0; family < 3; ++family) {
     const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
     for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw)
@@ -376,6 +358,34 @@ TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
             plain.excess_points += d > settings.excess_tolerance_mm;
           }
   }
+  return plain;
+}
+
+// A flat end mill D10 cuts a slot along x through the block 60 x 40 x 20 from (y, z) to
+// (y_end, z_end) (by default the same); the design is the block with a slot 10 wide, 2 deep
+// at y = 20.
+EndpointDeviation slot_endpoints(double y, double z, const CompareSettings& settings, EndpointDeviation& plain,
+                                 double y_end = std::nan(""), double z_end = std::nan("")) {
+  Cutter flat;
+  flat.type = CutterType::Flat;
+  flat.diameter_mm = 10;
+  flat.flute_length_mm = 20;
+  flat.length_mm = 40;
+  MoveList list;
+  list.cutters = {flat};
+  Move slot;
+  slot.start_mm = {-10, y, z};
+  slot.end_mm = {70, std::isnan(y_end) ? y : y_end, std::isnan(z_end) ? z : z_end};
+  list.moves = {slot};
+  const double v = 0.2;
+  DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, v);
+  stock.cut(list, {});
+  const DesignDistance design(test::slotted_block(5.0, 2.0));
+  plain = plain_endpoint_deviation(stock, design, settings, v);
+  return endpoint_deviation(stock, design, settings);
+}
+
+void expect_same(const EndpointDeviation& rows, const EndpointDeviation& plain) {
   EXPECT_GT(plain.points, 100000u);
   EXPECT_EQ(rows.points, plain.points);
   EXPECT_EQ(rows.max_gouge_mm, plain.max_gouge_mm);
@@ -384,6 +394,15 @@ TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
   EXPECT_EQ(rows.excess_points, plain.excess_points);
   EXPECT_EQ(rows.deepest_mm, plain.deepest_mm);
   EXPECT_EQ(rows.deepest_move, plain.deepest_move);
+}
+
+// The slot 0.3 mm off the design's centre line and 0.1 mm too deep: deepest along the edge
+// where its wall meets its floor, the same at every ray along x.
+TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
+  const CompareSettings settings{0.05, 0.1};
+  EndpointDeviation plain;
+  const EndpointDeviation rows = slot_endpoints(20.3, -2.1, settings, plain);
+  expect_same(rows, plain);
   // The figures themselves: the wall 0.3 mm into the design, the floor 0.1 mm; the deepest
   // point where they meet, at the first ray along x (at 0.1, 0.3, 0.5 mm ...) that lies
   // farther than that from the design's end face x = 0.
@@ -393,6 +412,38 @@ TEST(EndpointDeviation, RowByRowMatchesThePlainLoop) {
   EXPECT_NEAR(rows.deepest_mm.y(), 25.3, 0.2);
   EXPECT_GT(rows.gouge_points, 1000u);
   EXPECT_GT(rows.excess_points, 1000u);
+}
+
+// Within both tolerances everywhere: the slot where the design has it (every point within
+// rounding of the design, thousands equally far), and 0.02 mm too deep and 0.01 mm to the
+// side (the floor's points all 0.02 mm deep, the wall's 0.01 mm: the deepest is the first of
+// hundreds of equal ones, found among the points set aside). Nothing counts beyond a
+// tolerance; the figures and the deepest point are the plain loop's.
+TEST(EndpointDeviation, WithinTheTolerancesMatchesThePlainLoop) {
+  const CompareSettings settings{0.05, 0.1};
+  for (const auto& [y, z] : {std::pair{20.0, -2.0}, {20.01, -2.02}, {19.987, -1.996}}) {
+    SCOPED_TRACE(testing::Message() << "slot at y " << y << ", z " << z);
+    EndpointDeviation plain;
+    const EndpointDeviation rows = slot_endpoints(y, z, settings, plain);
+    expect_same(rows, plain);
+    EXPECT_EQ(rows.gouge_points, 0u);
+    EXPECT_EQ(rows.excess_points, 0u);
+    EXPECT_LE(rows.max_gouge_mm, 0.021);
+  }
+}
+
+// Slots a little askew and sloping, both ways, within the tolerances and past them: the
+// deepest and thickest points lie anywhere along the rows, set aside or not.
+TEST(EndpointDeviation, AskewSlotsMatchThePlainLoop) {
+  std::mt19937 random(24);
+  std::uniform_real_distribution<double> off(-0.04, 0.04);
+  for (int k = 0; k < 8; ++k) {
+    const double y = 20 + off(random), z = -2 + off(random), y_end = 20 + off(random), z_end = -2 + off(random);
+    const CompareSettings settings{k % 2 ? 0.05 : 0.02, k % 2 ? 0.1 : 0.03};
+    SCOPED_TRACE(testing::Message() << "slot from y " << y << ", z " << z << " to y " << y_end << ", z " << z_end);
+    EndpointDeviation plain;
+    expect_same(slot_endpoints(y, z, settings, plain, y_end, z_end), plain);
+  }
 }
 
 }  // namespace
