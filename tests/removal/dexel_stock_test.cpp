@@ -1189,6 +1189,45 @@ TEST(DexelStock, ContouredSurfaceIsClosedAndEnclosesTheSolid) {
   EXPECT_LT(triangles[0], triangles[1]) << triangles[0] << " vs " << triangles[1];
 }
 
+// A hole's wall (a flat end mill D8 plunged 6 mm along an axis 20 deg from z, D32's kind) at
+// v = 0.05 mm: between 1 and 5 mm deep its 100 mm2 of cylinder cross about 50,000 cells;
+// blocks of 4 cells a side stay within the merging tolerance of a plane on a 4 mm radius, so
+// the wall there keeps under 7,000 vertices (4,849), each within v/5 of the wall. (When a
+// block of one cell ended the merging of the blocks around it: 9,452.)
+TEST(DexelStock, CurvedWallMergesIntoBlocks) {
+  const BoxShape box{{0, 0, 0}, {16, 12, 10}};
+  const double tilt = 20.0 * M_PI / 180.0;
+  const Eigen::Vector3d axis(std::sin(tilt), 0.0, std::cos(tilt));
+  const Eigen::Vector3d entry(8, 6, 10), bottom = entry - 6.0 * axis;
+  MoveList list;
+  list.cutters.push_back(make(CutterType::Flat, 8, 0, 20));
+  list.moves.push_back(line(entry + 10.0 * axis, bottom, axis));
+  DexelStock stock(box, 0.05);
+  stock.cut(list, {});
+  const SurfaceMesh s = stock.surface();
+  auto radial = [&](const Eigen::Vector3d& x) { return (x - bottom - (x - bottom).dot(axis) * axis).norm(); };
+  auto wall = [&](const Eigen::Vector3d& x) {
+    const double depth = (entry - x).dot(axis);
+    return depth >= 1.0 && depth <= 5.0 && x.z() <= 9.5 && std::abs(radial(x) - 4.0) <= 0.3;
+  };
+  int on_wall = 0;
+  for (const Eigen::Vector3d& x : s.mesh.vertices_mm) {
+    if (!wall(x)) continue;
+    EXPECT_LT(std::abs(radial(x) - 4.0), 0.01) << x.transpose();
+    ++on_wall;
+  }
+  EXPECT_GT(on_wall, 1000);
+  EXPECT_LT(on_wall, 7000) << "vertices on the wall";
+  // And the triangles between them: their centres within v/10 (the chord of a merged block,
+  // about 0.2 mm on a 4 mm radius, lies 0.0013 mm inside).
+  for (const Eigen::Vector3i& t : s.mesh.triangles) {
+    const Eigen::Vector3d& a = s.mesh.vertices_mm[static_cast<std::size_t>(t[0])];
+    const Eigen::Vector3d& b = s.mesh.vertices_mm[static_cast<std::size_t>(t[1])];
+    const Eigen::Vector3d& c = s.mesh.vertices_mm[static_cast<std::size_t>(t[2])];
+    if (wall(a) && wall(b) && wall(c)) EXPECT_LT(std::abs(radial((a + b + c) / 3.0) - 4.0), 0.005);
+  }
+}
+
 // An untouched box whose far faces (x, y and z high) lie in the mesher's last bricks, fewer
 // than 16 cells deep: every vertex on the box's surface, every triangle lying on a face
 // facing out of the solid, and each face's triangles covering no more than the face.
