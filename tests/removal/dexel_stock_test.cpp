@@ -1184,7 +1184,7 @@ TEST(DexelStock, ContouredSurfaceIsClosedAndEnclosesTheSolid) {
   // Unmerged, the surface (about 1,046 mm2: the box's 1,000 less the groove's 80 mm2 mouth
   // plus its 126 mm2 half-cylinder) would be 104,600 cells at 0.1 mm, two triangles each.
   // Both modes merge the five untouched faces (exact axis planes, 920 mm2) into blocks of
-  // up to 16 cells; flat merging also the groove, within v/20 of a plane over a few cells.
+  // up to 16 cells; flat merging also the groove, within v/25 of a plane over a few cells.
   EXPECT_LT(triangles[1], 52300u);
   EXPECT_LT(triangles[0], triangles[1]) << triangles[0] << " vs " << triangles[1];
 }

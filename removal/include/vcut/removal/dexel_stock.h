@@ -49,7 +49,7 @@ class DexelStock final : public Stock {
   Eigen::AlignedBox3d bounds() const override;
 
   // The surface merges flat regions (octree blocks of up to 16 cells whose crossings lie
-  // within v/20 of one plane) into larger triangles; off, only exact axis planes merge
+  // within v/25 of one plane) into larger triangles; off, only exact axis planes merge
   // (untouched stock faces, level floors), so that no triangle crosses a crease: for
   // measurements that compare two meshes to within v/100, as studies and machine-error
   // runs do.
