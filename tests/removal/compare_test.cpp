@@ -446,5 +446,35 @@ TEST(EndpointDeviation, AskewSlotsMatchThePlainLoop) {
   }
 }
 
+// Equally deep points on both sides of the design's top face's diagonal: a flat end mill D10
+// takes 0.02 mm off the top from x = 34 on, around y = 10 (within the tolerances), and the
+// top's two triangles meet along x = 1.5 (40 - y). Along the first row with such points (y =
+// 5.1) the first ones lie on the hint's triangle and are set aside; the first past the
+// diagonal is measured at once (its hint's triangle is the other one), equally deep: the
+// deepest point is still the row's first, found among those set aside.
+TEST(EndpointDeviation, TheFirstOfEquallyDeepPointsAcrossThePasses) {
+  Cutter flat;
+  flat.type = CutterType::Flat;
+  flat.diameter_mm = 10;
+  flat.flute_length_mm = 20;
+  flat.length_mm = 40;
+  MoveList list;
+  list.cutters = {flat};
+  Move skim;
+  skim.start_mm = {35, 10, -0.02};
+  skim.end_mm = {70, 10, -0.02};
+  list.moves = {skim};
+  const double v = 0.2;
+  DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, v);
+  stock.cut(list, {});
+  const DesignDistance design(test::box_mesh({0, 0, -20}, {60, 40, 0}));
+  const CompareSettings settings{0.05, 0.1};
+  const EndpointDeviation plain = plain_endpoint_deviation(stock, design, settings, v);
+  expect_same(endpoint_deviation(stock, design, settings), plain);
+  EXPECT_NEAR(plain.max_gouge_mm, 0.02, 1e-6);
+  EXPECT_NEAR(plain.deepest_mm.y(), 5.1, 1e-9);
+  EXPECT_LT(plain.deepest_mm.x(), 35.0);
+}
+
 }  // namespace
 }  // namespace vcut::removal
