@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -338,6 +339,7 @@ struct DesignDistance::Impl {
   std::vector<Eigen::Vector3d> face_normal;                        // unit
   std::vector<Eigen::Vector3d> vertex_normal;                      // angle-weighted sum
   std::unordered_map<std::uint64_t, Eigen::Vector3d> edge_normal;  // sum of adjacent faces
+  std::vector<std::array<std::uint32_t, 3>> beside;                // per triangle: one across each edge (itself: none)
   std::vector<Eigen::Vector3d> points;
   Tree tree;
   TriangleGrid grid;
@@ -376,6 +378,26 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
       m.vertex_normal[static_cast<std::size_t>(t[i])] += angle * unit;
       // Eigen vectors are not zero-initialised: insert an explicit zero first.
       m.edge_normal.try_emplace(edge_key(t[i], t[(i + 1) % 3]), Eigen::Vector3d::Zero()).first->second += unit;
+    }
+  }
+  // A triangle across each edge (of more than one, the first two by number).
+  m.beside.resize(m.corners.size());
+  {
+    std::unordered_map<std::uint64_t, std::uint32_t> first;
+    for (std::uint32_t f = 0; f < m.corners.size(); ++f) {
+      m.beside[f] = {f, f, f};
+      for (int i = 0; i < 3; ++i) {
+        const auto [at, fresh] = first.try_emplace(edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]), f);
+        if (fresh) continue;
+        const std::uint32_t g = at->second;
+        m.beside[f][static_cast<std::size_t>(i)] = g;
+        for (int j = 0; j < 3; ++j) {
+          const Eigen::Vector3i& c = m.corners[g];
+          if (m.beside[g][static_cast<std::size_t>(j)] == g &&
+              edge_key(c[j], c[(j + 1) % 3]) == edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]))
+            m.beside[g][static_cast<std::size_t>(j)] = f;
+        }
+      }
     }
   }
   m.closed = is_closed(design);
@@ -462,10 +484,27 @@ double DesignDistance::signed_distance(const Eigen::Vector3d& x, DistanceHint& h
   return d.dot(normal) < 0.0 ? -distance : distance;
 }
 
-double DesignDistance::distance_bound(const Eigen::Vector3d& x, const DistanceHint& hint) const {
+double DesignDistance::distance_bound(const Eigen::Vector3d& x, DistanceHint& hint, double enough_mm) const {
   const Impl& m = *impl_;
   if (hint.triangle >= m.triangles.size()) return std::numeric_limits<double>::infinity();
-  return std::sqrt(m.squared_distance(hint.triangle, x));
+  double best = m.squared_distance(hint.triangle, x);
+  if (!(best <= enough_mm * enough_mm)) {
+    const std::size_t from = hint.triangle;
+    for (std::uint32_t g : m.beside[from]) {
+      if (g == from) continue;
+      const double d2 = m.squared_distance(g, x);
+      if (d2 < best) {
+        best = d2;
+        hint.triangle = g;
+      }
+    }
+    if (hint.triangle != from) {
+      Feature unused;
+      hint.point_mm = nearest_on_triangle(x, m.corner(hint.triangle, 0), m.corner(hint.triangle, 1),
+                                          m.corner(hint.triangle, 2), unused);
+    }
+  }
+  return std::sqrt(best);
 }
 
 void hinted_queries(std::size_t count, const std::function<void(std::size_t, DistanceHint&)>& query) {

@@ -86,8 +86,9 @@ EndpointDeviation endpoint_deviation(const DexelStock& stock, const DesignDistan
         if (pick < 0 || std::abs(along[h] - s) < std::abs(along[pick] - s)) pick = h;
       DistanceHint hint = pick >= 0 ? hints[pick] : DistanceHint{};
       if (pick >= 0) {
-        const double bound = design.distance_bound(p.x_mm, hint) + kBoundSlack_mm;
+        const double bound = design.distance_bound(p.x_mm, hint, within_mm - kBoundSlack_mm) + kBoundSlack_mm;
         if (bound <= within_mm) {
+          hints[pick] = hint;  // perhaps a triangle beside the one it had: the next points start there
           const double keep_from =
               std::min(std::max(out.max_gouge_mm, gouge_floor), std::max(out.max_excess_mm, excess_floor));
           if (bound >= keep_from) {

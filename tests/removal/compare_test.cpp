@@ -73,6 +73,43 @@ double brute_distance(const TriangleMesh& mesh, const Eigen::Vector3d& x) {
 // and an analytic inside test, on meshes of long slivers beside small triangles (a fan-
 // triangulated 600-gon prism, convex, 2,396 triangles; the slotted block, not convex), for points near and
 // far, queried with and without hints and with hints from far away.
+// The endpoint check's bound: from any hint, never below the distance (to the bit: the
+// check compares them with a 1e-9 mm allowance only for CGAL's far points); from the nearest
+// triangle's hint, the distance itself; looking across the hint's edges, never above the
+// hint's own triangle. Points within 1 mm of the slotted block's surface, hints from other
+// points' queries (many a triangle away).
+TEST(DesignDistance, BoundFromAHintIsNeverBelowTheDistance) {
+  const DesignDistance design(test::slotted_block(5.0, 2.0));
+  std::mt19937 random(33);
+  std::uniform_real_distribution<double> along(-1.0, 61.0), across(-1.0, 41.0), height(-21.0, 1.0);
+  std::vector<DistanceHint> hints;
+  int tested = 0, crossed = 0;
+  for (int k = 0; k < 20000 && tested < 3000; ++k) {
+    const Eigen::Vector3d x(along(random), across(random), height(random));
+    DistanceHint own;
+    const double d = design.signed_distance(x, own);
+    if (std::abs(d) > 1.0) continue;
+    ++tested;
+    DistanceHint same = own;
+    EXPECT_EQ(design.distance_bound(x, same, std::numeric_limits<double>::infinity()), std::abs(d));
+    for (std::size_t h = hints.size() > 8 ? hints.size() - 8 : 0; h < hints.size(); ++h) {
+      DistanceHint only = hints[h], across_edges = hints[h];
+      const double plain = design.distance_bound(x, only, std::numeric_limits<double>::infinity());
+      const double near = design.distance_bound(x, across_edges, 0.0);
+      ASSERT_GE(plain, std::abs(d)) << x.transpose();
+      ASSERT_GE(near, std::abs(d)) << x.transpose();
+      ASSERT_LE(near, plain) << x.transpose();
+      crossed += near < plain;
+      // The hint it hands back names the triangle of that bound.
+      DistanceHint again = across_edges;
+      EXPECT_EQ(design.distance_bound(x, again, std::numeric_limits<double>::infinity()), near);
+    }
+    hints.push_back(own);
+  }
+  EXPECT_EQ(tested, 3000);
+  EXPECT_GT(crossed, 100);
+}
+
 TEST(DesignDistance, GridSearchMatchesBruteForce) {
   constexpr int kSides = 600;
   constexpr double kRadius = 10.0;

@@ -37,11 +37,12 @@ class DesignDistance {
   // +infinity for a mesh with no triangle of nonzero area (empty()).
   double signed_distance(const Eigen::Vector3d& x_mm) const;
   double signed_distance(const Eigen::Vector3d& x_mm, DistanceHint& hint) const;
-  // The distance from x_mm to the hint's triangle (+infinity without one): at least
-  // |signed_distance(x_mm)|, which is the least such distance over the triangles computed the
-  // same way (equal to it where that triangle is the nearest; a point far from the design, whose
-  // nearest triangle CGAL's tree finds, may differ by rounding). One point-triangle distance.
-  double distance_bound(const Eigen::Vector3d& x_mm, const DistanceHint& hint) const;
+  // The distance from x_mm to the hint's triangle (+infinity without one), or where that is
+  // more than enough_mm, to the nearest of it and the triangles across its edges (the hint
+  // then names that one): at least |signed_distance(x_mm)|, which is the least such distance
+  // over all the triangles computed the same way (a point far from the design, whose nearest
+  // triangle CGAL's tree finds, may differ by rounding). One to four point-triangle distances.
+  double distance_bound(const Eigen::Vector3d& x_mm, DistanceHint& hint, double enough_mm) const;
   bool closed() const;
   bool empty() const;
 
