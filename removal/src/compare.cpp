@@ -383,20 +383,15 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
   // A triangle across each edge (of more than one, the first two by number).
   m.beside.resize(m.corners.size());
   {
-    std::unordered_map<std::uint64_t, std::uint32_t> first;
+    std::unordered_map<std::uint64_t, std::pair<std::uint32_t, int>> first;  // an edge's first triangle, its edge
     for (std::uint32_t f = 0; f < m.corners.size(); ++f) {
       m.beside[f] = {f, f, f};
       for (int i = 0; i < 3; ++i) {
-        const auto [at, fresh] = first.try_emplace(edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]), f);
+        const auto [at, fresh] = first.try_emplace(edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]), f, i);
         if (fresh) continue;
-        const std::uint32_t g = at->second;
+        const auto [g, j] = at->second;
         m.beside[f][static_cast<std::size_t>(i)] = g;
-        for (int j = 0; j < 3; ++j) {
-          const Eigen::Vector3i& c = m.corners[g];
-          if (m.beside[g][static_cast<std::size_t>(j)] == g &&
-              edge_key(c[j], c[(j + 1) % 3]) == edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]))
-            m.beside[g][static_cast<std::size_t>(j)] = f;
-        }
+        if (m.beside[g][static_cast<std::size_t>(j)] == g) m.beside[g][static_cast<std::size_t>(j)] = f;
       }
     }
   }

@@ -398,11 +398,11 @@ EndpointDeviation plain_endpoint_deviation(const DexelStock& stock, const Design
   return plain;
 }
 
-// A flat end mill D10 cuts a slot along x through the block 60 x 40 x 20 from (y, z) to
-// (y_end, z_end) (by default the same); the design is the block with a slot 10 wide, 2 deep
-// at y = 20.
-EndpointDeviation slot_endpoints(double y, double z, const CompareSettings& settings, EndpointDeviation& plain,
-                                 double y_end = std::nan(""), double z_end = std::nan("")) {
+// A flat end mill D10 moves from start to end through the block 60 x 40 x 20 (v = 0.2 mm):
+// the endpoint check against `design`, and the plain loop's figures in `plain`.
+EndpointDeviation flat_d10_endpoints(const Eigen::Vector3d& start, const Eigen::Vector3d& end,
+                                     const TriangleMesh& design_mesh, const CompareSettings& settings,
+                                     EndpointDeviation& plain) {
   Cutter flat;
   flat.type = CutterType::Flat;
   flat.diameter_mm = 10;
@@ -410,16 +410,24 @@ EndpointDeviation slot_endpoints(double y, double z, const CompareSettings& sett
   flat.length_mm = 40;
   MoveList list;
   list.cutters = {flat};
-  Move slot;
-  slot.start_mm = {-10, y, z};
-  slot.end_mm = {70, std::isnan(y_end) ? y : y_end, std::isnan(z_end) ? z : z_end};
-  list.moves = {slot};
+  Move move;
+  move.start_mm = start;
+  move.end_mm = end;
+  list.moves = {move};
   const double v = 0.2;
   DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, v);
   stock.cut(list, {});
-  const DesignDistance design(test::slotted_block(5.0, 2.0));
+  const DesignDistance design(design_mesh);
   plain = plain_endpoint_deviation(stock, design, settings, v);
   return endpoint_deviation(stock, design, settings);
+}
+
+// The D10 cuts a slot along x from (y, z) to (y_end, z_end) (by default the same); the design
+// is the block with a slot 10 wide, 2 deep at y = 20.
+EndpointDeviation slot_endpoints(double y, double z, const CompareSettings& settings, EndpointDeviation& plain,
+                                 double y_end = std::nan(""), double z_end = std::nan("")) {
+  return flat_d10_endpoints({-10, y, z}, {70, std::isnan(y_end) ? y : y_end, std::isnan(z_end) ? z : z_end},
+                            test::slotted_block(5.0, 2.0), settings, plain);
 }
 
 void expect_same(const EndpointDeviation& rows, const EndpointDeviation& plain) {
@@ -490,24 +498,10 @@ TEST(EndpointDeviation, AskewSlotsMatchThePlainLoop) {
 // diagonal is measured at once (its hint's triangle is the other one), equally deep: the
 // deepest point is still the row's first, found among those set aside.
 TEST(EndpointDeviation, TheFirstOfEquallyDeepPointsAcrossThePasses) {
-  Cutter flat;
-  flat.type = CutterType::Flat;
-  flat.diameter_mm = 10;
-  flat.flute_length_mm = 20;
-  flat.length_mm = 40;
-  MoveList list;
-  list.cutters = {flat};
-  Move skim;
-  skim.start_mm = {35, 10, -0.02};
-  skim.end_mm = {70, 10, -0.02};
-  list.moves = {skim};
-  const double v = 0.2;
-  DexelStock stock(BoxShape{{0, 0, -20}, {60, 40, 0}}, v);
-  stock.cut(list, {});
-  const DesignDistance design(test::box_mesh({0, 0, -20}, {60, 40, 0}));
-  const CompareSettings settings{0.05, 0.1};
-  const EndpointDeviation plain = plain_endpoint_deviation(stock, design, settings, v);
-  expect_same(endpoint_deviation(stock, design, settings), plain);
+  EndpointDeviation plain;
+  const EndpointDeviation rows = flat_d10_endpoints({35, 10, -0.02}, {70, 10, -0.02},
+                                                    test::box_mesh({0, 0, -20}, {60, 40, 0}), {0.05, 0.1}, plain);
+  expect_same(rows, plain);
   EXPECT_NEAR(plain.max_gouge_mm, 0.02, 1e-6);
   EXPECT_NEAR(plain.deepest_mm.y(), 5.1, 1e-9);
   EXPECT_LT(plain.deepest_mm.x(), 35.0);
