@@ -491,16 +491,36 @@ TEST(EndpointDeviation, AskewSlotsMatchThePlainLoop) {
   }
 }
 
-// Equally deep points on both sides of the design's top face's diagonal: a flat end mill D10
-// takes 0.02 mm off the top from x = 34 on, around y = 10 (within the tolerances), and the
-// top's two triangles meet along x = 1.5 (40 - y). Along the first row with such points (y =
-// 5.1) the first ones lie on the hint's triangle and are set aside; the first past the
-// diagonal is measured at once (its hint's triangle is the other one), equally deep: the
-// deepest point is still the row's first, found among those set aside.
+// The block 60 x 40 x 20 whose top face comes first, in two parts: x 0..40 as two triangles
+// (their diagonal from (0, 0) to (40, 40)), x 40..60 as strips 0.01 mm wide, none sharing a
+// vertex with another part; then the whole box (its top triangles, as near, numbered later).
+TriangleMesh block_with_a_striped_top() {
+  TriangleMesh m;
+  auto quad = [&](double x0, double x1) {
+    const int n = static_cast<int>(m.vertices_mm.size());
+    m.vertices_mm.insert(m.vertices_mm.end(), {{x0, 0, 0}, {x1, 0, 0}, {x1, 40, 0}, {x0, 40, 0}});
+    m.triangles.emplace_back(n, n + 1, n + 2);
+    m.triangles.emplace_back(n, n + 2, n + 3);
+  };
+  quad(0.0, 40.0);
+  for (int i = 0; i < 2000; ++i) quad(40.0 + 0.01 * i, 40.0 + 0.01 * (i + 1));
+  const TriangleMesh box = test::box_mesh({0, 0, -20}, {60, 40, 0});
+  const int n = static_cast<int>(m.vertices_mm.size());
+  m.vertices_mm.insert(m.vertices_mm.end(), box.vertices_mm.begin(), box.vertices_mm.end());
+  for (const Eigen::Vector3i& t : box.triangles) m.triangles.emplace_back(t[0] + n, t[1] + n, t[2] + n);
+  return m;
+}
+
+// Equally deep points measured in both passes: a flat end mill D10 takes 0.02 mm off the top
+// from x = 34 on, around y = 10 (within the tolerances). Along the first row with such points
+// (y = 5.1) those up to x = 40 lie on their hint's triangle and are set aside; the first past
+// x = 40 lies on a strip 0.1 mm from that triangle and every triangle beside it, and is
+// measured at once, equally deep: the deepest point is still the row's first, found among
+// those set aside.
 TEST(EndpointDeviation, TheFirstOfEquallyDeepPointsAcrossThePasses) {
   EndpointDeviation plain;
-  const EndpointDeviation rows = flat_d10_endpoints({35, 10, -0.02}, {70, 10, -0.02},
-                                                    test::box_mesh({0, 0, -20}, {60, 40, 0}), {0.05, 0.1}, plain);
+  const EndpointDeviation rows =
+      flat_d10_endpoints({35, 10, -0.02}, {70, 10, -0.02}, block_with_a_striped_top(), {0.05, 0.1}, plain);
   expect_same(rows, plain);
   EXPECT_NEAR(plain.max_gouge_mm, 0.02, 1e-6);
   EXPECT_NEAR(plain.deepest_mm.y(), 5.1, 1e-9);
