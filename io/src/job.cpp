@@ -284,9 +284,9 @@ void read_fixtures_key(const YamlReader& yaml, const YAML::Node& fixtures, const
   }
 }
 
-// engine: kind, resolution (mm) and threads.
+// engine: kind, resolution (mm), threads and the turning moves' tolerance (mm).
 void read_engine_key(const YamlReader& yaml, const YAML::Node& engine, const fs::path& /*base*/, Job& job) {
-  yaml.only_keys(engine, "engine", {"kind", "resolution", "threads"});
+  yaml.only_keys(engine, "engine", {"kind", "resolution", "threads", "turn_tolerance"});
   if (engine["kind"]) {
     const std::string kind = yaml.text(engine["kind"], "engine.kind");
     if (kind == "dexel")
@@ -299,6 +299,8 @@ void read_engine_key(const YamlReader& yaml, const YAML::Node& engine, const fs:
       yaml.fail(engine["kind"], "engine.kind", "dexel, vdb or both");
   }
   if (engine["resolution"]) job.resolution_mm = yaml.positive(engine["resolution"], "engine.resolution");
+  if (engine["turn_tolerance"])
+    job.turn_tolerance_mm = yaml.positive(engine["turn_tolerance"], "engine.turn_tolerance");
   if (const YAML::Node threads = engine["threads"]) {
     if (threads.IsScalar() && threads.Scalar() == "auto")
       job.threads = 0;

@@ -155,6 +155,10 @@ double chord_tolerance_mm(const io::Job& job, double resolution_mm) {
   return job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : resolution_mm / 20.0;
 }
 
+double turn_tolerance_mm(const io::Job& job, double resolution_mm) {
+  return job.turn_tolerance_mm > 0.0 ? job.turn_tolerance_mm : resolution_mm / 10.0;
+}
+
 double default_densify_tolerance_mm(const io::Job& job, double resolution_mm) {
   double eps = resolution_mm / 10.0;
   if (job.gouge_tolerance_mm > 0.0) eps = std::min(eps, job.gouge_tolerance_mm / 2.0);

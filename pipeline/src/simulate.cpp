@@ -185,8 +185,8 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
 // of the cutter that can come inside the stock's box: turning_split). With
 // `probes`, the tool's shank and holder follow every move and a feed move made with the
 // spindle stopped is probed before it cuts (collisions).
-CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double resolution_mm)
-    : run_(run), actual_(actual), probes_(probes), rotation_bound_mm_(resolution_mm / 10.0) {
+CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tolerance_mm)
+    : run_(run), actual_(actual), probes_(probes), rotation_bound_mm_(turn_tolerance_mm) {
   const kinematics::Program& program = run.program;
   removal::MoveList tools;
   for (const auto& b : program.blocks) {
@@ -602,9 +602,10 @@ SimulationResult simulate(const io::Job& job, const SimulateOptions& options) {
   // 3. Moves: the actual poses (servo, errors) when there are any, else the nominal; with
   // the nominal ones as well for the nominal cut.
   const bool cut_actual = !run.actual_path.empty();
-  CutMoves moves(run, cut_actual, true, v);
+  const double turn_mm = turn_tolerance_mm(job, v);
+  CutMoves moves(run, cut_actual, true, turn_mm);
   std::optional<CutMoves> nominal_moves;
-  if (cut_actual) nominal_moves.emplace(run, false, false, v);
+  if (cut_actual) nominal_moves.emplace(run, false, false, turn_mm);
   stage_done("densify");
 
   // 4, its end: the stock side waited for (the time it outlasted the reading), the moves against it.

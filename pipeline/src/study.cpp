@@ -150,7 +150,7 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
     const io::Job j = with_setting(base, setting);
     const PoseRun poses = run_pose_engine(j, read_job_program(j), resolution_mm, nullptr, true);
     // What the machine cuts: the actual path with servo or errors.
-    CutMoves cut(poses, !poses.actual_path.empty(), false, resolution_mm);
+    CutMoves cut(poses, !poses.actual_path.empty(), false, turn_tolerance_mm(j, resolution_mm));
     const removal::StockShape shape = stock_shape(j);
     cut.set_stock_box(removal::bounds_of(shape));
     require_cuttable(j, cut, shape, resolution_mm, options.max_memory_mb);

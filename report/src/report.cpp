@@ -216,6 +216,7 @@ void write_report_json(const std::string& path, const std::string& out_dir, cons
   settings["excess_tolerance_mm"] = job.excess_tolerance_mm;
   settings["collision_tolerance_mm"] = job.collision_tolerance_mm;
   settings["chord_tolerance_mm"] = pipeline::chord_tolerance_mm(job, r.resolution_mm);
+  settings["turn_tolerance_mm"] = pipeline::turn_tolerance_mm(job, r.resolution_mm);
   settings["out"] = out_dir;
   j["settings"] = settings;
   ordered_json inputs = ordered_json::array();

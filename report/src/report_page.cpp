@@ -420,6 +420,7 @@ void write_report_page(const std::string& path, const std::string& template_path
   if (job.angle_step_deg > 0.0) row("densify angle", fixed(job.angle_step_deg, 3, "deg"));
   if (job.densify_tolerance_mm > 0.0) row("densify tolerance", fixed(job.densify_tolerance_mm, 4, "mm"));
   row("chord tolerance", fixed(pipeline::chord_tolerance_mm(job, r.resolution_mm), 4, "mm"));
+  row("turn tolerance", fixed(pipeline::turn_tolerance_mm(job, r.resolution_mm), 4, "mm"));
   row("servo", job.servo ? "on" : "off");
   row("machine errors", job.apply_errors ? "on" : "off");
   row("tolerances", "gouge " + fixed(job.gouge_tolerance_mm, 3, "mm") + ", excess " +

@@ -395,6 +395,18 @@ TEST_F(Simulate, WrongTypeNamesKey) {
   expect_error(simulate(), "engine.resolution");
 }
 
+// engine.turn_tolerance is a length: a zero, a negative or a word is refused where it stands.
+TEST_F(Simulate, TurnToleranceMustBePositive) {
+  const std::string base = job;
+  for (const std::string value : {"0", "-0.01", "fine"}) {
+    job = base;
+    job.replace(job.find("resolution: 0.1"), 15, "resolution: 0.1, turn_tolerance: " + value);
+    const auto r = simulate();
+    expect_error(r, "job.yaml:");
+    expect_error(r, "'engine.turn_tolerance': expected a");
+  }
+}
+
 TEST_F(Simulate, PageTrianglesMustBeAUsefulCount) {
   job.replace(job.find("excess_tolerance: 0.02"), 22, "excess_tolerance: 0.02, page_triangles: 10");
   expect_error(simulate(), "report.page_triangles");

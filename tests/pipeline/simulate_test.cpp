@@ -118,7 +118,7 @@ TEST_F(Stages, SinumerikSwivelExampleRemovesTheChamfer) {
 TEST_F(Stages, CompareWithDesignFindsTheFloorTooDeep) {
   const io::Job j = job("report: {out: out, gouge_tolerance: 0.01, excess_tolerance: 0.01}\n");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-  CutMoves moves(run, false, true, 0.1);
+  CutMoves moves(run, false, true, 0.01);
   const removal::StockShape shape = stock_shape(j);
   const auto stock = make_stock(j, shape, 0.1, true);
   stock->cut(moves, {});
@@ -148,7 +148,7 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   const io::Job no_tool = job("");
   const PoseRun bare = run_pose_engine(no_tool, read_job_program(no_tool), 0.1);
   try {
-    CutMoves(bare, false, false, 0.1);
+    CutMoves(bare, false, false, 0.01);
     ADD_FAILURE() << "no InputError";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("slot.ngc:3: feed move with no tool"), std::string::npos) << e.what();
@@ -156,7 +156,7 @@ TEST_F(Stages, MovesStockAndCutComposeAsSimulate) {
   SetUp();
   const io::Job j = job("");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-  CutMoves cut(run, false, true, 0.1);
+  CutMoves cut(run, false, true, 0.01);
   EXPECT_EQ(cut.cutting_moves(), 2u);  // the plunge and the slot, one pose each (lines need no densifying)
   EXPECT_EQ(cut.rotating_moves(), 0u);
   const removal::StockShape shape = stock_shape(j);
@@ -193,7 +193,7 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
     ASSERT_TRUE(streamed.passes_pending) << name;
     EXPECT_EQ(streamed.poses, 0u);
     EXPECT_TRUE(streamed.timeline.t_s.empty());
-    CutMoves b(streamed, false, true, j.resolution_mm);
+    CutMoves b(streamed, false, true, turn_tolerance_mm(j, j.resolution_mm));
     const std::size_t moves_before_the_passes = b.count();
     finish_pose_run(j, streamed);
     EXPECT_FALSE(streamed.passes_pending);
@@ -213,7 +213,7 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
       EXPECT_EQ(streamed.program.where(streamed.events[i].lines), held.program.where(held.events[i].lines));
       EXPECT_EQ(streamed.events[i].detail, held.events[i].detail);
     }
-    CutMoves a(held, false, true, j.resolution_mm);
+    CutMoves a(held, false, true, turn_tolerance_mm(j, j.resolution_mm));
     EXPECT_EQ(a.count(), moves_before_the_passes);
     EXPECT_EQ(a.count(), b.count());
     EXPECT_EQ(a.cutting_moves(), b.cutting_moves());
@@ -249,12 +249,45 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
   }
 }
 
+// engine.turn_tolerance sets how finely a turning move is cut. A ball end mill D6 (flute 25 mm)
+// turns 10 deg about Y while its tip moves 10 mm, all of it inside a stock 50 mm tall (so the
+// bound must hold for the whole cutter), one move (densify q = 1). The core is the axis from
+// r = 3 to H - r = 22 mm above the tip: pivot c = 12.5 mm, reach 9.5 mm; n pieces of
+// phi = theta / n keep every point within 9.5 phi / 2 + 12.5 phi^2 / 8 of the rigid motion
+// (docs/POSE_ENGINE.md). At the default, resolution / 10 = 0.01 mm: 9.5 theta / 0.02 = 82.9,
+// so n = 83 (the second term adds 7e-6 mm); at 0.05 mm: 16.6, n = 17 (0.0488 + 0.0002 mm).
+TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
+  write("tools.yaml", "tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25}\n");
+  const double s10 = std::sin(10.0 * M_PI / 180.0), c10 = std::cos(10.0 * M_PI / 180.0);
+  write("turn.apt",
+        "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
+        "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
+            std::to_string(s10) + ",0," + std::to_string(c10) + "\nFINI\n");
+  for (const auto& [setting, expected] : {std::pair<std::string, int>{"", 83}, {", turn_tolerance: 0.05", 17}}) {
+    write("job.yaml",
+          "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
+          "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
+          "engine: {kind: dexel, resolution: 0.1" +
+              setting + "}\ndensify: {step: 1000, angle: 1000}\n");
+    const io::Job j = io::read_job((dir / "job.yaml").string());
+    const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+    CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
+    cut.set_stock_box(removal::bounds_of(stock_shape(j)));
+    std::vector<removal::Move> moves;
+    while (cut.next(moves, 4096)) {
+    }
+    const int turning = static_cast<int>(std::count_if(
+        moves.begin(), moves.end(), [](const removal::Move& m) { return !m.rapid && m.axis.z() < 1.0 - 1e-9; }));
+    EXPECT_EQ(turning, expected) << setting;
+  }
+}
+
 // Cutting moves that never come near the stock are refused before any cut (work offsets).
 TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
   write("slot.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X500 Y500 Z5\nG1 Z-2 F500\nG1 X600\nM30\n");
   const io::Job j = job("");
   const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-  CutMoves cut(run, false, false, 0.1);
+  CutMoves cut(run, false, false, 0.01);
   try {
     require_cuttable(j, cut, stock_shape(j), 0.1, 0.0);
     ADD_FAILURE() << "no InputError";
