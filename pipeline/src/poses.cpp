@@ -155,8 +155,10 @@ double chord_tolerance_mm(const io::Job& job, double resolution_mm) {
   return job.chord_tolerance_mm > 0.0 ? job.chord_tolerance_mm : resolution_mm / 20.0;
 }
 
+// The pieces' union reaches past the rigid sweep by up to the tolerance, so by default it is
+// the densification's: the part within half the gouge tolerance of the machine's.
 double turn_tolerance_mm(const io::Job& job, double resolution_mm) {
-  return job.turn_tolerance_mm > 0.0 ? job.turn_tolerance_mm : resolution_mm / 10.0;
+  return job.turn_tolerance_mm > 0.0 ? job.turn_tolerance_mm : default_densify_tolerance_mm(job, resolution_mm);
 }
 
 double default_densify_tolerance_mm(const io::Job& job, double resolution_mm) {

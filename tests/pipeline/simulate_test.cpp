@@ -254,8 +254,10 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
 // bound must hold for the whole cutter), one move (densify q = 1). The core is the axis from
 // r = 3 to H - r = 22 mm above the tip: pivot c = 12.5 mm, reach 9.5 mm; n pieces of
 // phi = theta / n keep every point within 9.5 phi / 2 + 12.5 phi^2 / 8 of the rigid motion
-// (docs/POSE_ENGINE.md). At the default, resolution / 10 = 0.01 mm: 9.5 theta / 0.02 = 82.9,
-// so n = 83 (the second term adds 7e-6 mm); at 0.05 mm: 16.6, n = 17 (0.0488 + 0.0002 mm).
+// (docs/POSE_ENGINE.md). Unset, it is min(v / 10, gouge tolerance / 2) as the densification's:
+// at v = 0.1 with the gouge tolerance 0.05 mm that is 0.01 mm, 9.5 theta / 0.02 = 82.9, so
+// n = 83 (the second term adds 7e-6 mm); with the default gouge tolerance 0.01 mm, 0.005 mm:
+// 165.8, n = 166 (0.004994 + 0.000002 mm); set to 0.05 mm: 16.6, n = 17 (0.0488 + 0.0002 mm).
 TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
   write("tools.yaml", "tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25}\n");
   const double s10 = std::sin(10.0 * M_PI / 180.0), c10 = std::cos(10.0 * M_PI / 180.0);
@@ -263,12 +265,17 @@ TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
         "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
         "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
             std::to_string(s10) + ",0," + std::to_string(c10) + "\nFINI\n");
-  for (const auto& [setting, expected] : {std::pair<std::string, int>{"", 83}, {", turn_tolerance: 0.05", 17}}) {
+  struct Case {
+    std::string engine, report;
+    int pieces;
+  };
+  for (const Case& c :
+       {Case{"", "report: {gouge_tolerance: 0.05}\n", 83}, Case{"", "", 166}, Case{", turn_tolerance: 0.05", "", 17}}) {
     write("job.yaml",
           "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
           "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
           "engine: {kind: dexel, resolution: 0.1" +
-              setting + "}\ndensify: {step: 1000, angle: 1000}\n");
+              c.engine + "}\ndensify: {step: 1000, angle: 1000}\n" + c.report);
     const io::Job j = io::read_job((dir / "job.yaml").string());
     const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
     CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
@@ -278,7 +285,7 @@ TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
     }
     const int turning = static_cast<int>(std::count_if(
         moves.begin(), moves.end(), [](const removal::Move& m) { return !m.rapid && m.axis.z() < 1.0 - 1e-9; }));
-    EXPECT_EQ(turning, expected) << setting;
+    EXPECT_EQ(turning, c.pieces) << c.engine << c.report;
   }
 }
 

@@ -83,7 +83,7 @@ struct Job {
   double machine_clearance_mm = 1.0;
   double chord_tolerance_mm = 0.0;  // arcs; 0 = resolution / 20
   // engine.turn_tolerance: how far the translation pieces a turning (five-axis) move is cut as
-  // may leave the rigid motion (mm); 0 = resolution / 10.
+  // may leave the rigid motion (mm); 0 = min(resolution / 10, gouge_tolerance / 2).
   double turn_tolerance_mm = 0.0;
   double step_mm = 0.0;               // densify.step: lambda; 0 = none
   double angle_step_deg = 0.0;        // densify.angle: phi; 0 = none

@@ -107,7 +107,7 @@ const char* feed_interpretation_name(kinematics::FeedInterpretation f);
 // The arc chord tolerance: the job's, else resolution / 20 (mm).
 double chord_tolerance_mm(const io::Job& job, double resolution_mm);
 // How far the pieces of a turning move may leave the rigid motion (mm): engine.turn_tolerance,
-// else resolution / 10.
+// else default_densify_tolerance_mm (min(v / 10, gouge tolerance / 2)).
 double turn_tolerance_mm(const io::Job& job, double resolution_mm);
 // The densification tolerance when the job gives no `densify:` (issue #20): min(v / 10,
 // gouge tolerance / 2), v the resolution (mm).
