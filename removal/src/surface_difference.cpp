@@ -2,12 +2,13 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
+#include <optional>
 #include <vector>
 
 #include "vcut/removal/compare.h"
@@ -47,26 +48,42 @@ std::vector<bool> sharp_vertices(const TriangleMesh& mesh, double limit_deg) {
   return sharp;
 }
 
-// Vertices of `mesh` within `radius_mm` of any of `points` (a hash grid of that cell size).
+// Vertices of `mesh` within `radius_mm` of any of `points`: a grid of that cell size, the
+// points sorted by cell; a vertex looks in the 27 cells about its own only when its own is
+// next to one holding a point (a sorted list of those), which most are not.
 std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen::Vector3d>& points, double radius_mm) {
+  using Cell = std::array<long, 3>;
   auto cell = [&](const Eigen::Vector3d& p) {
-    return std::array<long, 3>{static_cast<long>(std::floor(p.x() / radius_mm)),
-                               static_cast<long>(std::floor(p.y() / radius_mm)),
-                               static_cast<long>(std::floor(p.z() / radius_mm))};
+    return Cell{static_cast<long>(std::floor(p.x() / radius_mm)), static_cast<long>(std::floor(p.y() / radius_mm)),
+                static_cast<long>(std::floor(p.z() / radius_mm))};
   };
-  std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> grid;
-  for (const auto& p : points) grid[cell(p)].push_back(p);
+  std::vector<std::pair<Cell, Eigen::Vector3d>> sorted;
+  sorted.reserve(points.size());
+  for (const auto& p : points) sorted.emplace_back(cell(p), p);
+  std::sort(sorted.begin(), sorted.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<Cell> around;  // the cells next to (or at) a point's
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    if (i > 0 && sorted[i].first == sorted[i - 1].first) continue;
+    const Cell& c = sorted[i].first;
+    for (long dx = -1; dx <= 1; ++dx)
+      for (long dy = -1; dy <= 1; ++dy)
+        for (long dz = -1; dz <= 1; ++dz) around.push_back({c[0] + dx, c[1] + dy, c[2] + dz});
+  }
+  std::sort(around.begin(), around.end());
+  around.erase(std::unique(around.begin(), around.end()), around.end());
   std::vector<char> near(mesh.vertices_mm.size(), 0);  // char: written from several threads
   tbb::parallel_for(std::size_t{0}, mesh.vertices_mm.size(), [&](std::size_t i) {
     const Eigen::Vector3d& v = mesh.vertices_mm[i];
-    const auto c = cell(v);
+    const Cell c = cell(v);
+    if (!std::binary_search(around.begin(), around.end(), c)) return;
     for (long dx = -1; dx <= 1 && !near[i]; ++dx)
       for (long dy = -1; dy <= 1 && !near[i]; ++dy)
         for (long dz = -1; dz <= 1 && !near[i]; ++dz) {
-          const auto it = grid.find({c[0] + dx, c[1] + dy, c[2] + dz});
-          if (it == grid.end()) continue;
-          for (const auto& p : it->second)
-            if ((p - v).squaredNorm() <= radius_mm * radius_mm) {
+          const Cell at{c[0] + dx, c[1] + dy, c[2] + dz};
+          auto it = std::lower_bound(sorted.begin(), sorted.end(), at,
+                                     [](const auto& x, const Cell& key) { return x.first < key; });
+          for (; it != sorted.end() && it->first == at; ++it)
+            if ((it->second - v).squaredNorm() <= radius_mm * radius_mm) {
               near[i] = 1;
               break;
             }
@@ -78,7 +95,9 @@ std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen:
 }  // namespace
 
 SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg) {
-  const DesignDistance to_b(b.mesh), to_a(a.mesh);
+  // The two meshes' distance structures side by side (each is partly serial).
+  std::optional<DesignDistance> to_a, to_b;
+  tbb::parallel_invoke([&] { to_b.emplace(b.mesh); }, [&] { to_a.emplace(a.mesh); });
   const std::size_t na = a.mesh.vertices_mm.size();
   std::vector<double> d(na + b.mesh.vertices_mm.size());
   std::vector<Eigen::Vector3d> where(d.size());
@@ -86,14 +105,18 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
   if (sharp_edge_deg > 0.0) {
     // Near a sharp edge of either surface: the other meshing may cut that edge's corner
     // anywhere within a cell or two of it.
+    std::vector<bool> sharp[2];
+    tbb::parallel_invoke([&] { sharp[0] = sharp_vertices(a.mesh, sharp_edge_deg); },
+                         [&] { sharp[1] = sharp_vertices(b.mesh, sharp_edge_deg); });
     std::vector<Eigen::Vector3d> edge_points;
-    for (const SurfaceMesh* m : {&a, &b}) {
-      const std::vector<bool> sharp = sharp_vertices(m->mesh, sharp_edge_deg);
-      for (std::size_t i = 0; i < sharp.size(); ++i)
-        if (sharp[i]) edge_points.push_back(m->mesh.vertices_mm[i]);
+    for (int k = 0; k < 2; ++k) {
+      const TriangleMesh& mesh = k == 0 ? a.mesh : b.mesh;
+      for (std::size_t i = 0; i < sharp[k].size(); ++i)
+        if (sharp[k][i]) edge_points.push_back(mesh.vertices_mm[i]);
     }
-    const std::vector<char> sa = near_points(a.mesh, edge_points, kEdgeReach * v),
-                            sb = near_points(b.mesh, edge_points, kEdgeReach * v);
+    std::vector<char> sa, sb;
+    tbb::parallel_invoke([&] { sa = near_points(a.mesh, edge_points, kEdgeReach * v); },
+                         [&] { sb = near_points(b.mesh, edge_points, kEdgeReach * v); });
     std::copy(sa.begin(), sa.end(), skip.begin());
     std::copy(sb.begin(), sb.end(), skip.begin() + static_cast<std::ptrdiff_t>(na));
   }
@@ -101,7 +124,7 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
     const bool in_a = i < na;
     if (i == na) hint = DistanceHint();  // the other mesh's triangles from here
     where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
-    d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
+    d[i] = std::abs((in_a ? *to_b : *to_a).signed_distance(where[i], hint));
   });
   SurfaceDifference e;
   e.done = true;

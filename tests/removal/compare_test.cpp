@@ -68,6 +68,62 @@ double brute_distance(const TriangleMesh& mesh, const Eigen::Vector3d& x) {
   return best;
 }
 
+// The triangles across each edge, found by brute force (every pair sharing two vertices):
+// from a hint on one, a point just off the middle of the other's face (nearer to it than to
+// any other triangle) is measured across the edge, and the hint handed back names it. Both
+// ways across every edge of the slotted block and of a box (whose triangles' neighbours
+// come before and after them in number).
+TEST(DesignDistance, BoundLooksAcrossEveryEdgeBothWays) {
+  for (const TriangleMesh& mesh : {test::box_mesh({0, 0, 0}, {10, 20, 30}), test::slotted_block(5.0, 2.0)}) {
+    const DesignDistance design(mesh);
+    const auto& t = mesh.triangles;
+    auto vertex = [&](std::size_t f, int i) { return mesh.vertices_mm[static_cast<std::size_t>(t[f][i])]; };
+    int pairs = 0;
+    for (std::size_t f = 0; f < t.size(); ++f)
+      for (std::size_t g = 0; g < t.size(); ++g) {
+        int shared = 0;
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j) shared += t[f][i] == t[g][j];
+        if (f == g || shared != 2) continue;
+        const Eigen::Vector3d centre = (vertex(g, 0) + vertex(g, 1) + vertex(g, 2)) / 3.0;
+        const Eigen::Vector3d normal = (vertex(g, 1) - vertex(g, 0)).cross(vertex(g, 2) - vertex(g, 0)).normalized();
+        // Off the face by a tenth of the centre's distance to the nearest edge's line: g is nearest.
+        double inset = std::numeric_limits<double>::infinity();
+        for (int i = 0; i < 3; ++i) {
+          const Eigen::Vector3d a = vertex(g, i), e = (vertex(g, (i + 1) % 3) - a).normalized();
+          inset = std::min(inset, ((centre - a) - (centre - a).dot(e) * e).norm());
+        }
+        const Eigen::Vector3d x = centre + 0.1 * inset * normal;
+        DistanceHint hint;
+        hint.triangle = f;
+        const double bound = design.distance_bound(x, hint, 0.0);
+        ASSERT_NEAR(bound, 0.1 * inset, 1e-9) << "from triangle " << f << " to " << g;
+        ASSERT_EQ(hint.triangle, g) << "from triangle " << f;
+        ++pairs;
+      }
+    EXPECT_EQ(pairs, static_cast<int>(3 * t.size()));  // closed: three neighbours each
+  }
+}
+
+// Closed as is_closed says (each edge once each way), for closed meshes, a box with a face's
+// triangle missing, one turned over, one twice, and one of zero area added.
+TEST(DesignDistance, ClosedAsEveryEdgeOnceEachWay) {
+  const TriangleMesh box = test::box_mesh({0, 0, 0}, {10, 20, 30});
+  TriangleMesh open = box, turned = box, twice = box, sliver = box;
+  open.triangles.pop_back();
+  std::swap(turned.triangles[3][1], turned.triangles[3][2]);
+  twice.triangles.push_back(twice.triangles[5]);
+  sliver.vertices_mm.push_back(0.5 * (box.vertices_mm[0] + box.vertices_mm[1]));  // on the line between them
+  sliver.triangles.push_back({0, 1, static_cast<int>(sliver.vertices_mm.size()) - 1});
+  const std::vector<std::pair<TriangleMesh, bool>> cases = {{box, true},    {test::slotted_block(5.0, 2.0), true},
+                                                            {open, false},  {turned, false},
+                                                            {twice, false}, {sliver, false}};
+  for (const auto& [mesh, closed] : cases) {
+    EXPECT_EQ(DesignDistance(mesh).closed(), closed) << mesh.triangles.size() << " triangles";
+    EXPECT_EQ(is_closed(mesh), closed);
+  }
+}
+
 // The grid behind the distance queries (cells listing the triangles that meet them, a
 // search outward from the query's cell) against a brute-force minimum over all triangles
 // and an analytic inside test, on meshes of long slivers beside small triangles (a fan-
