@@ -35,9 +35,11 @@ int run_study(const std::string& job_file, pipeline::StudyOptions options, const
   for (const auto& w : s.warnings) std::fprintf(stderr, "vcut: warning: %s\n", w.c_str());
   const pipeline::StudyRow* best = s.recommended >= 0 ? &s.rows[static_cast<std::size_t>(s.recommended)] : nullptr;
   if (!quiet) {
-    std::printf("densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm\n",
-                s.job_name.c_str(), s.varied.c_str(), io::engine_name(s.engine), s.resolution_mm, s.threads,
-                s.accuracy_mm);
+    std::printf(
+        "densification study of %s (%s), %s engine at %.3g mm, %d threads; accuracy %.4g mm, turning moves within "
+        "%.3g mm\n",
+        s.job_name.c_str(), s.varied.c_str(), io::engine_name(s.engine), s.resolution_mm, s.threads, s.accuracy_mm,
+        s.turn_tolerance_mm);
     std::printf("  %-28s %10s %12s %12s %10s\n", "setting", "poses", "max mm", "RMS mm", "time s");
     for (const auto& r : s.rows) {
       if (!r.error.empty()) {

@@ -151,6 +151,7 @@ void write_study(const std::string& folder, pipeline::StudyResult& s, const io::
   j["threads"] = s.threads;
   j["varied"] = s.varied;
   j["accuracy_mm"] = s.accuracy_mm;
+  j["turn_tolerance_mm"] = s.turn_tolerance_mm;
   // What the settings leave as the job has it (0 = not set).
   j["job_densify"] = {
       {"step_mm", job.step_mm}, {"angle_deg", job.angle_step_deg}, {"tolerance_mm", job.densify_tolerance_mm}};

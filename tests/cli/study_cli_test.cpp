@@ -104,6 +104,34 @@ TEST_F(Study, ChordSagittaOfATurningTableAndTheRecommendation) {
   EXPECT_EQ(std::string(signature + 1, 3), "PNG");
 }
 
+// A pure turn: with tool-centre-point control on (LinuxCNC's M428 on xyzac-trt) the tip
+// stays put while A tilts the table 30 deg, so the tool turns about its tip on one great
+// circle at an even rate, and every setting densifies the very same rigid motion (the
+// distance from the reference is zero). What a setting measures is then the cut's own: the
+// turning pieces, within the study's turn tolerance (accuracy / 10 = 0.0002 mm here, not
+// the job's 0.02 = min(v / 10, gouge tolerance / 2)), which each setting splits differently,
+// and the meshes of nearly one solid. So every setting is well within the accuracy.
+TEST_F(Study, APureTurnIsTheSameAtEverySetting) {
+  program = "G21 G90 G94\nT1 M6\nS10000 M3\nG0 X0 Y0 Z5 A0 C0\nM428\nG1 Z-4 F500\nG1 A30 F2000\nG1 Z5\nM429\nM30\n";
+  job =
+      "job: tilt\nmachine: xyzac-trt\ntools: tools.yaml\n"
+      "program: {file: turn.ngc, tcp_m_codes: {M428: on, M429: off}}\n"
+      "stock: {box: {min: [-15, -15, -10], max: [15, 15, 0]}}\n"
+      "engine: {kind: dexel, resolution: 0.2, threads: 2}\nreport: {out: out, gouge_tolerance: 0.1}\n";
+  const CommandResult r = study("--angles 8,4,2 --reference-angle 0.5 --accuracy 0.002");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("accuracy 0.002 mm, turning moves within 0.0002 mm"), std::string::npos) << r.output;
+  const nlohmann::json j = json();
+  EXPECT_DOUBLE_EQ(j["turn_tolerance_mm"].get<double>(), 0.0002);
+  ASSERT_EQ(j["settings"].size(), 3u);
+  for (const nlohmann::json& row : j["settings"]) {
+    SCOPED_TRACE(row.dump());
+    EXPECT_LT(row["max_mm"].get<double>(), 0.001);
+    EXPECT_TRUE(row["meets_accuracy"].get<bool>());
+  }
+  EXPECT_EQ(j["recommended"], "angle 8 deg");
+}
+
 // No setting meets a 0.1 um accuracy: exit 1, the files complete, no recommendation. (At
 // 0.5 mm: the figures do not matter here, and such an accuracy is also warned about.)
 TEST_F(Study, NoSettingMeetsTheAccuracy) {
@@ -115,6 +143,9 @@ TEST_F(Study, NoSettingMeetsTheAccuracy) {
   EXPECT_NE(r.output.find("warning: accuracy 0.0001 mm is below what meshes at 0.5 mm resolve"), std::string::npos)
       << r.output;
   EXPECT_EQ(j["reference"]["setting"], "angle 1 deg");  // the finest / 4
+  // The turning moves' tolerance no finer than v / 1000 (a tenth of what the meshes
+  // resolve), not the accuracy's tenth.
+  EXPECT_DOUBLE_EQ(j["turn_tolerance_mm"].get<double>(), 0.0005);
   EXPECT_TRUE(fs::exists(dir / "out" / "study.png"));
 }
 

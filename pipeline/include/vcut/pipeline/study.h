@@ -62,6 +62,10 @@ struct StudyResult {
   std::string job_name;
   std::string varied;  // "step", "angle", "step+angle" or "tolerance"
   double resolution_mm = 0.0, accuracy_mm = 0.0;
+  // The turning five-axis moves' pieces (CutMoves): within a tenth of the accuracy, so that
+  // what a setting measures is its densification, not the pieces' (which differ between
+  // settings and overcut by up to this).
+  double turn_tolerance_mm = 0.0;
   int threads = 0;
   io::Engine engine = io::Engine::Dexel;
   std::vector<StudyRow> rows;  // in the order given
