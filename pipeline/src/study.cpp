@@ -198,11 +198,12 @@ StudyResult run_densification_study(const io::Job& job, const StudyOptions& opti
   } catch (const InputError& e) {
     throw InputError("study densification: the reference (" + describe(reference) + ") could not be run: " + e.what());
   }
+  // The reference's side of each measurement made once.
+  const removal::PreparedSurface reference_side(reference_surface, removal::kSharpEdgeDeg);
   for (std::size_t i = 0; i < settings.size(); ++i) {
     StudyRow& row = s.rows[i];
     if (!surfaces[i]) continue;
-    const removal::SurfaceDifference d =
-        removal::surface_difference(*surfaces[i], reference_surface, s.resolution_mm, removal::kSharpEdgeDeg);
+    const removal::SurfaceDifference d = removal::surface_difference(*surfaces[i], reference_side, s.resolution_mm);
     row.max_mm = d.max_mm;
     row.rms_mm = d.rms_mm;
     row.p99_mm = d.p99_mm;

@@ -92,28 +92,40 @@ std::vector<char> near_points(const TriangleMesh& mesh, const std::vector<Eigen:
   return near;
 }
 
+// Where surface `mesh` has sharp edges (none when limit_deg is 0).
+std::vector<Eigen::Vector3d> sharp_points_of(const TriangleMesh& mesh, double limit_deg) {
+  std::vector<Eigen::Vector3d> out;
+  if (!(limit_deg > 0.0)) return out;
+  const std::vector<bool> sharp = sharp_vertices(mesh, limit_deg);
+  for (std::size_t i = 0; i < sharp.size(); ++i)
+    if (sharp[i]) out.push_back(mesh.vertices_mm[i]);
+  return out;
+}
+
 }  // namespace
 
-SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg) {
-  // The two meshes' distance structures side by side (each is partly serial).
-  std::optional<DesignDistance> to_a, to_b;
-  tbb::parallel_invoke([&] { to_b.emplace(b.mesh); }, [&] { to_a.emplace(a.mesh); });
+PreparedSurface::PreparedSurface(const SurfaceMesh& surface, double sharp_edge_deg)
+    : surface_(surface), distance_(surface.mesh), sharp_edge_deg_(sharp_edge_deg) {
+  sharp_points_ = sharp_points_of(surface.mesh, sharp_edge_deg);
+}
+PreparedSurface::~PreparedSurface() = default;
+PreparedSurface::PreparedSurface(PreparedSurface&&) noexcept = default;
+
+namespace {
+
+// Every vertex of each surface against the other's triangles.
+SurfaceDifference measure(const PreparedSurface& prepared_a, const PreparedSurface& prepared_b, double v) {
+  const SurfaceMesh &a = prepared_a.surface(), &b = prepared_b.surface();
+  const DesignDistance &to_a = prepared_a.distance(), &to_b = prepared_b.distance();
   const std::size_t na = a.mesh.vertices_mm.size();
   std::vector<double> d(na + b.mesh.vertices_mm.size());
   std::vector<Eigen::Vector3d> where(d.size());
   std::vector<bool> skip(d.size(), false);
-  if (sharp_edge_deg > 0.0) {
+  if (prepared_b.sharp_edge_deg() > 0.0) {
     // Near a sharp edge of either surface: the other meshing may cut that edge's corner
     // anywhere within a cell or two of it.
-    std::vector<bool> sharp[2];
-    tbb::parallel_invoke([&] { sharp[0] = sharp_vertices(a.mesh, sharp_edge_deg); },
-                         [&] { sharp[1] = sharp_vertices(b.mesh, sharp_edge_deg); });
-    std::vector<Eigen::Vector3d> edge_points;
-    for (int k = 0; k < 2; ++k) {
-      const TriangleMesh& mesh = k == 0 ? a.mesh : b.mesh;
-      for (std::size_t i = 0; i < sharp[k].size(); ++i)
-        if (sharp[k][i]) edge_points.push_back(mesh.vertices_mm[i]);
-    }
+    std::vector<Eigen::Vector3d> edge_points = prepared_a.sharp_points();
+    edge_points.insert(edge_points.end(), prepared_b.sharp_points().begin(), prepared_b.sharp_points().end());
     std::vector<char> sa, sb;
     tbb::parallel_invoke([&] { sa = near_points(a.mesh, edge_points, kEdgeReach * v); },
                          [&] { sb = near_points(b.mesh, edge_points, kEdgeReach * v); });
@@ -124,7 +136,7 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
     const bool in_a = i < na;
     if (i == na) hint = DistanceHint();  // the other mesh's triangles from here
     where[i] = in_a ? a.mesh.vertices_mm[i] : b.mesh.vertices_mm[i - na];
-    d[i] = std::abs((in_a ? *to_b : *to_a).signed_distance(where[i], hint));
+    d[i] = std::abs((in_a ? to_b : to_a).signed_distance(where[i], hint));
   });
   SurfaceDifference e;
   e.done = true;
@@ -153,6 +165,19 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
     e.p99_mm = counted[k];
   }
   return e;
+}
+
+}  // namespace
+
+SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg) {
+  // The two sides side by side (each partly serial).
+  std::optional<PreparedSurface> prepared_a, prepared_b;
+  tbb::parallel_invoke([&] { prepared_b.emplace(b, sharp_edge_deg); }, [&] { prepared_a.emplace(a, sharp_edge_deg); });
+  return measure(*prepared_a, *prepared_b, v);
+}
+
+SurfaceDifference surface_difference(const SurfaceMesh& a, const PreparedSurface& b, double v) {
+  return measure(PreparedSurface(a, b.sharp_edge_deg()), b, v);
 }
 
 }  // namespace vcut::removal

@@ -5,7 +5,9 @@
 #include <Eigen/Core>
 
 #include <cstddef>
+#include <vector>
 
+#include "vcut/removal/compare.h"
 #include "vcut/removal/stock.h"
 
 namespace vcut::removal {
@@ -32,5 +34,28 @@ inline constexpr double kSharpEdgeDeg = 20.0;
 // max, RMS and p99 and reported as edge_*: meshing cuts a sharp edge's corner anywhere
 // within a cell or two, so two meshings of nearly one solid differ there by up to ~v/2.
 SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b, double v, double sharp_edge_deg = 0.0);
+
+// A surface made ready once to be measured against several (a densification study's
+// reference): its triangles' distance structure and its sharp vertices. It refers to
+// `surface`, which must outlive it.
+class PreparedSurface {
+ public:
+  PreparedSurface(const SurfaceMesh& surface, double sharp_edge_deg);
+  ~PreparedSurface();
+  PreparedSurface(PreparedSurface&&) noexcept;
+  const SurfaceMesh& surface() const { return surface_; }
+  const DesignDistance& distance() const { return distance_; }
+  double sharp_edge_deg() const { return sharp_edge_deg_; }
+  const std::vector<Eigen::Vector3d>& sharp_points() const { return sharp_points_; }
+
+ private:
+  const SurfaceMesh& surface_;
+  DesignDistance distance_;
+  double sharp_edge_deg_;
+  std::vector<Eigen::Vector3d> sharp_points_;  // vertices at a sharp edge (none when sharp_edge_deg is 0)
+};
+
+// The same as surface_difference(a, b.surface(), v, b.sharp_edge_deg()), to the bit.
+SurfaceDifference surface_difference(const SurfaceMesh& a, const PreparedSurface& b, double v);
 
 }  // namespace vcut::removal
