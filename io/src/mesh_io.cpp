@@ -6,6 +6,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,7 +15,6 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
-#include <map>
 #include <memory>
 
 #include "vcut/io/atomic_file.h"
@@ -30,24 +30,49 @@ removal::TriangleMesh read_mesh(const std::string& path) {
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(path, 0, 0, std::string("cannot read mesh: ") + importer.GetErrorString());
   removal::TriangleMesh mesh;
-  // Weld by exact coordinates: STL stores each triangle's corners separately.
-  std::map<std::array<float, 3>, int> index_of;
+  // Weld by exact coordinates (STL stores each triangle's corners separately): every
+  // corner's coordinates sorted (in parallel; a std::map took 0.6 s of a 2.3 M-triangle
+  // design's read), equal ones (as float compares: -0 and +0 too) become the vertex where
+  // the first of them stands, numbered in the order of first appearance.
+  std::vector<std::array<float, 3>> corner;
+  std::vector<std::size_t> mesh_start(scene->mNumMeshes + 1, 0);
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) mesh_start[m + 1] = mesh_start[m] + scene->mMeshes[m]->mNumVertices;
+  corner.reserve(mesh_start.back());
   for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
     const aiMesh* am = scene->mMeshes[m];
-    std::vector<int> remap(am->mNumVertices);
     for (unsigned v = 0; v < am->mNumVertices; ++v) {
       const aiVector3D& p = am->mVertices[v];
       if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
         throw InputError(path, 0, 0, "mesh has a vertex that is not a finite number");
-      const auto [it, inserted] =
-          index_of.emplace(std::array<float, 3>{p.x, p.y, p.z}, static_cast<int>(mesh.vertices_mm.size()));
-      if (inserted) mesh.vertices_mm.emplace_back(p.x, p.y, p.z);
-      remap[v] = it->second;
+      corner.push_back({p.x, p.y, p.z});
     }
+  }
+  const std::size_t n = corner.size();
+  std::vector<std::size_t> order(n);
+  for (std::size_t i = 0; i < n; ++i) order[i] = i;
+  tbb::parallel_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return corner[a] < corner[b] || (!(corner[b] < corner[a]) && a < b);
+  });
+  std::vector<std::size_t> first(n);  // the first corner at the same place
+  for (std::size_t k = 0; k < n; ++k)
+    first[order[k]] = k > 0 && !(corner[order[k - 1]] < corner[order[k]]) ? first[order[k - 1]] : order[k];
+  std::vector<int> remap(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (first[i] == i) {
+      remap[i] = static_cast<int>(mesh.vertices_mm.size());
+      mesh.vertices_mm.emplace_back(corner[i][0], corner[i][1], corner[i][2]);
+    } else {
+      remap[i] = remap[first[i]];
+    }
+  }
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* am = scene->mMeshes[m];
+    const std::size_t at = mesh_start[m];
     for (unsigned f = 0; f < am->mNumFaces; ++f) {
       const aiFace& face = am->mFaces[f];
       if (face.mNumIndices != 3) continue;  // points and lines are not surface
-      mesh.triangles.emplace_back(remap[face.mIndices[0]], remap[face.mIndices[1]], remap[face.mIndices[2]]);
+      mesh.triangles.emplace_back(remap[at + face.mIndices[0]], remap[at + face.mIndices[1]],
+                                  remap[at + face.mIndices[2]]);
     }
   }
   if (mesh.triangles.empty()) throw InputError(path, 0, 0, "mesh has no triangles");

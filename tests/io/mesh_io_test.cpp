@@ -65,6 +65,29 @@ TEST(MeshIo, BinaryStlHoldsEachTriangleWithItsNormal) {
   fs::remove_all(dir);
 }
 
+// STL repeats each triangle's corners; reading welds equal ones into one vertex, numbered
+// in the order the corners first appear, at the first one's coordinates: -0 and +0 are one
+// place (as floats compare). A square pyramid written with its apex once as (0, 0, 1) and
+// once as (-0, -0, 1), and its base corners in the order the faces first use them.
+TEST(MeshIo, ReadingWeldsEqualCornersInOrderOfFirstAppearance) {
+  removal::TriangleMesh pyramid;
+  pyramid.vertices_mm = {{0, 0, 1}, {-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}, {-0.0, -0.0, 1}};
+  pyramid.triangles = {{0, 1, 2}, {5, 2, 3}, {0, 3, 4}, {5, 4, 1}, {1, 4, 3}, {1, 3, 2}};
+  const fs::path dir = fs::temp_directory_path() / "vcut_mesh_io_weld_test";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path path = dir / "pyramid.stl";
+  write_stl(path.string(), pyramid);
+  const removal::TriangleMesh back = read_mesh(path.string());
+  ASSERT_EQ(back.vertices_mm.size(), 5u);
+  for (std::size_t v = 0; v < 5; ++v) EXPECT_EQ(back.vertices_mm[v], pyramid.vertices_mm[v]) << v;
+  EXPECT_FALSE(std::signbit(back.vertices_mm[0].x()));  // the apex as it first appears
+  const std::vector<Eigen::Vector3i> expected = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 1}, {1, 4, 3}, {1, 3, 2}};
+  ASSERT_EQ(back.triangles.size(), expected.size());
+  for (std::size_t f = 0; f < expected.size(); ++f) EXPECT_EQ(back.triangles[f], expected[f]) << f;
+  fs::remove_all(dir);
+}
+
 // A mesh of more triangles than the writer fills at once (2^18), not a multiple of that:
 // every record at its place with its own corners, none lost or repeated at a block's seam,
 // and the attribute words zero. Triangle f's corners are (f, 0, 0), (f, 1, 0), (f, 0, 1)
