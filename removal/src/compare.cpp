@@ -266,6 +266,9 @@ class TriangleGrid {
     int d = 0;
     normal.cwiseAbs().maxCoeff(&d);
     const int p = (d + 1) % 3, q = (d + 2) % 3;
+    // A triangle inside one cell meets it; else the separating axes, made once per triangle.
+    const bool single = lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2];
+    const SeparatingAxes axes(a, b, c, 0.5 * cell_mm_ * (1.0 + 1e-6));
     auto cell_of = [&](int along_d, int along_p, int along_q) {
       int idx[3];
       idx[d] = along_d;
@@ -299,30 +302,42 @@ class TriangleGrid {
           idx[d] = k;
           idx[p] = i;
           idx[q] = j;
-          if (meets_cell(a, b, c, idx)) visit(cell_of(k, i, j));
+          if (single || axes.meets(cell_centre(idx))) visit(cell_of(k, i, j));
         }
       }
   }
 
-  // Whether triangle abc meets the cell (separating axes: the nine edge-cross-axis
-  // directions and the plane's normal; the cell lies within the triangle's box already),
-  // the cell grown by a millionth of its size so that rounding never drops a triangle.
-  bool meets_cell(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c,
-                  const int idx[3]) const {
-    const double half = 0.5 * cell_mm_ * (1.0 + 1e-6);
-    const Eigen::Vector3d centre =
-        origin_ + cell_mm_ * (Eigen::Vector3d(idx[0], idx[1], idx[2]).array() + 0.5).matrix();
-    const Eigen::Vector3d v[3] = {a - centre, b - centre, c - centre};
-    auto separates = [&](const Eigen::Vector3d& axis) {
-      const double p0 = axis.dot(v[0]), p1 = axis.dot(v[1]), p2 = axis.dot(v[2]);
-      const double r = half * axis.cwiseAbs().sum();
-      return std::min({p0, p1, p2}) > r || std::max({p0, p1, p2}) < -r;
-    };
-    const Eigen::Vector3d edges[3] = {v[1] - v[0], v[2] - v[1], v[0] - v[2]};
-    for (const Eigen::Vector3d& e : edges)
-      for (int ax = 0; ax < 3; ++ax)
-        if (separates(Eigen::Vector3d::Unit(ax).cross(e))) return false;
-    return !separates(edges[0].cross(edges[1]));
+  // Whether triangle abc meets a cell (separating axes: the nine edge-cross-axis directions
+  // and the plane's normal; the cell lies within the triangle's box already), the cell grown
+  // by a millionth of its size so that rounding never drops a triangle. Each axis's span of
+  // the triangle is made once (a cell's test was 40 % of a 2.3 M-triangle design's grid).
+  struct SeparatingAxes {
+    SeparatingAxes(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c, double half) {
+      const Eigen::Vector3d edges[3] = {b - a, c - b, a - c};
+      int n = 0;
+      for (const Eigen::Vector3d& e : edges)
+        for (int ax = 0; ax < 3; ++ax) axis[n++] = Eigen::Vector3d::Unit(ax).cross(e);
+      axis[n] = edges[0].cross(edges[1]);
+      for (int k = 0; k < kAxes; ++k) {
+        const double p0 = axis[k].dot(a), p1 = axis[k].dot(b), p2 = axis[k].dot(c);
+        lo[k] = std::min({p0, p1, p2});
+        hi[k] = std::max({p0, p1, p2});
+        reach[k] = half * axis[k].cwiseAbs().sum();
+      }
+    }
+    bool meets(const Eigen::Vector3d& centre) const {
+      for (int k = 0; k < kAxes; ++k) {
+        const double t = axis[k].dot(centre);
+        if (lo[k] - t > reach[k] || hi[k] - t < -reach[k]) return false;
+      }
+      return true;
+    }
+    static constexpr int kAxes = 10;
+    Eigen::Vector3d axis[kAxes];
+    double lo[kAxes], hi[kAxes], reach[kAxes];
+  };
+  Eigen::Vector3d cell_centre(const int idx[3]) const {
+    return origin_ + cell_mm_ * (Eigen::Vector3d(idx[0], idx[1], idx[2]).array() + 0.5).matrix();
   }
 
   Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();
