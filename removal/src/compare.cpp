@@ -371,6 +371,59 @@ struct DesignDistance::Impl {
     Feature unused;
     return (x - nearest_on_triangle(x, corner(f, 0), corner(f, 1), corner(f, 2), unused)).squaredNorm();
   }
+  // edge_of, edge_normal and beside from the triangles' edges; true when they are closed.
+  bool link_edges() {
+    // The edges: every triangle's three, sorted by their two vertices and then by triangle and
+    // edge number (a parallel sort: one loop filling hash maps of the edges took 3.3 s of the
+    // set-up's 4.7 s on a 2 M-triangle machined surface; the set-up is now 0.7-0.9 s on 2
+    // threads). Each edge's normal is its faces' normals summed in the triangles' order; a
+    // triangle across each edge: for the edge's first triangle the second, for the others the
+    // first.
+    struct HalfEdge {
+      std::uint64_t key;
+      std::uint32_t at;  // 3 f + i (under 1.4 billion triangles)
+      bool operator<(const HalfEdge& o) const { return key < o.key || (key == o.key && at < o.at); }
+    };
+    const std::size_t n = corners.size();
+    std::vector<HalfEdge> edges(3 * n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t f) {
+      for (int i = 0; i < 3; ++i)
+        edges[3 * f + static_cast<std::size_t>(i)] = {edge_key(corners[f][i], corners[f][(i + 1) % 3]),
+                                                      static_cast<std::uint32_t>(3 * f + static_cast<std::size_t>(i))};
+    });
+    tbb::parallel_sort(edges.begin(), edges.end());
+    edge_of.resize(3 * n);
+    beside.resize(n);
+    for (std::uint32_t f = 0; f < n; ++f) beside[f] = {f, f, f};
+    // Closed: every edge has two triangles, one along it each way (is_closed; on the design's
+    // triangles of zero area too, where it has any).
+    bool closed = true;
+    for (std::size_t first = 0, next; first < edges.size(); first = next) {
+      next = first + 1;
+      while (next < edges.size() && edges[next].key == edges[first].key) ++next;
+      if (closed && next - first == 2) {
+        auto forward = [&](std::size_t e) {
+          const std::uint32_t f = edges[e].at / 3, i = edges[e].at % 3;
+          return corners[f][static_cast<int>(i)] < corners[f][static_cast<int>((i + 1) % 3)];
+        };
+        closed = forward(first) != forward(first + 1);
+      } else {
+        closed = false;
+      }
+      const auto id = static_cast<std::uint32_t>(edge_normal.size());
+      Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+      const std::uint32_t g = edges[first].at / 3;
+      for (std::size_t e = first; e < next; ++e) {
+        const std::uint32_t at = edges[e].at, f = at / 3;
+        edge_of[at] = id;
+        sum += face_normal[f];
+        if (e > first) beside[f][at % 3] = g;
+      }
+      if (next > first + 1) beside[g][edges[first].at % 3] = edges[first + 1].at / 3;
+      edge_normal.push_back(sum);
+    }
+    return closed;
+  }
   const Tree& made_tree() const {
     std::call_once(tree_made, [&] {
       triangles.reserve(corners.size());
@@ -425,54 +478,7 @@ DesignDistance::DesignDistance(const TriangleMesh& design) : impl_(std::make_uni
   for (std::size_t f = 0; f < n; ++f)
     for (int i = 0; i < 3; ++i) m.vertex_normal[static_cast<std::size_t>(m.corners[f][i])] += share[f][i];
   share = {};
-  // The edges: every triangle's three, sorted by their two vertices and then by triangle and
-  // edge number (a parallel sort: one loop filling hash maps of the edges took 3.3 s of the
-  // set-up's 4.7 s on a 2 M-triangle machined surface; the set-up is now 0.7-0.9 s on 2
-  // threads). Each edge's normal is its faces' normals summed in the triangles' order; a
-  // triangle across each edge: for the edge's first triangle the second, for the others the
-  // first.
-  struct HalfEdge {
-    std::uint64_t key;
-    std::uint32_t at;  // 3 f + i (under 1.4 billion triangles)
-    bool operator<(const HalfEdge& o) const { return key < o.key || (key == o.key && at < o.at); }
-  };
-  std::vector<HalfEdge> edges(3 * n);
-  tbb::parallel_for(std::size_t{0}, n, [&](std::size_t f) {
-    for (int i = 0; i < 3; ++i)
-      edges[3 * f + static_cast<std::size_t>(i)] = {edge_key(m.corners[f][i], m.corners[f][(i + 1) % 3]),
-                                                    static_cast<std::uint32_t>(3 * f + static_cast<std::size_t>(i))};
-  });
-  tbb::parallel_sort(edges.begin(), edges.end());
-  m.edge_of.resize(3 * n);
-  m.beside.resize(n);
-  for (std::uint32_t f = 0; f < n; ++f) m.beside[f] = {f, f, f};
-  // Closed: every edge has two triangles, one along it each way (is_closed; on the design's
-  // triangles of zero area too, where it has any).
-  bool closed = true;
-  for (std::size_t first = 0, next; first < edges.size(); first = next) {
-    next = first + 1;
-    while (next < edges.size() && edges[next].key == edges[first].key) ++next;
-    if (closed && next - first == 2) {
-      auto forward = [&](std::size_t e) {
-        const std::uint32_t f = edges[e].at / 3, i = edges[e].at % 3;
-        return m.corners[f][static_cast<int>(i)] < m.corners[f][static_cast<int>((i + 1) % 3)];
-      };
-      closed = forward(first) != forward(first + 1);
-    } else {
-      closed = false;
-    }
-    const auto id = static_cast<std::uint32_t>(m.edge_normal.size());
-    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    const std::uint32_t g = edges[first].at / 3;
-    for (std::size_t e = first; e < next; ++e) {
-      const std::uint32_t at = edges[e].at, f = at / 3;
-      m.edge_of[at] = id;
-      sum += m.face_normal[f];
-      if (e > first) m.beside[f][at % 3] = g;
-    }
-    if (next > first + 1) m.beside[g][edges[first].at % 3] = edges[first + 1].at / 3;
-    m.edge_normal.push_back(sum);
-  }
+  const bool closed = m.link_edges();
   m.closed = n == all ? closed : is_closed(design);
   m.grid = TriangleGrid(m.points, m.corners);
 }

@@ -108,8 +108,6 @@ PreparedSurface::PreparedSurface(const SurfaceMesh& surface, double sharp_edge_d
     : surface_(surface), distance_(surface.mesh), sharp_edge_deg_(sharp_edge_deg) {
   sharp_points_ = sharp_points_of(surface.mesh, sharp_edge_deg);
 }
-PreparedSurface::~PreparedSurface() = default;
-PreparedSurface::PreparedSurface(PreparedSurface&&) noexcept = default;
 
 namespace {
 

@@ -127,9 +127,8 @@ std::vector<std::string> warnings_of(const io::Job& job, const PoseRun& run);
 // errors: PoseRun::actual_path) as the cut's moves; a move that turns the tool axis is cut
 // in translation pieces within turn_tolerance_mm of the rigid motion (turn_tolerance_mm in
 // poses.h: min(v / 10, gouge tolerance / 2) unless the job sets engine.turn_tolerance). With
-// `probes` the
-// shank and holder of each tool follow every move, and a feed move with the spindle
-// stopped is probed first (collisions). The moves are made as the stock pulls them, a batch
+// `probes` the shank and holder of each tool follow every move, and a feed move with the
+// spindle stopped is probed first (collisions). The moves are made as the stock pulls them, a batch
 // at a time (removal::MoveSource): the program's moves are never all held. A first pass at
 // construction counts them, refuses a feed move with no tool (InputError) and keeps what
 // attribution needs of each move, its block and what it stands for (5 bytes).

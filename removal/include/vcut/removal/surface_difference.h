@@ -41,8 +41,6 @@ SurfaceDifference surface_difference(const SurfaceMesh& a, const SurfaceMesh& b,
 class PreparedSurface {
  public:
   PreparedSurface(const SurfaceMesh& surface, double sharp_edge_deg);
-  ~PreparedSurface();
-  PreparedSurface(PreparedSurface&&) noexcept;
   const SurfaceMesh& surface() const { return surface_; }
   const DesignDistance& distance() const { return distance_; }
   double sharp_edge_deg() const { return sharp_edge_deg_; }
