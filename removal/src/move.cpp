@@ -47,7 +47,10 @@ void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm,
   }
   hi = std::max(hi, lo);
   pivot_mm = 0.5 * (lo + hi);
-  reach_mm = std::hypot(radius, 0.5 * (hi - lo));
+  // A V-bit's points each move by at most their distance from the pivot times the turn; a
+  // core cylinder (half height h, radius Rc about its middle) turned into itself is nowhere
+  // farther than max(h, Rc) sin(theta) from where it was (move.h).
+  reach_mm = cutter.type == CutterType::VBit ? std::hypot(radius, 0.5 * (hi - lo)) : std::max(radius, 0.5 * (hi - lo));
 }
 
 double rotation_error_mm(const Cutter& cutter, double height_mm, double angle_rad, const TurningSplit& split) {

@@ -106,6 +106,43 @@ TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
   }
 }
 
+// The bound behind the pieces' reach (move.h): a cylinder of half height h and radius R about
+// its middle, turned by theta about an axis square to its own through that middle, has every
+// point within max(h, R) sin(theta) of the cylinder as it was (its distance is convex, so the
+// rim circles are the worst), and a rim point comes that far. Measured here on the rims of
+// cylinders wide and tall, with the exact distance to a cylinder.
+TEST(FiveAxisSweep, ATurnedCylinderStaysWithinTheLargerOfItsHalfHeightAndRadius) {
+  auto cylinder_distance = [](const Eigen::Vector3d& y, double h, double radius) {
+    return std::hypot(std::max(0.0, y.head<2>().norm() - radius), std::max(0.0, std::abs(y.z()) - h));
+  };
+  for (const double h : {0.0, 1.0, 3.0, 4.5, 12.0})
+    for (const double radius : {0.0, 1.0, 3.0, 5.0})
+      for (const double theta : {1e-3, 0.01, 0.1, 0.4}) {
+        if (h == 0.0 && radius == 0.0) continue;
+        const Eigen::Matrix3d turn = Eigen::AngleAxisd(theta, Eigen::Vector3d::UnitX()).toRotationMatrix();
+        double worst = 0.0;
+        for (int i = 0; i < 3600; ++i) {
+          const double psi = 2 * M_PI * i / 3600.0;
+          for (const double z : {-h, h}) {
+            const Eigen::Vector3d rim(radius * std::cos(psi), radius * std::sin(psi), z);
+            worst = std::max(worst, cylinder_distance(turn * rim, h, radius));
+          }
+        }
+        const double bound = std::max(h, radius) * std::sin(theta);
+        EXPECT_LE(worst, bound * (1 + 1e-12)) << "h " << h << " R " << radius << " theta " << theta;
+        // The rim point in the plane of the turn: on one side it leaves the side wall by
+        // h sin(theta) - R (1 - cos(theta)), on the other the end face by R sin(theta) - h (1 - cos(theta)).
+        const double corner = std::max(h * std::sin(theta) - radius * (1 - std::cos(theta)),
+                                       radius * std::sin(theta) - h * (1 - std::cos(theta)));
+        EXPECT_GE(worst, corner - 1e-12) << "h " << h << " R " << radius << " theta " << theta;
+        EXPECT_GT(worst, 0.99 * bound - std::min(h, radius) * theta * theta / 2);
+        // The bound the pieces used before, sqrt(h^2 + R^2) theta, is loose where h and R are alike.
+        if (h == 3.0 && radius == 3.0) {
+          EXPECT_LT(worst, 0.75 * std::hypot(h, radius) * theta);
+        }
+      }
+}
+
 // highest_point_in_box_mm: points of the tool (radius R, any height, any offset) placed by the
 // rigid motion at random instants, and by the pieces' axes, that fall inside the box lie no
 // higher than the bound; and the bound is near the truth (a point a little below it does
@@ -158,9 +195,9 @@ TEST(FiveAxisSweep, NoPointAboveTheHeightComesInsideTheBox) {
 // A tool standing out of the box turns in fewer pieces, and every point of its core (radius
 // R - r, heights r to H - r) whose ball of radius r reaches into the box (grown by the pieces'
 // tips' offset from the tip's path, as the pipeline grows it) in the rigid motion or in a
-// piece lies within the bound of where the other puts it: the same point, turned about the
-// arc's normal by the angle at t, or by the piece's middle angle on the piece's own straight
-// path (written out here with its own rotation). And the pieces' sweep stays within the
+// piece lies within the bound of the other's core at the same instant: the core turned about
+// the arc's normal by the angle at t, or by the piece's middle angle on the piece's own
+// straight path (written out here with its own rotation). And the pieces' sweep stays within the
 // bound of the rigid motion's inside the box: a point of the box inside either lies within
 // the bound (plus the brute force's sampling) of the other.
 TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
@@ -192,23 +229,35 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
     append_five_axis_move(pieces, base, a0, a1, split);
     ASSERT_EQ(static_cast<int>(pieces.size()), n);
     auto turned = [&](double fraction) { return Eigen::AngleAxisd(fraction * angle, normal).toRotationMatrix(); };
-    // Point by point, the core's points: the axis from r up, R - r about it.
-    const double r = c.corner_radius_mm, core_radius = c.radius_mm() - r;
+    // Instance by instance, the core's points (the axis from r up, R - r about it): each
+    // point of one instance lies within the bound of the other instance's core.
+    const double r = c.corner_radius_mm, core_radius = c.radius_mm() - r, core_top = 25.0 - r;
     double worst_point = 0.0;
     const Eigen::Vector3d e1 = a0.unitOrthogonal(), e2 = a0.cross(e1);
     auto near_box = [&](const Eigen::Vector3d& x) { return grown.exteriorDistance(x) <= r; };
+    // The distance from x to the core of the instance with its tip at `tip`, turned by `turn`
+    // from a0.
+    auto core_distance = [&](const Eigen::Vector3d& x, const Eigen::Vector3d& tip, const Eigen::Matrix3d& turn) {
+      const Eigen::Vector3d y = turn.transpose() * (x - tip);
+      const double along = y.dot(a0), across = (y - along * a0).norm();
+      const double out_radial = std::max(0.0, across - core_radius);
+      const double out_axial = std::max({0.0, r - along, along - core_top});
+      return std::hypot(out_radial, out_axial);
+    };
     for (int i = 0; i < 200000; ++i) {
-      const double t = unit(rng), h = r + (25.0 - 2 * r) * unit(rng), rho = core_radius * std::sqrt(unit(rng));
+      const double t = unit(rng), h = r + (core_top - r) * unit(rng), rho = core_radius * std::sqrt(unit(rng));
       const double phi = 2 * M_PI * unit(rng);
       const int k = std::min(n - 1, static_cast<int>(t * n));
       const Move& p = pieces[static_cast<std::size_t>(k)];
       EXPECT_LT((turned((k + 0.5) / n) * a0 - p.axis).norm(), 1e-12);
       const Eigen::Vector3d point = h * a0 + rho * (std::cos(phi) * e1 + std::sin(phi) * e2);
       const double along = t * n - k;  // the fraction of the piece
-      const Eigen::Vector3d rigid = motion.p0 + t * (motion.p1 - motion.p0) + turned(t) * point;
-      const Eigen::Vector3d piece = p.start_mm + along * (p.end_mm - p.start_mm) + turned((k + 0.5) / n) * point;
-      if (!near_box(rigid) && !near_box(piece)) continue;
-      worst_point = std::max(worst_point, (rigid - piece).norm());
+      const Eigen::Vector3d rigid_tip = motion.p0 + t * (motion.p1 - motion.p0);
+      const Eigen::Vector3d piece_tip = p.start_mm + along * (p.end_mm - p.start_mm);
+      const Eigen::Matrix3d rigid_turn = turned(t), piece_turn = turned((k + 0.5) / n);
+      const Eigen::Vector3d rigid = rigid_tip + rigid_turn * point, piece = piece_tip + piece_turn * point;
+      if (near_box(rigid)) worst_point = std::max(worst_point, core_distance(rigid, piece_tip, piece_turn));
+      if (near_box(piece)) worst_point = std::max(worst_point, core_distance(piece, rigid_tip, rigid_turn));
     }
     EXPECT_LE(worst_point, bound) << to_string(c.type);
     EXPECT_GT(worst_point, 0.5 * bound) << to_string(c.type) << ": the points never came near the bound";

@@ -72,21 +72,33 @@ class ListSource : public MoveSource {
 // point of the axis, the pivot c above the tip, along the chord of that point's path over the
 // piece (c = 0: the tip, straight). A flat, ball or bull-nose cutter is its core grown by the
 // corner radius r, so an instance's signed distance is the core's distance less r, off by at
-// most as much as the core's points are; a V-bit is no such sum and takes its own points.
-// Over a piece the axis turns by phi = angle / n; against the rigid motion a point q of the
-// core (from the pivot) is off by at most |q| phi / 2 (the turn to the middle axis) plus
-// c (1 - cos(phi / 2)) <= c phi^2 / 8 (the pivot's path, an arc's chord away from its chord).
-// With c at the middle of the core's part that matters (below height_mm above the tip), |q| is
-// at most half as far as from the tip: about half the pieces. Sampling instances instead
-// would be first order in the step at a sharp rim; here only the rotation is discretised.
+// most as much as the two instances' cores lie apart; a V-bit is no such sum and takes its own
+// points.
+// Over a piece the axis turns by phi = angle / n; a rigid instance and the piece's at the same
+// instant differ by the pivot's offset, at most c (1 - cos(phi / 2)) <= c phi^2 / 8 (the
+// pivot's path, an arc's chord away from its chord), and a turn by theta <= phi / 2 about an
+// axis w square to the tool's through the pivot. With c at the middle of the core's part that
+// matters (below height_mm above the tip; half height h, radius Rc), the turned core K' lies
+// within max(h, Rc) sin(theta) of K (and K of K'): d(., K) is convex, so over K' it is largest
+// on a rim circle; a rim point h a + Rc (cos(psi) u + sin(psi) w), u = w x a, turns to axial
+// coordinate h cos(theta) - Rc cos(psi) sin(theta) and radius P with P^2 = Rc^2 + X, X = h^2
+// sin^2 + 2 h Rc cos(psi) sin cos - Rc^2 cos^2(psi) sin^2 (of theta). For cos(psi) >= 0, P - Rc
+// <= h sin(theta), and where it passes the far end face (Rc tan(theta / 2) > h) P <= Rc and
+// the face's excess is under Rc sin(theta); for cos(psi) = -g < 0 the near end face's
+// excess is at most Rc g sin(theta), and where P > Rc, (P - Rc)^2 <= X, so the squares add to at
+// most h^2 sin^2(theta) - 2 h Rc g sin cos <= h^2 sin^2(theta). (A point's own path, sqrt(h^2 +
+// Rc^2) theta, was the bound before: up to 1.4x the pieces where h and Rc are alike.) A V-bit
+// is no cylinder and keeps its points' paths. Sampling instances instead would be first order
+// in the step at a sharp rim; here only the rotation is discretised.
 struct TurningSplit {
   int pieces = 1;
   double pivot_mm = 0.0;  // c, above the tip along the axis
 };
 // The pivot and reach for the cutter's part below height_mm above the tip (+inf: all of it):
 // for a flat, ball or bull-nose, the core from r to min(H - r, height + r) (a core point
-// higher has its whole ball above the height) and its radius R - r; for a V-bit, its points up
-// to min(H, height) and its radius.
+// higher has its whole ball above the height) and its radius R - r, reach the larger of the
+// radius and half the height; for a V-bit, its points up to min(H, height) and its radius,
+// reach the hypotenuse.
 void rotation_reach_mm(const Cutter& cutter, double height_mm, double& pivot_mm, double& reach_mm);
 // The bound on the error of the split's pieces (mm), turning by angle_rad in all.
 double rotation_error_mm(const Cutter& cutter, double height_mm, double angle_rad, const TurningSplit& split);
