@@ -76,8 +76,10 @@ bool TranslationSweep::start_dominates(const Eigen::Vector3d& x) const {
 
 namespace {
 
-// min over t in [0, 1] of a convex f given by eval(t, f, slope) (slope: f's derivative, or
-// where f has a kink any slope between its one-sided ones): f' goes from negative to
+// min over t in [0, 1] of a convex f given by eval(t, f, num, den), its slope num / den with
+// den > 0 (f's derivative, or where f has a kink any slope between its one-sided ones; the
+// division only where the value is needed: at an end that is the minimum its sign decides,
+// and the sweep's march mostly ends there): f' goes from negative to
 // positive once, so the minimum is found on a bracket [a, b] with f'(a) < 0 < f'(b) by secant
 // steps on f' (bisection when a step would not shrink the bracket enough). The tangents at a
 // and b meet below the minimum, which gives a lower bound: the search stops when the best
@@ -88,11 +90,13 @@ double convex_minimum(Eval&& eval, double delta_length, double far) {
   // The end first: the march comes at the sweep mostly from ahead of the move (W5's bull-nose
   // rows: 79 % of these end at t = 1, 17 % at t = 0), and f convex takes its minimum at an end
   // whose slope points away from the other (both only where f is constant).
-  double a = 0.0, b = 1.0, fa, ga, fb, gb;
-  eval(b, fb, gb);
-  if (gb <= 0.0) return fb;
-  eval(a, fa, ga);
-  if (ga >= 0.0) return fa;
+  double a = 0.0, b = 1.0, fa, fb, num, den;
+  eval(b, fb, num, den);
+  if (num <= 0.0) return fb;
+  double gb = num / den;
+  eval(a, fa, num, den);
+  if (num >= 0.0) return fa;
+  double ga = num / den;
   double best = std::min(fa, fb);
   for (int iteration = 0; iteration < 200; ++iteration) {
     // The tangents at a and b meet at t_x, below the convex f's minimum.
@@ -105,8 +109,9 @@ double convex_minimum(Eval&& eval, double delta_length, double far) {
     double t = a - ga * (b - a) / (gb - ga);  // the secant root of f'
     const double width = b - a;
     if (!(t > a + 0.1 * width && t < b - 0.1 * width)) t = 0.5 * (a + b);
-    double ft, gt;
-    eval(t, ft, gt);
+    double ft;
+    eval(t, ft, num, den);
+    const double gt = num / den;
     best = std::min(best, ft);
     if (gt == 0.0) return best;
     if (gt < 0.0) {
@@ -125,25 +130,29 @@ double convex_minimum(Eval&& eval, double delta_length, double far) {
 double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const {
   const Eigen::Vector3d& d = delta_tool_;
   const double mid = 0.5 * (core_.z_low_mm + core_.z_high_mm), half = 0.5 * (core_.z_high_mm - core_.z_low_mm);
-  auto eval = [&](double t, double& f, double& slope) {
+  auto eval = [&](double t, double& f, double& num, double& den) {
     const Eigen::Vector3d p = y - t * d;
     // sqrt of the sum of squares, not hypot: no overflow at mm scale, and hypot was 42 % of
     // a tilted bull-nose's cut (perf, W5's first rows).
     const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
     const double dr = rho - core_.core_radius_mm;
-    const double dr_slope = rho > 0.0 ? -(p.x() * d.x() + p.y() * d.y()) / rho : 0.0;
     const double q = p.z() - mid;
     const double dz = std::abs(q) - half;
     const double dz_slope = q > 0.0 ? -d.z() : q < 0.0 ? d.z() : 0.0;
+    // dr's slope is -(p.d)_xy / rho (0 on the axis).
+    const double radial = rho > 0.0 ? -(p.x() * d.x() + p.y() * d.y()) : 0.0;
     if (dr > 0.0 && dz > 0.0) {
       f = std::sqrt(dr * dr + dz * dz);
-      slope = (dr * dr_slope + dz * dz_slope) / f;
+      num = dr * (radial / rho) + dz * dz_slope;
+      den = f;
     } else if (dr > 0.0 || (dz <= 0.0 && dr >= dz)) {
       f = dr;
-      slope = dr_slope;
+      num = radial;
+      den = rho > 0.0 ? rho : 1.0;
     } else {
       f = dz;
-      slope = dz_slope;
+      num = dz_slope;
+      den = 1.0;
     }
   };
   return convex_minimum(eval, delta_length_, far);
@@ -155,13 +164,14 @@ double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, doubl
 // raster's run, in the mesher.)
 double TranslationSweep::vbit_sweep_distance(const Eigen::Vector3d& y, double far) const {
   const Eigen::Vector3d& d = delta_tool_;
-  auto eval = [&](double t, double& f, double& slope) {
+  auto eval = [&](double t, double& f, double& num, double& den) {
     const Eigen::Vector3d p = y - t * d;
     const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
     double g_rho, g_z;
     f = vbit_profile_distance(cutter_, rho, p.z(), g_rho, g_z);
     // On the axis the distance is level across it (a solid of revolution).
-    slope = -((rho > 0.0 ? g_rho * (p.x() * d.x() + p.y() * d.y()) / rho : 0.0) + g_z * d.z());
+    num = -((rho > 0.0 ? g_rho * (p.x() * d.x() + p.y() * d.y()) / rho : 0.0) + g_z * d.z());
+    den = 1.0;
   };
   return convex_minimum(eval, delta_length_, far);
 }
