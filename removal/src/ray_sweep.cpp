@@ -681,12 +681,7 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
         const int n =
             not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, true, hit, todo);
         bracket_avx2(axis, w, n, todo, u + first, capsule_lo, capsule_hi, capsule_hit);
-        for (int j = 0; j < n; ++j) {
-          const int c = todo[j], k = first + c;
-          if (capsule_hit[c])
-            hit[k] = bracketed(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], capsule_lo[c], capsule_hi[c],
-                               lo[k], hi[k]);
-        }
+        bracketed_lanes(axis, w, first, n, todo, u, bottom, top, capsule_lo, capsule_hi, capsule_hit, lo, hi, hit);
       }
       return;
     }
@@ -1570,18 +1565,26 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
   return bracketed(axis, o, bottom, top, capsule_lo, capsule_hi, lo, hi);
 }
 
-bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
-                         double& lo, double& hi) const {
+bool RaySweep::bracket_ends(int axis, const Vector3d& o, double bottom, double top, double capsule_lo,
+                            double capsule_hi, Bracket& b, bool& hit, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = sweep_.bounds();
   const double ak = tool_axis_[axis];
-  const double sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
-  const double sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
-  if (!(sa <= sb)) return false;
+  b.sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
+  b.sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
+  if (!(b.sa <= b.sb)) {
+    hit = false;
+    return true;
+  }
   // A bull-nose's ends where they are known without the march: the bracket's end in the band
   // (band_), or the point where the ray crosses the sweep's lowest plane inside the lowest
   // instance's flat bottom.
-  bool exact_lo = false, exact_hi = false;
-  double known_lo = capsule_lo, known_hi = capsule_hi;
+  bool& exact_lo = b.exact_lo;
+  bool& exact_hi = b.exact_hi;
+  double& known_lo = b.known_lo;
+  double& known_hi = b.known_hi;
+  exact_lo = exact_hi = false;
+  known_lo = capsule_lo;
+  known_hi = capsule_hi;
   if (band_) {
     // Heights along the axis above the first tip: h(s) = oa + s ak.
     const double oa = (o[0] - p0_[0]) * tool_axis_[0] + (o[1] - p0_[1]) * tool_axis_[1] +
@@ -1609,12 +1612,176 @@ bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top,
       }
     }
   }
-  if ((exact_lo && known_lo > top) || (exact_hi && known_hi < bottom)) return false;  // all material beside it
+  if ((exact_lo && known_lo > top) || (exact_hi && known_hi < bottom)) {  // all material beside it
+    hit = false;
+    return true;
+  }
   if (exact_lo && exact_hi) {
     lo = known_lo;
     hi = known_hi;
+    hit = true;
     return true;
   }
+  return false;
+}
+
+void RaySweep::march_lanes(int axis, double w, int n, const MarchJob* jobs, double* root, bool* found,
+                           bool* converged) const {
+  // Four marches at a time, each in its slot until it ends, then the next job in that slot.
+  struct Slot {
+    int job = -1, step = 0;
+    bool started = false;
+    double s0 = 0, f0 = 0, s1 = 0, dir = 0;
+  };
+  Slot slot[4];
+  int next = 0;
+  auto end = [&](Slot& sl, bool is_found, bool is_converged, double at) {
+    found[sl.job] = is_found;
+    converged[sl.job] = is_converged;
+    if (is_found) root[sl.job] = at;
+    sl.job = -1;
+  };
+  for (;;) {
+    Vector3d points[4];
+    int which[4], m = 0;
+    for (int i = 0; i < 4; ++i) {
+      Slot& sl = slot[i];
+      if (sl.job < 0 && next < n) {
+        const MarchJob& job = jobs[next];
+        sl = Slot{next++, 0, false, job.from, 0.0, 0.0, job.toward > job.from ? 1.0 : -1.0};
+      }
+      if (sl.job < 0) continue;
+      points[m] = ray_point(axis, jobs[sl.job].u, w, sl.started ? sl.s1 : sl.s0);
+      which[m++] = i;
+    }
+    if (m == 0) return;
+    double f[4];
+    sweep_.distances(points, m, f);
+    for (int j = 0; j < m; ++j) {
+      Slot& sl = slot[which[j]];
+      const double toward = jobs[sl.job].toward, dir = sl.dir;
+      if (!sl.started) {
+        // march_to_root's start: f at `from`, then the first sphere step.
+        sl.started = true;
+        sl.f0 = f[j];
+        if (sl.f0 <= kGeneralSweepTolerance_mm) {
+          end(sl, true, true, sl.s0);
+          continue;
+        }
+        sl.s1 = sl.s0 + dir * sl.f0;
+      } else {
+        const double f1 = f[j];
+        if (f1 <= kGeneralSweepTolerance_mm) {
+          end(sl, true, true, sl.s1);
+          continue;
+        }
+        if (f1 >= sl.f0) {
+          end(sl, false, true, 0.0);
+          continue;
+        }
+        const double secant = sl.s1 + (sl.s1 - sl.s0) * f1 / (sl.f0 - f1);
+        const double sphere = sl.s1 + dir * f1;
+        sl.s0 = sl.s1;
+        sl.f0 = f1;
+        sl.s1 = dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere);
+        if (++sl.step == 100) {
+          end(sl, false, false, 0.0);
+          continue;
+        }
+      }
+      if ((sl.s1 - toward) * dir > 0.0) end(sl, false, true, 0.0);
+    }
+  }
+}
+
+void RaySweep::bracketed_lanes(int axis, double w, int first, int n, const int* todo, const double* u,
+                               const double* bottom, const double* top, const double* capsule_lo,
+                               const double* capsule_hi, const bool* capsule_hit, double* lo, double* hi,
+                               bool* hit) const {
+  // The rays the ends leave open, and their marches from below, then from above.
+  int open[kLanesBlock], n_open = 0;
+  Bracket bracket[kLanesBlock];
+  MarchJob jobs[kLanesBlock];
+  int job_of[kLanesBlock];
+  double root[kLanesBlock];
+  bool found[kLanesBlock], converged[kLanesBlock];
+  bool lo_found[kLanesBlock], lo_converged[kLanesBlock];
+  for (int j = 0; j < n; ++j) {
+    const int c = todo[j], k = first + c;
+    if (!capsule_hit[c]) continue;
+    bool decided_hit;
+    Bracket& b = bracket[n_open];
+    if (bracket_ends(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], capsule_lo[c], capsule_hi[c], b,
+                     decided_hit, lo[k], hi[k])) {
+      hit[k] = decided_hit;
+      continue;
+    }
+    open[n_open++] = j;
+  }
+  int n_jobs = 0;
+  for (int i = 0; i < n_open; ++i) {
+    const int k = first + todo[open[i]];
+    job_of[i] = -1;
+    if (bracket[i].exact_lo) continue;
+    job_of[i] = n_jobs;
+    jobs[n_jobs++] = MarchJob{u[k], bracket[i].sa, bracket[i].sb};
+  }
+  if (n_jobs > 0) march_lanes(axis, w, n_jobs, jobs, root, found, converged);
+  n_jobs = 0;
+  for (int i = 0; i < n_open; ++i) {
+    const int k = first + todo[open[i]];
+    const Bracket& b = bracket[i];
+    if (b.exact_lo) {
+      lo[k] = b.known_lo;
+      lo_found[i] = lo_converged[i] = true;
+    } else {
+      const int job = job_of[i];
+      lo_found[i] = found[job];
+      lo_converged[i] = converged[job];
+      if (found[job]) lo[k] = root[job];
+    }
+    job_of[i] = -1;
+    if (!lo_found[i] || b.exact_hi) continue;
+    job_of[i] = n_jobs;
+    jobs[n_jobs++] = MarchJob{u[k], b.sb, b.sa};
+  }
+  if (n_jobs > 0) march_lanes(axis, w, n_jobs, jobs, root, found, converged);
+  // bracketed()'s decisions; a march out of steps takes bracketed() whole.
+  for (int i = 0; i < n_open; ++i) {
+    const int c = todo[open[i]], k = first + c;
+    const Bracket& b = bracket[i];
+    if (lo_found[i]) {
+      if (b.exact_hi) {
+        hi[k] = b.known_hi;
+        hit[k] = true;
+        continue;
+      }
+      const int job = job_of[i];
+      if (found[job]) hi[k] = root[job];
+      if (found[job] && hi[k] >= lo[k]) {
+        hit[k] = true;
+        continue;
+      }
+      if (converged[job]) {
+        hit[k] = false;
+        continue;
+      }
+    } else if (lo_converged[i]) {
+      hit[k] = false;
+      continue;
+    }
+    hit[k] =
+        bracketed(axis, ray_point(axis, u[k], w, 0.0), bottom[k], top[k], capsule_lo[c], capsule_hi[c], lo[k], hi[k]);
+  }
+}
+
+bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
+                         double& lo, double& hi) const {
+  Bracket b;
+  bool hit;
+  if (bracket_ends(axis, o, bottom, top, capsule_lo, capsule_hi, b, hit, lo, hi)) return hit;
+  const bool exact_lo = b.exact_lo, exact_hi = b.exact_hi;
+  const double sa = b.sa, sb = b.sb, known_lo = b.known_lo, known_hi = b.known_hi;
   // The point built whole from scalars (no store by index under a vector load: see above).
   const double o0 = o[0], o1 = o[1], o2 = o[2];
   auto f = [&](double s) {

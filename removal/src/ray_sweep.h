@@ -162,6 +162,27 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // The rest of general() given the bracket's interval [capsule_lo, capsule_hi] on the ray.
   bool bracketed(int axis, const Eigen::Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
                  double& lo, double& hi) const;
+  // bracketed()'s start: the march's range [sa, sb] and the ends known without it. True where
+  // that decides the ray (hit; lo and hi where it is hit), false where it takes the march.
+  struct Bracket {
+    double sa, sb, known_lo, known_hi;
+    bool exact_lo, exact_hi;
+  };
+  bool bracket_ends(int axis, const Eigen::Vector3d& o, double bottom, double top, double capsule_lo, double capsule_hi,
+                    Bracket& b, bool& hit, double& lo, double& hi) const;
+  // bracketed()'s march to the sweep's first zero for n rays of the row at w, from `from`
+  // toward `toward` along the ray at u (root, found and converged as march_to_root gives
+  // them): the same steps ray by ray, four rays' distances taken together
+  // (TranslationSweep::distances).
+  struct MarchJob {
+    double u, from, toward;
+  };
+  void march_lanes(int axis, double w, int n, const MarchJob* jobs, double* root, bool* found, bool* converged) const;
+  // bracketed() for the rays todo[0 .. n - 1] of a row whose bracket hit (capsule_hit), the
+  // marches four rays at a time; the same results.
+  void bracketed_lanes(int axis, double w, int first, int n, const int* todo, const double* u, const double* bottom,
+                       const double* top, const double* capsule_lo, const double* capsule_hi, const bool* capsule_hit,
+                       double* lo, double* hi, bool* hit) const;
   // Bull-nose (band_): between the heights z_low = r and z_high above its tip the cutter is a
   // cylinder of radius R, and so is the bracket's capsule (the core's axis segment grown by
   // R). A point at a height strictly inside (z_low, z_high) above every instance's tip

@@ -1224,7 +1224,9 @@ TEST(DexelStock, CurvedWallMergesIntoBlocks) {
     const Eigen::Vector3d& a = s.mesh.vertices_mm[static_cast<std::size_t>(t[0])];
     const Eigen::Vector3d& b = s.mesh.vertices_mm[static_cast<std::size_t>(t[1])];
     const Eigen::Vector3d& c = s.mesh.vertices_mm[static_cast<std::size_t>(t[2])];
-    if (wall(a) && wall(b) && wall(c)) EXPECT_LT(std::abs(radial((a + b + c) / 3.0) - 4.0), 0.005);
+    if (wall(a) && wall(b) && wall(c)) {
+      EXPECT_LT(std::abs(radial((a + b + c) / 3.0) - 4.0), 0.005);
+    }
   }
 }
 

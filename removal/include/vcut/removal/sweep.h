@@ -31,6 +31,10 @@ class TranslationSweep {
   // (a cheaper lower bound); elsewhere the exact distance.
   double distance(const Eigen::Vector3d& x_mm, double far_mm = std::numeric_limits<double>::infinity()) const;
   const Eigen::AlignedBox3d& bounds() const { return bounds_; }
+  // distance(x[j]) for j < n, the same values to the bit. A tilted flat or bull-nose cutter in
+  // general motion (its march's case) takes the points' first steps side by side: each is a
+  // chain of square roots, and four at once keep the processor busy where one waits.
+  void distances(const Eigen::Vector3d* x_mm, int n, double* out) const;
 
   // A ball end's sweep is the sweep of its core (a segment on the axis) grown by the ball's
   // radius: the point q_mm of the core's sweep nearest x_mm (workpiece frame), so that
@@ -62,6 +66,9 @@ class TranslationSweep {
   // The General kind for a cylinder core: the distance to the core's sweep (before the
   // rounding), exact to kGeneralSweepTolerance_mm, or any value >= far where it is that far.
   double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
+  // cylinder_sweep_distance's f(t) at t: its value and slope num / den (den > 0).
+  void cylinder_eval(const Eigen::Vector3d& y, double t, double& f, double& num, double& den) const;
+  Eigen::Vector3d tool_frame(const Eigen::Vector3d& x) const { return to_tool_ * (x - origin_); }
   // The same for a V-bit (its whole profile).
   double vbit_sweep_distance(const Eigen::Vector3d& y, double far) const;
 
