@@ -208,6 +208,43 @@ TEST(TranslationSweep, GeneralSweepNearItsSurface) {
     }
 }
 
+// distances() takes a tilted flat or bull-nose cutter's points four at a time (the march's
+// lanes): the same values as distance(), to the bit, for groups of 1 to 9 points, for every
+// cutter and kind of motion (those it does not take together go one by one); on a long
+// general move, points behind, ahead and beside its middle, whose nearest instance is the
+// start, the end or one between.
+TEST(TranslationSweep, DistancesTogetherAreEachDistance) {
+  std::mt19937 rng(29);
+  const Cutter cutters[] = {cutter(CutterType::Flat, 10, 0, 15), cutter(CutterType::BullNose, 8, 1, 25),
+                            cutter(CutterType::Ball, 6, 3, 15), vbit(10, 90, 15)};
+  Move tilted = move({0, 0, 0}, {8, 3, 1.5});
+  tilted.axis = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+  const Move moves[] = {tilted, move({0, 0, 0}, {3, 4, 2}), move({0, 0, 0}, {5, 0, 0}), move({0, 0, 0}, {0, 0, 4})};
+  std::uniform_real_distribution<double> unit(0.0, 1.0), across(-7, 7), along(-3, 20);
+  int compared = 0;
+  for (const Cutter& c : cutters)
+    for (const Move& m : moves) {
+      const TranslationSweep sweep(c, m);
+      for (int n = 1; n <= 9; ++n)
+        for (int trial = 0; trial < 40; ++trial) {
+          std::vector<Eigen::Vector3d> x(static_cast<std::size_t>(n));
+          for (Eigen::Vector3d& p : x) {
+            const double t = -0.5 + 2.0 * unit(rng);  // behind the start to ahead of the end
+            p = m.start_mm + t * (m.end_mm - m.start_mm) + Eigen::Vector3d(across(rng), across(rng), along(rng));
+          }
+          std::vector<double> together(static_cast<std::size_t>(n));
+          sweep.distances(x.data(), n, together.data());
+          for (int j = 0; j < n; ++j) {
+            const double alone = sweep.distance(x[static_cast<std::size_t>(j)]);
+            EXPECT_EQ(together[static_cast<std::size_t>(j)], alone)
+                << to_string(c.type) << " point " << j << " of " << n;
+            ++compared;
+          }
+        }
+    }
+  EXPECT_EQ(compared, 4 * 4 * 40 * 45);
+}
+
 TEST(TranslationSweep, BoundsContainTheCutterAtBothEnds) {
   const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
   const TranslationSweep sweep(flat, move({0, 0, 0}, {10, 0, -3}));
