@@ -84,8 +84,9 @@ namespace {
 // steps on f' (bisection when a step would not shrink the bracket enough). The tangents at a
 // and b meet below the minimum, which gives a lower bound: the search stops when the best
 // value found is within kGeneralSweepTolerance_mm of it (the error bound), or when it is at
-// least `far`.
-// The search between the ends once neither is the minimum (ga < 0 < gb).
+// least `far`. convex_minimum_between is that search from the two ends once neither is the
+// minimum (f and f' at t = 0: fa, ga < 0; at t = 1: fb, gb > 0); convex_minimum looks at the
+// ends first.
 template <class Eval>
 double convex_minimum_between(Eval&& eval, double delta_length, double far, double fa, double ga, double fb,
                               double gb) {
