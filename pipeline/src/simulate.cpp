@@ -204,6 +204,18 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tol
   // The shank and holder of every tool (their cutters follow the tools' in the list).
   bodies_ = removal::add_tool_bodies(tools);
   cutters_ = std::move(tools.cutters);
+  // The parts a long ball end mill turns in, after the shanks and holders (no body of their
+  // own: the shank and holder follow the tool's moves).
+  const std::size_t n_tools = cutter_index_.size();
+  parts_.resize(n_tools);
+  parts_first_.assign(n_tools, -1);
+  for (std::size_t i = 0; i < n_tools; ++i) {
+    parts_[i] = removal::cutter_parts(cutters_[i]);
+    if (parts_[i].size() < 2) continue;
+    parts_first_[i] = static_cast<int>(cutters_.size());
+    for (const removal::CutterPart& part : parts_[i]) cutters_.push_back(part.cutter);
+  }
+  bodies_.resize(cutters_.size());
   if (run.streamed && !actual) {
     // Only the poses: the axis values are not needed for the moves unless a block's poses
     // start from the previous sample's axes (PoseRun::poses_need_axes).
@@ -277,11 +289,10 @@ bool CutMoves::step(kinematics::ToolPose& from, kinematics::ToolPose& to, int& b
   return true;
 }
 
-removal::TurningSplit CutMoves::turning_split(int cutter, const kinematics::ToolPose& from,
-                                              const kinematics::ToolPose& to) const {
+double CutMoves::turning_height(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const {
   const removal::Cutter& c = cutters_[static_cast<std::size_t>(cutter)];
   constexpr double kWhole = std::numeric_limits<double>::infinity();
-  if (stock_box_.isEmpty()) return removal::five_axis_split(c, kWhole, from.axis, to.axis, rotation_bound_mm_);
+  if (stock_box_.isEmpty()) return kWhole;
   const removal::ToolBody& body = bodies_[static_cast<std::size_t>(cutter)];
   // The pieces' tips leave the tip's path: the box grown for that (removal/move.h).
   const Eigen::AlignedBox3d box = removal::box_for_pieces(c, from.axis, to.axis, stock_box_);
@@ -298,7 +309,7 @@ removal::TurningSplit CutMoves::turning_split(int cutter, const kinematics::Tool
       (body.holder >= 0 &&
        highest(cutters_[static_cast<std::size_t>(body.holder)].radius_mm()) >= body.holder_height_mm))
     height_mm = kWhole;
-  return removal::five_axis_split(c, height_mm, from.axis, to.axis, rotation_bound_mm_);
+  return height_mm;
 }
 
 void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
@@ -315,9 +326,63 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   m.rapid = b.kind == kinematics::MotionKind::Rapid;
   const bool turns = (from.axis - to.axis).norm() > 1e-12;
   if (!turns && (m.end_mm - m.start_mm).norm() < 1e-12) return;
+  // With probes, a feed move made with the spindle stopped is probed before it cuts.
+  auto stopped_probe = [&](const removal::Move& piece) {
+    if (!probes_ || piece.rapid || b.spindle != kinematics::SpindleState::Off) return;
+    removal::Move stopped = piece;
+    stopped.rapid = true;
+    stopped.probe = removal::ProbeKind::SpindleStopped;
+    out.push_back(stopped);
+  };
+  const double height_mm = turns ? turning_height(m.cutter, from, to) : 0.0;
+  const removal::TurningSplit whole = turns ? removal::part_split({cutters_[static_cast<std::size_t>(m.cutter)], 0.0},
+                                                                  height_mm, from.axis, to.axis, rotation_bound_mm_)
+                                            : removal::TurningSplit{};
+  const std::vector<removal::CutterPart>& parts = parts_[static_cast<std::size_t>(m.cutter)];
+  const int first_part = parts_first_[static_cast<std::size_t>(m.cutter)];
+  if (turns && first_part >= 0 && !m.rapid) {
+    // Part by part (a rapid stays whole: its probe measures the longest overlap along a ray
+    // with the whole tool), the pieces in the order of the instants they end at (the parts'
+    // pieces are of different lengths), and with probes the shank and holder along the whole
+    // cutter's pieces, each after the cuts up to its instant, as they follow the whole's.
+    struct Timed {
+      double until;
+      bool probe;
+      removal::Move move;
+    };
+    std::vector<Timed> timed;
+    std::vector<removal::Move> pieces;
+    for (std::size_t j = 0; j < parts.size(); ++j) {
+      const removal::TurningSplit split =
+          removal::part_split(parts[j], height_mm, from.axis, to.axis, rotation_bound_mm_);
+      pieces.clear();
+      removal::append_part_pieces(pieces, m, from.axis, to.axis, parts[j], first_part + static_cast<int>(j), split);
+      for (std::size_t k = 0; k < pieces.size(); ++k)
+        timed.push_back({static_cast<double>(k + 1) / static_cast<double>(pieces.size()), false, pieces[k]});
+    }
+    if (probes_) {
+      pieces.clear();
+      removal::append_five_axis_move(pieces, m, from.axis, to.axis, whole);
+      std::vector<removal::Move> bodies;
+      for (std::size_t k = 0; k < pieces.size(); ++k) {
+        bodies.clear();
+        removal::append_body_probes(bodies, pieces[k], bodies_[static_cast<std::size_t>(m.cutter)]);
+        for (const removal::Move& probe : bodies)
+          timed.push_back({static_cast<double>(k + 1) / static_cast<double>(pieces.size()), true, probe});
+      }
+    }
+    std::stable_sort(timed.begin(), timed.end(), [](const Timed& p, const Timed& q) {
+      return p.until < q.until || (p.until == q.until && !p.probe && q.probe);
+    });
+    for (const Timed& t : timed) {
+      if (!t.probe) stopped_probe(t.move);
+      out.push_back(t.move);
+    }
+    return;
+  }
   const std::size_t first_piece = out.size();
   if (turns) {
-    removal::append_five_axis_move(out, m, from.axis, to.axis, turning_split(m.cutter, from, to));
+    removal::append_five_axis_move(out, m, from.axis, to.axis, whole);
   } else {
     out.push_back(m);
   }
@@ -325,12 +390,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   const std::vector<removal::Move> pieces(out.begin() + static_cast<std::ptrdiff_t>(first_piece), out.end());
   out.resize(first_piece);
   for (const removal::Move& piece : pieces) {
-    if (!piece.rapid && b.spindle == kinematics::SpindleState::Off) {
-      removal::Move stopped = piece;
-      stopped.rapid = true;
-      stopped.probe = removal::ProbeKind::SpindleStopped;
-      out.push_back(stopped);
-    }
+    stopped_probe(piece);
     out.push_back(piece);
     removal::append_body_probes(out, piece, bodies_[static_cast<std::size_t>(piece.cutter)]);
   }

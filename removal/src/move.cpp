@@ -98,8 +98,12 @@ double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, co
 
 Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                                    const Eigen::AlignedBox3d& box) {
-  double pivot_mm, reach_mm;
-  rotation_reach_mm(cutter, std::numeric_limits<double>::infinity(), pivot_mm, reach_mm);
+  double pivot_mm = 0.0;
+  for (const CutterPart& part : cutter_parts(cutter)) {
+    double pivot, reach_mm;
+    rotation_reach_mm(part.cutter, std::numeric_limits<double>::infinity(), pivot, reach_mm);
+    pivot_mm = std::max(pivot_mm, part.offset_mm + pivot);
+  }
   const double angle = angle_between(axis0.normalized(), axis1.normalized());
   const Eigen::Vector3d off = Eigen::Vector3d::Constant(pivot_mm * (angle / 2.0 + angle * angle / 8.0));
   return {box.min() - off, box.max() + off};
@@ -126,6 +130,48 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
     piece.end_mm = c == 0.0 ? to : Eigen::Vector3d(to - c * piece.axis);
     out.push_back(piece);
     from = to;
+  }
+}
+
+std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
+  const double r = cutter.corner_radius_mm, core = cutter.flute_length_mm - 2.0 * r;
+  if (cutter.type != CutterType::Ball || !(r > 0.0) || !(core > 2.0 * r)) return {{cutter, 0.0}};
+  const int n = static_cast<int>(std::ceil(core / r - 1e-9));
+  std::vector<CutterPart> parts;
+  for (int j = 0; j < n; ++j) {
+    CutterPart part{cutter, j * r};
+    part.cutter.flute_length_mm = std::min(r, core - j * r) + 2.0 * r;
+    part.cutter.length_mm = part.cutter.flute_length_mm;
+    parts.push_back(part);
+  }
+  return parts;
+}
+
+TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::Vector3d& axis0,
+                        const Eigen::Vector3d& axis1, double bound_mm) {
+  // A part whose core starts above height + r has its whole ball above the height.
+  if (part.offset_mm > height_mm) return {0, 0.0};
+  TurningSplit split = five_axis_split(part.cutter, height_mm - part.offset_mm, axis0, axis1, bound_mm);
+  const double angle = angle_between(axis0.normalized(), axis1.normalized());
+  if (angle == 0.0) return split;  // no turn: the tip's own path
+  double pivot_mm, reach_mm;
+  rotation_reach_mm(part.cutter, height_mm - part.offset_mm, pivot_mm, reach_mm);
+  split.pivot_mm += part.offset_mm;
+  while (split.pieces < kMaxPieces && split_error_mm(reach_mm, angle, split) > bound_mm) ++split.pieces;
+  return split;
+}
+
+void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
+                        const Eigen::Vector3d& axis1, const CutterPart& part, int part_cutter,
+                        const TurningSplit& split) {
+  if (split.pieces == 0) return;
+  Move m = move;
+  m.cutter = part_cutter;
+  const std::size_t first = out.size();
+  append_five_axis_move(out, m, axis0, axis1, split);
+  for (std::size_t i = first; i < out.size(); ++i) {
+    out[i].start_mm += part.offset_mm * out[i].axis;
+    out[i].end_mm += part.offset_mm * out[i].axis;
   }
 }
 

@@ -285,5 +285,93 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
   }
 }
 
+// A long ball end mill turns part by part (cutter_parts, part_split, append_part_pieces). The
+// parts' union is the cutter: outside it the least of the parts' distances is the cutter's
+// (the distance to a union), inside it some part holds the point. Inside the stock's box
+// (grown by box_for_pieces, for the top part's pivot) the parts' pieces sweep within the bound
+// of the rigid motion's and the rigid motion within the bound of theirs (brute force over
+// 4,000 instances), the parts whose core starts above the height left out.
+TEST(FiveAxisSweep, LongBallTurnsPartByPartWithinTheBound) {
+  constexpr int kInstances = 4000;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Cutter& c : {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15)}) {
+    const double r = c.corner_radius_mm;
+    const std::vector<CutterPart> parts = cutter_parts(c);
+    ASSERT_EQ(parts.size(), static_cast<std::size_t>(std::ceil((c.flute_length_mm - 2 * r) / r)));
+    int outside = 0, inside = 0;
+    for (int i = 0; i < 20000; ++i) {
+      const Eigen::Vector3d y(8 * unit(rng) - 4, 8 * unit(rng) - 4, c.flute_length_mm * 1.2 * unit(rng) - 2);
+      const double whole = cutter_distance(c, y);
+      double least = std::numeric_limits<double>::infinity();
+      for (const CutterPart& part : parts)
+        least = std::min(least, cutter_distance(part.cutter, y - part.offset_mm * Eigen::Vector3d::UnitZ()));
+      if (whole > 0.0) {
+        EXPECT_NEAR(least, whole, 1e-12) << y.transpose();
+        ++outside;
+      } else {
+        EXPECT_LE(least, 0.0) << y.transpose();
+        ++inside;
+      }
+    }
+    EXPECT_GT(inside, 1000);
+    EXPECT_GT(outside, 1000);
+
+    // A turn of 25 deg about a tilted axis while the tip moves, the box's top 6 mm above the
+    // tip: the upper parts stay out of it.
+    const Eigen::AlignedBox3d box(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 10, 6));
+    const double tilt = 25.0 * M_PI / 180.0;
+    const Eigen::Vector3d a0(0, std::sin(tilt), std::cos(tilt));
+    const Eigen::Vector3d a1 = Eigen::Vector3d(std::sin(tilt) * 0.3, std::sin(tilt), std::cos(tilt)).normalized();
+    const RigidMotion motion{{0, 0, 0}, {1.5, 0.5, 0.2}, a0, a1};
+    const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+    const Eigen::AlignedBox3d grown = box_for_pieces(c, a0, a1, box);
+    const double top_pivot = parts.back().offset_mm + 0.5 * parts.back().cutter.flute_length_mm;  // its core's middle
+    EXPECT_NEAR(grown.max().z() - box.max().z(), top_pivot * (angle / 2 + angle * angle / 8), 1e-12);
+    const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, grown);
+    ASSERT_LT(height, c.flute_length_mm - 2 * r);
+    for (const double bound : {0.05, 0.01}) {
+      Move base;
+      base.start_mm = motion.p0;
+      base.end_mm = motion.p1;
+      std::vector<Move> pieces;
+      int left_out = 0;
+      for (std::size_t j = 0; j < parts.size(); ++j) {
+        const TurningSplit split = part_split(parts[j], height, a0, a1, bound);
+        if (split.pieces == 0) {
+          EXPECT_GT(parts[j].offset_mm, height);
+          ++left_out;
+        }
+        append_part_pieces(pieces, base, a0, a1, parts[j], static_cast<int>(j), split);
+      }
+      EXPECT_GT(left_out, 0);
+      std::vector<TranslationSweep> sweeps;
+      for (const Move& m : pieces) sweeps.emplace_back(parts[static_cast<std::size_t>(m.cutter)].cutter, m);
+      const double brute_error =
+          ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), c.flute_length_mm)) / (2.0 * kInstances);
+      std::uniform_real_distribution<double> x(-6, 8), yy(-6, 8), z(-2, 6);
+      int near = 0;
+      double worst = 0.0;
+      while (near < 120) {
+        const Eigen::Vector3d p(x(rng), yy(rng), z(rng));
+        const double pieces_d = pieces_distance(sweeps, p);
+        if (std::abs(pieces_d) > 0.2) continue;  // near the swept surface only
+        const double brute = brute_distance(motion, c, p, kInstances);
+        if (pieces_d <= 0.0) {
+          EXPECT_LE(brute, bound + brute_error + 1e-6) << "r " << r << " at " << p.transpose();
+        }
+        if (brute <= 0.0) {
+          EXPECT_LE(pieces_d, bound + brute_error + 1e-6) << "r " << r << " at " << p.transpose();
+        }
+        worst = std::max(worst, std::abs(pieces_d - brute));
+        ++near;
+      }
+      if (bound == 0.05) {
+        EXPECT_GT(worst, 0.1 * bound) << "r " << r << ": the error never came near the bound";
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace vcut::removal

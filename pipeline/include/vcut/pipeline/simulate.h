@@ -166,9 +166,9 @@ class CutMoves : public removal::MoveSource {
   // The counts and attribution of the moves just made (out[first..]) from one pose to the next.
   void record(const kinematics::ToolPose& from, const kinematics::ToolPose& to, const std::vector<removal::Move>& out,
               std::size_t first);
-  // The pieces a move that turns the axis from `from` to `to` is cut in, with `cutter`.
-  removal::TurningSplit turning_split(int cutter, const kinematics::ToolPose& from,
-                                      const kinematics::ToolPose& to) const;
+  // The height above the tip below which the cutter's points matter for a move that turns the
+  // axis from `from` to `to` (+inf: all of them).
+  double turning_height(int cutter, const kinematics::ToolPose& from, const kinematics::ToolPose& to) const;
   // Appends the moves from one pose to the next (of `block`).
   void moves_into(const kinematics::ToolPose& from, const kinematics::ToolPose& to, int block,
                   std::vector<removal::Move>& out) const;
@@ -178,8 +178,12 @@ class CutMoves : public removal::MoveSource {
   double rotation_bound_mm_;
   Eigen::AlignedBox3d stock_box_;  // empty: the whole tool needs the bound
   std::vector<removal::Cutter> cutters_;
-  std::map<int, int> cutter_index_;                 // T number -> cutters_
-  std::vector<removal::ToolBody> bodies_;           // the shank and holder of each tool's cutter
+  std::map<int, int> cutter_index_;        // T number -> cutters_
+  std::vector<removal::ToolBody> bodies_;  // the shank and holder of each tool's cutter
+  // Each tool's cutter's parts for turning moves (removal::cutter_parts), their cutters in
+  // cutters_ from parts_first_ (the whole cutter where it is one part).
+  std::vector<std::vector<removal::CutterPart>> parts_;
+  std::vector<int> parts_first_;
   std::size_t samples_ = 0, sample_ = 1;            // poses in all, the next one to move into
   std::optional<kinematics::Densifier> densifier_;  // a streamed run's poses
   std::vector<kinematics::PoseSample> pending_;     // of its current block
