@@ -132,14 +132,15 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
                            const Eigen::Vector3d& axis1, const TurningSplit& split);
 
 // A long ball end mill's turning moves cut part by part. The cutter is its core (the axis from
-// r to H - r) grown by r, and the union of cores' parts grown by r is the cutter (a Minkowski
-// sum takes unions apart): each part is a ball end mill of its own, its tip offset_mm up the
-// axis. A part needs the pieces for its own reach (half its core: the bound above), so the
-// parts take about as many pieces as the whole, but each piece is a short capsule where the
-// whole's was the full length: the rays across the axis meet far fewer of them (the impeller,
-// a 3 mm ball with a 12 mm core: its cut 2.1x faster). Each part's core is r long (measured:
-// the fastest of 1/2, 1, 2 and 3 r on W5's and the impeller's), the last one shorter; a ball
-// whose core is not longer than 2r, and other cutters, are one part, the whole.
+// r to H - r) grown by r, and the union of the core's parts grown by r is the cutter (a
+// Minkowski sum takes unions apart): each part is a ball end mill of its own, its tip
+// offset_mm up the axis. A part needs the pieces for its own reach (half its core: the bound
+// above), so the parts take about as many pieces as the whole, but each piece is a short
+// capsule where the whole's was the full length: the rays across the axis meet far fewer of
+// them (the impeller's 3 mm ball with a 12 mm core: its cut 1.36x faster without its shank's
+// probes). Each part's core is r long, the last one shorter (W5's ball rows, r = 3 mm: parts
+// of 2, 3 and 5 mm cut in 0.82, 0.78 and 0.92 s); a ball whose core is not longer than 2r, and
+// other cutters, are one part, the whole.
 struct CutterPart {
   Cutter cutter;
   double offset_mm = 0.0;  // the part's tip above the cutter's
