@@ -20,6 +20,10 @@ bool ListSource::next(std::vector<Move>& out, std::size_t wanted) {
 namespace {
 
 constexpr int kMaxPieces = 1 << 16;
+// A ball's parts are r of its core, but no more than this many: each takes at least a piece a
+// move (a D1 ball with a 19 mm core in W5's ball rows: 38 parts cut in 0.273 s, 8 in 0.170 s,
+// the whole cutter in 0.196 s).
+constexpr double kMaxParts = 8.0;
 
 double angle_between(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -136,11 +140,12 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
 std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
   const double r = cutter.corner_radius_mm, core = cutter.flute_length_mm - 2.0 * r;
   if (cutter.type != CutterType::Ball || !(r > 0.0) || !(core > 2.0 * r)) return {{cutter, 0.0}};
-  const int n = static_cast<int>(std::ceil(core / r - 1e-9));
+  const double length = std::max(r, core / kMaxParts);
+  const int n = static_cast<int>(std::ceil(core / length - 1e-9));
   std::vector<CutterPart> parts;
   for (int j = 0; j < n; ++j) {
-    CutterPart part{cutter, j * r};
-    part.cutter.flute_length_mm = std::min(r, core - j * r) + 2.0 * r;
+    CutterPart part{cutter, j * length};
+    part.cutter.flute_length_mm = std::min(length, core - j * length) + 2.0 * r;
     part.cutter.length_mm = part.cutter.flute_length_mm;
     parts.push_back(part);
   }

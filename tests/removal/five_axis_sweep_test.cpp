@@ -295,13 +295,17 @@ TEST(FiveAxisSweep, LongBallTurnsPartByPartWithinTheBound) {
   constexpr int kInstances = 4000;
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  for (const Cutter& c : {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15)}) {
+  for (const Cutter& c :
+       {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15), make(CutterType::Ball, 1, 0.5, 20)}) {
     const double r = c.corner_radius_mm;
     const std::vector<CutterPart> parts = cutter_parts(c);
-    ASSERT_EQ(parts.size(), static_cast<std::size_t>(std::ceil((c.flute_length_mm - 2 * r) / r)));
+    // Parts r of the core long (7 and 8 of them), or an eighth of it (the D1 ball: 38 would be r).
+    ASSERT_EQ(parts.size(), r == 0.5 ? 8u : static_cast<std::size_t>(std::ceil((c.flute_length_mm - 2 * r) / r)));
     int outside = 0, inside = 0;
     for (int i = 0; i < 20000; ++i) {
-      const Eigen::Vector3d y(8 * unit(rng) - 4, 8 * unit(rng) - 4, c.flute_length_mm * 1.2 * unit(rng) - 2);
+      const double across = 1.3 * c.radius_mm();
+      const Eigen::Vector3d y(across * (2 * unit(rng) - 1), across * (2 * unit(rng) - 1),
+                              c.flute_length_mm * 1.2 * unit(rng) - 2);
       const double whole = cutter_distance(c, y);
       double least = std::numeric_limits<double>::infinity();
       for (const CutterPart& part : parts)

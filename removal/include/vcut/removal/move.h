@@ -138,8 +138,9 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
 // above), so the parts take about as many pieces as the whole, but each piece is a short
 // capsule where the whole's was the full length: the rays across the axis meet far fewer of
 // them (the impeller's 3 mm ball with a 12 mm core: its cut 1.36x faster without its shank's
-// probes). Each part's core is r long, the last one shorter (W5's ball rows, r = 3 mm: parts
-// of 2, 3 and 5 mm cut in 0.82, 0.78 and 0.92 s); a ball whose core is not longer than 2r, and
+// probes). Each part's core is r long (W5's ball rows, r = 3 mm: parts of 2, 3 and 5 mm cut in
+// 0.82, 0.78 and 0.92 s), or an eighth of the core where that is longer (every part takes a
+// piece a move at least), the last one shorter; a ball whose core is not longer than 2r, and
 // other cutters, are one part, the whole.
 struct CutterPart {
   Cutter cutter;
