@@ -183,9 +183,10 @@ std::optional<removal::TriangleMesh> design_of(const io::Job& job) {
 // 3. Moves: every block's tool must be known; a five-axis move (the axis turning) is cut as
 // translation pieces within the turn tolerance of the rigid motion (min(v/10, gouge
 // tolerance / 2) unless the job sets engine.turn_tolerance: removal::five_axis_split, for
-// the part of the cutter that can come inside the stock's box: turning_split). With
-// `probes`, the tool's shank and holder follow every move and a feed move made with the
-// spindle stopped is probed before it cuts (collisions).
+// the part of the cutter that can come inside the stock's box: turning_height; a long ball
+// end mill part by part: removal::cutter_parts). With `probes`, the tool's shank and holder
+// follow every move and a feed move made with the spindle stopped is probed before it cuts
+// (collisions).
 CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tolerance_mm)
     : run_(run), actual_(actual), probes_(probes), rotation_bound_mm_(turn_tolerance_mm) {
   const kinematics::Program& program = run.program;
