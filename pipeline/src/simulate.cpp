@@ -216,7 +216,6 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tol
     parts_first_[i] = static_cast<int>(cutters_.size());
     for (const removal::CutterPart& part : parts_[i]) cutters_.push_back(part.cutter);
   }
-  bodies_.resize(cutters_.size());
   if (run.streamed && !actual) {
     // Only the poses: the axis values are not needed for the moves unless a block's poses
     // start from the previous sample's axes (PoseRun::poses_need_axes).
@@ -336,9 +335,11 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
     out.push_back(stopped);
   };
   const double height_mm = turns ? turning_height(m.cutter, from, to) : 0.0;
-  const removal::TurningSplit whole = turns ? removal::part_split({cutters_[static_cast<std::size_t>(m.cutter)], 0.0},
-                                                                  height_mm, from.axis, to.axis, rotation_bound_mm_)
-                                            : removal::TurningSplit{};
+  // The whole cutter's split (its pieces cut, or the shank and holder follow them).
+  auto whole = [&] {
+    return removal::five_axis_split(cutters_[static_cast<std::size_t>(m.cutter)], height_mm, from.axis, to.axis,
+                                    rotation_bound_mm_);
+  };
   const std::vector<removal::CutterPart>& parts = parts_[static_cast<std::size_t>(m.cutter)];
   const int first_part = parts_first_[static_cast<std::size_t>(m.cutter)];
   if (turns && first_part >= 0 && !m.rapid) {
@@ -363,7 +364,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
     }
     if (probes_) {
       pieces.clear();
-      removal::append_five_axis_move(pieces, m, from.axis, to.axis, whole);
+      removal::append_five_axis_move(pieces, m, from.axis, to.axis, whole());
       std::vector<removal::Move> bodies;
       for (std::size_t k = 0; k < pieces.size(); ++k) {
         bodies.clear();
@@ -383,7 +384,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   }
   const std::size_t first_piece = out.size();
   if (turns) {
-    removal::append_five_axis_move(out, m, from.axis, to.axis, whole);
+    removal::append_five_axis_move(out, m, from.axis, to.axis, whole());
   } else {
     out.push_back(m);
   }

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <string>
 
 #include "vcut/removal/move.h"
 #include "vcut/removal/sweep.h"
@@ -55,6 +56,32 @@ double brute_distance(const RigidMotion& motion, const Cutter& c, const Eigen::V
   for (int i = 0; i <= instances; ++i)
     d = std::min(d, motion.instance_distance(c, p, static_cast<double>(i) / instances));
   return d;
+}
+
+// `count` points drawn from `sampling` (x, y, z in turn) near the pieces' swept surface (|d| <=
+// near_mm): a point inside either sweep lies within `slack` of the other (the distance to a set
+// is at most its signed distance). Returns the largest difference of the two distances seen.
+double expect_within_both_ways(const std::vector<TranslationSweep>& sweeps, const RigidMotion& motion, const Cutter& c,
+                               int instances, const Eigen::AlignedBox3d& sampling, double near_mm, int count,
+                               double slack, std::mt19937& rng, const std::string& what) {
+  std::uniform_real_distribution<double> x(sampling.min().x(), sampling.max().x()),
+      y(sampling.min().y(), sampling.max().y()), z(sampling.min().z(), sampling.max().z());
+  double worst = 0.0;
+  for (int near = 0; near < count;) {
+    const Eigen::Vector3d p(x(rng), y(rng), z(rng));
+    const double pieces_d = pieces_distance(sweeps, p);
+    if (std::abs(pieces_d) > near_mm) continue;
+    const double brute = brute_distance(motion, c, p, instances);
+    if (pieces_d <= 0.0) {
+      EXPECT_LE(brute, slack) << what << " at " << p.transpose();
+    }
+    if (brute <= 0.0) {
+      EXPECT_LE(pieces_d, slack) << what << " at " << p.transpose();
+    }
+    worst = std::max(worst, std::abs(pieces_d - brute));
+    ++near;
+  }
+  return worst;
 }
 
 TEST(FiveAxisSweep, TiltingCuttersWithinTheStatedBound) {
@@ -266,22 +293,8 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
     for (const Move& m : pieces) sweeps.emplace_back(c, m);
     const double brute_error =
         ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), 25.0)) / (2.0 * kInstances);
-    std::uniform_real_distribution<double> x(-6, 8), y(-6, 8), z(-2, 3);
-    int near = 0;
-    while (near < 100) {
-      const Eigen::Vector3d p(x(rng), y(rng), z(rng));
-      const double pieces_d = pieces_distance(sweeps, p);
-      if (std::abs(pieces_d) > 0.05) continue;  // near the swept surface only
-      const double brute = brute_distance(motion, c, p, kInstances);
-      // Inside one: within the bound of the other (distance to a set <= its signed distance).
-      if (pieces_d <= 0.0) {
-        EXPECT_LE(brute, bound + brute_error + 1e-6) << to_string(c.type) << " at " << p.transpose();
-      }
-      if (brute <= 0.0) {
-        EXPECT_LE(pieces_d, bound + brute_error + 1e-6) << to_string(c.type) << " at " << p.transpose();
-      }
-      ++near;
-    }
+    expect_within_both_ways(sweeps, motion, c, kInstances, {Eigen::Vector3d(-6, -6, -2), Eigen::Vector3d(8, 8, 3)},
+                            0.05, 100, bound + brute_error + 1e-6, rng, to_string(c.type));
   }
 }
 
@@ -353,23 +366,9 @@ TEST(FiveAxisSweep, LongBallTurnsPartByPartWithinTheBound) {
       for (const Move& m : pieces) sweeps.emplace_back(parts[static_cast<std::size_t>(m.cutter)].cutter, m);
       const double brute_error =
           ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), c.flute_length_mm)) / (2.0 * kInstances);
-      std::uniform_real_distribution<double> x(-6, 8), yy(-6, 8), z(-2, 6);
-      int near = 0;
-      double worst = 0.0;
-      while (near < 120) {
-        const Eigen::Vector3d p(x(rng), yy(rng), z(rng));
-        const double pieces_d = pieces_distance(sweeps, p);
-        if (std::abs(pieces_d) > 0.2) continue;  // near the swept surface only
-        const double brute = brute_distance(motion, c, p, kInstances);
-        if (pieces_d <= 0.0) {
-          EXPECT_LE(brute, bound + brute_error + 1e-6) << "r " << r << " at " << p.transpose();
-        }
-        if (brute <= 0.0) {
-          EXPECT_LE(pieces_d, bound + brute_error + 1e-6) << "r " << r << " at " << p.transpose();
-        }
-        worst = std::max(worst, std::abs(pieces_d - brute));
-        ++near;
-      }
+      const double worst = expect_within_both_ways(sweeps, motion, c, kInstances,
+                                                   {Eigen::Vector3d(-6, -6, -2), Eigen::Vector3d(8, 8, 6)}, 0.2, 120,
+                                                   bound + brute_error + 1e-6, rng, "r " + std::to_string(r));
       if (bound == 0.05) {
         EXPECT_GT(worst, 0.1 * bound) << "r " << r << ": the error never came near the bound";
       }
