@@ -27,73 +27,6 @@ namespace {
 // fewer, by a scan (bisection on every ray cost W1's and W5's cut 4 %).
 constexpr std::uint32_t kScanIntervals = 8;
 
-// Removes [a, b] (made by `move`) from the ray; returns the length removed (mm).
-double subtract(SegmentList& ray, float a, float b, int move, std::vector<DexelSegment>& scratch) {
-  const std::uint32_t n = ray.size();
-  if (n == 0 || !(a < b)) return 0.0;
-  DexelSegment* s = ray.data();
-  if (b <= s[0].lo_mm || a >= s[n - 1].hi_mm) return 0.0;
-  if (n == 1 && !(s[0].lo_mm < a && s[0].hi_mm > b)) {
-    // One interval, trimmed at one end or removed whole: in place.
-    DexelSegment& seg = s[0];
-    const double before = static_cast<double>(seg.hi_mm) - seg.lo_mm;
-    if (seg.lo_mm < a) {
-      seg.hi_mm = a;
-      seg.hi_move = move;
-    } else if (seg.hi_mm > b) {
-      seg.lo_mm = b;
-      seg.lo_move = move;
-    } else {
-      ray.assign(nullptr, 0);
-      return before;
-    }
-    const double after = static_cast<double>(seg.hi_mm) - seg.lo_mm;
-    if (after <= kMinSegment_mm) {
-      ray.assign(nullptr, 0);
-      return before;
-    }
-    return before - after;
-  }
-  // Several intervals: those from i to j meet [a, b]; they give way to at most two pieces,
-  // the part of i below a and the part of j above b (a sliver thinner than kMinSegment_mm
-  // is dropped), and the intervals after j move up or down to follow them.
-  std::uint32_t i = 0;
-  while (s[i].hi_mm <= a) ++i;
-  if (s[i].lo_mm >= b) return 0.0;
-  std::uint32_t j = i;
-  while (j + 1 < n && s[j + 1].lo_mm < b) ++j;
-  double removed = 0.0;
-  for (std::uint32_t k = i; k <= j; ++k)
-    removed += static_cast<double>(std::min(s[k].hi_mm, b)) - std::max(s[k].lo_mm, a);
-  DexelSegment pieces[2];
-  std::uint32_t kept = 0;
-  if (s[i].lo_mm < a) {
-    if (a - s[i].lo_mm > kMinSegment_mm)
-      pieces[kept++] = {s[i].lo_mm, a, s[i].lo_move, move};
-    else
-      removed += static_cast<double>(a) - s[i].lo_mm;
-  }
-  if (s[j].hi_mm > b) {
-    if (s[j].hi_mm - b > kMinSegment_mm)
-      pieces[kept++] = {b, s[j].hi_mm, move, s[j].hi_move};
-    else
-      removed += static_cast<double>(s[j].hi_mm) - b;
-  }
-  const std::uint32_t gone = j - i + 1, size = n - gone + kept;
-  if (size > n) {
-    // One interval split in two: through the scratch list, the ray may need more room.
-    scratch.assign(s, s + i);
-    scratch.insert(scratch.end(), pieces, pieces + kept);
-    scratch.insert(scratch.end(), s + j + 1, s + n);
-    ray.assign(scratch.data(), size);
-    return removed;
-  }
-  std::memmove(s + i + kept, s + j + 1, (n - j - 1) * sizeof(DexelSegment));
-  std::copy(pieces, pieces + kept, s + i);
-  ray.truncate(size);
-  return removed;
-}
-
 // Longest overlap (mm) of [a, b] with the ray's material, and where along the ray.
 double overlap(const SegmentList& ray, double a, double b, double& middle) {
   double best = 0.0;
@@ -607,10 +540,10 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 SegmentList& ray = row[k];
                 const std::uint32_t n = ray.size();
                 if (n == 0) continue;
-                const DexelSegment* const seg = ray.data();
-                const double top = seg[n - 1].hi_mm;
+                const double top = ray.last_hi_mm();
                 // Rays already clear of the sweep's box cost a look only.
-                if (seg[0].lo_mm >= box_hi || top <= clear_below) continue;
+                if (ray.first_lo_mm() >= box_hi || top <= clear_below) continue;
+                const DexelSegment* const seg = ray.data();
                 const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
                 double win_lo = box_lo, win_hi = box_hi;
                 // A tighter window along the ray: the section disc about the tip's path, or
