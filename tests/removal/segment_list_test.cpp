@@ -27,16 +27,20 @@ double reference_subtract(std::vector<DexelSegment>& ray, float a, float b, int 
     }
     removed += static_cast<double>(std::min(s.hi_mm, b)) - std::max(s.lo_mm, a);
     if (s.lo_mm < a) {
-      if (static_cast<double>(a) - s.lo_mm > kMinSegment_mm)
+      if (static_cast<double>(a) - s.lo_mm > kMinSegment_mm) {
         out.push_back({s.lo_mm, a, s.lo_move, move});
-      else
-        removed += static_cast<double>(a) - s.lo_mm, dropped += a > s.lo_mm;
+      } else {
+        removed += static_cast<double>(a) - s.lo_mm;
+        ++dropped;
+      }
     }
     if (s.hi_mm > b) {
-      if (static_cast<double>(s.hi_mm) - b > kMinSegment_mm)
+      if (static_cast<double>(s.hi_mm) - b > kMinSegment_mm) {
         out.push_back({b, s.hi_mm, move, s.hi_move});
-      else
-        removed += static_cast<double>(s.hi_mm) - b, dropped += s.hi_mm > b;
+      } else {
+        removed += static_cast<double>(s.hi_mm) - b;
+        ++dropped;
+      }
     }
   }
   ray = out;
