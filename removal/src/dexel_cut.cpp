@@ -79,6 +79,67 @@ struct Handover {
       }
       return true;
     }
+    // Row by row: h along the row of rays at w is built from two forms linear in (u, s),
+    // L1 = k0 + dk s and L2 = m0 + ak s, as h = L1 - da clamp(L2, 0, H), that is
+    //   h = max(min(L1 - da L2, L1), L1 - da H)    (da >= 0)
+    //   h = min(max(L1 + e L2, L1), L1 + e H)      (e = -da > 0).
+    // A form p u + q + r s is at most (or at least) a bound for every s in [s_lo, s_hi] on a
+    // half-line of u: checked at both ends. The spans below are such half-lines' meets (u in
+    // mm; lo > hi: none), with h kept kRowMargin from 0 so that the ray-wise test, in its own
+    // rounding, agrees.
+    static constexpr double kRowMargin = 1e-7;  // mm^2, as h: far above the ray-wise test's rounding
+    struct Form {
+      double p, q, r;  // u-coefficient, constant, s-coefficient
+    };
+    void row_forms(double w, Form& l1, Form& l1_l2, Form& l1_h) const {
+      l1 = {d1, -c1 * d1 + (w - c2) * d2 - cd, dk};
+      const Form l2{a1, -c1 * a1 + (w - c2) * a2 - ca, ak};
+      l1_l2 = {l1.p - da * l2.p, l1.q - da * l2.q, l1.r - da * l2.r};
+      l1_h = {l1.p, l1.q - da * height_mm, l1.r};
+    }
+    // Narrows range to where f <= bound (at_most) or f >= bound for every s.
+    static void narrow(double* range, const Form& f, bool at_most, double bound, double s_lo, double s_hi) {
+      const double extreme = at_most ? std::max(f.r * s_lo, f.r * s_hi) : std::min(f.r * s_lo, f.r * s_hi);
+      const double rhs = bound - f.q - extreme;  // p u against rhs
+      if (f.p != 0.0) {
+        const double at = rhs / f.p;
+        if ((f.p > 0.0) == at_most)
+          range[1] = std::min(range[1], at);
+        else
+          range[0] = std::max(range[0], at);
+      } else if (at_most ? rhs < 0.0 : rhs > 0.0) {
+        range[0] = std::numeric_limits<double>::infinity();
+      }
+    }
+    // Up to two spans of u where covers(u, w, lo, hi) holds for every [lo, hi] within
+    // [s_lo, s_hi] (h <= -margin for every s): for da >= 0 where L1 <= -m, or where L1 - da L2
+    // <= -m and L1 - da H <= -m; for da < 0 where L1 + e L2 <= -m and L1 <= -m, or where
+    // L1 + e H <= -m.
+    void covered_spans(double w, double s_lo, double s_hi, double span[2][2]) const {
+      Form l1, l1_l2, l1_h;
+      row_forms(w, l1, l1_l2, l1_h);
+      constexpr double kAll = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 2; ++i) span[i][0] = -kAll, span[i][1] = kAll;
+      const Form* first[2] = {&l1, da >= 0.0 ? &l1 : &l1_l2};
+      narrow(span[0], *first[0], true, -kRowMargin, s_lo, s_hi);
+      narrow(span[0], *first[1], true, -kRowMargin, s_lo, s_hi);
+      narrow(span[1], l1_h, true, -kRowMargin, s_lo, s_hi);
+      if (da >= 0.0) narrow(span[1], l1_l2, true, -kRowMargin, s_lo, s_hi);
+    }
+    // The other way: up to two spans of u where h >= margin at every s in [s_lo, s_hi], so
+    // that covers() is false for any [lo, hi] there: for da >= 0 (h is at least L1 - da H and
+    // at least min(L1 - da L2, L1)) where L1 - da H >= m, or where L1 - da L2 >= m and L1 >=
+    // m; for da < 0 where L1 >= m (then L1 + e H >= m too), or where L1 + e L2 >= m and
+    // L1 + e H >= m.
+    void uncovered_spans(double w, double s_lo, double s_hi, double span[2][2]) const {
+      Form l1, l1_l2, l1_h;
+      row_forms(w, l1, l1_l2, l1_h);
+      constexpr double kAll = std::numeric_limits<double>::infinity();
+      for (int i = 0; i < 2; ++i) span[i][0] = -kAll, span[i][1] = kAll;
+      narrow(span[0], da >= 0.0 ? l1_h : l1, false, kRowMargin, s_lo, s_hi);
+      narrow(span[1], l1_l2, false, kRowMargin, s_lo, s_hi);
+      narrow(span[1], da >= 0.0 ? l1 : l1_h, false, kRowMargin, s_lo, s_hi);
+    }
   };
   OnAxis on_axis(int axis) const {
     const auto [i1, i2] = kOther[static_cast<std::size_t>(axis)];
@@ -182,6 +243,58 @@ std::vector<MoveHandover> handovers(const MoveList& list) {
     out[i].bounds = TranslationSweep(list.cutters[static_cast<std::size_t>(m.cutter)], m).bounds();
   });
   return out;
+}
+
+// A tilted tool's neighbours, for the tests along the rays of one family (the cut's
+// ray-wise hand-over, and row by row row_skips).
+struct RayNeighbours {
+  bool start_on = false, end_on = false;
+  Handover::OnAxis start, end, back;  // back: the next move's from_start
+  double lo, hi, next_lo, next_hi;    // the move's and the next one's box along the rays
+};
+
+// The ray-wise tests' sure answers over a whole row (at w_mm, rays k0..k1 of a family whose
+// first ray is lattice index lo_u, spacing v), as up to six ranges of ray indices to skip,
+// a hair inside: the rays the move before surely cut (its end instance is this move's
+// start), and those the end instance surely holds where the next move's start test surely
+// does not hold (the next move cuts them and will not pass them over). Out of line: the
+// cut's loop around it runs faster without it inside.
+__attribute__((noinline)) int row_skips(const RayNeighbours& r, double w_mm, int k0, int k1, int lo_u, double v,
+                                        int (*skip)[2]) {
+  int n = 0;
+  auto skip_span = [&](double u_lo, double u_hi) {
+    constexpr double kInside = 1e-6;  // of a spacing
+    if (!(u_lo <= u_hi)) return;
+    const double lo = std::max(u_lo / v - 0.5 + kInside, static_cast<double>(k0 + lo_u));
+    const double hi = std::min(u_hi / v - 0.5 - kInside, static_cast<double>(k1 + lo_u));
+    if (!(lo <= hi)) return;
+    skip[n][0] = static_cast<int>(std::ceil(lo)) - lo_u;
+    skip[n][1] = static_cast<int>(std::floor(hi)) - lo_u;
+    ++n;
+  };
+  if (r.start_on) {
+    double span[2][2];
+    r.start.covered_spans(w_mm, r.lo, r.hi, span);
+    for (const auto& sp : span) skip_span(sp[0], sp[1]);
+  }
+  if (r.end_on) {
+    double ends[2][2], backs[2][2];
+    r.end.covered_spans(w_mm, r.lo, r.hi, ends);
+    r.back.uncovered_spans(w_mm, r.next_lo, r.next_hi, backs);
+    for (const auto& e : ends)
+      for (const auto& b : backs) skip_span(std::max(e[0], b[0]), std::min(e[1], b[1]));
+  }
+  return n;
+}
+
+// The bits of word `word` outside the n ray index ranges skip[i][0]..skip[i][1].
+__attribute__((noinline)) std::uint64_t skip_mask(const int (*skip)[2], int n, int word) {
+  std::uint64_t keep = ~std::uint64_t{0};
+  for (int i = 0; i < n; ++i) {
+    const int lo = std::max(skip[i][0], 64 * word), hi = std::min(skip[i][1], 64 * word + 63);
+    if (lo <= hi) keep &= ~((~std::uint64_t{0} << (lo % 64)) & (~std::uint64_t{0} >> (63 - hi % 64)));
+  }
+  return keep;
 }
 
 // Rounding allowance (mm) between a probe's window and the interval the kernel finds in
@@ -324,11 +437,6 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   // one after when its start instance does, unless that one hands the ray back (it is cut
   // after this move, so one of the two must cut it). Each test spans the ray's material
   // within that move's box, as the move's own test does.
-  struct RayNeighbours {
-    bool start_on = false, end_on = false;
-    Handover::OnAxis start, end, back;  // back: the next move's from_start
-    double lo, hi, next_lo, next_hi;    // the move's and the next one's box along the rays
-  };
   auto ray_neighbours = [&](const MoveHandover& h, int axis) {
     RayNeighbours out;
     out.start_on = h.from_start.on;
@@ -528,12 +636,20 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
             const bool windowed = use_window && section < std::numeric_limits<double>::infinity();
             detail::RaySweep::TiltRow tilt_row{};
             if (tilted) sweep.tilted_row(a, w_mm, tilt_row);
+            // A tilted tool's rays the move before cut for sure (its end instance is this
+            // move's start): the ray-wise start test's spans over the whole box along the
+            // rays, as ray indices (k_skip[i][0] > k_skip[i][1]: none), a hair inside.
+            // Likewise the rays the end instance holds for sure (the next move cuts them) where
+            // the next move's start test surely does not hold (it will not pass them over).
+            int k_skip[6][2];
+            const int skips = ray_wise ? row_skips(ray_cover, w_mm, k0, k1, f.lo_u, m.v, k_skip) : 0;
             // The row's rays that pass the tests below, then their intervals in one call.
             int count = 0;
             for (int word = k0 / 64; word <= k1 / 64; ++word) {
               std::uint64_t walk = f.occupied_word(word, iw);
               if (word == k0 / 64) walk &= ~std::uint64_t{0} << (k0 % 64);
               if (word == k1 / 64) walk &= ~std::uint64_t{0} >> (63 - k1 % 64);
+              if (skips > 0) walk &= skip_mask(k_skip, skips, word);
               for (; walk != 0; walk &= walk - 1) {
                 const int bit = __builtin_ctzll(walk);
                 const int k = 64 * word + bit;

@@ -948,6 +948,37 @@ TEST(DexelStock, SameRaysForOneAndTwoThreads) {
   EXPECT_EQ(s1.vertex_move, s2.vertex_move);
 }
 
+// Cuts `chain` in one call and one move per call into two stocks of `box` at 0.1 mm and
+// expects the same material on every ray (within 1 um); returns the rays holding material
+// and the volume left.
+std::pair<std::size_t, double> expect_chain_cuts_as_one_by_one(const MoveList& chain, const BoxShape& box) {
+  DexelStock together(box, 0.1), alone(box, 0.1);
+  together.cut(chain, {});
+  for (const Move& m : chain.moves) {
+    MoveList one;
+    one.cutters = chain.cutters;
+    one.moves.push_back(m);
+    alone.cut(one, {});
+  }
+  EXPECT_NEAR(together.volume_mm3(), alone.volume_mm3(), 1e-6);
+  std::size_t rays = 0;
+  for (int family = 0; family < 3; ++family) {
+    for (int iu = -2; iu < 210; ++iu) {
+      for (int iw = -2; iw < 210; ++iw) {
+        const auto a = together.ray(family, iu, iw), b = alone.ray(family, iu, iw);
+        EXPECT_EQ(a.size(), b.size()) << "family " << family << " ray " << iu << ", " << iw;
+        if (a.size() != b.size()) return {rays, together.volume_mm3()};
+        for (std::size_t k = 0; k < a.size(); ++k) {
+          EXPECT_NEAR(a[k].lo_mm, b[k].lo_mm, kEndpointTol_mm) << "family " << family << " ray " << iu << ", " << iw;
+          EXPECT_NEAR(a[k].hi_mm, b[k].hi_mm, kEndpointTol_mm) << "family " << family << " ray " << iu << ", " << iw;
+        }
+        rays += !a.empty();
+      }
+    }
+  }
+  return {rays, together.volume_mm3()};
+}
+
 // A chain of moves cut in one call (each ray left to whichever neighbour's instance covers
 // it) against the same moves cut one call each (no move can rely on another): the same
 // material on every ray. The chain climbs, descends, turns back on itself, turns corners
@@ -994,32 +1025,45 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
       }
       p = q;
     }
-    const BoxShape box{{0, 0, 0}, {20, 15, 10}};
-    DexelStock together(box, 0.1), alone(box, 0.1);
-    together.cut(chain, {});
-    for (const Move& m : chain.moves) {
-      MoveList one;
-      one.cutters = chain.cutters;
-      one.moves.push_back(m);
-      alone.cut(one, {});
-    }
-    EXPECT_NEAR(together.volume_mm3(), alone.volume_mm3(), 1e-6);
-    std::size_t rays = 0;
-    for (int family = 0; family < 3; ++family) {
-      for (int iu = -2; iu < 210; ++iu) {
-        for (int iw = -2; iw < 210; ++iw) {
-          const auto a = together.ray(family, iu, iw), b = alone.ray(family, iu, iw);
-          ASSERT_EQ(a.size(), b.size()) << "family " << family << " ray " << iu << ", " << iw;
-          for (std::size_t k = 0; k < a.size(); ++k) {
-            EXPECT_NEAR(a[k].lo_mm, b[k].lo_mm, kEndpointTol_mm);
-            EXPECT_NEAR(a[k].hi_mm, b[k].hi_mm, kEndpointTol_mm);
-          }
-          rays += !a.empty();
-        }
-      }
-    }
+    const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
     EXPECT_GT(rays, 40000u);
-    EXPECT_LT(together.volume_mm3(), 3000.0 - 100.0);  // the chain did cut (the V-bit least)
+    EXPECT_LT(volume_mm3, 3000.0 - 100.0);  // the chain did cut (the V-bit least)
+  }
+}
+
+// A tilted ball end mill at a fixed axis (3+2) hands rays over row by row: each row's rays
+// that the move before surely cut (its end instance is this move's start) and those the next
+// move surely cuts and will not pass over are skipped before their material is looked at
+// (the spans of removal/dexel_cut.cpp's covered_spans and uncovered_spans). The same chain cut
+// in one call and one move per call leaves the same material on every ray. A short ball (its
+// core 0.5 mm long) sunk deep into a tall block: its top cap cuts too, where the hand-over's
+// height clamp matters; rows that climb and descend (the motion along the axis of both
+// signs), turn back and wander, at two tilts.
+TEST(DexelStock, TiltedBallRasterHandsOverRowByRow) {
+  for (const Eigen::Vector3d& tilt : {Eigen::Vector3d(0.35, 0.2, 1), Eigen::Vector3d(-0.1, 0.6, 1)}) {
+    const Eigen::Vector3d axis = tilt.normalized();
+    MoveList chain;
+    chain.cutters.push_back(make(CutterType::Ball, 3, 1.5, 3.5));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-0.4, 0.4);
+    Eigen::Vector3d p(3, 3, 6);
+    for (int i = 0; i < 300; ++i) {
+      Eigen::Vector3d q;
+      if (i % 50 < 30)
+        q = p + Eigen::Vector3d((i / 50) % 2 ? -0.45 : 0.45, 0.02, dip(rng));  // rows
+      else if (i % 50 < 33)
+        q = p + Eigen::Vector3d(0, 0.4, 0);  // stepover
+      else
+        q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
+      q.z() = std::clamp(q.z(), 3.0, 8.5);
+      q.x() = std::clamp(q.x(), 1.0, 19.0);
+      q.y() = std::clamp(q.y(), 1.0, 14.0);
+      chain.moves.push_back(line(p, q, axis));
+      p = q;
+    }
+    const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
+    EXPECT_GT(rays, 40000u);
+    EXPECT_LT(volume_mm3, 3000.0 - 150.0);  // the chain cut deep
   }
 }
 
