@@ -9,7 +9,11 @@ Writes, into the folder given (default: benchmarks/workloads/w1):
   w1.path     the same tip points, one "x y z" per line (for the peers and the error check)
   tools.yaml  T1: ball D6, flute length 25 mm
   job.yaml    the vcut job (engine dexel, v = 0.05 mm); `--resolution`/`--threads` override
-Usage: make_w1.py [folder] [--size MM] (a smaller size gives a quick variant of the same kind)
+With --tilt DEG, W1T (issue 24): the same tip path as 3+2 work, the tool's axis tilted DEG
+from +z toward +y throughout, written as APT CL data (w1.apt: MULTAX GOTO/x, y, z, i, j, k)
+for the table-table-ac machine, whose job then reads it.
+Usage: make_w1.py [folder] [--size MM] [--tilt DEG] (a smaller size gives a quick variant of
+the same kind)
 """
 import math
 import os
@@ -26,6 +30,10 @@ def main():
     if "--size" in sys.argv:
         size = float(sys.argv[sys.argv.index("--size") + 1])
         args = [a for a in args if a != sys.argv[sys.argv.index("--size") + 1]]
+    tilt = None
+    if "--tilt" in sys.argv:
+        tilt = float(sys.argv[sys.argv.index("--tilt") + 1])
+        args = [a for a in args if a != sys.argv[sys.argv.index("--tilt") + 1]]
     out = args[0] if args else os.path.join(os.path.dirname(os.path.abspath(__file__)), "w1")
     os.makedirs(out, exist_ok=True)
     step, stepover = 0.5, 0.3
@@ -54,7 +62,23 @@ def main():
             f.write("%.4f %.4f %.4f\n" % (x, y, z))
     with open(os.path.join(out, "tools.yaml"), "w") as f:
         f.write("tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25, shank_diameter: 6, length: 40}\n")
+    if tilt is not None:
+        i, j, k = 0.0, math.sin(math.radians(tilt)), math.cos(math.radians(tilt))
+        with open(os.path.join(out, "w1.apt"), "w") as f:
+            f.write("$$ vcut workload W1T: W1's tip path at a fixed axis tilted %g deg, written by make_w1.py\n" % tilt)
+            f.write("UNITS/MM\nMULTAX/ON\nCUTTER/6,3,0,3,0,0,25\nLOADTL/1\nSPINDL/12000,CLW\n")
+            f.write("RAPID\nGOTO/%.4f,%.4f,%.1f,%.6f,%.6f,%.6f\nFEDRAT/2000\n" % (x0, y0, safe, i, j, k))
+            for x, y, z in points:
+                f.write("GOTO/%.4f,%.4f,%.4f,%.6f,%.6f,%.6f\n" % (x, y, z, i, j, k))
+            f.write("RAPID\nGOTO/%.4f,%.4f,%.1f,%.6f,%.6f,%.6f\nFINI\n" % (points[-1][0], points[-1][1], safe, i, j, k))
     with open(os.path.join(out, "job.yaml"), "w") as f:
+        if tilt is not None:
+            f.write("job: w1t\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: w1.apt, dialect: apt}\n"
+                    "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
+                    "engine: {kind: dexel, resolution: 0.05, threads: auto}\n"
+                    "report: {out: out}\n" % (size, size))
+            print("W1T: %d moves over %g x %g mm, the axis tilted %g deg -> %s" % (len(points), size, size, tilt, out))
+            return
         f.write("job: w1\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: w1.ngc}\n"
                 "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
                 "engine: {kind: dexel, resolution: 0.05, threads: auto}\n"
