@@ -120,9 +120,8 @@ struct Handover {
       row_forms(w, l1, l1_l2, l1_h);
       constexpr double kAll = std::numeric_limits<double>::infinity();
       for (int i = 0; i < 2; ++i) span[i][0] = -kAll, span[i][1] = kAll;
-      const Form* first[2] = {&l1, da >= 0.0 ? &l1 : &l1_l2};
-      narrow(span[0], *first[0], true, -kRowMargin, s_lo, s_hi);
-      narrow(span[0], *first[1], true, -kRowMargin, s_lo, s_hi);
+      narrow(span[0], l1, true, -kRowMargin, s_lo, s_hi);
+      if (da < 0.0) narrow(span[0], l1_l2, true, -kRowMargin, s_lo, s_hi);
       narrow(span[1], l1_h, true, -kRowMargin, s_lo, s_hi);
       if (da >= 0.0) narrow(span[1], l1_l2, true, -kRowMargin, s_lo, s_hi);
     }
