@@ -970,7 +970,10 @@ void Reader::do_cutter() {
          "corner radius " + num(r) + " mm is more than half the diameter " + num(d) + " mm (expected r <= d/2)");
   }
   if (r <= kCutterMatchMm) r = 0.0;
-  if (std::abs(r - radius) <= kCutterMatchMm) r = radius;
+  // Within the tolerance of d/2 (beyond it, above, is the error just above): a ball. r - d/2
+  // rounds, so the test above can let through an r whose difference from d/2 here is a hair
+  // over the tolerance: anything over d/2 is a ball too.
+  if (std::abs(r - radius) <= kCutterMatchMm || r > radius) r = radius;
   const double alpha = nargs_ > 4 ? number(4, "alpha") : 0.0;
   const double beta = nargs_ > 5 ? number(5, "beta") : 0.0;
   if (std::abs(beta) > kZeroAngleDeg) {

@@ -527,6 +527,20 @@ TEST(AptReader, LoadtlNumbersCutters) {
   EXPECT_EQ(a.program.warnings[0].rfind("test.apt:7:10: ", 0), 0u) << a.program.warnings[0];
 }
 
+// A corner radius printed within 0.002 mm (kCutterMatchMm) over d/2 is a ball, r = d/2, also
+// where the difference rounds just over the tolerance (0.252 - 0.25 is 0.0020000000000000018
+// in doubles: the fuzzer found the cutter kept r > d/2); 0.0021 mm over is the error.
+TEST(AptReader, CornerRadiusAHairOverHalfTheDiameterIsABall) {
+  for (const char* cutter : {"CUTTER/0.5,0.252", "CUTTER/10,5.0015"}) {
+    const AptProgram a = read(std::string(cutter) + "\nFROM/0,0,1\nRAPID\nGOTO/1,0,1\n");
+    ASSERT_EQ(a.cutters.size(), 1u);
+    const auto& c = a.cutters.begin()->second;
+    EXPECT_EQ(c.type, CutterType::Ball) << cutter;
+    EXPECT_EQ(c.corner_radius_mm, 0.5 * c.diameter_mm) << cutter;
+  }
+  EXPECT_APT_ERROR("CUTTER/0.5,0.2521\n", 1, 12, "more than half the diameter");
+}
+
 TEST(AptReader, CutterErrors) {
   EXPECT_APT_ERROR("CUTTER/0\n", 1, 8, "expected d > 0");
   EXPECT_APT_ERROR("CUTTER/10,6\n", 1, 11, "more than half the diameter");
