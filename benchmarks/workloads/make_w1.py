@@ -71,18 +71,15 @@ def main():
             for x, y, z in points:
                 f.write("GOTO/%.4f,%.4f,%.4f,%.6f,%.6f,%.6f\n" % (x, y, z, i, j, k))
             f.write("RAPID\nGOTO/%.4f,%.4f,%.1f,%.6f,%.6f,%.6f\nFINI\n" % (points[-1][0], points[-1][1], safe, i, j, k))
+    head = ("job: w1\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: w1.ngc}\n" if tilt is None else
+            "job: w1t\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: w1.apt, dialect: apt}\n")
     with open(os.path.join(out, "job.yaml"), "w") as f:
-        if tilt is not None:
-            f.write("job: w1t\nmachine: table-table-ac\ntools: tools.yaml\nprogram: {file: w1.apt, dialect: apt}\n"
-                    "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
-                    "engine: {kind: dexel, resolution: 0.05, threads: auto}\n"
-                    "report: {out: out}\n" % (size, size))
-            print("W1T: %d moves over %g x %g mm, the axis tilted %g deg -> %s" % (len(points), size, size, tilt, out))
-            return
-        f.write("job: w1\nmachine: 3axis\ntools: tools.yaml\nprogram: {file: w1.ngc}\n"
-                "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
+        f.write(head + "stock: {box: {min: [0, 0, 0], max: [%g, %g, 40]}}\n"
                 "engine: {kind: dexel, resolution: 0.05, threads: auto}\n"
                 "report: {out: out}\n" % (size, size))
+    if tilt is not None:
+        print("W1T: %d moves over %g x %g mm, the axis tilted %g deg -> %s" % (len(points), size, size, tilt, out))
+        return
     print("W1: %d moves over %g x %g mm -> %s" % (len(points), size, size, out))
 
 

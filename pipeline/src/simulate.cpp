@@ -353,24 +353,23 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
       removal::Move move;
     };
     std::vector<Timed> timed;
-    std::vector<removal::Move> pieces;
+    std::vector<removal::Move> pieces, bodies;
+    // Piece k of n ends at the instant (k + 1) / n of the move.
+    auto until = [&](std::size_t k) { return static_cast<double>(k + 1) / static_cast<double>(pieces.size()); };
     for (std::size_t j = 0; j < parts.size(); ++j) {
       const removal::TurningSplit split =
           removal::part_split(parts[j], height_mm, from.axis, to.axis, rotation_bound_mm_);
       pieces.clear();
       removal::append_part_pieces(pieces, m, from.axis, to.axis, parts[j], first_part + static_cast<int>(j), split);
-      for (std::size_t k = 0; k < pieces.size(); ++k)
-        timed.push_back({static_cast<double>(k + 1) / static_cast<double>(pieces.size()), false, pieces[k]});
+      for (std::size_t k = 0; k < pieces.size(); ++k) timed.push_back({until(k), false, pieces[k]});
     }
     if (probes_) {
       pieces.clear();
       removal::append_five_axis_move(pieces, m, from.axis, to.axis, whole());
-      std::vector<removal::Move> bodies;
       for (std::size_t k = 0; k < pieces.size(); ++k) {
         bodies.clear();
         removal::append_body_probes(bodies, pieces[k], bodies_[static_cast<std::size_t>(m.cutter)]);
-        for (const removal::Move& probe : bodies)
-          timed.push_back({static_cast<double>(k + 1) / static_cast<double>(pieces.size()), true, probe});
+        for (const removal::Move& probe : bodies) timed.push_back({until(k), true, probe});
       }
     }
     std::stable_sort(timed.begin(), timed.end(), [](const Timed& p, const Timed& q) {
