@@ -39,7 +39,8 @@ constexpr int kNoMove = -1;
 // times, scheduled; 14.3x with 8 rows, one thread's time the same within 2 %).
 constexpr int kTileU = 512, kTileW = 8;
 static_assert(kTileU % 64 == 0, "a tile row's occupied rays are whole 64-bit words");
-constexpr std::size_t kBatchMoves = 4096;  // moves binned and cut together
+constexpr std::size_t kBatchMoves = 4096;    // moves binned and cut together
+constexpr std::size_t kBinChunkMoves = 128;  // the fewest moves binned as one chunk
 // The move record is pruned when it has grown by this many moves and doubled since the last time.
 constexpr std::size_t kPruneMoves = 65536;
 // Material thinner than this along a ray (mm) is dropped: a sliver a grazing cut leaves.

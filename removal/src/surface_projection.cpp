@@ -35,11 +35,12 @@ int remember_cutters(const std::vector<Cutter>& from, std::vector<Cutter>& cutte
 }
 
 void MoveRecord::append(const Move* first, std::size_t count, int cutter_base) {
-  for (std::size_t i = 0; i < count; ++i) {
-    Move move = first[i];
-    move.cutter += cutter_base;
-    ids_.push_back(next_id_++);
-    moves_.push_back(move);
+  const std::size_t at = moves_.size();
+  moves_.insert(moves_.end(), first, first + count);
+  ids_.resize(at + count);
+  for (std::size_t i = at; i < at + count; ++i) {
+    moves_[i].cutter += cutter_base;
+    ids_[i] = next_id_++;
   }
 }
 

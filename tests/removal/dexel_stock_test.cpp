@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
@@ -13,6 +14,7 @@
 #include <random>
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <limits>
 #include <map>
 #include <memory>
@@ -918,34 +920,42 @@ TEST(DexelStock, CylinderStockVolume) {
   EXPECT_NEAR(stock.volume_mm3(), exact, exact * 2e-3);
 }
 
-TEST(DexelStock, SameRaysForOneAndTwoThreads) {
+// One thread, two, and an arena of seven (the cut bins a batch's moves in as many chunks as
+// its arena has slots: 1,200 moves make 7 chunks there, one on one thread).
+TEST(DexelStock, SameRaysForOneTwoAndSevenThreads) {
   auto run = [](int threads) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
     const BoxShape box{{0, 0, -10}, {30, 20, 0}};
-    DexelStock stock(box, 0.1);
     MoveList list;
-    list.cutters.push_back(make(CutterType::BullNose, 6, 1));
+    list.cutters.push_back(make(CutterType::Ball, 6, 3));
     Eigen::Vector3d p(-5, 2, -1);
-    for (int i = 0; i < 300; ++i) {
-      const Eigen::Vector3d q(2 + 0.09 * i, 2 + 16 * (i % 2), -1.0 - 0.01 * i);
+    for (int i = 0; i < 1200; ++i) {
+      const Eigen::Vector3d q(2 + 0.0225 * i, 2 + 16 * (i % 2), -1.0 - 0.0025 * i);
       list.moves.push_back(line(p, q));
       p = q;
     }
-    stock.cut(list, {});
-    return std::make_pair(stock.endpoints(), stock.surface());
+    std::optional<DexelStock> stock;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      stock.emplace(box, 0.1);
+      stock->cut(list, {});
+    });
+    return std::make_pair(stock->endpoints(), stock->surface());
   };
   const auto [e1, s1] = run(1);
-  const auto [e2, s2] = run(2);
-  ASSERT_EQ(e1.size(), e2.size());
-  for (std::size_t i = 0; i < e1.size(); ++i) {
-    ASSERT_EQ(std::memcmp(e1[i].x_mm.data(), e2[i].x_mm.data(), 3 * sizeof(double)), 0);
-    ASSERT_EQ(e1[i].move, e2[i].move);
+  for (int threads : {2, 7}) {
+    const auto [e2, s2] = run(threads);
+    ASSERT_EQ(e1.size(), e2.size()) << threads;
+    for (std::size_t i = 0; i < e1.size(); ++i) {
+      ASSERT_EQ(std::memcmp(e1[i].x_mm.data(), e2[i].x_mm.data(), 3 * sizeof(double)), 0) << threads;
+      ASSERT_EQ(e1[i].move, e2[i].move) << threads;
+    }
+    ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
+    EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
+                          s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
+              0);
+    EXPECT_EQ(s1.vertex_move, s2.vertex_move);
   }
-  ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
-  EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
-                        s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
-            0);
-  EXPECT_EQ(s1.vertex_move, s2.vertex_move);
 }
 
 // Cuts `chain` in one call and one move per call into two stocks of `box` at 0.1 mm and
@@ -1065,6 +1075,51 @@ TEST(DexelStock, TiltedBallRasterHandsOverRowByRow) {
     EXPECT_GT(rays, 40000u);
     EXPECT_LT(volume_mm3, 3000.0 - 150.0);  // the chain cut deep
   }
+}
+
+// The hand-over tests' storage is kept from batch to batch (4,096 moves): a move that takes
+// no hand-over must not see the one the move at its place in the batch before took. A chain
+// of 4,096 tilted ball moves (each handing over to the next) over one end of the stock, then
+// 300 tilted bull-nose moves descending over the other end (not square to their axis: no
+// hand-over) leave the same rays, bit for bit, cut in one call as in two (where the second
+// call's hand-overs start afresh).
+TEST(DexelStock, AMoveWithoutHandOverSeesNoneFromTheBatchBefore) {
+  const Eigen::Vector3d axis = Eigen::Vector3d(0.3, 0.2, 1).normalized();
+  MoveList balls, bulls;
+  balls.cutters = {make(CutterType::Ball, 3, 1.5, 3.5), make(CutterType::BullNose, 4, 1, 5)};
+  bulls.cutters = balls.cutters;
+  Eigen::Vector3d p(1, 1, 9);
+  for (int i = 0; i < 4096; ++i) {
+    const int k = i % 128;
+    const Eigen::Vector3d q(1 + 0.05 * ((i / 128) % 2 ? 128 - k : k), 1 + 13.0 * i / 4096, 9);
+    balls.moves.push_back(line(p, q, axis));
+    p = q;
+  }
+  p = {11, 1, 9.5};
+  for (int i = 0; i < 300; ++i) {
+    const int k = i % 40;
+    const Eigen::Vector3d q(11 + 0.2 * ((i / 40) % 2 ? 40 - k : k), 1 + 0.04 * i, 9.5 - 0.01 * i);
+    Move m = line(p, q, axis);
+    m.cutter = 1;
+    bulls.moves.push_back(m);
+    p = q;
+  }
+  const BoxShape box{{0, 0, 0}, {20, 15, 10}};
+  DexelStock in_one(box, 0.1), in_two(box, 0.1);
+  MoveList both = balls;
+  both.moves.insert(both.moves.end(), bulls.moves.begin(), bulls.moves.end());
+  in_one.cut(both, {});
+  in_two.cut(balls, {});
+  in_two.cut(bulls, {});
+  const std::vector<DexelEndpoint> a = in_one.endpoints(), b = in_two.endpoints();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(std::memcmp(a[i].x_mm.data(), b[i].x_mm.data(), 3 * sizeof(double)), 0) << i;
+    ASSERT_EQ(a[i].move, b[i].move) << i;
+  }
+  // Both chains cut: endpoints of the last ball move and of the last bull-nose move.
+  EXPECT_TRUE(std::any_of(a.begin(), a.end(), [](const DexelEndpoint& e) { return e.move == 4095; }));
+  EXPECT_TRUE(std::any_of(a.begin(), a.end(), [](const DexelEndpoint& e) { return e.move == 4395; }));
 }
 
 // The stock pulls moves a batch at a time (4,096), each batch looking at the cutting moves
