@@ -2,11 +2,13 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -122,17 +124,31 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   // where all its triangles agree, a seventh group where they do not, an eighth in no triangle.
   // So the vertices of a cell on two sides of a sharp edge fall in two groups, and those along
   // the edge in a third, whose vertex stays on the edge.
+  // A vertex's group does not depend on the order its triangles come in (one side when all
+  // agree, else mixed): the triangles side by side, each vertex's group updated atomically.
   constexpr std::uint8_t kUnset = 0xff, kMixed = 6;
-  std::vector<std::uint8_t> facing(nv, kUnset);
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d a = area_normal(mesh, t);
-    int axis = 0;
-    a.cwiseAbs().maxCoeff(&axis);
-    const auto side = static_cast<std::uint8_t>(2 * axis + (a[axis] < 0 ? 1 : 0));
-    for (int c = 0; c < 3; ++c) {
-      std::uint8_t& f = facing[static_cast<std::size_t>(t[c])];
-      f = f == kUnset || f == side ? side : kMixed;
-    }
+  std::vector<std::uint8_t> facing(nv);
+  {
+    std::vector<std::atomic<std::uint8_t>> group(nv);
+    tbb::parallel_for(std::size_t{0}, nv, [&](std::size_t v) { group[v].store(kUnset, std::memory_order_relaxed); });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i != r.end(); ++i) {
+        const Eigen::Vector3i& t = mesh.triangles[i];
+        const Eigen::Vector3d a = area_normal(mesh, t);
+        int axis = 0;
+        a.cwiseAbs().maxCoeff(&axis);
+        const auto side = static_cast<std::uint8_t>(2 * axis + (a[axis] < 0 ? 1 : 0));
+        for (int c = 0; c < 3; ++c) {
+          std::atomic<std::uint8_t>& f = group[static_cast<std::size_t>(t[c])];
+          std::uint8_t now = f.load(std::memory_order_relaxed);
+          while (true) {
+            const std::uint8_t next = now == kUnset || now == side ? side : kMixed;
+            if (next == now || f.compare_exchange_weak(now, next, std::memory_order_relaxed)) break;
+          }
+        }
+      }
+    });
+    tbb::parallel_for(std::size_t{0}, nv, [&](std::size_t v) { facing[v] = group[v].load(std::memory_order_relaxed); });
   }
   auto outside = [&](const Eigen::Vector3i& t) {
     const std::size_t a = static_cast<std::size_t>(t[0]), b = static_cast<std::size_t>(t[1]),
@@ -190,80 +206,96 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   }
   const std::size_t clusters = first.size();
   first.push_back(nv);
-  // Each cluster's quadric: the planes of every triangle at its vertices, area-weighted
-  // (Lindstrom's out-of-core clustering), summed in triangle order.
-  std::vector<Quadric> quadric(clusters, Quadric{});
-  std::vector<double> weight(clusters, 0.0);  // the quadric's total weight: its error over it is in mm^2
-  for (const auto& t : mesh.triangles) {
-    const Eigen::Vector3d a = mesh.vertices_mm[static_cast<std::size_t>(t[0])] - grid.origin;
-    const Eigen::Vector3d normal = area_normal(mesh, t);
-    const double doubled_area = normal.norm();
-    if (doubled_area == 0.0) continue;
-    const Eigen::Vector3d unit = normal / doubled_area;
-    for (int c = 0; c < 3; ++c) {
-      const auto k = static_cast<std::size_t>(cluster[static_cast<std::size_t>(t[c])]);
-      add_plane(quadric[k], unit, -unit.dot(a), doubled_area);
-      weight[k] += doubled_area;
-    }
-  }
-  // Each cluster's vertex: the original vertex nearest its planes (a corner where three meet,
-  // an edge where two do), among near equals (within 1e-4 of the cell in root mean square
-  // distance) the one nearest the cluster's centre, so that vertices on a plane spread evenly.
+  // The clusters' vertices (from their quadrics, summed in triangle order on one thread) and
+  // the triangles left (from the clusters alone) side by side.
   std::vector<int> chosen(clusters);
-  const double slack_mm2 = 1e-8 * grid.cell_mm * grid.cell_mm;
-  tbb::parallel_for(std::size_t{0}, clusters, [&](std::size_t k) {
-    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-    for (std::size_t i = first[k]; i < first[k + 1]; ++i)
-      centre += mesh.vertices_mm[static_cast<std::size_t>(by_cell[i].second)];
-    centre /= static_cast<double>(first[k + 1] - first[k]);
-    double best = std::numeric_limits<double>::infinity(), best_d = 0.0;
-    int best_v = -1;
-    for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
-      const int v = by_cell[i].second;
-      const Eigen::Vector3d& p = mesh.vertices_mm[static_cast<std::size_t>(v)];
-      const double e = weight[k] > 0.0 ? quadric_error(quadric[k], p - grid.origin) / weight[k] : 0.0;
-      const double d = (p - centre).squaredNorm();
-      if (best_v < 0 || e < best - slack_mm2 || (e <= best + slack_mm2 && d < best_d))
-        best = std::min(best, e), best_d = d, best_v = v;
-    }
-    chosen[k] = best_v;
-  });
-  // The triangles that span three clusters, each a triple of clusters with an orientation; a
-  // triple met in both orientations (the two sides of a wall thinner than a cell) cancels, so
-  // the result bounds what the mesh bounded.
-  struct Spanning {
-    std::array<int, 3> sorted;  // the clusters, ascending
-    int sign;                   // +1 where the triangle runs sorted[0] -> sorted[1] -> sorted[2]
-    int index;                  // the original triangle
-    bool operator<(const Spanning& o) const { return std::tie(sorted, index) < std::tie(o.sorted, o.index); }
-  };
-  std::vector<Spanning> spanning;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Eigen::Vector3i& t = mesh.triangles[i];
-    if (!outside(t)) continue;
-    std::array<int, 3> c{cluster[static_cast<std::size_t>(t[0])], cluster[static_cast<std::size_t>(t[1])],
-                         cluster[static_cast<std::size_t>(t[2])]};
-    // An even permutation of (c0 c1 c2) keeps the orientation: rotate the smallest first.
-    const int m = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
-    std::rotate(c.begin(), c.begin() + m, c.end());
-    const int sign = c[1] < c[2] ? 1 : -1;
-    if (sign < 0) std::swap(c[1], c[2]);
-    spanning.push_back({c, sign, static_cast<int>(i)});
-  }
-  tbb::parallel_sort(spanning.begin(), spanning.end());
-  // What is left, in the order of the triangles that first made each triple.
   std::vector<std::pair<int, Eigen::Vector3i>> left;
-  for (std::size_t i = 0; i < spanning.size();) {
-    std::size_t j = i;
-    int sum = 0;
-    for (; j < spanning.size() && spanning[j].sorted == spanning[i].sorted; ++j) sum += spanning[j].sign;
-    const auto& s = spanning[i].sorted;
-    for (int copy = 0; copy < std::abs(sum); ++copy)
-      left.push_back(
-          {spanning[i].index, sum > 0 ? Eigen::Vector3i(s[0], s[1], s[2]) : Eigen::Vector3i(s[0], s[2], s[1])});
-    i = j;
-  }
-  std::stable_sort(left.begin(), left.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  tbb::parallel_invoke(
+      [&] {
+        // Each cluster's quadric: the planes of every triangle at its vertices, area-weighted
+        // (Lindstrom's out-of-core clustering), summed in triangle order.
+        std::vector<Quadric> quadric(clusters, Quadric{});
+        std::vector<double> weight(clusters, 0.0);  // the quadric's total weight: its error over it is in mm^2
+        for (const auto& t : mesh.triangles) {
+          const Eigen::Vector3d a = mesh.vertices_mm[static_cast<std::size_t>(t[0])] - grid.origin;
+          const Eigen::Vector3d normal = area_normal(mesh, t);
+          const double doubled_area = normal.norm();
+          if (doubled_area == 0.0) continue;
+          const Eigen::Vector3d unit = normal / doubled_area;
+          for (int c = 0; c < 3; ++c) {
+            const auto k = static_cast<std::size_t>(cluster[static_cast<std::size_t>(t[c])]);
+            add_plane(quadric[k], unit, -unit.dot(a), doubled_area);
+            weight[k] += doubled_area;
+          }
+        }
+        // Each cluster's vertex: the original vertex nearest its planes (a corner where three meet,
+        // an edge where two do), among near equals (within 1e-4 of the cell in root mean square
+        // distance) the one nearest the cluster's centre, so that vertices on a plane spread evenly.
+        const double slack_mm2 = 1e-8 * grid.cell_mm * grid.cell_mm;
+        tbb::parallel_for(std::size_t{0}, clusters, [&](std::size_t k) {
+          Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+          for (std::size_t i = first[k]; i < first[k + 1]; ++i)
+            centre += mesh.vertices_mm[static_cast<std::size_t>(by_cell[i].second)];
+          centre /= static_cast<double>(first[k + 1] - first[k]);
+          double best = std::numeric_limits<double>::infinity(), best_d = 0.0;
+          int best_v = -1;
+          for (std::size_t i = first[k]; i < first[k + 1]; ++i) {
+            const int v = by_cell[i].second;
+            const Eigen::Vector3d& p = mesh.vertices_mm[static_cast<std::size_t>(v)];
+            const double e = weight[k] > 0.0 ? quadric_error(quadric[k], p - grid.origin) / weight[k] : 0.0;
+            const double d = (p - centre).squaredNorm();
+            if (best_v < 0 || e < best - slack_mm2 || (e <= best + slack_mm2 && d < best_d))
+              best = std::min(best, e), best_d = d, best_v = v;
+          }
+          chosen[k] = best_v;
+        });
+      },
+      [&] {
+        // The triangles that span three clusters, each a triple of clusters with an orientation; a
+        // triple met in both orientations (the two sides of a wall thinner than a cell) cancels, so
+        // the result bounds what the mesh bounded.
+        struct Spanning {
+          std::array<int, 3> sorted;  // the clusters, ascending
+          int sign;                   // +1 where the triangle runs sorted[0] -> sorted[1] -> sorted[2]
+          int index;                  // the original triangle
+          bool operator<(const Spanning& o) const { return std::tie(sorted, index) < std::tie(o.sorted, o.index); }
+        };
+        // Found in fixed chunks of the triangles side by side and joined in chunk order.
+        constexpr std::size_t kChunk = std::size_t{1} << 16;
+        std::vector<std::vector<Spanning>> found((n + kChunk - 1) / kChunk);
+        tbb::parallel_for(std::size_t{0}, found.size(), [&](std::size_t k) {
+          for (std::size_t i = k * kChunk; i < std::min(n, (k + 1) * kChunk); ++i) {
+            const Eigen::Vector3i& t = mesh.triangles[i];
+            if (!outside(t)) continue;
+            std::array<int, 3> c{cluster[static_cast<std::size_t>(t[0])], cluster[static_cast<std::size_t>(t[1])],
+                                 cluster[static_cast<std::size_t>(t[2])]};
+            // An even permutation of (c0 c1 c2) keeps the orientation: rotate the smallest first.
+            const int m = c[0] < c[1] ? (c[0] < c[2] ? 0 : 2) : (c[1] < c[2] ? 1 : 2);
+            std::rotate(c.begin(), c.begin() + m, c.end());
+            const int sign = c[1] < c[2] ? 1 : -1;
+            if (sign < 0) std::swap(c[1], c[2]);
+            found[k].push_back({c, sign, static_cast<int>(i)});
+          }
+        });
+        std::vector<Spanning> spanning;
+        for (std::vector<Spanning>& f : found) spanning.insert(spanning.end(), f.begin(), f.end());
+        found.clear();
+        tbb::parallel_sort(spanning.begin(), spanning.end());
+        // What is left, in the order of the triangles that first made each triple.
+        for (std::size_t i = 0; i < spanning.size();) {
+          std::size_t j = i;
+          int sum = 0;
+          for (; j < spanning.size() && spanning[j].sorted == spanning[i].sorted; ++j) sum += spanning[j].sign;
+          const auto& s = spanning[i].sorted;
+          for (int copy = 0; copy < std::abs(sum); ++copy)
+            left.push_back(
+                {spanning[i].index, sum > 0 ? Eigen::Vector3i(s[0], s[1], s[2]) : Eigen::Vector3i(s[0], s[2], s[1])});
+          i = j;
+        }
+        // Two entries of one triangle are copies of one triple (its sum's |sum| copies): any sort by
+        // the triangle gives the same list.
+        tbb::parallel_sort(left.begin(), left.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+      });
   TriangleMesh out;
   out.triangles.reserve(left.size());
   std::vector<int> index(clusters, -1);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include <array>
 #include <cmath>
@@ -157,6 +158,39 @@ TEST(Decimate, BoxKeepsItsCornersEdgesAndVolume) {
     corners += ((p - lo).cwiseAbs().array() < 1e-12 || (p - hi).cwiseAbs().array() < 1e-12).all() ? 1 : 0;
   EXPECT_EQ(corners, 8);
   EXPECT_NEAR(signed_volume_mm3(small), box_mm3, 1e-9);
+}
+
+// A plate thinner than the clustering's cell (0.2 mm against about 1.3 mm): its top and bottom
+// vertices share cells, and only their facing (+z, -z, the rims mixed) keeps them in separate
+// clusters; merged, each top triangle's triple would cancel its bottom twin's and the plate
+// would vanish. Its faces stay; the rims (top and bottom edges both mixed) may fold within a
+// cell of the edge: at most the 80 mm perimeter x about 1.3 mm x 0.2 mm, 21 mm3 of 80. Every
+// vertex kept lies on the plate, so no more than the plate. The same for one thread and an
+// arena of seven (each vertex's facing gathered from its triangles in any order).
+TEST(Decimate, PlateThinnerThanACellKeepsBothFaces) {
+  const Eigen::Vector3d lo(0, 0, 0), hi(20, 20, 0.2);
+  const TriangleMesh plate = tessellated_box(lo, hi, 40);
+  ASSERT_TRUE(is_closed(plate));
+  const double plate_mm3 = 20.0 * 20.0 * 0.2;
+  ASSERT_NEAR(signed_volume_mm3(plate), plate_mm3, 1e-9);
+  auto run = [&](int threads, std::vector<int>& kept) {
+    TriangleMesh small;
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
+      small = decimate(plate, 1500, kept);
+    });
+    return small;
+  };
+  std::vector<int> kept1, kept7;
+  const TriangleMesh one = run(1, kept1), seven = run(7, kept7);
+  EXPECT_LE(one.triangles.size(), 1500u);
+  EXPECT_GT(one.triangles.size(), 200u);
+  expect_original_vertices(one, kept1, plate);
+  EXPECT_GT(signed_volume_mm3(one), plate_mm3 - 80.0 * 1.3 * 0.2);
+  EXPECT_LE(signed_volume_mm3(one), plate_mm3 + 1e-9);
+  EXPECT_EQ(seven.triangles, one.triangles);
+  EXPECT_EQ(kept7, kept1);
 }
 
 // A closed mesh has every directed edge once and its reverse once (derived by hand on a box's
