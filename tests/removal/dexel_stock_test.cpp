@@ -921,40 +921,47 @@ TEST(DexelStock, CylinderStockVolume) {
 }
 
 // One thread, two, and an arena of seven (the cut bins a batch's moves in as many chunks as
-// its arena has slots: 1,200 moves make 7 chunks there, one on one thread).
+// its arena has slots: 1,200 moves make 7 chunks there, one on one thread): a ball's zig-zag
+// (whose slivers and ties show a tile's moves taken out of program order) and a bull-nose's.
 TEST(DexelStock, SameRaysForOneTwoAndSevenThreads) {
-  auto run = [](int threads) {
-    const BoxShape box{{0, 0, -10}, {30, 20, 0}};
-    MoveList list;
-    list.cutters.push_back(make(CutterType::Ball, 6, 3));
-    Eigen::Vector3d p(-5, 2, -1);
-    for (int i = 0; i < 1200; ++i) {
-      const Eigen::Vector3d q(2 + 0.0225 * i, 2 + 16 * (i % 2), -1.0 - 0.0025 * i);
-      list.moves.push_back(line(p, q));
-      p = q;
-    }
+  auto run = [](const MoveList& list, int threads) {
     std::optional<DexelStock> stock;
     tbb::task_arena arena(threads);
     arena.execute([&] {
       tbb::global_control limit(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(threads));
-      stock.emplace(box, 0.1);
+      stock.emplace(BoxShape{{0, 0, -10}, {30, 20, 0}}, 0.1);
       stock->cut(list, {});
     });
     return std::make_pair(stock->endpoints(), stock->surface());
   };
-  const auto [e1, s1] = run(1);
-  for (int threads : {2, 7}) {
-    const auto [e2, s2] = run(threads);
-    ASSERT_EQ(e1.size(), e2.size()) << threads;
-    for (std::size_t i = 0; i < e1.size(); ++i) {
-      ASSERT_EQ(std::memcmp(e1[i].x_mm.data(), e2[i].x_mm.data(), 3 * sizeof(double)), 0) << threads;
-      ASSERT_EQ(e1[i].move, e2[i].move) << threads;
+  auto zigzag = [](const Cutter& cutter, int moves) {
+    MoveList list;
+    list.cutters.push_back(cutter);
+    Eigen::Vector3d p(-5, 2, -1);
+    for (int i = 0; i < moves; ++i) {
+      const double f = 300.0 / moves;
+      const Eigen::Vector3d q(2 + 0.09 * f * i, 2 + 16 * (i % 2), -1.0 - 0.01 * f * i);
+      list.moves.push_back(line(p, q));
+      p = q;
     }
-    ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
-    EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
-                          s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
-              0);
-    EXPECT_EQ(s1.vertex_move, s2.vertex_move);
+    return list;
+  };
+  for (const MoveList& list :
+       {zigzag(make(CutterType::Ball, 6, 3), 1200), zigzag(make(CutterType::BullNose, 6, 1), 300)}) {
+    const auto [e1, s1] = run(list, 1);
+    for (int threads : {2, 7}) {
+      const auto [e2, s2] = run(list, threads);
+      ASSERT_EQ(e1.size(), e2.size()) << threads;
+      for (std::size_t i = 0; i < e1.size(); ++i) {
+        ASSERT_EQ(std::memcmp(e1[i].x_mm.data(), e2[i].x_mm.data(), 3 * sizeof(double)), 0) << threads;
+        ASSERT_EQ(e1[i].move, e2[i].move) << threads;
+      }
+      ASSERT_EQ(s1.mesh.vertices_mm.size(), s2.mesh.vertices_mm.size());
+      EXPECT_EQ(std::memcmp(s1.mesh.vertices_mm.data(), s2.mesh.vertices_mm.data(),
+                            s1.mesh.vertices_mm.size() * sizeof(Eigen::Vector3d)),
+                0);
+      EXPECT_EQ(s1.vertex_move, s2.vertex_move);
+    }
   }
 }
 
