@@ -534,37 +534,37 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         count / kBinChunkMoves, 1, static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
     const std::size_t chunk_moves = (count + chunks - 1) / chunks;
     // Chunk-major: a chunk's slots lie apart from the others'.
+    auto slot = [&](std::size_t c, int t) { return c * static_cast<std::size_t>(tiles) + static_cast<std::size_t>(t); };
+    auto for_each_in_chunk = [&](std::size_t c, auto&& visit) {
+      for (std::size_t i = c * chunk_moves; i < std::min(count, (c + 1) * chunk_moves); ++i)
+        for_each_tile(i, [&](int t, std::int64_t rays) { visit(i, t, rays); });
+    };
     chunk_count.assign(static_cast<std::size_t>(tiles) * chunks, 0);
     chunk_rays.assign(static_cast<std::size_t>(tiles) * chunks, 0);
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-      for (std::size_t i = c * chunk_moves; i < std::min(count, (c + 1) * chunk_moves); ++i)
-        for_each_tile(i, [&](int t, std::int64_t rays) {
-          const std::size_t slot = c * static_cast<std::size_t>(tiles) + static_cast<std::size_t>(t);
-          ++chunk_count[slot];
-          chunk_rays[slot] += rays;
-        });
+      for_each_in_chunk(c, [&](std::size_t, int t, std::int64_t rays) {
+        ++chunk_count[slot(c, t)];
+        chunk_rays[slot(c, t)] += rays;
+      });
     });
     start[0] = 0;
     for (int t = 0; t < tiles; ++t) {
       int at = start[static_cast<std::size_t>(t)];
       std::int64_t rays = 0;
       for (std::size_t c = 0; c < chunks; ++c) {
-        const std::size_t slot = c * static_cast<std::size_t>(tiles) + static_cast<std::size_t>(t);
-        const int n = chunk_count[slot];
-        chunk_count[slot] = at;  // each chunk's count becomes its first slot
+        const int n = chunk_count[slot(c, t)];
+        chunk_count[slot(c, t)] = at;  // each chunk's count becomes its first slot
         at += n;
-        rays += chunk_rays[slot];
+        rays += chunk_rays[slot(c, t)];
       }
       start[static_cast<std::size_t>(t) + 1] = at;
       rays_of[static_cast<std::size_t>(t)] = rays;
     }
     entries.resize(static_cast<std::size_t>(start[static_cast<std::size_t>(tiles)]));
     tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t c) {
-      for (std::size_t i = c * chunk_moves; i < std::min(count, (c + 1) * chunk_moves); ++i)
-        for_each_tile(i, [&](int t, std::int64_t) {
-          entries[static_cast<std::size_t>(
-              chunk_count[c * static_cast<std::size_t>(tiles) + static_cast<std::size_t>(t)]++)] = static_cast<int>(i);
-        });
+      for_each_in_chunk(c, [&](std::size_t i, int t, std::int64_t) {
+        entries[static_cast<std::size_t>(chunk_count[slot(c, t)]++)] = static_cast<int>(i);
+      });
     });
     // The busy tiles, those the most rays' worth of moves cover first, handed out one at a
     // time: a few heavy tiles (where the tool dwells) then start early instead of last.

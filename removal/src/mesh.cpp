@@ -123,9 +123,9 @@ TriangleMesh decimate(const TriangleMesh& mesh, std::size_t max_triangles, std::
   // Which way each vertex faces: the largest component of its triangles' normals and its sign,
   // where all its triangles agree, a seventh group where they do not, an eighth in no triangle.
   // So the vertices of a cell on two sides of a sharp edge fall in two groups, and those along
-  // the edge in a third, whose vertex stays on the edge.
-  // A vertex's group does not depend on the order its triangles come in (one side when all
-  // agree, else mixed): the triangles side by side, each vertex's group updated atomically.
+  // the edge in a third, whose vertex stays on the edge. A vertex's group does not depend on
+  // the order its triangles come in (one side when all agree, else mixed): the triangles side
+  // by side, each vertex's group updated atomically.
   constexpr std::uint8_t kUnset = 0xff, kMixed = 6;
   std::vector<std::uint8_t> facing(nv);
   {
