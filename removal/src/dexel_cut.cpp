@@ -56,20 +56,33 @@ double overlap(const SegmentList& ray, double a, double b, double& middle) {
 // cutter is symmetric under the reflection that turns D into -D, so the instants t at which
 // a point lies inside it are an interval symmetric about t* = q.D / |D|^2; when t* <= 0 and
 // the point is in the sweep at all, that interval holds t = 0.
+// A flat or bull-nose end mill moving any other way (ramps, contouring): the cutter is its
+// core C (the solid cylinder of radius Rc about that axis segment) grown by r, and
+// f(t) = dist(x - t D, C) is convex in t, so where f does not fall at t = 0 the instance at
+// t = 0 is the nearest: where
+//   h_C = D.(x - p_C(x)) = (D.a) (m - clamp(m, 0, H)) + (D.rho) max(0, 1 - Rc / |rho|) <= 0,
+// m = q.a, rho = q - m a, p_C the nearest point of C (the ball's h when Rc = 0). The factor
+// is in [0, 1), so h_C <= max(h, (D.a) (m - clamp(m, 0, H))): h <= 0 where m stays within
+// [0, H] when D.a < 0 (no point below the core's bottom while the tool goes down), and at
+// most H when D.a > 0, is enough (`core`), and h's tests below serve with that bound on m.
 struct Handover {
   Vector3d c = Vector3d::Zero(), d = Vector3d::Zero(), a = Vector3d::UnitZ();
   double height_mm = 0.0;
   bool on = false;
-  double da = 0.0;  // D.a
+  double da = 0.0;    // D.a
+  bool core = false;  // h_C's bound: m >= 0 (D.a < 0) or m <= H (D.a > 0) as well
 
   // The test along the rays of one family, its coordinates picked out once per move.
   struct OnAxis {
     double c1, c2, d1, d2, cd, dk, a1, a2, ca, ak, da, height_mm;
+    bool core;
     // True when every point of the ray at (u, w) with axis coordinate in [s_lo, s_hi] has
-    // h <= 0. h is linear in s between the two heights where q.a is 0 or H.
+    // h <= 0 (and with `core`, m on the side it must keep). h is linear in s between the two
+    // heights where q.a is 0 or H.
     bool covers(double u, double w, double s_lo, double s_hi) const {
       const double k0 = (u - c1) * d1 + (w - c2) * d2 - cd;
       const double m0 = (u - c1) * a1 + (w - c2) * a2 - ca;
+      if (core && !core_side(m0 + ak * s_lo, m0 + ak * s_hi)) return false;
       auto h = [&](double s) { return k0 + dk * s - da * std::clamp(m0 + ak * s, 0.0, height_mm); };
       if (h(s_lo) > 0.0 || h(s_hi) > 0.0) return false;
       if (ak != 0.0) {
@@ -78,6 +91,12 @@ struct Handover {
           if (s > s_lo && s < s_hi && h(s) > 0.0) return false;
         }
       }
+      return true;
+    }
+    // `core`'s bound on m, given m at both ends of the span (m is linear along the ray).
+    bool core_side(double m_a, double m_b) const {
+      if (da < 0.0) return std::min(m_a, m_b) >= 0.0;
+      if (da > 0.0) return std::max(m_a, m_b) <= height_mm;
       return true;
     }
     // Row by row: h along the row of rays at w is built from two forms linear in (u, s),
@@ -125,6 +144,11 @@ struct Handover {
       if (da < 0.0) narrow(span[0], l1_l2, true, -kRowMargin, s_lo, s_hi);
       narrow(span[1], l1_h, true, -kRowMargin, s_lo, s_hi);
       if (da >= 0.0) narrow(span[1], l1_l2, true, -kRowMargin, s_lo, s_hi);
+      if (core && da != 0.0) {  // and m kept kRowMargin (mm) inside its side
+        const Form l2{a1, -c1 * a1 + (w - c2) * a2 - ca, ak};
+        for (int i = 0; i < 2; ++i)
+          narrow(span[i], l2, da > 0.0, da > 0.0 ? height_mm - kRowMargin : kRowMargin, s_lo, s_hi);
+      }
     }
     // The other way: up to two spans of u where h >= margin at every s in [s_lo, s_hi], so
     // that covers() is false for any [lo, hi] there: for da >= 0 (h is at least L1 - da H and
@@ -143,8 +167,8 @@ struct Handover {
   };
   OnAxis on_axis(int axis) const {
     const auto [i1, i2] = kOther[static_cast<std::size_t>(axis)];
-    return {c[i1],   c[i2], d[i1],    d[i2], c[axis] * d[axis], d[axis], a[i1], a[i2], c[axis] * a[axis],
-            a[axis], da,    height_mm};
+    return {c[i1],   c[i2], d[i1],     d[i2], c[axis] * d[axis], d[axis], a[i1], a[i2], c[axis] * a[axis],
+            a[axis], da,    height_mm, core};
   }
 };
 
@@ -157,8 +181,14 @@ struct RowHandover {
   double slope = 0.0, g_max = 0.0, g_min = 0.0;
   double base0 = 0.0, base_w = 0.0;                      // base(w) = base0 + base_w w - clamp term
   double clamp_c = 0.0, clamp_d = 0.0, height_mm = 0.0;  // x, y rays: d clamp(w - c, 0, H)
+  // The rows that `core`'s bound on m lets h's test cover (none for z rays outside it);
+  // base is +inf in the others: nothing covered there, all() and at() say so.
+  double w_lo = -std::numeric_limits<double>::infinity(), w_hi = std::numeric_limits<double>::infinity();
 
-  double base(double w) const { return base0 + base_w * w - clamp_d * std::clamp(w - clamp_c, 0.0, height_mm); }
+  double base(double w) const {
+    if (!(w >= w_lo && w <= w_hi)) return std::numeric_limits<double>::infinity();
+    return base0 + base_w * w - clamp_d * std::clamp(w - clamp_c, 0.0, height_mm);
+  }
   // Whether every ray of the row at w is covered (h <= 0 for every s), else through `at`
   // where the covered half-line {u : slope u + base + g <= 0} begins (g = g_max: covered
   // for sure; g = g_min: perhaps covered).
@@ -197,6 +227,17 @@ RowHandover row_handover(const Handover& h, int axis, double s_lo, double s_hi) 
       }
     }
   }
+  if (h.core && h.da != 0.0) {  // m = z - c_z kept OnAxis::kRowMargin inside its side
+    constexpr double kMargin = Handover::OnAxis::kRowMargin;
+    const double z_lo = h.da < 0.0 ? h.c.z() + kMargin : -std::numeric_limits<double>::infinity();
+    const double z_hi = h.da > 0.0 ? h.c.z() + h.height_mm - kMargin : std::numeric_limits<double>::infinity();
+    if (axis != 2) {
+      out.w_lo = z_lo;
+      out.w_hi = z_hi;
+    } else if (!(s_lo >= z_lo && s_hi <= z_hi)) {
+      out.w_lo = std::numeric_limits<double>::infinity();  // no row
+    }
+  }
   return out;
 }
 
@@ -214,12 +255,19 @@ struct MoveHandover {
 void handovers(const MoveList& list, std::vector<MoveHandover>& out) {
   const std::size_t count = list.moves.size();
   out.resize(count);
+  auto square = [&](const Move& m) {
+    const Vector3d d = m.end_mm - m.start_mm;
+    return std::abs(d.dot(m.axis)) <= 1e-12 * d.norm() * m.axis.norm();
+  };
+  // Any cutter square to its axis; ball, flat and bull-nose end mills any way (`core` for the
+  // flat and the bull-nose then).
+  auto by_core = [&](const Move& m) {
+    const Cutter& c = list.cutters.at(static_cast<std::size_t>(m.cutter));
+    return c.type != CutterType::VBit && core_of(c).core_radius_mm > 0.0 && !square(m);
+  };
   auto eligible = [&](const Move& m) {
     if (m.rapid) return false;
-    const Cutter& c = list.cutters.at(static_cast<std::size_t>(m.cutter));
-    if (c.type != CutterType::VBit && core_of(c).core_radius_mm == 0.0) return true;  // ball end
-    const Vector3d d = m.end_mm - m.start_mm;
-    return std::abs(d.dot(m.axis)) <= 1e-12 * d.norm() * m.axis.norm();  // square to the axis
+    return list.cutters.at(static_cast<std::size_t>(m.cutter)).type != CutterType::VBit || square(m);
   };
   std::vector<std::size_t> next_cut(count + 1, count);
   for (std::size_t i = count; i-- > 0;) next_cut[i] = list.moves[i].rapid ? next_cut[i + 1] : i;
@@ -239,8 +287,9 @@ void handovers(const MoveList& list, std::vector<MoveHandover>& out) {
     };
     const std::size_t before = last_cut[i], after = next_cut[i + 1];
     const Vector3d d = m.end_mm - m.start_mm;
-    out[i].from_start = {c0, d, a, height, before < count && joins(list.moves[before], m), d.dot(a)};
-    out[i].to_end = {c1, -d, a, height, after < count && joins(m, list.moves[after]), -d.dot(a)};
+    const bool cylinder = by_core(m);
+    out[i].from_start = {c0, d, a, height, before < count && joins(list.moves[before], m), d.dot(a), cylinder};
+    out[i].to_end = {c1, -d, a, height, after < count && joins(m, list.moves[after]), -d.dot(a), cylinder};
     out[i].next = after;
     out[i].bounds = TranslationSweep(list.cutters[static_cast<std::size_t>(m.cutter)], m).bounds();
   });

@@ -1000,9 +1000,10 @@ std::pair<std::size_t, double> expect_chain_cuts_as_one_by_one(const MoveList& c
 // it) against the same moves cut one call each (no move can rely on another): the same
 // material on every ray. The chain climbs, descends, turns back on itself, turns corners
 // and runs diagonally; a ball end with an upright and a tilted axis (any motion hands
-// over), a flat end mill and a V-bit (only motion square to the axis hands over: their
-// level raster rows do, the ramps between do not); a shank probe between moves (it removes
-// nothing and must not break the chain).
+// over), a flat end mill and a V-bit on level rows (motion square to the axis hands over
+// for any cutter; the V-bit's ramps between do not), flat and bull-nose end mills upright
+// and tilted on rows that climb and descend (their cores' bound on h); a shank probe between
+// moves (it removes nothing and must not break the chain).
 TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
   struct Case {
     Cutter cutter;
@@ -1014,7 +1015,11 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
   const Case cases[] = {{make(CutterType::Ball, 3, 1.5, 12), Eigen::Vector3d(0, 0, 1), false},
                         {make(CutterType::Ball, 3, 1.5, 12), Eigen::Vector3d(0.3, -0.2, 1).normalized(), false},
                         {make(CutterType::Flat, 3, 0, 12), Eigen::Vector3d(0, 0, 1), true},
-                        {vbit, Eigen::Vector3d(0, 0, 1), true}};
+                        {vbit, Eigen::Vector3d(0, 0, 1), true},
+                        {make(CutterType::Flat, 3, 0, 12), Eigen::Vector3d(0, 0, 1), false},
+                        {make(CutterType::BullNose, 3, 0.75, 12), Eigen::Vector3d(0, 0, 1), false},
+                        {make(CutterType::Flat, 3, 0, 12), Eigen::Vector3d(-0.2, 0.3, 1).normalized(), false},
+                        {make(CutterType::BullNose, 3, 0.75, 12), Eigen::Vector3d(0.3, -0.2, 1).normalized(), false}};
   for (const Case& c : cases) {
     const Eigen::Vector3d& axis = c.axis;
     MoveList chain;
@@ -1084,16 +1089,57 @@ TEST(DexelStock, TiltedBallRasterHandsOverRowByRow) {
   }
 }
 
+// Flat and bull-nose end mills moving along their axis hand rays over by h's bound for their
+// core (removal/dexel_cut.cpp, Handover): h <= 0 and no point below the core's bottom while
+// the tool goes down, none above its top while it goes up. Short tools (flutes 3.5 mm) sunk
+// deep into a tall block, so that both ends of the core pass through material, on rows that
+// climb and descend steeply, turn back and wander, upright (row by row) and at two tilts
+// (row by row and ray by ray): the chain cut in one call leaves what it leaves cut one move
+// per call.
+TEST(DexelStock, FlatAndBullNoseRampsHandOverByTheirCore) {
+  const Cutter cutters[] = {make(CutterType::Flat, 3, 0, 3.5), make(CutterType::BullNose, 3, 0.6, 3.5)};
+  const Eigen::Vector3d axes[] = {Eigen::Vector3d(0, 0, 1), Eigen::Vector3d(0.35, 0.2, 1).normalized(),
+                                  Eigen::Vector3d(-0.1, 0.6, 1).normalized()};
+  for (const Cutter& cutter : cutters) {
+    for (const Eigen::Vector3d& axis : axes) {
+      MoveList chain;
+      chain.cutters.push_back(cutter);
+      std::mt19937 rng(13);
+      std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-0.5, 0.5);
+      Eigen::Vector3d p(3, 3, 6);
+      for (int i = 0; i < 300; ++i) {
+        Eigen::Vector3d q;
+        if (i % 50 < 30)
+          q = p + Eigen::Vector3d((i / 50) % 2 ? -0.45 : 0.45, 0.02, dip(rng));  // rows
+        else if (i % 50 < 33)
+          q = p + Eigen::Vector3d(0, 0.4, 0);  // stepover
+        else
+          q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
+        q.z() = std::clamp(q.z(), 3.0, 8.5);
+        q.x() = std::clamp(q.x(), 1.0, 19.0);
+        q.y() = std::clamp(q.y(), 1.0, 14.0);
+        chain.moves.push_back(line(p, q, axis));
+        p = q;
+      }
+      const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
+      EXPECT_GT(rays, 40000u);
+      EXPECT_LT(volume_mm3, 3000.0 - 150.0);  // the chain cut deep
+    }
+  }
+}
+
 // The hand-over tests' storage is kept from batch to batch (4,096 moves): a move that takes
 // no hand-over must not see the one the move at its place in the batch before took. A chain
 // of 4,096 tilted ball moves (each handing over to the next) over one end of the stock, then
-// 300 tilted bull-nose moves descending over the other end (not square to their axis: no
+// 300 tilted V-bit moves descending over the other end (not square to their axis: no
 // hand-over) leave the same rays, bit for bit, cut in one call as in two (where the second
 // call's hand-overs start afresh).
 TEST(DexelStock, AMoveWithoutHandOverSeesNoneFromTheBatchBefore) {
   const Eigen::Vector3d axis = Eigen::Vector3d(0.3, 0.2, 1).normalized();
   MoveList balls, bulls;
-  balls.cutters = {make(CutterType::Ball, 3, 1.5, 3.5), make(CutterType::BullNose, 4, 1, 5)};
+  Cutter vbit = make(CutterType::VBit, 4, 0, 5);
+  vbit.tip_angle_deg = 90;
+  balls.cutters = {make(CutterType::Ball, 3, 1.5, 3.5), vbit};
   bulls.cutters = balls.cutters;
   Eigen::Vector3d p(1, 1, 9);
   for (int i = 0; i < 4096; ++i) {
@@ -1124,7 +1170,7 @@ TEST(DexelStock, AMoveWithoutHandOverSeesNoneFromTheBatchBefore) {
     ASSERT_EQ(std::memcmp(a[i].x_mm.data(), b[i].x_mm.data(), 3 * sizeof(double)), 0) << i;
     ASSERT_EQ(a[i].move, b[i].move) << i;
   }
-  // Both chains cut: endpoints of the last ball move and of the last bull-nose move.
+  // Both chains cut: endpoints of the last ball move and of the last V-bit move.
   EXPECT_TRUE(std::any_of(a.begin(), a.end(), [](const DexelEndpoint& e) { return e.move == 4095; }));
   EXPECT_TRUE(std::any_of(a.begin(), a.end(), [](const DexelEndpoint& e) { return e.move == 4395; }));
 }
