@@ -692,8 +692,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     }
     return;
   }
-  if (method_ != Method::Ball) {
-    for (int k = 0; k < count; ++k) hit[k] = interval(axis, u[k], w, lo[k], hi[k]);
+  if (method_ == Method::Upright) {
+    for (int k = 0; k < count; ++k)
+      hit[k] = axis == 2 ? upright_vertical(u[k], w, top[k], lo[k], hi[k])
+                         : upright_horizontal(axis, u[k], w, bottom[k], top[k], lo[k], hi[k]);
     return;
   }
   const BallFamily& f = ball_[axis];
@@ -1134,12 +1136,12 @@ bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) co
     case Method::General:
       return interval_within(axis, u, w, -kInf, kInf, lo, hi);
     case Method::Upright:
-      return axis == 2 ? upright_vertical(u, w, lo, hi) : upright_horizontal(axis, u, w, lo, hi);
+      return axis == 2 ? upright_vertical(u, w, kInf, lo, hi) : upright_horizontal(axis, u, w, -kInf, kInf, lo, hi);
   }
   return false;
 }
 
-bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) const {
+bool RaySweep::upright_vertical(double u, double w, double top, double& lo, double& hi) const {
   const double radius = radius_mm_;
   const double qx = u - p0_.x(), qy = w - p0_.y();
   const double dx = delta_.x(), dy = delta_.y(), dz = delta_.z();
@@ -1229,11 +1231,15 @@ bool RaySweep::upright_vertical(double u, double w, double& lo, double& hi) cons
   const bool over_core = cutter_.type != CutterType::VBit && !flat_bottom_ &&
                          std::max(distance_at(ta), distance_at(tb)) <= core_.core_radius_mm;
   lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
-  hi = p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
+  // The top lies at least H - r (H with a flat top) above the lowest tip: material below
+  // that needs no search for it (a value between the material's top and the sweep's will do).
+  const double top_floor = p0_.z() + std::min(0.0, dz) + height_mm_ - (flat_top ? 0.0 : core_.rounding_mm);
+  hi = top <= top_floor ? top_floor : p0_.z() + height_mm_ - lowest(-dz, flat_top || over_core);
   return true;
 }
 
-bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, double& hi) const {
+bool RaySweep::upright_horizontal(int axis, double u, double w, double bottom, double top, double& lo,
+                                  double& hi) const {
   const int across = axis == 0 ? 1 : 0;  // the other horizontal axis, where u lies
   const double c0 = p0_[axis], dc = delta_[axis];
   const double w0 = p0_[across] - u, dw = delta_[across];
@@ -1285,7 +1291,7 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double& lo, doub
   // the ball method's), prepared for it (upright_march_).
   if (cone_) return cone_interval(axis, u, w, lo, hi);
   assert(upright_march_);
-  return general(axis, ray_point(axis, u, w, 0.0), -kInf, kInf, lo, hi);
+  return general(axis, ray_point(axis, u, w, 0.0), bottom, top, lo, hi);
 }
 
 bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) const {

@@ -155,8 +155,9 @@ class __attribute__((visibility("hidden"))) RaySweep {
   void prepare_tilt_box(const Eigen::AlignedBox3d* material_box);
   TiltBox tilt_box_[3];
   Eigen::Vector3d tilt_corner_[8];  // the window box's corners (corner c: bit k set, the high side along k)
-  bool upright_vertical(double u, double w, double& lo, double& hi) const;
-  bool upright_horizontal(int axis, double u, double w, double& lo, double& hi) const;
+  // With the ray's material [bottom, top] (as interval_within's; infinite: the whole line).
+  bool upright_vertical(double u, double w, double top, double& lo, double& hi) const;
+  bool upright_horizontal(int axis, double u, double w, double bottom, double top, double& lo, double& hi) const;
   // The root march over [bottom, top] of the ray (see interval_within).
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
   // The rest of general() given the bracket's interval [capsule_lo, capsule_hi] on the ray.

@@ -232,6 +232,50 @@ double deepest_left_inside(const DexelStock& stock, const std::vector<Translatio
   return deepest;
 }
 
+// Material taken outside the sweeps: the most that a point just inside either end of a
+// ray's gap (0.01 mm in, or its middle when shorter) lies outside every sweep, over the 40 x
+// 30 x 20 box at v = 0.25 (above 0: a cut reached past the sweep, say up to the material's
+// top, where no endpoint of the move shows it); on the z rays also every 0.05 mm along the
+// gap (where two sweeps' cuts join, what one took too many lies inside the gap).
+double farthest_taken_outside(const DexelStock& stock, const std::vector<TranslationSweep>& sweeps) {
+  const double v = 0.25;
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  const double box_lo[3] = {0, 0, -20}, box_hi[3] = {40, 30, 0};
+  double farthest = 0.0;
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+        const std::vector<DexelSegment> ray = stock.ray(family, iu, iw);
+        double from = box_lo[family];
+        auto gap = [&](double a, double b) {
+          if (b - a <= 1e-6) return;
+          const double in = std::min(0.01, 0.5 * (b - a));
+          std::vector<double> at = {a + in, b - in};
+          if (family == 2)
+            for (double s = a + 0.05; s < b - 0.05; s += 0.05) at.push_back(s);
+          for (double s : at) {
+            Eigen::Vector3d x;
+            x[family] = s;
+            x[a1] = (iu + 0.5) * v;
+            x[a2] = (iw + 0.5) * v;
+            double nearest = std::numeric_limits<double>::infinity();
+            for (const TranslationSweep& sweep : sweeps)
+              if (nearest > 0.0 && sweep.bounds().exteriorDistance(x) < nearest)
+                nearest = std::min(nearest, sweep.distance(x));
+            farthest = std::max(farthest, nearest - kEndpointTol_mm);
+          }
+        };
+        for (const DexelSegment& seg : ray) {
+          gap(from, seg.lo_mm);
+          from = seg.hi_mm;
+        }
+        gap(from, box_hi[family]);
+      }
+  }
+  return farthest;
+}
+
 // One move through a 40 x 30 x 20 box at v = 0.25: every endpoint it made lies on its swept
 // volume's surface, and no material is left inside it, measured with TranslationSweep's
 // distance (a search over the move for the point's nearest instance, independent of the
@@ -399,6 +443,55 @@ TEST(DexelStock, TiltedMovesThroughCutMaterialMatchTheirSweeps) {
   const double deepest = deepest_left_inside(stock, sweeps, &split);
   EXPECT_EQ(deepest, 0.0);
   EXPECT_GT(split, 500);
+}
+
+// Upright flat and bull-nose end mills ramping through material earlier ramps cut: their
+// kernels see only the rays' material (the z rays' top, below which the sweep's top needs no
+// search; the horizontal rays' march over [bottom, top] alone). Ramps down and up in random
+// directions through the block's middle, the flutes short enough that the tops of most stay
+// inside it: every endpoint each move made lies on its sweep, none of the material left lies
+// inside any sweep, and none was taken outside them.
+TEST(DexelStock, UprightRampsThroughCutMaterialMatchTheirSweeps) {
+  std::mt19937 rng(47);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  DexelStock stock(box, 0.25);
+  MoveList list;
+  list.cutters = {make(CutterType::BullNose, 8, 2, 20), make(CutterType::BullNose, 6, 1, 9),
+                  make(CutterType::Flat, 6, 0, 8),      make(CutterType::Flat, 50, 0, 5),
+                  make(CutterType::BullNose, 6, 1, 5),  make(CutterType::Flat, 6, 0, 5)};
+  // The block faced 1.2 mm down first; two ramps at the end whose tops rise from just below
+  // that face (where the z rays' material top lies just above the sweep's lowest top; the
+  // bull-nose's rim, whose top is r lower, from just above it).
+  Move face = line({-30, 15, -1.2}, {70, 15, -1.2}, Eigen::Vector3d::UnitZ());
+  face.cutter = 3;
+  list.moves.push_back(face);
+  for (int i = 0; i < 12; ++i) {
+    const Eigen::Vector3d mid(20 + 6 * (unit(rng) - 0.5), 15 + 6 * (unit(rng) - 0.5), -9 - 6 * unit(rng));
+    Eigen::Vector3d step(unit(rng) - 0.5, unit(rng) - 0.5, 0.0);
+    step = 8.0 * step.normalized();
+    step.z() = (i % 2 ? 3.0 : -3.0) * unit(rng) + (i % 2 ? 0.5 : -0.5);
+    Move m = line(mid - step, mid + step, Eigen::Vector3d::UnitZ());
+    m.cutter = i % 3;
+    list.moves.push_back(m);
+  }
+  for (int c : {4, 5}) {
+    const double y = c == 4 ? 2.0 : 27.0;  // beside the ramps above
+    Move m = line({6, y, c == 4 ? -6.15 : -6.4}, {34, y + 1, -5.45}, Eigen::Vector3d::UnitZ());
+    m.cutter = c;
+    list.moves.push_back(m);
+  }
+  stock.cut(list, {});
+  double worst;
+  std::vector<int> made;
+  const std::vector<TranslationSweep> sweeps = sweeps_and_endpoints(stock, list, 0, worst, made);
+  EXPECT_LT(worst, kEndpointTol_mm);
+  for (std::size_t i = 0; i < made.size(); ++i) EXPECT_GT(made[i], 50) << "move " << i;
+  int split = 0;
+  const double deepest = deepest_left_inside(stock, sweeps, &split);
+  EXPECT_EQ(deepest, 0.0);
+  EXPECT_GT(split, 500);
+  EXPECT_EQ(farthest_taken_outside(stock, sweeps), 0.0);
 }
 
 // Tilted moves through a comb: fifteen upright slots first leave the x rays in up to sixteen
