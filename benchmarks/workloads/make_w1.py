@@ -12,12 +12,22 @@ Writes, into the folder given (default: benchmarks/workloads/w1):
 With --tilt DEG, W1T (issue 24): the same tip path as 3+2 work, the tool's axis tilted DEG
 from +z toward +y throughout, written as APT CL data (w1.apt: MULTAX GOTO/x, y, z, i, j, k)
 for the table-table-ac machine, whose job then reads it.
-Usage: make_w1.py [folder] [--size MM] [--tilt DEG] (a smaller size gives a quick variant of
-the same kind)
+With --tool flat or --tool bull, W1F and W1B (issue 24): the same raster with a D6 flat end
+mill or a D6 r1 bull-nose (three-axis finishing with those tools: moves along their axis).
+Usage: make_w1.py [folder] [--size MM] [--tilt DEG] [--tool ball|flat|bull] (a smaller size
+gives a quick variant of the same kind)
 """
 import math
 import os
 import sys
+
+
+# The D6 tools, as tools.yaml entries and APT CUTTER statements (d, r, e, f, a, b, h).
+TOOLS = {
+    "ball": ("{type: ball, diameter: 6, corner_radius: 3", "CUTTER/6,3,0,3,0,0,25"),
+    "flat": ("{type: flat, diameter: 6, corner_radius: 0", "CUTTER/6,0,3,0,0,0,25"),
+    "bull": ("{type: bull, diameter: 6, corner_radius: 1", "CUTTER/6,1,2,1,0,0,25"),
+}
 
 
 def surface(x, y):
@@ -30,6 +40,12 @@ def main():
     if "--size" in sys.argv:
         size = float(sys.argv[sys.argv.index("--size") + 1])
         args = [a for a in args if a != sys.argv[sys.argv.index("--size") + 1]]
+    tool = "ball"
+    if "--tool" in sys.argv:
+        tool = sys.argv[sys.argv.index("--tool") + 1]
+        args = [a for a in args if a != tool]
+        if tool not in TOOLS:
+            sys.exit("make_w1.py: --tool takes ball, flat or bull, not %s" % tool)
     tilt = None
     if "--tilt" in sys.argv:
         tilt = float(sys.argv[sys.argv.index("--tilt") + 1])
@@ -61,12 +77,12 @@ def main():
         for x, y, z in points:
             f.write("%.4f %.4f %.4f\n" % (x, y, z))
     with open(os.path.join(out, "tools.yaml"), "w") as f:
-        f.write("tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25, shank_diameter: 6, length: 40}\n")
+        f.write("tools:\n  1: %s, flute_length: 25, shank_diameter: 6, length: 40}\n" % TOOLS[tool][0])
     if tilt is not None:
         i, j, k = 0.0, math.sin(math.radians(tilt)), math.cos(math.radians(tilt))
         with open(os.path.join(out, "w1.apt"), "w") as f:
             f.write("$$ vcut workload W1T: W1's tip path at a fixed axis tilted %g deg, written by make_w1.py\n" % tilt)
-            f.write("UNITS/MM\nMULTAX/ON\nCUTTER/6,3,0,3,0,0,25\nLOADTL/1\nSPINDL/12000,CLW\n")
+            f.write("UNITS/MM\nMULTAX/ON\n%s\nLOADTL/1\nSPINDL/12000,CLW\n" % TOOLS[tool][1])
             f.write("RAPID\nGOTO/%.4f,%.4f,%.1f,%.6f,%.6f,%.6f\nFEDRAT/2000\n" % (x0, y0, safe, i, j, k))
             for x, y, z in points:
                 f.write("GOTO/%.4f,%.4f,%.4f,%.6f,%.6f,%.6f\n" % (x, y, z, i, j, k))
@@ -80,7 +96,7 @@ def main():
     if tilt is not None:
         print("W1T: %d moves over %g x %g mm, the axis tilted %g deg -> %s" % (len(points), size, size, tilt, out))
         return
-    print("W1: %d moves over %g x %g mm -> %s" % (len(points), size, size, out))
+    print("W1%s: %d moves over %g x %g mm -> %s" % ({"ball": "", "flat": "F", "bull": "B"}[tool], len(points), size, size, out))
 
 
 if __name__ == "__main__":
