@@ -103,7 +103,9 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
         double f = initial(x), second = -std::numeric_limits<double>::infinity();
         lead = -1;
         for (std::size_t k = 0; k < sweeps.size(); ++k) {
-          const double cut = -made[sweeps[k]].distance(x);
+          // Only the two largest count: a sweep at least -second away may stop its search
+          // there (a flat end mill's raster: dozens of candidates a vertex, each a search).
+          const double cut = -made[sweeps[k]].distance(x, -second);
           if (cut > f) {
             second = f;
             f = cut;
@@ -131,19 +133,11 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
         }
         const bool alone = gap > 2.0 * kStep_mm + kLeadSlack_mm;
         const int leader = lead;
-        // A ball end's sweep leading alone: its nearest surface point in closed form (the
-        // core sweep's nearest point, then the ball's radius toward x), where Newton's steps
-        // took six more distances each.
-        Eigen::Vector3d core;
-        double radius_mm;
-        if (alone && leader >= 0 &&
-            made[sweeps[static_cast<std::size_t>(leader)]].ball_core_nearest(x, core, radius_mm)) {
-          const double from_core = (x - core).norm();
-          if (from_core > 0.0) {
-            x = core + (radius_mm / from_core) * (x - core);
-            continue;
-          }
-        }
+        // A ball, flat or bull-nose end mill's sweep leading alone: the surface point its
+        // core's nearest (or deepest) instance gives (a ball's in closed form, a cylinder
+        // core's from one search over the move), where Newton's steps took six more
+        // distances each, each a search for a flat or a bull-nose.
+        if (alone && leader >= 0 && made[sweeps[static_cast<std::size_t>(leader)]].surface_point(x, x)) continue;
         auto probe = [&](const Eigen::Vector3d& y) {
           if (!alone) return field(y);
           return leader < 0 ? initial(y) : -made[sweeps[static_cast<std::size_t>(leader)]].distance(y);

@@ -86,12 +86,13 @@ namespace {
 // value found is within kGeneralSweepTolerance_mm of it (the error bound), or when it is at
 // least `far`. convex_minimum_between is that search from the two ends once neither is the
 // minimum (f and f' at t = 0: fa, ga < 0; at t = 1: fb, gb > 0); convex_minimum looks at the
-// ends first.
+// ends first. `at`, where given: the t of the value returned (unless it is the bound `far`).
 template <class Eval>
-double convex_minimum_between(Eval&& eval, double delta_length, double far, double fa, double ga, double fb,
-                              double gb) {
+double convex_minimum_between(Eval&& eval, double delta_length, double far, double fa, double ga, double fb, double gb,
+                              double* at = nullptr) {
   double a = 0.0, b = 1.0, num, den;
   double best = std::min(fa, fb);
+  if (at != nullptr) *at = fa <= fb ? 0.0 : 1.0;
   for (int iteration = 0; iteration < 200; ++iteration) {
     // The tangents at a and b meet at t_x, below the convex f's minimum.
     const double tx = (fb - fa - gb * b + ga * a) / (ga - gb);
@@ -106,7 +107,10 @@ double convex_minimum_between(Eval&& eval, double delta_length, double far, doub
     double ft;
     eval(t, ft, num, den);
     const double gt = num / den;
-    best = std::min(best, ft);
+    if (ft < best) {
+      best = ft;
+      if (at != nullptr) *at = t;
+    }
     if (gt == 0.0) return best;
     if (gt < 0.0) {
       a = t, fa = ft, ga = gt;
@@ -118,17 +122,19 @@ double convex_minimum_between(Eval&& eval, double delta_length, double far, doub
 }
 
 template <class Eval>
-double convex_minimum(Eval&& eval, double delta_length, double far) {
+double convex_minimum(Eval&& eval, double delta_length, double far, double* at = nullptr) {
   // The end first: the march comes at the sweep mostly from ahead of the move (W5's bull-nose
   // rows: 79 % of these end at t = 1, 17 % at t = 0), and f convex takes its minimum at an end
   // whose slope points away from the other (both only where f is constant).
   double fa, fb, num, den;
+  if (at != nullptr) *at = 1.0;
   eval(1.0, fb, num, den);
   if (num <= 0.0) return fb;
   const double gb = num / den;
+  if (at != nullptr) *at = 0.0;
   eval(0.0, fa, num, den);
   if (num >= 0.0) return fa;
-  return convex_minimum_between(eval, delta_length, far, fa, num / den, fb, gb);
+  return convex_minimum_between(eval, delta_length, far, fa, num / den, fb, gb, at);
 }
 
 }  // namespace
@@ -249,6 +255,36 @@ bool TranslationSweep::ball_core_nearest(const Eigen::Vector3d& x, Eigen::Vector
   if (!ball()) return false;
   q = origin_ + to_tool_.transpose() * ball_core_point(to_tool_ * (x - origin_));
   radius_mm = core_.rounding_mm;
+  return true;
+}
+
+bool TranslationSweep::surface_point(const Eigen::Vector3d& x, Eigen::Vector3d& out) const {
+  Eigen::Vector3d q;
+  double r;
+  if (ball_core_nearest(x, q, r)) {
+    const double from_core = (x - q).norm();
+    if (!(from_core > 0.0)) return false;
+    out = q + (r / from_core) * (x - q);
+    return true;
+  }
+  if (cutter_.type == CutterType::VBit || kind_ != Kind::General) return false;
+  // The instance t nearest y (f(t) = d_K(y - t delta) at its least, K the core cylinder),
+  // K's point k nearest p = y - t delta (the radial part cut to Rc, the height to [lo, hi])
+  // and the normal n toward p, then k + r n moved by t delta. Not inside the core's sweep:
+  // there the deepest instance's boundary often lies inside another, and Newton's steps on
+  // the distance came back sooner (W1's raster with a flat end mill: 3.7 such steps a vertex).
+  const Eigen::Vector3d y = tool_frame(x);
+  double t;
+  const double f =
+      convex_minimum([&](double at, double& value, double& num, double& den) { cylinder_eval(y, at, value, num, den); },
+                     delta_length_, std::numeric_limits<double>::infinity(), &t);
+  if (!(f > 0.0)) return false;
+  const Eigen::Vector3d p = y - t * delta_tool_;
+  const double rho = std::sqrt(p.x() * p.x() + p.y() * p.y());
+  const double radial = rho > core_.core_radius_mm ? core_.core_radius_mm / rho : 1.0;
+  const Eigen::Vector3d k(p.x() * radial, p.y() * radial, std::clamp(p.z(), core_.z_low_mm, core_.z_high_mm));
+  const Eigen::Vector3d n = (p - k) / f;
+  out = origin_ + to_tool_.transpose() * (k + core_.rounding_mm * n + t * delta_tool_);
   return true;
 }
 

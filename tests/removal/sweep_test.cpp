@@ -167,6 +167,60 @@ TEST(TranslationSweep, BallCoreNearestPointOnTheCoreSweep) {
                    .ball_core_nearest({0, 0, 0}, q, radius));
 }
 
+// The projection's step for a flat or bull-nose end mill ramping or contouring (the motion
+// neither square to the axis nor along it): where it answers, the point lies on the sweep's
+// surface and is as far from x as the sweep is, both against a ternary search over the move
+// of the cutter's own distance (its profile, checked by hand above); where it does not, x
+// lies in the core's sweep (at least r inside the sweep). Tilted and upright axes; a V-bit
+// and the motions with a closed form do not answer.
+TEST(TranslationSweep, FlatAndBullNoseSurfacePointIsTheNearest) {
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  const Cutter cutters[] = {cutter(CutterType::Flat, 8, 0, 12), cutter(CutterType::BullNose, 8, 2, 12),
+                            cutter(CutterType::BullNose, 6, 1, 5)};
+  int answered = 0, inside = 0;
+  for (const Cutter& c : cutters) {
+    for (int trial = 0; trial < 20; ++trial) {
+      Move m = move(Eigen::Vector3d(u(rng), u(rng), u(rng)), Eigen::Vector3d::Zero());
+      m.axis =
+          trial % 4 == 0 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d(0.6 * u(rng), 0.6 * u(rng), 1.0).normalized();
+      const Eigen::Vector3d delta = Eigen::Vector3d(5 * u(rng), 5 * u(rng), 2 * u(rng)) + 1.5 * u(rng) * m.axis;
+      m.end_mm = m.start_mm + delta;
+      const TranslationSweep sweep(c, m);
+      auto sweep_distance = [&](const Eigen::Vector3d& x) {
+        return convex_min([&](double t) {
+          const Eigen::Vector3d q = x - m.start_mm - t * delta;
+          const double along = q.dot(m.axis);
+          return cutter_distance(c, {(q - along * m.axis).norm(), 0.0, along});
+        });
+      };
+      for (int i = 0; i < 25; ++i) {
+        const Eigen::Vector3d x = m.start_mm + 0.5 * delta + Eigen::Vector3d(8 * u(rng), 8 * u(rng), 3 + 8 * u(rng));
+        Eigen::Vector3d on;
+        const double d = sweep_distance(x);
+        if (sweep.surface_point(x, on)) {
+          EXPECT_NEAR(sweep_distance(on), 0.0, 1e-6) << x.transpose();
+          EXPECT_NEAR((x - on).norm(), std::abs(d), 1e-6) << x.transpose();
+          EXPECT_GT(d, -c.corner_radius_mm - 1e-6) << x.transpose();
+          ++answered;
+        } else {
+          EXPECT_LE(d, -c.corner_radius_mm + 1e-6) << x.transpose();
+          ++inside;
+        }
+      }
+    }
+  }
+  EXPECT_GT(answered, 1000);
+  EXPECT_GT(inside, 50);
+  Eigen::Vector3d on;
+  Cutter v = cutter(CutterType::VBit, 6, 0, 10);
+  v.tip_angle_deg = 90;
+  EXPECT_FALSE(TranslationSweep(v, move({0, 0, 0}, {3, 1, 2})).surface_point({9, 9, 9}, on));
+  EXPECT_FALSE(TranslationSweep(cutters[1], move({0, 0, 0}, {3, 1, 0})).surface_point({9, 9, 9}, on));  // square
+  EXPECT_FALSE(TranslationSweep(cutters[1], move({0, 0, 0}, {0, 0, 3})).surface_point({9, 9, 9}, on));  // along
+  EXPECT_TRUE(TranslationSweep(cutters[1], move({0, 0, 0}, {3, 1, 2})).surface_point({9, 9, 9}, on));
+}
+
 Cutter vbit(double d, double angle_deg, double flute) {
   Cutter c = cutter(CutterType::VBit, d, 0, flute);
   c.tip_angle_deg = angle_deg;

@@ -42,6 +42,13 @@ class TranslationSweep {
   // point nearest x is q + radius (x - q) / |x - q|. False for other cutters.
   bool ball_core_nearest(const Eigen::Vector3d& x_mm, Eigen::Vector3d& q_mm, double& radius_mm) const;
 
+  // The sweep's surface point nearest x_mm (workpiece frame) where x lies outside the core's
+  // sweep: for a ball end, ball_core_nearest's q grown by the radius toward x; for a flat or
+  // bull-nose end mill moving other than square to or along its axis, the core cylinder's
+  // point nearest x's nearest instance grown by r toward x. False otherwise (a V-bit, the
+  // motions whose distance is in closed form, x in or on the core's sweep).
+  bool surface_point(const Eigen::Vector3d& x_mm, Eigen::Vector3d& out_mm) const;
+
   // Whether, at every point of `box` (workpiece frame), the nearest cutter instance of the
   // sweep is the one at the move's start, so that the distance to the sweep is the distance
   // to that cutter: true only when that is certain. The test: d(t) = d_K(y - t delta) is
