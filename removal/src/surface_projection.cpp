@@ -133,11 +133,15 @@ void project_onto_machined_surface(const MoveRecord& moves, const std::vector<Cu
         }
         const bool alone = gap > 2.0 * kStep_mm + kLeadSlack_mm;
         const int leader = lead;
-        // A ball, flat or bull-nose end mill's sweep leading alone: the surface point its
-        // core's nearest (or deepest) instance gives (a ball's in closed form, a cylinder
-        // core's from one search over the move), where Newton's steps took six more
-        // distances each, each a search for a flat or a bull-nose.
-        if (alone && leader >= 0 && made[sweeps[static_cast<std::size_t>(leader)]].surface_point(x, x)) continue;
+        // A ball, flat or bull-nose end mill's sweep leading alone, x outside its core's sweep:
+        // its nearest surface point (a ball's in closed form, a cylinder core's from one
+        // search over the move), where Newton's steps took six more distances each, each a
+        // search for a flat or a bull-nose.
+        Eigen::Vector3d on;
+        if (alone && leader >= 0 && made[sweeps[static_cast<std::size_t>(leader)]].surface_point(x, on)) {
+          x = on;
+          continue;
+        }
         auto probe = [&](const Eigen::Vector3d& y) {
           if (!alone) return field(y);
           return leader < 0 ? initial(y) : -made[sweeps[static_cast<std::size_t>(leader)]].distance(y);
