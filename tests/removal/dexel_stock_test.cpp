@@ -1146,6 +1146,32 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
   }
 }
 
+// 300 moves of one cutter at a fixed axis sunk deep into the 20 x 15 x 10 block: rows along x
+// that climb and descend by up to dip_mm a move and turn back, stepovers, and stretches that
+// wander (random draws from `seed`, in a fixed order).
+MoveList deep_raster(const Cutter& cutter, const Eigen::Vector3d& axis, unsigned seed, double dip_mm) {
+  MoveList chain;
+  chain.cutters.push_back(cutter);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-dip_mm, dip_mm);
+  Eigen::Vector3d p(3, 3, 6);
+  for (int i = 0; i < 300; ++i) {
+    Eigen::Vector3d q;
+    if (i % 50 < 30)
+      q = p + Eigen::Vector3d((i / 50) % 2 ? -0.45 : 0.45, 0.02, dip(rng));  // rows
+    else if (i % 50 < 33)
+      q = p + Eigen::Vector3d(0, 0.4, 0);  // stepover
+    else
+      q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
+    q.z() = std::clamp(q.z(), 3.0, 8.5);
+    q.x() = std::clamp(q.x(), 1.0, 19.0);
+    q.y() = std::clamp(q.y(), 1.0, 14.0);
+    chain.moves.push_back(line(p, q, axis));
+    p = q;
+  }
+  return chain;
+}
+
 // A tilted ball end mill at a fixed axis (3+2) hands rays over row by row: each row's rays
 // that the move before surely cut (its end instance is this move's start) and those the next
 // move surely cuts and will not pass over are skipped before their material is looked at
@@ -1156,26 +1182,7 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
 // signs), turn back and wander, at two tilts.
 TEST(DexelStock, TiltedBallRasterHandsOverRowByRow) {
   for (const Eigen::Vector3d& tilt : {Eigen::Vector3d(0.35, 0.2, 1), Eigen::Vector3d(-0.1, 0.6, 1)}) {
-    const Eigen::Vector3d axis = tilt.normalized();
-    MoveList chain;
-    chain.cutters.push_back(make(CutterType::Ball, 3, 1.5, 3.5));
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-0.4, 0.4);
-    Eigen::Vector3d p(3, 3, 6);
-    for (int i = 0; i < 300; ++i) {
-      Eigen::Vector3d q;
-      if (i % 50 < 30)
-        q = p + Eigen::Vector3d((i / 50) % 2 ? -0.45 : 0.45, 0.02, dip(rng));  // rows
-      else if (i % 50 < 33)
-        q = p + Eigen::Vector3d(0, 0.4, 0);  // stepover
-      else
-        q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
-      q.z() = std::clamp(q.z(), 3.0, 8.5);
-      q.x() = std::clamp(q.x(), 1.0, 19.0);
-      q.y() = std::clamp(q.y(), 1.0, 14.0);
-      chain.moves.push_back(line(p, q, axis));
-      p = q;
-    }
+    const MoveList chain = deep_raster(make(CutterType::Ball, 3, 1.5, 3.5), tilt.normalized(), 11, 0.4);
     const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
     EXPECT_GT(rays, 40000u);
     EXPECT_LT(volume_mm3, 3000.0 - 150.0);  // the chain cut deep
@@ -1195,26 +1202,8 @@ TEST(DexelStock, FlatAndBullNoseRampsHandOverByTheirCore) {
                                   Eigen::Vector3d(-0.1, 0.6, 1).normalized()};
   for (const Cutter& cutter : cutters) {
     for (const Eigen::Vector3d& axis : axes) {
-      MoveList chain;
-      chain.cutters.push_back(cutter);
-      std::mt19937 rng(13);
-      std::uniform_real_distribution<double> step(-0.6, 0.6), dip(-0.5, 0.5);
-      Eigen::Vector3d p(3, 3, 6);
-      for (int i = 0; i < 300; ++i) {
-        Eigen::Vector3d q;
-        if (i % 50 < 30)
-          q = p + Eigen::Vector3d((i / 50) % 2 ? -0.45 : 0.45, 0.02, dip(rng));  // rows
-        else if (i % 50 < 33)
-          q = p + Eigen::Vector3d(0, 0.4, 0);  // stepover
-        else
-          q = p + Eigen::Vector3d(step(rng), step(rng), dip(rng));  // wandering
-        q.z() = std::clamp(q.z(), 3.0, 8.5);
-        q.x() = std::clamp(q.x(), 1.0, 19.0);
-        q.y() = std::clamp(q.y(), 1.0, 14.0);
-        chain.moves.push_back(line(p, q, axis));
-        p = q;
-      }
-      const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
+      const auto [rays, volume_mm3] =
+          expect_chain_cuts_as_one_by_one(deep_raster(cutter, axis, 13, 0.5), {{0, 0, 0}, {20, 15, 10}});
       EXPECT_GT(rays, 40000u);
       EXPECT_LT(volume_mm3, 3000.0 - 150.0);  // the chain cut deep
     }
