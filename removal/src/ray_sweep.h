@@ -73,7 +73,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
   const Eigen::AlignedBox3d& bounds() const { return sweep_.bounds(); }
 
   // A range [u_lo, u_hi] holding every ray of family `axis` in the row at w that can meet
-  // the sweep (tighter than bounds() for an upright tool; the bounds' range otherwise).
+  // the sweep (an upright tool's from its section about the tip's path, a tilted one's the
+  // row's slice of tilted_window's box: no ray outside it has a window).
   void row_range(int axis, double w, double& u_lo, double& u_hi) const {
     row_range(axis, w, row_section(axis, w), u_lo, u_hi);
   }
