@@ -27,6 +27,32 @@ namespace {
 // A ray holding more intervals than this is searched by bisection for those in a window;
 // fewer, by a scan (bisection on every ray cost W1's and W5's cut 4 %).
 constexpr std::uint32_t kScanIntervals = 8;
+// At most this many pieces of a turning move are cut row by row together (cut_pieces).
+constexpr int kGroupPieces = 16;
+constexpr int kNoRun = std::numeric_limits<int>::min();  // a move that joins no run
+
+// The ray's material the kernel need look at for a window [win_lo, win_hi] along it: from
+// the first interval that ends past the window's start to the last that starts before its
+// end, [bottom, top] (false: none in the window). The intervals are disjoint and in order;
+// a ray that many earlier cuts left in shreds is searched by bisection.
+inline __attribute__((always_inline)) bool material_in_window(const DexelSegment* seg, std::uint32_t n, double win_lo,
+                                                              double win_hi, double& bottom, double& top) {
+  std::uint32_t j = 0, last = n - 1;
+  if (n <= kScanIntervals) {
+    while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
+    if (j == n) return false;
+    while (last > j && !(seg[last].lo_mm < win_hi)) --last;
+  } else {
+    j = static_cast<std::uint32_t>(
+        std::partition_point(seg, seg + n, [&](const DexelSegment& g) { return g.hi_mm <= win_lo; }) - seg);
+    if (j == n || !(seg[j].lo_mm < win_hi)) return false;
+    last = static_cast<std::uint32_t>(
+        std::partition_point(seg + j, seg + n, [&](const DexelSegment& g) { return g.lo_mm < win_hi; }) - seg - 1);
+  }
+  bottom = seg[j].lo_mm;
+  top = seg[last].hi_mm;
+  return true;
+}
 
 // Longest overlap (mm) of [a, b] with the ray's material, and where along the ray.
 double overlap(const SegmentList& ray, double a, double b, double& middle) {
@@ -404,6 +430,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
   const int tiles = tile_base[3];
   std::vector<int> start(static_cast<std::size_t>(tiles) + 1);
   std::vector<int> entries;
+  std::vector<int> runs;     // per entry: cut_pieces' runs (see below)
+  std::vector<int> run_key;  // per move of the batch: the key of its run (kNoRun: none)
   std::vector<std::int64_t> rays_of(static_cast<std::size_t>(tiles));  // per tile: its moves' rays, summed
   // A move's rays in each family (none: u0 > u1).
   struct RayBox {
@@ -543,6 +571,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     const Move* const batch = window.moves.data() + off;
     sweeps.clear();
     sweeps.resize(count);
+    run_key.assign(count, kNoRun);
+    std::atomic<bool> any_runs{false};
     ray_boxes.assign(count, {});
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 16), [&](const auto& range) {
       for (std::size_t i = range.begin(); i != range.end(); ++i) {
@@ -551,6 +581,13 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         // probe high above the part) meets no ray's material.
         const detail::RaySweep& sweep =
             sweeps[i].emplace(cutters.at(static_cast<std::size_t>(batch[i].cutter)), batch[i], &m.shape_bounds);
+        // A turning move's pieces (cutting, tilted, with no hand-over) are cut a run at a time
+        // (cut_pieces): the key their run shares.
+        const MoveHandover& h = handover[off + i];
+        if (!batch[i].rapid && sweep.tilted() && !h.from_start.on && !h.to_end.on) {
+          run_key[i] = batch[i].block;
+          any_runs.store(true, std::memory_order_relaxed);
+        }
         if (!sweep.bounds().intersects(m.shape_bounds)) continue;
         const int only = probe_family(batch[i]);
         for (int a = 0; a < 3; ++a) {
@@ -634,6 +671,161 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
       m.moves.append(batch, count, cutter_base);
       batches.fill(count + 2 * kBatchMoves);  // the next batch and its look-ahead
     });
+    // A run of a turning move's pieces (consecutive cutting entries of one block, tilted,
+    // with no hand-over) over one tile, row by row; returns the length removed. Where the
+    // pieces cover much the same rays of a row (W5: 3.2 pieces a program move 0.4 mm long,
+    // a tool 6-8 mm wide), the rays with material in a window box around all of them are
+    // found once, and each piece then looks only at those: a ray clear of the run costs
+    // one look, not one a piece. Where they lie apart, each piece takes its own rays. Either
+    // way every ray meets the pieces in program order, each seeing what the ones before
+    // left, as one piece after another over the whole tile would: the same cut.
+    auto cut_pieces = [&](const int* list, int n, int a, int tile_u0, int tile_w0, std::vector<DexelSegment>& buffer)
+        __attribute__((noinline)) {
+      double removed = 0.0;
+      RowRays rows, candidates;
+      Family& f = m.families[static_cast<std::size_t>(a)];
+      struct Piece {
+        const detail::RaySweep* sweep;
+        int id, u0, u1, w0, w1;
+        double box_lo, box_hi;
+      };
+      Piece pieces[kGroupPieces];
+      const detail::RaySweep* group[kGroupPieces] = {};
+      for (int p = 0; p < n; ++p) group[p] = &*sweeps[static_cast<std::size_t>(list[p])];
+      const detail::RaySweep::GroupWindow window(group, n);
+      int w_lo = tile_w0 + kTileW, w_hi = tile_w0 - 1;
+      for (int p = 0; p < n; ++p) {
+        const int i = list[p];
+        const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
+        const RayBox& box = ray_boxes[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)];
+        pieces[p] = {&sweep,
+                     id_base + static_cast<int>(first) + i,
+                     std::max(box.u0, tile_u0),
+                     std::min(box.u1, tile_u0 + kTileU - 1),
+                     std::max(box.w0, tile_w0),
+                     std::min(box.w1, tile_w0 + kTileW - 1),
+                     sweep.bounds().min()[a],
+                     sweep.bounds().max()[a]};
+        w_lo = std::min(w_lo, pieces[p].w0);
+        w_hi = std::max(w_hi, pieces[p].w1);
+      }
+      const double v = m.v;
+      for (int iw = w_lo; iw <= w_hi; ++iw) {
+        const double w_mm = m.position(iw);
+        struct Span {
+          int k0, k1;  // the piece's rays in the row, from f.lo_u (k0 > k1: none)
+          detail::RaySweep::TiltRow tilt;
+        };
+        Span spans[kGroupPieces];
+        int k_lo = kTileU + tile_u0, k_hi = -1, span_sum = 0;
+        double box_lo = std::numeric_limits<double>::infinity(), box_hi = -box_lo;
+        for (int p = 0; p < n; ++p) {
+          const Piece& piece = pieces[p];
+          Span& span = spans[p];
+          span.k0 = 1;
+          span.k1 = 0;
+          if (iw < piece.w0 || iw > piece.w1) continue;
+          const double section = piece.sweep->row_section(a, w_mm);
+          if (section < 0.0) continue;
+          double row_lo, row_hi;
+          piece.sweep->row_range(a, w_mm, section, row_lo, row_hi);
+          span.k0 = std::max(piece.u0, static_cast<int>(std::ceil(m.index_of(row_lo)))) - f.lo_u;
+          span.k1 = std::min(piece.u1, static_cast<int>(std::floor(m.index_of(row_hi)))) - f.lo_u;
+          if (span.k0 > span.k1) continue;
+          piece.sweep->tilted_row(a, w_mm, span.tilt);
+          span_sum += span.k1 - span.k0 + 1;
+          k_lo = std::min(k_lo, span.k0);
+          k_hi = std::max(k_hi, span.k1);
+          box_lo = std::min(box_lo, piece.box_lo);
+          box_hi = std::max(box_hi, piece.box_hi);
+        }
+        if (k_lo > k_hi) continue;
+        SegmentList* const row = &f.at(f.lo_u, iw);
+        // The ray k into `out` when it holds material within [lo, hi] and the window at its
+        // row (tilt): its material there, clamped to the window (the sweep lies in it).
+        auto take = [&](int k, double lo, double hi, const detail::RaySweep::TiltRow& tilt, RowRays& out, int& count) {
+          const SegmentList& ray = row[k];
+          const std::uint32_t size = ray.size();
+          if (size == 0 || ray.first_lo_mm() >= hi || ray.last_hi_mm() <= lo) return;
+          const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
+          double win_lo, win_hi, bottom, top;
+          if (!detail::RaySweep::tilted_window(tilt, u_mm, win_lo, win_hi) ||
+              !material_in_window(ray.data(), size, win_lo, win_hi, bottom, top))
+            return;
+          out.k[count] = k;
+          out.u[count] = u_mm;
+          out.bottom[count] = std::max(bottom, win_lo);
+          out.top[count] = std::min(top, win_hi);
+          ++count;
+        };
+        // The row's rays k0..k1 that take() keeps.
+        auto gather = [&](int k0, int k1, double lo, double hi, const detail::RaySweep::TiltRow& tilt, RowRays& out) {
+          int count = 0;
+          for (int word = k0 / 64; word <= k1 / 64; ++word) {
+            std::uint64_t walk = f.occupied_word(word, iw);
+            if (word == k0 / 64) walk &= ~std::uint64_t{0} << (k0 % 64);
+            if (word == k1 / 64) walk &= ~std::uint64_t{0} >> (63 - k1 % 64);
+            for (; walk != 0; walk &= walk - 1) take(64 * word + __builtin_ctzll(walk), lo, hi, tilt, out, count);
+          }
+          return count;
+        };
+        // Piece p's intervals on the rays in `rows`, cut.
+        auto cut = [&](const Piece& piece, int count) {
+          piece.sweep->intervals_within(a, w_mm, count, rows.u, rows.bottom, rows.top, rows.lo, rows.hi, rows.hit);
+          for (int c = 0; c < count; ++c) {
+            if (!rows.hit[c]) continue;
+            const int k = rows.k[c];
+            SegmentList& ray = row[k];
+            removed += subtract(ray, static_cast<float>(rows.lo[c]), static_cast<float>(rows.hi[c]), piece.id, buffer);
+            if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
+          }
+        };
+        // Pieces mostly apart along the row (the impeller's, the S-piece's): each its own rays.
+        if (span_sum < 2 * (k_hi - k_lo + 1)) {
+          for (int p = 0; p < n; ++p)
+            if (spans[p].k0 <= spans[p].k1)
+              cut(pieces[p], gather(spans[p].k0, spans[p].k1, pieces[p].box_lo, pieces[p].box_hi, spans[p].tilt, rows));
+          continue;
+        }
+        // Over much the same rays (W5's): those with material within the window around all
+        // the pieces first, then each piece's among them.
+        detail::RaySweep::TiltRow group_row;
+        window.row(a, w_mm, group_row);
+        const int held = gather(k_lo, k_hi, box_lo, box_hi, group_row, candidates);
+        for (int p = 0; p < n; ++p) {
+          const Span& span = spans[p];
+          if (span.k0 > span.k1) continue;
+          int c0 = 0;
+          while (c0 < held && candidates.k[c0] < span.k0) ++c0;
+          int count = 0;
+          for (int c = c0; c < held && candidates.k[c] <= span.k1; ++c)
+            take(candidates.k[c], pieces[p].box_lo, pieces[p].box_hi, span.tilt, rows, count);
+          cut(pieces[p], count);
+        }
+      }
+      return removed;
+    };
+    // Each tile's runs of pieces: runs[e] is the run's length at its first entry, 0 at the
+    // others, 1 for an entry cut on its own.
+    runs.assign(entries.size(), 1);
+    if (any_runs.load())
+      tbb::parallel_for(std::size_t{0}, busy.size(), [&](std::size_t b) {
+        const int t = busy[b];
+        const int end = start[static_cast<std::size_t>(t) + 1];
+        for (int e = start[static_cast<std::size_t>(t)]; e < end;) {
+          const int key = run_key[static_cast<std::size_t>(entries[static_cast<std::size_t>(e)])];
+          int g = e + 1;
+          if (key != kNoRun)
+            while (g < end && g - e < kGroupPieces &&
+                   run_key[static_cast<std::size_t>(entries[static_cast<std::size_t>(g)])] == key)
+              ++g;
+          if (g > e + 1) {
+            runs[static_cast<std::size_t>(e)] = g - e;
+            for (int k = e + 1; k < g; ++k) runs[static_cast<std::size_t>(k)] = 0;
+          }
+          e = g;
+        }
+      });
     std::atomic<std::size_t> next_busy{0};
     const std::size_t workers =
         std::min(busy.size(), static_cast<std::size_t>(tbb::this_task_arena::max_concurrency()));
@@ -652,6 +844,11 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         RowRays rows;
         for (int e = start[static_cast<std::size_t>(t)]; e < start[static_cast<std::size_t>(t) + 1]; ++e) {
           const int i = entries[static_cast<std::size_t>(e)];
+          // A run's first entry cuts the whole run; its other entries are done then.
+          if (const int run = runs[static_cast<std::size_t>(e)]; __builtin_expect(run != 1, 0)) {
+            if (run > 1) removed += cut_pieces(&entries[static_cast<std::size_t>(e)], run, a, tile_u0, tile_w0, buffer);
+            continue;
+          }
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
           const Move& move = batch[i];
           const int id = id_base + static_cast<int>(first) + i;
@@ -751,26 +948,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                   if (longest <= 0.0 || (probe.overlap_mm > 0.0 && longest + kProbeMargin_mm <= probe.overlap_mm))
                     continue;
                 } else if (windowed || tilted) {
-                  // The intervals are disjoint and in order: the first that ends past the
-                  // window's start, to the last that starts before its end (by bisection on
-                  // a ray that many earlier cuts left in shreds).
-                  std::uint32_t j = 0, last = n - 1;
-                  if (n <= kScanIntervals) {
-                    while (j < n && !(seg[j].lo_mm < win_hi && seg[j].hi_mm > win_lo)) ++j;
-                    if (j == n) continue;
-                    while (last > j && !(seg[last].lo_mm < win_hi)) --last;
-                  } else {
-                    j = static_cast<std::uint32_t>(
-                        std::partition_point(seg, seg + n, [&](const DexelSegment& g) { return g.hi_mm <= win_lo; }) -
-                        seg);
-                    if (j == n || !(seg[j].lo_mm < win_hi)) continue;
-                    last = static_cast<std::uint32_t>(
-                        std::partition_point(seg + j, seg + n,
-                                             [&](const DexelSegment& g) { return g.lo_mm < win_hi; }) -
-                        seg - 1);
-                  }
-                  bottom = seg[j].lo_mm;
-                  material_top = seg[last].hi_mm;
+                  if (!material_in_window(seg, n, win_lo, win_hi, bottom, material_top)) continue;
                   // The sweep lies in a tilted tool's window: the kernel need look no further
                   // (the root march then starts at the tool's tip plane, not below it).
                   if (tilted) {

@@ -213,6 +213,10 @@ struct Conic {
 
 }  // namespace
 
+// The tilted window box's margin (mm), far above rounding and far below anything a ray
+// resolves: the window is only a filter, the kernel decides.
+constexpr double kTiltMargin_mm = 1e-6;
+
 RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedBox3d* material_box)
     : sweep_(cutter, move),
       cutter_(cutter),
@@ -328,32 +332,54 @@ void RaySweep::prepare_tilt_box(const Eigen::AlignedBox3d* material_box) {
   const double H = material_box == nullptr
                        ? height_mm_
                        : std::min(height_mm_, highest_point_in_box_mm(R, p0_, p0_ + delta_, a, a, *material_box));
-  // A margin (mm) far above rounding and far below anything a ray resolves: the window is
-  // only a filter, the kernel decides.
-  constexpr double kMargin_mm = 1e-6;
-  const Vector3d dirs[3] = {a, n1, n2};
+  tilt_dirs_[0] = a;
+  tilt_dirs_[1] = n1;
+  tilt_dirs_[2] = n2;
   const double lo[3] = {std::min(0.0, da), -R, -R};
   const double hi[3] = {H + std::max(0.0, da), R + along, R};
   for (int c = 0; c < 8; ++c) {
     tilt_corner_[c] = p0_;
-    for (int k = 0; k < 3; ++k) tilt_corner_[c] += ((c >> k & 1) ? hi[k] + kMargin_mm : lo[k] - kMargin_mm) * dirs[k];
+    for (int k = 0; k < 3; ++k)
+      tilt_corner_[c] += ((c >> k & 1) ? hi[k] + kTiltMargin_mm : lo[k] - kTiltMargin_mm) * tilt_dirs_[k];
   }
+  fill_tilt_boxes(p0_, tilt_dirs_, lo, hi, tilt_box_);
+}
+
+void RaySweep::fill_tilt_boxes(const Vector3d& origin, const Vector3d* dirs, const double* lo, const double* hi,
+                               TiltBox* boxes) {
   for (int axis = 0; axis < 3; ++axis) {
-    TiltBox& b = tilt_box_[axis];
+    TiltBox& b = boxes[axis];
     const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
     for (int k = 0; k < 3; ++k) {
       // Taken along the ray (slope > 0), so that its lower bound gives the entry.
       const double sign = dirs[k][axis] < 0.0 ? -1.0 : 1.0;
       const Vector3d d = sign * dirs[k];
-      b.base[k] = -d.dot(p0_);
+      b.base[k] = -d.dot(origin);
       b.du[k] = d[a1];
       b.dw[k] = d[a2];
-      b.lo[k] = (sign > 0.0 ? lo[k] : -hi[k]) - kMargin_mm;
-      b.hi[k] = (sign > 0.0 ? hi[k] : -lo[k]) + kMargin_mm;
+      b.lo[k] = (sign > 0.0 ? lo[k] : -hi[k]) - kTiltMargin_mm;
+      b.hi[k] = (sign > 0.0 ? hi[k] : -lo[k]) + kTiltMargin_mm;
       b.flat[k] = std::abs(d[axis]) <= 1e-12;
       b.inv_slope[k] = b.flat[k] ? 0.0 : 1.0 / d[axis];
     }
   }
+}
+
+RaySweep::GroupWindow::GroupWindow(const RaySweep* const* sweeps, int n) {
+  const RaySweep& first = *sweeps[0];
+  double lo[3], hi[3];
+  for (int k = 0; k < 3; ++k) {
+    lo[k] = kInf;
+    hi[k] = -kInf;
+  }
+  for (int i = 0; i < n; ++i)
+    for (const Vector3d& corner : sweeps[i]->tilt_corner_)
+      for (int k = 0; k < 3; ++k) {
+        const double x = first.tilt_dirs_[k].dot(corner - first.p0_);
+        lo[k] = std::min(lo[k], x);
+        hi[k] = std::max(hi[k], x);
+      }
+  fill_tilt_boxes(first.p0_, first.tilt_dirs_, lo, hi, box_);
 }
 
 void RaySweep::prepare_flat_family(int axis) {

@@ -112,8 +112,40 @@ class __attribute__((visibility("hidden"))) RaySweep {
     double c_lo[3], c_hi[3], slope[3];
     double u_min, u_max;  // where the directions square to the rays keep the row in the box
   };
-  void tilted_row(int axis, double w, TiltRow& row) const {
-    const TiltBox& b = tilt_box_[axis];
+  void tilted_row(int axis, double w, TiltRow& row) const { box_row(tilt_box_[axis], w, row); }
+  static bool tilted_window(const TiltRow& row, double u, double& lo, double& hi) {
+    if (!(u >= row.u_min && u <= row.u_max)) return false;
+    lo = std::max({row.c_lo[0] + row.slope[0] * u, row.c_lo[1] + row.slope[1] * u, row.c_lo[2] + row.slope[2] * u});
+    hi = std::min({row.c_hi[0] + row.slope[0] * u, row.c_hi[1] + row.slope[1] * u, row.c_hi[2] + row.slope[2] * u});
+    return lo <= hi;
+  }
+
+ private:
+  // The box of tilted_window along one family's rays: the coordinate along direction k is
+  // base + u du + w dw + s slope, within [lo, hi] (widened by a rounding margin).
+  struct TiltBox {
+    double base[3], du[3], dw[3], inv_slope[3], lo[3], hi[3];
+    bool flat[3];
+  };
+
+ public:
+  // One window box around the window boxes of n tilted sweeps (a turning move's pieces):
+  // the first's directions, its extents along them over every corner of every box (each box
+  // is its corners' hull). Its rows and windows as tilted_row and tilted_window give them.
+  class GroupWindow {
+   public:
+    GroupWindow(const RaySweep* const* sweeps, int n);
+    void row(int axis, double w, TiltRow& row) const { box_row(box_[axis], w, row); }
+
+   private:
+    TiltBox box_[3];
+  };
+
+ private:
+  // The three families' boxes for the box spanning [lo[k], hi[k]] along dirs[k] from origin.
+  static void fill_tilt_boxes(const Eigen::Vector3d& origin, const Eigen::Vector3d* dirs, const double* lo,
+                              const double* hi, TiltBox* boxes);
+  static void box_row(const TiltBox& b, double w, TiltRow& row) {
     row.u_min = -std::numeric_limits<double>::infinity();
     row.u_max = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 3; ++k) {
@@ -138,21 +170,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
       row.slope[k] = -b.du[k] * b.inv_slope[k];
     }
   }
-  static bool tilted_window(const TiltRow& row, double u, double& lo, double& hi) {
-    if (!(u >= row.u_min && u <= row.u_max)) return false;
-    lo = std::max({row.c_lo[0] + row.slope[0] * u, row.c_lo[1] + row.slope[1] * u, row.c_lo[2] + row.slope[2] * u});
-    hi = std::min({row.c_hi[0] + row.slope[0] * u, row.c_hi[1] + row.slope[1] * u, row.c_hi[2] + row.slope[2] * u});
-    return lo <= hi;
-  }
 
- private:
   enum class Method { Ball, Upright, General };
-  // The box of tilted_window along one family's rays: the coordinate along direction k is
-  // base + u du + w dw + s slope, within [lo, hi] (widened by a rounding margin).
-  struct TiltBox {
-    double base[3], du[3], dw[3], inv_slope[3], lo[3], hi[3];
-    bool flat[3];
-  };
   void prepare_tilt_box(const Eigen::AlignedBox3d* material_box);
   TiltBox tilt_box_[3];
   Eigen::Vector3d tilt_corner_[8];  // the window box's corners (corner c: bit k set, the high side along k)
@@ -326,6 +345,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
   Eigen::Vector3d normal_, dual_a_, dual_b_;  // slab normal and dual basis (no slab if zero)
   int segments_ = 0;                          // 0: sphere, 1: one capsule c0 -> c0 + edge_a, 2: parallelogram
   bool vertical_axis_ = false;
+  Eigen::Vector3d tilt_dirs_[3];  // the window box's directions: a, n1, n2 (GroupWindow's)
 };
 
 }  // namespace vcut::removal::detail

@@ -23,6 +23,7 @@
 #include "test_meshes.h"
 #include "vcut/removal/cutter.h"
 #include "vcut/removal/mesh.h"
+#include "vcut/removal/move.h"
 #include "vcut/removal/sweep.h"
 
 namespace vcut::removal {
@@ -1059,9 +1060,10 @@ TEST(DexelStock, SameRaysForOneTwoAndSevenThreads) {
 }
 
 // Cuts `chain` in one call and one move per call into two stocks of `box` at 0.1 mm and
-// expects the same material on every ray (within 1 um); returns the rays holding material
-// and the volume left.
-std::pair<std::size_t, double> expect_chain_cuts_as_one_by_one(const MoveList& chain, const BoxShape& box) {
+// expects the same material on every ray (within 1 um; `exact`: the same floats and the same
+// move on every endpoint); returns the rays holding material and the volume left.
+std::pair<std::size_t, double> expect_chain_cuts_as_one_by_one(const MoveList& chain, const BoxShape& box,
+                                                               bool exact = false) {
   DexelStock together(box, 0.1), alone(box, 0.1);
   together.cut(chain, {});
   for (const Move& m : chain.moves) {
@@ -1079,6 +1081,13 @@ std::pair<std::size_t, double> expect_chain_cuts_as_one_by_one(const MoveList& c
         EXPECT_EQ(a.size(), b.size()) << "family " << family << " ray " << iu << ", " << iw;
         if (a.size() != b.size()) return {rays, together.volume_mm3()};
         for (std::size_t k = 0; k < a.size(); ++k) {
+          if (exact) {
+            const bool same = a[k].lo_mm == b[k].lo_mm && a[k].hi_mm == b[k].hi_mm && a[k].lo_move == b[k].lo_move &&
+                              a[k].hi_move == b[k].hi_move;
+            EXPECT_TRUE(same) << "family " << family << " ray " << iu << ", " << iw;
+            if (!same) return {rays, together.volume_mm3()};
+            continue;
+          }
           EXPECT_NEAR(a[k].lo_mm, b[k].lo_mm, kEndpointTol_mm) << "family " << family << " ray " << iu << ", " << iw;
           EXPECT_NEAR(a[k].hi_mm, b[k].hi_mm, kEndpointTol_mm) << "family " << family << " ray " << iu << ", " << iw;
         }
@@ -1143,6 +1152,56 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
     const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(chain, {{0, 0, 0}, {20, 15, 10}});
     EXPECT_GT(rays, 40000u);
     EXPECT_LT(volume_mm3, 3000.0 - 100.0);  // the chain did cut (the V-bit least)
+  }
+}
+
+// A turning move's pieces over the same tile are cut row by row together (removal/
+// dexel_cut.cpp, cut_pieces): the rays with material in a window around all the pieces
+// first where the pieces cover much the same rays, each piece its own rays where they lie
+// apart. Either way every ray must meet the pieces in program order, each seeing what the
+// ones before left, as when each piece is cut in a call of its own (then no run forms): the
+// same intervals to the bit, and the same move on every endpoint. Tilted ball, bull-nose,
+// flat and V-bit tools turning by up to 9 deg a move, on short moves (pieces over the same
+// rays) and long ones (pieces apart), a tight bound (more pieces than a run takes), and a
+// shank probe between two moves' pieces (it ends a run).
+TEST(DexelStock, TurningPiecesCutTogetherAsOneByOne) {
+  Cutter vbit = make(CutterType::VBit, 4, 0, 10);
+  vbit.tip_angle_deg = 90;
+  const Cutter cutters[] = {make(CutterType::Ball, 3, 1.5, 8), make(CutterType::BullNose, 4, 0.8, 8),
+                            make(CutterType::Flat, 3, 0, 8), vbit};
+  for (const Cutter& cutter : cutters) {
+    for (const double step_mm : {0.3, 3.0}) {
+      MoveList pieces;
+      pieces.cutters.push_back(cutter);
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<double> turn(-0.05, 0.05), wander(-step_mm, step_mm), dip(-0.3, 0.3);
+      Eigen::Vector3d p(3, 3, 7), axis = Eigen::Vector3d(0.3, 0.25, 1).normalized();
+      for (int i = 0; i < 40; ++i) {
+        Eigen::Vector3d q = p + Eigen::Vector3d(i % 15 < 12 ? step_mm * ((i / 15) % 2 ? -1 : 1) : wander(rng),
+                                                i % 15 < 12 ? 0.05 : 0.4, dip(rng));
+        q = q.cwiseMax(Eigen::Vector3d(1, 1, 4)).cwiseMin(Eigen::Vector3d(19, 14, 9));
+        Eigen::Vector3d next = (axis + Eigen::Vector3d(turn(rng), turn(rng), 0)).normalized();
+        if (next.z() < 0.8) next = Eigen::Vector3d(0.3, 0.25, 1).normalized();
+        Move m = line(p, q, next);
+        m.block = i;
+        const TurningSplit split = five_axis_split(cutter, 8.0, axis, next, i % 7 == 0 ? 0.001 : 0.01);
+        append_five_axis_move(pieces.moves, m, axis, next, split);
+        if (i == 20) {
+          Move probe = line(q, q, next);
+          probe.rapid = true;
+          probe.probe = ProbeKind::Shank;
+          probe.block = i;
+          pieces.moves.push_back(probe);
+        }
+        p = q;
+        axis = next;
+      }
+      ASSERT_GT(pieces.moves.size(), 200u);
+      SCOPED_TRACE(testing::Message() << "cutter " << static_cast<int>(cutter.type) << ", steps of " << step_mm);
+      const auto [rays, volume_mm3] = expect_chain_cuts_as_one_by_one(pieces, {{0, 0, 0}, {20, 15, 10}}, true);
+      EXPECT_GT(rays, 40000u);
+      EXPECT_LT(volume_mm3, 3000.0 - 50.0);  // the pieces did cut
+    }
   }
 }
 
