@@ -690,9 +690,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         double box_lo, box_hi;
       };
       Piece pieces[kGroupPieces];
-      const detail::RaySweep* group[kGroupPieces] = {};
-      for (int p = 0; p < n; ++p) group[p] = &*sweeps[static_cast<std::size_t>(list[p])];
-      const detail::RaySweep::GroupWindow window(group, n);
+      std::optional<detail::RaySweep::GroupWindow> window;  // made where a row first needs it
       int w_lo = tile_w0 + kTileW, w_hi = tile_w0 - 1;
       for (int p = 0; p < n; ++p) {
         const int i = list[p];
@@ -717,7 +715,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           detail::RaySweep::TiltRow tilt;
         };
         Span spans[kGroupPieces];
-        int k_lo = kTileU + tile_u0, k_hi = -1, span_sum = 0;
+        int k_lo = std::numeric_limits<int>::max(), k_hi = -1, span_sum = 0;
         double box_lo = std::numeric_limits<double>::infinity(), box_hi = -box_lo;
         for (int p = 0; p < n; ++p) {
           const Piece& piece = pieces[p];
@@ -789,8 +787,13 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         }
         // Over much the same rays (W5's): those with material within the window around all
         // the pieces first, then each piece's among them.
+        if (!window) {
+          const detail::RaySweep* group[kGroupPieces] = {};
+          for (int p = 0; p < n; ++p) group[p] = pieces[p].sweep;
+          window.emplace(group, n);
+        }
         detail::RaySweep::TiltRow group_row;
-        window.row(a, w_mm, group_row);
+        window->row(a, w_mm, group_row);
         const int held = gather(k_lo, k_hi, box_lo, box_hi, group_row, candidates);
         for (int p = 0; p < n; ++p) {
           const Span& span = spans[p];
