@@ -1155,10 +1155,10 @@ TEST(DexelStock, ChainedMovesCutWhatTheyCutOneByOne) {
   }
 }
 
-// A turning move's pieces over the same tile are cut row by row together (removal/
-// dexel_cut.cpp, cut_pieces): the rays with material in a window around all the pieces
-// first where the pieces cover much the same rays, each piece its own rays where they lie
-// apart. Either way every ray must meet the pieces in program order, each seeing what the
+// Turning moves' consecutive pieces over the same tile (a move's and the next's) are cut row
+// by row together (removal/dexel_cut.cpp, cut_pieces): the rays with material in a window
+// around all the pieces first where the pieces cover much the same rays, each piece its own
+// rays where they lie apart. Either way every ray must meet the pieces in program order, each seeing what the
 // ones before left, as when each piece is cut in a call of its own (then no run forms): the
 // same intervals to the bit, and the same move on every endpoint. Tilted ball, bull-nose,
 // flat and V-bit tools turning by up to 9 deg a move, on short moves (pieces over the same
