@@ -581,8 +581,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         // probe high above the part) meets no ray's material.
         const detail::RaySweep& sweep =
             sweeps[i].emplace(cutters.at(static_cast<std::size_t>(batch[i].cutter)), batch[i], &m.shape_bounds);
-        // Turning moves' pieces (cutting, tilted, with no hand-over) are cut a run at a time
-        // (cut_pieces).
+        // Turning moves' pieces (cutting, tilted, with no hand-over; so is any other such move)
+        // are cut a run at a time (cut_pieces).
         const MoveHandover& h = handover[off + i];
         if (!batch[i].rapid && sweep.tilted() && !h.from_start.on && !h.to_end.on) {
           in_run[i] = 1;
