@@ -798,10 +798,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         for (int p = 0; p < n; ++p) {
           const Span& span = spans[p];
           if (span.k0 > span.k1) continue;
-          int c0 = 0;
-          while (c0 < held && candidates.k[c0] < span.k0) ++c0;
           int count = 0;
-          for (int c = c0; c < held && candidates.k[c] <= span.k1; ++c)
+          for (int c = static_cast<int>(std::lower_bound(candidates.k, candidates.k + held, span.k0) - candidates.k);
+               c < held && candidates.k[c] <= span.k1; ++c)
             take(candidates.k[c], pieces[p].box_lo, pieces[p].box_hi, span.tilt, rows, count);
           cut(pieces[p], count);
         }
