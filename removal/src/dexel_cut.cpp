@@ -739,22 +739,28 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         }
         if (k_lo > k_hi) continue;
         SegmentList* const row = &f.at(f.lo_u, iw);
-        // The ray k into `out` when it holds material within [lo, hi] and the window at its
-        // row (tilt): its material there, clamped to the window (the sweep lies in it).
-        auto take = [&](int k, double lo, double hi, const detail::RaySweep::TiltRow& tilt, RowRays& out, int& count) {
-          const SegmentList& ray = row[k];
-          const std::uint32_t size = ray.size();
-          if (size == 0 || ray.first_lo_mm() >= hi || ray.last_hi_mm() <= lo) return;
-          const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
-          double win_lo, win_hi, bottom, top;
-          if (!detail::RaySweep::tilted_window(tilt, u_mm, win_lo, win_hi) ||
-              !material_in_window(ray.data(), size, win_lo, win_hi, bottom, top))
-            return;
+        // The ray k (at u_mm) into `out` when it holds material within the window [win_lo,
+        // win_hi] of its row: its material there, clamped to the window (the sweep lies in it).
+        auto take_in_window = [&](const SegmentList& ray, int k, double u_mm, double win_lo, double win_hi,
+                                  RowRays& out, int& count) {
+          double bottom, top;
+          if (!material_in_window(ray.data(), ray.size(), win_lo, win_hi, bottom, top)) return;
           out.k[count] = k;
           out.u[count] = u_mm;
           out.bottom[count] = std::max(bottom, win_lo);
           out.top[count] = std::min(top, win_hi);
           ++count;
+        };
+        // The ray k into `out` when it holds material within [lo, hi] and the window at its
+        // row (tilt).
+        auto take = [&](int k, double lo, double hi, const detail::RaySweep::TiltRow& tilt, RowRays& out, int& count) {
+          const SegmentList& ray = row[k];
+          const std::uint32_t size = ray.size();
+          if (size == 0 || ray.first_lo_mm() >= hi || ray.last_hi_mm() <= lo) return;
+          const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
+          double win_lo, win_hi;
+          if (detail::RaySweep::tilted_window(tilt, u_mm, win_lo, win_hi))
+            take_in_window(ray, k, u_mm, win_lo, win_hi, out, count);
         };
         // The row's rays k0..k1 that take() keeps.
         auto gather = [&](int k0, int k1, double lo, double hi, const detail::RaySweep::TiltRow& tilt, RowRays& out) {
@@ -799,9 +805,22 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           const Span& span = spans[p];
           if (span.k0 > span.k1) continue;
           int count = 0;
+          // A candidate's material in the run's window when it was gathered holds all it has
+          // in the piece's window now (the pieces before only took some away): where the two
+          // windows' spans do not meet, the ray is passed over unread.
           for (int c = static_cast<int>(std::lower_bound(candidates.k, candidates.k + held, span.k0) - candidates.k);
-               c < held && candidates.k[c] <= span.k1; ++c)
-            take(candidates.k[c], pieces[p].box_lo, pieces[p].box_hi, span.tilt, rows, count);
+               c < held && candidates.k[c] <= span.k1; ++c) {
+            const double u_mm = candidates.u[c];
+            double win_lo, win_hi;
+            if (!detail::RaySweep::tilted_window(span.tilt, u_mm, win_lo, win_hi) || candidates.bottom[c] >= win_hi ||
+                candidates.top[c] <= win_lo)
+              continue;
+            const int k = candidates.k[c];
+            const SegmentList& ray = row[k];
+            if (ray.size() == 0 || ray.first_lo_mm() >= pieces[p].box_hi || ray.last_hi_mm() <= pieces[p].box_lo)
+              continue;
+            take_in_window(ray, k, u_mm, win_lo, win_hi, rows, count);
+          }
           cut(pieces[p], count);
         }
       }
