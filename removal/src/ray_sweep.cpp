@@ -1332,7 +1332,133 @@ bool RaySweep::upright_horizontal(int axis, double u, double w, double bottom, d
   // the ball method's), prepared for it (upright_march_).
   if (cone_) return cone_interval(axis, u, w, lo, hi);
   assert(upright_march_);
-  return general(axis, ray_point(axis, u, w, 0.0), bottom, top, lo, hi);
+  bool decided = false;
+  const bool hit = upright_ramp(c0, dc, w0, dw, h0, dh, ta, tb, lo, hi, decided);
+  return decided ? hit : general(axis, ray_point(axis, u, w, 0.0), bottom, top, lo, hi);
+}
+
+// The instances that meet the line are those whose section there reaches it: (off(t), h(t))
+// in the tool's axial section, the core's rectangle [-Rc, Rc] x [zl, zh] grown by r, which is
+// two slabs' cross and four corner discs; each meets the line's path (off, h) over an interval
+// of t in closed form, and they over T, the hull. Instance t meets the line over c(t) -/+
+// half(t), half = sqrt(rho^2 - off^2). The sweep is convex, so over T the entry c - half is
+// convex in t and the exit c + half concave (the set of (s, t) with the line's point s in
+// instance t is convex, and these are its lower and upper edges): each extreme is an end of T
+// whose slope points away from the other, else found by Newton's steps on the slope within a
+// bracket (bisection where a step would leave it), to within kGeneralSweepTolerance_mm of the
+// value by the tangent's bound. W1's raster with a D6 r1 bull-nose ramps in every move: the
+// march took two root searches a ray, each of about four distances, each a search along the
+// move.
+bool RaySweep::upright_ramp(double c0, double dc, double w0, double dw, double h0, double dh, double ta, double tb,
+                            double& lo, double& hi, bool& decided) const {
+  const double Rc = core_.core_radius_mm, r = core_.rounding_mm, zl = core_.z_low_mm, zh = core_.z_high_mm;
+  decided = true;
+  double t1 = kInf, t2 = -kInf;
+  auto add = [&](double a, double b) {
+    a = std::max(a, ta);
+    b = std::min(b, tb);
+    if (a <= b) {
+      t1 = std::min(t1, a);
+      t2 = std::max(t2, b);
+    }
+  };
+  // [a, b] narrowed to where x0 + t dx lies in [x_lo, x_hi].
+  auto slab = [](double x0, double dx, double x_lo, double x_hi, double& a, double& b) {
+    if (dx == 0.0) return x0 >= x_lo && x0 <= x_hi;
+    double s0 = (x_lo - x0) / dx, s1 = (x_hi - x0) / dx;
+    if (s0 > s1) std::swap(s0, s1);
+    a = std::max(a, s0);
+    b = std::min(b, s1);
+    return a <= b;
+  };
+  auto rectangle = [&](double x_half, double y_lo, double y_hi) {
+    double a = -kInf, b = kInf;
+    if (slab(w0, dw, -x_half, x_half, a, b) && slab(h0, dh, y_lo, y_hi, a, b)) add(a, b);
+  };
+  rectangle(Rc + r, zl, zh);
+  rectangle(Rc, zl - r, zh + r);
+  const double A = dw * dw + dh * dh;  // > 0: the line's height changes (dh != 0)
+  for (const double cx : {-Rc, Rc})
+    for (const double cy : {zl, zh}) {
+      const double px = w0 - cx, py = h0 - cy;
+      const double B = px * dw + py * dh, C = px * px + py * py - r * r;
+      const double disc = B * B - A * C;
+      if (disc < 0.0) continue;
+      const double root = std::sqrt(disc);
+      add((-B - root) / A, (-B + root) / A);
+    }
+  if (!(t1 <= t2)) return false;
+  // At t: half, its slope and its second derivative (false where the slope is infinite: the
+  // line touching the section, or the corner's vertical tangent at the tip's or the top's
+  // height, both only at T's ends, where the slope points into T).
+  auto section = [&](double t, double& half, double& d1, double& d2) {
+    const double h = h0 + t * dh, off = w0 + t * dw;
+    double e = 0.0, e1 = 0.0;  // the height's distance from the core's [zl, zh], and its slope
+    if (h < zl) {
+      e = zl - h;
+      e1 = -dh;
+    } else if (h > zh) {
+      e = h - zh;
+      e1 = dh;
+    }
+    const double sigma = std::sqrt(std::max(0.0, r * r - e * e));
+    const double rho = Rc + sigma, q = rho * rho - off * off;
+    half = std::sqrt(std::max(0.0, q));
+    if (!(sigma > 0.0) || !(half > 0.0)) return false;
+    const double s1 = -e * e1 / sigma, s2 = -e1 * e1 * r * r / (sigma * sigma * sigma);
+    const double q1 = 2.0 * (rho * s1 - off * dw), q2 = 2.0 * (s1 * s1 + rho * s2 - dw * dw);
+    d1 = q1 / (2.0 * half);
+    d2 = q2 / (2.0 * half) - q1 * q1 / (4.0 * half * half * half);
+    return true;
+  };
+  // The least of F(t) = s c(t) - half(t) over T (s = 1: the entry; s = -1: minus the exit).
+  auto least = [&](double s, double& value) {
+    double half, d1, d2;
+    const bool slope1 = section(t1, half, d1, d2);
+    const double f1 = s * (c0 + t1 * dc) - half;
+    if (t2 - t1 <= 0.0 || (slope1 && s * dc - d1 >= 0.0)) {
+      value = f1;
+      return true;
+    }
+    const bool slope2 = section(t2, half, d1, d2);
+    const double f2 = s * (c0 + t2 * dc) - half;
+    if (slope2 && s * dc - d1 <= 0.0) {
+      value = f2;
+      return true;
+    }
+    double a = t1, b = t2, t = 0.5 * (t1 + t2), best = std::min(f1, f2);
+    for (int step = 0; step < 60; ++step) {
+      double g2 = 0.0, g = 0.0;
+      if (section(t, half, d1, d2)) {
+        const double f = s * (c0 + t * dc) - half;
+        best = std::min(best, f);
+        g = s * dc - d1;
+        g2 = -d2;
+        if (g < 0.0)
+          a = t;
+        else
+          b = t;
+        if (std::abs(g) * (b - a) <= kGeneralSweepTolerance_mm) {
+          value = best;
+          return true;
+        }
+      } else {
+        return false;  // inside T the slope is finite: rounding at its ends
+      }
+      double next = g2 > 0.0 ? t - g / g2 : a;
+      if (!(next > a && next < b)) next = 0.5 * (a + b);
+      t = next;
+    }
+    return false;
+  };
+  double entry, exit;
+  if (!least(1.0, entry) || !least(-1.0, exit)) {
+    decided = false;
+    return false;
+  }
+  lo = entry;
+  hi = -exit;
+  return true;
 }
 
 bool RaySweep::flat_strip(int axis, double u, double w, double& lo, double& hi) const {

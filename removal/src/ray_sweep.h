@@ -178,6 +178,13 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // With the ray's material [bottom, top] (as interval_within's; infinite: the whole line).
   bool upright_vertical(double u, double w, double top, double& lo, double& hi) const;
   bool upright_horizontal(int axis, double u, double w, double bottom, double top, double& lo, double& hi) const;
+  // An upright bull-nose's horizontal line where its section changes along the move (a ramp
+  // through the corner's heights): instance t's section at the line's height h(t) = h0 + t dh
+  // above its tip is a disc of radius rho(h) centred c(t) = c0 + t dc along the line and off(t)
+  // = w0 + t dw across it, over t in [ta, tb]. False with `decided`: the line misses the sweep;
+  // `decided` false: the search ran out of steps (the caller takes the march).
+  bool upright_ramp(double c0, double dc, double w0, double dw, double h0, double dh, double ta, double tb, double& lo,
+                    double& hi, bool& decided) const;
   // The root march over [bottom, top] of the ray (see interval_within).
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
   // The rest of general() given the bracket's interval [capsule_lo, capsule_hi] on the ray.

@@ -446,6 +446,62 @@ TEST(DexelStock, TiltedMovesThroughCutMaterialMatchTheirSweeps) {
   EXPECT_GT(split, 500);
 }
 
+// Upright bull-nose ramps of every kind the raster makes (along x, along y, skew; down and up,
+// shallow to steep; short flutes whose top corner comes inside the block, and long ones)
+// chained through the block, each through what the ones before cut: the horizontal rays'
+// entries and exits where the section changes along the move (the corner's heights) come from
+// the instances' sections (upright_ramp), checked here against the sweep's own distance (a
+// search over the move in three dimensions): every endpoint each move made lies on its sweep
+// within 1 um, none of the material left lies inside a sweep, and none was taken outside them.
+TEST(DexelStock, RandomUprightBullNoseRampsMatchTheSweepDistance) {
+  std::mt19937 rng(61);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  DexelStock stock(box, 0.25);
+  MoveList list;
+  list.cutters = {make(CutterType::BullNose, 6, 1, 25), make(CutterType::BullNose, 10, 3, 25),
+                  make(CutterType::BullNose, 8, 0.5, 6), make(CutterType::BullNose, 5, 2, 5)};
+  Eigen::Vector3d at(8, 8, -6);
+  for (int i = 0; i < 24; ++i) {
+    const double length = 2.0 + 6.0 * unit(rng);
+    Eigen::Vector3d step;
+    switch (i % 3) {
+      case 0:  // along x, as a raster's rows
+        step = {unit(rng) < 0.5 ? -length : length, 0.0, 0.0};
+        break;
+      case 1:  // along y
+        step = {0.0, unit(rng) < 0.5 ? -length : length, 0.0};
+        break;
+      default: {
+        const double angle = 2 * M_PI * unit(rng);
+        step = {length * std::cos(angle), length * std::sin(angle), 0.0};
+      }
+    }
+    const double slope = (i % 4 < 2 ? 0.02 : 0.2) + 0.5 * unit(rng);  // shallow and steep
+    step.z() = (i % 2 ? 1.0 : -1.0) * slope * length;
+    Eigen::Vector3d to = at + step;
+    to = to.cwiseMax(Eigen::Vector3d(6, 6, -12)).cwiseMin(Eigen::Vector3d(34, 24, -2));
+    if ((to - at).head<2>().norm() < 1.0 || std::abs(to.z() - at.z()) < 0.01) to.z() = at.z() + (i % 2 ? 0.3 : -0.3);
+    Move m = line(at, to);
+    m.cutter = i % 4;
+    list.moves.push_back(m);
+    at = to;
+  }
+  stock.cut(list, {});
+  double worst;
+  std::vector<int> made;
+  const std::vector<TranslationSweep> sweeps = sweeps_and_endpoints(stock, list, 0, worst, made);
+  EXPECT_LT(worst, kEndpointTol_mm);
+  int moves_seen = 0;
+  for (const int n : made) moves_seen += n > 20 ? 1 : 0;
+  EXPECT_GE(moves_seen, 10);
+  int endpoints = 0;
+  for (const int n : made) endpoints += n;
+  EXPECT_GT(endpoints, 3000);
+  EXPECT_EQ(deepest_left_inside(stock, sweeps), 0.0);
+  EXPECT_EQ(farthest_taken_outside(stock, sweeps), 0.0);
+}
+
 // Upright flat and bull-nose end mills ramping through material earlier ramps cut: their
 // kernels see only the rays' material (the z rays' top, below which the sweep's top needs no
 // search; the horizontal rays' march over [bottom, top] alone). Ramps down and up in random
