@@ -1207,7 +1207,16 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
     const double x = qx - t * dx, y = qy - t * dy;
     return std::sqrt(x * x + y * y);
   };
-  auto underside = [&](double t) { return underside_height(cutter_, std::min(radius, distance_at(t))); };
+  // underside_height's own arithmetic for a flat, ball or bull-nose (the core's radius and
+  // rounding kept here), its call for a V-bit.
+  const bool vbit = cutter_.type == CutterType::VBit;
+  auto underside_at = [&](double rho) {
+    if (vbit) return underside_height(cutter_, std::min(radius, rho));
+    const double off = std::min(radius, rho) - core_.core_radius_mm;
+    return off <= 0.0 ? 0.0
+                      : core_.rounding_mm - std::sqrt(std::max(0.0, core_.rounding_mm * core_.rounding_mm - off * off));
+  };
+  auto underside = [&](double t) { return underside_at(distance_at(t)); };
   const bool flat_top = cutter_.type == CutterType::VBit || flat_bottom_;
   const double t_tolerance = kRaySearchTolerance_mm / std::max(1.0, std::sqrt(dd + dz * dz));
   // min over [ta, tb] of t*slope + height(t): convex (the underside is a convex function
@@ -1216,8 +1225,7 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
   // as a function of the distance rho to the axis; infinite where the side is vertical).
   const double rc = core_.core_radius_mm, r = core_.rounding_mm;
   const double cone = cutter_.type == CutterType::VBit ? 1.0 / cone_k_ : 0.0;  // cone_k_: the tangent, once
-  auto slope_at = [&](double slope, double t, double& second) {
-    const double rho = distance_at(t);
+  auto slope_at = [&](double slope, double t, double rho, double& second) {
     const double drho = rho > 0.0 ? (t * dd - qd) / rho : 0.0;
     const double d2rho = rho > 0.0 ? (dd - drho * drho) / rho : 0.0;
     if (cutter_.type == CutterType::VBit) {
@@ -1238,6 +1246,9 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
     second = r * r / (s2 * root) * drho * drho + e / root * d2rho;
     return slope + e / root * drho;
   };
+  // The ends' distances to the axis, worked out once for both searches (a flat end mill's
+  // underside is flat: none needed).
+  const double rho_a = flat_bottom_ ? 0.0 : distance_at(ta), rho_b = flat_bottom_ ? 0.0 : distance_at(tb);
   // min over [ta, tb] of g(t) = t*slope + underside(t): g is convex, so its derivative
   // rises through zero once; safeguarded Newton steps on it from the closest approach,
   // halving the bracket where a step would leave it.
@@ -1246,12 +1257,12 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
     if (std::abs(slope) <= kTiny_mm) return underside(dd > 0.0 ? std::clamp(qd / dd, ta, tb) : ta);
     const auto g = [&](double t) { return t * slope + underside(t); };
     double second;
-    if (slope_at(slope, ta, second) >= 0.0) return g(ta);
-    if (slope_at(slope, tb, second) <= 0.0) return g(tb);
+    if (slope_at(slope, ta, rho_a, second) >= 0.0) return ta * slope + underside_at(rho_a);
+    if (slope_at(slope, tb, rho_b, second) <= 0.0) return tb * slope + underside_at(rho_b);
     double lo_t = ta, hi_t = tb;
     double t = dd > 0.0 ? std::clamp(qd / dd, ta, tb) : 0.5 * (ta + tb);
     for (int iteration = 0; iteration < 100 && hi_t - lo_t > t_tolerance; ++iteration) {
-      const double d1 = slope_at(slope, t, second);
+      const double d1 = slope_at(slope, t, distance_at(t), second);
       if (d1 < 0.0)
         lo_t = t;
       else if (d1 > 0.0)
@@ -1269,8 +1280,7 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
   // Where the line stays over the flat core of a bull-nose's underside for the whole move
   // (the distance to the axis is convex in t: largest at the ends), the underside is flat.
   // (A flat end mill's underside is flat anyway: no distances to work out.)
-  const bool over_core = cutter_.type != CutterType::VBit && !flat_bottom_ &&
-                         std::max(distance_at(ta), distance_at(tb)) <= core_.core_radius_mm;
+  const bool over_core = !vbit && !flat_bottom_ && std::max(rho_a, rho_b) <= core_.core_radius_mm;
   lo = p0_.z() + lowest(dz, flat_bottom_ || over_core);
   // The top lies at least H - r (H with a flat top) above the lowest tip: material below
   // that needs no search for it (a value between the material's top and the sweep's will do).
@@ -1378,8 +1388,12 @@ bool RaySweep::upright_ramp(double c0, double dc, double w0, double dw, double h
   rectangle(Rc + r, zl, zh);
   rectangle(Rc, zl - r, zh + r);
   const double A = dw * dw + dh * dh;  // > 0: the line's height changes (dh != 0)
+  // The corner discs the path's box over [ta, tb] meets (the top ones mostly not).
+  const double h_lo = h0 + std::min(ta * dh, tb * dh), h_hi = h0 + std::max(ta * dh, tb * dh);
+  const double off_lo = w0 + std::min(ta * dw, tb * dw), off_hi = w0 + std::max(ta * dw, tb * dw);
   for (const double cx : {-Rc, Rc})
     for (const double cy : {zl, zh}) {
+      if (h_hi < cy - r || h_lo > cy + r || off_hi < cx - r || off_lo > cx + r) continue;
       const double px = w0 - cx, py = h0 - cy;
       const double B = px * dw + py * dh, C = px * px + py * py - r * r;
       const double disc = B * B - A * C;
@@ -1411,18 +1425,19 @@ bool RaySweep::upright_ramp(double c0, double dc, double w0, double dw, double h
     d2 = q2 / (2.0 * half) - q1 * q1 / (4.0 * half * half * half);
     return true;
   };
+  // T's ends, for both extremes.
+  double half1, slope1, half2, slope2, unused;
+  const bool finite1 = section(t1, half1, slope1, unused), finite2 = section(t2, half2, slope2, unused);
   // The least of F(t) = s c(t) - half(t) over T (s = 1: the entry; s = -1: minus the exit).
   auto least = [&](double s, double& value) {
     double half, d1, d2;
-    const bool slope1 = section(t1, half, d1, d2);
-    const double f1 = s * (c0 + t1 * dc) - half;
-    if (t2 - t1 <= 0.0 || (slope1 && s * dc - d1 >= 0.0)) {
+    const double f1 = s * (c0 + t1 * dc) - half1;
+    if (t2 - t1 <= 0.0 || (finite1 && s * dc - slope1 >= 0.0)) {
       value = f1;
       return true;
     }
-    const bool slope2 = section(t2, half, d1, d2);
-    const double f2 = s * (c0 + t2 * dc) - half;
-    if (slope2 && s * dc - d1 <= 0.0) {
+    const double f2 = s * (c0 + t2 * dc) - half2;
+    if (finite2 && s * dc - slope2 <= 0.0) {
       value = f2;
       return true;
     }
