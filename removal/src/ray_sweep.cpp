@@ -719,6 +719,11 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     return;
   }
   if (method_ == Method::Upright) {
+    if (axis == 2 && lanes_ && !flat_bottom_ && !cone_ &&
+        delta_.x() * delta_.x() + delta_.y() * delta_.y() > kTiny_mm * kTiny_mm) {
+      upright_vertical_avx2(w, count, u, top, lo, hi, hit);
+      return;
+    }
     for (int k = 0; k < count; ++k)
       hit[k] = axis == 2 ? upright_vertical(u[k], w, top[k], lo[k], hi[k])
                          : upright_horizontal(axis, u[k], w, bottom[k], top[k], lo[k], hi[k]);
@@ -1159,6 +1164,84 @@ __attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double fl
     store_lanes(hits, l, h, nullptr, k0, count, hit, lo, hi);
   }
 }
+
+// The same operations as upright_vertical's, lane by lane (no fused multiply-add), so the
+// same bits: the disc the move's axis passes through the ray within, the ends' distances to
+// the axis, and the least of t dz + underside(t) where the core holds the ray throughout (flat),
+// where the move is level (at the closest approach) or where an end's slope settles it; the
+// top where the material stays below the sweep's lowest top. Rays that need more (a search
+// between the ends, or the top) take upright_vertical itself.
+__attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, int count, const double* u,
+                                                                     const double* top, double* lo, double* hi,
+                                                                     bool* hit) const {
+  const double radius = radius_mm_, rc = core_.core_radius_mm, r = core_.rounding_mm;
+  const double qy = w - p0_.y();
+  const double dx = delta_.x(), dy = delta_.y(), dz = delta_.z();
+  const double dd = dx * dx + dy * dy;
+  const bool level = std::abs(dz) <= kTiny_mm;
+  const double top_floor = p0_.z() + std::min(0.0, dz) + height_mm_ - core_.rounding_mm;
+  const v4d zero = all(0.0), one = all(1.0), inf = all(kInf);
+  auto distance_at = [&](v4d qx, v4d t) __attribute__((target("avx2"), always_inline)) {
+    const v4d x = qx - t * all(dx), y = all(qy) - t * all(dy);
+    return vsqrt(x * x + y * y);
+  };
+  auto underside_at = [&](v4d rho) __attribute__((target("avx2"), always_inline)) {
+    const v4d off = vmin(all(radius), rho) - all(rc);
+    const v4d under = all(r) - vsqrt(vmax(zero, all(r * r) - off * off));
+    return select(off <= zero, zero, under);
+  };
+  // slope_at's value (the second derivative not needed): slope + U'(rho) rho'(t).
+  auto slope_at = [&](v4d qd, v4d t, v4d rho) __attribute__((target("avx2"), always_inline)) {
+    const v4d drho = select(rho > zero, (t * all(dd) - qd) / rho, zero);
+    const v4d e = rho - all(rc);
+    const v4d s2 = all(r * r) - e * e;
+    const v4d root = vsqrt(select(s2 > zero, s2, one));
+    const v4d side = select(drho < zero, -inf, select(drho > zero, inf, all(dz)));
+    return select(e <= zero, all(dz), select(s2 <= zero, side, all(dz) + e / root * drho));
+  };
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    const v4d U = lanes_of(u, nullptr, k0, count), T = lanes_of(top, nullptr, k0, count);
+    const v4d qx = U - all(p0_.x());
+    const v4d qd = qx * all(dx) + all(qy * dy), qq = qx * qx + all(qy * qy);
+    const v4d disc = qd * qd - all(dd) * (qq - all(radius * radius));
+    const v4i met_disc = !(disc < zero);
+    const v4d root = vsqrt(select(met_disc, disc, zero));
+    const v4d ta = vmax(zero, (qd - root) / all(dd)), tb = vmin(one, (qd + root) / all(dd));
+    const v4i met = met_disc & !(ta > tb);
+    const v4d rho_a = distance_at(qx, ta), rho_b = distance_at(qx, tb);
+    const v4i over_core = vmax(rho_a, rho_b) <= all(rc);
+    // lowest(dz, over_core), where it needs no search (settled).
+    v4d value;
+    v4i settled;
+    const v4d flat_value = dz >= 0.0 ? ta * all(dz) : tb * all(dz);
+    if (level) {
+      const v4d c = qd / all(dd);
+      const v4d closest = select(c < ta, ta, select(tb < c, tb, c));
+      value = select(over_core, flat_value, underside_at(distance_at(qx, closest)));
+      settled = ~v4i{};
+    } else {
+      const v4i at_a = slope_at(qd, ta, rho_a) >= zero;
+      const v4i at_b = slope_at(qd, tb, rho_b) <= zero;
+      value = select(at_a, ta * all(dz) + underside_at(rho_a), tb * all(dz) + underside_at(rho_b));
+      value = select(over_core, flat_value, value);
+      settled = over_core | at_a | at_b;
+    }
+    const v4i low = T <= all(top_floor);
+    const v4d l = all(p0_.z()) + value;
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      const int k = k0 + j;
+      if (!met[j]) {
+        hit[k] = false;
+      } else if (settled[j] && low[j]) {
+        hit[k] = true;
+        lo[k] = l[j];
+        hi[k] = top_floor;
+      } else {
+        hit[k] = upright_vertical(u[k], w, top[k], lo[k], hi[k]);
+      }
+    }
+  }
+}
 #else
 // Never called (lanes_ is false off x86-64): defined for the linker.
 int RaySweep::not_clear_avx2(int, double, int, int, const double*, const double*, const double*, bool, bool*,
@@ -1169,6 +1252,7 @@ void RaySweep::bracket_avx2(int, double, int, const int*, const double*, double*
 void RaySweep::capsule_avx2(int, double, int, int, const double*, double*, double*, bool*) const {}
 void RaySweep::band_avx2(int, double, double, int, const double*, double*, double*, bool*) const {}
 void RaySweep::vertical_avx2(double, double, int, const double*, const double*, double*, double*, bool*) const {}
+void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {

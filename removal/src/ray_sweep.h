@@ -326,6 +326,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
                  bool* hit) const;
   void vertical_avx2(double w, double floor_of_exit, int count, const double* u, const double* top, double* lo,
                      double* hi, bool* hit) const;
+  // An upright bull-nose's vertical rays (moving across them: dd > 0) as upright_vertical
+  // takes them, four at a time where an end of the move settles both ends of the interval;
+  // a ray that needs a search goes to upright_vertical.
+  void upright_vertical_avx2(double w, int count, const double* u, const double* top, double* lo, double* hi,
+                             bool* hit) const;
   // `lo_side`/`hi_side`: that end of the interval lies on the cylinder's side, not on an end
   // plane, so on the boundary of the capsule around the edge: its end spheres cannot move it.
   bool ball_cylinder(int axis, int edge, double u, double w, double& lo, double& hi, bool& lo_side,

@@ -684,6 +684,29 @@ TEST(DexelStock, UprightBallCutsTheSameFourRaysAtATime) {
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
+// An upright bull-nose: the same raster over a wavy floor (every move a ramp), two level
+// rows, a ramp in y and a plunge: its vertical rays four at a time where an end of the move
+// settles them, the rest by the scalar search.
+TEST(DexelStock, UprightBullNoseCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  MoveList list;
+  list.cutters = {make(CutterType::BullNose, 6, 1, 12), make(CutterType::BullNose, 10, 3, 4)};
+  Eigen::Vector3d at(2, 3, -2);
+  for (int row = 0; row < 8; ++row) {
+    for (int i = 1; i <= 24; ++i) {
+      const double x = row % 2 == 0 ? 2 + 1.5 * i : 38 - 1.5 * i;
+      const Eigen::Vector3d to(x, 3 + 3.0 * row, row < 6 ? -6 - 2.5 * std::sin(0.4 * x + row) : -9.0);
+      Move m = line(at, to);
+      m.cutter = row % 3 == 2 ? 1 : 0;
+      list.moves.push_back(m);
+      at = to;
+    }
+  }
+  list.moves.push_back(line(at, {at.x(), 28, -3}));
+  list.moves.push_back(line({20, 15, 2}, {20, 15, -12}));
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
+}
+
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
 // axis (or off it by rounding, in a ray family's plane with the axis) and with a ray family
 // along the axis. Also a plunge along a lattice axis, where both hold.
