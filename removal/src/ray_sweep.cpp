@@ -1353,6 +1353,9 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
         hi_t = t;
       else
         break;
+      // g is convex and t an end of the bracket, which holds the least: g(t) exceeds it by
+      // at most |g'(t)| times the bracket's width.
+      if (std::abs(d1) * (hi_t - lo_t) <= kGeneralSweepTolerance_mm) break;
       double next = second > 0.0 && std::isfinite(second) ? t - d1 / second : 0.5 * (lo_t + hi_t);
       if (!(next > lo_t && next < hi_t)) next = 0.5 * (lo_t + hi_t);
       const bool converged = std::abs(next - t) <= t_tolerance;
