@@ -1459,18 +1459,9 @@ bool RaySweep::upright_ramp(double c0, double dc, double w0, double dw, double h
       t2 = std::max(t2, b);
     }
   };
-  // [a, b] narrowed to where x0 + t dx lies in [x_lo, x_hi].
-  auto slab = [](double x0, double dx, double x_lo, double x_hi, double& a, double& b) {
-    if (dx == 0.0) return x0 >= x_lo && x0 <= x_hi;
-    double s0 = (x_lo - x0) / dx, s1 = (x_hi - x0) / dx;
-    if (s0 > s1) std::swap(s0, s1);
-    a = std::max(a, s0);
-    b = std::min(b, s1);
-    return a <= b;
-  };
   auto rectangle = [&](double x_half, double y_lo, double y_hi) {
     double a = -kInf, b = kInf;
-    if (slab(w0, dw, -x_half, x_half, a, b) && slab(h0, dh, y_lo, y_hi, a, b)) add(a, b);
+    if (clip(w0, dw, -x_half, x_half, a, b) && clip(h0, dh, y_lo, y_hi, a, b)) add(a, b);
   };
   rectangle(Rc + r, zl, zh);
   rectangle(Rc, zl - r, zh + r);
