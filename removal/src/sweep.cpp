@@ -81,7 +81,8 @@ namespace {
 // division only where the value is needed: at an end that is the minimum its sign decides,
 // and the sweep's march mostly ends there): f' goes from negative to
 // positive once, so the minimum is found on a bracket [a, b] with f'(a) < 0 < f'(b) by secant
-// steps on f' (bisection when a step would not shrink the bracket enough). The tangents at a
+// steps on f' (bisection when a step would not shrink the bracket enough; the tangents'
+// meeting point after a step that found f straight: below). The tangents at a
 // and b meet below the minimum, which gives a lower bound: the search stops when the best
 // value found is within kGeneralSweepTolerance_mm of it (the error bound), or when it is at
 // least `far`. convex_minimum_between is that search from the two ends once neither is the
@@ -92,6 +93,7 @@ double convex_minimum_between(Eval&& eval, double delta_length, double far, doub
                               double* at = nullptr) {
   double a = 0.0, b = 1.0, num, den;
   double best = std::min(fa, fb);
+  bool kink = false;
   if (at != nullptr) *at = fa <= fb ? 0.0 : 1.0;
   for (int iteration = 0; iteration < 200; ++iteration) {
     // The tangents at a and b meet at t_x, below the convex f's minimum.
@@ -101,9 +103,20 @@ double convex_minimum_between(Eval&& eval, double delta_length, double far, doub
         (b - a) * delta_length <= kGeneralSweepTolerance_mm) {
       return lower >= far ? lower : best;
     }
-    double t = a - ga * (b - a) / (gb - ga);  // the secant root of f'
+    // After a step whose slope came out within a tenth of the slope at that side's end (f is
+    // straight from that end to it, so f' jumps further in: a kink at the least, where the
+    // core's distance turns from its side's to its end's), the tangents' meeting point itself:
+    // between straight pieces they meet at the kink, and f there is the bound. Secant roots of
+    // f' closed in on a kink by a tenth of the bracket a step (W1F's mesh: 18.9 steps a
+    // search, 3.6 % of them 39 or more; 5.2 with this, W5's bull-nose 4.94 -> 4.89).
     const double width = b - a;
-    if (!(t > a + 0.1 * width && t < b - 0.1 * width)) t = 0.5 * (a + b);
+    double t;
+    if (kink) {
+      t = tx > a && tx < b ? tx : 0.5 * (a + b);
+    } else {
+      t = a - ga * (b - a) / (gb - ga);  // the secant root of f'
+      if (!(t > a + 0.1 * width && t < b - 0.1 * width)) t = 0.5 * (a + b);
+    }
     double ft;
     eval(t, ft, num, den);
     const double gt = num / den;
@@ -112,6 +125,7 @@ double convex_minimum_between(Eval&& eval, double delta_length, double far, doub
       if (at != nullptr) *at = t;
     }
     if (gt == 0.0) return best;
+    kink = gt < 0.0 ? std::abs(gt - ga) <= 0.1 * -ga : std::abs(gt - gb) <= 0.1 * gb;
     if (gt < 0.0) {
       a = t, fa = ft, ga = gt;
     } else {
