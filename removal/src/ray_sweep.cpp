@@ -1,5 +1,7 @@
 #include "ray_sweep.h"
 
+#include "lanes.h"
+
 #include <algorithm>
 #include <array>
 #include <cassert>
@@ -14,12 +16,6 @@ namespace {
 
 using Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// Whether the processor runs AVX2 (bracket_avx2).
-#if defined(__x86_64__)
-const bool kHaveAvx2 = (__builtin_cpu_init(), __builtin_cpu_supports("avx2"));
-#else
-const bool kHaveAvx2 = false;
-#endif
 // Motion or edge lengths below this (mm) count as zero.
 constexpr double kTiny_mm = 1e-12;
 
@@ -867,17 +863,8 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
 }
 
 #if defined(__x86_64__)
-// Four lanes of doubles for the AVX2 kernel (GCC's vector extensions), and its operations,
-// compiled for AVX2 like their caller.
+// The AVX2 kernels' parts (lanes.h's four lanes).
 namespace {
-typedef double v4d __attribute__((vector_size(32)));
-typedef long v4i __attribute__((vector_size(32)));  // what comparing two v4d gives
-#define VCUT_AVX2 __attribute__((target("avx2"), always_inline)) inline
-VCUT_AVX2 v4d all(double x) { return v4d{x, x, x, x}; }
-VCUT_AVX2 v4d select(v4i mask, v4d a, v4d b) { return mask ? a : b; }
-VCUT_AVX2 v4d vmin(v4d current, v4d a) { return a < current ? a : current; }  // std::min(current, a)
-VCUT_AVX2 v4d vmax(v4d current, v4d a) { return current < a ? a : current; }  // std::max(current, a)
-VCUT_AVX2 v4d vsqrt(v4d x) { return __builtin_ia32_sqrtpd256(x); }
 // ball_cylinder for four rays at u = U of the row at w: ok (it meets them), [s0, s1], and
 // whether each end lies on the cylinder's side (meaningful where ok).
 template <class Edge>
@@ -968,7 +955,6 @@ VCUT_AVX2 v4i clip_lanes(v4d v0, double inv, double a, double b, v4d& e0, v4d& e
   e1 = vmin(e1, select(swap, c0, c1));
   return e0 <= e1;
 }
-#undef VCUT_AVX2
 }  // namespace
 
 // ball_general (two segments: four spheres, four edges and the slab) for the rays todo[0 ..
@@ -1922,7 +1908,7 @@ void RaySweep::march_lanes(int axis, double w, int n, const MarchJob* jobs, doub
     }
     if (m == 0) return;
     double f[4];
-    sweep_.distances(points, m, f);
+    sweep_.distances(points, m, f, lanes_);
     for (int j = 0; j < m; ++j) {
       Slot& sl = slot[which[j]];
       const double toward = jobs[sl.job].toward, dir = sl.dir;

@@ -1,6 +1,7 @@
 #include "vcut/removal/sweep.h"
 
 #include "distance.h"
+#include "lanes.h"
 
 #include <algorithm>
 #include <cmath>
@@ -302,24 +303,103 @@ bool TranslationSweep::surface_point(const Eigen::Vector3d& x, Eigen::Vector3d& 
   return true;
 }
 
-void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out) const {
+#if defined(__x86_64__)
+namespace {
+
+using detail::all;
+using detail::select;
+using detail::v4d;
+using detail::v4i;
+using detail::vsqrt;
+
+// TranslationSweep::cylinder_eval's constants.
+struct CylinderConstants {
+  double dx, dy, dz, mid, half, core_radius;
+};
+
+// cylinder_eval at t for four points (their tool-frame coordinates in lanes): its operations
+// in the same order, each case's values worked out in every lane and the lane's case picked.
+VCUT_AVX2 void cylinder_eval_lanes(const CylinderConstants& c, v4d yx, v4d yy, v4d yz, double t, v4d& f, v4d& num,
+                                   v4d& den) {
+  const v4d zero = all(0.0), px = yx - all(t * c.dx), py = yy - all(t * c.dy), pz = yz - all(t * c.dz);
+  const v4d rho = vsqrt(px * px + py * py);
+  const v4d dr = rho - all(c.core_radius);
+  const v4d q = pz - all(c.mid);
+  const v4d dz = select(q < zero, -q, q) - all(c.half);
+  const v4d dz_slope = select(q > zero, all(-c.dz), select(q < zero, all(c.dz), zero));
+  const v4i on_axis = !(rho > zero);
+  const v4d radial = select(on_axis, zero, -(px * all(c.dx) + py * all(c.dy)));
+  const v4i corner = (dr > zero) & (dz > zero);
+  const v4i side = (dr > zero) | ((dz <= zero) & (dr >= dz));
+  const v4d corner_f = vsqrt(dr * dr + dz * dz);
+  const v4d corner_num = dr * (radial / select(on_axis, all(1.0), rho)) + dz * dz_slope;
+  f = select(corner, corner_f, select(side, dr, dz));
+  num = select(corner, corner_num, select(side, radial, dz_slope));
+  den = select(corner, corner_f, select(side, select(on_axis, all(1.0), rho), all(1.0)));
+}
+
+// f, num and den at t = 1 for the points y[0 .. m - 1], and at t = 0 too where the end t = 1
+// leaves one open (num > 0): `open`.
+__attribute__((target("avx2"))) bool end_values_lanes(const CylinderConstants& c, const Eigen::Vector3d* y, int m,
+                                                      double* fb, double* nb, double* db, double* fa, double* na,
+                                                      double* da) {
+  double yx[4], yy[4], yz[4];
+  for (int j = 0; j < 4; ++j) {
+    const Eigen::Vector3d& p = y[std::min(j, m - 1)];
+    yx[j] = p.x(), yy[j] = p.y(), yz[j] = p.z();
+  }
+  const v4d x{yx[0], yx[1], yx[2], yx[3]}, yv{yy[0], yy[1], yy[2], yy[3]}, z{yz[0], yz[1], yz[2], yz[3]};
+  v4d f, num, den;
+  cylinder_eval_lanes(c, x, yv, z, 1.0, f, num, den);
+  bool open = false;
+  for (int j = 0; j < m; ++j) {
+    fb[j] = f[j], nb[j] = num[j], db[j] = den[j];
+    open |= !(nb[j] <= 0.0);
+  }
+  if (!open) return false;
+  cylinder_eval_lanes(c, x, yv, z, 0.0, f, num, den);
+  for (int j = 0; j < m; ++j) fa[j] = f[j], na[j] = num[j], da[j] = den[j];
+  return true;
+}
+
+}  // namespace
+#endif
+
+void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, bool lanes) const {
   if (kind_ != Kind::General || ball() || cutter_.type == CutterType::VBit) {
     for (int j = 0; j < n; ++j) out[j] = distance(x[j]);
     return;
   }
   // convex_minimum for up to four points at a time: the end t = 1, then t = 0, each loop's
-  // iterations independent of each other; a point neither end settles goes on alone.
+  // iterations independent of each other (or in AVX2 lanes); a point neither end settles
+  // goes on alone.
   const double r = core_.rounding_mm, far = std::numeric_limits<double>::infinity();
+#if defined(__x86_64__)
+  lanes = lanes && detail::kHaveAvx2;
+  const CylinderConstants constants{delta_tool_.x(),
+                                    delta_tool_.y(),
+                                    delta_tool_.z(),
+                                    0.5 * (core_.z_low_mm + core_.z_high_mm),
+                                    0.5 * (core_.z_high_mm - core_.z_low_mm),
+                                    core_.core_radius_mm};
+#else
+  lanes = false;
+#endif
   for (int first = 0; first < n; first += 4) {
     const int m = std::min(4, n - first);
     Eigen::Vector3d y[4];
     double fb[4], nb[4], db[4], fa[4], na[4], da[4];
     for (int j = 0; j < m; ++j) y[j] = tool_frame(x[first + j]);
-    for (int j = 0; j < m; ++j) cylinder_eval(y[j], 1.0, fb[j], nb[j], db[j]);
     bool open = false;
-    for (int j = 0; j < m; ++j) open |= !(nb[j] <= 0.0);
-    if (open)
-      for (int j = 0; j < m; ++j) cylinder_eval(y[j], 0.0, fa[j], na[j], da[j]);
+#if defined(__x86_64__)
+    if (lanes) open = end_values_lanes(constants, y, m, fb, nb, db, fa, na, da);
+#endif
+    if (!lanes) {
+      for (int j = 0; j < m; ++j) cylinder_eval(y[j], 1.0, fb[j], nb[j], db[j]);
+      for (int j = 0; j < m; ++j) open |= !(nb[j] <= 0.0);
+      if (open)
+        for (int j = 0; j < m; ++j) cylinder_eval(y[j], 0.0, fa[j], na[j], da[j]);
+    }
     for (int j = 0; j < m; ++j) {
       if (nb[j] <= 0.0) {
         out[first + j] = fb[j] - r;

@@ -263,10 +263,12 @@ TEST(TranslationSweep, GeneralSweepNearItsSurface) {
 }
 
 // distances() takes a tilted flat or bull-nose cutter's points four at a time (the march's
-// lanes): the same values as distance(), to the bit, for groups of 1 to 9 points, for every
-// cutter and kind of motion (those it does not take together go one by one); on a long
-// general move, points behind, ahead and beside its middle, whose nearest instance is the
-// start, the end or one between.
+// lanes), in AVX2 lanes or not: the same values as distance(), to the bit, for groups of 1 to
+// 9 points, for every cutter and kind of motion (those it does not take together go one by
+// one); on a long general move, points behind, ahead and beside its middle, whose nearest
+// instance is the start, the end or one between, and points where the core's distance
+// changes its case at an end: on the axis, at the core's middle height, on its side and its
+// rims.
 TEST(TranslationSweep, DistancesTogetherAreEachDistance) {
   std::mt19937 rng(29);
   const Cutter cutters[] = {cutter(CutterType::Flat, 10, 0, 15), cutter(CutterType::BullNose, 8, 1, 25),
@@ -279,24 +281,36 @@ TEST(TranslationSweep, DistancesTogetherAreEachDistance) {
   for (const Cutter& c : cutters)
     for (const Move& m : moves) {
       const TranslationSweep sweep(c, m);
+      // In the tool frame at either end: (radius from the axis, height above the tip).
+      const Eigen::Vector3d a = m.axis.normalized(), side = a.unitOrthogonal();
+      const CutterCore core = core_of(c);
+      const double radii[] = {0.0, core.core_radius_mm, core.core_radius_mm + 1.5};
+      const double heights[] = {core.z_low_mm, 0.5 * (core.z_low_mm + core.z_high_mm), core.z_high_mm, -2.0};
+      std::vector<Eigen::Vector3d> cases;
+      for (const Eigen::Vector3d& tip : {m.start_mm, m.end_mm})
+        for (const double radius : radii)
+          for (const double height : heights) cases.push_back(tip + height * a + radius * side);
       for (int n = 1; n <= 9; ++n)
         for (int trial = 0; trial < 40; ++trial) {
           std::vector<Eigen::Vector3d> x(static_cast<std::size_t>(n));
           for (Eigen::Vector3d& p : x) {
             const double t = -0.5 + 2.0 * unit(rng);  // behind the start to ahead of the end
             p = m.start_mm + t * (m.end_mm - m.start_mm) + Eigen::Vector3d(across(rng), across(rng), along(rng));
+            if (trial % 4 == 0) p = cases[rng() % cases.size()];
           }
-          std::vector<double> together(static_cast<std::size_t>(n));
-          sweep.distances(x.data(), n, together.data());
-          for (int j = 0; j < n; ++j) {
-            const double alone = sweep.distance(x[static_cast<std::size_t>(j)]);
-            EXPECT_EQ(together[static_cast<std::size_t>(j)], alone)
-                << to_string(c.type) << " point " << j << " of " << n;
-            ++compared;
+          for (const bool lanes : {true, false}) {
+            std::vector<double> together(static_cast<std::size_t>(n));
+            sweep.distances(x.data(), n, together.data(), lanes);
+            for (int j = 0; j < n; ++j) {
+              const double alone = sweep.distance(x[static_cast<std::size_t>(j)]);
+              EXPECT_EQ(together[static_cast<std::size_t>(j)], alone)
+                  << to_string(c.type) << " point " << j << " of " << n << (lanes ? ", lanes" : "");
+              ++compared;
+            }
           }
         }
     }
-  EXPECT_EQ(compared, 4 * 4 * 40 * 45);
+  EXPECT_EQ(compared, 2 * 4 * 4 * 40 * 45);
 }
 
 TEST(TranslationSweep, BoundsContainTheCutterAtBothEnds) {
