@@ -168,10 +168,18 @@ TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::V
 
 void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                         const Eigen::Vector3d& axis1, const CutterPart& part, int part_cutter,
-                        const TurningSplit& split) {
+                        const TurningSplit& split, bool highest) {
   if (split.pieces == 0) return;
   Move m = move;
   m.cutter = part_cutter;
+  // The part's core from r to r + core above its tip, grown by r phi / 2 (and a hair for the
+  // rounding of the heights); the lowest part down through the tip's ball, the highest up
+  // through its cap.
+  const double r = part.cutter.corner_radius_mm, core = part.cutter.flute_length_mm - 2.0 * r;
+  const double phi = angle_between(axis0.normalized(), axis1.normalized()) / std::max(1, split.pieces);
+  const double margin = r * phi / 2.0 + 1e-6;
+  m.slab_low_mm = part.offset_mm > 0.0 ? r - margin : -std::numeric_limits<double>::infinity();
+  m.slab_high_mm = highest ? std::numeric_limits<double>::infinity() : r + core + margin;
   const std::size_t first = out.size();
   append_five_axis_move(out, m, axis0, axis1, split);
   for (std::size_t i = first; i < out.size(); ++i) {

@@ -357,7 +357,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
   Eigen::Vector3d normal_, dual_a_, dual_b_;  // slab normal and dual basis (no slab if zero)
   int segments_ = 0;                          // 0: sphere, 1: one capsule c0 -> c0 + edge_a, 2: parallelogram
   bool vertical_axis_ = false;
-  Eigen::Vector3d tilt_dirs_[3];  // the window box's directions: a, n1, n2 (GroupWindow's)
+  double slab_low_mm_ = 0.0, slab_high_mm_ = 0.0;  // the move's (Move::slab_low_mm): the tilted window's heights
+  Eigen::Vector3d tilt_dirs_[3];                   // the window box's directions: a, n1, n2 (GroupWindow's)
 };
 
 }  // namespace vcut::removal::detail

@@ -1284,6 +1284,106 @@ TEST(DexelStock, TurningPiecesCutTogetherAsOneByOne) {
   }
 }
 
+// A long ball end mill turning deep in the 40 x 30 x 20 box (v = 0.25), cut part by part
+// (cutter_parts, part_split, append_part_pieces), each part's pieces passing over the rays
+// that hold no material in the sweep of their slab (Move::slab_low_mm, slab_high_mm: the
+// tilted window's heights). Nothing is taken outside the pieces' sweeps, nothing is left inside
+// any piece's sweep within its slab's sweep (at every remaining segment's middle and just
+// inside its ends: a ray the window passed over wrongly keeps such material), and every ray
+// keeps at least the material the same pieces without slabs leave.
+TEST(DexelStock, TurningLongBallPartsCutWithinTheirSlabs) {
+  const Cutter ball = make(CutterType::Ball, 6, 3, 25);
+  const std::vector<CutterPart> parts = cutter_parts(ball);
+  const BoxShape box{{0, 0, -20}, {40, 30, 0}};
+  const Eigen::AlignedBox3d material(box.min_mm, box.max_mm);
+  MoveList list;
+  for (const CutterPart& part : parts) list.cutters.push_back(part.cutter);
+  // Three turning moves 14 mm deep, the axis tilting 10-30 deg and swinging about z, and a
+  // turn on the spot.
+  const Eigen::Vector3d tips[] = {{8, 10, -14}, {20, 12, -13}, {30, 18, -15}, {30, 18, -15}};
+  const Eigen::Vector3d axes[] = {
+      Eigen::Vector3d(0.2, 0.1, 1).normalized(), Eigen::Vector3d(-0.3, 0.35, 1).normalized(),
+      Eigen::Vector3d(0.5, -0.2, 1).normalized(), Eigen::Vector3d(0.1, 0.5, 1).normalized()};
+  int highest_parts = 0;
+  for (int i = 0; i < 3; ++i) {
+    const Eigen::Vector3d &a0 = axes[i], &a1 = axes[i + 1];
+    const double height =
+        highest_point_in_box_mm(ball.radius_mm(), tips[i], tips[i + 1], a0, a1, box_for_pieces(ball, a0, a1, material));
+    std::vector<TurningSplit> splits;
+    std::size_t highest = 0;
+    for (std::size_t j = 0; j < parts.size(); ++j) {
+      splits.push_back(part_split(parts[j], height, a0, a1, 0.01));
+      if (splits[j].pieces > 0) highest = j;
+    }
+    highest_parts += static_cast<int>(highest);
+    for (std::size_t j = 0; j < parts.size(); ++j)
+      append_part_pieces(list.moves, line(tips[i], tips[i + 1]), a0, a1, parts[j], static_cast<int>(j), splits[j],
+                         j == highest);
+  }
+  ASSERT_GE(highest_parts, 9);  // at least three parts in the stock each move
+  MoveList whole = list;
+  for (Move& m : whole.moves) {
+    m.slab_low_mm = -std::numeric_limits<double>::infinity();
+    m.slab_high_mm = std::numeric_limits<double>::infinity();
+  }
+  DexelStock stock(box, 0.25), reference(box, 0.25);
+  stock.cut(list, {});
+  reference.cut(whole, {});
+  std::vector<TranslationSweep> sweeps;
+  for (const Move& m : list.moves) sweeps.emplace_back(list.cutters[static_cast<std::size_t>(m.cutter)], m);
+  EXPECT_LE(farthest_taken_outside(stock, sweeps), 0.0);
+  // The least over the pieces of the larger of the sweep's distance and the slab's sweep's
+  // (along the axis), at x.
+  auto within_slabs = [&](const Eigen::Vector3d& x) {
+    double least = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < sweeps.size(); ++i) {
+      const Move& m = list.moves[i];
+      if (sweeps[i].bounds().exteriorDistance(x) >= least) continue;
+      const double h = (x - m.start_mm).dot(m.axis), along = (m.end_mm - m.start_mm).dot(m.axis);
+      const double slab =
+          std::max(m.slab_low_mm + std::min(0.0, along) - h, h - (m.slab_high_mm + std::max(0.0, along)));
+      least = std::min(least, std::max(sweeps[i].distance(x), slab));
+    }
+    return least;
+  };
+  const double v = 0.25;
+  const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  double deepest = 0.0;
+  int checked = 0, kept_more = 0;
+  for (int family = 0; family < 3; ++family) {
+    const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+        const std::vector<DexelSegment> ray = stock.ray(family, iu, iw), less = reference.ray(family, iu, iw);
+        for (const DexelSegment& seg : less) {
+          const bool held = std::any_of(ray.begin(), ray.end(), [&](const DexelSegment& mine) {
+            return mine.lo_mm <= seg.lo_mm && mine.hi_mm >= seg.hi_mm;
+          });
+          EXPECT_TRUE(held) << "family " << family << " ray " << iu << ", " << iw << ": [" << seg.lo_mm << ", "
+                            << seg.hi_mm << "] not kept";
+        }
+        kept_more += ray.size() != less.size() || !std::equal(ray.begin(), ray.end(), less.begin(),
+                                                              [](const DexelSegment& p, const DexelSegment& q) {
+                                                                return p.lo_mm == q.lo_mm && p.hi_mm == q.hi_mm;
+                                                              });
+        for (const DexelSegment& seg : ray) {
+          const double in = std::min(0.01, 0.5 * (static_cast<double>(seg.hi_mm) - seg.lo_mm));
+          for (const double s : {seg.lo_mm + in, 0.5 * (static_cast<double>(seg.lo_mm) + seg.hi_mm), seg.hi_mm - in}) {
+            Eigen::Vector3d x;
+            x[family] = s;
+            x[a1] = (iu + 0.5) * v;
+            x[a2] = (iw + 0.5) * v;
+            deepest = std::min(deepest, within_slabs(x) + kEndpointTol_mm);
+            ++checked;
+          }
+        }
+      }
+  }
+  EXPECT_EQ(deepest, 0.0);
+  EXPECT_GT(checked, 100000);
+  EXPECT_GT(kept_more, 0);  // the slabs did pass over some material the whole pieces take
+}
+
 // 300 moves of one cutter at a fixed axis sunk deep into the 20 x 15 x 10 block: rows along x
 // that climb and descend by up to dip_mm a move and turn back, stepovers, and stretches that
 // wander (random draws from `seed`, in a fixed order).

@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "vcut/removal/cutter.h"
@@ -32,6 +33,12 @@ struct Move {
   int block = -1;                                   // index of the NC block it came from
   bool rapid = false;                               // rapids never cut: touching material is a collision
   ProbeKind probe = ProbeKind::Rapid;               // with `rapid`: what the probe stands for
+  // The heights above the tip along the axis (mm) outside which the move need not cut: the
+  // points of a turning ball end mill that its other parts hold (append_part_pieces). The cut
+  // may still take any of the move's sweep there, and passes over a ray only where the ray has
+  // no material in the sweep of this slab.
+  double slab_low_mm = -std::numeric_limits<double>::infinity();
+  double slab_high_mm = std::numeric_limits<double>::infinity();
 };
 
 struct MoveList {
@@ -155,10 +162,17 @@ TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::V
                         const Eigen::Vector3d& axis1, double bound_mm);
 // Appends the pieces of a part's split (cutter index part_cutter in the move list) of `move`,
 // the tool's: as append_five_axis_move with the pivot from the tool's tip, each piece's tip
-// then offset_mm up its axis.
+// then offset_mm up its axis. Each piece's slab (Move::slab_low_mm, slab_high_mm) is the
+// part's own: a point of the tool at a height its core spans (above the first part's core
+// top: the tip's ball; below the highest part's core bottom, `highest`: its cap) lies in that
+// part at the same height, with its offset from the core square to the axis. The piece's
+// instance carries the core point at that height within the bound and the offset turned by
+// at most phi / 2 (phi the piece's turn): the point comes within the bound at a height off by
+// at most r sin(phi / 2). So the slab is the part's core heights grown by r phi / 2, and the
+// parts' slabs cut together what their whole pieces cut, within the same bound.
 void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                         const Eigen::Vector3d& axis1, const CutterPart& part, int part_cutter,
-                        const TurningSplit& split);
+                        const TurningSplit& split, bool highest);
 
 // The non-cutting parts of the tools: for each cutter, the index in MoveList::cutters of its
 // shank and its holder (flat cylinders, tip at their lower face), -1 where it has none, and
