@@ -139,8 +139,17 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
 
 std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
   const double r = cutter.corner_radius_mm, core = cutter.flute_length_mm - 2.0 * r;
-  if (cutter.type != CutterType::Ball || !(r > 0.0) || !(core > 2.0 * r)) return {{cutter, 0.0}};
-  const double length = std::max(r, core / kMaxParts);
+  double length;
+  if (cutter.type == CutterType::Ball) {
+    if (!(r > 0.0) || !(core > 2.0 * r)) return {{cutter, 0.0}};
+    length = std::max(r, core / kMaxParts);
+  } else if (cutter.type == CutterType::Flat || cutter.type == CutterType::BullNose) {
+    const double rc = cutter.radius_mm() - r;
+    if (!(rc > 0.0) || !(core > 4.0 * rc)) return {{cutter, 0.0}};
+    length = std::max(2.0 * rc, core / kMaxParts);
+  } else {
+    return {{cutter, 0.0}};
+  }
   const int n = static_cast<int>(std::ceil(core / length - 1e-9));
   std::vector<CutterPart> parts;
   for (int j = 0; j < n; ++j) {
@@ -172,12 +181,21 @@ void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::V
   if (split.pieces == 0) return;
   Move m = move;
   m.cutter = part_cutter;
-  // The part's core from r to r + core above its tip, grown by r phi / 2 (and a hair for the
-  // rounding of the heights); the lowest part down through the tip's ball, the highest up
-  // through its cap.
+  // The part's core heights from r to r + core above its tip, grown by the margin (move.h; and
+  // a hair for the rounding of the heights); the lowest part down through the tip's end, the
+  // highest up through its top.
   const double r = part.cutter.corner_radius_mm, core = part.cutter.flute_length_mm - 2.0 * r;
   const double phi = angle_between(axis0.normalized(), axis1.normalized()) / std::max(1, split.pieces);
-  const double margin = r * phi / 2.0 + 1e-6;
+  double margin = r * phi / 2.0 + 1e-6;
+  if (part.cutter.radius_mm() > r) {
+    // A core of radius Rc > 0: its instances lie within e of each other as sets only.
+    double part_pivot_mm, reach_mm;
+    rotation_reach_mm(part.cutter, std::numeric_limits<double>::infinity(), part_pivot_mm, reach_mm);
+    const double c = std::abs(split.pivot_mm), c_part = std::abs(split.pivot_mm - part.offset_mm);
+    const double e = reach_mm * phi / 2.0 + c * phi * phi / 8.0;
+    margin =
+        e + part.cutter.radius_mm() * phi / 2.0 + (part.cutter.flute_length_mm + c_part + c) * phi * phi / 8.0 + 1e-6;
+  }
   m.slab_low_mm = part.offset_mm > 0.0 ? r - margin : -std::numeric_limits<double>::infinity();
   m.slab_high_mm = highest ? std::numeric_limits<double>::infinity() : r + core + margin;
   const std::size_t first = out.size();

@@ -320,22 +320,26 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
   }
 }
 
-// A long ball end mill turns part by part (cutter_parts, part_split, append_part_pieces). The
-// parts' union is the cutter: outside it the least of the parts' distances is the cutter's
-// (the distance to a union), inside it some part holds the point. Inside the stock's box
-// (grown by box_for_pieces, for the top part's pivot) the parts' pieces sweep within the bound
-// of the rigid motion's and the rigid motion within the bound of theirs (brute force over
-// 4,000 instances), the parts whose core starts above the height left out.
-TEST(FiveAxisSweep, LongBallTurnsPartByPartWithinTheBound) {
+// A long ball, flat or bull-nose end mill turns part by part (cutter_parts, part_split,
+// append_part_pieces). The parts' union is the cutter: outside it the least of the parts'
+// distances is the cutter's (the distance to a union), inside it some part holds the point.
+// Inside the stock's box (grown by box_for_pieces, for the top part's pivot) the parts' pieces
+// sweep within the bound of the rigid motion's and the rigid motion within the bound of theirs
+// (brute force over 4,000 instances), the parts whose core starts above the height left out.
+TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
   constexpr int kInstances = 4000;
   std::mt19937 rng(31);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   for (const Cutter& c :
-       {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15), make(CutterType::Ball, 1, 0.5, 20)}) {
-    const double r = c.corner_radius_mm;
+       {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15), make(CutterType::Ball, 1, 0.5, 20),
+        make(CutterType::Flat, 4, 0, 25), make(CutterType::BullNose, 5, 1, 25)}) {
+    const double r = c.corner_radius_mm, core = c.flute_length_mm - 2 * r;
     const std::vector<CutterPart> parts = cutter_parts(c);
-    // Parts r of the core long (7 and 8 of them), or an eighth of it (the D1 ball: 38 would be r).
-    ASSERT_EQ(parts.size(), r == 0.5 ? 8u : static_cast<std::size_t>(std::ceil((c.flute_length_mm - 2 * r) / r)));
+    // A ball's parts r of the core long (7 and 8 of them), or an eighth of it (the D1 ball: 38
+    // would be r); a flat or bull-nose end mill's 2 Rc (7 and 8 of them).
+    const double length =
+        c.type == CutterType::Ball ? std::max(r, core / 8) : std::max(2 * (c.radius_mm() - r), core / 8);
+    ASSERT_EQ(parts.size(), static_cast<std::size_t>(std::ceil(core / length - 1e-9))) << to_string(c.type);
     int outside = 0, inside = 0;
     for (int i = 0; i < 20000; ++i) {
       const double across = 1.3 * c.radius_mm();
@@ -436,7 +440,7 @@ TEST(FiveAxisSweep, LongBallTurnsPartByPartWithinTheBound) {
         for (std::size_t j = 0; j < top; ++j) {
           const double h = parts[j + 1].offset_mm + r;
           for (int i = 0; i < 800; ++i) {
-            const double t = unit(rng), rho = r * (1 - 1e-3 * unit(rng));
+            const double t = unit(rng), rho = c.radius_mm() * (1 - 1e-3 * unit(rng));
             double psi = 2 * M_PI * unit(rng);
             if (i % 2 == 0) {
               const Eigen::Vector3d w = turn.a0.cross(turn.a1).normalized();

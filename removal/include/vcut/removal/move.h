@@ -138,17 +138,19 @@ Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& 
 void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                            const Eigen::Vector3d& axis1, const TurningSplit& split);
 
-// A long ball end mill's turning moves cut part by part. The cutter is its core (the axis from
-// r to H - r) grown by r, and the union of the core's parts grown by r is the cutter (a
-// Minkowski sum takes unions apart): each part is a ball end mill of its own, its tip
-// offset_mm up the axis. A part needs the pieces for its own reach (half its core: the bound
-// above), so the parts take about as many pieces as the whole, but each piece is a short
-// capsule where the whole's was the full length: the rays across the axis meet far fewer of
-// them (the impeller's 3 mm ball with a 12 mm core: its cut 1.36x faster without its shank's
-// probes). Each part's core is r long (W5's ball rows, r = 3 mm: parts of 2, 3 and 5 mm cut in
-// 0.82, 0.78 and 0.92 s), or an eighth of the core where that is longer (every part takes a
-// piece a move at least), the last one shorter; a ball whose core is not longer than 2r, and
-// other cutters, are one part, the whole.
+// A long cutter's turning moves cut part by part. A ball, flat or bull-nose end mill is its
+// core (the cylinder of radius Rc = R - r about the axis from r to H - r) grown by r, and the
+// union of the core's parts grown by r is the cutter (a Minkowski sum takes unions apart):
+// each part is an end mill of the same kind, its tip offset_mm up the axis. A part needs the
+// pieces for its own reach (the larger of Rc and half its core: the bound above), so the parts
+// take about as many pieces as the whole, but each piece is a short one where the whole's was
+// the full length, and cuts only its own slab (append_part_pieces): the rays across the axis
+// meet far fewer of them (the impeller's 3 mm ball with a 12 mm core: its cut 1.36x faster
+// without its shank's probes). A ball's parts' cores are r long (W5's ball rows, r = 3 mm:
+// parts of 2, 3 and 5 mm cut in 0.82, 0.78 and 0.92 s), a flat or bull-nose end mill's 2 Rc
+// (a reach of Rc), or an eighth of the core where that is longer (every part takes a piece a
+// move at least), the last one shorter; a ball whose core is not longer than 2r, a flat or
+// bull-nose end mill whose core is not longer than 4 Rc, and a V-bit are one part, the whole.
 struct CutterPart {
   Cutter cutter;
   double offset_mm = 0.0;  // the part's tip above the cutter's
@@ -164,11 +166,16 @@ TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::V
 // the tool's: as append_five_axis_move with the pivot from the tool's tip, each piece's tip
 // then offset_mm up its axis. Each piece's slab (Move::slab_low_mm, slab_high_mm) is the
 // part's own: a point of the tool at a height its core spans (above the first part's core
-// top: the tip's ball; below the highest part's core bottom, `highest`: its cap) lies in that
-// part at the same height, with its offset from the core square to the axis. The piece's
-// instance carries the core point at that height within the bound and the offset turned by
-// at most phi / 2 (phi the piece's turn): the point comes within the bound at a height off by
-// at most r sin(phi / 2). So the slab is the part's core heights grown by r phi / 2, and the
+// top: the tip's end; below the highest part's core bottom, `highest`: its top) lies in that
+// part at the same height, offset square to the axis from the core point c there. A ball's
+// core is a segment: the piece's instance carries c (the same point of the segment) within the
+// bound e and the offset turned by at most phi / 2 (phi the piece's turn), so the point comes
+// within e at a height off by at most r sin(phi / 2): its slab is the part's core heights grown
+// by r phi / 2. A core cylinder (Rc > 0) lies within e of the piece's only as a set: the
+// nearest point of the piece's core to c lies within e, at a height (the piece's frame) off by
+// at most e + Rc theta + (|h| + c) theta^2 / 2 and the sagitta c phi^2 / 8 (theta <= phi / 2,
+// h the height, c the pivot's), the offset adds r theta: the slab is grown by e + R phi / 2 +
+// (H + |c_part| + |c|) phi^2 / 8, with e the whole part's reach phi / 2 + |c| phi^2 / 8. The
 // parts' slabs cut together what their whole pieces cut, within the same bound.
 void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                         const Eigen::Vector3d& axis1, const CutterPart& part, int part_cutter,
