@@ -142,7 +142,7 @@ std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
   double length;
   if (cutter.type == CutterType::Ball) {
     if (!(r > 0.0) || !(core > 2.0 * r)) return {{cutter, 0.0}};
-    length = std::max(r, core / kMaxParts);
+    length = std::max(0.5 * r, core / kMaxParts);
   } else if (cutter.type == CutterType::Flat || cutter.type == CutterType::BullNose) {
     const double rc = cutter.radius_mm() - r;
     if (!(rc > 0.0) || !(core > 4.0 * rc)) return {{cutter, 0.0}};

@@ -252,17 +252,17 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
 // engine.turn_tolerance sets how finely a turning move is cut. A ball end mill D6 (flute 25 mm)
 // turns 10 deg about Y while its tip moves 10 mm, all of it inside a stock 50 mm tall (so the
 // bound must hold for the whole cutter), one move (densify q = 1). The core is the axis from
-// r = 3 to H - r = 22 mm above the tip; a turning cut takes it in 7 parts of r = 3 mm (the
-// last 1 mm; removal::cutter_parts), part j's pivot c = 3j + 4.5 mm above the tip (the last
-// 21.5 mm), its reach 1.5 mm (the last 0.5): n pieces of phi = theta / n keep the part within
-// reach phi / 2 + c phi^2 / 8 of the rigid motion (docs/POSE_ENGINE.md). Unset, the tolerance
-// is min(v / 10, gouge tolerance / 2) as the densification's. At v = 0.1 with the gouge
-// tolerance 0.05 mm that is 0.01 mm: 1.5 theta / 0.02 = 13.09, n = 14 for the first six parts
-// (at c = 19.5 mm 0.00935 + 0.00038), and the last 6 (5: 0.00873 + 0.00328 > 0.01): 90. With
-// the default gouge tolerance 0.01 mm, 0.005 mm: 27 each (0.004848 + 0.000102 at c = 19.5) and
-// the last 11 (10: 0.004363 + 0.000819 > 0.005): 173. Set to 0.05 mm: 3 for the parts at c =
-// 4.5 to 13.5 (0.0436 + at most 0.0057), 4 at 16.5 and 19.5 (3: 0.0436 + 0.0070 > 0.05), the
-// last 2 (1: 0.0436 + 0.0819): 22.
+// r = 3 to H - r = 22 mm above the tip; a turning cut takes it in 8 parts of 19 / 8 = 2.375 mm
+// (an eighth of the core, longer than r / 2; removal::cutter_parts), part j's pivot c = 2.375j
+// + 4.1875 mm above the tip, its reach 1.1875 mm: n pieces of phi = theta / n keep the part
+// within reach phi / 2 + c phi^2 / 8 of the rigid motion (docs/POSE_ENGINE.md). Unset, the
+// tolerance is min(v / 10, gouge tolerance / 2) as the densification's. At v = 0.1 with the
+// gouge tolerance 0.05 mm that is 0.01 mm: 1.1875 theta / 0.02 = 10.36, n = 11 for the first
+// six parts (at c = 16.0625 mm 0.009421 + 0.000505), 12 for the last two (11 at c = 18.4375:
+// 0.009421 + 0.000580 > 0.01): 90. With the default gouge tolerance 0.01 mm, 0.005 mm: 21 for
+// the first two (0.004935 + 0.000057 at c = 6.5625), 22 for the other six (21 at c = 8.9375:
+// 0.004935 + 0.000077 > 0.005): 174. Set to 0.05 mm: 3 each (0.034543 + at most 0.008805 at
+// c = 20.8125): 24.
 TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
   write("tools.yaml", "tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25}\n");
   const double s10 = std::sin(10.0 * M_PI / 180.0), c10 = std::cos(10.0 * M_PI / 180.0);
@@ -275,7 +275,7 @@ TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
     int pieces;
   };
   for (const Case& c :
-       {Case{"", "report: {gouge_tolerance: 0.05}\n", 90}, Case{"", "", 173}, Case{", turn_tolerance: 0.05", "", 22}}) {
+       {Case{"", "report: {gouge_tolerance: 0.05}\n", 90}, Case{"", "", 174}, Case{", turn_tolerance: 0.05", "", 24}}) {
     write("job.yaml",
           "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
           "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"

@@ -335,10 +335,11 @@ TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
         make(CutterType::Flat, 4, 0, 25), make(CutterType::BullNose, 5, 1, 25)}) {
     const double r = c.corner_radius_mm, core = c.flute_length_mm - 2 * r;
     const std::vector<CutterPart> parts = cutter_parts(c);
-    // A ball's parts r of the core long (7 and 8 of them), or an eighth of it (the D1 ball: 38
-    // would be r); a flat or bull-nose end mill's 2 Rc (7 and 8 of them).
+    // A ball's parts r / 2 of the core long, or an eighth of it where longer (8 of them each: the
+    // D6 ball's 19 mm core in parts of 2.375 mm, the D3's 12 mm in parts of r = 1.5 mm); a flat or
+    // bull-nose end mill's 2 Rc (7 and 8 of them).
     const double length =
-        c.type == CutterType::Ball ? std::max(r, core / 8) : std::max(2 * (c.radius_mm() - r), core / 8);
+        c.type == CutterType::Ball ? std::max(r / 2, core / 8) : std::max(2 * (c.radius_mm() - r), core / 8);
     ASSERT_EQ(parts.size(), static_cast<std::size_t>(std::ceil(core / length - 1e-9))) << to_string(c.type);
     int outside = 0, inside = 0;
     for (int i = 0; i < 20000; ++i) {
