@@ -34,9 +34,9 @@ struct Move {
   bool rapid = false;                               // rapids never cut: touching material is a collision
   ProbeKind probe = ProbeKind::Rapid;               // with `rapid`: what the probe stands for
   // The heights above the tip along the axis (mm) outside which the move need not cut: the
-  // points of a turning ball end mill that its other parts hold (append_part_pieces). The cut
-  // may still take any of the move's sweep there, and passes over a ray only where the ray has
-  // no material in the sweep of this slab.
+  // points of a turning cutter that its other parts hold (append_part_pieces). The cut may
+  // still take any of the move's sweep there, and passes over a ray only where the ray has no
+  // material in the sweep of this slab.
   double slab_low_mm = -std::numeric_limits<double>::infinity();
   double slab_high_mm = std::numeric_limits<double>::infinity();
 };
@@ -151,8 +151,8 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
 // nearer the answer of a turn tolerance ten times finer), a flat or bull-nose end mill's 2 Rc
 // (a reach of Rc), or an eighth of the core where that is longer (every part takes a piece a
 // move at least: W5's ball rows with parts of 1.19 mm 0.83x, but the impeller's 1.014x), the
-// last one shorter; a ball whose core is not longer than 2r, a flat or
-// bull-nose end mill whose core is not longer than 4 Rc, and a V-bit are one part, the whole.
+// last one shorter; a ball whose core is not longer than 2r, a flat or bull-nose end mill
+// whose core is not longer than 4 Rc, and a V-bit are one part, the whole.
 struct CutterPart {
   Cutter cutter;
   double offset_mm = 0.0;  // the part's tip above the cutter's
