@@ -320,7 +320,8 @@ void RaySweep::prepare_tilt_box(const Eigen::AlignedBox3d* material_box) {
   // along n1 [-R, R + |delta_perp|], along n2 [-R, R]. The part that stays out of the
   // material's box never meets material: H stops where it begins (W5: the tool stands 25 mm
   // out of a 12 mm block, and two thirds of the rays the whole box passed held none in it).
-  // A move with a slab of heights (a turning ball's part) spans only that slab's sweep along a.
+  // A move with a slab of heights (Move::slab_low_mm, slab_high_mm: a turning cutter's part)
+  // spans only that slab's sweep along a.
   const Vector3d& a = tool_axis_;
   const double da = delta_.dot(a);
   const Vector3d perp = delta_ - da * a;
@@ -334,7 +335,6 @@ void RaySweep::prepare_tilt_box(const Eigen::AlignedBox3d* material_box) {
   tilt_dirs_[0] = a;
   tilt_dirs_[1] = n1;
   tilt_dirs_[2] = n2;
-  // A part of a turning ball: its slab of heights (Move::slab_low_mm, slab_high_mm) only.
   const double low = std::max(0.0, slab_low_mm_), high = std::max(low, std::min(H, slab_high_mm_));
   const double lo[3] = {low + std::min(0.0, da), -R, -R};
   const double hi[3] = {high + std::max(0.0, da), R + along, R};
