@@ -364,12 +364,9 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
     std::vector<removal::Move> pieces, bodies;
     // Piece k of n ends at the instant (k + 1) / n of the move.
     auto until = [&](std::size_t k) { return static_cast<double>(k + 1) / static_cast<double>(pieces.size()); };
-    std::vector<removal::TurningSplit> splits;
-    std::size_t highest = 0;  // the highest part with pieces: it cuts up through the tool's cap
-    for (std::size_t j = 0; j < parts.size(); ++j) {
-      splits.push_back(removal::part_split(parts[j], height_mm, from.axis, to.axis, rotation_bound_mm_));
-      if (splits[j].pieces > 0) highest = j;
-    }
+    std::size_t highest;
+    const std::vector<removal::TurningSplit> splits =
+        removal::part_splits(parts, height_mm, from.axis, to.axis, rotation_bound_mm_, highest);
     for (std::size_t j = 0; j < parts.size(); ++j) {
       pieces.clear();
       removal::append_part_pieces(pieces, m, from.axis, to.axis, parts[j], first_part + static_cast<int>(j), splits[j],

@@ -175,6 +175,18 @@ TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::V
   return split;
 }
 
+std::vector<TurningSplit> part_splits(const std::vector<CutterPart>& parts, double height_mm,
+                                      const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1, double bound_mm,
+                                      std::size_t& highest) {
+  std::vector<TurningSplit> splits;
+  highest = 0;
+  for (std::size_t j = 0; j < parts.size(); ++j) {
+    splits.push_back(part_split(parts[j], height_mm, axis0, axis1, bound_mm));
+    if (splits[j].pieces > 0) highest = j;
+  }
+  return splits;
+}
+
 void append_part_pieces(std::vector<Move>& out, const Move& move, const Eigen::Vector3d& axis0,
                         const Eigen::Vector3d& axis1, const CutterPart& part, int part_cutter,
                         const TurningSplit& split, bool highest) {

@@ -154,12 +154,20 @@ double convex_minimum(Eval&& eval, double delta_length, double far, double* at =
 
 }  // namespace
 
+namespace {
+
+// The core's middle height and half height (cylinder_eval's and its lanes').
+double core_middle_mm(const CutterCore& core) { return 0.5 * (core.z_low_mm + core.z_high_mm); }
+double core_half_mm(const CutterCore& core) { return 0.5 * (core.z_high_mm - core.z_low_mm); }
+
+}  // namespace
+
 // f(t) = d_K(y - t delta), K the core cylinder (radius Rc, z in [lo, hi]), is convex (rho and
 // zeta each convex in t), with an analytic derivative (f = extrude(rho - Rc, zeta)).
 inline void TranslationSweep::cylinder_eval(const Eigen::Vector3d& y, double t, double& f, double& num,
                                             double& den) const {
   const Eigen::Vector3d& d = delta_tool_;
-  const double mid = 0.5 * (core_.z_low_mm + core_.z_high_mm), half = 0.5 * (core_.z_high_mm - core_.z_low_mm);
+  const double mid = core_middle_mm(core_), half = core_half_mm(core_);
   const Eigen::Vector3d p = y - t * d;
   // sqrt of the sum of squares, not hypot: no overflow at mm scale, and hypot was 42 % of
   // a tilted bull-nose's cut (perf, W5's first rows).
@@ -303,19 +311,19 @@ bool TranslationSweep::surface_point(const Eigen::Vector3d& x, Eigen::Vector3d& 
   return true;
 }
 
-#if defined(__x86_64__)
 namespace {
-
-using detail::all;
-using detail::select;
-using detail::v4d;
-using detail::v4i;
-using detail::vsqrt;
 
 // TranslationSweep::cylinder_eval's constants.
 struct CylinderConstants {
   double dx, dy, dz, mid, half, core_radius;
 };
+
+#if defined(__x86_64__)
+using detail::all;
+using detail::select;
+using detail::v4d;
+using detail::v4i;
+using detail::vsqrt;
 
 // cylinder_eval at t for four points (their tool-frame coordinates in lanes): its operations
 // in the same order, each case's values worked out in every lane and the lane's case picked.
@@ -361,9 +369,15 @@ __attribute__((target("avx2"))) bool end_values_lanes(const CylinderConstants& c
   for (int j = 0; j < m; ++j) fa[j] = f[j], na[j] = num[j], da[j] = den[j];
   return true;
 }
+#else
+// Never called (kHaveAvx2 is false off x86-64).
+bool end_values_lanes(const CylinderConstants&, const Eigen::Vector3d*, int, double*, double*, double*, double*,
+                      double*, double*) {
+  return false;
+}
+#endif
 
 }  // namespace
-#endif
 
 void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, bool lanes) const {
   if (kind_ != Kind::General || ball() || cutter_.type == CutterType::VBit) {
@@ -374,27 +388,18 @@ void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, b
   // iterations independent of each other (or in AVX2 lanes); a point neither end settles
   // goes on alone.
   const double r = core_.rounding_mm, far = std::numeric_limits<double>::infinity();
-#if defined(__x86_64__)
   lanes = lanes && detail::kHaveAvx2;
-  const CylinderConstants constants{delta_tool_.x(),
-                                    delta_tool_.y(),
-                                    delta_tool_.z(),
-                                    0.5 * (core_.z_low_mm + core_.z_high_mm),
-                                    0.5 * (core_.z_high_mm - core_.z_low_mm),
-                                    core_.core_radius_mm};
-#else
-  lanes = false;
-#endif
+  const CylinderConstants constants{delta_tool_.x(),       delta_tool_.y(),     delta_tool_.z(),
+                                    core_middle_mm(core_), core_half_mm(core_), core_.core_radius_mm};
   for (int first = 0; first < n; first += 4) {
     const int m = std::min(4, n - first);
     Eigen::Vector3d y[4];
     double fb[4], nb[4], db[4], fa[4], na[4], da[4];
     for (int j = 0; j < m; ++j) y[j] = tool_frame(x[first + j]);
     bool open = false;
-#if defined(__x86_64__)
-    if (lanes) open = end_values_lanes(constants, y, m, fb, nb, db, fa, na, da);
-#endif
-    if (!lanes) {
+    if (lanes) {
+      open = end_values_lanes(constants, y, m, fb, nb, db, fa, na, da);
+    } else {
       for (int j = 0; j < m; ++j) cylinder_eval(y[j], 1.0, fb[j], nb[j], db[j]);
       for (int j = 0; j < m; ++j) open |= !(nb[j] <= 0.0);
       if (open)

@@ -20,6 +20,7 @@
 #include <memory>
 #include <string>
 
+#include "slab_distance.h"
 #include "test_meshes.h"
 #include "vcut/removal/cutter.h"
 #include "vcut/removal/mesh.h"
@@ -1309,12 +1310,8 @@ void expect_parts_cut_within_their_slabs(const Cutter& cutter) {
     const Eigen::Vector3d &a0 = axes[i], &a1 = axes[i + 1];
     const double height = highest_point_in_box_mm(cutter.radius_mm(), tips[i], tips[i + 1], a0, a1,
                                                   box_for_pieces(cutter, a0, a1, material));
-    std::vector<TurningSplit> splits;
-    std::size_t highest = 0;
-    for (std::size_t j = 0; j < parts.size(); ++j) {
-      splits.push_back(part_split(parts[j], height, a0, a1, 0.01));
-      if (splits[j].pieces > 0) highest = j;
-    }
+    std::size_t highest;
+    const std::vector<TurningSplit> splits = part_splits(parts, height, a0, a1, 0.01, highest);
     highest_parts += static_cast<int>(highest);
     for (std::size_t j = 0; j < parts.size(); ++j)
       append_part_pieces(list.moves, line(tips[i], tips[i + 1]), a0, a1, parts[j], static_cast<int>(j), splits[j],
@@ -1338,9 +1335,7 @@ void expect_parts_cut_within_their_slabs(const Cutter& cutter) {
     for (std::size_t i = 0; i < sweeps.size(); ++i) {
       const Move& m = list.moves[i];
       if (sweeps[i].bounds().exteriorDistance(x) >= least) continue;
-      const double h = (x - m.start_mm).dot(m.axis), along = (m.end_mm - m.start_mm).dot(m.axis);
-      const double slab =
-          std::max(m.slab_low_mm + std::min(0.0, along) - h, h - (m.slab_high_mm + std::max(0.0, along)));
+      const double slab = test::slab_distance(m, x);
       if (slab < least) least = std::min(least, std::max(sweeps[i].distance(x), slab));
     }
     return least;

@@ -11,6 +11,7 @@
 #include <random>
 #include <string>
 
+#include "slab_distance.h"
 #include "vcut/removal/move.h"
 #include "vcut/removal/sweep.h"
 
@@ -50,13 +51,6 @@ struct RigidMotion {
   }
 };
 
-// How far p lies outside the sweep of move m's slab (Move::slab_low_mm, slab_high_mm: heights
-// above its tip along its axis, swept along the move), measured along the axis (<= 0 inside).
-double slab_distance(const Move& m, const Eigen::Vector3d& p) {
-  const double h = (p - m.start_mm).dot(m.axis), along = (m.end_mm - m.start_mm).dot(m.axis);
-  return std::max(m.slab_low_mm + std::min(0.0, along) - h, h - (m.slab_high_mm + std::max(0.0, along)));
-}
-
 // The pieces' sweep distance at p (the least over the pieces), and the rigid motion's by brute
 // force over instances + 1 instants. With `slabs` (the pieces' moves): each piece's sweep
 // within its slab's sweep (the larger of the two distances, at most the distance to their
@@ -66,8 +60,8 @@ double pieces_distance(const std::vector<TranslationSweep>& sweeps, const Eigen:
                        const std::vector<Move>* slabs = nullptr) {
   double d = 1e300;
   for (std::size_t i = 0; i < sweeps.size(); ++i)
-    d = std::min(
-        d, slabs == nullptr ? sweeps[i].distance(p) : std::max(sweeps[i].distance(p), slab_distance((*slabs)[i], p)));
+    d = std::min(d, slabs == nullptr ? sweeps[i].distance(p)
+                                     : std::max(sweeps[i].distance(p), test::slab_distance((*slabs)[i], p)));
   return d;
 }
 double brute_distance(const RigidMotion& motion, const Cutter& c, const Eigen::Vector3d& p, int instances) {
@@ -380,16 +374,12 @@ TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
       Move base;
       base.start_mm = turn.p0;
       base.end_mm = turn.p1;
-      std::vector<TurningSplit> splits;
-      highest = 0;
+      const std::vector<TurningSplit> splits = part_splits(parts, height, turn.a0, turn.a1, bound, highest);
       left_out = 0;
       for (std::size_t j = 0; j < parts.size(); ++j) {
-        splits.push_back(part_split(parts[j], height, turn.a0, turn.a1, bound));
         if (splits[j].pieces == 0) {
           EXPECT_GT(parts[j].offset_mm, height);
           ++left_out;
-        } else {
-          highest = j;
         }
       }
       std::vector<Move> pieces;

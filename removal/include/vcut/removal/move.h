@@ -164,6 +164,11 @@ std::vector<CutterPart> cutter_parts(const Cutter& cutter);
 // sagitta the count allows for). None (0 pieces) where the part lies wholly above the height.
 TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::Vector3d& axis0,
                         const Eigen::Vector3d& axis1, double bound_mm);
+// part_split for each of `parts`, and `highest`: the highest part with pieces (the one that
+// append_part_pieces takes up through the cutter's top).
+std::vector<TurningSplit> part_splits(const std::vector<CutterPart>& parts, double height_mm,
+                                      const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1, double bound_mm,
+                                      std::size_t& highest);
 // Appends the pieces of a part's split (cutter index part_cutter in the move list) of `move`,
 // the tool's: as append_five_axis_move with the pivot from the tool's tip, each piece's tip
 // then offset_mm up its axis. Each piece's slab (Move::slab_low_mm, slab_high_mm) is the
