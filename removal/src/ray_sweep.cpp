@@ -214,11 +214,12 @@ struct Conic {
 constexpr double kTiltMargin_mm = 1e-6;
 
 RaySweep::RaySweep(const Cutter& cutter, const Move& move, const Eigen::AlignedBox3d* material_box)
-    : sweep_(cutter, move),
-      cutter_(cutter),
+    : p0_(move.start_mm),
+      delta_(move.end_mm - move.start_mm),
       core_(core_of(cutter)),
-      p0_(move.start_mm),
-      delta_(move.end_mm - move.start_mm) {
+      cutter_(cutter),
+      sweep_(cutter, move) {
+  bounds_ = sweep_.bounds();
   radius_mm_ = cutter.type == CutterType::VBit ? section_radius(cutter, cutter.flute_length_mm)
                                                : core_.core_radius_mm + core_.rounding_mm;
   height_mm_ = core_.z_high_mm + core_.rounding_mm;
@@ -695,7 +696,7 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
     // within the material ends the ray's test).
     if (!flat_bottom_ && !cone_ && segments_ == 2 && lanes_) {
       // general() with the bracket's intervals four rays at a time (bracket_avx2).
-      const Eigen::AlignedBox3d& box = sweep_.bounds();
+      const Eigen::AlignedBox3d& box = bounds_;
       const int a2 = axis == 2 ? 1 : 2;
       if (!(w >= box.min()[a2] && w <= box.max()[a2])) {  // the row misses the sweep's box
         std::fill(hit, hit + count, false);
@@ -1044,8 +1045,7 @@ __attribute__((target("avx2"))) int RaySweep::not_clear_avx2(int axis, double w,
   const double pw = w - core_mid_[a2], pw_a = pw * tool_axis_[a2], pw2 = pw * pw;
   const double reach_base = capsule_r_ + half_move_mm_;
   const v4d zl = all(core_.z_low_mm), zh = all(core_.z_high_mm), inf = all(kInf), zero = all(0.0);
-  const v4d u_lo = all(in_box ? sweep_.bounds().min()[a1] : -kInf),
-            u_hi = all(in_box ? sweep_.bounds().max()[a1] : kInf);
+  const v4d u_lo = all(in_box ? bounds_.min()[a1] : -kInf), u_hi = all(in_box ? bounds_.max()[a1] : kInf);
   int n = 0;
   for (int k0 = first; k0 < end; k0 += 4) {
     const v4d U = lanes_of(u, nullptr, k0, end), B = lanes_of(bottom, nullptr, k0, end),
@@ -1807,7 +1807,7 @@ bool RaySweep::material_clear(int axis, double u, double w, double bottom, doubl
 }
 
 bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, double& lo, double& hi) const {
-  const Eigen::AlignedBox3d& box = sweep_.bounds();
+  const Eigen::AlignedBox3d& box = bounds_;
   for (int a = 0; a < 3; ++a)
     if (a != axis && (o[a] < box.min()[a] || o[a] > box.max()[a])) return false;
   // Material clear of the bracket (material_clear). In scalars throughout: o's coordinate
@@ -1824,7 +1824,7 @@ bool RaySweep::general(int axis, const Vector3d& o, double bottom, double top, d
 
 bool RaySweep::bracket_ends(int axis, const Vector3d& o, double bottom, double top, double capsule_lo,
                             double capsule_hi, Bracket& b, bool& hit, double& lo, double& hi) const {
-  const Eigen::AlignedBox3d& box = sweep_.bounds();
+  const Eigen::AlignedBox3d& box = bounds_;
   const double ak = tool_axis_[axis];
   b.sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
   b.sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
