@@ -152,10 +152,6 @@ double convex_minimum(Eval&& eval, double delta_length, double far, double* at =
   return convex_minimum_between(eval, delta_length, far, fa, num / den, fb, gb, at);
 }
 
-}  // namespace
-
-namespace {
-
 // The core's middle height and half height (cylinder_eval's and its lanes').
 double core_middle_mm(const CutterCore& core) { return 0.5 * (core.z_low_mm + core.z_high_mm); }
 double core_half_mm(const CutterCore& core) { return 0.5 * (core.z_high_mm - core.z_low_mm); }
