@@ -185,7 +185,8 @@ inline __attribute__((always_inline)) double subtract(SegmentList& ray, float a,
     ray.assign(scratch.data(), size);
     return removed;
   }
-  std::memmove(s + i + kept, s + j + 1, (n - j - 1) * sizeof(DexelSegment));
+  // As many pieces as intervals gone (an interval trimmed at one end): those after stay put.
+  if (kept != gone) std::memmove(s + i + kept, s + j + 1, (n - j - 1) * sizeof(DexelSegment));
   std::copy(pieces, pieces + kept, s + i);
   ray.truncate(size);  // the extent follows
   return removed;
