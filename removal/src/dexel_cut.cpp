@@ -679,8 +679,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     // the run costs one look, not one a piece. Where they lie apart, each piece takes its
     // own rays. Either way every ray meets the pieces in program order, each seeing what the
     // ones before left, as one piece after another over the whole tile would: the same cut.
-    auto cut_pieces = [&](const int* list, int n, int a, int tile_u0, int tile_w0, std::vector<DexelSegment>& buffer)
-        __attribute__((noinline)) {
+    auto cut_pieces = [&](const int* list, int n, int a, int tile_u0, int tile_w0, std::vector<DexelSegment>& buffer,
+                          SegmentArena& arena) __attribute__((noinline)) {
       double removed = 0.0;
       RowRays rows, candidates;
       Family& f = m.families[static_cast<std::size_t>(a)];
@@ -780,7 +780,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
             if (!rows.hit[c]) continue;
             const int k = rows.k[c];
             SegmentList& ray = row[k];
-            removed += subtract(ray, static_cast<float>(rows.lo[c]), static_cast<float>(rows.hi[c]), piece.id, buffer);
+            removed +=
+                subtract(ray, static_cast<float>(rows.lo[c]), static_cast<float>(rows.hi[c]), piece.id, buffer, arena);
             if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
           }
         };
@@ -859,6 +860,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         const int tu = local % f.tiles_u, tw = local / f.tiles_u;
         const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
         TileResult& r = results[static_cast<std::size_t>(t)];
+        SegmentArena& arena = f.arenas[static_cast<std::size_t>(local)];
         r.probes.clear();
         double removed = 0.0;  // summed here, stored once: neighbouring tiles' results share cache lines
         RowRays rows;
@@ -866,7 +868,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           const int i = entries[static_cast<std::size_t>(e)];
           // A run's first entry cuts the whole run; its other entries are done then.
           if (const int run = runs[static_cast<std::size_t>(e)]; __builtin_expect(run != 1, 0)) {
-            if (run > 1) removed += cut_pieces(&entries[static_cast<std::size_t>(e)], run, a, tile_u0, tile_w0, buffer);
+            if (run > 1)
+              removed += cut_pieces(&entries[static_cast<std::size_t>(e)], run, a, tile_u0, tile_w0, buffer, arena);
             continue;
           }
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
@@ -1010,7 +1013,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                   probe.where_mm = m.point(a, f.lo_u + k, iw, middle);
                 }
               } else {
-                removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer);
+                removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer, arena);
                 if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
               }
             }

@@ -158,6 +158,7 @@ std::size_t DexelStock::memory_bytes() const {
   for (const Family& f : impl_->families) {
     bytes += f.rays.size() * sizeof(SegmentList);
     for (const SegmentList& ray : f.rays) bytes += ray.heap_bytes();
+    for (const SegmentArena& arena : f.arenas) bytes += arena.bytes() + sizeof(SegmentArena);
   }
   return bytes;
 }

@@ -63,12 +63,14 @@ void expect_same(const SegmentList& ray, const std::vector<DexelSegment>& expect
 }
 
 // Ends on a grid of 1/64 mm (exact in float, so both sides compute the same lengths), with
-// the slivers a grazing cut leaves (under and over kMinSegment_mm) mixed in.
+// the slivers a grazing cut leaves (under and over kMinSegment_mm) mixed in. Rays that grow
+// do so in an arena (as the cut's do) or, for half the trials' first lists, on the heap.
 TEST(SegmentList, SubtractIsTheDifferenceIntervalByIntervalAndKeepsTheExtentInline) {
   std::mt19937 rng(20261130);
   std::uniform_int_distribution<int> grid(0, 64 * 40), count(1, 5), cuts(1, 40), sliver(0, 4);
   std::vector<DexelSegment> scratch;
-  int heap_rays = 0, emptied = 0, dropped = 0;
+  SegmentArena arena;
+  int heap_rays = 0, arena_rays = 0, grown_by_cuts = 0, emptied = 0, dropped = 0;
   for (int trial = 0; trial < 3000; ++trial) {
     // A ray of disjoint intervals, in order.
     std::vector<int> ends;
@@ -80,7 +82,7 @@ TEST(SegmentList, SubtractIsTheDifferenceIntervalByIntervalAndKeepsTheExtentInli
     for (std::size_t i = 0; i + 1 < ends.size(); i += 2)
       expected.push_back({ends[i] / 64.0f, ends[i + 1] / 64.0f, -1, -1});
     SegmentList ray;
-    ray.assign(expected.data(), static_cast<std::uint32_t>(expected.size()));
+    ray.assign(expected.data(), static_cast<std::uint32_t>(expected.size()), trial % 2 == 0 ? nullptr : &arena);
     expect_same(ray, expected, "assigned");
     const int steps = cuts(rng);
     for (int step = 0; step < steps && !expected.empty(); ++step) {
@@ -103,12 +105,15 @@ TEST(SegmentList, SubtractIsTheDifferenceIntervalByIntervalAndKeepsTheExtentInli
       }
       const int move = trial * 100 + step;
       const double want = reference_subtract(expected, a, b, move, dropped);
-      const double got = subtract(ray, a, b, move, scratch);
+      const double got = subtract(ray, a, b, move, scratch, arena);
       EXPECT_DOUBLE_EQ(got, want) << "trial " << trial << " step " << step;
       expect_same(ray, expected, "after a cut");
       if (HasFailure()) return;
     }
     heap_rays += ray.heap_bytes() > 0;
+    arena_rays += ray.borrowed();
+    // Made inline or on the heap, it took room from the arena only when a cut split it.
+    grown_by_cuts += trial % 2 == 0 && ray.borrowed();
     emptied += ray.size() == 0;
     // Moved (the stock's rays are made in place, but a moved list keeps its intervals too).
     SegmentList moved(std::move(ray));
@@ -116,9 +121,54 @@ TEST(SegmentList, SubtractIsTheDifferenceIntervalByIntervalAndKeepsTheExtentInli
     EXPECT_EQ(ray.size(), 0u);
   }
   // The draws reach both storages, empty rays and dropped slivers.
-  EXPECT_GT(heap_rays, 500);
+  EXPECT_GT(heap_rays, 300);
+  EXPECT_GT(arena_rays, 300);
+  EXPECT_GT(grown_by_cuts, 100);
   EXPECT_GT(emptied, 100);
   EXPECT_GT(dropped, 20);
+}
+
+// Blocks of a power of two intervals, at least those asked for; a block given back serves the
+// next request of its size (and of no other), and chunks are taken only when none is free.
+TEST(SegmentArena, GivesPowersOfTwoAndServesReturnedBlocksAgain) {
+  SegmentArena arena;
+  std::uint32_t size = 0;
+  DexelSegment* const two = arena.take(2, size);
+  EXPECT_EQ(size, 2u);
+  DexelSegment* const four = arena.take(3, size);
+  EXPECT_EQ(size, 4u);
+  EXPECT_EQ(four, two + 2);  // from the same chunk, side by side
+  DexelSegment* const eight = arena.take(5, size);
+  EXPECT_EQ(size, 8u);
+  EXPECT_EQ(arena.take(8, size), eight + 8);
+  EXPECT_EQ(arena.take(1, size), eight + 16);  // one interval's room: still a block of two
+  EXPECT_EQ(size, 2u);
+  const std::size_t bytes = arena.bytes();
+  EXPECT_EQ(bytes, 64 * sizeof(DexelSegment));  // the first chunk, 2 + 4 + 8 + 8 + 2 used
+  arena.give_back(four, 4);
+  arena.give_back(eight, 8);
+  EXPECT_EQ(arena.take(4, size), four);
+  EXPECT_EQ(arena.take(8, size), eight);
+  EXPECT_NE(arena.take(4, size), four);  // given out again: not on the free list twice
+  EXPECT_EQ(arena.bytes(), bytes);
+  // A request larger than the chunk left: a new chunk (twice the first), not the free lists'.
+  arena.give_back(two, 2);
+  DexelSegment* const big = arena.take(100, size);
+  EXPECT_EQ(size, 128u);
+  EXPECT_NE(big, two);
+  EXPECT_EQ(arena.bytes(), bytes + 128 * sizeof(DexelSegment));
+  EXPECT_EQ(arena.take(2, size), two);
+  // A list that outgrows its block gives it back.
+  SegmentArena rays;
+  const DexelSegment segs[3] = {{0.0f, 1.0f, 1, 2}, {2.0f, 3.0f, 3, 4}, {4.0f, 5.0f, 5, 6}};
+  SegmentList ray;
+  ray.assign(segs, 2, &rays);
+  const DexelSegment* const first = ray.data();
+  ray.assign(segs, 3, &rays);
+  EXPECT_TRUE(ray.borrowed());
+  EXPECT_EQ(ray.size(), 3u);
+  EXPECT_EQ(ray.data()[2].hi_move, 6);
+  EXPECT_EQ(rays.take(2, size), first);
 }
 
 }  // namespace
