@@ -557,9 +557,13 @@ class Contour {
         first = last;
       }
     }
-    // Each vertex at the mean of its cells' crossings.
+    // Each vertex at the mean of its cells' crossings (the points' room taken once: grown
+    // by doubling, they were most of the mesher's allocations).
     b.cells.resize(n);
     b.vertex.resize(n);
+    std::size_t vertices = 0;
+    for (std::size_t i = 0; i < n; ++i) vertices += group[i] == i;
+    b.points.reserve(vertices);
     std::vector<int>& members = scratch.members;
     members.clear();
     for (std::size_t i = 0; i < n; ++i) {
