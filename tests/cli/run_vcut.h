@@ -18,8 +18,9 @@ struct CommandResult {
   std::string output;  // stdout and stderr
 };
 
-inline CommandResult run_vcut(const std::string& args) {
-  const std::string command = std::string(VCUT_BINARY) + " " + args + " 2>&1";
+// `prefix`: in front of the binary on the shell's line (env VAR=value, ...).
+inline CommandResult run_vcut(const std::string& args, const std::string& prefix = "") {
+  const std::string command = prefix + (prefix.empty() ? "" : " ") + std::string(VCUT_BINARY) + " " + args + " 2>&1";
   CommandResult r{-1, ""};
   FILE* pipe = ::popen(command.c_str(), "r");
   char buffer[4096];
