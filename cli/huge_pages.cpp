@@ -1,5 +1,6 @@
 #include "huge_pages.h"
 
+#include <sys/auxv.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -20,7 +21,10 @@ std::optional<std::string> huge_page_tunables(const char* command, const char* t
 
 void restart_with_huge_pages(int argc, char** argv) {
 #if defined(__linux__) && defined(__GLIBC__) && !defined(__SANITIZE_ADDRESS__)
-  if (argc < 2) return;
+  // Started by the kernel through its interpreter (AT_BASE, where the dynamic loader lies), so
+  // that /proc/self/exe is this program; run as `ld-linux.so vcut ...` (scripts/device-bundle)
+  // it is the loader, which would take the command for the program to load.
+  if (argc < 2 || ::getauxval(AT_BASE) == 0) return;
   char mode[128] = {};
   if (std::FILE* f = std::fopen("/sys/kernel/mm/transparent_hugepage/enabled", "r")) {
     const std::size_t n = std::fread(mode, 1, sizeof mode - 1, f);

@@ -26,7 +26,8 @@ std::optional<std::string> huge_page_tunables(const char* command, const char* t
 // Where huge_page_tunables gives a value: sets it and replaces the process by the same program
 // with the same arguments (the same process id, open files and working folder). Returns when
 // it does not, or when the restart fails (the run then goes on with 4 KB pages). Does nothing
-// under the address sanitizer, whose allocator is not glibc's.
+// under the address sanitizer, whose allocator is not glibc's, nor where the program was not
+// started by its own name (run through the dynamic loader, /proc/self/exe is the loader).
 void restart_with_huge_pages(int argc, char** argv);
 
 }  // namespace vcut::cli

@@ -77,6 +77,11 @@ TEST(HugePages, ARestartedRunKeepsItsArgumentsAndItsOutput) {
   const std::string report = read_file(dir / "out restarted" / "report.json");
   EXPECT_NE(report.find("\"threads\": 2"), std::string::npos) << report.substr(0, 2000);
   EXPECT_NE(report.find("\"resolution_mm\": 0.1"), std::string::npos) << report.substr(0, 2000);
+  // Run through the dynamic loader (as scripts/device-bundle does), /proc/self/exe is the
+  // loader: no restart there (the loader would take `simulate` for the program to load).
+  const auto loaded = run("env -u GLIBC_TUNABLES /lib64/ld-linux-x86-64.so.2", "out loaded");
+  ASSERT_EQ(loaded.exit_code, 0) << loaded.output;
+  EXPECT_EQ(stl, read_file(dir / "out loaded" / "machined.stl"));
   fs::remove_all(dir);
 }
 
