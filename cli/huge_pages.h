@@ -11,23 +11,20 @@ namespace vcut::cli {
 // faults and 2.0 of 14 CPU-seconds in the kernel on the reference VM, whose kernel gives huge
 // pages only where asked: THP "madvise"). glibc's malloc asks for them (madvise on its heaps
 // and large blocks) under the tunable glibc.malloc.hugetlb=1, which it reads from
-// GLIBC_TUNABLES at start-up only.
+// GLIBC_TUNABLES at start-up only: the launcher (cli/launcher.cpp) sets it before it starts
+// the program.
 //
-// The GLIBC_TUNABLES value the command `command` (argv[1]) restarts with, given the value it
-// was started with (nullptr: unset) and the kernel's THP mode (the text of
+// The GLIBC_TUNABLES value the command `command` (argv[1]) starts with, given the value the
+// launcher was started with (nullptr: unset) and the kernel's THP mode (the text of
 // /sys/kernel/mm/transparent_hugepage/enabled, nullptr: none): the old value with
 // glibc.malloc.hugetlb=1 added. None where the kernel gives huge pages only where asked does
-// not hold ("[always]" gives them to every heap, "[never]" to none: the restart, about 0.1 s
-// of start-up on the reference VM, would buy nothing), for a command that does not cut
-// (simulate and study do), or where the old value names glibc.malloc.hugetlb already (a
-// restarted run does; =0 keeps 4 KB pages).
+// not hold ("[always]" gives them to every heap, "[never]" to none), for a command that does
+// not cut (simulate and study do), or where the old value names glibc.malloc.hugetlb already
+// (=0 keeps 4 KB pages).
 std::optional<std::string> huge_page_tunables(const char* command, const char* tunables, const char* thp_mode);
 
-// Where huge_page_tunables gives a value: sets it and replaces the process by the same program
-// with the same arguments (the same process id, open files and working folder). Returns when
-// it does not, or when the restart fails (the run then goes on with 4 KB pages). Does nothing
-// under the address sanitizer, whose allocator is not glibc's, nor where the program was not
-// started by its own name (run through the dynamic loader, /proc/self/exe is the loader).
-void restart_with_huge_pages(int argc, char** argv);
+// Sets GLIBC_TUNABLES to huge_page_tunables' value for this process's arguments and kernel,
+// where it gives one (under the address sanitizer, whose allocator is not glibc's, never).
+void ask_for_huge_pages(int argc, char** argv);
 
 }  // namespace vcut::cli

@@ -1,5 +1,6 @@
-// vcut: the command line. It only wires the libraries; every error from bad input is a
-// vcut::InputError, printed here on one line with exit code 2.
+// vcut-core: the command line, started by vcut (cli/launcher.cpp). It only wires the
+// libraries; every error from bad input is a vcut::InputError, printed here on one line with
+// exit code 2.
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -7,7 +8,6 @@
 
 #include "check_command.h"
 #include "compensate_command.h"
-#include "huge_pages.h"
 #include "job_command.h"
 #include "machine_commands.h"
 #include "poses_command.h"
@@ -17,8 +17,6 @@
 #include "vcut/io/input_error.h"
 
 int main(int argc, char** argv) {
-  // Before anything else: a run that cuts restarts once with huge pages for its heap.
-  vcut::cli::restart_with_huge_pages(argc, argv);
   CLI::App app{"vcut: virtual machining - NC program in, machined part and its gouges out"};
   app.require_subcommand(1);
   vcut::cli::SimulateCommand simulate;
