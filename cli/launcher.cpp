@@ -22,19 +22,13 @@ namespace {
 // this program's path.
 std::string own_folder(const char* argv0) {
   char path[PATH_MAX];
+  std::string own;
   if (::getauxval(AT_BASE) != 0) {
-    const ssize_t n = ::readlink("/proc/self/exe", path, sizeof path - 1);
-    if (n > 0) {
-      path[n] = '\0';
-      const std::string p(path);
-      return p.substr(0, p.rfind('/'));
-    }
+    const ssize_t n = ::readlink("/proc/self/exe", path, sizeof path);
+    if (n > 0 && static_cast<std::size_t>(n) < sizeof path) own.assign(path, static_cast<std::size_t>(n));
   }
-  if (argv0 != nullptr && ::realpath(argv0, path) != nullptr) {
-    const std::string p(path);
-    return p.substr(0, p.rfind('/'));
-  }
-  return ".";
+  if (own.empty() && argv0 != nullptr && ::realpath(argv0, path) != nullptr) own = path;
+  return own.empty() ? std::string(".") : own.substr(0, own.rfind('/'));
 }
 
 }  // namespace

@@ -96,15 +96,10 @@ TEST(HugePages, ALauncherWithoutItsProgramSaysSo) {
   const fs::path dir = vcut::cli::test::fresh_test_dir("vcut_launcher_");
   fs::copy_file(VCUT_BINARY, dir / "vcut");
   fs::permissions(dir / "vcut", fs::perms::owner_all);
-  const std::string command = (dir / "vcut").string() + " program nothing.ngc 2>&1";
-  std::string output;
-  FILE* pipe = ::popen(command.c_str(), "r");
-  char buffer[4096];
-  while (pipe && std::fgets(buffer, sizeof buffer, pipe)) output += buffer;
-  const int status = pipe ? ::pclose(pipe) : -1;
-  EXPECT_EQ(WIFEXITED(status) ? WEXITSTATUS(status) : -1, 1) << output;
-  EXPECT_NE(output.find("vcut: internal error: cannot start " + (dir / "vcut-core").string()), std::string::npos)
-      << output;
+  const auto r = vcut::cli::test::run_command((dir / "vcut").string() + " program nothing.ngc");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("vcut: internal error: cannot start " + (dir / "vcut-core").string()), std::string::npos)
+      << r.output;
   fs::remove_all(dir);
 }
 

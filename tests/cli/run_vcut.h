@@ -18,16 +18,20 @@ struct CommandResult {
   std::string output;  // stdout and stderr
 };
 
-// `prefix`: in front of the binary on the shell's line (env VAR=value, ...).
-inline CommandResult run_vcut(const std::string& args, const std::string& prefix = "") {
-  const std::string command = prefix + (prefix.empty() ? "" : " ") + std::string(VCUT_BINARY) + " " + args + " 2>&1";
+// A shell command line, its stderr with its stdout.
+inline CommandResult run_command(const std::string& command) {
   CommandResult r{-1, ""};
-  FILE* pipe = ::popen(command.c_str(), "r");
+  FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
   char buffer[4096];
   while (pipe && std::fgets(buffer, sizeof buffer, pipe)) r.output += buffer;
   const int status = pipe ? ::pclose(pipe) : -1;
   r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   return r;
+}
+
+// `prefix`: in front of the binary on the shell's line (env VAR=value, ...).
+inline CommandResult run_vcut(const std::string& args, const std::string& prefix = "") {
+  return run_command(prefix + (prefix.empty() ? "" : " ") + std::string(VCUT_BINARY) + " " + args);
 }
 
 // An empty folder of its own for the running test: <tmp>/<prefix><test name>.
