@@ -210,11 +210,17 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tol
   const std::size_t n_tools = cutter_index_.size();
   parts_.resize(n_tools);
   parts_first_.assign(n_tools, -1);
+  halves_.resize(n_tools);
+  halves_first_.assign(n_tools, -1);
   for (std::size_t i = 0; i < n_tools; ++i) {
     parts_[i] = removal::cutter_parts(cutters_[i]);
     if (parts_[i].size() < 2) continue;
     parts_first_[i] = static_cast<int>(cutters_.size());
     for (const removal::CutterPart& part : parts_[i]) cutters_.push_back(part.cutter);
+    if (cutters_[i].type != removal::CutterType::Ball) continue;
+    halves_[i] = removal::halved_parts(parts_[i]);
+    halves_first_[i] = static_cast<int>(cutters_.size());
+    for (const removal::CutterPart& part : halves_[i]) cutters_.push_back(part.cutter);
   }
   if (run.streamed && !actual) {
     // Only the poses: the axis values are not needed for the moves unless a block's poses
@@ -340,8 +346,8 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
     return removal::five_axis_split(cutters_[static_cast<std::size_t>(m.cutter)], height_mm, from.axis, to.axis,
                                     rotation_bound_mm_);
   };
-  const std::vector<removal::CutterPart>& parts = parts_[static_cast<std::size_t>(m.cutter)];
-  const int first_part = parts_first_[static_cast<std::size_t>(m.cutter)];
+  const std::vector<removal::CutterPart>* parts = &parts_[static_cast<std::size_t>(m.cutter)];
+  int first_part = parts_first_[static_cast<std::size_t>(m.cutter)];
   // A flat or bull-nose end mill part by part only where at least two of its parts (2 Rc long:
   // removal::cutter_parts) come inside the stock: each part takes as many pieces as a core 2 Rc
   // long, and the rays along the axis meet every part (W5's bull-nose, about 10 mm inside the
@@ -349,7 +355,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
   // 40 mm flute in the stock with parts of 10 mm: 0.71x).
   const bool by_parts =
       first_part >= 0 && (cutters_[static_cast<std::size_t>(m.cutter)].type == removal::CutterType::Ball ||
-                          height_mm >= 2.0 * parts[1].offset_mm);
+                          height_mm >= 2.0 * (*parts)[1].offset_mm);
   if (turns && by_parts && !m.rapid) {
     // Part by part (a rapid stays whole: its probe measures the longest overlap along a ray
     // with the whole tool), the pieces in the order of the instants they end at (the parts'
@@ -365,12 +371,32 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
     // Piece k of n ends at the instant (k + 1) / n of the move.
     auto until = [&](std::size_t k) { return static_cast<double>(k + 1) / static_cast<double>(pieces.size()); };
     std::size_t highest;
-    const std::vector<removal::TurningSplit> splits =
-        removal::part_splits(parts, height_mm, from.axis, to.axis, rotation_bound_mm_, highest);
-    for (std::size_t j = 0; j < parts.size(); ++j) {
+    std::vector<removal::TurningSplit> splits =
+        removal::part_splits(*parts, height_mm, from.axis, to.axis, rotation_bound_mm_, highest);
+    // A ball's halved parts where they take no more pieces in all (W5's ball rows, whose moves
+    // turn about 0.8 deg: a part of 2.375 mm takes 2 pieces, each half 1): as many pieces,
+    // each over half the rays.
+    const std::vector<removal::CutterPart>& halves = halves_[static_cast<std::size_t>(m.cutter)];
+    if (!halves.empty()) {
+      std::size_t halves_highest;
+      std::vector<removal::TurningSplit> halves_splits =
+          removal::part_splits(halves, height_mm, from.axis, to.axis, rotation_bound_mm_, halves_highest);
+      auto total = [](const std::vector<removal::TurningSplit>& s) {
+        int n = 0;
+        for (const removal::TurningSplit& split : s) n += split.pieces;
+        return n;
+      };
+      if (total(halves_splits) <= total(splits)) {
+        parts = &halves;
+        first_part = halves_first_[static_cast<std::size_t>(m.cutter)];
+        splits = std::move(halves_splits);
+        highest = halves_highest;
+      }
+    }
+    for (std::size_t j = 0; j < parts->size(); ++j) {
       pieces.clear();
-      removal::append_part_pieces(pieces, m, from.axis, to.axis, parts[j], first_part + static_cast<int>(j), splits[j],
-                                  j == highest);
+      removal::append_part_pieces(pieces, m, from.axis, to.axis, (*parts)[j], first_part + static_cast<int>(j),
+                                  splits[j], j == highest);
       for (std::size_t k = 0; k < pieces.size(); ++k) timed.push_back({until(k), false, pieces[k]});
     }
     if (probes_) {

@@ -103,7 +103,12 @@ double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, co
 Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                                    const Eigen::AlignedBox3d& box) {
   double pivot_mm = 0.0;
-  for (const CutterPart& part : cutter_parts(cutter)) {
+  std::vector<CutterPart> parts = cutter_parts(cutter);
+  if (cutter.type == CutterType::Ball && parts.size() > 1) {  // a ball's halves too (their top one's pivot is higher)
+    const std::vector<CutterPart> halves = halved_parts(parts);
+    parts.insert(parts.end(), halves.begin(), halves.end());
+  }
+  for (const CutterPart& part : parts) {
     double pivot, reach_mm;
     rotation_reach_mm(part.cutter, std::numeric_limits<double>::infinity(), pivot, reach_mm);
     pivot_mm = std::max(pivot_mm, part.offset_mm + pivot);
@@ -159,6 +164,21 @@ std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
     parts.push_back(part);
   }
   return parts;
+}
+
+std::vector<CutterPart> halved_parts(const std::vector<CutterPart>& parts) {
+  std::vector<CutterPart> halves;
+  for (const CutterPart& part : parts) {
+    const double r = part.cutter.corner_radius_mm, half = 0.5 * (part.cutter.flute_length_mm - 2.0 * r);
+    CutterPart low = part;
+    low.cutter.flute_length_mm = half + 2.0 * r;
+    low.cutter.length_mm = low.cutter.flute_length_mm;
+    CutterPart high = low;
+    high.offset_mm = part.offset_mm + half;
+    halves.push_back(low);
+    halves.push_back(high);
+  }
+  return halves;
 }
 
 TurningSplit part_split(const CutterPart& part, double height_mm, const Eigen::Vector3d& axis0,

@@ -294,6 +294,50 @@ TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
   }
 }
 
+// A ball's turning move takes its parts halved (removal::halved_parts: 16 of 1.1875 mm, reach
+// 0.59375 mm, pivots c = 1.1875i + 3.59375 mm) where they need no more pieces in all than its
+// parts (8 of 2.375 mm, reach 1.1875 mm, c = 2.375j + 4.1875 mm), each part n pieces with
+// reach phi / 2 + c phi^2 / 8 <= 0.01 mm (phi = theta / n), the cutter D6 (flute 25 mm) wholly
+// inside the stock. Turning 1 deg (0.017453 rad): a part needs 2 (reach theta / 0.02 = 1.036;
+// at n = 2 at most 0.005181 + 20.8125 * 9.52e-6 = 0.005379), 16 in all; a half 1 (0.518; at
+// most 0.005181 + 21.40625 * 3.81e-5 = 0.005997), 16: the halves, each piece's core 1.1875 mm
+// (flute 7.1875). Turning 2 deg: a part 3 (2.073; at n = 3 0.006909 + 0.000352), 24; a half 2
+// (1.036), 32: the parts (flute 8.375).
+TEST_F(Stages, ABallTurnsInHalfPartsWhereTheyTakeNoMorePieces) {
+  write("tools.yaml", "tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25}\n");
+  struct Case {
+    double degrees;
+    int pieces;
+    double flute_mm;
+  };
+  for (const Case& c : {Case{1.0, 16, 7.1875}, Case{2.0, 24, 8.375}}) {
+    const double s = std::sin(c.degrees * M_PI / 180.0), co = std::cos(c.degrees * M_PI / 180.0);
+    write("turn.apt",
+          "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
+          "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
+              std::to_string(s) + ",0," + std::to_string(co) + "\nFINI\n");
+    write("job.yaml",
+          "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
+          "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
+          "engine: {kind: dexel, resolution: 0.1, turn_tolerance: 0.01}\ndensify: {step: 1000, angle: 1000}\n");
+    const io::Job j = io::read_job((dir / "job.yaml").string());
+    const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+    CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
+    cut.set_stock_box(removal::bounds_of(stock_shape(j)));
+    std::vector<removal::Move> moves;
+    while (cut.next(moves, 4096)) {
+    }
+    int turning = 0;
+    for (const removal::Move& m : moves) {
+      if (m.rapid || m.axis.z() >= 1.0 - 1e-9) continue;
+      ++turning;
+      EXPECT_NEAR(cut.cutters().at(static_cast<std::size_t>(m.cutter)).flute_length_mm, c.flute_mm, 1e-9)
+          << c.degrees << " deg";
+    }
+    EXPECT_EQ(turning, c.pieces) << c.degrees << " deg";
+  }
+}
+
 // Cutting moves that never come near the stock are refused before any cut (work offsets).
 TEST_F(Stages, MovesAwayFromTheStockAreRefused) {
   write("slot.ngc", "G21 G90\nT1 M6\nS1000 M3\nG0 X500 Y500 Z5\nG1 Z-2 F500\nG1 X600\nM30\n");

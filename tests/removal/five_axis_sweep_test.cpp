@@ -315,11 +315,12 @@ TEST(FiveAxisSweep, FewerPiecesWithinTheBoundInsideTheBox) {
 }
 
 // A long ball, flat or bull-nose end mill turns part by part (cutter_parts, part_split,
-// append_part_pieces). The parts' union is the cutter: outside it the least of the parts'
-// distances is the cutter's (the distance to a union), inside it some part holds the point.
-// Inside the stock's box (grown by box_for_pieces, for the top part's pivot) the parts' pieces
-// sweep within the bound of the rigid motion's and the rigid motion within the bound of theirs
-// (brute force over 4,000 instances), the parts whose core starts above the height left out.
+// append_part_pieces), a ball's parts halved too (halved_parts). The parts' union is the
+// cutter: outside it the least of the parts' distances is the cutter's (the distance to a
+// union), inside it some part holds the point. Inside the stock's box (grown by box_for_pieces,
+// for the top part's pivot) the parts' pieces sweep within the bound of the rigid motion's and
+// the rigid motion within the bound of theirs (brute force over 4,000 instances), the parts
+// whose core starts above the height left out.
 TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
   constexpr int kInstances = 4000;
   std::mt19937 rng(31);
@@ -327,122 +328,138 @@ TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
   for (const Cutter& c :
        {make(CutterType::Ball, 6, 3, 25), make(CutterType::Ball, 3, 1.5, 15), make(CutterType::Ball, 1, 0.5, 20),
         make(CutterType::Flat, 4, 0, 25), make(CutterType::BullNose, 5, 1, 25)}) {
-    const double r = c.corner_radius_mm, core = c.flute_length_mm - 2 * r;
-    const std::vector<CutterPart> parts = cutter_parts(c);
-    // A ball's parts r / 2 of the core long, or an eighth of it where longer (8 of them each: the
-    // D6 ball's 19 mm core in parts of 2.375 mm, the D3's 12 mm in parts of r = 1.5 mm); a flat or
-    // bull-nose end mill's 2 Rc (7 and 8 of them).
-    const double length =
-        c.type == CutterType::Ball ? std::max(r / 2, core / 8) : std::max(2 * (c.radius_mm() - r), core / 8);
-    ASSERT_EQ(parts.size(), static_cast<std::size_t>(std::ceil(core / length - 1e-9))) << to_string(c.type);
-    int outside = 0, inside = 0;
-    for (int i = 0; i < 20000; ++i) {
-      const double across = 1.3 * c.radius_mm();
-      const Eigen::Vector3d y(across * (2 * unit(rng) - 1), across * (2 * unit(rng) - 1),
-                              c.flute_length_mm * 1.2 * unit(rng) - 2);
-      const double whole = cutter_distance(c, y);
-      double least = std::numeric_limits<double>::infinity();
-      for (const CutterPart& part : parts)
-        least = std::min(least, cutter_distance(part.cutter, y - part.offset_mm * Eigen::Vector3d::UnitZ()));
-      if (whole > 0.0) {
-        EXPECT_NEAR(least, whole, 1e-12) << y.transpose();
-        ++outside;
-      } else {
-        EXPECT_LE(least, 0.0) << y.transpose();
-        ++inside;
+    for (const bool halved : {false, true}) {
+      if (halved && c.type != CutterType::Ball) continue;
+      const double r = c.corner_radius_mm, core = c.flute_length_mm - 2 * r;
+      const std::vector<CutterPart> whole_parts = cutter_parts(c);
+      const std::vector<CutterPart> parts = halved ? halved_parts(whole_parts) : whole_parts;
+      // A ball's parts r / 2 of the core long, or an eighth of it where longer (8 of them each: the
+      // D6 ball's 19 mm core in parts of 2.375 mm, the D3's 12 mm in parts of r = 1.5 mm); a flat or
+      // bull-nose end mill's 2 Rc (7 and 8 of them). Halved, twice as many, each half as long.
+      const double length =
+          c.type == CutterType::Ball ? std::max(r / 2, core / 8) : std::max(2 * (c.radius_mm() - r), core / 8);
+      ASSERT_EQ(whole_parts.size(), static_cast<std::size_t>(std::ceil(core / length - 1e-9))) << to_string(c.type);
+      ASSERT_EQ(parts.size(), (halved ? 2 : 1) * whole_parts.size());
+      for (std::size_t j = 0; j < parts.size(); ++j) {  // end to end up the core
+        const double own = parts[j].cutter.flute_length_mm - 2 * r;
+        EXPECT_NEAR(own, j + 1 < parts.size() ? length / (halved ? 2 : 1) : core - parts[j].offset_mm, 1e-12);
+        if (j > 0) EXPECT_NEAR(parts[j].offset_mm, parts[j - 1].offset_mm + length / (halved ? 2 : 1), 1e-12);
       }
-    }
-    EXPECT_GT(inside, 1000);
-    EXPECT_GT(outside, 1000);
+      int outside = 0, inside = 0;
+      for (int i = 0; i < 20000; ++i) {
+        const double across = 1.3 * c.radius_mm();
+        const Eigen::Vector3d y(across * (2 * unit(rng) - 1), across * (2 * unit(rng) - 1),
+                                c.flute_length_mm * 1.2 * unit(rng) - 2);
+        const double whole = cutter_distance(c, y);
+        double least = std::numeric_limits<double>::infinity();
+        for (const CutterPart& part : parts)
+          least = std::min(least, cutter_distance(part.cutter, y - part.offset_mm * Eigen::Vector3d::UnitZ()));
+        if (whole > 0.0) {
+          EXPECT_NEAR(least, whole, 1e-12) << y.transpose();
+          ++outside;
+        } else {
+          EXPECT_LE(least, 0.0) << y.transpose();
+          ++inside;
+        }
+      }
+      EXPECT_GT(inside, 1000);
+      EXPECT_GT(outside, 1000);
 
-    // A turn of 25 deg about a tilted axis while the tip moves, the box's top 6 mm above the
-    // tip: the upper parts stay out of it.
-    const Eigen::AlignedBox3d box(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 10, 6));
-    const double tilt = 25.0 * M_PI / 180.0;
-    const Eigen::Vector3d a0(0, std::sin(tilt), std::cos(tilt));
-    const Eigen::Vector3d a1 = Eigen::Vector3d(std::sin(tilt) * 0.3, std::sin(tilt), std::cos(tilt)).normalized();
-    const RigidMotion motion{{0, 0, 0}, {1.5, 0.5, 0.2}, a0, a1};
-    const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
-    const Eigen::AlignedBox3d grown = box_for_pieces(c, a0, a1, box);
-    const double top_pivot = parts.back().offset_mm + 0.5 * parts.back().cutter.flute_length_mm;  // its core's middle
-    EXPECT_NEAR(grown.max().z() - box.max().z(), top_pivot * (angle / 2 + angle * angle / 8), 1e-12);
-    const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, grown);
-    ASSERT_LT(height, c.flute_length_mm - 2 * r);
-    // The parts' pieces of a rigid motion, each with its slab; `highest`, the highest part
-    // with pieces.
-    auto part_pieces = [&](const RigidMotion& turn, double bound, std::size_t& highest, int& left_out) {
-      Move base;
-      base.start_mm = turn.p0;
-      base.end_mm = turn.p1;
-      const std::vector<TurningSplit> splits = part_splits(parts, height, turn.a0, turn.a1, bound, highest);
-      left_out = 0;
-      for (std::size_t j = 0; j < parts.size(); ++j) {
-        if (splits[j].pieces == 0) {
-          EXPECT_GT(parts[j].offset_mm, height);
-          ++left_out;
+      // A turn of 25 deg about a tilted axis while the tip moves, the box's top 6 mm above the
+      // tip: the upper parts stay out of it.
+      const Eigen::AlignedBox3d box(Eigen::Vector3d(-10, -10, -10), Eigen::Vector3d(10, 10, 6));
+      const double tilt = 25.0 * M_PI / 180.0;
+      const Eigen::Vector3d a0(0, std::sin(tilt), std::cos(tilt));
+      const Eigen::Vector3d a1 = Eigen::Vector3d(std::sin(tilt) * 0.3, std::sin(tilt), std::cos(tilt)).normalized();
+      const RigidMotion motion{{0, 0, 0}, {1.5, 0.5, 0.2}, a0, a1};
+      const double angle = std::atan2(a0.cross(a1).norm(), a0.dot(a1));
+      const Eigen::AlignedBox3d grown = box_for_pieces(c, a0, a1, box);
+      // The top part's core's middle; a ball's top half's lies higher, a quarter of that part up.
+      const CutterPart& top_part = whole_parts.back();
+      const double top_core = top_part.cutter.flute_length_mm - 2 * r;
+      const double top_pivot =
+          top_part.offset_mm + r + (c.type == CutterType::Ball && whole_parts.size() > 1 ? 0.75 : 0.5) * top_core;
+      EXPECT_NEAR(grown.max().z() - box.max().z(), top_pivot * (angle / 2 + angle * angle / 8), 1e-12);
+      const double height = highest_point_in_box_mm(c.radius_mm(), motion.p0, motion.p1, a0, a1, grown);
+      ASSERT_LT(height, c.flute_length_mm - 2 * r);
+      // The parts' pieces of a rigid motion, each with its slab; `highest`, the highest part
+      // with pieces.
+      auto part_pieces = [&](const RigidMotion& turn, double bound, std::size_t& highest, int& left_out) {
+        Move base;
+        base.start_mm = turn.p0;
+        base.end_mm = turn.p1;
+        const std::vector<TurningSplit> splits = part_splits(parts, height, turn.a0, turn.a1, bound, highest);
+        left_out = 0;
+        for (std::size_t j = 0; j < parts.size(); ++j) {
+          if (splits[j].pieces == 0) {
+            EXPECT_GT(parts[j].offset_mm, height);
+            ++left_out;
+          }
         }
-      }
-      std::vector<Move> pieces;
-      for (std::size_t j = 0; j < parts.size(); ++j)
-        append_part_pieces(pieces, base, turn.a0, turn.a1, parts[j], static_cast<int>(j), splits[j], j == highest);
-      return pieces;
-    };
-    auto sweeps_of = [&](const std::vector<Move>& pieces) {
-      std::vector<TranslationSweep> sweeps;
-      for (const Move& m : pieces) sweeps.emplace_back(parts[static_cast<std::size_t>(m.cutter)].cutter, m);
-      return sweeps;
-    };
-    // The same turn with the tip standing still: the pieces then move square to their axes
-    // (the pivot's chord), and their slabs' sweeps reach no further than the slabs (a tip
-    // moving along the axis carries a slab over its neighbour's).
-    const RigidMotion still{motion.p0, motion.p0, a0, a1};
-    for (const double bound : {0.05, 0.01}) {
-      std::size_t highest;
-      int left_out;
-      const std::vector<Move> pieces = part_pieces(motion, bound, highest, left_out);
-      EXPECT_GT(left_out, 0);
-      const std::vector<TranslationSweep> sweeps = sweeps_of(pieces);
-      const double brute_error =
-          ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), c.flute_length_mm)) / (2.0 * kInstances);
-      // The pieces whole, then each within its part's slab (append_part_pieces): the same bound.
-      const std::vector<Move>* const ways[] = {nullptr, &pieces};
-      for (const std::vector<Move>* slabs : ways) {
-        const std::string what = "r " + std::to_string(r) + (slabs != nullptr ? ", slabs" : "");
-        const double worst = expect_within_both_ways(sweeps, motion, c, kInstances,
-                                                     {Eigen::Vector3d(-6, -6, -2), Eigen::Vector3d(8, 8, 6)}, 0.2, 120,
-                                                     bound + brute_error + 1e-6, rng, what, slabs);
-        if (bound == 0.05) {
-          EXPECT_GT(worst, 0.1 * bound) << what << ": the error never came near the bound";
+        std::vector<Move> pieces;
+        for (std::size_t j = 0; j < parts.size(); ++j)
+          append_part_pieces(pieces, base, turn.a0, turn.a1, parts[j], static_cast<int>(j), splits[j], j == highest);
+        return pieces;
+      };
+      auto sweeps_of = [&](const std::vector<Move>& pieces) {
+        std::vector<TranslationSweep> sweeps;
+        for (const Move& m : pieces) sweeps.emplace_back(parts[static_cast<std::size_t>(m.cutter)].cutter, m);
+        return sweeps;
+      };
+      // The same turn with the tip standing still: the pieces then move square to their axes
+      // (the pivot's chord), and their slabs' sweeps reach no further than the slabs (a tip
+      // moving along the axis carries a slab over its neighbour's).
+      const RigidMotion still{motion.p0, motion.p0, a0, a1};
+      for (const double bound : {0.05, 0.01}) {
+        std::size_t highest;
+        int left_out;
+        const std::vector<Move> pieces = part_pieces(motion, bound, highest, left_out);
+        EXPECT_GT(left_out, 0);
+        const std::vector<TranslationSweep> sweeps = sweeps_of(pieces);
+        const double brute_error =
+            ((motion.p1 - motion.p0).norm() + angle * std::hypot(c.radius_mm(), c.flute_length_mm)) /
+            (2.0 * kInstances);
+        // The pieces whole, then each within its part's slab (append_part_pieces): the same bound.
+        const std::vector<Move>* const ways[] = {nullptr, &pieces};
+        for (const std::vector<Move>* slabs : ways) {
+          const std::string what =
+              "r " + std::to_string(r) + (halved ? ", halved" : "") + (slabs != nullptr ? ", slabs" : "");
+          const double worst = expect_within_both_ways(sweeps, motion, c, kInstances,
+                                                       {Eigen::Vector3d(-6, -6, -2), Eigen::Vector3d(8, 8, 6)}, 0.2,
+                                                       120, bound + brute_error + 1e-6, rng, what, slabs);
+          if (bound == 0.05) {
+            EXPECT_GT(worst, 0.1 * bound) << what << ": the error never came near the bound";
+          }
         }
-      }
-      // Where two parts' slabs meet (part j's core top, j + 1's bottom): points of the rigid
-      // motion's instances just inside the tool's surface at that height lie within the bound
-      // of the parts' pieces within their slabs, for both motions. Half of them on the side
-      // of the axis that the turn raises or lowers most (their offset along w x a, w the turn's
-      // axis), where a piece's turn moves a point's height by up to r phi / 2: where two parts'
-      // pieces turn apart (their counts differ), slabs without that margin leave such points of
-      // the still turn out (22 of them; a margin of r phi / 4 passes).
-      for (const RigidMotion& turn : {motion, still}) {
-        std::size_t top;
-        int out;
-        const std::vector<Move> turn_pieces = part_pieces(turn, bound, top, out);
-        const std::vector<TranslationSweep> turn_sweeps = sweeps_of(turn_pieces);
-        ASSERT_GE(top, 1u);
-        for (std::size_t j = 0; j < top; ++j) {
-          const double h = parts[j + 1].offset_mm + r;
-          for (int i = 0; i < 800; ++i) {
-            const double t = unit(rng), rho = c.radius_mm() * (1 - 1e-3 * unit(rng));
-            double psi = 2 * M_PI * unit(rng);
-            if (i % 2 == 0) {
-              const Eigen::Vector3d w = turn.a0.cross(turn.a1).normalized();
-              const Eigen::Vector3d raised = turn.tool_to_work(t).transpose() * w.cross(turn.tool_to_work(t).col(2));
-              psi = std::atan2(raised.y(), raised.x()) + (i % 4 == 0 ? 0.0 : M_PI);
+        // Where two parts' slabs meet (part j's core top, j + 1's bottom): points of the rigid
+        // motion's instances just inside the tool's surface at that height lie within the bound
+        // of the parts' pieces within their slabs, for both motions. Half of them on the side
+        // of the axis that the turn raises or lowers most (their offset along w x a, w the turn's
+        // axis), where a piece's turn moves a point's height by up to r phi / 2: where two parts'
+        // pieces turn apart (their counts differ), slabs without that margin leave such points of
+        // the still turn out (22 of them; a margin of r phi / 4 passes).
+        for (const RigidMotion& turn : {motion, still}) {
+          std::size_t top;
+          int out;
+          const std::vector<Move> turn_pieces = part_pieces(turn, bound, top, out);
+          const std::vector<TranslationSweep> turn_sweeps = sweeps_of(turn_pieces);
+          ASSERT_GE(top, 1u);
+          for (std::size_t j = 0; j < top; ++j) {
+            const double h = parts[j + 1].offset_mm + r;
+            for (int i = 0; i < 800; ++i) {
+              const double t = unit(rng), rho = c.radius_mm() * (1 - 1e-3 * unit(rng));
+              double psi = 2 * M_PI * unit(rng);
+              if (i % 2 == 0) {
+                const Eigen::Vector3d w = turn.a0.cross(turn.a1).normalized();
+                const Eigen::Vector3d raised = turn.tool_to_work(t).transpose() * w.cross(turn.tool_to_work(t).col(2));
+                psi = std::atan2(raised.y(), raised.x()) + (i % 4 == 0 ? 0.0 : M_PI);
+              }
+              const Eigen::Vector3d local(rho * std::cos(psi), rho * std::sin(psi), h + 0.002 * (2 * unit(rng) - 1));
+              const Eigen::Vector3d x = turn.point(t, local);
+              ASSERT_LE(turn.instance_distance(c, x, t), 0.0);
+              EXPECT_LE(pieces_distance(turn_sweeps, x, &turn_pieces), bound + 1e-6)
+                  << "r " << r << ", bound " << bound << ": between parts " << j << " and " << j + 1 << " at t " << t;
             }
-            const Eigen::Vector3d local(rho * std::cos(psi), rho * std::sin(psi), h + 0.002 * (2 * unit(rng) - 1));
-            const Eigen::Vector3d x = turn.point(t, local);
-            ASSERT_LE(turn.instance_distance(c, x, t), 0.0);
-            EXPECT_LE(pieces_distance(turn_sweeps, x, &turn_pieces), bound + 1e-6)
-                << "r " << r << ", bound " << bound << ": between parts " << j << " and " << j + 1 << " at t " << t;
           }
         }
       }

@@ -130,8 +130,8 @@ double highest_point_in_box_mm(double radius_mm, const Eigen::Vector3d& tip0, co
                                const Eigen::AlignedBox3d& box);
 // `box` grown by the most any piece's tip leaves the tip's path for a move turning from axis0
 // to axis1: c (angle / 2 + angle^2 / 8) with the highest pivot c any piece may have (the whole
-// cutter's, or its top part's: cutter_parts) and a single piece (highest_point_in_box_mm on it
-// then bounds the pieces too).
+// cutter's, or its top part's: cutter_parts, or for a ball its top half's: halved_parts) and a
+// single piece (highest_point_in_box_mm on it then bounds the pieces too).
 Eigen::AlignedBox3d box_for_pieces(const Cutter& cutter, const Eigen::Vector3d& axis0, const Eigen::Vector3d& axis1,
                                    const Eigen::AlignedBox3d& box);
 // Appends the split's pieces of `move` (its `axis` is ignored) to `out`.
@@ -150,14 +150,21 @@ void append_five_axis_move(std::vector<Move>& out, const Move& move, const Eigen
 // mm, each part within its slab: parts of 2.375 mm cut 0.933x the time of parts of 3 mm, and
 // nearer the answer of a turn tolerance ten times finer), a flat or bull-nose end mill's 2 Rc
 // (a reach of Rc), or an eighth of the core where that is longer (every part takes a piece a
-// move at least: W5's ball rows with parts of 1.19 mm 0.83x, but the impeller's 1.014x), the
-// last one shorter; a ball whose core is not longer than 2r, a flat or bull-nose end mill
-// whose core is not longer than 4 Rc, and a V-bit are one part, the whole.
+// move at least: W5's ball rows with parts of 1.19 mm for every move 0.83x, but the impeller's
+// 1.014x; halved_parts below where they take no more pieces), the last one shorter; a ball whose
+// core is not longer than 2r, a flat or bull-nose end mill whose core is not longer than 4 Rc,
+// and a V-bit are one part, the whole.
 struct CutterPart {
   Cutter cutter;
   double offset_mm = 0.0;  // the part's tip above the cutter's
 };
 std::vector<CutterPart> cutter_parts(const Cutter& cutter);
+// Each of `parts` cut in two at the middle of its core: the same cutter in twice as many parts,
+// each half as long. For a ball (reach: half its core) a turning move then needs about half the
+// pieces a part, and where that rounds to no more pieces in all, each piece cuts about half the
+// rays (pipeline's CutMoves takes them there: W5's ball rows, turning about 0.8 deg a move, 2
+// pieces a part or 1 a half, cut 0.79x; the impeller unchanged).
+std::vector<CutterPart> halved_parts(const std::vector<CutterPart>& parts);
 // The split of part `part` of a turning move from axis0 to axis1: the pieces for its core's part
 // below height_mm above the cutter's tip (rotation_reach_mm on the part, its height less its
 // offset), the pivot measured from the cutter's tip (its own plus the offset, whose path's
