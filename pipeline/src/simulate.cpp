@@ -375,7 +375,7 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
         removal::part_splits(*parts, height_mm, from.axis, to.axis, rotation_bound_mm_, highest);
     // A ball's halved parts where they take no more pieces in all (W5's ball rows, whose moves
     // turn about 0.8 deg: a part of 2.375 mm takes 2 pieces, each half 1): as many pieces,
-    // each over half the rays.
+    // each over about half the rays.
     const std::vector<removal::CutterPart>& halves = halves_[static_cast<std::size_t>(m.cutter)];
     if (!halves.empty()) {
       std::size_t halves_highest;

@@ -169,12 +169,12 @@ std::vector<CutterPart> cutter_parts(const Cutter& cutter) {
 std::vector<CutterPart> halved_parts(const std::vector<CutterPart>& parts) {
   std::vector<CutterPart> halves;
   for (const CutterPart& part : parts) {
-    const double r = part.cutter.corner_radius_mm, half = 0.5 * (part.cutter.flute_length_mm - 2.0 * r);
+    const double r_mm = part.cutter.corner_radius_mm, half_mm = 0.5 * (part.cutter.flute_length_mm - 2.0 * r_mm);
     CutterPart low = part;
-    low.cutter.flute_length_mm = half + 2.0 * r;
+    low.cutter.flute_length_mm = half_mm + 2.0 * r_mm;
     low.cutter.length_mm = low.cutter.flute_length_mm;
     CutterPart high = low;
-    high.offset_mm = part.offset_mm + half;
+    high.offset_mm = part.offset_mm + half_mm;
     halves.push_back(low);
     halves.push_back(high);
   }
