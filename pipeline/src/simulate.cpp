@@ -211,15 +211,13 @@ CutMoves::CutMoves(const PoseRun& run, bool actual, bool probes, double turn_tol
   parts_.resize(n_tools);
   parts_first_.assign(n_tools, -1);
   halves_.resize(n_tools);
-  halves_first_.assign(n_tools, -1);
   for (std::size_t i = 0; i < n_tools; ++i) {
     parts_[i] = removal::cutter_parts(cutters_[i]);
     if (parts_[i].size() < 2) continue;
     parts_first_[i] = static_cast<int>(cutters_.size());
     for (const removal::CutterPart& part : parts_[i]) cutters_.push_back(part.cutter);
     if (cutters_[i].type != removal::CutterType::Ball) continue;
-    halves_[i] = removal::halved_parts(parts_[i]);
-    halves_first_[i] = static_cast<int>(cutters_.size());
+    halves_[i] = removal::halved_parts(parts_[i]);  // their cutters right after the parts'
     for (const removal::CutterPart& part : halves_[i]) cutters_.push_back(part.cutter);
   }
   if (run.streamed && !actual) {
@@ -387,8 +385,8 @@ void CutMoves::moves_into(const kinematics::ToolPose& from, const kinematics::To
         return n;
       };
       if (total(halves_splits) <= total(splits)) {
+        first_part += static_cast<int>(parts->size());  // the halves' cutters follow the parts'
         parts = &halves;
-        first_part = halves_first_[static_cast<std::size_t>(m.cutter)];
         splits = std::move(halves_splits);
         highest = halves_highest;
       }

@@ -45,6 +45,32 @@ class Stages : public ::testing::Test {
       machine.insert(at + 6, folder);
     return machine;
   }
+  // The moves CutMoves makes of the tool in tools.yaml (written by the caller) plunging to
+  // z = 0, then moving 10 mm along X while its axis turns `degrees` about Y, one move (densify
+  // step and angle 1000), in a stock 50 mm tall at v = 0.1 mm with `engine` added to the
+  // engine's settings and `report` to the job; the cut's cutters into `cutters`.
+  std::vector<removal::Move> turning_moves(double degrees, const std::string& engine, const std::string& report,
+                                           std::vector<removal::Cutter>* cutters = nullptr) {
+    const double s = std::sin(degrees * M_PI / 180.0), c = std::cos(degrees * M_PI / 180.0);
+    write("turn.apt",
+          "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
+          "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
+              std::to_string(s) + ",0," + std::to_string(c) + "\nFINI\n");
+    write("job.yaml",
+          "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
+          "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
+          "engine: {kind: dexel, resolution: 0.1" +
+              engine + "}\ndensify: {step: 1000, angle: 1000}\n" + report);
+    const io::Job j = io::read_job((dir / "job.yaml").string());
+    const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
+    CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
+    cut.set_stock_box(removal::bounds_of(stock_shape(j)));
+    std::vector<removal::Move> moves;
+    while (cut.next(moves, 4096)) {
+    }
+    if (cutters != nullptr) *cutters = cut.cutters();
+    return moves;
+  }
   // A mesh that is one triangle, not a solid.
   void write_one_triangle(const std::string& name) {
     write(name,
@@ -265,29 +291,13 @@ TEST_F(Stages, StreamedRunMakesTheSameMoves) {
 // c = 20.8125): 24.
 TEST_F(Stages, TurnToleranceSetsTheTurningMovesPieces) {
   write("tools.yaml", "tools:\n  1: {type: ball, diameter: 6, corner_radius: 3, flute_length: 25}\n");
-  const double s10 = std::sin(10.0 * M_PI / 180.0), c10 = std::cos(10.0 * M_PI / 180.0);
-  write("turn.apt",
-        "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
-        "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
-            std::to_string(s10) + ",0," + std::to_string(c10) + "\nFINI\n");
   struct Case {
     std::string engine, report;
     int pieces;
   };
   for (const Case& c :
        {Case{"", "report: {gouge_tolerance: 0.05}\n", 90}, Case{"", "", 174}, Case{", turn_tolerance: 0.05", "", 24}}) {
-    write("job.yaml",
-          "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
-          "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
-          "engine: {kind: dexel, resolution: 0.1" +
-              c.engine + "}\ndensify: {step: 1000, angle: 1000}\n" + c.report);
-    const io::Job j = io::read_job((dir / "job.yaml").string());
-    const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-    CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
-    cut.set_stock_box(removal::bounds_of(stock_shape(j)));
-    std::vector<removal::Move> moves;
-    while (cut.next(moves, 4096)) {
-    }
+    const std::vector<removal::Move> moves = turning_moves(10.0, c.engine, c.report);
     const int turning = static_cast<int>(std::count_if(
         moves.begin(), moves.end(), [](const removal::Move& m) { return !m.rapid && m.axis.z() < 1.0 - 1e-9; }));
     EXPECT_EQ(turning, c.pieces) << c.engine << c.report;
@@ -311,27 +321,13 @@ TEST_F(Stages, ABallTurnsInHalfPartsWhereTheyTakeNoMorePieces) {
     double flute_mm;
   };
   for (const Case& c : {Case{1.0, 16, 7.1875}, Case{2.0, 24, 8.375}}) {
-    const double s = std::sin(c.degrees * M_PI / 180.0), co = std::cos(c.degrees * M_PI / 180.0);
-    write("turn.apt",
-          "UNITS/MM\nMULTAX/ON\nLOADTL/1\nSPINDL/12000,CLW\nRAPID\nGOTO/0,20,45,0,0,1\n"
-          "FEDRAT/1000,MMPM\nGOTO/0,20,0,0,0,1\nGOTO/10,20,0," +
-              std::to_string(s) + ",0," + std::to_string(co) + "\nFINI\n");
-    write("job.yaml",
-          "job: turn\nmachine: table-table-ac\ntools: tools.yaml\n"
-          "program: {file: turn.apt, dialect: apt}\nstock: {box: {min: [-20, 0, -10], max: [30, 40, 40]}}\n"
-          "engine: {kind: dexel, resolution: 0.1, turn_tolerance: 0.01}\ndensify: {step: 1000, angle: 1000}\n");
-    const io::Job j = io::read_job((dir / "job.yaml").string());
-    const PoseRun run = run_pose_engine(j, read_job_program(j), 0.1);
-    CutMoves cut(run, false, false, turn_tolerance_mm(j, 0.1));
-    cut.set_stock_box(removal::bounds_of(stock_shape(j)));
-    std::vector<removal::Move> moves;
-    while (cut.next(moves, 4096)) {
-    }
+    std::vector<removal::Cutter> cutters;
+    const std::vector<removal::Move> moves = turning_moves(c.degrees, ", turn_tolerance: 0.01", "", &cutters);
     int turning = 0;
     for (const removal::Move& m : moves) {
       if (m.rapid || m.axis.z() >= 1.0 - 1e-9) continue;
       ++turning;
-      EXPECT_NEAR(cut.cutters().at(static_cast<std::size_t>(m.cutter)).flute_length_mm, c.flute_mm, 1e-9)
+      EXPECT_NEAR(cutters.at(static_cast<std::size_t>(m.cutter)).flute_length_mm, c.flute_mm, 1e-9)
           << c.degrees << " deg";
     }
     EXPECT_EQ(turning, c.pieces) << c.degrees << " deg";

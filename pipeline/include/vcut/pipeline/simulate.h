@@ -184,10 +184,9 @@ class CutMoves : public removal::MoveSource {
   // cutters_ from parts_first_ (the whole cutter where it is one part).
   std::vector<std::vector<removal::CutterPart>> parts_;
   std::vector<int> parts_first_;
-  // A ball's parts halved (removal::halved_parts), their cutters from halves_first_: a turning
-  // move takes them where they need no more pieces than parts_ (none for other cutters).
+  // A ball's parts halved (removal::halved_parts), their cutters right after its parts': a
+  // turning move takes them where they need no more pieces than parts_ (none for other cutters).
   std::vector<std::vector<removal::CutterPart>> halves_;
-  std::vector<int> halves_first_;
   std::size_t samples_ = 0, sample_ = 1;            // poses in all, the next one to move into
   std::optional<kinematics::Densifier> densifier_;  // a streamed run's poses
   std::vector<kinematics::PoseSample> pending_;     // of its current block
