@@ -20,6 +20,7 @@
 #include <memory>
 #include <string>
 
+#include "sanitized.h"
 #include "slab_distance.h"
 #include "test_meshes.h"
 #include "vcut/removal/cutter.h"
@@ -1342,12 +1343,14 @@ void expect_parts_cut_within_their_slabs(const Cutter& cutter) {
   };
   const double v = 0.25;
   const int index_lo[3] = {0, 0, -80}, index_hi[3] = {160, 120, 0};
+  // Every ray; every third row and column of them under the sanitizers (sanitized.h).
+  const int stride = test::sanitized() ? 3 : 1;
   double deepest = 0.0;
   int checked = 0, kept_more = 0;
   for (int family = 0; family < 3; ++family) {
     const int a1 = family == 0 ? 1 : 0, a2 = family == 2 ? 1 : 2;
-    for (int iu = index_lo[a1]; iu < index_hi[a1]; ++iu)
-      for (int iw = index_lo[a2]; iw < index_hi[a2]; ++iw) {
+    for (int iu = index_lo[a1]; iu < index_hi[a1]; iu += stride)
+      for (int iw = index_lo[a2]; iw < index_hi[a2]; iw += stride) {
         const std::vector<DexelSegment> ray = stock.ray(family, iu, iw), less = reference.ray(family, iu, iw);
         for (const DexelSegment& seg : less) {
           // Within the root march's tolerance: a bull-nose piece's march starts at the
@@ -1381,7 +1384,7 @@ void expect_parts_cut_within_their_slabs(const Cutter& cutter) {
       }
   }
   EXPECT_EQ(deepest, 0.0);
-  EXPECT_GT(checked, 100000);
+  EXPECT_GT(checked, 100000 / (stride * stride));
   // The slabs did pass over some material the whole pieces take (the ball's; a flat end
   // mill's parts leave the same rays).
   if (cutter.type == CutterType::Ball) {
