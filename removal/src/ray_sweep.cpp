@@ -63,25 +63,52 @@ double bisect(F&& f, double outside, double inside, double tolerance) {
   return inside;
 }
 
+// The root march's next point from s (f > 0 there, `slope` its slope along +s where known,
+// else NaN), walking along dir, given `safe`: the farthest of its own steps (the sphere step
+// and, after the first point, the secant step). Newton's step where it goes farther: f is
+// convex, so its tangent lies below it and the tangent's zero too comes at or before the root
+// (a bull-nose's march from the bracket's end: 3.7 distances a root by sphere and secant
+// steps, the first sphere step short where the ray meets the surface obliquely). Then
+// `fallback` is `safe`, where the march goes instead should f come out below -tolerance
+// (rounding in the slope); else NaN.
+double newton_or(double s, double f, double slope, double dir, double safe, double& fallback) {
+  fallback = std::numeric_limits<double>::quiet_NaN();
+  const double fall = -dir * slope;  // f's fall per mm along the walk
+  if (!(fall > 0.0)) return safe;
+  const double newton = s + dir * (f / fall);
+  if (!((newton - safe) * dir > 0.0)) return safe;
+  fallback = safe;
+  return newton;
+}
+
 // The first root of a convex, 1-Lipschitz f met walking from `from` toward `toward`, where
-// f(from) > 0. Each step takes the farther of the sphere step (f is 1-Lipschitz: no root
-// nearer than f) and the secant step (f is convex: beyond two points before the root f lies
-// above their secant, so the secant's zero comes at or before the root): it never passes the
+// f(from) > 0; f(s, slope) gives f and its slope along +s (NaN where not known). Each step
+// takes the farthest of the sphere step (f is 1-Lipschitz: no root nearer than f), the secant
+// step (f is convex: beyond two points before the root f lies above their secant, so the
+// secant's zero comes at or before the root) and Newton's (newton_or): it never passes the
 // root and converges superlinearly. False when f stops decreasing first (the line misses)
-// or the walk leaves the range; `converged` false when it ran out of steps.
+// or the walk leaves the range; `converged` false when it ran out of steps. march_lanes takes
+// the same steps four rays at a time.
 template <class F>
 bool march_to_root(F&& f, double from, double toward, double tolerance, double& root, bool& converged) {
   const double dir = toward > from ? 1.0 : -1.0;
-  double s0 = from, f0 = f(s0);
+  double slope;
+  double s0 = from, f0 = f(s0, slope);
   converged = true;
   if (f0 <= tolerance) {
     root = from;
     return true;
   }
-  double s1 = s0 + dir * f0;
+  double fallback;
+  double s1 = newton_or(s0, f0, slope, dir, s0 + dir * f0, fallback);
   for (int step = 0; step < 100; ++step) {
     if ((s1 - toward) * dir > 0.0) return false;
-    const double f1 = f(s1);
+    const double f1 = f(s1, slope);
+    if (f1 < -tolerance && fallback == fallback) {  // Newton's step passed the root
+      s1 = fallback;
+      fallback = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
     if (f1 <= tolerance) {
       root = s1;
       return true;
@@ -91,7 +118,7 @@ bool march_to_root(F&& f, double from, double toward, double tolerance, double& 
     const double sphere = s1 + dir * f1;
     s0 = s1;
     f0 = f1;
-    s1 = dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere);
+    s1 = newton_or(s0, f0, slope, dir, dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere), fallback);
   }
   converged = false;
   return false;
@@ -1884,11 +1911,12 @@ bool RaySweep::bracket_ends(int axis, const Vector3d& o, double bottom, double t
 
 void RaySweep::march_lanes(int axis, double w, int n, const MarchJob* jobs, double* root, bool* found,
                            bool* converged) const {
-  // Four marches at a time, each in its slot until it ends, then the next job in that slot.
+  // Four marches at a time, each in its slot until it ends, then the next job in that slot:
+  // march_to_root's steps.
   struct Slot {
     int job = -1, step = 0;
     bool started = false;
-    double s0 = 0, f0 = 0, s1 = 0, dir = 0;
+    double s0 = 0, f0 = 0, s1 = 0, dir = 0, fallback = 0;
   };
   Slot slot[4];
   int next = 0;
@@ -1905,42 +1933,48 @@ void RaySweep::march_lanes(int axis, double w, int n, const MarchJob* jobs, doub
       Slot& sl = slot[i];
       if (sl.job < 0 && next < n) {
         const MarchJob& job = jobs[next];
-        sl = Slot{next++, 0, false, job.from, 0.0, 0.0, job.toward > job.from ? 1.0 : -1.0};
+        sl = Slot{next++, 0, false, job.from, 0.0, 0.0, job.toward > job.from ? 1.0 : -1.0, 0.0};
       }
       if (sl.job < 0) continue;
       points[m] = ray_point(axis, jobs[sl.job].u, w, sl.started ? sl.s1 : sl.s0);
       which[m++] = i;
     }
     if (m == 0) return;
-    double f[4];
-    sweep_.distances(points, m, f, lanes_);
+    double f[4], slope[4];
+    sweep_.distances(points, m, f, lanes_, axis, slope);
     for (int j = 0; j < m; ++j) {
       Slot& sl = slot[which[j]];
       const double toward = jobs[sl.job].toward, dir = sl.dir;
       if (!sl.started) {
-        // march_to_root's start: f at `from`, then the first sphere step.
+        // march_to_root's start: f at `from`, then the first step.
         sl.started = true;
         sl.f0 = f[j];
         if (sl.f0 <= kGeneralSweepTolerance_mm) {
           end(sl, true, true, sl.s0);
           continue;
         }
-        sl.s1 = sl.s0 + dir * sl.f0;
+        sl.s1 = newton_or(sl.s0, sl.f0, slope[j], dir, sl.s0 + dir * sl.f0, sl.fallback);
       } else {
         const double f1 = f[j];
-        if (f1 <= kGeneralSweepTolerance_mm) {
-          end(sl, true, true, sl.s1);
-          continue;
+        if (f1 < -kGeneralSweepTolerance_mm && sl.fallback == sl.fallback) {  // Newton's step passed the root
+          sl.s1 = sl.fallback;
+          sl.fallback = std::numeric_limits<double>::quiet_NaN();
+        } else {
+          if (f1 <= kGeneralSweepTolerance_mm) {
+            end(sl, true, true, sl.s1);
+            continue;
+          }
+          if (f1 >= sl.f0) {
+            end(sl, false, true, 0.0);
+            continue;
+          }
+          const double secant = sl.s1 + (sl.s1 - sl.s0) * f1 / (sl.f0 - f1);
+          const double sphere = sl.s1 + dir * f1;
+          sl.s0 = sl.s1;
+          sl.f0 = f1;
+          sl.s1 = newton_or(sl.s0, sl.f0, slope[j], dir,
+                            dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere), sl.fallback);
         }
-        if (f1 >= sl.f0) {
-          end(sl, false, true, 0.0);
-          continue;
-        }
-        const double secant = sl.s1 + (sl.s1 - sl.s0) * f1 / (sl.f0 - f1);
-        const double sphere = sl.s1 + dir * f1;
-        sl.s0 = sl.s1;
-        sl.f0 = f1;
-        sl.s1 = dir > 0.0 ? std::max(secant, sphere) : std::min(secant, sphere);
         if (++sl.step == 100) {
           end(sl, false, false, 0.0);
           continue;
@@ -2044,15 +2078,22 @@ bool RaySweep::bracketed(int axis, const Vector3d& o, double bottom, double top,
   auto f = [&](double s) {
     return sweep_.distance(Vector3d(axis == 0 ? s : o0, axis == 1 ? s : o1, axis == 2 ? s : o2));
   };
+  // With its slope along the ray where known: march_lanes' values, to the bit.
+  auto f_slope = [&](double s, double& slope) {
+    const Vector3d x(axis == 0 ? s : o0, axis == 1 ? s : o1, axis == 2 ? s : o2);
+    double value;
+    sweep_.distances(&x, 1, &value, lanes_, axis, &slope);
+    return value;
+  };
   // The sweep's signed distance is convex and 1-Lipschitz along the line: march to its first
   // zero from each end (exact to the distance's own tolerance, kGeneralSweepTolerance_mm).
   bool converged_lo = false, converged_hi = false;
-  if (exact_lo ? (lo = known_lo, true) : march_to_root(f, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
+  if (exact_lo ? (lo = known_lo, true) : march_to_root(f_slope, sa, sb, kGeneralSweepTolerance_mm, lo, converged_lo)) {
     if (exact_hi) {
       hi = known_hi;
       return true;
     }
-    if (march_to_root(f, sb, sa, kGeneralSweepTolerance_mm, hi, converged_hi) && hi >= lo) return true;
+    if (march_to_root(f_slope, sb, sa, kGeneralSweepTolerance_mm, hi, converged_hi) && hi >= lo) return true;
     if (converged_hi) return false;
   } else if (converged_lo) {
     return false;

@@ -160,8 +160,8 @@ double core_half_mm(const CutterCore& core) { return 0.5 * (core.z_high_mm - cor
 
 // f(t) = d_K(y - t delta), K the core cylinder (radius Rc, z in [lo, hi]), is convex (rho and
 // zeta each convex in t), with an analytic derivative (f = extrude(rho - Rc, zeta)).
-inline void TranslationSweep::cylinder_eval(const Eigen::Vector3d& y, double t, double& f, double& num,
-                                            double& den) const {
+inline void TranslationSweep::cylinder_eval(const Eigen::Vector3d& y, double t, const Eigen::Vector3d& e, double& f,
+                                            double& num, double& den, double& along_num) const {
   const Eigen::Vector3d& d = delta_tool_;
   const double mid = core_middle_mm(core_), half = core_half_mm(core_);
   const Eigen::Vector3d p = y - t * d;
@@ -172,21 +172,33 @@ inline void TranslationSweep::cylinder_eval(const Eigen::Vector3d& y, double t, 
   const double q = p.z() - mid;
   const double dz = std::abs(q) - half;
   const double dz_slope = q > 0.0 ? -d.z() : q < 0.0 ? d.z() : 0.0;
-  // dr's slope is -(p.d)_xy / rho (0 on the axis).
+  // dr's slope is -(p.d)_xy / rho (0 on the axis); along e, (p.e)_xy / rho, and dz's along e
+  // is +-e.z.
   const double radial = rho > 0.0 ? -(p.x() * d.x() + p.y() * d.y()) : 0.0;
+  const double radial_e = rho > 0.0 ? p.x() * e.x() + p.y() * e.y() : 0.0;
+  const double dz_e = q > 0.0 ? e.z() : q < 0.0 ? -e.z() : 0.0;
   if (dr > 0.0 && dz > 0.0) {
     f = std::sqrt(dr * dr + dz * dz);
     num = dr * (radial / rho) + dz * dz_slope;
+    along_num = dr * (radial_e / rho) + dz * dz_e;
     den = f;
   } else if (dr > 0.0 || (dz <= 0.0 && dr >= dz)) {
     f = dr;
     num = radial;
+    along_num = radial_e;
     den = rho > 0.0 ? rho : 1.0;
   } else {
     f = dz;
     num = dz_slope;
+    along_num = dz_e;
     den = 1.0;
   }
+}
+
+inline void TranslationSweep::cylinder_eval(const Eigen::Vector3d& y, double t, double& f, double& num,
+                                            double& den) const {
+  double unused;
+  cylinder_eval(y, t, Eigen::Vector3d::Zero(), f, num, den, unused);
 }
 
 double TranslationSweep::cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const {
@@ -312,6 +324,7 @@ namespace {
 // TranslationSweep::cylinder_eval's constants.
 struct CylinderConstants {
   double dx, dy, dz, mid, half, core_radius;
+  double ex, ey, ez;  // the direction the slope is taken along (tool frame)
 };
 
 #if defined(__x86_64__)
@@ -324,7 +337,7 @@ using detail::vsqrt;
 // cylinder_eval at t for four points (their tool-frame coordinates in lanes): its operations
 // in the same order, each case's values worked out in every lane and the lane's case picked.
 VCUT_AVX2 void cylinder_eval_lanes(const CylinderConstants& c, v4d yx, v4d yy, v4d yz, double t, v4d& f, v4d& num,
-                                   v4d& den) {
+                                   v4d& den, v4d& along_num) {
   const v4d zero = all(0.0), px = yx - all(t * c.dx), py = yy - all(t * c.dy), pz = yz - all(t * c.dz);
   const v4d rho = vsqrt(px * px + py * py);
   const v4d dr = rho - all(c.core_radius);
@@ -333,42 +346,46 @@ VCUT_AVX2 void cylinder_eval_lanes(const CylinderConstants& c, v4d yx, v4d yy, v
   const v4d dz_slope = select(q > zero, all(-c.dz), select(q < zero, all(c.dz), zero));
   const v4i on_axis = !(rho > zero);
   const v4d radial = select(on_axis, zero, -(px * all(c.dx) + py * all(c.dy)));
+  const v4d radial_e = select(on_axis, zero, px * all(c.ex) + py * all(c.ey));
+  const v4d dz_e = select(q > zero, all(c.ez), select(q < zero, all(-c.ez), zero));
   const v4i corner = (dr > zero) & (dz > zero);
   const v4i side = (dr > zero) | ((dz <= zero) & (dr >= dz));
   const v4d corner_f = vsqrt(dr * dr + dz * dz);
   const v4d corner_num = dr * (radial / select(on_axis, all(1.0), rho)) + dz * dz_slope;
+  const v4d corner_along = dr * (radial_e / select(on_axis, all(1.0), rho)) + dz * dz_e;
   f = select(corner, corner_f, select(side, dr, dz));
   num = select(corner, corner_num, select(side, radial, dz_slope));
+  along_num = select(corner, corner_along, select(side, radial_e, dz_e));
   den = select(corner, corner_f, select(side, select(on_axis, all(1.0), rho), all(1.0)));
 }
 
-// f, num and den at t = 1 for the points y[0 .. m - 1], and at t = 0 too where the end t = 1
-// leaves one open (num > 0): `open`.
+// f, num, den and the slope's numerator along e at t = 1 for the points y[0 .. m - 1], and at
+// t = 0 too where the end t = 1 leaves one open (num > 0): `open`.
 __attribute__((target("avx2"))) bool end_values_lanes(const CylinderConstants& c, const Eigen::Vector3d* y, int m,
-                                                      double* fb, double* nb, double* db, double* fa, double* na,
-                                                      double* da) {
+                                                      double* fb, double* nb, double* db, double* eb, double* fa,
+                                                      double* na, double* da, double* ea) {
   double yx[4], yy[4], yz[4];
   for (int j = 0; j < 4; ++j) {
     const Eigen::Vector3d& p = y[std::min(j, m - 1)];
     yx[j] = p.x(), yy[j] = p.y(), yz[j] = p.z();
   }
   const v4d x{yx[0], yx[1], yx[2], yx[3]}, yv{yy[0], yy[1], yy[2], yy[3]}, z{yz[0], yz[1], yz[2], yz[3]};
-  v4d f, num, den;
-  cylinder_eval_lanes(c, x, yv, z, 1.0, f, num, den);
+  v4d f, num, den, along;
+  cylinder_eval_lanes(c, x, yv, z, 1.0, f, num, den, along);
   bool open = false;
   for (int j = 0; j < m; ++j) {
-    fb[j] = f[j], nb[j] = num[j], db[j] = den[j];
+    fb[j] = f[j], nb[j] = num[j], db[j] = den[j], eb[j] = along[j];
     open |= !(nb[j] <= 0.0);
   }
   if (!open) return false;
-  cylinder_eval_lanes(c, x, yv, z, 0.0, f, num, den);
-  for (int j = 0; j < m; ++j) fa[j] = f[j], na[j] = num[j], da[j] = den[j];
+  cylinder_eval_lanes(c, x, yv, z, 0.0, f, num, den, along);
+  for (int j = 0; j < m; ++j) fa[j] = f[j], na[j] = num[j], da[j] = den[j], ea[j] = along[j];
   return true;
 }
 #else
 // Never called (kHaveAvx2 is false off x86-64).
 bool end_values_lanes(const CylinderConstants&, const Eigen::Vector3d*, int, double*, double*, double*, double*,
-                      double*, double*) {
+                      double*, double*, double*, double*) {
   return false;
 }
 #endif
@@ -376,8 +393,17 @@ bool end_values_lanes(const CylinderConstants&, const Eigen::Vector3d*, int, dou
 }  // namespace
 
 void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, bool lanes) const {
+  distances(x, n, out, lanes, -1, nullptr);
+}
+
+void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, bool lanes, int axis,
+                                 double* slope) const {
+  const double unknown = std::numeric_limits<double>::quiet_NaN();
   if (kind_ != Kind::General || ball() || cutter_.type == CutterType::VBit) {
-    for (int j = 0; j < n; ++j) out[j] = distance(x[j]);
+    for (int j = 0; j < n; ++j) {
+      out[j] = distance(x[j]);
+      if (slope != nullptr) slope[j] = unknown;
+    }
     return;
   }
   // convex_minimum for up to four points at a time: the end t = 1, then t = 0, each loop's
@@ -385,32 +411,44 @@ void TranslationSweep::distances(const Eigen::Vector3d* x, int n, double* out, b
   // goes on alone.
   const double r = core_.rounding_mm, far = std::numeric_limits<double>::infinity();
   lanes = lanes && detail::kHaveAvx2;
-  const CylinderConstants constants{delta_tool_.x(),       delta_tool_.y(),     delta_tool_.z(),
-                                    core_middle_mm(core_), core_half_mm(core_), core_.core_radius_mm};
+  const Eigen::Vector3d e = axis >= 0 ? Eigen::Vector3d(to_tool_.col(axis)) : Eigen::Vector3d::Zero();
+  const CylinderConstants constants{delta_tool_.x(),
+                                    delta_tool_.y(),
+                                    delta_tool_.z(),
+                                    core_middle_mm(core_),
+                                    core_half_mm(core_),
+                                    core_.core_radius_mm,
+                                    e.x(),
+                                    e.y(),
+                                    e.z()};
   for (int first = 0; first < n; first += 4) {
     const int m = std::min(4, n - first);
     Eigen::Vector3d y[4];
-    double fb[4], nb[4], db[4], fa[4], na[4], da[4];
+    double fb[4], nb[4], db[4], eb[4], fa[4], na[4], da[4], ea[4];
     for (int j = 0; j < m; ++j) y[j] = tool_frame(x[first + j]);
     bool open = false;
     if (lanes) {
-      open = end_values_lanes(constants, y, m, fb, nb, db, fa, na, da);
+      open = end_values_lanes(constants, y, m, fb, nb, db, eb, fa, na, da, ea);
     } else {
-      for (int j = 0; j < m; ++j) cylinder_eval(y[j], 1.0, fb[j], nb[j], db[j]);
+      for (int j = 0; j < m; ++j) cylinder_eval(y[j], 1.0, e, fb[j], nb[j], db[j], eb[j]);
       for (int j = 0; j < m; ++j) open |= !(nb[j] <= 0.0);
       if (open)
-        for (int j = 0; j < m; ++j) cylinder_eval(y[j], 0.0, fa[j], na[j], da[j]);
+        for (int j = 0; j < m; ++j) cylinder_eval(y[j], 0.0, e, fa[j], na[j], da[j], ea[j]);
     }
     for (int j = 0; j < m; ++j) {
+      double along = unknown;  // the slope where an end is the least and the point outside the core's sweep
       if (nb[j] <= 0.0) {
         out[first + j] = fb[j] - r;
+        if (fb[j] > 0.0) along = eb[j] / db[j];
       } else if (na[j] >= 0.0) {
         out[first + j] = fa[j] - r;
+        if (fa[j] > 0.0) along = ea[j] / da[j];
       } else {
         auto eval = [&](double t, double& f, double& num, double& den) { cylinder_eval(y[j], t, f, num, den); };
         out[first + j] =
             convex_minimum_between(eval, delta_length_, far, fa[j], na[j] / da[j], fb[j], nb[j] / db[j]) - r;
       }
+      if (slope != nullptr) slope[first + j] = along;
     }
   }
 }

@@ -313,6 +313,56 @@ TEST(TranslationSweep, DistancesTogetherAreEachDistance) {
   EXPECT_EQ(compared, 2 * 4 * 4 * 40 * 45);
 }
 
+// The march's Newton steps take the distance's slope along a ray family (distances() with
+// `slope`): where it is given, the derivative of distance() along that axis, by central
+// differences of distance() itself (h = 1e-4 mm: the second-order term about h^2 / r, the
+// points' own tolerance 1e-7 / h at most), the same bits with and without lanes; given for
+// most points (those whose nearest instance is an end), never for a ball or a V-bit, nor inside the
+// core's sweep.
+TEST(TranslationSweep, SlopesAlongTheRaysAreTheDistancesDerivative) {
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> unit(0.0, 1.0), across(-7, 7), along(-3, 20);
+  Move tilted = move({0, 0, 0}, {8, 3, 1.5}), steep = move({0, 0, 0}, {0.5, -0.4, -3});
+  tilted.axis = Eigen::Vector3d(0.3, -0.2, 1.0).normalized();
+  steep.axis = Eigen::Vector3d(-0.4, 0.1, 1.0).normalized();
+  int known = 0, points = 0;
+  for (const Cutter& c : {cutter(CutterType::BullNose, 8, 1, 25), cutter(CutterType::Flat, 10, 0, 15)})
+    for (const Move& m : {tilted, steep}) {
+      const TranslationSweep sweep(c, m);
+      for (int trial = 0; trial < 2000; ++trial) {
+        const double t = -0.5 + 2.0 * unit(rng);
+        const Eigen::Vector3d x =
+            m.start_mm + t * (m.end_mm - m.start_mm) + Eigen::Vector3d(across(rng), across(rng), along(rng));
+        for (int axis = 0; axis < 3; ++axis) {
+          double value[2], slope[2];
+          for (const bool lanes : {true, false}) sweep.distances(&x, 1, &value[lanes], lanes, axis, &slope[lanes]);
+          ++points;
+          EXPECT_EQ(value[0], value[1]);
+          if (std::isnan(slope[1])) {
+            EXPECT_TRUE(std::isnan(slope[0]));
+            continue;
+          }
+          ++known;
+          EXPECT_EQ(slope[0], slope[1]);
+          EXPECT_GT(value[1], -c.corner_radius_mm) << "a slope inside the core's sweep";
+          const double h = 1e-4;
+          const Eigen::Vector3d e = Eigen::Vector3d::Unit(axis);
+          const double central = (sweep.distance(x + h * e) - sweep.distance(x - h * e)) / (2 * h);
+          EXPECT_NEAR(slope[1], central, 2e-3) << to_string(c.type) << " at " << x.transpose() << ", axis " << axis;
+        }
+      }
+    }
+  EXPECT_GT(known, points / 2);
+  for (const Cutter& c : {cutter(CutterType::Ball, 6, 3, 15), vbit(10, 90, 15)}) {
+    const TranslationSweep sweep(c, tilted);
+    const Eigen::Vector3d x(4, 8, 2);
+    double value, slope;
+    sweep.distances(&x, 1, &value, true, 2, &slope);
+    EXPECT_TRUE(std::isnan(slope));
+    EXPECT_EQ(value, sweep.distance(x));
+  }
+}
+
 TEST(TranslationSweep, BoundsContainTheCutterAtBothEnds) {
   const Cutter flat = cutter(CutterType::Flat, 10, 0, 20);
   const TranslationSweep sweep(flat, move({0, 0, 0}, {10, 0, -3}));

@@ -37,6 +37,14 @@ class TranslationSweep {
   // `lanes`, where the processor has AVX2, those steps (the ends of the move, which settle 95 %
   // of W5's bull-nose points) are four points' lanes of one AVX2 evaluation.
   void distances(const Eigen::Vector3d* x_mm, int n, double* out, bool lanes = true) const;
+  // The same, with each distance's slope along the workpiece's axis `axis` (0, 1, 2: d distance
+  // / d x[axis]) into slope[j] where it is exact: a tilted flat or bull-nose cutter in general
+  // motion whose nearest instance to the point is the move's start or end (where the ends
+  // settle the least, as for 95 % of W5's bull-nose points), the point outside the core's
+  // sweep (the distance to a convex set is smooth there: its gradient is the unit vector from
+  // the nearest point). Elsewhere NaN: a least inside the move is found only to a tolerance,
+  // and the other cutters and motions take no slope. The same bits with and without lanes.
+  void distances(const Eigen::Vector3d* x_mm, int n, double* out, bool lanes, int axis, double* slope) const;
 
   // A ball end's sweep is the sweep of its core (a segment on the axis) grown by the ball's
   // radius: the point q_mm of the core's sweep nearest x_mm (workpiece frame), so that
@@ -77,6 +85,9 @@ class TranslationSweep {
   double cylinder_sweep_distance(const Eigen::Vector3d& y, double far) const;
   // cylinder_sweep_distance's f(t) at t: its value and slope num / den (den > 0).
   void cylinder_eval(const Eigen::Vector3d& y, double t, double& f, double& num, double& den) const;
+  // The same, and the value's slope along e (tool frame) as along_num / den.
+  void cylinder_eval(const Eigen::Vector3d& y, double t, const Eigen::Vector3d& e, double& f, double& num, double& den,
+                     double& along_num) const;
   Eigen::Vector3d tool_frame(const Eigen::Vector3d& x) const { return to_tool_ * (x - origin_); }
   // The same for a V-bit (its whole profile).
   double vbit_sweep_distance(const Eigen::Vector3d& y, double far) const;
