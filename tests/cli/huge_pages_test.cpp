@@ -94,7 +94,7 @@ TEST(HugePages, TheLauncherPassesItsArgumentsOnAndTheOutputIsTheSame) {
 // could not start, not a crash or a silent success.
 TEST(HugePages, ALauncherWithoutItsProgramSaysSo) {
   const fs::path dir = vcut::cli::test::fresh_test_dir("vcut_launcher_");
-  fs::copy_file(VCUT_BINARY, dir / "vcut");
+  fs::copy_file(vcut::cli::test::vcut_binary(), dir / "vcut");
   fs::permissions(dir / "vcut", fs::perms::owner_all);
   const auto r = vcut::cli::test::run_command((dir / "vcut").string() + " program nothing.ngc");
   EXPECT_EQ(r.exit_code, 1) << r.output;

@@ -1,4 +1,4 @@
-// Runs the real `vcut` binary as a user does (VCUT_BINARY, set by tests/CMakeLists.txt) and
+// Runs the real `vcut` binary as a user does (vcut_binary(): tests/cli/vcut_binary.cpp) and
 // checks its one-line errors; shared by the command-line tests.
 #pragma once
 
@@ -12,6 +12,9 @@
 #include <string>
 
 namespace vcut::cli::test {
+
+// The path of the `vcut` binary this build made.
+const char* vcut_binary();
 
 struct CommandResult {
   int exit_code;
@@ -31,7 +34,7 @@ inline CommandResult run_command(const std::string& command) {
 
 // `prefix`: in front of the binary on the shell's line (env VAR=value, ...).
 inline CommandResult run_vcut(const std::string& args, const std::string& prefix = "") {
-  return run_command(prefix + (prefix.empty() ? "" : " ") + std::string(VCUT_BINARY) + " " + args);
+  return run_command(prefix + (prefix.empty() ? "" : " ") + std::string(vcut_binary()) + " " + args);
 }
 
 // An empty folder of its own for the running test: <tmp>/<prefix><test name>.

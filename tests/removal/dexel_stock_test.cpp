@@ -1250,8 +1250,12 @@ TEST(DexelStock, TurningPiecesCutTogetherAsOneByOne) {
   vbit.tip_angle_deg = 90;
   const Cutter cutters[] = {make(CutterType::Ball, 3, 1.5, 8), make(CutterType::BullNose, 4, 0.8, 8),
                             make(CutterType::Flat, 3, 0, 8), vbit};
+  int variant = 0;
   for (const Cutter& cutter : cutters) {
     for (const double step_mm : {0.3, 3.0}) {
+      // Under the sanitizers every cutter at one of the two steps, in turn (sanitized.h).
+      const int k = variant++;
+      if (test::sanitized() && (k / 2 + k % 2) % 2 != 0) continue;
       MoveList pieces;
       pieces.cutters.push_back(cutter);
       std::mt19937 rng(5);
