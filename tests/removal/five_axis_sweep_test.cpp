@@ -343,7 +343,9 @@ TEST(FiveAxisSweep, LongCuttersTurnPartByPartWithinTheBound) {
       for (std::size_t j = 0; j < parts.size(); ++j) {  // end to end up the core
         const double own = parts[j].cutter.flute_length_mm - 2 * r;
         EXPECT_NEAR(own, j + 1 < parts.size() ? length / (halved ? 2 : 1) : core - parts[j].offset_mm, 1e-12);
-        if (j > 0) EXPECT_NEAR(parts[j].offset_mm, parts[j - 1].offset_mm + length / (halved ? 2 : 1), 1e-12);
+        if (j > 0) {
+          EXPECT_NEAR(parts[j].offset_mm, parts[j - 1].offset_mm + length / (halved ? 2 : 1), 1e-12);
+        }
       }
       int outside = 0, inside = 0;
       for (int i = 0; i < 20000; ++i) {
