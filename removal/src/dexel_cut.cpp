@@ -691,6 +691,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
       };
       Piece pieces[kGroupPieces];
       std::optional<detail::RaySweep::GroupWindow> window;  // made where a row first needs it
+      std::optional<detail::RaySweep::GroupReach> reach;    // with it
       int w_lo = tile_w0 + kTileW, w_hi = tile_w0 - 1;
       for (int p = 0; p < n; ++p) {
         const int i = list[p];
@@ -798,10 +799,22 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           const detail::RaySweep* group[kGroupPieces] = {};
           for (int p = 0; p < n; ++p) group[p] = pieces[p].sweep;
           window.emplace(group, n);
+          reach.emplace(group, n);
         }
         detail::RaySweep::TiltRow group_row;
         window->row(a, w_mm, group_row);
-        const int held = gather(k_lo, k_hi, box_lo, box_hi, group_row, candidates);
+        // Those whose material lies clear of every piece's bracket (GroupReach) go no further:
+        // shreds beside the tool, which each piece would otherwise look at and pass over.
+        const int gathered = gather(k_lo, k_hi, box_lo, box_hi, group_row, candidates);
+        int held = 0;
+        for (int c = 0; c < gathered; ++c) {
+          if (reach->clear(a, candidates.u[c], w_mm, candidates.bottom[c], candidates.top[c])) continue;
+          candidates.k[held] = candidates.k[c];
+          candidates.u[held] = candidates.u[c];
+          candidates.bottom[held] = candidates.bottom[c];
+          candidates.top[held] = candidates.top[c];
+          ++held;
+        }
         for (int p = 0; p < n; ++p) {
           const Span& span = spans[p];
           if (span.k0 > span.k1) continue;

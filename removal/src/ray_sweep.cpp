@@ -411,6 +411,39 @@ RaySweep::GroupWindow::GroupWindow(const RaySweep* const* sweeps, int n) {
   fill_tilt_boxes(first.p0_, first.tilt_dirs_, lo, hi, box_);
 }
 
+RaySweep::GroupReach::GroupReach(const RaySweep* const* sweeps, int n) {
+  const RaySweep& ref = *sweeps[n / 2];
+  mid_ = ref.core_mid_;
+  axis_ = ref.tool_axis_;
+  z_low_mm_ = ref.core_.z_low_mm;
+  z_high_mm_ = ref.core_.z_high_mm;
+  auto distance = [&](const Vector3d& x) {
+    const Vector3d p = x - mid_;
+    const double h = std::clamp(p.dot(axis_), z_low_mm_, z_high_mm_);
+    return (p - h * axis_).norm();
+  };
+  reach_mm_ = 0.0;
+  for (int i = 0; i < n; ++i) {
+    const RaySweep& s = *sweeps[i];
+    const double d = std::max(distance(s.core_mid_ + s.core_.z_low_mm * s.tool_axis_),
+                              distance(s.core_mid_ + s.core_.z_high_mm * s.tool_axis_));
+    reach_mm_ = std::max(reach_mm_, s.capsule_r_ + s.half_move_mm_ + d);
+  }
+  reach_mm_ += 1e-9;  // rounding
+}
+
+// material_clear's test, with the group's segment and reach.
+bool RaySweep::GroupReach::clear(int axis, double u, double w, double bottom, double top) const {
+  if (!(std::isfinite(bottom) && std::isfinite(top))) return false;
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const double half = 0.5 * (top - bottom);
+  const double pu = u - mid_[a1], pw = w - mid_[a2], ps = bottom + half - mid_[axis];
+  const double qa = pu * axis_[a1] + pw * axis_[a2] + ps * axis_[axis];
+  const double h = std::clamp(qa, z_low_mm_, z_high_mm_);
+  const double reach = reach_mm_ + half;
+  return pu * pu + pw * pw + ps * ps - h * (2.0 * qa - h) > reach * reach;
+}
+
 void RaySweep::prepare_flat_family(int axis) {
   FlatFamily& f = flat_[axis];
   const Vector3d& a = tool_axis_;

@@ -129,6 +129,22 @@ class __attribute__((visibility("hidden"))) RaySweep {
   };
 
  public:
+  // material_clear for n tilted sweeps at once (a run of turning moves' pieces): one core
+  // segment, the middle sweep's middle instance's, and a reach that holds every sweep's
+  // bracket. A sweep's bracket lies within its capsule radius plus half its move of its own
+  // middle core segment, and every point of that segment within d of the reference segment,
+  // d the farther of its two ends' distances (the distance to a segment is convex along
+  // another): so within the largest of r + half move + d. A ray clear of it is clear of
+  // every sweep, and since the sweeps only take material away, of what they leave of it too.
+  class GroupReach {
+   public:
+    GroupReach(const RaySweep* const* sweeps, int n);
+    bool clear(int axis, double u, double w, double bottom, double top) const;
+
+   private:
+    Eigen::Vector3d mid_, axis_;
+    double z_low_mm_, z_high_mm_, reach_mm_;
+  };
   // One window box around the window boxes of n tilted sweeps (a turning move's pieces):
   // the first's directions, its extents along them over every corner of every box (each box
   // is its corners' hull). Its rows and windows as tilted_row and tilted_window give them.
