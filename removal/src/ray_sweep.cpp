@@ -415,8 +415,18 @@ RaySweep::GroupReach::GroupReach(const RaySweep* const* sweeps, int n) {
   const RaySweep& ref = *sweeps[n / 2];
   mid_ = ref.core_mid_;
   axis_ = ref.tool_axis_;
+  // Along the reference axis, as far as every sweep's segment reaches (the parts of a long
+  // cutter lie one above the other).
   z_low_mm_ = ref.core_.z_low_mm;
   z_high_mm_ = ref.core_.z_high_mm;
+  for (int i = 0; i < n; ++i) {
+    const RaySweep& s = *sweeps[i];
+    for (const double z : {s.core_.z_low_mm, s.core_.z_high_mm}) {
+      const double h = (s.core_mid_ + z * s.tool_axis_ - mid_).dot(axis_);
+      z_low_mm_ = std::min(z_low_mm_, h);
+      z_high_mm_ = std::max(z_high_mm_, h);
+    }
+  }
   auto distance = [&](const Vector3d& x) {
     const Vector3d p = x - mid_;
     const double h = std::clamp(p.dot(axis_), z_low_mm_, z_high_mm_);
