@@ -129,14 +129,15 @@ class __attribute__((visibility("hidden"))) RaySweep {
   };
 
  public:
-  // material_clear for n tilted sweeps at once (a run of turning moves' pieces): one core
-  // segment, the middle sweep's middle instance's, and a reach that holds every sweep's
-  // bracket. A sweep's bracket lies within its capsule radius plus half its move of its own
-  // middle core segment, and every point of that segment within d of the reference segment,
-  // d the farther of its two ends' distances (the distance to a convex set is convex along a
-  // line, so largest at an end of a segment): so within the largest of r + half move + d. A
-  // ray's material clear of it is clear of every sweep, and so is what the sweeps before
-  // leave of it (they only take material away).
+  // material_clear for n tilted sweeps at once (a run of turning moves' pieces): one
+  // reference segment, on the middle sweep's middle instance's axis as far as every sweep's
+  // core segment reaches along it, and a reach that holds every sweep's bracket. A sweep's
+  // bracket lies within its capsule radius plus half its move of its own middle core
+  // segment, and every point of that segment within d of the reference segment, d the
+  // farther of its two ends' distances (the distance to a convex set is convex along a line,
+  // so largest at an end of a segment): so within the largest of r + half move + d. A ray's
+  // material clear of it is clear of every sweep, and so is what the sweeps before leave of
+  // it (they only take material away).
   class GroupReach {
    public:
     GroupReach(const RaySweep* const* sweeps, int n);
