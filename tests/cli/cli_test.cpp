@@ -576,3 +576,15 @@ TEST_F(Simulate, SPieceFromTcpGcodeFindsTheSameGouge) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   expect_deliberate_gouge(report(), {"program.ngc:1955", "program.ngc:1956", "program.ngc:1957", "program.ngc:1958"});
 }
+
+// Most of the other command-line tests, in this translation unit: each is small beside the
+// headers it includes (gtest's, JSON's), which took most of their compile time, eight times
+// over (tests/CMakeLists.txt). The pose and servo tests stay apart: each has a CSV reader of
+// its own.
+#include "check_cli_test.cpp"
+#include "huge_pages_test.cpp"
+#include "machine_check_cli_test.cpp"
+#include "machine_cli_test.cpp"
+#include "program_alone_cli_test.cpp"
+#include "program_cli_test.cpp"
+#include "study_cli_test.cpp"

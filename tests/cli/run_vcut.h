@@ -1,4 +1,4 @@
-// Runs the real `vcut` binary as a user does (vcut_binary(): tests/cli/vcut_binary.cpp) and
+// Runs the real `vcut` binary as a user does (vcut_binary()) and
 // checks its one-line errors; shared by the command-line tests.
 #pragma once
 
@@ -13,8 +13,14 @@
 
 namespace vcut::cli::test {
 
-// The path of the `vcut` binary this build made.
-const char* vcut_binary();
+// The path of the `vcut` binary this build made: cli/vcut beside this test's tests/ folder
+// in the same build folder (read at run time, so that the test sources compile alike in the
+// Release and the sanitizer builds and ccache compiles them once).
+inline const char* vcut_binary() {
+  static const std::string path =
+      (std::filesystem::read_symlink("/proc/self/exe").parent_path().parent_path() / "cli" / "vcut").string();
+  return path.c_str();
+}
 
 struct CommandResult {
   int exit_code;
