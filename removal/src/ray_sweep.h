@@ -363,6 +363,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
                  bool* hit) const;
   void vertical_avx2(double w, double floor_of_exit, int count, const double* u, const double* top, double* lo,
                      double* hi, bool* hit) const;
+  // tilted_flat's closed form (Kind::Ellipse) on a row's rays, four at a time.
+  void tilted_flat_avx2(int axis, double w, int count, const double* u, double* lo, double* hi, bool* hit) const;
   // An upright bull-nose's vertical rays (moving across them: dd > 0) as upright_vertical
   // takes them, four at a time where an end of the move settles both ends of the interval;
   // a ray that needs a search goes to upright_vertical.

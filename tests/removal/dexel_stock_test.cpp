@@ -598,11 +598,12 @@ TEST(DexelStock, TiltedMovesThroughAComb) {
   EXPECT_EQ(deepest, 0.0);
 }
 
-// On a processor with AVX2 the ball's rays and the bull-nose's bracket (a ball swept over a
-// parallelogram) are found four rays at a time, else ray by ray; VCUT_SCALAR_KERNELS asks for
-// the second everywhere. The same operations in the same order: `list` cut both ways through
-// the 40 x 30 x 20 box at v = 0.25 leaves every ray the same intervals, to the bit and to the
-// move that made each end. Returns the volume removed.
+// On a processor with AVX2 the ball's rays, the bull-nose's bracket (a ball swept over a
+// parallelogram) and the tilted flat end mill's ellipse are found four rays at a time, else
+// ray by ray; VCUT_SCALAR_KERNELS asks for the second everywhere. The same operations in the
+// same order: `list` cut both ways through the 40 x 30 x 20 box at v = 0.25 leaves every ray
+// the same intervals, to the bit and to the move that made each end. Returns the volume
+// removed.
 double expect_the_same_rays_four_at_a_time(const MoveList& list) {
   const BoxShape box{{0, 0, -20}, {40, 30, 0}};
   double removed[2];
@@ -643,26 +644,47 @@ bool have_avx2() {
 #endif
 }
 
-// A chain of random tilted ball and bull-nose moves (the axis turning a few degrees a move,
-// every move starting where the last ended, through what the earlier ones cut; the tools'
-// tops within the stock).
-TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
-  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+// A chain of 60 random tilted moves (the axis turning a few degrees a move, every move
+// starting where the last ended, through what the earlier ones cut; the tools' tops within
+// the stock): steps of up to `step` mm across (from -step / 3), the axis nudged by up to
+// `turn` / 2 a move, move i with cutter cutter_of(i).
+template <class CutterOf>
+MoveList random_tilted_chain(std::vector<Cutter> cutters, unsigned seed, Eigen::Vector3d axis, double step, double turn,
+                             CutterOf cutter_of) {
   MoveList list;
-  list.cutters = {make(CutterType::Ball, 6, 3, 12), make(CutterType::BullNose, 8, 2, 12)};
-  std::mt19937 rng(53);
+  list.cutters = std::move(cutters);
+  std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0.0, 1.0);
-  Eigen::Vector3d at(6, 6, -8), axis(0.2, 0.3, 1.0);
+  Eigen::Vector3d at(6, 6, -8);
   for (int i = 0; i < 60; ++i) {
-    Eigen::Vector3d to = at + Eigen::Vector3d(3.0 * unit(rng) - 1.0, 3.0 * unit(rng) - 1.0, 2.0 * unit(rng) - 1.0);
+    Eigen::Vector3d to =
+        at + Eigen::Vector3d(step * unit(rng) - step / 3.0, step * unit(rng) - step / 3.0, 2.0 * unit(rng) - 1.0);
     to = to.cwiseMax(Eigen::Vector3d(4, 4, -14)).cwiseMin(Eigen::Vector3d(36, 26, -4));
-    axis = (axis.normalized() + 0.08 * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 0)).normalized();
+    axis = (axis.normalized() + turn * Eigen::Vector3d(unit(rng) - 0.5, unit(rng) - 0.5, 0)).normalized();
     if (axis.z() < std::cos(60 * M_PI / 180.0)) axis.z() = 1.0;  // keep within 60 deg of upright
     Move m = line(at, to, axis);
-    m.cutter = i / 30;
+    m.cutter = cutter_of(i);
     list.moves.push_back(m);
     at = to;
   }
+  return list;
+}
+
+// Tilted ball and bull-nose moves.
+TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  const MoveList list = random_tilted_chain({make(CutterType::Ball, 6, 3, 12), make(CutterType::BullNose, 8, 2, 12)},
+                                            53, {0.2, 0.3, 1.0}, 3.0, 0.08, [](int i) { return i / 30; });
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
+}
+
+// Tilted flat end mills (the ellipse's closed form four rays at a time): a long one, and one
+// 4 mm tall whose top stays inside the stock, so that the rays walk the lines t = 0, t = 1
+// and both end planes' and meet the corners.
+TEST(DexelStock, TiltedFlatCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  const MoveList list = random_tilted_chain({make(CutterType::Flat, 6, 0, 12), make(CutterType::Flat, 10, 0, 4)}, 59,
+                                            {-0.3, 0.2, 1.0}, 4.5, 0.1, [](int i) { return i % 2; });
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
