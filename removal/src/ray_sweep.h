@@ -363,6 +363,10 @@ class __attribute__((visibility("hidden"))) RaySweep {
                  bool* hit) const;
   void vertical_avx2(double w, double floor_of_exit, int count, const double* u, const double* top, double* lo,
                      double* hi, bool* hit) const;
+  // upright_horizontal's rays of a row where the section stays the same along the move (its
+  // closed form), four at a time: false (nothing written) where it changes, for
+  // upright_horizontal ray by ray.
+  bool upright_horizontal_avx2(int axis, double w, int count, const double* u, double* lo, double* hi, bool* hit) const;
   // tilted_flat's closed form (Kind::Ellipse) on a row's rays, four at a time.
   void tilted_flat_avx2(int axis, double w, int count, const double* u, double* lo, double* hi, bool* hit) const;
   // An upright bull-nose's vertical rays (moving across them: dd > 0) as upright_vertical

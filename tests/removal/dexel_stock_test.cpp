@@ -688,46 +688,54 @@ TEST(DexelStock, TiltedFlatCutsTheSameFourRaysAtATime) {
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
-// An upright ball: a zig-zag raster in x over a wavy floor (steps along x and in z, the rows
-// below, between and above the ball's centres), a ramp in y and a plunge.
-TEST(DexelStock, UprightBallCutsTheSameFourRaysAtATime) {
-  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+// A zig-zag raster in x over a wavy floor (8 rows of 24 steps along x and in z, the rows
+// below, between and above a ball's centres; the rows from level_from on level at -9 mm),
+// row r with cutter cutter_of(r), then a ramp in y and a plunge.
+template <class CutterOf>
+MoveList wavy_raster(std::vector<Cutter> cutters, int level_from, CutterOf cutter_of) {
   MoveList list;
-  list.cutters = {make(CutterType::Ball, 6, 3, 12)};
+  list.cutters = std::move(cutters);
   Eigen::Vector3d at(2, 3, -2);
   for (int row = 0; row < 8; ++row) {
     for (int i = 1; i <= 24; ++i) {
       const double x = row % 2 == 0 ? 2 + 1.5 * i : 38 - 1.5 * i;
-      const Eigen::Vector3d to(x, 3 + 3.0 * row, -6 - 2.5 * std::sin(0.4 * x + row));
-      list.moves.push_back(line(at, to));
-      at = to;
-    }
-  }
-  list.moves.push_back(line(at, {at.x(), 28, -3}));
-  list.moves.push_back(line({20, 15, 2}, {20, 15, -12}));
-  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
-}
-
-// An upright bull-nose: the same raster over a wavy floor (every move a ramp), two level
-// rows, a ramp in y and a plunge: its vertical rays four at a time where an end of the move
-// settles them, the rest by the scalar search.
-TEST(DexelStock, UprightBullNoseCutsTheSameFourRaysAtATime) {
-  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
-  MoveList list;
-  list.cutters = {make(CutterType::BullNose, 6, 1, 12), make(CutterType::BullNose, 10, 3, 4)};
-  Eigen::Vector3d at(2, 3, -2);
-  for (int row = 0; row < 8; ++row) {
-    for (int i = 1; i <= 24; ++i) {
-      const double x = row % 2 == 0 ? 2 + 1.5 * i : 38 - 1.5 * i;
-      const Eigen::Vector3d to(x, 3 + 3.0 * row, row < 6 ? -6 - 2.5 * std::sin(0.4 * x + row) : -9.0);
+      const Eigen::Vector3d to(x, 3 + 3.0 * row, row < level_from ? -6 - 2.5 * std::sin(0.4 * x + row) : -9.0);
       Move m = line(at, to);
-      m.cutter = row % 3 == 2 ? 1 : 0;
+      m.cutter = cutter_of(row);
       list.moves.push_back(m);
       at = to;
     }
   }
   list.moves.push_back(line(at, {at.x(), 28, -3}));
   list.moves.push_back(line({20, 15, 2}, {20, 15, -12}));
+  return list;
+}
+
+// An upright ball.
+TEST(DexelStock, UprightBallCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  const MoveList list = wavy_raster({make(CutterType::Ball, 6, 3, 12)}, 8, [](int) { return 0; });
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
+}
+
+// An upright bull-nose (every move a ramp but on two level rows): its vertical rays four at
+// a time where an end of the move settles them, the rest by the scalar search; its horizontal
+// rows where the section stays the full radius four at a time.
+TEST(DexelStock, UprightBullNoseCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  const MoveList list = wavy_raster({make(CutterType::BullNose, 6, 1, 12), make(CutterType::BullNose, 10, 3, 4)}, 6,
+                                    [](int row) { return row % 3 == 2 ? 1 : 0; });
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
+}
+
+// An upright flat end mill (ramps: its section never changes) and a V-bit on the level rows:
+// their horizontal rays' closed form four at a time, across the motion and along it.
+TEST(DexelStock, UprightFlatAndVBitCutTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  Cutter vbit = make(CutterType::VBit, 6, 0, 12);
+  vbit.tip_angle_deg = 90;
+  const MoveList list =
+      wavy_raster({make(CutterType::Flat, 6, 0, 12), vbit}, 6, [](int row) { return row >= 6 ? 1 : 0; });
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
