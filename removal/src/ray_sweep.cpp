@@ -1302,25 +1302,19 @@ __attribute__((target("avx2"))) void RaySweep::tilted_flat_avx2(int axis, double
 // root (half) was a fifth of the kernels' time, and two divisions a ray more.
 __attribute__((target("avx2"))) bool RaySweep::upright_horizontal_avx2(int axis, double w, int count, const double* u,
                                                                        double* lo, double* hi, bool* hit) const {
-  const int across = axis == 0 ? 1 : 0;
-  const double c0 = p0_[axis], dc = delta_[axis], dw = delta_[across];
-  const double h0 = w - p0_.z(), dh = -delta_.z();
-  double ta = 0.0, tb = 1.0;
-  if (std::abs(dh) <= kTiny_mm ? (h0 < 0.0 || h0 > height_mm_) : !clip(h0, dh, 0.0, height_mm_, ta, tb)) {
+  const HorizontalRow row = horizontal_row(axis, w);
+  if (!row.meets) {
     std::fill(hit, hit + count, false);
     return true;
   }
-  const double full_lo = cutter_.type == CutterType::VBit ? underside_height(cutter_, radius_mm_) : core_.z_low_mm;
-  const double full_hi = cutter_.type == CutterType::VBit ? height_mm_ : core_.z_high_mm;
-  const double h_a = h0 + ta * dh, h_b = h0 + tb * dh;
-  const bool full_section = std::min(h_a, h_b) >= full_lo && std::max(h_a, h_b) <= full_hi;
-  if (!(flat_bottom_ || full_section || std::abs(dh) <= kTiny_mm)) return false;
-  const double radius = section_radius(cutter_, std::clamp(h0 + 0.5 * (ta + tb) * dh, 0.0, height_mm_));
+  if (!row.same_section) return false;
+  const double c0 = row.c0, dc = row.dc, dw = row.dw, ta = row.ta, tb = row.tb, radius = row.radius;
+  const double u_axis = p0_[axis == 0 ? 1 : 0];
   const bool along = std::abs(dw) <= kTiny_mm;  // the offset from the axis stays the same
   const double off = along ? 0.0 : std::abs(dc) * radius / std::sqrt(dc * dc + dw * dw) * sign(dc) * sign(dw);
   const v4d zero = all(0.0), r2 = all(radius * radius);
   for (int k0 = 0; k0 < count; k0 += 4) {
-    const v4d w0 = all(p0_[across]) - lanes_of(u, nullptr, k0, count);
+    const v4d w0 = all(u_axis) - lanes_of(u, nullptr, k0, count);
     v4d t0 = all(ta), t1 = all(tb), t_lo, t_hi;
     v4i in;
     if (along) {
@@ -1328,7 +1322,7 @@ __attribute__((target("avx2"))) bool RaySweep::upright_horizontal_avx2(int axis,
       t_lo = dc >= 0.0 ? t0 : t1;
       t_hi = dc >= 0.0 ? t1 : t0;
     } else {
-      v4d e0 = (all(-radius) - w0) / all(dw), e1 = (all(radius) - w0) / all(dw);
+      const v4d e0 = (all(-radius) - w0) / all(dw), e1 = (all(radius) - w0) / all(dw);
       const v4i swap = e0 > e1;
       const v4d first = select(swap, e1, e0), second = select(swap, e0, e1);
       t0 = vmax(t0, first);
@@ -1584,29 +1578,41 @@ bool RaySweep::upright_vertical(double u, double w, double top, double& lo, doub
   return true;
 }
 
-bool RaySweep::upright_horizontal(int axis, double u, double w, double bottom, double top, double& lo,
-                                  double& hi) const {
+RaySweep::HorizontalRow RaySweep::horizontal_row(int axis, double w) const {
+  HorizontalRow row;
   const int across = axis == 0 ? 1 : 0;  // the other horizontal axis, where u lies
-  const double c0 = p0_[axis], dc = delta_[axis];
-  const double w0 = p0_[across] - u, dw = delta_[across];
-  const double h0 = w - p0_.z(), dh = -delta_.z();  // the line's height above the tip
-  double ta = 0.0, tb = 1.0;
-  if (std::abs(dh) <= kTiny_mm) {
-    if (h0 < 0.0 || h0 > height_mm_) return false;
-  } else if (!clip(h0, dh, 0.0, height_mm_, ta, tb)) {
-    return false;
+  row.c0 = p0_[axis];
+  row.dc = delta_[axis];
+  row.dw = delta_[across];
+  row.h0 = w - p0_.z();  // the line's height above the tip
+  row.dh = -delta_.z();
+  if (std::abs(row.dh) <= kTiny_mm) {
+    if (row.h0 < 0.0 || row.h0 > height_mm_) return row;
+  } else if (!clip(row.h0, row.dh, 0.0, height_mm_, row.ta, row.tb)) {
+    return row;
   }
-  // Radius of the cutter's cross-section at height h above the tip.
-  auto section = [&](double h) { return section_radius(cutter_, std::clamp(h, 0.0, height_mm_)); };
+  row.meets = true;
   // Heights above the tip where the section is the full radius.
   const double full_lo = cutter_.type == CutterType::VBit ? underside_height(cutter_, radius_mm_) : core_.z_low_mm;
   const double full_hi = cutter_.type == CutterType::VBit ? height_mm_ : core_.z_high_mm;
-  const double h_a = h0 + ta * dh, h_b = h0 + tb * dh;
+  const double h_a = row.h0 + row.ta * row.dh, h_b = row.h0 + row.tb * row.dh;
   const bool full_section = std::min(h_a, h_b) >= full_lo && std::max(h_a, h_b) <= full_hi;
-  if (flat_bottom_ || full_section || std::abs(dh) <= kTiny_mm) {
+  row.same_section = flat_bottom_ || full_section || std::abs(row.dh) <= kTiny_mm;
+  if (row.same_section)
+    row.radius = section_radius(cutter_, std::clamp(row.h0 + 0.5 * (row.ta + row.tb) * row.dh, 0.0, height_mm_));
+  return row;
+}
+
+bool RaySweep::upright_horizontal(int axis, double u, double w, double bottom, double top, double& lo,
+                                  double& hi) const {
+  const HorizontalRow row = horizontal_row(axis, w);
+  if (!row.meets) return false;
+  const double c0 = row.c0, dc = row.dc, w0 = p0_[axis == 0 ? 1 : 0] - u, dw = row.dw, h0 = row.h0, dh = row.dh;
+  double ta = row.ta, tb = row.tb;
+  if (row.same_section) {
     // The section does not change along the move: a disc swept along a segment in the
     // plane of the line, whose extent along the line has a closed form.
-    const double radius = section(h0 + 0.5 * (ta + tb) * dh);
+    const double radius = row.radius;
     if (std::abs(dw) <= kTiny_mm) {
       if (std::abs(w0) > radius) return false;
     } else if (!clip(w0, dw, -radius, radius, ta, tb)) {

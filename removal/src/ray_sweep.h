@@ -363,6 +363,15 @@ class __attribute__((visibility("hidden"))) RaySweep {
                  bool* hit) const;
   void vertical_avx2(double w, double floor_of_exit, int count, const double* u, const double* top, double* lo,
                      double* hi, bool* hit) const;
+  // An upright tool's horizontal row at height w (family axis): the line's coordinates along
+  // itself (c0 + t dc), across (u's axis: its offset from the axis is p0 - u + t dw) and its
+  // height above the tip (h0 + t dh); the instants [ta, tb] the row lies within the cutter's
+  // height (meets: some), and where the section stays the same along the move its radius.
+  struct HorizontalRow {
+    double c0, dc, dw, h0, dh, ta = 0.0, tb = 1.0, radius = 0.0;
+    bool meets = false, same_section = false;
+  };
+  HorizontalRow horizontal_row(int axis, double w) const;
   // upright_horizontal's rays of a row where the section stays the same along the move (its
   // closed form), four at a time: false (nothing written) where it changes, for
   // upright_horizontal ray by ray.
