@@ -18,6 +18,7 @@ VCUT_AVX2 v4d select(v4i mask, v4d a, v4d b) { return mask ? a : b; }
 VCUT_AVX2 v4d vmin(v4d current, v4d a) { return a < current ? a : current; }  // std::min(current, a)
 VCUT_AVX2 v4d vmax(v4d current, v4d a) { return current < a ? a : current; }  // std::max(current, a)
 VCUT_AVX2 v4d vsqrt(v4d x) { return __builtin_ia32_sqrtpd256(x); }
+VCUT_AVX2 bool any_lane(v4i mask) { return (mask[0] | mask[1] | mask[2] | mask[3]) != 0; }  // some lane set
 VCUT_AVX2 v4d vabs(v4d x) { return x < 0.0 ? -x : x; }  // std::abs but for -0.0 (its sign only)
 #else
 inline const bool kHaveAvx2 = false;

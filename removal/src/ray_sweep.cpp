@@ -16,6 +16,9 @@ namespace {
 
 using Eigen::Vector3d;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// tilted_flat's (and its lanes') slack: points on a boundary of its (s, t) region count as
+// inside (mm, and mm^2 for the ellipse's q).
+constexpr double kFlatSlack_mm = 1e-12;
 // Motion or edge lengths below this (mm) count as zero.
 constexpr double kTiny_mm = 1e-12;
 
@@ -1218,7 +1221,7 @@ __attribute__((target("avx2"))) void RaySweep::tilted_flat_avx2(int axis, double
   const FlatFamily& f = flat_[axis];
   const double he = f.he, hd = f.hd, EE = f.EE, ED = f.ED, DD = f.DD;
   const double R = radius_mm_, H = height_mm_;
-  constexpr double kSlack = 1e-12;  // as tilted_flat's
+  constexpr double kSlack = kFlatSlack_mm;
   const v4d zero = all(0.0), one = all(1.0);
   const v4i no = zero != zero;
   const double xw = w - f.p[1], xk = -f.p[2];
@@ -1259,7 +1262,7 @@ __attribute__((target("avx2"))) void RaySweep::tilted_flat_avx2(int axis, double
     // 2. Where each such line crosses the ellipse, inside the others.
     auto cross = [&](v4i walked, v4d ps, v4d pt, double ds, double dt, double qa, v4d qb, double inv_2qa)
         __attribute__((target("avx2"), always_inline)) {
-      if (!(walked[0] | walked[1] | walked[2] | walked[3])) return;
+      if (!any_lane(walked)) return;
       const v4d qc = q(ps, pt);
       const v4d d = qb * qb - all(4.0 * qa) * qc;
       const v4i meets = walked & !(d < zero);
@@ -1274,7 +1277,7 @@ __attribute__((target("avx2"))) void RaySweep::tilted_flat_avx2(int axis, double
     if (f.h_lines && f.qa_h > 0.0) {
       for (int i = 0; i < 2; ++i) {
         const v4i walked = (lines & (4 << i)) != 0;
-        if (!(walked[0] | walked[1] | walked[2] | walked[3])) continue;
+        if (!any_lane(walked)) continue;
         const v4d k = (all(i == 0 ? 0.0 : H) - hw) * all(f.inv_nn);
         const v4d ps = all(he) * k, pt = all(-hd) * k;
         const v4d qb = all(2.0) * (all(EE) * ps * all(hd) - all(ED) * (ps * all(he) + pt * all(hd)) +
@@ -1287,7 +1290,7 @@ __attribute__((target("avx2"))) void RaySweep::tilted_flat_avx2(int axis, double
       for (int i = 0; i < 2; ++i)
         for (int j = 0; j < 2; ++j) {
           const v4i walked = (lines & ((1 << i) | (4 << j))) != 0;
-          if (!(walked[0] | walked[1] | walked[2] | walked[3])) continue;
+          if (!any_lane(walked)) continue;
           const double t = i == 0 ? 0.0 : 1.0;
           const v4d s = (all(j == 0 ? 0.0 : H) - hw + all(hd * t)) * all(f.inv_he);
           take(walked & (q(s, all(t)) <= all(kSlack * (1.0 + R * R))), s);
@@ -1356,7 +1359,7 @@ __attribute__((target("avx2"))) void RaySweep::vertical_avx2(double w, double fl
     v4d h = all(floor_of_exit);
     v4i hits = met & low;
     const v4i exit = met & !low;
-    if (exit[0] | exit[1] | exit[2] | exit[3]) {
+    if (any_lane(exit)) {
       const v4d e = capsule_end<false>(f, 1, U, w, r2);
       h = select(exit, e, h);
       hits = hits | (exit & (e >= l));
@@ -1839,7 +1842,7 @@ bool RaySweep::tilted_flat(int axis, double u, double w, double& lo, double& hi,
   auto q = [&](double s, double t) {
     return EE * s * s - 2.0 * ED * s * t + DD * t * t + 2.0 * WE * s - 2.0 * WD * t + WW;
   };
-  constexpr double kSlack = 1e-12;  // mm (and mm^2 for q): points on a boundary count as inside
+  constexpr double kSlack = kFlatSlack_mm;
   // Which of the four lines' constraints (t >= 0, t <= 1, h >= 0, h <= H) a point breaks.
   auto broken = [&](double s, double t) {
     const double h = hw + he * s - hd * t;
