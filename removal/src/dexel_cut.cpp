@@ -869,6 +869,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         const int t = heaviest_first[b];
         const int a = t >= tile_base[2] ? 2 : (t >= tile_base[1] ? 1 : 0);
         Family& f = m.families[static_cast<std::size_t>(a)];
+        const int lo_u = f.lo_u;  // a local: the rays' stores could otherwise alias it
         const int local = t - tile_base[static_cast<std::size_t>(a)];
         const int tu = local % f.tiles_u, tw = local / f.tiles_u;
         const int tile_u0 = f.lo_u + tu * kTileU, tile_w0 = f.lo_w + tw * kTileW;
@@ -887,6 +888,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           }
           const detail::RaySweep& sweep = *sweeps[static_cast<std::size_t>(i)];
           const Move& move = batch[i];
+          const bool rapid = move.rapid;
           const int id = id_base + static_cast<int>(first) + i;
           const RayBox& box = ray_boxes[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)];  // as binned
           const int u0 = std::max(box.u0, tile_u0), u1 = std::min(box.u1, tile_u0 + kTileU - 1);
@@ -936,19 +938,23 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
             const double w_mm = m.position(iw), section = spans[iw - w0].section;
             // A ray whose material ends below this is clear: the box, and for z rays of a
             // cutting move the sweep's floor over the row.
-            const double clear_below = a == 2 && !move.rapid ? std::max(box_lo, sweep.row_floor(a, w_mm)) : box_lo;
-            const int k0 = first_u - f.lo_u, k1 = last_u - f.lo_u;
-            SegmentList* const row = &f.at(f.lo_u, iw);
+            const double clear_below = a == 2 && !rapid ? std::max(box_lo, sweep.row_floor(a, w_mm)) : box_lo;
+            const int k0 = first_u - lo_u, k1 = last_u - lo_u;
+            SegmentList* const row = &f.at(lo_u, iw);
             const bool windowed = use_window && section < std::numeric_limits<double>::infinity();
             detail::RaySweep::TiltRow tilt_row{};
-            if (tilted) sweep.tilted_row(a, w_mm, tilt_row);
+            detail::RaySweep::SectionRow section_row{};
+            if (tilted)
+              sweep.tilted_row(a, w_mm, tilt_row);
+            else if (windowed)
+              sweep.section_row(a, section, section_row);
             // A tilted tool's rays the move before cut for sure (its end instance is this
             // move's start): the ray-wise start test's spans over the whole box along the
             // rays, as ray indices (k_skip[i][0] > k_skip[i][1]: none), a hair inside.
             // Likewise the rays the end instance holds for sure (the next move cuts them) where
             // the next move's start test surely does not hold (it will not pass them over).
             int k_skip[6][2];
-            const int skips = ray_wise ? row_skips(ray_cover, w_mm, k0, k1, f.lo_u, m.v, k_skip) : 0;
+            const int skips = ray_wise ? row_skips(ray_cover, w_mm, k0, k1, lo_u, m.v, k_skip) : 0;
             // The row's rays that pass the tests below, then their intervals in one call.
             int count = 0;
             for (int word = k0 / 64; word <= k1 / 64; ++word) {
@@ -966,17 +972,18 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
                 // Rays already clear of the sweep's box cost a look only.
                 if (ray.first_lo_mm() >= box_hi || top <= clear_below) continue;
                 const DexelSegment* const seg = ray.data();
-                const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
+                const double u_mm = (lo_u + k + 0.5) * v;  // m.position
                 double win_lo = box_lo, win_hi = box_hi;
                 // A tighter window along the ray: the section disc about the tip's path, or
                 // for a tilted tool the box about the sweep along its axis and motion.
-                if ((windowed || tilted) && (tilted ? !detail::RaySweep::tilted_window(tilt_row, u_mm, win_lo, win_hi)
-                                                    : !sweep.ray_window(a, u_mm, section, win_lo, win_hi)))
+                if ((windowed || tilted) &&
+                    (tilted ? !detail::RaySweep::tilted_window(tilt_row, u_mm, win_lo, win_hi)
+                            : !detail::RaySweep::section_window(section_row, u_mm, win_lo, win_hi)))
                   continue;
                 // The ray's material the kernel need look at: all of it, or for a cutting move
                 // with a window, from the first interval in the window to the last.
                 double bottom = seg[0].lo_mm, material_top = top;
-                if (move.rapid) {
+                if (rapid) {
                   // A probe keeps the longest overlap it finds: a ray with no material in the
                   // window, or less than that overlap by the margin, cannot replace it.
                   double middle;
@@ -1013,23 +1020,29 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
               count = kept;
             }
             sweep.intervals_within(a, w_mm, count, rows.u, rows.bottom, rows.top, rows.lo, rows.hi, rows.hit);
+            if (rapid) {
+              for (int c = 0; c < count; ++c) {
+                if (!rows.hit[c]) continue;
+                double middle = 0.0;
+                const double depth = overlap(row[rows.k[c]], rows.lo[c], rows.hi[c], middle);
+                if (depth > probe.overlap_mm) {
+                  probe.overlap_mm = depth;
+                  probe.where_mm = m.point(a, lo_u + rows.k[c], iw, middle);
+                }
+              }
+              continue;
+            }
+            // The sum in a local through the row, in the same order: as `removed` it lived on
+            // the stack, a store and a load on every cut ray's chain.
+            double sum = removed;
             for (int c = 0; c < count; ++c) {
               if (!rows.hit[c]) continue;
               const int k = rows.k[c];
               SegmentList& ray = row[k];
-              const double lo = rows.lo[c], hi = rows.hi[c];
-              if (move.rapid) {
-                double middle = 0.0;
-                const double depth = overlap(ray, lo, hi, middle);
-                if (depth > probe.overlap_mm) {
-                  probe.overlap_mm = depth;
-                  probe.where_mm = m.point(a, f.lo_u + k, iw, middle);
-                }
-              } else {
-                removed += subtract(ray, static_cast<float>(lo), static_cast<float>(hi), id, buffer, arena);
-                if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
-              }
+              sum += subtract(ray, static_cast<float>(rows.lo[c]), static_cast<float>(rows.hi[c]), id, buffer, arena);
+              if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
             }
+            removed = sum;
           }
           if (probe.overlap_mm > 0.0) r.probes.push_back(probe);
         }

@@ -87,17 +87,27 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // height w (+inf when unknown, < 0 when the row misses the cutter's height), and from it
   // a window [lo, hi] along the ray at u holding the ray's meeting with the sweep (false:
   // the ray misses). The section is a disc of at most that radius about the tip's path.
+  // The row's part (section_row: the path's extent across and along the rays, the section
+  // squared) is worked out once a row; the ray's (section_window) then takes a square root.
   double row_section(int axis, double w) const;
-  bool ray_window(int axis, double u, double section, double& lo, double& hi) const {
+  struct SectionRow {
+    double u_lo, u_hi;  // the tip's path across the rays (mm)
+    double s_lo, s_hi;  // and along them (mm)
+    double section2;    // the section's radius squared (mm^2)
+  };
+  void section_row(int axis, double section, SectionRow& row) const {
     const int a1 = axis == 0 ? 1 : 0;
     const double p1u = p0_[a1] + delta_[a1], p1s = p0_[axis] + delta_[axis];
-    const double u_lo = std::min(p0_[a1], p1u), u_hi = std::max(p0_[a1], p1u);
-    const double du = u < u_lo ? u_lo - u : (u > u_hi ? u - u_hi : 0.0);
-    const double reach2 = section * section - du * du;
+    row = {std::min(p0_[a1], p1u), std::max(p0_[a1], p1u), std::min(p0_[axis], p1s), std::max(p0_[axis], p1s),
+           section * section};
+  }
+  static bool section_window(const SectionRow& row, double u, double& lo, double& hi) {
+    const double du = u < row.u_lo ? row.u_lo - u : (u > row.u_hi ? u - row.u_hi : 0.0);
+    const double reach2 = row.section2 - du * du;
     if (reach2 < 0.0) return false;
     const double reach = std::sqrt(reach2);
-    lo = std::min(p0_[axis], p1s) - reach;
-    hi = std::max(p0_[axis], p1s) + reach;
+    lo = row.s_lo - reach;
+    hi = row.s_hi + reach;
     return true;
   }
 
