@@ -682,8 +682,9 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     auto cut_pieces = [&](const int* list, int n, int a, int tile_u0, int tile_w0, std::vector<DexelSegment>& buffer,
                           SegmentArena& arena) __attribute__((noinline)) {
       double removed = 0.0;
-      RowRays rows, candidates;
+      RowRays rows, candidates, windows;  // windows: a piece's candidates that meet its window
       Family& f = m.families[static_cast<std::size_t>(a)];
+      const int lo_u = f.lo_u;  // a local: the rays' stores could otherwise alias it
       struct Piece {
         const detail::RaySweep* sweep;
         int id, u0, u1, w0, w1;
@@ -712,7 +713,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
       for (int iw = w_lo; iw <= w_hi; ++iw) {
         const double w_mm = m.position(iw);
         struct Span {
-          int k0, k1;  // the piece's rays in the row, from f.lo_u (k0 > k1: none)
+          int k0, k1;  // the piece's rays in the row, from lo_u (k0 > k1: none)
           detail::RaySweep::TiltRow tilt;
         };
         Span spans[kGroupPieces];
@@ -728,8 +729,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           if (section < 0.0) continue;
           double row_lo, row_hi;
           piece.sweep->row_range(a, w_mm, section, row_lo, row_hi);
-          span.k0 = std::max(piece.u0, static_cast<int>(std::ceil(m.index_of(row_lo)))) - f.lo_u;
-          span.k1 = std::min(piece.u1, static_cast<int>(std::floor(m.index_of(row_hi)))) - f.lo_u;
+          span.k0 = std::max(piece.u0, static_cast<int>(std::ceil(m.index_of(row_lo)))) - lo_u;
+          span.k1 = std::min(piece.u1, static_cast<int>(std::floor(m.index_of(row_hi)))) - lo_u;
           if (span.k0 > span.k1) continue;
           piece.sweep->tilted_row(a, w_mm, span.tilt);
           span_sum += span.k1 - span.k0 + 1;
@@ -739,7 +740,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           box_hi = std::max(box_hi, piece.box_hi);
         }
         if (k_lo > k_hi) continue;
-        SegmentList* const row = &f.at(f.lo_u, iw);
+        SegmentList* const row = &f.at(lo_u, iw);
         // The ray k (at u_mm) into `out` when it holds material within the window [win_lo,
         // win_hi] of its row: its material there, clamped to the window (the sweep lies in it).
         auto take_in_window = [&](const SegmentList& ray, int k, double u_mm, double win_lo, double win_hi,
@@ -758,7 +759,7 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           const SegmentList& ray = row[k];
           const std::uint32_t size = ray.size();
           if (size == 0 || ray.first_lo_mm() >= hi || ray.last_hi_mm() <= lo) return;
-          const double u_mm = (f.lo_u + k + 0.5) * v;  // m.position
+          const double u_mm = (lo_u + k + 0.5) * v;  // m.position
           double win_lo, win_hi;
           if (detail::RaySweep::tilted_window(tilt, u_mm, win_lo, win_hi))
             take_in_window(ray, k, u_mm, win_lo, win_hi, out, count);
@@ -777,14 +778,16 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         // Piece p's intervals on the rays in `rows`, cut.
         auto cut = [&](const Piece& piece, int count) {
           piece.sweep->intervals_within(a, w_mm, count, rows.u, rows.bottom, rows.top, rows.lo, rows.hi, rows.hit);
+          double sum = removed;  // in a local through the row, in the same order (as in the tile loop)
           for (int c = 0; c < count; ++c) {
             if (!rows.hit[c]) continue;
             const int k = rows.k[c];
             SegmentList& ray = row[k];
-            removed +=
+            sum +=
                 subtract(ray, static_cast<float>(rows.lo[c]), static_cast<float>(rows.hi[c]), piece.id, buffer, arena);
             if (ray.size() == 0) f.occupied_word(k / 64, iw) &= ~(std::uint64_t{1} << (k % 64));
           }
+          removed = sum;
         };
         // Pieces mostly apart along the row (the impeller's, the S-piece's): each its own rays.
         if (span_sum < 2 * (k_hi - k_lo + 1)) {
@@ -822,18 +825,19 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
           // A candidate's material in the run's window when it was gathered holds all it has
           // in the piece's window now (the pieces before only took some away): where the two
           // windows' spans do not meet, the ray is passed over unread.
-          for (int c = static_cast<int>(std::lower_bound(candidates.k, candidates.k + held, span.k0) - candidates.k);
-               c < held && candidates.k[c] <= span.k1; ++c) {
-            const double u_mm = candidates.u[c];
-            double win_lo, win_hi;
-            if (!detail::RaySweep::tilted_window(span.tilt, u_mm, win_lo, win_hi) || candidates.bottom[c] >= win_hi ||
-                candidates.top[c] <= win_lo)
-              continue;
+          const int c0 = static_cast<int>(std::lower_bound(candidates.k, candidates.k + held, span.k0) - candidates.k);
+          const int c1 =
+              static_cast<int>(std::upper_bound(candidates.k + c0, candidates.k + held, span.k1) - candidates.k);
+          const int met = detail::RaySweep::tilted_windows(span.tilt, c1 - c0, candidates.u + c0,
+                                                           candidates.bottom + c0, candidates.top + c0, windows.k,
+                                                           windows.lo, windows.hi, pieces[p].sweep->lanes());
+          for (int j = 0; j < met; ++j) {
+            const int c = c0 + windows.k[j];
             const int k = candidates.k[c];
             const SegmentList& ray = row[k];
             if (ray.size() == 0 || ray.first_lo_mm() >= pieces[p].box_hi || ray.last_hi_mm() <= pieces[p].box_lo)
               continue;
-            take_in_window(ray, k, u_mm, win_lo, win_hi, rows, count);
+            take_in_window(ray, k, candidates.u[c], windows.lo[j], windows.hi[j], rows, count);
           }
           cut(pieces[p], count);
         }

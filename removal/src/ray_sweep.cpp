@@ -7,6 +7,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -1445,6 +1446,43 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
     }
   }
 }
+
+namespace {
+// RaySweep::tilted_windows four rays at a time: tilted_window's products, sums and pairwise
+// max / min in the same order, the tests negated as written (so a NaN goes as it would).
+__attribute__((target("avx2"))) int tilted_windows_avx2(const RaySweep::TiltRow& row, int n, const double* u,
+                                                        const double* bottom, const double* top, int* index, double* lo,
+                                                        double* hi) {
+  const v4d u_min = all(row.u_min), u_max = all(row.u_max);
+  const v4d s0 = all(row.slope[0]), s1 = all(row.slope[1]), s2 = all(row.slope[2]);
+  const v4d lo0 = all(row.c_lo[0]), lo1 = all(row.c_lo[1]), lo2 = all(row.c_lo[2]);
+  const v4d hi0 = all(row.c_hi[0]), hi1 = all(row.c_hi[1]), hi2 = all(row.c_hi[2]);
+  int kept = 0, j = 0;
+  for (; j + 4 <= n; j += 4) {
+    v4d U, B, T;
+    std::memcpy(&U, u + j, sizeof U);
+    std::memcpy(&B, bottom + j, sizeof B);
+    std::memcpy(&T, top + j, sizeof T);
+    const v4d along0 = s0 * U, along1 = s1 * U, along2 = s2 * U;
+    const v4d l = vmax(vmax(lo0 + along0, lo1 + along1), lo2 + along2);
+    const v4d h = vmin(vmin(hi0 + along0, hi1 + along1), hi2 + along2);
+    const v4i meets = (U >= u_min) & (U <= u_max) & (l <= h) & ~(B >= h) & ~(T <= l);
+    if (!any_lane(meets)) continue;
+    for (int q = 0; q < 4; ++q)
+      if (meets[q] != 0) {
+        index[kept] = j + q;
+        lo[kept] = l[q];
+        hi[kept] = h[q];
+        ++kept;
+      }
+  }
+  for (; j < n; ++j)
+    if (RaySweep::tilted_window(row, u[j], lo[kept], hi[kept]) && !(bottom[j] >= hi[kept]) && !(top[j] <= lo[kept]))
+      index[kept++] = j;
+  return kept;
+}
+}  // namespace
+
 #else
 // Never called (lanes_ is false off x86-64): defined for the linker.
 int RaySweep::not_clear_avx2(int, double, int, int, const double*, const double*, const double*, bool, bool*,
@@ -1459,6 +1497,18 @@ void RaySweep::tilted_flat_avx2(int, double, int, const double*, double*, double
 bool RaySweep::upright_horizontal_avx2(int, double, int, const double*, double*, double*, bool*) const { return false; }
 void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
+
+int RaySweep::tilted_windows(const TiltRow& row, int n, const double* u, const double* bottom, const double* top,
+                             int* index, double* lo, double* hi, bool lanes) {
+#if defined(__x86_64__)
+  if (lanes && kHaveAvx2) return tilted_windows_avx2(row, n, u, bottom, top, index, lo, hi);
+#endif
+  int kept = 0;
+  for (int j = 0; j < n; ++j)
+    if (tilted_window(row, u[j], lo[kept], hi[kept]) && !(bottom[j] >= hi[kept]) && !(top[j] <= lo[kept]))
+      index[kept++] = j;
+  return kept;
+}
 
 bool RaySweep::interval(int axis, double u, double w, double& lo, double& hi) const {
   switch (method_) {
@@ -2052,8 +2102,8 @@ bool RaySweep::bracket_ends(int axis, const Vector3d& o, double bottom, double t
                             double capsule_hi, Bracket& b, bool& hit, double& lo, double& hi) const {
   const Eigen::AlignedBox3d& box = bounds_;
   const double ak = tool_axis_[axis];
-  b.sa = std::max({box.min()[axis], capsule_lo, bottom}) - 1e-6;
-  b.sb = std::min({box.max()[axis], capsule_hi, top}) + 1e-6;
+  b.sa = std::max(std::max(box.min()[axis], capsule_lo), bottom) - 1e-6;
+  b.sb = std::min(std::min(box.max()[axis], capsule_hi), top) + 1e-6;
   if (!(b.sa <= b.sb)) {
     hit = false;
     return true;

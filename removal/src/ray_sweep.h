@@ -125,10 +125,19 @@ class __attribute__((visibility("hidden"))) RaySweep {
   void tilted_row(int axis, double w, TiltRow& row) const { box_row(tilt_box_[axis], w, row); }
   static bool tilted_window(const TiltRow& row, double u, double& lo, double& hi) {
     if (!(u >= row.u_min && u <= row.u_max)) return false;
-    lo = std::max({row.c_lo[0] + row.slope[0] * u, row.c_lo[1] + row.slope[1] * u, row.c_lo[2] + row.slope[2] * u});
-    hi = std::min({row.c_hi[0] + row.slope[0] * u, row.c_hi[1] + row.slope[1] * u, row.c_hi[2] + row.slope[2] * u});
+    // Pairwise, as std::max({...}) compares (GCC kept the list's loop).
+    const double along0 = row.slope[0] * u, along1 = row.slope[1] * u, along2 = row.slope[2] * u;
+    lo = std::max(std::max(row.c_lo[0] + along0, row.c_lo[1] + along1), row.c_lo[2] + along2);
+    hi = std::min(std::min(row.c_hi[0] + along0, row.c_hi[1] + along1), row.c_hi[2] + along2);
     return lo <= hi;
   }
+  // tilted_window for the rays u[0 .. n - 1] whose material lies in [bottom, top]: those whose
+  // window meets it (neither bottom >= hi nor top <= lo), in order, as `index` into them with
+  // their windows [lo, hi]; their count. Four rays at a time with `lanes` (the same bits).
+  static int tilted_windows(const TiltRow& row, int n, const double* u, const double* bottom, const double* top,
+                            int* index, double* lo, double* hi, bool lanes);
+  // Whether the four-ray kernels are taken (the processor has AVX2, VCUT_SCALAR_KERNELS unset).
+  bool lanes() const { return lanes_; }
 
  private:
   // The box of tilted_window along one family's rays: the coordinate along direction k is

@@ -599,7 +599,8 @@ TEST(DexelStock, TiltedMovesThroughAComb) {
 }
 
 // On a processor with AVX2 the ball's rays, the bull-nose's bracket (a ball swept over a
-// parallelogram) and the tilted flat end mill's ellipse are found four rays at a time, else
+// parallelogram), the tilted flat end mill's ellipse and the windows of a run of tilted moves
+// cut together (a random tilted chain's: no hand-over) are found four rays at a time, else
 // ray by ray; VCUT_SCALAR_KERNELS asks for the second everywhere. The same operations in the
 // same order: `list` cut both ways through the 40 x 30 x 20 box at v = 0.25 leaves every ray
 // the same intervals, to the bit and to the move that made each end. Returns the volume
