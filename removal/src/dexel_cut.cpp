@@ -809,9 +809,11 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
         // Those whose material lies clear of every piece's bracket (GroupReach) go no further:
         // shreds beside the tool, which each piece would otherwise look at and pass over.
         const int gathered = gather(k_lo, k_hi, box_lo, box_hi, group_row, candidates);
+        const int reached = reach->not_clear(a, w_mm, gathered, candidates.u, candidates.bottom, candidates.top,
+                                             windows.k, pieces[0].sweep->lanes());
         int held = 0;
-        for (int c = 0; c < gathered; ++c) {
-          if (reach->clear(a, candidates.u[c], w_mm, candidates.bottom[c], candidates.top[c])) continue;
+        for (int j = 0; j < reached; ++j) {
+          const int c = windows.k[j];
           candidates.k[held] = candidates.k[c];
           candidates.u[held] = candidates.u[c];
           candidates.bottom[held] = candidates.bottom[c];

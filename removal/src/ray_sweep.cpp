@@ -458,6 +458,55 @@ bool RaySweep::GroupReach::clear(int axis, double u, double w, double bottom, do
   return pu * pu + pw * pw + ps * ps - h * (2.0 * qa - h) > reach * reach;
 }
 
+#if defined(__x86_64__)
+namespace {
+// GroupReach::clear four rays at a time (its operations in the same order; std::clamp as
+// written: the low end where qa < lo, else the high one where hi < qa), the rays not clear
+// to `index`.
+__attribute__((target("avx2"))) int reach_not_clear_avx2(const Eigen::Vector3d& mid, const Eigen::Vector3d& axis_dir,
+                                                         double z_low, double z_high, double reach_mm, int axis,
+                                                         double w, int n, const double* u, const double* bottom,
+                                                         const double* top, int* index) {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const double pw = w - mid[a2];
+  const v4d mid_u = all(mid[a1]), mid_s = all(mid[axis]), pw2 = all(pw * pw), low = all(z_low), high = all(z_high);
+  const v4d au = all(axis_dir[a1]), aw = all(pw * axis_dir[a2]), as = all(axis_dir[axis]);
+  const v4d largest = all(std::numeric_limits<double>::max());
+  int kept = 0, j = 0;
+  for (; j + 4 <= n; j += 4) {
+    v4d U, B, T;
+    std::memcpy(&U, u + j, sizeof U);
+    std::memcpy(&B, bottom + j, sizeof B);
+    std::memcpy(&T, top + j, sizeof T);
+    const v4i finite = (vabs(B) <= largest) & (vabs(T) <= largest);
+    const v4d half = all(0.5) * (T - B);
+    const v4d pu = U - mid_u, ps = (B + half) - mid_s;
+    const v4d qa = (pu * au + aw) + ps * as;
+    const v4d h = select(qa < low, low, select(high < qa, high, qa));
+    const v4d reach = all(reach_mm) + half;
+    const v4i clear = finite & (((pu * pu + pw2) + ps * ps) - h * (all(2.0) * qa - h) > reach * reach);
+    for (int q = 0; q < 4; ++q)
+      if (clear[q] == 0) index[kept++] = j + q;
+  }
+  return kept;
+}
+}  // namespace
+#endif
+
+int RaySweep::GroupReach::not_clear(int axis, double w, int n, const double* u, const double* bottom, const double* top,
+                                    int* index, bool lanes) const {
+  int kept = 0, j = 0;
+#if defined(__x86_64__)
+  if (lanes && kHaveAvx2) {
+    j = n / 4 * 4;
+    kept = reach_not_clear_avx2(mid_, axis_, z_low_mm_, z_high_mm_, reach_mm_, axis, w, j, u, bottom, top, index);
+  }
+#endif
+  for (; j < n; ++j)
+    if (!clear(axis, u[j], w, bottom[j], top[j])) index[kept++] = j;
+  return kept;
+}
+
 void RaySweep::prepare_flat_family(int axis) {
   FlatFamily& f = flat_[axis];
   const Vector3d& a = tool_axis_;

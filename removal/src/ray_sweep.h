@@ -161,6 +161,11 @@ class __attribute__((visibility("hidden"))) RaySweep {
    public:
     GroupReach(const RaySweep* const* sweeps, int n);
     bool clear(int axis, double u, double w, double bottom, double top) const;
+    // The rays u[0 .. n - 1] of the row at w (material in [bottom, top]) that are not clear(),
+    // in order, as `index` into them; their count. Four rays at a time with `lanes` (the same
+    // bits).
+    int not_clear(int axis, double w, int n, const double* u, const double* bottom, const double* top, int* index,
+                  bool lanes) const;
 
    private:
     Eigen::Vector3d mid_, axis_;
