@@ -715,20 +715,21 @@ void RaySweep::row_range(int axis, double w, double section, double& u_lo, doubl
     // The row's plane at w cuts the window box (tilted_window's) in a convex polygon whose
     // corners lie on the box's edges: its extent in u holds every ray that meets the box.
     const int a2 = axis == 2 ? 1 : 2;
+    // The box's 12 edges, corner c to corner c | 1 << k for each bit k not set in c.
+    static constexpr int kEdges[12][2] = {{0, 1}, {0, 2}, {0, 4}, {1, 3}, {1, 5}, {2, 3},
+                                          {2, 6}, {3, 7}, {4, 5}, {4, 6}, {5, 7}, {6, 7}};
     double lo = kInf, hi = -kInf;
-    for (int c = 0; c < 8; ++c)
-      for (int k = 0; k < 3; ++k) {
-        if (c >> k & 1) continue;
-        const Vector3d &p = tilt_corner_[c], &q = tilt_corner_[c | 1 << k];
-        const double pw = p[a2], qw = q[a2];
-        if (w < std::min(pw, qw) || w > std::max(pw, qw)) continue;
-        if (pw == qw) {
-          widen(lo, hi, std::min(p[a1], q[a1]), std::max(p[a1], q[a1]));
-        } else {
-          const double x = p[a1] + (w - pw) / (qw - pw) * (q[a1] - p[a1]);
-          widen(lo, hi, x, x);
-        }
+    for (const auto& edge : kEdges) {
+      const Vector3d &p = tilt_corner_[edge[0]], &q = tilt_corner_[edge[1]];
+      const double pw = p[a2], qw = q[a2];
+      if (w < std::min(pw, qw) || w > std::max(pw, qw)) continue;
+      if (pw == qw) {
+        widen(lo, hi, std::min(p[a1], q[a1]), std::max(p[a1], q[a1]));
+      } else {
+        const double x = p[a1] + (w - pw) / (qw - pw) * (q[a1] - p[a1]);
+        widen(lo, hi, x, x);
       }
+    }
     u_lo = std::max(u_lo, lo);
     u_hi = std::min(u_hi, hi);
     return;
