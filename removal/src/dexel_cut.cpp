@@ -682,7 +682,8 @@ CutResult DexelStock::cut(MoveSource& source, const CutOptions& options) {
     auto cut_pieces = [&](const int* list, int n, int a, int tile_u0, int tile_w0, std::vector<DexelSegment>& buffer,
                           SegmentArena& arena) __attribute__((noinline)) {
       double removed = 0.0;
-      RowRays rows, candidates, windows;  // windows: a piece's candidates that meet its window
+      // windows: the candidates GroupReach leaves, then a piece's that meet its window
+      RowRays rows, candidates, windows;
       Family& f = m.families[static_cast<std::size_t>(a)];
       const int lo_u = f.lo_u;  // a local: the rays' stores could otherwise alias it
       struct Piece {

@@ -460,9 +460,9 @@ bool RaySweep::GroupReach::clear(int axis, double u, double w, double bottom, do
 
 #if defined(__x86_64__)
 namespace {
-// GroupReach::clear four rays at a time (its operations in the same order; std::clamp as
-// written: the low end where qa < lo, else the high one where hi < qa), the rays not clear
-// to `index`.
+// GroupReach::clear four rays at a time (n a multiple of four; its operations in the same
+// order, std::clamp as written: the low end where qa < lo, else the high one where hi < qa),
+// the rays not clear to `index`.
 __attribute__((target("avx2"))) int reach_not_clear_avx2(const Eigen::Vector3d& mid, const Eigen::Vector3d& axis_dir,
                                                          double z_low, double z_high, double reach_mm, int axis,
                                                          double w, int n, const double* u, const double* bottom,
@@ -473,7 +473,7 @@ __attribute__((target("avx2"))) int reach_not_clear_avx2(const Eigen::Vector3d& 
   const v4d au = all(axis_dir[a1]), aw = all(pw * axis_dir[a2]), as = all(axis_dir[axis]);
   const v4d largest = all(std::numeric_limits<double>::max());
   int kept = 0, j = 0;
-  for (; j + 4 <= n; j += 4) {
+  for (; j < n; j += 4) {
     v4d U, B, T;
     std::memcpy(&U, u + j, sizeof U);
     std::memcpy(&B, bottom + j, sizeof B);
@@ -1498,8 +1498,9 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
 }
 
 namespace {
-// RaySweep::tilted_windows four rays at a time: tilted_window's products, sums and pairwise
-// max / min in the same order, the tests negated as written (so a NaN goes as it would).
+// RaySweep::tilted_windows four rays at a time (n a multiple of four): tilted_window's
+// products, sums and pairwise max / min in the same order, the tests negated as written (so a
+// NaN goes as it would).
 __attribute__((target("avx2"))) int tilted_windows_avx2(const RaySweep::TiltRow& row, int n, const double* u,
                                                         const double* bottom, const double* top, int* index, double* lo,
                                                         double* hi) {
@@ -1508,7 +1509,7 @@ __attribute__((target("avx2"))) int tilted_windows_avx2(const RaySweep::TiltRow&
   const v4d lo0 = all(row.c_lo[0]), lo1 = all(row.c_lo[1]), lo2 = all(row.c_lo[2]);
   const v4d hi0 = all(row.c_hi[0]), hi1 = all(row.c_hi[1]), hi2 = all(row.c_hi[2]);
   int kept = 0, j = 0;
-  for (; j + 4 <= n; j += 4) {
+  for (; j < n; j += 4) {
     v4d U, B, T;
     std::memcpy(&U, u + j, sizeof U);
     std::memcpy(&B, bottom + j, sizeof B);
@@ -1526,9 +1527,6 @@ __attribute__((target("avx2"))) int tilted_windows_avx2(const RaySweep::TiltRow&
         ++kept;
       }
   }
-  for (; j < n; ++j)
-    if (RaySweep::tilted_window(row, u[j], lo[kept], hi[kept]) && !(bottom[j] >= hi[kept]) && !(top[j] <= lo[kept]))
-      index[kept++] = j;
   return kept;
 }
 }  // namespace
@@ -1550,11 +1548,14 @@ void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, 
 
 int RaySweep::tilted_windows(const TiltRow& row, int n, const double* u, const double* bottom, const double* top,
                              int* index, double* lo, double* hi, bool lanes) {
+  int kept = 0, j = 0;
 #if defined(__x86_64__)
-  if (lanes && kHaveAvx2) return tilted_windows_avx2(row, n, u, bottom, top, index, lo, hi);
+  if (lanes && kHaveAvx2) {
+    j = n / 4 * 4;
+    kept = tilted_windows_avx2(row, j, u, bottom, top, index, lo, hi);
+  }
 #endif
-  int kept = 0;
-  for (int j = 0; j < n; ++j)
+  for (; j < n; ++j)
     if (tilted_window(row, u[j], lo[kept], hi[kept]) && !(bottom[j] >= hi[kept]) && !(top[j] <= lo[kept]))
       index[kept++] = j;
   return kept;

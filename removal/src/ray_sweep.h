@@ -125,7 +125,8 @@ class __attribute__((visibility("hidden"))) RaySweep {
   void tilted_row(int axis, double w, TiltRow& row) const { box_row(tilt_box_[axis], w, row); }
   static bool tilted_window(const TiltRow& row, double u, double& lo, double& hi) {
     if (!(u >= row.u_min && u <= row.u_max)) return false;
-    // Pairwise, as std::max({...}) compares (GCC kept the list's loop).
+    // Pairwise max and min (comparing as std::max({...}) and std::min({...}) would), as the
+    // four-ray tilted_windows does.
     const double along0 = row.slope[0] * u, along1 = row.slope[1] * u, along2 = row.slope[2] * u;
     lo = std::max(std::max(row.c_lo[0] + along0, row.c_lo[1] + along1), row.c_lo[2] + along2);
     hi = std::min(std::min(row.c_hi[0] + along0, row.c_hi[1] + along1), row.c_hi[2] + along2);
