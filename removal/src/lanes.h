@@ -4,6 +4,8 @@
 // in the same order (no fused multiply-add), so the same bits. Private to the removal library.
 #pragma once
 
+#include <cstring>
+
 namespace vcut::removal::detail {
 
 #if defined(__x86_64__)
@@ -14,6 +16,11 @@ typedef double v4d __attribute__((vector_size(32)));
 typedef long v4i __attribute__((vector_size(32)));  // what comparing two v4d gives
 #define VCUT_AVX2 __attribute__((target("avx2"), always_inline)) inline
 VCUT_AVX2 v4d all(double x) { return v4d{x, x, x, x}; }
+VCUT_AVX2 v4d vload(const double* p) {  // p[0 .. 3], any alignment
+  v4d x;
+  std::memcpy(&x, p, sizeof x);
+  return x;
+}
 VCUT_AVX2 v4d select(v4i mask, v4d a, v4d b) { return mask ? a : b; }
 VCUT_AVX2 v4d vmin(v4d current, v4d a) { return a < current ? a : current; }  // std::min(current, a)
 VCUT_AVX2 v4d vmax(v4d current, v4d a) { return current < a ? a : current; }  // std::max(current, a)

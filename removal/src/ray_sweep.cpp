@@ -7,7 +7,6 @@
 #include <cassert>
 #include <cmath>
 #include <cstdlib>
-#include <cstring>
 #include <limits>
 #include <utility>
 #include <vector>
@@ -474,10 +473,7 @@ __attribute__((target("avx2"))) int reach_not_clear_avx2(const Eigen::Vector3d& 
   const v4d largest = all(std::numeric_limits<double>::max());
   int kept = 0, j = 0;
   for (; j < n; j += 4) {
-    v4d U, B, T;
-    std::memcpy(&U, u + j, sizeof U);
-    std::memcpy(&B, bottom + j, sizeof B);
-    std::memcpy(&T, top + j, sizeof T);
+    const v4d U = vload(u + j), B = vload(bottom + j), T = vload(top + j);
     const v4i finite = (vabs(B) <= largest) & (vabs(T) <= largest);
     const v4d half = all(0.5) * (T - B);
     const v4d pu = U - mid_u, ps = (B + half) - mid_s;
@@ -1510,10 +1506,7 @@ __attribute__((target("avx2"))) int tilted_windows_avx2(const RaySweep::TiltRow&
   const v4d hi0 = all(row.c_hi[0]), hi1 = all(row.c_hi[1]), hi2 = all(row.c_hi[2]);
   int kept = 0, j = 0;
   for (; j < n; j += 4) {
-    v4d U, B, T;
-    std::memcpy(&U, u + j, sizeof U);
-    std::memcpy(&B, bottom + j, sizeof B);
-    std::memcpy(&T, top + j, sizeof T);
+    const v4d U = vload(u + j), B = vload(bottom + j), T = vload(top + j);
     const v4d along0 = s0 * U, along1 = s1 * U, along2 = s2 * U;
     const v4d l = vmax(vmax(lo0 + along0, lo1 + along1), lo2 + along2);
     const v4d h = vmin(vmin(hi0 + along0, hi1 + along1), hi2 + along2);
