@@ -88,6 +88,16 @@ const std::array<MortonCell, kBrickCells> kMortonCells = [] {
             static_cast<std::uint8_t>(t[static_cast<std::size_t>(code)].index[a] | ((code >> (3 * b + a)) & 1) << b);
   return t;
 }();
+// The cells of a brick's square face in Morton order: (i, j) for i's bits at the even places.
+const std::array<std::array<int, 2>, kBrick* kBrick> kSquareMorton = [] {
+  std::array<std::array<int, 2>, kBrick * kBrick> t{};
+  for (int code = 0; code < kBrick * kBrick; ++code)
+    for (int b = 0; b < kBrickLevels; ++b) {
+      t[static_cast<std::size_t>(code)][0] |= ((code >> (2 * b)) & 1) << b;
+      t[static_cast<std::size_t>(code)][1] |= ((code >> (2 * b + 1)) & 1) << b;
+    }
+  return t;
+}();
 std::array<int, 3> unmorton(int code) {
   const MortonCell& c = kMortonCells[static_cast<std::size_t>(code)];
   return {c.index[0], c.index[1], c.index[2]};
@@ -108,28 +118,22 @@ struct BrickMesh {
   std::uint32_t first_vertex = 0;  // global index of points[0]
 };
 
-// Whether the points `for_each` visits (it calls its argument with each, in a fixed order)
-// lie within `tolerance` of one plane through their mean: the plane across the smallest
-// spread. The spread's six sums by hand: Eigen's d * d^T into a 3x3 on the stack stalled on
-// store forwarding (a fifth of the mesher's time on D32).
-template <class ForEachPoint>
-bool within_one_plane(const Vector3d& mean, double tolerance, ForEachPoint&& for_each) {
+// The spread of points about their mean: the sums of d d^T over them, d = p - mean.
+struct Spread {
   double xx = 0.0, xy = 0.0, xz = 0.0, yy = 0.0, yz = 0.0, zz = 0.0;
-  for_each([&](const Vector3d& p) {
-    const Vector3d d = p - mean;
-    xx += d.x() * d.x();
-    xy += d.x() * d.y();
-    xz += d.x() * d.z();
-    yy += d.y() * d.y();
-    yz += d.y() * d.z();
-    zz += d.z() * d.z();
-  });
+};
+
+// Whether points of spread `s` lie within `tolerance` of one plane through their mean (the
+// plane across the smallest spread), where `for_each` visits them (it calls its argument
+// with each, in a fixed order) when the spread alone does not tell.
+template <class ForEachPoint>
+bool within_one_plane(const Spread& s, const Vector3d& mean, double tolerance, ForEachPoint&& for_each) {
   // The spread's smallest eigenvalue, the sum of the squared offsets from the least-squares
   // plane, is at most n^T S n / |n|^2 for any n. Across the two of its rows that span the
   // most (on a flat sheet, nearly its null direction), a value under tolerance^2 (less a
   // margin for rounding) puts every point within tolerance of that plane: most blocks pass
   // so, without the eigensolver and the second pass (D32: 6.1 M tests, 98 % flat).
-  const Vector3d r0(xx, xy, xz), r1(xy, yy, yz), r2(xz, yz, zz);
+  const Vector3d r0(s.xx, s.xy, s.xz), r1(s.xy, s.yy, s.yz), r2(s.xz, s.yz, s.zz);
   Vector3d across = r0.cross(r1);
   for (const Vector3d& c : {Vector3d(r0.cross(r2)), Vector3d(r1.cross(r2))})
     if (c.squaredNorm() > across.squaredNorm()) across = c;
@@ -139,13 +143,31 @@ bool within_one_plane(const Vector3d& mean, double tolerance, ForEachPoint&& for
     if (across.dot(s_across) <= 0.999 * tolerance * tolerance * across2) return true;
   }
   Eigen::Matrix3d spread;
-  spread << xx, xy, xz, xy, yy, yz, xz, yz, zz;
+  spread << s.xx, s.xy, s.xz, s.xy, s.yy, s.yz, s.xz, s.yz, s.zz;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   eig.computeDirect(spread);
   const Vector3d normal = eig.eigenvectors().col(0);
   bool within = true;
   for_each([&](const Vector3d& p) { within = within && std::abs(normal.dot(p - mean)) <= tolerance; });
   return within;
+}
+
+// The same for the points `for_each` visits, their spread summed here. By hand: Eigen's
+// d * d^T into a 3x3 on the stack stalled on store forwarding (a fifth of the mesher's time
+// on D32).
+template <class ForEachPoint>
+bool within_one_plane(const Vector3d& mean, double tolerance, ForEachPoint&& for_each) {
+  Spread s;
+  for_each([&](const Vector3d& p) {
+    const Vector3d d = p - mean;
+    s.xx += d.x() * d.x();
+    s.xy += d.x() * d.y();
+    s.xz += d.x() * d.z();
+    s.yy += d.y() * d.y();
+    s.yz += d.y() * d.z();
+    s.zz += d.z() * d.z();
+  });
+  return within_one_plane(s, mean, tolerance, for_each);
 }
 
 class Contour {
@@ -401,19 +423,20 @@ class Contour {
     for (int j = 0; j <= n2; ++j)
       for (int i = 0; i <= n1; ++i)
         if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
-    // The cells at `step` along the axis, in Morton order.
-    std::array<std::uint16_t, kBrick * kBrick> codes;
-    std::size_t n = 0;
-    for (int j = 0; j < n2; ++j)
-      for (int i = 0; i < n1; ++i) {
-        std::array<int, 3> cell;
-        cell[static_cast<std::size_t>(axis)] = step;
-        cell[static_cast<std::size_t>(o1)] = i;
-        cell[static_cast<std::size_t>(o2)] = j;
-        codes[n++] = static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2]));
-      }
-    std::sort(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
-    b.cells.assign(codes.begin(), codes.begin() + static_cast<std::ptrdiff_t>(n));
+    // The cells at `step` along the axis, in Morton order: with the axis's bits fixed, a
+    // code grows with the interleave of the other two indices, o1's bits (o1 < o2) the lower
+    // (sorting the codes instead was 4 % of the mesh on an untouched stock).
+    b.cells.clear();
+    b.cells.reserve(static_cast<std::size_t>(n1 * n2));
+    for (const auto [i, j] : kSquareMorton) {
+      if (i >= n1 || j >= n2) continue;
+      std::array<int, 3> cell;
+      cell[static_cast<std::size_t>(axis)] = step;
+      cell[static_cast<std::size_t>(o1)] = i;
+      cell[static_cast<std::size_t>(o2)] = j;
+      b.cells.push_back(static_cast<std::uint16_t>(morton(cell[0], cell[1], cell[2])));
+    }
+    const std::size_t n = b.cells.size();
     b.vertex.assign(n, 0);
     // The mean of the cells' crossings: `value` along the axis, and across it the middle of
     // the cells' span, nodes g .. g + n of spacing v (positions (g + 0.5) v).
@@ -461,6 +484,45 @@ class Contour {
     }
   };
 
+  // A merge block's crossings: their box, which ways the surface faces across them (the
+  // cells' facing bits together), and their sums about the brick's first node, from which
+  // the spread about their mean follows. A level's blocks are summed from the level below's
+  // (from every crossing again, flat() read W1's crossings three times over: a fifth of
+  // its mesh).
+  struct Block {
+    Vector3d lo, hi;
+    Vector3d sum = Vector3d::Zero();  // of d = p - origin (mm)
+    Spread raw;                       // d d^T summed (mm^2)
+    std::uint32_t count = 0;          // crossings
+    std::uint32_t first = 0;          // its first cell
+    std::uint8_t facing = 0;
+    bool mergeable = true;  // every block below it is one vertex
+    void add(const Vector3d& d) {
+      sum += d;
+      raw.xx += d.x() * d.x();
+      raw.xy += d.x() * d.y();
+      raw.xz += d.x() * d.z();
+      raw.yy += d.y() * d.y();
+      raw.yz += d.y() * d.z();
+      raw.zz += d.z() * d.z();
+      ++count;
+    }
+    void add(const Block& o) {
+      lo = lo.cwiseMin(o.lo);
+      hi = hi.cwiseMax(o.hi);
+      sum += o.sum;
+      raw.xx += o.raw.xx;
+      raw.xy += o.raw.xy;
+      raw.xz += o.raw.xz;
+      raw.yy += o.raw.yy;
+      raw.yz += o.raw.yz;
+      raw.zz += o.raw.zz;
+      count += o.count;
+      facing |= o.facing;
+      mergeable = mergeable && o.mergeable;
+    }
+  };
+
   // A thread's working storage for vertices(), kept from brick to brick: the crossing cache
   // and the brick's lists (allocated per brick they cost W1's mesh 2 %).
   struct BrickScratch {
@@ -468,7 +530,7 @@ class Contour {
     std::vector<Cell> cells;
     std::vector<Vector3d> points;
     std::vector<std::uint32_t> group;
-    std::vector<std::uint8_t> merged;
+    std::vector<Block> blocks;
     std::vector<int> members;
   };
 
@@ -523,10 +585,8 @@ class Contour {
     std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
     // Octree merging, level by level: a block's cells are a run of the Morton order.
     const std::size_t n = cells.size();
-    std::vector<std::uint32_t>& group = scratch.group;   // the run start of each cell's merged block
-    std::vector<std::uint8_t>& merged = scratch.merged;  // the cell's block so far is one vertex
+    std::vector<std::uint32_t>& group = scratch.group;  // the run start of each cell's merged block
     group.resize(n);
-    merged.assign(n, 1);
     for (std::size_t i = 0; i < n; ++i) group[i] = static_cast<std::uint32_t>(i);
     double tolerance = kMergeTolerance * m_.v;
     // Without flat merging only exact axis planes merge (untouched stock faces, floors of a
@@ -534,28 +594,48 @@ class Contour {
     // cells that hold both, so none of its triangles crosses a crease.
     const bool any_plane = m_.flat_merging;
     if (!any_plane) tolerance = kExactPlane_mm;
+    // Level 0: a block per cell, its sums from its crossings.
+    const Vector3d origin(m_.position(b.origin[0]), m_.position(b.origin[1]), m_.position(b.origin[2]));
+    std::vector<Block>& blocks = scratch.blocks;
+    blocks.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      Block& k = blocks[i];
+      k = Block{};
+      k.lo = k.hi = points[cells[i].first];
+      for (std::uint32_t j = 0; j < cells[i].count; ++j) {
+        const Vector3d& p = points[cells[i].first + j];
+        k.lo = k.lo.cwiseMin(p);
+        k.hi = k.hi.cwiseMax(p);
+        k.add(p - origin);
+      }
+      k.first = static_cast<std::uint32_t>(i);
+      k.facing = cells[i].facing;
+    }
+    std::size_t count = n;  // blocks at the level below
     for (int level = 1; level <= kBrickLevels; ++level) {
       const int shift = 3 * level;
-      for (std::size_t first = 0; first < n;) {
+      std::size_t made = 0;
+      for (std::size_t first = 0; first < count;) {
+        const int code = cells[blocks[first].first].code >> shift;
         std::size_t last = first;
-        while (last < n && (cells[last].code >> shift) == (cells[first].code >> shift)) ++last;
+        Block k = blocks[first];
+        while (++last < count && (cells[blocks[last].first].code >> shift) == code) k.add(blocks[last]);
+        const std::size_t cell_first = k.first, cell_last = last < count ? blocks[last].first : n;
         // A block of one cell is one vertex already: it stays mergeable. (It used to end
         // the merging of every larger block around it, so that a tilted or curved sheet,
         // whose blocks hold lone cells at their corners, kept nearly a vertex per cell: D32's
         // hole walls 2.79 M vertices, now 1.67 M.)
-        if (last - first == 1) {
-          first = last;
-          continue;
+        if (cell_last - cell_first > 1) {
+          if (k.mergeable && flat(k, origin, cells, points, tolerance, any_plane, cell_last)) {
+            for (std::size_t i = cell_first; i < cell_last; ++i) group[i] = static_cast<std::uint32_t>(cell_first);
+          } else {
+            k.mergeable = false;
+          }
         }
-        bool candidate = true;
-        for (std::size_t i = first; i < last && candidate; ++i) candidate = merged[i] != 0;
-        if (candidate && flat(cells, points, first, last, tolerance, any_plane)) {
-          for (std::size_t i = first; i < last; ++i) group[i] = static_cast<std::uint32_t>(first);
-        } else {
-          for (std::size_t i = first; i < last; ++i) merged[i] = 0;
-        }
+        blocks[made++] = k;  // made <= first: the blocks below it are read already
         first = last;
       }
+      count = made;
     }
     // Each vertex at the mean of its cells' crossings (the points' room taken once: grown
     // by doubling, they were most of the mesher's allocations).
@@ -581,41 +661,35 @@ class Contour {
     return true;
   }
 
-  // Whether the cells first..last hold one flat sheet: the surface faces one way along each
-  // axis (two sheets of a thin wall face opposite ways) and every crossing lies within
-  // `tolerance` of one plane. Not an axis plane through the lattice's nodes: crossings lie
-  // there where surfaces pass through the nodes (a 90 deg V-bit's walls one cell apart at a
-  // row of nodes), and two such surfaces' crossings share the node plane without being one
-  // sheet (a junction of two such grooves merged into one vertex sat 0.03 mm above their
-  // floor). Such a sheet is left in cells: more triangles, never a cut crease.
+  // Whether block k (its cells up to cell_last) holds one flat sheet: the surface faces one
+  // way along each axis (two sheets of a thin wall face opposite ways) and every crossing
+  // lies within `tolerance` of one plane. Not an axis plane through the lattice's nodes:
+  // crossings lie there where surfaces pass through the nodes (a 90 deg V-bit's walls one
+  // cell apart at a row of nodes), and two such surfaces' crossings share the node plane
+  // without being one sheet (a junction of two such grooves merged into one vertex sat
+  // 0.03 mm above their floor). Such a sheet is left in cells: more triangles, never a cut
+  // crease.
   template <class Cells>
-  bool flat(const Cells& cells, const std::vector<Vector3d>& points, std::size_t first, std::size_t last,
-            double tolerance, bool any_plane) const {
-    std::uint8_t facing = 0;
-    for (std::size_t i = first; i < last; ++i) facing |= cells[i].facing;
+  bool flat(const Block& k, const Vector3d& origin, const Cells& cells, const std::vector<Vector3d>& points,
+            double tolerance, bool any_plane, std::size_t cell_last) const {
     for (int a = 0; a < 3; ++a)
-      if (((facing >> (2 * a)) & 3u) == 3u) return false;
-    Vector3d lo = points[cells[first].first], hi = lo, mean = Vector3d::Zero();
-    std::size_t count = 0;
-    for (std::size_t i = first; i < last; ++i) {
-      for (std::uint32_t k = 0; k < cells[i].count; ++k) {
-        const Vector3d& p = points[cells[i].first + k];
-        lo = lo.cwiseMin(p);
-        hi = hi.cwiseMax(p);
-        mean += p;
-        ++count;
-      }
-    }
+      if (((k.facing >> (2 * a)) & 3u) == 3u) return false;
     int axis;
-    if ((hi - lo).minCoeff(&axis) <= 2.0 * tolerance) {  // an axis plane
-      const double at = m_.index_of(0.5 * (lo[axis] + hi[axis]));
+    if ((k.hi - k.lo).minCoeff(&axis) <= 2.0 * tolerance) {  // an axis plane
+      const double at = m_.index_of(0.5 * (k.lo[axis] + k.hi[axis]));
       return std::abs(at - std::round(at)) * m_.v > kExactPlane_mm;
     }
     if (!any_plane) return false;
-    mean /= static_cast<double>(count);
-    return within_one_plane(mean, tolerance, [&](auto&& visit) {
-      for (std::size_t i = first; i < last; ++i)
-        for (std::uint32_t k = 0; k < cells[i].count; ++k) visit(points[cells[i].first + k]);
+    // The spread about the mean from the sums about the origin (crossings within 0.8 mm of
+    // it at 0.05 mm cells: the difference loses about 1e-16 mm^2 a crossing against a
+    // tolerance of 4e-6 mm^2 a crossing).
+    const Vector3d mean = k.sum / static_cast<double>(k.count);
+    const Spread& r = k.raw;
+    const Spread spread{r.xx - k.sum.x() * mean.x(), r.xy - k.sum.x() * mean.y(), r.xz - k.sum.x() * mean.z(),
+                        r.yy - k.sum.y() * mean.y(), r.yz - k.sum.y() * mean.z(), r.zz - k.sum.z() * mean.z()};
+    return within_one_plane(spread, origin + mean, tolerance, [&](auto&& visit) {
+      for (std::size_t i = k.first; i < cell_last; ++i)
+        for (std::uint32_t j = 0; j < cells[i].count; ++j) visit(points[cells[i].first + j]);
     });
   }
 
@@ -730,11 +804,12 @@ SurfaceMesh contour_mesh(const DexelStock::Impl& m) { return Contour(m).run(); }
 // or below s_hi.
 template <class Visit>
 void for_each_reaching(const SegmentList& ray, double s_lo, double s_hi, Visit&& visit) {
-  const DexelSegment* const end = ray.data() + ray.size();
-  for (const DexelSegment* seg =
-           std::partition_point(ray.data(), end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
-       seg != end && seg->lo_mm <= s_hi; ++seg)
-    visit(*seg);
+  const DexelSegment* seg = ray.data();
+  const DexelSegment* const end = seg + ray.size();
+  // A few intervals (most rays hold one) are passed one by one.
+  if (ray.size() > 4) seg = std::partition_point(seg, end, [&](const DexelSegment& g) { return g.hi_mm < s_lo; });
+  for (; seg != end && seg->lo_mm <= s_hi; ++seg)
+    if (seg->hi_mm >= s_lo) visit(*seg);
 }
 
 // A plane direction counts where its eigenvalue is above this share of the largest (singular
@@ -909,10 +984,13 @@ SurfaceMesh DexelStock::surface() const {
     for (const Family& f : m.families) {
       const auto [a1, a2] = kOther[static_cast<std::size_t>(f.axis)];
       const double s_lo = m.position(base[f.axis] - 1), s_hi = m.position(base[f.axis] + 2);
-      for (int iw = base[a2] - 1; iw <= base[a2] + 2; ++iw) {
-        for (int iu = base[a1] - 1; iu <= base[a1] + 2; ++iu) {
-          if (!f.contains(iu, iw)) continue;
-          for_each_reaching(f.at(iu, iw), s_lo, s_hi, [&](const DexelSegment& seg) {
+      // The 4 x 4 rays within the family, a row at a time.
+      const int u0 = std::max(base[a1] - 1, f.lo_u), u1 = std::min(base[a1] + 2, f.lo_u + f.n_u - 1);
+      const int w0 = std::max(base[a2] - 1, f.lo_w), w1 = std::min(base[a2] + 2, f.lo_w + f.n_w - 1);
+      for (int iw = w0; iw <= w1 && u0 <= u1; ++iw) {
+        const SegmentList* row = &f.at(u0, iw);
+        for (int iu = u0; iu <= u1; ++iu) {
+          for_each_reaching(row[iu - u0], s_lo, s_hi, [&](const DexelSegment& seg) {
             if (seg.lo_move != kNoMove && seg.lo_mm >= s_lo) add(seg.lo_move);
             if (seg.hi_move != kNoMove && seg.hi_mm <= s_hi) add(seg.hi_move);
           });
