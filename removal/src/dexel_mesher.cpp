@@ -347,14 +347,15 @@ class Contour {
   double crossing(int axis, int iu, int iw, int n) const {
     const Family& f = m_.families[static_cast<std::size_t>(axis)];
     const double a = m_.position(n), b = m_.position(n + 1);
-    if (f.contains(iu, iw)) {
-      const SegmentList& ray = f.at(iu, iw);
-      for (std::uint32_t s = 0; s < ray.size(); ++s) {
-        const DexelSegment& seg = ray.data()[s];
-        if (seg.lo_mm >= a && seg.lo_mm <= b) return seg.lo_mm;
-        if (seg.hi_mm >= a && seg.hi_mm <= b) return seg.hi_mm;
-        if (seg.lo_mm > b) break;
-      }
+    return f.contains(iu, iw) ? crossing_on(f.at(iu, iw), a, b) : 0.5 * (a + b);
+  }
+  // The same on a ray of the family, between positions a and b.
+  static double crossing_on(const SegmentList& ray, double a, double b) {
+    for (std::uint32_t s = 0; s < ray.size(); ++s) {
+      const DexelSegment& seg = ray.data()[s];
+      if (seg.lo_mm >= a && seg.lo_mm <= b) return seg.lo_mm;
+      if (seg.hi_mm >= a && seg.hi_mm <= b) return seg.hi_mm;
+      if (seg.lo_mm > b) break;
     }
     return 0.5 * (a + b);
   }
@@ -420,9 +421,21 @@ class Contour {
     // crossing() takes (u, w) as its family orders them: z rays (x, y), x rays (y, z), y rays (x, z).
     const int n1 = limit[static_cast<std::size_t>(o1)], n2 = limit[static_cast<std::size_t>(o2)];
     const double value = crossing(axis, g1, g2, g);
-    for (int j = 0; j <= n2; ++j)
-      for (int i = 0; i <= n1; ++i)
-        if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
+    const Family& f = m_.families[static_cast<std::size_t>(axis)];
+    if (f.contains(g1, g2) && f.contains(g1 + n1, g2 + n2)) {
+      // All the rays in the family: a row of them at a time (a stock's side faces are such
+      // bricks, 289 rays each).
+      const double lo = m_.position(g), hi = m_.position(g + 1);
+      for (int j = 0; j <= n2; ++j) {
+        const SegmentList* row = &f.at(g1, g2 + j);
+        for (int i = 0; i <= n1; ++i)
+          if (crossing_on(row[i], lo, hi) != value) return false;
+      }
+    } else {
+      for (int j = 0; j <= n2; ++j)
+        for (int i = 0; i <= n1; ++i)
+          if (crossing(axis, g1 + i, g2 + j, g) != value) return false;
+    }
     // The cells at `step` along the axis, in Morton order: with the axis's bits fixed, a
     // code grows with the interleave of the other two indices, o1's bits (o1 < o2) the lower
     // (sorting the codes instead was 4 % of the mesh on an untouched stock).
@@ -693,24 +706,28 @@ class Contour {
     });
   }
 
-  // The vertex (global index) of the cell at lattice index g, which must be active.
-  int vertex_of(const std::array<int, 3>& g) const {
-    std::array<int, 3> brick, local;
-    for (int a = 0; a < 3; ++a) {
-      const int rel = g[static_cast<std::size_t>(a)] - lo_[static_cast<std::size_t>(a)];
-      brick[static_cast<std::size_t>(a)] = rel / kBrick;
-      local[static_cast<std::size_t>(a)] = rel % kBrick;
+  // The brick whose first node is at lattice index `origin`, null when it holds no surface
+  // (or lies outside the lattice).
+  const BrickMesh* brick_at(const std::array<int, 3>& origin) const {
+    std::array<int, 3> brick;
+    for (std::size_t a = 0; a < 3; ++a) {
+      const int rel = origin[a] - lo_[a];
+      if (rel < 0) return nullptr;
+      brick[a] = rel / kBrick;
     }
     const std::size_t column = static_cast<std::size_t>(brick[1] * bricks_[0] + brick[0]);
     const auto first = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column]);
     const auto last = bricks_list_.begin() + static_cast<std::ptrdiff_t>(column_first_[column + 1]);
-    const int z0 = lo_[2] + brick[2] * kBrick;
-    const auto it = std::lower_bound(first, last, z0, [](const BrickMesh& b, int z) { return b.origin[2] < z; });
-    if (it == last || it->origin[2] != z0) return -1;
-    const std::uint16_t code = static_cast<std::uint16_t>(morton(local[0], local[1], local[2]));
-    const auto c = std::lower_bound(it->cells.begin(), it->cells.end(), code);
-    if (c == it->cells.end() || *c != code) return -1;
-    return static_cast<int>(it->first_vertex + it->vertex[static_cast<std::size_t>(c - it->cells.begin())]);
+    const auto it = std::lower_bound(first, last, origin[2], [](const BrickMesh& b, int z) { return b.origin[2] < z; });
+    return it == last || it->origin[2] != origin[2] ? nullptr : &*it;
+  }
+
+  // The vertex (global index) of brick b's cell (x, y, z), -1 when the cell is not active.
+  static int vertex_in(const BrickMesh& b, int x, int y, int z) {
+    const std::uint16_t code = static_cast<std::uint16_t>(morton(x, y, z));
+    const auto c = std::lower_bound(b.cells.begin(), b.cells.end(), code);
+    if (c == b.cells.end() || *c != code) return -1;
+    return static_cast<int>(b.first_vertex + b.vertex[static_cast<std::size_t>(c - b.cells.begin())]);
   }
 
   // The faces of every sign-changing edge starting at one of the brick's active cells'
@@ -729,6 +746,11 @@ class Contour {
     // A brick merged into one vertex (a flat sheet, a plane brick) has quads only across its
     // lower faces: one whose four cells all lie in the brick has four equal corners.
     const bool one_vertex = b.points.size() == 1;
+    // The bricks below this one (bit a of the index: one brick down along a), each looked up
+    // the first time a quad reaches into it (a lookup in the lattice per quad corner was a
+    // third of this).
+    std::array<const BrickMesh*, 8> below{};
+    unsigned looked = 0;
     for (std::uint16_t code : b.cells) {
       const auto [x, y, z] = unmorton(code);
       if (one_vertex && x > 0 && y > 0 && z > 0) continue;
@@ -748,8 +770,18 @@ class Contour {
           if (c[0] >= 0 && c[1] >= 0 && c[2] >= 0) {
             v[static_cast<std::size_t>(q)] = local[static_cast<std::size_t>(morton(c[0], c[1], c[2]))];
           } else {
-            for (int k = 0; k < 3; ++k) c[static_cast<std::size_t>(k)] += b.origin[static_cast<std::size_t>(k)];
-            v[static_cast<std::size_t>(q)] = vertex_of(c);
+            // In a brick below (-1 along an axis: that brick's last cell, 15).
+            const unsigned side = (c[0] < 0 ? 1u : 0u) | (c[1] < 0 ? 2u : 0u) | (c[2] < 0 ? 4u : 0u);
+            if ((looked & (1u << side)) == 0) {
+              looked |= 1u << side;
+              std::array<int, 3> origin = b.origin;
+              for (std::size_t k = 0; k < 3; ++k)
+                if ((side >> k) & 1u) origin[k] -= kBrick;
+              below[side] = brick_at(origin);
+            }
+            const BrickMesh* near = below[side];
+            v[static_cast<std::size_t>(q)] =
+                near == nullptr ? -1 : vertex_in(*near, c[0] & (kBrick - 1), c[1] & (kBrick - 1), c[2] & (kBrick - 1));
           }
           ok = ok && v[static_cast<std::size_t>(q)] >= 0;
         }
