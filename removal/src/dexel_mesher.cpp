@@ -575,17 +575,21 @@ class Contour {
             points.push_back(at());
             ++cell.count;
           };
+          // Node (x + i, y + j, z + k) is bit z + k of corner[i + 2 j] (the four columns read
+          // above, not looked up again for each of the 24 ends).
+          const std::uint32_t corner[4] = {c00 >> z, c10 >> z, c01 >> z, c11 >> z};
+          auto inside = [&](int i, int j, int k) { return ((corner[i + 2 * j] >> k) & 1u) != 0; };
           for (int d = 0; d < 4; ++d) {
             const int e1 = d & 1, e2 = d >> 1;
-            edge(2, sg.inside(x + e1, y + e2, z), sg.inside(x + e1, y + e2, z + 1), [&] {
+            edge(2, inside(e1, e2, 0), inside(e1, e2, 1), [&] {
               const double s = crossings.at(2, x + e1, y + e2, z, [&] { return crossing(2, gx + e1, gy + e2, gz); });
               return Vector3d(m_.position(gx + e1), m_.position(gy + e2), s);
             });
-            edge(0, sg.inside(x, y + e1, z + e2), sg.inside(x + 1, y + e1, z + e2), [&] {
+            edge(0, inside(0, e1, e2), inside(1, e1, e2), [&] {
               const double s = crossings.at(0, x, y + e1, z + e2, [&] { return crossing(0, gy + e1, gz + e2, gx); });
               return Vector3d(s, m_.position(gy + e1), m_.position(gz + e2));
             });
-            edge(1, sg.inside(x + e1, y, z + e2), sg.inside(x + e1, y + 1, z + e2), [&] {
+            edge(1, inside(e1, 0, e2), inside(e1, 1, e2), [&] {
               const double s = crossings.at(1, x + e1, y, z + e2, [&] { return crossing(1, gx + e1, gz + e2, gy); });
               return Vector3d(m_.position(gx + e1), s, m_.position(gz + e2));
             });
