@@ -219,11 +219,12 @@ class Contour {
     });
     // Bricks in lattice order, numbered; vertices numbered brick after brick.
     column_first_.assign(static_cast<std::size_t>(columns) + 1, 0);
-    for (int c = 0; c < columns; ++c) {
+    for (int c = 0; c < columns; ++c)
       column_first_[static_cast<std::size_t>(c) + 1] =
           column_first_[static_cast<std::size_t>(c)] + by_column[static_cast<std::size_t>(c)].size();
-      for (BrickMesh& b : by_column[static_cast<std::size_t>(c)]) bricks_list_.push_back(std::move(b));
-    }
+    bricks_list_.reserve(column_first_.back());
+    for (auto& column : by_column)
+      for (BrickMesh& b : column) bricks_list_.push_back(std::move(b));
     by_column.clear();
     std::uint32_t next = 0;
     for (BrickMesh& b : bricks_list_) {
