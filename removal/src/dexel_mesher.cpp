@@ -642,8 +642,9 @@ class Contour {
         // A block of one cell is one vertex already: it stays mergeable. (It used to end
         // the merging of every larger block around it, so that a tilted or curved sheet,
         // whose blocks hold lone cells at their corners, kept nearly a vertex per cell: D32's
-        // hole walls 2.79 M vertices, now 1.67 M.)
-        if (cell_last - cell_first > 1) {
+        // hole walls 2.79 M vertices, now 1.67 M.) Nor is a block alone in its larger one
+        // tested again: the same crossings give the same answer.
+        if (last - first > 1) {
           if (k.mergeable && flat(k, origin, cells, points, tolerance, any_plane, cell_last)) {
             for (std::size_t i = cell_first; i < cell_last; ++i) group[i] = static_cast<std::uint32_t>(cell_first);
           } else {
@@ -698,9 +699,9 @@ class Contour {
       return std::abs(at - std::round(at)) * m_.v > kExactPlane_mm;
     }
     if (!any_plane) return false;
-    // The spread about the mean from the sums about the origin (crossings within 0.8 mm of
-    // it at 0.05 mm cells: the difference loses about 1e-16 mm^2 a crossing against a
-    // tolerance of 4e-6 mm^2 a crossing).
+    // The spread about the mean from the sums about the origin: the crossings lie within 16
+    // cells of it and the tolerance is 0.04 of a cell, so the difference's rounding stays
+    // near 1e-10 of tolerance^2 a crossing (the quick test's margin is 1e-3 of it).
     const Vector3d mean = k.sum / static_cast<double>(k.count);
     const Spread& r = k.raw;
     const Spread spread{r.xx - k.sum.x() * mean.x(), r.xy - k.sum.x() * mean.y(), r.xz - k.sum.x() * mean.z(),
