@@ -541,7 +541,7 @@ class Contour {
   // and the brick's lists (allocated per brick they cost W1's mesh 2 %).
   struct BrickScratch {
     CrossingCache crossings;
-    std::vector<Cell> cells;
+    std::vector<Cell> cells, sorted;
     std::vector<Vector3d> points;
     std::vector<std::uint32_t> group;
     std::vector<Block> blocks;
@@ -600,7 +600,18 @@ class Contour {
       }
     }
     if (cells.empty()) return false;
-    std::sort(cells.begin(), cells.end(), [](const Cell& p, const Cell& q) { return p.code < q.code; });
+    // Into Morton order: a radix sort on the 12-bit codes, two passes of 6 bits (the codes are
+    // distinct, so the order is the comparison sort's; that sort was 3.4 % of D32's mesh).
+    static_assert(kBrickCells == 1 << 12, "two passes of 6 bits");
+    std::vector<Cell>& sorted = scratch.sorted;
+    sorted.resize(cells.size());
+    for (int shift = 0; shift < 12; shift += 6) {
+      std::array<std::uint32_t, 65> at{};
+      for (const Cell& c : cells) ++at[((c.code >> shift) & 63u) + 1];
+      for (std::size_t i = 0; i < 64; ++i) at[i + 1] += at[i];
+      for (const Cell& c : cells) sorted[at[(c.code >> shift) & 63u]++] = c;
+      cells.swap(sorted);
+    }
     // Octree merging, level by level: a block's cells are a run of the Morton order.
     const std::size_t n = cells.size();
     std::vector<std::uint32_t>& group = scratch.group;  // the run start of each cell's merged block
