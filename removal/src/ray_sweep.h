@@ -101,9 +101,14 @@ class __attribute__((visibility("hidden"))) RaySweep {
     row = {std::min(p0_[a1], p1u), std::max(p0_[a1], p1u), std::min(p0_[axis], p1s), std::max(p0_[axis], p1s),
            section * section};
   }
-  static bool section_window(const SectionRow& row, double u, double& lo, double& hi) {
+  // The window's reach squared at u (< 0: the ray misses): the window is [s_lo - reach,
+  // s_hi + reach].
+  static double section_reach2(const SectionRow& row, double u) {
     const double du = u < row.u_lo ? row.u_lo - u : (u > row.u_hi ? u - row.u_hi : 0.0);
-    const double reach2 = row.section2 - du * du;
+    return row.section2 - du * du;
+  }
+  static bool section_window(const SectionRow& row, double u, double& lo, double& hi) {
+    const double reach2 = section_reach2(row, u);
     if (reach2 < 0.0) return false;
     const double reach = std::sqrt(reach2);
     lo = row.s_lo - reach;
