@@ -255,7 +255,9 @@ inline __attribute__((always_inline)) double subtract(SegmentList& ray, float a,
   }
   // As many pieces as intervals gone (an interval trimmed at one end): those after stay put.
   if (kept != gone) std::memmove(s + i + kept, s + j + 1, (n - j - 1) * sizeof(DexelSegment));
-  std::copy(pieces, pieces + kept, s + i);
+  // One by one: std::copy of these 16 or 32 bytes was a call to memmove (2.4 % of W1's run).
+  if (kept > 0) s[i] = pieces[0];
+  if (kept > 1) s[i + 1] = pieces[1];
   ray.truncate(size);  // the extent follows
   return removed;
 }
