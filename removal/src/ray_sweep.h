@@ -256,6 +256,22 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // `decided` false: the search ran out of steps (the caller takes the march).
   bool upright_ramp(double c0, double dc, double w0, double dw, double h0, double dh, double ta, double tb, double& lo,
                     double& hi, bool& decided) const;
+  // upright_ramp's parts: T = [t1, t2] and the section at its ends (false: T is empty); the
+  // section at t (false: its slope infinite); an extreme an end of T settles; the search for
+  // one it does not.
+  struct RampSpan {
+    double t1, t2, half1, slope1 = 0.0, half2, slope2 = 0.0, unused = 0.0;
+    bool finite1, finite2;
+  };
+  bool ramp_span(double w0, double dw, double h0, double dh, double ta, double tb, RampSpan& span) const;
+  bool ramp_section(double t, double w0, double dw, double h0, double dh, double& half, double& d1, double& d2) const;
+  static bool ramp_settled(const RampSpan& span, double s, double c0, double dc, double& value, double& best);
+  bool ramp_search(const RampSpan& span, double s, double c0, double dc, double w0, double dw, double h0, double dh,
+                   double best, double& value) const;
+  // upright_horizontal's rays of a row where an upright bull-nose's section changes along the
+  // move (upright_ramp), the searches four at a time: false (nothing written) for other rows.
+  bool upright_ramps_avx2(int axis, double w, int count, const double* u, const double* bottom, const double* top,
+                          double* lo, double* hi, bool* hit) const;
   // The root march over [bottom, top] of the ray (see interval_within).
   bool general(int axis, const Eigen::Vector3d& o, double bottom, double top, double& lo, double& hi) const;
   // The rest of general() given the bracket's interval [capsule_lo, capsule_hi] on the ray.
