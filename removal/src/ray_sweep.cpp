@@ -1563,15 +1563,17 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
   search(pending, n_pending);
 }
 
-// upright_ramp on a row's rays, the searches of the extremes no end of T settles gathered and
-// run four at a time: each lane takes ramp_search's steps (ramp_section's operations in the
-// same order) until its own test ends it. A ray whose search fails takes general(), as
-// upright_horizontal does. (On W1B the ramps' searches were a fifth of the run.)
+// upright_ramp on a row's rays four at a time: ramp_span's T (its clips of the rows' heights
+// worked out once a row) and the section at T's ends, then the searches of the extremes no end
+// of T settles, gathered and run four at a time, each lane taking ramp_search's steps
+// (ramp_section's operations in the same order) until its own test ends it. A ray whose
+// search fails takes general(), as upright_horizontal does. (On W1B the ramps' searches were
+// a fifth of the run, and T with its ends another fifth once the searches ran in lanes.)
 __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, double w, int count, const double* u,
                                                                   const double* bottom, const double* top, double* lo,
                                                                   double* hi, bool* hit) const {
   const HorizontalRow row = horizontal_row(axis, w);
-  if (!row.meets || row.same_section || cone_ || !upright_march_ || count > kLanesBlock) return false;
+  if (!row.meets || row.same_section || cone_ || !upright_march_ || row.dh == 0.0 || count > kLanesBlock) return false;
   const double c0 = row.c0, dc = row.dc, dw = row.dw, h0 = row.h0, dh = row.dh;
   const double u_axis = p0_[axis == 0 ? 1 : 0];
   const double Rc = core_.core_radius_mm, r = core_.rounding_mm, zl = core_.z_low_mm, zh = core_.z_high_mm;
@@ -1583,27 +1585,113 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
   // Per ray: its extremes' values where settled, and the jobs of those that are not (-1: none).
   double entry[kLanesBlock], exit[kLanesBlock];
   int entry_job[kLanesBlock], exit_job[kLanesBlock];
-  for (int k = 0; k < count; ++k) {
-    const double w0 = u_axis - u[k];
-    RampSpan span;
-    entry_job[k] = exit_job[k] = -1;
-    hit[k] = ramp_span(w0, dw, h0, dh, row.ta, row.tb, span);
-    if (!hit[k]) continue;
-    for (int side = 0; side < 2; ++side) {
-      const double s = side == 0 ? 1.0 : -1.0;
-      double& value = side == 0 ? entry[k] : exit[k];
-      double best;
-      if (ramp_settled(span, s, c0, dc, value, best)) continue;
-      (side == 0 ? entry_job : exit_job)[k] = n;
-      job_w0[n] = w0;
-      job_s[n] = s;
-      job_t1[n] = span.t1;
-      job_t2[n] = span.t2;
-      job_best[n] = best;
-      ++n;
+  const v4d zero = all(0.0), inf = all(kInf);
+  // ramp_section at t, four rays (w0) at a time: half, its slope and second derivative, and
+  // where they are finite.
+  auto section = [&](v4d w0, v4d t, v4d & half, v4d & d1, v4d & d2) __attribute__((target("avx2"), always_inline)) {
+    const v4d h = all(h0) + t * all(dh), off = w0 + t * all(dw);
+    const v4i below = h < all(zl), above = (!below) & (h > all(zh));
+    const v4d e = select(below, all(zl) - h, select(above, h - all(zh), zero));
+    const v4d e1 = select(below, all(-dh), select(above, all(dh), zero));
+    const v4d sigma = vsqrt(vmax(zero, all(r * r) - e * e));
+    const v4d rho = all(Rc) + sigma, q = rho * rho - off * off;
+    half = vsqrt(vmax(zero, q));
+    const v4d s1 = -e * e1 / sigma, s2 = -e1 * e1 * all(r) * all(r) / (sigma * sigma * sigma);
+    const v4d q1 = all(2.0) * (rho * s1 - off * all(dw)), q2 = all(2.0) * (s1 * s1 + rho * s2 - all(dw * dw));
+    d1 = q1 / (all(2.0) * half);
+    d2 = q2 / (all(2.0) * half) - q1 * q1 / (all(4.0) * half * half * half);
+    return (sigma > zero) & (half > zero);
+  };
+  // ramp_span's T and ends, four rays at a time. clip()'s bounds along the line's height are
+  // the row's; add()'s and clip()'s max and min in the same order (exact either way).
+  const double ta = row.ta, tb = row.tb;
+  auto clip_height = [&](double y_lo, double y_hi, double& e0, double& e1) {
+    e0 = (y_lo - h0) / dh;  // dh != 0: the section changes
+    e1 = (y_hi - h0) / dh;
+    if (e0 > e1) std::swap(e0, e1);
+  };
+  const double x_halves[2] = {Rc + r, Rc}, y_los[2] = {zl, zl - r}, y_his[2] = {zh, zh + r};
+  double h_e0[2], h_e1[2];
+  for (int i = 0; i < 2; ++i) clip_height(y_los[i], y_his[i], h_e0[i], h_e1[i]);
+  const double A = dw * dw + dh * dh;
+  const double h_lo = h0 + std::min(ta * dh, tb * dh), h_hi = h0 + std::max(ta * dh, tb * dh);
+  const double off_min = std::min(ta * dw, tb * dw), off_max = std::max(ta * dw, tb * dw);
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    const v4d w0 = all(u_axis) - lanes_of(u, nullptr, k0, count);
+    v4d t1 = inf, t2 = -inf;
+    auto add = [&](v4i in, v4d a, v4d b) __attribute__((target("avx2"), always_inline)) {
+      a = vmax(a, all(ta));
+      b = vmin(b, all(tb));
+      const v4i keep = in & (a <= b);
+      t1 = select(keep, vmin(t1, a), t1);
+      t2 = select(keep, vmax(t2, b), t2);
+    };
+    for (int i = 0; i < 2; ++i) {  // the two rectangles
+      v4d a = -inf, b = inf;
+      v4i in;
+      if (dw == 0.0) {
+        in = (w0 >= all(-x_halves[i])) & (w0 <= all(x_halves[i]));
+      } else {
+        v4d e0 = (all(-x_halves[i]) - w0) / all(dw), e1 = (all(x_halves[i]) - w0) / all(dw);
+        const v4i swap = e0 > e1;
+        const v4d first = select(swap, e1, e0), second = select(swap, e0, e1);
+        a = vmax(a, first);
+        b = vmin(b, second);
+        in = a <= b;
+      }
+      a = vmax(a, all(h_e0[i]));
+      b = vmin(b, all(h_e1[i]));
+      in &= a <= b;
+      add(in, a, b);
+    }
+    const v4d off_lo = w0 + all(off_min), off_hi = w0 + all(off_max);
+    for (const double cx : {-Rc, Rc})
+      for (const double cy : {zl, zh}) {
+        if (h_hi < cy - r || h_lo > cy + r) continue;
+        const v4i near = (!(off_hi < all(cx - r))) & (!(off_lo > all(cx + r)));
+        if (!any_lane(near)) continue;
+        const v4d px = w0 - all(cx);
+        const double py = h0 - cy;
+        const v4d B = px * all(dw) + all(py * dh), C = px * px + all(py * py) - all(r * r);
+        const v4d disc = B * B - all(A) * C;
+        const v4i meets = near & !(disc < zero);
+        const v4d root = vsqrt(select(meets, disc, zero));
+        add(meets, (-B - root) / all(A), (-B + root) / all(A));
+      }
+    const v4i met = t1 <= t2;
+    v4d half1, slope1, half2, slope2, unused;
+    const v4i finite1 = section(w0, select(met, t1, zero), half1, slope1, unused);
+    const v4i finite2 = section(w0, select(met, t2, zero), half2, slope2, unused);
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      const int k = k0 + j;
+      entry_job[k] = exit_job[k] = -1;
+      hit[k] = met[j] != 0;
+      if (!hit[k]) continue;
+      RampSpan span;
+      span.t1 = t1[j];
+      span.t2 = t2[j];
+      span.half1 = half1[j];
+      span.slope1 = slope1[j];
+      span.half2 = half2[j];
+      span.slope2 = slope2[j];
+      span.finite1 = finite1[j] != 0;
+      span.finite2 = finite2[j] != 0;
+      const double w0k = w0[j];
+      for (int side = 0; side < 2; ++side) {
+        const double s = side == 0 ? 1.0 : -1.0;
+        double& value = side == 0 ? entry[k] : exit[k];
+        double best;
+        if (ramp_settled(span, s, c0, dc, value, best)) continue;
+        (side == 0 ? entry_job : exit_job)[k] = n;
+        job_w0[n] = w0k;
+        job_s[n] = s;
+        job_t1[n] = span.t1;
+        job_t2[n] = span.t2;
+        job_best[n] = best;
+        ++n;
+      }
     }
   }
-  const v4d zero = all(0.0);
   for (int g = 0; g < n; g += 4) {
     const v4d w0 = lanes_of(job_w0, nullptr, g, n), s = lanes_of(job_s, nullptr, g, n);
     v4d a = lanes_of(job_t1, nullptr, g, n), b = lanes_of(job_t2, nullptr, g, n);
@@ -1611,19 +1699,8 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
     v4d t = all(0.5) * (a + b);
     v4i active = ~v4i{}, found = v4i{};
     for (int step = 0; step < 60 && any_lane(active); ++step) {
-      // ramp_section at t.
-      const v4d h = all(h0) + t * all(dh), off = w0 + t * all(dw);
-      const v4i below = h < all(zl), above = !below & (h > all(zh));
-      const v4d e = select(below, all(zl) - h, select(above, h - all(zh), zero));
-      const v4d e1 = select(below, all(-dh), select(above, all(dh), zero));
-      const v4d sigma = vsqrt(vmax(zero, all(r * r) - e * e));
-      const v4d rho = all(Rc) + sigma, q = rho * rho - off * off;
-      const v4d half = vsqrt(vmax(zero, q));
-      active &= (sigma > zero) & (half > zero);  // else the search fails
-      const v4d s1 = -e * e1 / sigma, s2 = -e1 * e1 * all(r) * all(r) / (sigma * sigma * sigma);
-      const v4d q1 = all(2.0) * (rho * s1 - off * all(dw)), q2 = all(2.0) * (s1 * s1 + rho * s2 - all(dw * dw));
-      const v4d d1 = q1 / (all(2.0) * half);
-      const v4d d2 = q2 / (all(2.0) * half) - q1 * q1 / (all(4.0) * half * half * half);
+      v4d half, d1, d2;
+      active &= section(w0, t, half, d1, d2);  // else the search fails
       // ramp_search's step.
       const v4d f = s * (all(c0) + t * all(dc)) - half;
       best = select(active, vmin(best, f), best);
