@@ -1488,7 +1488,8 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
         const v4d d1 = select(e <= zero, all(dz), select(s2 <= zero, side, all(dz) + e / root * drho));
         const v4d second =
             select(e <= zero, zero, select(s2 <= zero, inf, all(r * r) / (s2 * root) * drho * drho + e / root * d2rho));
-        const v4i below = d1<zero, above = d1> zero;
+        const v4i below = d1 < zero;
+        const v4i above = d1 > zero;
         lo_t = select(active & below, t, lo_t);
         hi_t = select(active & above, t, hi_t);
         active &= below | above;  // a zero slope: t is the least
