@@ -837,6 +837,10 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
       tilted_flat_avx2(axis, w, count, u, lo, hi, hit);
       return;
     }
+    if (cone_ && lanes_) {
+      cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit);
+      return;
+    }
     for (int k = 0; k < count; ++k) {
       bool decided = false;
       if (flat_bottom_) hit[k] = tilted_flat(axis, u[k], w, lo[k], hi[k], decided);
@@ -1738,6 +1742,155 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
   return true;
 }
 
+// general() for a tilted V-bit (its box test, material_clear and cone_interval) four rays at a
+// time: every conic's roots in lanes (quadratic_roots' cases as masks, its copysign by the
+// sign bit), each candidate taken where its lane's tests hold, the operations of the scalar
+// code in the same order. (V5's cut was three quarters cone_interval, ray by ray.)
+__attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, double w, int count, const double* u,
+                                                                   const double* bottom, const double* top, double* lo,
+                                                                   double* hi, bool* hit) const {
+  const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
+  const Eigen::AlignedBox3d& box = bounds_;
+  if (w < box.min()[a2] || w > box.max()[a2]) {
+    std::fill(hit, hit + count, false);
+    return;
+  }
+  const ConeFamily& f = cone_family_[axis];
+  const double r = cone_r_mm_, H = height_mm_, cone_top = cone_top_mm_;
+  constexpr double kTol_mm = 1e-9, kTolT = 1e-12;
+  const v4d zero = all(0.0), inf = all(kInf);
+  const v4d sign_bit = all(-0.0);
+  // quadratic_roots(a, b, c) with 1 / a: the roots, and the lanes with at least one and with two.
+  auto roots_of = [&](double a, v4d b, v4d c, double inv_a, v4d& root0, v4d& root1, v4i& one, v4i& two)
+      __attribute__((target("avx2"), always_inline)) {
+    if (a == 0.0) {
+      one = b != zero;
+      root0 = -c / (all(2.0) * b);
+      root1 = zero;
+      two = v4i{};
+      return;
+    }
+    v4d disc = b * b - all(a) * c;
+    const v4i negative = disc < zero;
+    const v4i none = negative & (disc < all(-1e-12) * vmax(b * b, vabs(all(a) * c)));
+    disc = select(negative, zero, disc);
+    const v4d root = vsqrt(disc);
+    const v4d signed_root = (v4d)(((v4i)root & ~(v4i)sign_bit) | ((v4i)b & (v4i)sign_bit));  // std::copysign
+    const v4d q = -(b + signed_root);
+    const v4i q_zero = q == zero;
+    root0 = select(q_zero, zero, q * all(inv_a));
+    root1 = c / q;
+    one = !none;
+    two = (!none) & (!q_zero);
+  };
+  for (int k0 = 0; k0 < count; k0 += 4) {
+    const v4d U = lanes_of(u, nullptr, k0, count), B = lanes_of(bottom, nullptr, k0, count),
+              T = lanes_of(top, nullptr, k0, count);
+    const v4i in_box = (!(U < all(box.min()[a1]))) & (!(U > all(box.max()[a1])));
+    // material_clear.
+    const v4d dbl_max = all(std::numeric_limits<double>::max());
+    const v4i finite = (vabs(B) <= dbl_max) & (vabs(T) <= dbl_max);
+    const v4d half = all(0.5) * (T - B);
+    const double pw = w - core_mid_[a2];
+    const v4d pu = U - all(core_mid_[a1]), ps = B + half - all(core_mid_[axis]);
+    const v4d qa = pu * all(tool_axis_[a1]) + all(pw * tool_axis_[a2]) + ps * all(tool_axis_[axis]);
+    const v4d h = select(qa < all(core_.z_low_mm), all(core_.z_low_mm),
+                         select(all(core_.z_high_mm) < qa, all(core_.z_high_mm), qa));  // std::clamp
+    const v4d reach = all(capsule_r_ + half_move_mm_) + half;
+    const v4i clear = finite & (pu * pu + all(pw * pw) + ps * ps - h * (all(2.0) * qa - h) > reach * reach);
+    const v4i asked = in_box & !clear;
+    if (!any_lane(asked)) {
+      for (int j = 0; j < 4 && k0 + j < count; ++j) hit[k0 + j] = false;
+      continue;
+    }
+    // cone_interval.
+    const v4d w0_1 = U - all(p0_[a1]);
+    const double w0_2 = w - p0_[a2];
+    const v4d A0 = w0_1 * all(f.a1) + all(w0_2 * f.a2);
+    const double A1 = f.A1, A2 = f.A2;
+    const v4d wd = w0_1 * all(f.d1) + all(w0_2 * f.d2), ww = w0_1 * w0_1 + all(w0_2 * w0_2);
+    struct LaneConic {
+      double ss, st, tt;
+      v4d s, t, c;
+    };
+    auto conic = [&](int j) __attribute__((target("avx2"), always_inline)) {
+      const double c = f.c[j];
+      return LaneConic{f.ss[j],
+                       f.st[j],
+                       f.tt[j],
+                       all(-c) * A0 * all(A1),
+                       -wd + all(c) * A0 * all(A2),
+                       ww - all(c) * A0 * A0 - all(f.kappa[j])};
+    };
+    const LaneConic cone = conic(0), cylinder = conic(1);
+    auto at = [&](const LaneConic& q, v4d x, v4d y) __attribute__((target("avx2"), always_inline)) {
+      return (all(q.ss) * x + all(2.0) * (all(q.st) * y + q.s)) * x + (all(q.tt) * y + all(2.0) * q.t) * y + q.c;
+    };
+    auto on_line = [&](const LaneConic& q, v4d x, v4d y, double dx, double dy, double a, double inv_a, v4d& root0,
+                       v4d& root1, v4i& one, v4i& two) __attribute__((target("avx2"), always_inline)) {
+      const v4d qb = all(q.ss) * x * all(dx) + all(q.st) * (x * all(dy) + y * all(dx)) + all(q.tt) * y * all(dy) +
+                     q.s * all(dx) + q.t * all(dy);
+      roots_of(a, qb, at(q, x, y), inv_a, root0, root1, one, two);
+    };
+    v4d s_lo = inf, s_hi = -inf;
+    auto take = [&](v4i valid, v4d s, v4d t, double y_lo, double y_hi) __attribute__((target("avx2"), always_inline)) {
+      valid &= (t >= all(-kTolT)) & (t <= all(1.0 + kTolT));
+      const v4d y = A0 + all(A1) * s - all(A2) * t;
+      valid &= (y >= all(y_lo - kTol_mm)) & (y <= all(y_hi + kTol_mm));
+      s_lo = select(valid, vmin(s_lo, s), s_lo);
+      s_hi = select(valid, vmax(s_hi, s), s_hi);
+    };
+    v4d root0, root1;
+    v4i one, two;
+    // Where each conic runs square to s (its derivative in t zero).
+    for (int which = 0; which < 2; ++which) {
+      const LaneConic& q = which == 0 ? cone : cylinder;
+      if (q.tt == 0.0) continue;
+      roots_of(f.lead[which], q.s * all(q.tt) - all(q.st) * q.t, q.c * all(q.tt) - q.t * q.t, f.inv_lead[which], root0,
+               root1, one, two);
+      const double y_lo = which == 0 ? 0.0 : cone_top, y_hi = which == 0 ? cone_top : H;
+      take(one, root0, -(all(q.st) * root0 + q.t) * all(f.inv_tt[which]), y_lo, y_hi);
+      take(two, root1, -(all(q.st) * root1 + q.t) * all(f.inv_tt[which]), y_lo, y_hi);
+    }
+    // Each conic against the first and last instance.
+    for (const double t : {0.0, 1.0})
+      for (int which = 0; which < 2; ++which) {
+        on_line(which == 0 ? cone : cylinder, zero, all(t), 1.0, 0.0, f.ss[which], f.inv_ss[which], root0, root1, one,
+                two);
+        const double y_lo = which == 0 ? 0.0 : cone_top, y_hi = which == 0 ? cone_top : H;
+        take(one, root0, all(t), y_lo, y_hi);
+        take(two, root1, all(t), y_lo, y_hi);
+      }
+    // The cylinder against the top and where it meets the cone.
+    if (A1 != 0.0 || A2 != 0.0) {
+      for (int line = 0; line < (cone_top < H ? 2 : 1); ++line) {
+        const double height = line == 0 ? H : cone_top;
+        const v4d x = f.along_s ? (all(height) - A0) * all(f.inv_A1) : zero;
+        const v4d y = f.along_s ? zero : (A0 - all(height)) * all(f.inv_A2);
+        on_line(cylinder, x, y, A2, A1, f.line_lead, f.inv_line_lead, root0, root1, one, two);
+        take(one, x + root0 * all(A2), y + root0 * all(A1), height, height);
+        take(two, x + root1 * all(A2), y + root1 * all(A1), height, height);
+      }
+    }
+    // The top's centre line at the first and last instance, where it lies in the top disc.
+    const double cylinder_tol = 2.0 * r * kTol_mm;
+    if (A1 != 0.0)
+      for (const double t : {0.0, 1.0}) {
+        const v4d s = (all(H) - A0 + all(A2 * t)) * all(f.inv_A1);
+        take(at(cylinder, s, all(t)) <= all(cylinder_tol), s, all(t), H, H);
+      }
+    const v4i found = asked & (s_lo <= s_hi);
+    const v4d l = s_lo + all(p0_[axis]), h_ = s_hi + all(p0_[axis]);
+    for (int j = 0; j < 4 && k0 + j < count; ++j) {
+      const int k = k0 + j;
+      hit[k] = found[j] != 0;
+      if (!hit[k]) continue;
+      lo[k] = l[j];
+      hi[k] = h_[j];
+    }
+  }
+}
+
 namespace {
 // RaySweep::tilted_windows four rays at a time (n a multiple of four): tilted_window's
 // products, sums and pairwise max / min in the same order, the tests negated as written (so a
@@ -1785,6 +1938,8 @@ bool RaySweep::upright_ramps_avx2(int, double, int, const double*, const double*
                                   bool*) const {
   return false;
 }
+void RaySweep::cone_intervals_avx2(int, double, int, const double*, const double*, const double*, double*, double*,
+                                   bool*) const {}
 void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
 

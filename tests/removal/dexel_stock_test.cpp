@@ -679,6 +679,19 @@ TEST(DexelStock, TiltedBallAndBullNoseCutTheSameFourRaysAtATime) {
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
+// Tilted V-bits (the cone's closed form four rays at a time): a 90 deg one and a 60 deg one
+// cut off at a flute length below its full diameter, so that the rays meet the cone, the
+// cylinder, the top and the line where they join.
+TEST(DexelStock, TiltedVBitCutsTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  Cutter wide = make(CutterType::VBit, 8, 0, 12), narrow = make(CutterType::VBit, 6, 0, 2.5);
+  wide.tip_angle_deg = 90;
+  narrow.tip_angle_deg = 60;
+  const MoveList list =
+      random_tilted_chain({wide, narrow}, 61, {0.25, -0.2, 1.0}, 3.0, 0.08, [](int i) { return i % 3 == 2 ? 1 : 0; });
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 300.0);
+}
+
 // Tilted flat end mills (the ellipse's closed form four rays at a time): a long one, and one
 // 4 mm tall whose top stays inside the stock, so that the rays walk the lines t = 0, t = 1
 // and both end planes' and meet the corners.
