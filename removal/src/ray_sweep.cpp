@@ -838,7 +838,7 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
       return;
     }
     if (cone_ && lanes_) {
-      cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit);
+      cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit, true);
       return;
     }
     for (int k = 0; k < count; ++k) {
@@ -1578,7 +1578,12 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
                                                                   const double* bottom, const double* top, double* lo,
                                                                   double* hi, bool* hit) const {
   const HorizontalRow row = horizontal_row(axis, w);
-  if (!row.meets || row.same_section || cone_ || !upright_march_ || row.dh == 0.0 || count > kLanesBlock) return false;
+  if (!row.meets || row.same_section) return false;
+  if (cone_) {  // a V-bit's ramp: upright_horizontal takes cone_interval itself
+    cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit, false);
+    return true;
+  }
+  if (!upright_march_ || row.dh == 0.0 || count > kLanesBlock) return false;
   const double c0 = row.c0, dc = row.dc, dw = row.dw, h0 = row.h0, dh = row.dh;
   const double u_axis = p0_[axis == 0 ? 1 : 0];
   const double Rc = core_.core_radius_mm, r = core_.rounding_mm, zl = core_.z_low_mm, zh = core_.z_high_mm;
@@ -1742,16 +1747,17 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
   return true;
 }
 
-// general() for a tilted V-bit (its box test, material_clear and cone_interval) four rays at a
-// time: every conic's roots in lanes (quadratic_roots' cases as masks, its copysign by the
+// general() for a tilted V-bit (its box test, material_clear and cone_interval; without
+// `general_tests` cone_interval alone, as upright_horizontal takes it for a V-bit's ramp) four
+// rays at a time: every conic's roots in lanes (quadratic_roots' cases as masks, its copysign by the
 // sign bit), each candidate taken where its lane's tests hold, the operations of the scalar
 // code in the same order. (V5's cut was three quarters cone_interval, ray by ray.)
 __attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, double w, int count, const double* u,
                                                                    const double* bottom, const double* top, double* lo,
-                                                                   double* hi, bool* hit) const {
+                                                                   double* hi, bool* hit, bool general_tests) const {
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
   const Eigen::AlignedBox3d& box = bounds_;
-  if (w < box.min()[a2] || w > box.max()[a2]) {
+  if (general_tests && (w < box.min()[a2] || w > box.max()[a2])) {
     std::fill(hit, hit + count, false);
     return;
   }
@@ -1798,7 +1804,7 @@ __attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, dou
                          select(all(core_.z_high_mm) < qa, all(core_.z_high_mm), qa));  // std::clamp
     const v4d reach = all(capsule_r_ + half_move_mm_) + half;
     const v4i clear = finite & (pu * pu + all(pw * pw) + ps * ps - h * (all(2.0) * qa - h) > reach * reach);
-    const v4i asked = in_box & !clear;
+    const v4i asked = general_tests ? in_box & !clear : ~v4i{};
     if (!any_lane(asked)) {
       for (int j = 0; j < 4 && k0 + j < count; ++j) hit[k0 + j] = false;
       continue;
@@ -1939,7 +1945,7 @@ bool RaySweep::upright_ramps_avx2(int, double, int, const double*, const double*
   return false;
 }
 void RaySweep::cone_intervals_avx2(int, double, int, const double*, const double*, const double*, double*, double*,
-                                   bool*) const {}
+                                   bool*, bool) const {}
 void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
 

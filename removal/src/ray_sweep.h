@@ -268,8 +268,9 @@ class __attribute__((visibility("hidden"))) RaySweep {
   static bool ramp_settled(const RampSpan& span, double s, double c0, double dc, double& value, double& best);
   bool ramp_search(const RampSpan& span, double s, double c0, double dc, double w0, double dw, double h0, double dh,
                    double best, double& value) const;
-  // upright_horizontal's rays of a row where an upright bull-nose's section changes along the
-  // move (upright_ramp), the searches four at a time: false (nothing written) for other rows.
+  // upright_horizontal's rays of a row where an upright bull-nose's or V-bit's section changes
+  // along the move (upright_ramp, cone_interval), four at a time: false (nothing written) for
+  // other rows.
   bool upright_ramps_avx2(int axis, double w, int count, const double* u, const double* bottom, const double* top,
                           double* lo, double* hi, bool* hit) const;
   // The root march over [bottom, top] of the ray (see interval_within).
@@ -329,9 +330,10 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // and two conics (the cone's and the cylinder's surfaces), so its extremes in s are among
   // a fixed set of points: where a conic runs square to s, and where two boundaries meet.
   bool cone_interval(int axis, double u, double w, double& lo, double& hi) const;
-  // general() for a tilted V-bit on a row's rays (cone_interval), four at a time.
+  // general() for a tilted V-bit on a row's rays (cone_interval), four at a time; without
+  // `general_tests` (an upright V-bit's ramp) cone_interval alone.
   void cone_intervals_avx2(int axis, double w, int count, const double* u, const double* bottom, const double* top,
-                           double* lo, double* hi, bool* hit) const;
+                           double* lo, double* hi, bool* hit, bool general_tests) const;
   // The general method's march (band_ and the bracket's capsule), for a tilted tool or an
   // upright bull-nose moving up or down (upright_march_: its horizontal rays).
   void prepare_march();

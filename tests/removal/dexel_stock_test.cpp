@@ -753,6 +753,17 @@ TEST(DexelStock, UprightFlatAndVBitCutTheSameFourRaysAtATime) {
   EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 500.0);
 }
 
+// An upright V-bit on the wavy rows (every move a ramp): its horizontal rays' cone closed form
+// four at a time; a 90 deg one and a 60 deg one cut off below its full diameter.
+TEST(DexelStock, UprightVBitRampsCutTheSameFourRaysAtATime) {
+  if (!have_avx2()) GTEST_SKIP() << "no AVX2 here: only the scalar kernels run";
+  Cutter wide = make(CutterType::VBit, 6, 0, 12), narrow = make(CutterType::VBit, 6, 0, 2.5);
+  wide.tip_angle_deg = 90;
+  narrow.tip_angle_deg = 60;
+  const MoveList list = wavy_raster({wide, narrow}, 8, [](int row) { return row % 3 == 2 ? 1 : 0; });
+  EXPECT_GT(expect_the_same_rays_four_at_a_time(list), 300.0);
+}
+
 // The tilted flat end mill where its ellipse degenerates into strips: moving along its own
 // axis (or off it by rounding, in a ray family's plane with the axis) and with a ray family
 // along the axis. Also a plunge along a lattice axis, where both hold.
