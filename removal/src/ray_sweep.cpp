@@ -1886,13 +1886,13 @@ __attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, dou
         take(at(cylinder, s, all(t)) <= all(cylinder_tol), s, all(t), H, H);
       }
     const v4i found = asked & (s_lo <= s_hi);
-    const v4d l = s_lo + all(p0_[axis]), h_ = s_hi + all(p0_[axis]);
+    const v4d entry_mm = s_lo + all(p0_[axis]), exit_mm = s_hi + all(p0_[axis]);
     for (int j = 0; j < 4 && k0 + j < count; ++j) {
       const int k = k0 + j;
       hit[k] = found[j] != 0;
       if (!hit[k]) continue;
-      lo[k] = l[j];
-      hi[k] = h_[j];
+      lo[k] = entry_mm[j];
+      hi[k] = exit_mm[j];
     }
   }
 }
