@@ -838,7 +838,19 @@ __attribute__((flatten)) void RaySweep::intervals_within(int axis, double w, int
       return;
     }
     if (cone_ && lanes_) {
-      cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit, true);
+      // general(): the box, material_clear (not_clear_avx2, as for the ball and bull-nose
+      // above), then the cone's closed form on the rays left.
+      const int a2 = axis == 2 ? 1 : 2;
+      if (!(w >= bounds_.min()[a2] && w <= bounds_.max()[a2])) {
+        std::fill(hit, hit + count, false);
+        return;
+      }
+      int todo[kLanesBlock];
+      for (int first = 0; first < count; first += kLanesBlock) {
+        const int n =
+            not_clear_avx2(axis, w, first, std::min(count, first + kLanesBlock), u, bottom, top, true, hit, todo);
+        cone_intervals_avx2(axis, w, n, todo, u + first, lo + first, hi + first, hit + first);
+      }
       return;
     }
     for (int k = 0; k < count; ++k) {
@@ -1450,24 +1462,30 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
     const v4d under = all(r) - vsqrt(vmax(zero, all(r * r) - off * off));
     return select(off <= zero, zero, under);
   };
-  // slope_at's value (the second derivative not needed): slope + U'(rho) rho'(t).
-  auto slope_at = [&](v4d qd, v4d t, v4d rho) __attribute__((target("avx2"), always_inline)) {
+  // slope_at: slope + U'(rho) rho'(t), and in `second` its derivative (dropped by the compiler
+  // where unused).
+  auto slope_at = [&](v4d qd, v4d t, v4d rho, v4d & second) __attribute__((target("avx2"), always_inline)) {
     const v4d drho = select(rho > zero, (t * all(dd) - qd) / rho, zero);
+    const v4d d2rho = select(rho > zero, (all(dd) - drho * drho) / rho, zero);
     const v4d e = rho - all(rc);
     const v4d s2 = all(r * r) - e * e;
     const v4d root = vsqrt(select(s2 > zero, s2, one));
     const v4d side = select(drho < zero, -inf, select(drho > zero, inf, all(dz)));
+    second =
+        select(e <= zero, zero, select(s2 <= zero, inf, all(r * r) / (s2 * root) * drho * drho + e / root * d2rho));
     return select(e <= zero, all(dz), select(s2 <= zero, side, all(dz) + e / root * drho));
   };
-  // The ray's disc crossing [ta, tb] and what the search needs, as in the loop below.
+  // Where the ray crosses the disc the move's axis passes through: [ta, tb] (met), and qx, qd.
   auto crossing = [&](v4d U, v4d & qx, v4d & qd, v4d & ta, v4d & tb) __attribute__((target("avx2"), always_inline)) {
     qx = U - all(p0_.x());
     qd = qx * all(dx) + all(qy * dy);
     const v4d qq = qx * qx + all(qy * qy);
     const v4d disc = qd * qd - all(dd) * (qq - all(radius * radius));
-    const v4d root = vsqrt(select(!(disc < zero), disc, zero));
+    const v4i met_disc = !(disc < zero);
+    const v4d root = vsqrt(select(met_disc, disc, zero));
     ta = vmax(zero, (qd - root) / all(dd));
     tb = vmin(one, (qd + root) / all(dd));
+    return met_disc & !(ta > tb);
   };
   // lowest(dz)'s safeguarded Newton steps, lane by lane (slope_at's second derivative too),
   // for the rays pending[0 .. n): the least is settled by neither end, so the search runs.
@@ -1482,16 +1500,8 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
       for (int iteration = 0; iteration < 100; ++iteration) {
         active &= hi_t - lo_t > all(t_tolerance);
         if (!any_lane(active)) break;
-        const v4d rho = distance_at(qx, t);
-        const v4d drho = select(rho > zero, (t * all(dd) - qd) / rho, zero);
-        const v4d d2rho = select(rho > zero, (all(dd) - drho * drho) / rho, zero);
-        const v4d e = rho - all(rc);
-        const v4d s2 = all(r * r) - e * e;
-        const v4d root = vsqrt(select(s2 > zero, s2, one));
-        const v4d side = select(drho < zero, -inf, select(drho > zero, inf, all(dz)));
-        const v4d d1 = select(e <= zero, all(dz), select(s2 <= zero, side, all(dz) + e / root * drho));
-        const v4d second =
-            select(e <= zero, zero, select(s2 <= zero, inf, all(r * r) / (s2 * root) * drho * drho + e / root * d2rho));
+        v4d second;
+        const v4d d1 = slope_at(qd, t, distance_at(qx, t), second);
         const v4i below = d1 < zero;
         const v4i above = d1 > zero;
         lo_t = select(active & below, t, lo_t);
@@ -1518,14 +1528,9 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
   int pending[kLanesBlock];
   int n_pending = 0;
   for (int k0 = 0; k0 < count; k0 += 4) {
-    const v4d U = lanes_of(u, nullptr, k0, count), T = lanes_of(top, nullptr, k0, count);
-    const v4d qx = U - all(p0_.x());
-    const v4d qd = qx * all(dx) + all(qy * dy), qq = qx * qx + all(qy * qy);
-    const v4d disc = qd * qd - all(dd) * (qq - all(radius * radius));
-    const v4i met_disc = !(disc < zero);
-    const v4d root = vsqrt(select(met_disc, disc, zero));
-    const v4d ta = vmax(zero, (qd - root) / all(dd)), tb = vmin(one, (qd + root) / all(dd));
-    const v4i met = met_disc & !(ta > tb);
+    const v4d T = lanes_of(top, nullptr, k0, count);
+    v4d qx, qd, ta, tb;
+    const v4i met = crossing(lanes_of(u, nullptr, k0, count), qx, qd, ta, tb);
     const v4d rho_a = distance_at(qx, ta), rho_b = distance_at(qx, tb);
     const v4i over_core = vmax(rho_a, rho_b) <= all(rc);
     // lowest(dz, over_core), where it needs no search (settled).
@@ -1538,8 +1543,9 @@ __attribute__((target("avx2"))) void RaySweep::upright_vertical_avx2(double w, i
       value = select(over_core, flat_value, underside_at(distance_at(qx, closest)));
       settled = ~v4i{};
     } else {
-      const v4i at_a = slope_at(qd, ta, rho_a) >= zero;
-      const v4i at_b = slope_at(qd, tb, rho_b) <= zero;
+      v4d unused;
+      const v4i at_a = slope_at(qd, ta, rho_a, unused) >= zero;
+      const v4i at_b = slope_at(qd, tb, rho_b, unused) <= zero;
       value = select(at_a, ta * all(dz) + underside_at(rho_a), tb * all(dz) + underside_at(rho_b));
       value = select(over_core, flat_value, value);
       settled = over_core | at_a | at_b;
@@ -1580,7 +1586,7 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
   const HorizontalRow row = horizontal_row(axis, w);
   if (!row.meets || row.same_section) return false;
   if (cone_) {  // a V-bit's ramp: upright_horizontal takes cone_interval itself
-    cone_intervals_avx2(axis, w, count, u, bottom, top, lo, hi, hit, false);
+    cone_intervals_avx2(axis, w, count, nullptr, u, lo, hi, hit);
     return true;
   }
   if (!upright_march_ || row.dh == 0.0 || count > kLanesBlock) return false;
@@ -1747,20 +1753,14 @@ __attribute__((target("avx2"))) bool RaySweep::upright_ramps_avx2(int axis, doub
   return true;
 }
 
-// general() for a tilted V-bit (its box test, material_clear and cone_interval; without
-// `general_tests` cone_interval alone, as upright_horizontal takes it for a V-bit's ramp) four
-// rays at a time: every conic's roots in lanes (quadratic_roots' cases as masks, its copysign by the
+// cone_interval on the rays index[0 .. n) (all of the first n without an index) four at a
+// time: every conic's roots in lanes (quadratic_roots' cases as masks, its copysign by the
 // sign bit), each candidate taken where its lane's tests hold, the operations of the scalar
 // code in the same order. (V5's cut was three quarters cone_interval, ray by ray.)
-__attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, double w, int count, const double* u,
-                                                                   const double* bottom, const double* top, double* lo,
-                                                                   double* hi, bool* hit, bool general_tests) const {
+__attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, double w, int n, const int* index,
+                                                                   const double* u, double* lo, double* hi,
+                                                                   bool* hit) const {
   const int a1 = axis == 0 ? 1 : 0, a2 = axis == 2 ? 1 : 2;
-  const Eigen::AlignedBox3d& box = bounds_;
-  if (general_tests && (w < box.min()[a2] || w > box.max()[a2])) {
-    std::fill(hit, hit + count, false);
-    return;
-  }
   const ConeFamily& f = cone_family_[axis];
   const double r = cone_r_mm_, H = height_mm_, cone_top = cone_top_mm_;
   constexpr double kTol_mm = 1e-9, kTolT = 1e-12;
@@ -1789,26 +1789,8 @@ __attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, dou
     one = !none;
     two = (!none) & (!q_zero);
   };
-  for (int k0 = 0; k0 < count; k0 += 4) {
-    const v4d U = lanes_of(u, nullptr, k0, count), B = lanes_of(bottom, nullptr, k0, count),
-              T = lanes_of(top, nullptr, k0, count);
-    const v4i in_box = (!(U < all(box.min()[a1]))) & (!(U > all(box.max()[a1])));
-    // material_clear.
-    const v4d dbl_max = all(std::numeric_limits<double>::max());
-    const v4i finite = (vabs(B) <= dbl_max) & (vabs(T) <= dbl_max);
-    const v4d half = all(0.5) * (T - B);
-    const double pw = w - core_mid_[a2];
-    const v4d pu = U - all(core_mid_[a1]), ps = B + half - all(core_mid_[axis]);
-    const v4d qa = pu * all(tool_axis_[a1]) + all(pw * tool_axis_[a2]) + ps * all(tool_axis_[axis]);
-    const v4d h = select(qa < all(core_.z_low_mm), all(core_.z_low_mm),
-                         select(all(core_.z_high_mm) < qa, all(core_.z_high_mm), qa));  // std::clamp
-    const v4d reach = all(capsule_r_ + half_move_mm_) + half;
-    const v4i clear = finite & (pu * pu + all(pw * pw) + ps * ps - h * (all(2.0) * qa - h) > reach * reach);
-    const v4i asked = general_tests ? in_box & !clear : ~v4i{};
-    if (!any_lane(asked)) {
-      for (int j = 0; j < 4 && k0 + j < count; ++j) hit[k0 + j] = false;
-      continue;
-    }
+  for (int k0 = 0; k0 < n; k0 += 4) {
+    const v4d U = lanes_of(u, index, k0, n);
     // cone_interval.
     const v4d w0_1 = U - all(p0_[a1]);
     const double w0_2 = w - p0_[a2];
@@ -1885,10 +1867,10 @@ __attribute__((target("avx2"))) void RaySweep::cone_intervals_avx2(int axis, dou
         const v4d s = (all(H) - A0 + all(A2 * t)) * all(f.inv_A1);
         take(at(cylinder, s, all(t)) <= all(cylinder_tol), s, all(t), H, H);
       }
-    const v4i found = asked & (s_lo <= s_hi);
+    const v4i found = s_lo <= s_hi;
     const v4d entry_mm = s_lo + all(p0_[axis]), exit_mm = s_hi + all(p0_[axis]);
-    for (int j = 0; j < 4 && k0 + j < count; ++j) {
-      const int k = k0 + j;
+    for (int j = 0; j < 4 && k0 + j < n; ++j) {
+      const int k = index != nullptr ? index[k0 + j] : k0 + j;
       hit[k] = found[j] != 0;
       if (!hit[k]) continue;
       lo[k] = entry_mm[j];
@@ -1944,8 +1926,7 @@ bool RaySweep::upright_ramps_avx2(int, double, int, const double*, const double*
                                   bool*) const {
   return false;
 }
-void RaySweep::cone_intervals_avx2(int, double, int, const double*, const double*, const double*, double*, double*,
-                                   bool*, bool) const {}
+void RaySweep::cone_intervals_avx2(int, double, int, const int*, const double*, double*, double*, bool*) const {}
 void RaySweep::upright_vertical_avx2(double, int, const double*, const double*, double*, double*, bool*) const {}
 #endif
 

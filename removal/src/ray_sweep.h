@@ -330,10 +330,9 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // and two conics (the cone's and the cylinder's surfaces), so its extremes in s are among
   // a fixed set of points: where a conic runs square to s, and where two boundaries meet.
   bool cone_interval(int axis, double u, double w, double& lo, double& hi) const;
-  // general() for a tilted V-bit on a row's rays (cone_interval), four at a time; without
-  // `general_tests` (an upright V-bit's ramp) cone_interval alone.
-  void cone_intervals_avx2(int axis, double w, int count, const double* u, const double* bottom, const double* top,
-                           double* lo, double* hi, bool* hit, bool general_tests) const;
+  // cone_interval on a row's rays index[0 .. n) (the first n without an index), four at a time.
+  void cone_intervals_avx2(int axis, double w, int n, const int* index, const double* u, double* lo, double* hi,
+                           bool* hit) const;
   // The general method's march (band_ and the bracket's capsule), for a tilted tool or an
   // upright bull-nose moving up or down (upright_march_: its horizontal rays).
   void prepare_march();
