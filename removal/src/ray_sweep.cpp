@@ -2183,8 +2183,9 @@ bool RaySweep::ramp_span(double w0, double dw, double h0, double dh, double ta, 
   span.t1 = t1;
   span.t2 = t2;
   // T's ends, for both extremes.
-  span.finite1 = ramp_section(t1, w0, dw, h0, dh, span.half1, span.slope1, span.unused);
-  span.finite2 = ramp_section(t2, w0, dw, h0, dh, span.half2, span.slope2, span.unused);
+  double unused;  // the second derivative, not needed at the ends
+  span.finite1 = ramp_section(t1, w0, dw, h0, dh, span.half1, span.slope1, unused);
+  span.finite2 = ramp_section(t2, w0, dw, h0, dh, span.half2, span.slope2, unused);
   return true;
 }
 

@@ -260,7 +260,7 @@ class __attribute__((visibility("hidden"))) RaySweep {
   // section at t (false: its slope infinite); an extreme an end of T settles; the search for
   // one it does not.
   struct RampSpan {
-    double t1, t2, half1, slope1 = 0.0, half2, slope2 = 0.0, unused = 0.0;
+    double t1, t2, half1, slope1 = 0.0, half2, slope2 = 0.0;
     bool finite1, finite2;
   };
   bool ramp_span(double w0, double dw, double h0, double dh, double ta, double tb, RampSpan& span) const;
